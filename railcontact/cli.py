@@ -1,0 +1,77 @@
+"""The ``railcontact`` command line.
+
+``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file; errors in the
+input are reported in one line (exit status 2), never as a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from .errors import RailContactError
+
+
+def _summary(sol) -> str:
+    lines = [f"case: {sol.case.get('name', 'case')}"]
+    for k, ps in enumerate(sol.patches):
+        n = ps.normal
+        g = n.grid
+        lines.append(f"patch {k}: BEM normal contact on {g.nx} x {g.ny} elements "
+                     f"({g.dx * 1e3:.4g} x {g.dy * 1e3:.4g} mm), estimate '{ps.estimate}'")
+        lines.append(f"  force          {n.force:12.6g} N")
+        lines.append(f"  penetration    {n.penetration:12.6g} m")
+        lines.append(f"  max pressure   {n.max_pressure:12.6g} Pa")
+        lines.append(f"  contact area   {n.area:12.6g} m^2")
+        lines.append(f"  iterations     {n.iterations:12d}   ({n.message})")
+        lines.append(f"  wall time      {n.wall_time * 1e3:12.3f} ms")
+        if ps.hertz is not None:
+            h = ps.hertz
+            lines.append(f"  Hertz: a = {h.a:.6g} m, b = {h.b:.6g} m, N = {h.load:.6g} N, "
+                         f"delta = {h.penetration:.6g} m, p0 = {h.max_pressure:.6g} Pa, "
+                         f"area = {h.area:.6g} m^2")
+    return "\n".join(lines)
+
+
+def _cmd_solve(args: argparse.Namespace) -> int:
+    from .pipeline import solve
+
+    sol = solve(args.case)
+    if args.json:
+        print(json.dumps(sol.to_dict(), indent=2))
+    else:
+        print(_summary(sol))
+    if args.plot:
+        from .plotting import plot_normal
+
+        out = plot_normal(sol, args.plot)
+        if not args.json:
+            print(f"plot written to {out}")
+    return 0 if all(p.normal.converged for p in sol.patches) else 1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="railcontact",
+                                 description="Exact wheel-rail contact (half-space BEM).")
+    sub = ap.add_subparsers(dest="command", required=True)
+    s = sub.add_parser("solve", help="solve a TOML case file")
+    s.add_argument("case", help="case file (TOML, SI units)")
+    s.add_argument("--json", action="store_true", help="print the result as JSON")
+    s.add_argument("--plot", metavar="FILE", help="write the patch/pressure figure to FILE")
+    s.set_defaults(func=_cmd_solve)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except RailContactError as exc:
+        print(f"railcontact: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

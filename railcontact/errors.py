@@ -1,0 +1,51 @@
+"""Exceptions raised by railcontact.
+
+Every error that a user can cause (a bad case file, a bad parameter, a grid that is too
+small) is a :class:`RailContactError`, a :class:`ValueError` whose message names the
+offending quantity, its unit and the value received.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class RailContactError(ValueError):
+    """Invalid input to a railcontact model; the message says which input and why."""
+
+
+class CaseError(RailContactError):
+    """A case file or case dictionary that cannot be solved as given."""
+
+
+def check_finite(name: str, value: object, unit: str = "") -> float:
+    """Return ``value`` as a float, or raise if it is not a finite real number.
+
+    Parameters
+    ----------
+    name
+        Name of the quantity as the user wrote it (e.g. ``"normal.load"``).
+    value
+        The value to check.
+    unit
+        Unit shown in the message (e.g. ``"N"``).
+    """
+    suffix = f" [{unit}]" if unit else ""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) and not hasattr(
+        value, "__float__"
+    ):
+        raise RailContactError(f"{name}{suffix} must be a number, got {value!r}")
+    x = float(value)  # type: ignore[arg-type]
+    if not math.isfinite(x):
+        raise RailContactError(f"{name}{suffix} must be finite, got {x}")
+    return x
+
+
+def check_positive(name: str, value: object, unit: str = "", allow_zero: bool = False) -> float:
+    """Return ``value`` as a float, or raise if it is not finite and positive."""
+    x = check_finite(name, value, unit)
+    suffix = f" [{unit}]" if unit else ""
+    if x < 0 or (x == 0 and not allow_zero):
+        bound = "non-negative" if allow_zero else "positive"
+        raise RailContactError(f"{name}{suffix} must be {bound}, got {x:g}")
+    return x

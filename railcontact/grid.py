@@ -1,0 +1,103 @@
+"""The potential-contact grid: rectangular elements of equal size in the tangent plane.
+
+Fields on the grid are arrays of shape ``(nx, ny)`` indexed ``[i, j]`` with element
+centres ``x[i] = x0 + i dx`` (rolling direction) and ``y[j] = y0 + j dy`` (lateral).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import RailContactError, check_finite, check_positive
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A rectangular grid of ``nx * ny`` elements of size ``dx * dy`` [m].
+
+    Attributes
+    ----------
+    nx, ny
+        Number of elements along x (rolling) and y (lateral).
+    dx, dy
+        Element size [m].
+    x0, y0
+        Centre of element (0, 0) [m].
+    """
+
+    nx: int
+    ny: int
+    dx: float
+    dy: float
+    x0: float
+    y0: float
+
+    def __post_init__(self) -> None:
+        for name in ("nx", "ny"):
+            n = getattr(self, name)
+            if isinstance(n, bool) or int(n) != n or n < 1:
+                raise RailContactError(f"grid.{name} must be a positive integer, got {n!r}")
+        check_positive("grid.dx", self.dx, "m")
+        check_positive("grid.dy", self.dy, "m")
+        check_finite("grid.x0", self.x0, "m")
+        check_finite("grid.y0", self.y0, "m")
+
+    @classmethod
+    def from_bounds(
+        cls, xmin: float, xmax: float, ymin: float, ymax: float, nx: int, ny: int
+    ) -> Grid:
+        """Grid of ``nx * ny`` elements covering the rectangle [xmin, xmax] x [ymin, ymax] [m]."""
+        for name, lo, hi in (("x", xmin, xmax), ("y", ymin, ymax)):
+            check_finite(f"grid.{name} lower bound", lo, "m")
+            check_finite(f"grid.{name} upper bound", hi, "m")
+            if not hi > lo:
+                raise RailContactError(f"grid.{name} range must be increasing, got [{lo}, {hi}]")
+        dx = (xmax - xmin) / nx
+        dy = (ymax - ymin) / ny
+        return cls(int(nx), int(ny), dx, dy, xmin + dx / 2, ymin + dy / 2)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.nx, self.ny)
+
+    @property
+    def size(self) -> int:
+        return self.nx * self.ny
+
+    @property
+    def element_area(self) -> float:
+        """Area of one element dx * dy [m^2]."""
+        return self.dx * self.dy
+
+    @property
+    def x(self) -> np.ndarray:
+        """Element centres along x [m], shape (nx,)."""
+        return self.x0 + self.dx * np.arange(self.nx)
+
+    @property
+    def y(self) -> np.ndarray:
+        """Element centres along y [m], shape (ny,)."""
+        return self.y0 + self.dy * np.arange(self.ny)
+
+    def mesh(self) -> tuple[np.ndarray, np.ndarray]:
+        """Element centres as two (nx, ny) arrays (x, y) [m]."""
+        return np.meshgrid(self.x, self.y, indexing="ij")
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """Outer edges (xmin, xmax, ymin, ymax) [m]."""
+        return (self.x0 - self.dx / 2, self.x0 + (self.nx - 0.5) * self.dx,
+                self.y0 - self.dy / 2, self.y0 + (self.ny - 0.5) * self.dy)
+
+    def same_elements(self, other: Grid) -> bool:
+        """True when ``other`` has the same element count and size (so the same influence
+        operator applies), whatever its position."""
+        return (self.nx, self.ny) == (other.nx, other.ny) and np.isclose(
+            self.dx, other.dx, rtol=1e-12) and np.isclose(self.dy, other.dy, rtol=1e-12)
+
+
+def touches_boundary(mask: np.ndarray) -> bool:
+    """True when any element on the outer ring of the grid is set in ``mask``."""
+    return bool(mask[0, :].any() or mask[-1, :].any() or mask[:, 0].any() or mask[:, -1].any())

@@ -1,0 +1,170 @@
+"""Hertz's solution for two elastic bodies with a quadratic undeformed gap.
+
+The gap near the initial contact point is ``h(x, y) = A x^2 + B y^2`` with the
+longitudinal and lateral relative curvatures ``A``, ``B`` [1/m]. The contact patch is the
+ellipse ``x^2/a^2 + y^2/b^2 <= 1`` (``a`` along x) carrying
+
+    p(x, y) = p0 sqrt(1 - x^2/a^2 - y^2/b^2),   p0 = 3 N / (2 pi a b).
+
+The equations are solved directly (no table interpolation), following Johnson (1985,
+eq. 4.39) and CONTACT (``m_hertz.f90:hzcalc3d``). With ``g = b_min / a_max`` and the
+eccentricity ``e^2 = 1 - g^2``, ``K(e)`` and ``E(e)`` the complete elliptic integrals:
+
+* shape:        ``B_max/B_min = (E(e)/g^2 - K(e)) / (K(e) - E(e))``  (larger curvature
+  across the short axis),
+* size:         ``c^3 = 3 N rho E(e) / (4 pi E* sqrt(g))``, ``c = sqrt(a b)``,
+  ``rho = 2 / (A + B)``,
+* approach:     ``delta = b_min^2 (A + B) K(e) / E(e)``.
+
+An identity used by the virtual-penetration models: ``A a^2 + B b^2 = delta``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.special import ellipe, ellipk, elliprd, elliprf
+
+from .errors import RailContactError, check_positive
+from .materials import ElasticPair
+
+_CIRCLE_TOL = 1e-12
+
+
+def _shape_ratio(m: float) -> float:
+    """Curvature ratio B_max/B_min of a Hertz ellipse with parameter m = e^2 = 1 - g^2.
+
+    ``(E/(1-m) - K) / (K - E)`` written with Carlson's integrals (``K = R_F``,
+    ``K - E = (m/3) R_D``, both at (0, 1-m, 1)) as ``(3 R_F/R_D - 1)/(1 - m)``, which does
+    not cancel for nearly circular patches (m -> 0), where ``K - E`` loses all digits.
+    """
+    rf, rd = elliprf(0.0, 1.0 - m, 1.0), elliprd(0.0, 1.0 - m, 1.0)
+    return (3.0 * rf / rd - 1.0) / (1.0 - m)
+
+
+def axis_ratio(curvature_ratio: float) -> float:
+    """Ratio ``g = b_min / a_max <= 1`` of the Hertz ellipse for ``B_max / B_min`` >= 1.
+
+    Solves the shape equation by Brent's method on the parameter ``m = e^2``.
+    """
+    r = float(curvature_ratio)
+    if not r >= 1.0:
+        raise RailContactError(f"curvature ratio must be >= 1, got {r}")
+    if r - 1.0 < _CIRCLE_TOL:
+        return 1.0
+    # _shape_ratio grows monotonically from 1 (m -> 0) to infinity (m -> 1).
+    lo, hi = 0.0, 1.0 - 1e-16
+    if _shape_ratio(hi) < r:  # more slender than double precision resolves
+        raise RailContactError(f"curvature ratio {r:g} is too large for the Hertz solution")
+    m = brentq(lambda mm: _shape_ratio(mm) - r, lo, hi, xtol=1e-300, rtol=4 * np.finfo(float).eps,
+               maxiter=500)
+    return math.sqrt(1.0 - m)
+
+
+def curvature_ratio(g: float) -> float:
+    """Inverse of :func:`axis_ratio`: ``B_max / B_min`` for the axis ratio ``g`` in (0, 1]."""
+    g = float(g)
+    if not 0.0 < g <= 1.0:
+        raise RailContactError(f"axis ratio must lie in (0, 1], got {g}")
+    if 1.0 - g < 1e-12:
+        return 1.0
+    return float(_shape_ratio(1.0 - g * g))
+
+
+@dataclass(frozen=True)
+class HertzSolution:
+    """Hertz's solution. All quantities in SI units.
+
+    Attributes
+    ----------
+    A, B
+        Longitudinal and lateral relative curvatures [1/m].
+    a, b
+        Semi-axes along x (rolling) and y (lateral) [m].
+    load
+        Normal force N [N].
+    penetration
+        Approach of distant points delta [m].
+    max_pressure
+        p0 = 3 N / (2 pi a b) [Pa].
+    e_star
+        Contact modulus E* [Pa].
+    """
+
+    A: float
+    B: float
+    a: float
+    b: float
+    load: float
+    penetration: float
+    max_pressure: float
+    e_star: float
+
+    @property
+    def area(self) -> float:
+        """Contact area pi a b [m^2]."""
+        return math.pi * self.a * self.b
+
+    def pressure(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Pressure [Pa] at points (x, y) [m] (broadcast), zero outside the ellipse."""
+        s = 1.0 - (np.asarray(x) / self.a) ** 2 - (np.asarray(y) / self.b) ** 2
+        return self.max_pressure * np.sqrt(np.clip(s, 0.0, None))
+
+
+def hertz(
+    A: float,
+    B: float,
+    pair: ElasticPair,
+    *,
+    load: float | None = None,
+    penetration: float | None = None,
+) -> HertzSolution:
+    """Hertz's solution for curvatures ``A``, ``B`` and either the load or the penetration.
+
+    Parameters
+    ----------
+    A, B
+        Relative curvatures of the undeformed gap ``h = A x^2 + B y^2`` [1/m]; both > 0.
+    pair
+        Combined elastic parameters of the two bodies.
+    load
+        Normal force N [N] (give this or ``penetration``).
+    penetration
+        Approach delta [m] (give this or ``load``).
+
+    Returns
+    -------
+    HertzSolution
+    """
+    A = check_positive("curvature A", A, "1/m")
+    B = check_positive("curvature B", B, "1/m")
+    if (load is None) == (penetration is None):
+        raise RailContactError("give exactly one of load [N] and penetration [m]")
+    e_star = pair.e_star
+    g = axis_ratio(max(A, B) / min(A, B))
+    m = 1.0 - g * g
+    k, e = (ellipk(m), ellipe(m)) if m > 0 else (math.pi / 2, math.pi / 2)
+    rho = 2.0 / (A + B)
+
+    def from_load(n: float) -> tuple[float, float, float]:
+        c = (3.0 * n * rho * e / (4.0 * math.pi * e_star * math.sqrt(g))) ** (1.0 / 3.0)
+        major, minor = c / math.sqrt(g), c * math.sqrt(g)
+        delta = minor**2 * (A + B) * k / e
+        return major, minor, delta
+
+    if load is not None:
+        n = check_positive("load", load, "N", allow_zero=True)
+    else:
+        delta_target = check_positive("penetration", penetration, "m", allow_zero=True)
+        _, _, delta1 = from_load(1.0)
+        n = (delta_target / delta1) ** 1.5
+    major, minor, delta = from_load(n)
+    if penetration is not None:
+        delta = float(penetration)
+    a, b = (major, minor) if A <= B else (minor, major)
+    p0 = 3.0 * n / (2.0 * math.pi * a * b) if n > 0 else 0.0
+    return HertzSolution(A=A, B=B, a=a, b=b, load=n, penetration=delta, max_pressure=p0,
+                         e_star=e_star)

@@ -1,0 +1,269 @@
+"""Normal contact on a half-space by the Polonsky–Keer extended conjugate gradient method.
+
+Problem (per element ``I`` of the potential-contact grid)::
+
+    g_I = h_I + u_I - delta >= 0,   p_I >= 0,   g_I p_I = 0,   u = A_zz * p
+
+with the undeformed gap ``h`` [m], the elastic displacement difference ``u`` [m] from the
+influence operator, the rigid approach (penetration) ``delta`` [m] and the pressure ``p``
+[Pa]. Either ``delta`` is prescribed (penetration control) or the total force
+``F = dx dy sum p`` [N] (force control; ``delta`` is then the mean of ``h + u`` over the
+contact set, Polonsky & Keer, Wear 231 (1999) 206–219).
+
+Convergence: iteration ``k`` stops when the relative change of the pressure
+
+    eps_k = sum_I |p_I^k - p_I^(k-1)| / sum_I p_I^k
+
+falls below the tolerance ``eps_n`` (the paper's normal tolerance). The iteration count is
+the number of CG steps taken (each costs two convolutions).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RailContactError, check_positive
+from ..grid import Grid, touches_boundary
+from ..operator import InfluenceOperator
+
+
+@dataclass
+class NormalResult:
+    """Solution of the normal contact problem on a grid (SI units).
+
+    Attributes
+    ----------
+    grid
+        The potential-contact grid.
+    pressure
+        Pressure per element [Pa], shape (nx, ny).
+    contact
+        Contact mask (pressure > 0), shape (nx, ny).
+    gap
+        Deformed gap ``h + u - delta`` [m] (zero in contact, positive outside).
+    force
+        Total normal force [N].
+    penetration
+        Rigid approach delta [m].
+    max_pressure
+        Largest element pressure [Pa].
+    area
+        Contact area (contact elements times element area) [m^2].
+    iterations
+        CG iterations taken.
+    converged
+        True when the tolerance was reached within ``max_iterations``.
+    message
+        What happened, in words.
+    wall_time
+        Solver wall time [s].
+    error
+        The final relative pressure change eps.
+    history
+        eps after each iteration.
+    touches_boundary
+        True when the contact reaches the outer ring of the potential area (the area is
+        then probably too small).
+    """
+
+    grid: Grid
+    pressure: np.ndarray
+    contact: np.ndarray
+    gap: np.ndarray
+    force: float
+    penetration: float
+    max_pressure: float
+    area: float
+    iterations: int
+    converged: bool
+    message: str
+    wall_time: float
+    error: float
+    history: np.ndarray = field(repr=False)
+    touches_boundary: bool = False
+
+
+def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
+    if value is None:
+        return None
+    a = np.asarray(value, dtype=float)
+    if a.shape != shape:
+        raise RailContactError(f"{name} must have the grid shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise RailContactError(f"{name} contains NaN or infinite values")
+    return a
+
+
+def _uniform_start(gap: np.ndarray, operator: InfluenceOperator, penetration: float) -> np.ndarray:
+    """Best uniform pressure for penetration control: minimises the complementary energy
+    0.5 p.Ap - p.(delta - h) over p = c * 1, floored at a tiny positive value."""
+    k1 = float(np.sum(operator.apply(np.ones_like(gap))))
+    c = float(np.sum(penetration - gap)) / k1
+    return np.full_like(gap, max(c, 1e-6 * penetration * gap.size / k1))
+
+
+def solve_normal(
+    gap: np.ndarray,
+    grid: Grid,
+    operator: InfluenceOperator,
+    *,
+    load: float | None = None,
+    penetration: float | None = None,
+    initial_pressure: np.ndarray | None = None,
+    initial_contact: np.ndarray | None = None,
+    tolerance: float = 1e-3,
+    max_iterations: int = 500,
+) -> NormalResult:
+    """Solve the frictionless normal contact problem by Polonsky–Keer's CG method.
+
+    Parameters
+    ----------
+    gap
+        Undeformed gap h [m] at the element centres, shape (nx, ny). Any constant offset
+        is allowed under force control; under penetration control ``delta`` is measured
+        from ``h = 0``.
+    grid
+        The potential-contact grid.
+    operator
+        Influence operator with component ``"z"`` for this grid's element size.
+    load
+        Total normal force [N] (force control). Give this or ``penetration``.
+    penetration
+        Rigid approach delta [m] (penetration control).
+    initial_pressure
+        Initial estimate of the pressure [Pa] on this grid (e.g. Hertz, INFCON, the
+        previous time step). Negative values are set to zero; under force control it is
+        rescaled to the load. Default: a small uniform pressure on the whole grid, as in
+        the paper's "w/o initial estimate".
+    initial_contact
+        Initial contact mask; elements outside it start with zero pressure.
+    tolerance
+        eps_n, the relative pressure change at which iteration stops (see module doc).
+    max_iterations
+        Largest number of CG iterations.
+
+    Returns
+    -------
+    NormalResult
+    """
+    t0 = time.perf_counter()
+    shape = grid.shape
+    h = _check_field("gap", gap, shape)
+    if h is None:
+        raise RailContactError("gap is required")
+    if operator.components != "z" or (operator.nx, operator.ny) != shape:
+        raise RailContactError("operator must be a 'z' influence operator for this grid")
+    tolerance = check_positive("tolerance", tolerance)
+    if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or \
+            max_iterations < 1:
+        raise RailContactError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    if (load is None) == (penetration is None):
+        raise RailContactError("give exactly one of load [N] and penetration [m]")
+    force_control = load is not None
+    if force_control:
+        load = check_positive("load", load, "N", allow_zero=True)
+    else:
+        penetration = check_positive("penetration", penetration, "m", allow_zero=True)
+    p = _check_field("initial_pressure", initial_pressure, shape)
+    mask = None if initial_contact is None else np.asarray(initial_contact, dtype=bool)
+    if mask is not None and mask.shape != shape:
+        raise RailContactError(f"initial_contact must have the grid shape {shape}, "
+                               f"got {mask.shape}")
+    area_el = grid.element_area
+
+    def finish(p, u, delta, its, converged, message, err, hist):
+        contact = p > 0.0
+        return NormalResult(
+            grid=grid, pressure=p, contact=contact, gap=h + u - delta,
+            force=float(p.sum() * area_el), penetration=float(delta),
+            max_pressure=float(p.max(initial=0.0)), area=float(contact.sum() * area_el),
+            iterations=its, converged=converged, message=message,
+            wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
+            touches_boundary=touches_boundary(contact))
+
+    zeros = np.zeros(shape)
+    # Trivial cases: no load, or no interpenetration anywhere.
+    if force_control and load == 0.0:
+        return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
+    if not force_control and np.all(h >= penetration):
+        return finish(zeros, zeros, penetration, 0, True,
+                      "no contact: penetration below the smallest gap", 0.0, [])
+
+    # Start.
+    if p is None:
+        p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
+    else:
+        p = np.clip(p, 0.0, None)
+    if mask is not None:
+        p = np.where(mask, p, 0.0)
+    if not np.any(p > 0):
+        p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
+            _uniform_start(h, operator, penetration)
+    if force_control:
+        p *= load / (area_el * p.sum())
+
+    t = np.zeros(shape)
+    g_old = 1.0
+    conjugate = False
+    hist: list[float] = []
+    err = np.inf
+    its = 0
+    converged = False
+    delta = penetration if not force_control else 0.0
+    for its in range(1, int(max_iterations) + 1):
+        u = operator.apply(p)
+        c = p > 0.0
+        if not c.any():  # pressure vanished (possible under penetration control)
+            c = (h + u - delta) < 0
+        g = h + u
+        if force_control:
+            delta = float(g[c].mean())
+        g -= delta
+        gg = float(np.dot(g[c], g[c]))
+        t = np.where(c, g + (gg / g_old if conjugate else 0.0) * t, 0.0)
+        g_old = gg
+        r = operator.apply(t)
+        if force_control:
+            r -= r[c].mean()
+        rt = float(np.dot(r[c], t[c]))
+        if rt <= 0.0 or gg == 0.0:  # exact solution on the current set
+            tau = 0.0
+        else:
+            tau = float(np.dot(g[c], t[c])) / rt
+        p_old = p
+        p = p - tau * t
+        np.maximum(p, 0.0, out=p)
+        overlap = (p == 0.0) & (g < 0.0)
+        conjugate = not overlap.any()
+        if not conjugate:
+            p[overlap] -= tau * g[overlap]
+        if force_control:
+            total = p.sum()
+            if total <= 0.0:
+                return finish(p, u, delta, its, False, "pressure vanished", np.inf, hist)
+            p *= load / (area_el * total)
+        total = p.sum()
+        err = float(np.abs(p - p_old).sum() / total) if total > 0 else 0.0
+        hist.append(err)
+        if not np.isfinite(err):
+            break
+        if err < tolerance:
+            converged = True
+            break
+
+    u = operator.apply(p)
+    c = p > 0.0
+    if force_control:
+        delta = float((h + u)[c].mean()) if c.any() else float(h.min())
+    if converged:
+        message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
+    else:
+        message = (f"not converged: eps = {err:.3g} after {its} iterations "
+                   f"(tolerance {tolerance:g})")
+    res = finish(p, u, delta, its, converged, message, err, hist)
+    if res.touches_boundary:
+        res.message += "; contact reaches the edge of the potential contact area"
+    return res

@@ -1,0 +1,235 @@
+"""The influence operator: tractions on a grid -> surface displacement differences.
+
+``u_a[I] = sum_b sum_J A_ab[I - J] p_b[J]`` for traction components ``b`` and displacement
+components ``a`` among ``x, y, z``. The sum is a 2-D linear (non-periodic) convolution,
+evaluated by DC-FFT (Liu, Wang & Liu, Wear 243, 2000): the kernel over all offsets is laid
+out in wrap-around order on a ``2nx * 2ny`` array and the traction is zero-padded to the
+same size, so the circular convolution of the padded arrays equals the linear one on the
+grid. The kernel spectra are computed once per operator; FFT plans are cached per padded
+shape (and per thread, so concurrent solvers never share buffers).
+
+Backends
+--------
+``"pyfftw"``  planned FFTW transforms (FFTW_MEASURE, one thread) — the fast path;
+``"scipy"``   ``scipy.fft`` (one worker) — the fallback when pyfftw is missing;
+``"dense"``   the full influence matrix — exact reference, and fastest on tiny grids;
+``"auto"``    dense for at most :data:`DENSE_MAX` elements, else pyfftw if importable,
+              else scipy.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+from functools import lru_cache
+
+import numpy as np
+import scipy.fft
+
+from .errors import RailContactError
+from .grid import Grid
+from .influence import influence_kernel
+from .materials import ElasticPair
+
+try:  # pragma: no cover - exercised through the backend tests
+    import pyfftw
+
+    HAVE_PYFFTW = True
+except ImportError:  # pragma: no cover
+    pyfftw = None
+    HAVE_PYFFTW = False
+
+BACKENDS = ("auto", "pyfftw", "scipy", "dense")
+DENSE_MAX = 144
+"""Largest grid (elements) on which ``"auto"`` uses the dense product."""
+
+_local = threading.local()
+
+
+class _FFTWPlan:
+    """A forward r2c and backward c2r FFTW plan pair with their own aligned buffers."""
+
+    def __init__(self, shape: tuple[int, int]):
+        m, n = shape
+        self.real_in = pyfftw.zeros_aligned((m, n), dtype="float64")
+        self.spec_out = pyfftw.empty_aligned((m, n // 2 + 1), dtype="complex128")
+        self.spec_in = pyfftw.empty_aligned((m, n // 2 + 1), dtype="complex128")
+        self.real_out = pyfftw.empty_aligned((m, n), dtype="float64")
+        flags = ("FFTW_MEASURE",)
+        self.forward = pyfftw.FFTW(self.real_in, self.spec_out, axes=(0, 1), flags=flags,
+                                   threads=1)
+        self.backward = pyfftw.FFTW(self.spec_in, self.real_out, axes=(0, 1),
+                                    direction="FFTW_BACKWARD", flags=flags, threads=1)
+        self.real_in[...] = 0.0
+
+
+def _fftw_plan(shape: tuple[int, int]) -> _FFTWPlan:
+    cache = getattr(_local, "plans", None)
+    if cache is None:
+        cache = _local.plans = {}
+    plan = cache.get(shape)
+    if plan is None:
+        plan = cache[shape] = _FFTWPlan(shape)
+    return plan
+
+
+def _wraparound(kernel: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    """Lay the offset kernel (2nx-1, 2ny-1) out in DC-FFT wrap-around order (2nx, 2ny)."""
+    k = np.zeros((2 * nx, 2 * ny))
+    k[:nx, :ny] = kernel[nx - 1:, ny - 1:]
+    k[nx + 1:, :ny] = kernel[:nx - 1, ny - 1:]
+    k[:nx, ny + 1:] = kernel[nx - 1:, :ny - 1]
+    k[nx + 1:, ny + 1:] = kernel[:nx - 1, :ny - 1]
+    return k
+
+
+def _dense_matrix(kernel: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    """Full (nx*ny, nx*ny) matrix A[I, J] = kernel[I - J] (row-major element order)."""
+    i = np.arange(nx)
+    j = np.arange(ny)
+    di = (i[:, None] - i[None, :]) + nx - 1  # (nx, nx)
+    dj = (j[:, None] - j[None, :]) + ny - 1  # (ny, ny)
+    m = kernel[di[:, None, :, None], dj[None, :, None, :]]  # (nx, ny, nx, ny)
+    return m.reshape(nx * ny, nx * ny)
+
+
+def resolve_backend(backend: str, size: int) -> str:
+    """The concrete backend that ``backend`` means for a grid of ``size`` elements."""
+    if backend not in BACKENDS:
+        raise RailContactError(f"fft backend must be one of {BACKENDS}, got {backend!r}")
+    if backend == "auto":
+        if size <= DENSE_MAX:
+            return "dense"
+        return "pyfftw" if HAVE_PYFFTW else "scipy"
+    if backend == "pyfftw" and not HAVE_PYFFTW:
+        raise RailContactError("fft backend 'pyfftw' requested but pyfftw is not installed; "
+                               "pip install pyfftw, or choose 'scipy'")
+    return backend
+
+
+class InfluenceOperator:
+    """Linear operator from traction components to displacement components on a grid.
+
+    Parameters
+    ----------
+    grid
+        The potential-contact grid (only element count and size matter).
+    pair
+        Combined elastic parameters of the two bodies.
+    components
+        Traction/displacement components handled, e.g. ``"z"`` (normal problem) or
+        ``"xy"`` (tangential problem with quasi-identical materials) or ``"xyz"``.
+    backend
+        One of :data:`BACKENDS`.
+
+    Notes
+    -----
+    ``apply`` takes an array of shape ``(nx, ny)`` for one component or
+    ``(ncomp, nx, ny)`` for several, in Pa, and returns displacements in m.
+    """
+
+    def __init__(self, grid: Grid, pair: ElasticPair, components: str = "z",
+                 backend: str = "auto"):
+        if not components or any(c not in "xyz" for c in components) or len(
+                set(components)) != len(components):
+            raise RailContactError(f"components must be distinct letters of 'xyz', got "
+                                   f"{components!r}")
+        self.nx, self.ny = grid.nx, grid.ny
+        self.dx, self.dy = grid.dx, grid.dy
+        self.pair = pair
+        self.components = components
+        self.backend = resolve_backend(backend, grid.size)
+        nc = len(components)
+        self.kernels = np.stack([
+            np.stack([influence_kernel(a + b, self.nx, self.ny, self.dx, self.dy, pair)
+                      for b in components]) for a in components])  # (nc, nc, 2nx-1, 2ny-1)
+        nx, ny = self.nx, self.ny
+        self._padded = (2 * nx, 2 * ny)
+        if self.backend == "dense":
+            self._matrix = np.block([[_dense_matrix(self.kernels[a, b], nx, ny)
+                                      for b in range(nc)] for a in range(nc)])
+        else:
+            wrapped = np.stack([[_wraparound(self.kernels[a, b], nx, ny) for b in range(nc)]
+                                for a in range(nc)])
+            # 1/N of the inverse transform folded into the spectra (FFTW does not scale).
+            self._spectra = np.fft.rfft2(wrapped) / (4 * nx * ny)
+            if self.backend == "pyfftw":
+                _fftw_plan(self._padded)  # plan now, not inside the first solve
+
+    @property
+    def self_coefficient(self) -> np.ndarray:
+        """The (nc, nc) block of an element's influence on itself [m/Pa]."""
+        return self.kernels[:, :, self.nx - 1, self.ny - 1].copy()
+
+    def kernel(self, block: str) -> np.ndarray:
+        """Offset kernel of one block, e.g. ``"zz"``, shape (2nx-1, 2ny-1) [m/Pa]."""
+        a, b = (self.components.index(c) for c in block)
+        return self.kernels[a, b]
+
+    def apply(self, traction: np.ndarray) -> np.ndarray:
+        """Displacement differences [m] due to ``traction`` [Pa]."""
+        p = np.asarray(traction, dtype=float)
+        single = p.ndim == 2
+        nc = len(self.components)
+        if single:
+            p = p[None]
+        if p.shape != (nc, self.nx, self.ny):
+            raise RailContactError(f"traction must have shape {(nc, self.nx, self.ny)} "
+                                   f"(or {(self.nx, self.ny)} for one component), got "
+                                   f"{np.shape(traction)}")
+        if self.backend == "dense":
+            u = (self._matrix @ p.reshape(-1)).reshape(nc, self.nx, self.ny)
+        elif self.backend == "pyfftw":
+            u = self._apply_fftw(p)
+        else:
+            u = self._apply_scipy(p)
+        return u[0] if single else u
+
+    def _apply_fftw(self, p: np.ndarray) -> np.ndarray:
+        plan = _fftw_plan(self._padded)
+        nx, ny = self.nx, self.ny
+        nc = p.shape[0]
+        spectra = []
+        for b in range(nc):
+            plan.real_in[:nx, :ny] = p[b]
+            plan.forward.execute()
+            spectra.append(plan.spec_out.copy() if nc > 1 else plan.spec_out)
+        u = np.empty((nc, nx, ny))
+        for a in range(nc):
+            np.multiply(self._spectra[a, 0], spectra[0], out=plan.spec_in)
+            for b in range(1, nc):
+                plan.spec_in += self._spectra[a, b] * spectra[b]
+            plan.backward.execute()
+            u[a] = plan.real_out[:nx, :ny]
+        return u
+
+    def _apply_scipy(self, p: np.ndarray) -> np.ndarray:
+        nx, ny = self.nx, self.ny
+        spec = scipy.fft.rfft2(p, s=self._padded, workers=1)  # (nc, 2nx, ny+1)
+        prod = np.einsum("abij,bij->aij", self._spectra, spec)
+        return scipy.fft.irfft2(prod, s=self._padded, workers=1)[:, :nx, :ny] * (4 * nx * ny)
+
+    def dense(self) -> np.ndarray:
+        """The full influence matrix (nc*nx*ny, nc*nx*ny) [m/Pa] (for tests and tiny grids)."""
+        nc = len(self.components)
+        return np.block([[_dense_matrix(self.kernels[a, b], self.nx, self.ny)
+                          for b in range(nc)] for a in range(nc)])
+
+
+@lru_cache(maxsize=32)
+def _cached_operator(nx: int, ny: int, dx: float, dy: float, pair: ElasticPair,
+                     components: str, backend: str) -> InfluenceOperator:
+    return InfluenceOperator(Grid(nx, ny, dx, dy, 0.0, 0.0), pair, components, backend)
+
+
+def influence_operator(grid: Grid, pair: ElasticPair, components: str | Sequence[str] = "z",
+                       backend: str = "auto") -> InfluenceOperator:
+    """A cached :class:`InfluenceOperator` for the element count and size of ``grid``.
+
+    Repeated calls with the same element count, element size, materials, components and
+    backend return the same object, so the influence coefficients and kernel spectra are
+    computed once (the FMU and the studies call the solver thousands of times).
+    """
+    comps = "".join(components)
+    return _cached_operator(grid.nx, grid.ny, float(grid.dx), float(grid.dy), pair, comps,
+                            resolve_backend(backend, grid.size))

@@ -1,0 +1,158 @@
+"""From a validated case to a solution: geometry -> grid -> estimate -> BEM -> result."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .case import load_case, validate_case
+from .errors import CaseError
+from .grid import Grid
+from .hertz import HertzSolution, hertz
+from .materials import ElasticPair, Material
+from .normal import NormalResult, solve_normal
+from .operator import influence_operator
+
+GROW_FACTOR = 1.5
+MAX_GROW = 4
+
+
+@dataclass
+class PatchSolution:
+    """Solution on one contact patch.
+
+    Attributes
+    ----------
+    normal
+        The BEM normal solution.
+    hertz
+        Hertz's solution for the same curvatures and the same load (force control) or
+        penetration (penetration control), for comparison and as an estimate.
+    estimate
+        The name of the initial estimate used.
+    """
+
+    normal: NormalResult
+    hertz: HertzSolution | None = None
+    estimate: str = "none"
+
+    def to_dict(self) -> dict[str, Any]:
+        n = self.normal
+        d: dict[str, Any] = {
+            "normal": {
+                "force": n.force, "penetration": n.penetration,
+                "max_pressure": n.max_pressure, "area": n.area,
+                "iterations": n.iterations, "converged": n.converged,
+                "message": n.message, "wall_time": n.wall_time, "error": n.error,
+                "estimate": self.estimate,
+                "grid": {"nx": n.grid.nx, "ny": n.grid.ny, "dx": n.grid.dx, "dy": n.grid.dy,
+                         "bounds": list(n.grid.bounds)},
+            }
+        }
+        if self.hertz is not None:
+            h = self.hertz
+            d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,
+                          "max_pressure": h.max_pressure, "area": h.area}
+        return d
+
+
+@dataclass
+class Solution:
+    """The solution of a case: one entry per contact patch."""
+
+    case: dict[str, Any]
+    patches: list[PatchSolution] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (SI units)."""
+        return {"name": self.case.get("name", "case"),
+                "patches": [p.to_dict() for p in self.patches]}
+
+
+def elastic_pair(material: dict[str, Any]) -> ElasticPair:
+    """Combined elastic parameters from the case's [material] table."""
+    young, poisson = material["young"], material["poisson"]
+    ys = young if isinstance(young, list) else [young]
+    ns = poisson if isinstance(poisson, list) else [poisson]
+    if len(ys) == 1 and len(ns) == 2:
+        ys = ys * 2
+    if len(ns) == 1 and len(ys) == 2:
+        ns = ns * 2
+    bodies = [Material(float(e), float(n)) for e, n in zip(ys, ns, strict=True)]
+    return ElasticPair.of(*bodies)
+
+
+def potential_area(A: float, B: float, delta0: float, margin: float = 1.0
+                   ) -> tuple[float, float, float, float]:
+    """Potential contact area for a quadratic gap (paper Sec. 2.1) [m].
+
+    ``A x^2 <= delta0`` and ``B y^2 <= delta0``, i.e. the rigid interpenetration region
+    for the estimated penetration ``delta0``, scaled by ``margin``. It contains the Hertz
+    ellipse, since ``A a^2 + B b^2 = delta0``.
+    """
+    xl = margin * math.sqrt(delta0 / A)
+    yl = margin * math.sqrt(delta0 / B)
+    return (-xl, xl, -yl, yl)
+
+
+def _make_grid(spec: dict[str, Any], bounds: tuple[float, float, float, float]) -> Grid:
+    xmin, xmax, ymin, ymax = bounds
+    nx, ny = spec["nx"], spec["ny"]
+    if "dx" in spec:
+        nx = max(2, math.ceil((xmax - xmin) / spec["dx"] - 1e-9))
+        xc = 0.5 * (xmin + xmax)
+        xmin, xmax = xc - nx * spec["dx"] / 2, xc + nx * spec["dx"] / 2
+    if "dy" in spec:
+        ny = max(2, math.ceil((ymax - ymin) / spec["dy"] - 1e-9))
+        yc = 0.5 * (ymin + ymax)
+        ymin, ymax = yc - ny * spec["dy"] / 2, yc + ny * spec["dy"] / 2
+    return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)
+
+
+def solve(case: dict[str, Any] | str | Path) -> Solution:
+    """Solve a contact case.
+
+    Parameters
+    ----------
+    case
+        A case dictionary (schema in :mod:`railcontact.case`) or the path of a TOML file.
+
+    Returns
+    -------
+    Solution
+    """
+    case = load_case(case) if isinstance(case, (str, Path)) else validate_case(case)
+    pair = elastic_pair(case["material"])
+    geo, gspec, nspec = case["geometry"], case["grid"], case["normal"]
+    A, B = float(geo["A"]), float(geo["B"])
+    control = {"load": nspec["load"]} if "load" in nspec else {
+        "penetration": nspec["penetration"]}
+    hz = hertz(A, B, pair, **control)
+
+    automatic = "x" not in gspec or "y" not in gspec
+    auto = potential_area(A, B, hz.penetration if hz.penetration > 0 else 1e-12,
+                          gspec["margin"])
+    bounds = (*gspec.get("x", auto[:2]), *gspec.get("y", auto[2:]))
+
+    for _ in range(MAX_GROW + 1):
+        grid = _make_grid(gspec, bounds)
+        op = influence_operator(grid, pair, "z", nspec["fft"])
+        X, Y = grid.mesh()
+        gap = A * X**2 + B * Y**2
+        p0 = hz.pressure(X, Y) if nspec["estimate"] == "hertz" else None
+        res = solve_normal(gap, grid, op, initial_pressure=p0, tolerance=nspec["tolerance"],
+                           max_iterations=nspec["max_iterations"], **control)
+        if not res.touches_boundary:
+            break
+        if not automatic:
+            raise CaseError(
+                "potential contact area too small: the contact reaches the edge of [grid] "
+                f"x = {gspec.get('x')} , y = {gspec.get('y')} m; enlarge it or leave x and y "
+                "out for an automatic area")
+        xmin, xmax, ymin, ymax = bounds
+        bounds = (xmin * GROW_FACTOR, xmax * GROW_FACTOR, ymin * GROW_FACTOR, ymax * GROW_FACTOR)
+    return Solution(case=case, patches=[PatchSolution(normal=res, hertz=hz,
+                                                      estimate=nspec["estimate"])])
+

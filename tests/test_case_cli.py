@@ -1,0 +1,120 @@
+"""Case files, the solve() API and the command line."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from railcontact import CaseError, hertz, load_case, solve
+from railcontact.pipeline import elastic_pair
+
+
+def paper_case(**normal):
+    case = {
+        "material": {"young": 206e9, "poisson": 0.28},
+        "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+        "grid": {"nx": 48, "ny": 48},
+        "normal": {"penetration": 1e-4, "tolerance": 1e-3},
+    }
+    case["normal"].update(normal)
+    return case
+
+
+def test_shipped_paper_case(root):
+    case = load_case(root / "models" / "cases" / "hertz_paper.toml")
+    assert case["geometry"]["A"] == 1.0 and case["geometry"]["B"] == 5.0
+    assert case["normal"]["penetration"] == 1e-4 and case["normal"]["tolerance"] == 1e-3
+    assert case["material"] == {"young": 206e9, "poisson": 0.28}
+    sol = solve(case)
+    n = sol.patches[0].normal
+    hz = hertz(1.0, 5.0, elastic_pair(case["material"]), penetration=1e-4)
+    assert n.converged
+    assert n.force == pytest.approx(hz.load, rel=0.01)
+    assert n.max_pressure == pytest.approx(hz.max_pressure, rel=0.01)
+
+
+def test_force_controlled_case():
+    case = paper_case()
+    del case["normal"]["penetration"]
+    case["normal"]["load"] = 50e3
+    n = solve(case).patches[0].normal
+    assert n.force == pytest.approx(50e3, rel=1e-12)
+    hz = hertz(1.0, 5.0, elastic_pair(case["material"]), load=50e3)
+    assert n.penetration == pytest.approx(hz.penetration, rel=0.01)
+
+
+def test_estimate_reduces_iterations_through_api():
+    none = solve(paper_case(estimate="none")).patches[0].normal
+    hz = solve(paper_case(estimate="hertz")).patches[0].normal
+    assert hz.iterations < none.iterations
+
+
+def test_element_size_and_growing_automatic_area():
+    case = paper_case()
+    case["grid"] = {"dx": 5e-4, "dy": 2e-4, "margin": 0.6}  # too small: must grow
+    sol = solve(case)
+    n = sol.patches[0].normal
+    assert not n.touches_boundary and n.converged
+    assert n.grid.dx == pytest.approx(5e-4) and n.grid.dy == pytest.approx(2e-4)
+
+
+@pytest.mark.parametrize("mutate, match", [
+    (lambda c: c["normal"].update(penetration=-1e-4), r"\[normal\] penetration"),
+    (lambda c: c["normal"].update(penetration=float("nan")), "finite"),
+    (lambda c: (c["normal"].pop("penetration"), c["normal"].update(load=-5.0)), r"load"),
+    (lambda c: c["normal"].update(load=1e3), "exactly one"),
+    (lambda c: c["geometry"].update(A=0.0), r"\[geometry\] A"),
+    (lambda c: c["geometry"].update(B=-2.0), r"\[geometry\] B"),
+    (lambda c: c["grid"].update(x=[-1e-3, 1e-3], y=[-1e-3, 1e-3]), "too small"),
+    (lambda c: c["normal"].update(estimate="magic"), "estimate"),
+    (lambda c: c["normal"].update(lod=3), "unknown key"),
+    (lambda c: c.update(extra={}), "unknown table"),
+    (lambda c: c.pop("material"), r"missing table \[material\]"),
+    (lambda c: c["material"].update(poisson=0.7), "poisson"),
+    (lambda c: c["grid"].update(nx=1.5), "nx"),
+])
+def test_bad_cases(mutate, match):
+    case = paper_case()
+    mutate(case)
+    with pytest.raises(CaseError, match=match):
+        solve(case)
+
+
+def test_missing_and_broken_files(tmp_path):
+    with pytest.raises(CaseError, match="not found"):
+        load_case(tmp_path / "nope.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[normal\nload = ")
+    with pytest.raises(CaseError, match="not valid TOML"):
+        load_case(bad)
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "railcontact", *args], capture_output=True,
+                          text=True, timeout=120)
+
+
+def test_cli_json_and_plot(root, tmp_path):
+    png = tmp_path / "patch.png"
+    r = run_cli("solve", str(root / "models/cases/hertz_paper.toml"), "--json", "--plot",
+                str(png))
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    normal = out["patches"][0]["normal"]
+    for key in ("force", "penetration", "max_pressure", "area", "iterations", "converged"):
+        assert key in normal
+    assert normal["converged"] is True
+    assert normal["penetration"] == 1e-4
+    assert png.stat().st_size > 10_000
+
+
+def test_cli_errors_are_one_line(tmp_path):
+    r = run_cli("solve", str(tmp_path / "missing.toml"))
+    assert r.returncode == 2
+    assert "error: case file not found" in r.stderr and "Traceback" not in r.stderr
+    bad = tmp_path / "neg.toml"
+    bad.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\nA = 1.0\nB = 5.0\n'
+                   '[normal]\nload = -10.0\n')
+    r = run_cli("solve", str(bad))
+    assert r.returncode == 2 and "[normal] load" in r.stderr and "Traceback" not in r.stderr

@@ -1,0 +1,170 @@
+"""The Polonsky–Keer normal BEM against Hertz's analytic solution."""
+
+import numpy as np
+import pytest
+
+from railcontact import ElasticPair, Grid, Material, RailContactError, hertz, solve_normal
+from railcontact.hertz import curvature_ratio
+from railcontact.operator import HAVE_PYFFTW, influence_operator
+
+PAIR = ElasticPair.of(Material(206e9, 0.28))
+
+
+def fitted_semi_axis(x: np.ndarray, p: np.ndarray) -> float:
+    """Semi-axis from a centre line of a Hertz-like field: p^2 is linear in x^2 and
+    vanishes at the patch edge, so the zero of the least-squares line is a^2."""
+    c = p > 0
+    slope, intercept = np.polyfit(x[c] ** 2, p[c] ** 2, 1)
+    return float(np.sqrt(-intercept / slope))
+
+
+def curvatures(ab: float) -> tuple[float, float]:
+    """Curvatures (A, B) [1/m] whose Hertz ellipse has a/b = ab."""
+    A = 1.0
+    ratio = curvature_ratio(min(ab, 1 / ab))
+    return A, A * ratio if ab >= 1 else A / ratio
+
+
+def solve_on_box(A, B, hz, n, **kw):
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, n, n)
+    X, Y = g.mesh()
+    op = influence_operator(g, PAIR)
+    return g, solve_normal(A * X**2 + B * Y**2, g, op, tolerance=1e-9, **kw)
+
+
+def errors(g, res, hz):
+    c = g.nx // 2  # odd grids: the centre lines x = 0 and y = 0 exist
+    return {
+        "force": abs(res.force / hz.load - 1),
+        "max_pressure": abs(res.max_pressure / hz.max_pressure - 1),
+        "a": abs(fitted_semi_axis(g.x, res.pressure[:, c]) / hz.a - 1),
+        "b": abs(fitted_semi_axis(g.y, res.pressure[c, :]) / hz.b - 1),
+        "area": abs(res.area / hz.area - 1),
+    }
+
+
+@pytest.mark.parametrize("ab", [0.2, 1.0, 5.0])
+def test_bem_matches_hertz_and_converges(ab):
+    """a/b = 1 is the sphere; 0.2 and 5 are slender ellipses across and along x."""
+    A, B = curvatures(ab)
+    hz = hertz(A, B, PAIR, load=50e3)
+    assert hz.a / hz.b == pytest.approx(ab, rel=1e-9)
+    errs = {}
+    for n in (23, 45, 89):
+        g, res = solve_on_box(A, B, hz, n, penetration=hz.penetration)
+        assert res.converged and not res.touches_boundary
+        errs[n] = errors(g, res, hz)
+    # >= 40 elements across the patch (45 elements over 2.3 a): within 1 %
+    assert 2 * hz.a / g.dx * 45 / 89 >= 39
+    for key in ("force", "max_pressure", "a", "b"):
+        assert errs[45][key] < 0.01, (key, errs[45])
+    # the error falls under refinement
+    for key in ("max_pressure", "a", "b", "area"):
+        assert errs[89][key] < errs[45][key] < errs[23][key], (key, errs)
+    assert errs[89]["force"] < errs[23]["force"]
+
+
+def test_force_and_penetration_control_agree():
+    A, B = 1.0, 5.0
+    hz = hertz(A, B, PAIR, penetration=1e-4)
+    g, by_pen = solve_on_box(A, B, hz, 45, penetration=1e-4)
+    _, by_force = solve_on_box(A, B, hz, 45, load=by_pen.force)
+    assert by_force.penetration == pytest.approx(1e-4, rel=1e-7)
+    assert np.array_equal(by_force.contact, by_pen.contact)
+    assert np.max(np.abs(by_force.pressure - by_pen.pressure)) < 1e-6 * by_pen.max_pressure
+
+
+def test_dissimilar_materials_use_combined_modulus():
+    pair = ElasticPair.of(Material(210e9, 0.3), Material(110e9, 0.34))
+    hz = hertz(2.0, 2.0, pair, load=1e4)
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 45, 45)
+    X, Y = g.mesh()
+    res = solve_normal(2.0 * (X**2 + Y**2), g, influence_operator(g, pair), load=1e4,
+                       tolerance=1e-9)
+    assert res.penetration == pytest.approx(hz.penetration, rel=5e-3)
+    assert res.max_pressure == pytest.approx(hz.max_pressure, rel=5e-3)
+
+
+@pytest.mark.parametrize("backend", ["scipy", "dense"] + (["pyfftw"] if HAVE_PYFFTW else []))
+def test_backends_give_same_solution(backend):
+    hz = hertz(1.0, 5.0, PAIR, penetration=1e-4)
+    g = Grid.from_bounds(-1.2 * hz.a, 1.2 * hz.a, -1.2 * hz.b, 1.2 * hz.b, 12, 12)
+    X, Y = g.mesh()
+    h = X**2 + 5 * Y**2
+    ref = solve_normal(h, g, influence_operator(g, PAIR, "z", "dense"), load=hz.load)
+    res = solve_normal(h, g, influence_operator(g, PAIR, "z", backend), load=hz.load)
+    assert res.iterations == ref.iterations
+    assert np.allclose(res.pressure, ref.pressure, rtol=1e-9, atol=1e-6 * ref.max_pressure)
+
+
+def test_hertz_estimate_cuts_iterations_on_paper_case():
+    """Paper Sec. 4.1.1 (A = 1/m, B = 5/m, delta = 0.1 mm, eps_n = 1e-3): the paper reports
+    13 -> 3 iterations with the INFCON estimate; Hertz is exact here."""
+    A, B, d = 1.0, 5.0, 1e-4
+    hz = hertz(A, B, PAIR, penetration=d)
+    xl, yl = np.sqrt(d / A), np.sqrt(d / B)
+    g = Grid.from_bounds(-xl, xl, -yl, yl, 64, 64)
+    X, Y = g.mesh()
+    h = A * X**2 + B * Y**2
+    op = influence_operator(g, PAIR)
+    cold = solve_normal(h, g, op, penetration=d, tolerance=1e-3)
+    warm = solve_normal(h, g, op, penetration=d, tolerance=1e-3,
+                        initial_pressure=hz.pressure(X, Y))
+    print(f"iterations: none {cold.iterations}, hertz {warm.iterations}")
+    assert cold.converged and warm.converged
+    assert warm.iterations <= cold.iterations / 3
+    assert warm.force == pytest.approx(cold.force, rel=2e-3)
+
+
+def test_no_contact_and_zero_load():
+    g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 8, 8)
+    X, Y = g.mesh()
+    h = 1.0 * X**2 + 1.0 * Y**2 + 1e-6
+    op = influence_operator(g, PAIR)
+    r = solve_normal(h, g, op, penetration=1e-7)
+    assert r.force == 0.0 and r.converged and "no contact" in r.message
+    r = solve_normal(h, g, op, load=0.0)
+    assert r.force == 0.0 and not r.contact.any()
+
+
+def test_too_small_area_is_flagged():
+    hz = hertz(1.0, 1.0, PAIR, load=1e4)
+    g = Grid.from_bounds(-0.5 * hz.a, 0.5 * hz.a, -0.5 * hz.a, 0.5 * hz.a, 16, 16)
+    X, Y = g.mesh()
+    r = solve_normal(X**2 + Y**2, g, influence_operator(g, PAIR), load=1e4)
+    assert r.touches_boundary and "edge of the potential contact area" in r.message
+
+
+def test_nonconvergence_is_reported():
+    hz = hertz(1.0, 1.0, PAIR, load=1e4)
+    g = Grid.from_bounds(-1.2 * hz.a, 1.2 * hz.a, -1.2 * hz.a, 1.2 * hz.a, 32, 32)
+    X, Y = g.mesh()
+    r = solve_normal(X**2 + Y**2, g, influence_operator(g, PAIR), load=1e4, max_iterations=2,
+                     tolerance=1e-12)
+    assert not r.converged and r.iterations == 2 and "not converged" in r.message
+    assert np.all(np.isfinite(r.pressure))
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(load=-1.0), "load"),
+    (dict(load=float("nan")), "load"),
+    (dict(penetration=float("nan")), "penetration"),
+    (dict(), "exactly one"),
+    (dict(load=1.0, tolerance=0.0), "tolerance"),
+    (dict(load=1.0, max_iterations=0), "max_iterations"),
+    (dict(load=1.0, initial_pressure=np.zeros((3, 3))), "initial_pressure"),
+    (dict(load=1.0, initial_pressure=np.full((8, 8), np.nan)), "NaN"),
+])
+def test_bad_input(kwargs, match):
+    g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 8, 8)
+    X, Y = g.mesh()
+    with pytest.raises(RailContactError, match=match):
+        solve_normal(X**2 + Y**2, g, influence_operator(g, PAIR), **kwargs)
+
+
+def test_nan_gap_rejected():
+    g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 8, 8)
+    h = np.zeros((8, 8))
+    h[2, 2] = np.nan
+    with pytest.raises(RailContactError, match="gap"):
+        solve_normal(h, g, influence_operator(g, PAIR), load=1.0)
