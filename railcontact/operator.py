@@ -129,7 +129,7 @@ class InfluenceOperator:
     """
 
     def __init__(self, grid: Grid, pair: ElasticPair, components: str = "z",
-                 backend: str = "auto"):
+                 backend: str = "auto", kernels: np.ndarray | None = None):
         if not components or any(c not in "xyz" for c in components) or len(
                 set(components)) != len(components):
             raise RailContactError(f"components must be distinct letters of 'xyz', got "
@@ -140,14 +140,20 @@ class InfluenceOperator:
         self.components = components
         self.backend = resolve_backend(backend, grid.size)
         nc = len(components)
-        self.kernels = np.stack([
-            np.stack([influence_kernel(a + b, self.nx, self.ny, self.dx, self.dy, pair)
-                      for b in components]) for a in components])  # (nc, nc, 2nx-1, 2ny-1)
+        if kernels is None:
+            kernels = np.stack([
+                np.stack([influence_kernel(a + b, self.nx, self.ny, self.dx, self.dy, pair)
+                          for b in components]) for a in components])
+        else:
+            expected = (nc, nc, 2 * self.nx - 1, 2 * self.ny - 1)
+            if kernels.shape != expected:
+                raise RailContactError(f"kernels must have shape {expected}, "
+                                       f"got {kernels.shape}")
+        self.kernels = kernels  # (nc, nc, 2nx-1, 2ny-1)
         nx, ny = self.nx, self.ny
         self._padded = (2 * nx, 2 * ny)
         if self.backend == "dense":
-            self._matrix = np.block([[_dense_matrix(self.kernels[a, b], nx, ny)
-                                      for b in range(nc)] for a in range(nc)])
+            self._matrix = self.dense()
         else:
             wrapped = np.stack([[_wraparound(self.kernels[a, b], nx, ny) for b in range(nc)]
                                 for a in range(nc)])

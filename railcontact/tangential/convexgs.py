@@ -1,0 +1,407 @@
+"""ConvexGS: Vollebregt's block Gauss–Seidel solver for the steady-rolling tangential problem.
+
+Each sweep visits the elements in contact row by row (increasing y), within a row from the
+trailing to the leading edge (increasing x), as CONTACT's ``cnvxgs`` does. For element ``I``
+the shift ``S = W + sum_J B_IJ p_J`` is evaluated with the current tractions (including
+``p_I``), ``S0 = S - C p_I`` with the 2x2 self-coefficient ``C = B_II``, and:
+
+* adhesion: ``p = -C^-1 S0``, relaxed ``p_I + omega_h (p - p_I)``; accepted when within
+  the bound ``g = mu p_n`` (a relaxed value outside the bound is scaled onto it when the
+  unrelaxed one is inside);
+* slip otherwise: ``p = g (cos a, sin a)`` with ``S(p)`` anti-parallel to ``p``, a scalar
+  Newton iteration on the angle ``a`` from ``-S0/|S0|``, then relaxation of the angle
+  ``a_I + omega_s (a - a_I)``.
+
+Convergence (as CONTACT): ``||p^k - p^(k-1)||_2 < eps_tau ||p^k||_2`` over the elements.
+Defaults ``omega_h = omega_s = 0.5`` are CONTACT's for ConvexGS in steady rolling.
+
+The sweep is compiled with numba (``cache=True``); a numpy implementation of the same sweep
+(vectorised shift per element) is used where numba is missing or on request.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from ..errors import RailContactError, check_finite, check_positive
+from ..grid import Grid
+from ..operator import InfluenceOperator
+from .rolling import rigid_slip
+
+try:
+    import numba
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover
+    numba = None
+    HAVE_NUMBA = False
+
+EXTERIOR, ADHESION, SLIP = 0, 1, 2
+ENGINES = ("auto", "numba", "numpy")
+
+
+def _element_solve(px, py, s0x, s0y, g, c11, c12, c21, c22, omega_h, omega_s):
+    """New traction (px, py) [Pa] and state of one element; see the module docstring."""
+    if g <= 0.0:
+        return 0.0, 0.0, EXTERIOR
+    det = c11 * c22 - c12 * c21
+    fx = (-c22 * s0x + c12 * s0y) / det  # full adhesion: C p = -S0
+    fy = (c21 * s0x - c11 * s0y) / det
+    rx = px + omega_h * (fx - px)
+    ry = py + omega_h * (fy - py)
+    nr = math.hypot(rx, ry)
+    if nr <= g:
+        return rx, ry, ADHESION
+    if math.hypot(fx, fy) <= g:
+        return rx * g / nr, ry * g / nr, ADHESION
+    a0 = math.atan2(-s0y, -s0x)
+    alpha = a0
+    for _ in range(20):
+        c = math.cos(alpha)
+        s = math.sin(alpha)
+        f = s * s0x - c * s0y + g * (c11 * c * s + c12 * s * s - c21 * c * c - c22 * s * c)
+        df = c * s0x + s * s0y + g * ((c11 - c22) * (c * c - s * s) + 2.0 * (c12 + c21) * s * c)
+        if df == 0.0:
+            break
+        step = f / df
+        alpha -= step
+        if abs(step) < 1e-13:
+            break
+    c = math.cos(alpha)
+    s = math.sin(alpha)
+    if c * (s0x + g * (c11 * c + c12 * s)) + s * (s0y + g * (c21 * c + c22 * s)) > 0.0:
+        alpha = a0  # Newton left the dissipative branch: keep the isotropic estimate
+    if px != 0.0 or py != 0.0:
+        a_old = math.atan2(py, px)
+        d = alpha - a_old
+        d = (d + math.pi) % (2.0 * math.pi) - math.pi
+        alpha = a_old + omega_s * d
+    return g * math.cos(alpha), g * math.sin(alpha), SLIP
+
+
+def _block_sweep(rxx, rxy, ryx, ryy, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
+                 c11, c12, c21, c22, omega_h, omega_s):
+    """Gauss–Seidel over the elements of rows r0 .. r1-1 (numba-compiled).
+
+    ``(ux, uy)`` is the shift ``W + B p`` for the tractions at the start of the block;
+    the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
+    direct sum, so every element sees the newest tractions of all elements. Fields are
+    (ny, nx), kernels (2ny-1, 2nx-1) reversed so the inner sum runs over contiguous
+    memory. Returns the squared norm of the updates.
+    """
+    ny, nx = g.shape
+    dif = 0.0
+    for iy in range(r0, r1):
+        for ix in range(lo[iy], hi[iy] + 1):
+            gi = g[iy, ix]
+            if gi <= 0.0:
+                continue
+            sx = ux[iy, ix]
+            sy = uy[iy, ix]
+            bx = nx - 1 - ix
+            for jy in range(r0, r1):
+                r = ny - 1 - iy + jy
+                for jx in range(lo[jy], hi[jy] + 1):
+                    k = bx + jx
+                    qx = dpx[jy, jx]
+                    qy = dpy[jy, jx]
+                    sx += rxx[r, k] * qx + rxy[r, k] * qy
+                    sy += ryx[r, k] * qx + ryy[r, k] * qy
+            ox = px[iy, ix]
+            oy = py[iy, ix]
+            s0x = sx - c11 * ox - c12 * oy
+            s0y = sy - c21 * ox - c22 * oy
+            new_x, new_y, st = _element_solve_c(ox, oy, s0x, s0y, gi, c11, c12, c21, c22,
+                                                omega_h, omega_s)
+            px[iy, ix] = new_x
+            py[iy, ix] = new_y
+            dpx[iy, ix] += new_x - ox
+            dpy[iy, ix] += new_y - oy
+            state[iy, ix] = st
+            dif += (new_x - ox) ** 2 + (new_y - oy) ** 2
+    return dif
+
+
+def _sweep_numpy(rxx, rxy, ryx, ryy, wx, wy, g, px, py, state, lo, hi, c11, c12, c21, c22,
+                 omega_h, omega_s):
+    """The plain sweep: the shift of each element as a vectorised sum over all elements."""
+    ny, nx = g.shape
+    dif = 0.0
+    for iy in range(ny):
+        for ix in range(lo[iy], hi[iy] + 1):
+            if g[iy, ix] <= 0.0:
+                continue
+            win = (slice(ny - 1 - iy, 2 * ny - 1 - iy), slice(nx - 1 - ix, 2 * nx - 1 - ix))
+            sx = wx[iy, ix] + np.vdot(rxx[win], px) + np.vdot(rxy[win], py)
+            sy = wy[iy, ix] + np.vdot(ryx[win], px) + np.vdot(ryy[win], py)
+            ox, oy = px[iy, ix], py[iy, ix]
+            new_x, new_y, st = _element_solve(ox, oy, sx - c11 * ox - c12 * oy,
+                                              sy - c21 * ox - c22 * oy, g[iy, ix], c11, c12,
+                                              c21, c22, omega_h, omega_s)
+            px[iy, ix], py[iy, ix], state[iy, ix] = new_x, new_y, st
+            dif += (new_x - ox) ** 2 + (new_y - oy) ** 2
+    return dif
+
+
+if HAVE_NUMBA:
+    _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
+    _block_sweep_numba = numba.njit(cache=True, fastmath=True)(_block_sweep)
+else:  # pragma: no cover
+    _element_solve_c = _element_solve
+    _block_sweep_numba = None
+
+DIRECT_WORK = 60_000
+"""Target size of a row block in the blocked sweep: (contact elements in the block)^2."""
+
+
+def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, omega_s):
+    """One Gauss–Seidel sweep, row block by row block (see :func:`_block_sweep`); between
+    blocks the shift is brought up to date with one DC-FFT convolution of the block's
+    changes. Same iterates as the plain sweep, at a fraction of its O(k^2) cost."""
+    u = w_t + op.apply(np.stack([px.T, py.T])).transpose(0, 2, 1)
+    ux, uy = np.ascontiguousarray(u[0]), np.ascontiguousarray(u[1])
+    dpx = np.zeros_like(px)
+    dpy = np.zeros_like(py)
+    dif = 0.0
+    for b, (r0, r1) in enumerate(rows):
+        dif += _block_sweep_numba(*kern, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
+                                  *c, omega_h, omega_s)
+        if b + 1 < len(rows):
+            du = op.apply(np.stack([dpx.T, dpy.T]))
+            ux += du[0].T
+            uy += du[1].T
+            dpx[r0:r1] = 0.0
+            dpy[r0:r1] = 0.0
+    return dif
+
+
+def _row_blocks(contact: np.ndarray) -> list[tuple[int, int]]:
+    """Split the rows that hold contact into blocks of about DIRECT_WORK^(1/2) elements."""
+    per_row = contact.sum(axis=1)
+    rows = np.flatnonzero(per_row)
+    if rows.size == 0:
+        return []
+    total = int(per_row.sum())
+    nblocks = max(1, min(rows.size, round(total / math.sqrt(DIRECT_WORK))))
+    target = total / nblocks
+    blocks, start, acc = [], int(rows[0]), 0
+    for r in rows:
+        acc += int(per_row[r])
+        if acc >= target and len(blocks) < nblocks - 1:
+            blocks.append((start, int(r) + 1))
+            start, acc = int(r) + 1, 0
+    blocks.append((start, int(rows[-1]) + 1))
+    return blocks
+
+
+@lru_cache(maxsize=16)
+def _gs_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, ...]:
+    """The operator's 2x2 kernels reversed and transposed to (2ny-1, 2nx-1) for the sweep."""
+    k = operator.kernels
+    return tuple(np.ascontiguousarray(k[a, b][::-1, ::-1].T) for a in (0, 1) for b in (0, 1))
+
+
+@dataclass
+class TangentialResult:
+    """Solution of the steady-rolling tangential problem (SI units).
+
+    Attributes
+    ----------
+    grid
+        The grid.
+    traction
+        Tangential traction (p_x, p_y) on body 1 [Pa], shape (2, nx, ny).
+    state
+        0 exterior, 1 adhesion, 2 slip, shape (nx, ny).
+    slip
+        Relative slip ``S/dx`` (slip velocity divided by rolling speed) [-], (2, nx, ny).
+    force
+        (F_x, F_y) [N].
+    spin_moment
+        M_z = sum (x p_y - y p_x) dA about the grid origin [N m].
+    slip_area_ratio
+        Slip elements / contact elements [-].
+    max_traction
+        Largest |p| [Pa].
+    iterations, converged, message, wall_time, error, history
+        As for the normal solver; ``error`` is ``||dp|| / ||p||`` of the last sweep.
+    """
+
+    grid: Grid
+    traction: np.ndarray
+    state: np.ndarray
+    slip: np.ndarray
+    force: tuple[float, float]
+    spin_moment: float
+    slip_area_ratio: float
+    max_traction: float
+    iterations: int
+    converged: bool
+    message: str
+    wall_time: float
+    error: float
+    history: np.ndarray = field(repr=False)
+
+
+def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
+                       ) -> tuple[tuple[float, float], float, float, float]:
+    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
+    X, Y = grid.mesh()
+    da = grid.element_area
+    fx = float(traction[0].sum() * da)
+    fy = float(traction[1].sum() * da)
+    mz = float((X * traction[1] - Y * traction[0]).sum() * da)
+    ncon = int(np.count_nonzero(state != EXTERIOR))
+    ratio = float(np.count_nonzero(state == SLIP) / ncon) if ncon else 0.0
+    pmax = float(np.hypot(traction[0], traction[1]).max(initial=0.0))
+    return (fx, fy), mz, ratio, pmax
+
+
+def solve_tangential(
+    grid: Grid,
+    operator: InfluenceOperator,
+    pressure: np.ndarray,
+    friction: float,
+    creepage: tuple[float, float, float],
+    *,
+    initial_traction: np.ndarray | None = None,
+    initial_state: np.ndarray | None = None,
+    tolerance: float = 1e-2,
+    max_iterations: int = 1000,
+    omega_h: float = 0.5,
+    omega_s: float = 0.5,
+    engine: str = "auto",
+    spin_offset: float = 1.0 / 6.0,
+) -> TangentialResult:
+    """Solve steady rolling with Coulomb friction by ConvexGS.
+
+    Parameters
+    ----------
+    grid
+        Potential-contact grid, the same as the normal solution's.
+    operator
+        Steady-rolling operator from :func:`railcontact.tangential.rolling_operator`.
+    pressure
+        Normal pressure [Pa], shape (nx, ny) (from the normal solution).
+    friction
+        Coefficient of friction mu [-].
+    creepage
+        (xi, eta, phi): longitudinal, lateral creepage [-] and spin [1/m].
+    initial_traction
+        Initial estimate (2, nx, ny) [Pa]; default zero traction (all adhesion), the paper's
+        "w/o initial estimate". It is clipped to the traction bound.
+    initial_state
+        Adhesion/slip map (nx, ny) of the estimate (1 adhesion, 2 slip): slip elements start
+        on the traction bound.
+    tolerance
+        eps_tau for ``||dp|| < eps_tau ||p||``.
+    max_iterations
+        Largest number of sweeps.
+    omega_h, omega_s
+        Relaxation in adhesion and slip (0 < omega <= 1.5).
+    engine
+        "auto" (numba when installed), "numba" or "numpy".
+    """
+    t0 = time.perf_counter()
+    shape = grid.shape
+    if operator.components != "xy" or (operator.nx, operator.ny) != shape:
+        raise RailContactError("operator must be the 'xy' steady-rolling operator of this grid")
+    pn = np.asarray(pressure, dtype=float)
+    if pn.shape != shape or not np.all(np.isfinite(pn)) or np.any(pn < 0):
+        raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
+    mu = check_positive("friction", friction, allow_zero=True)
+    tolerance = check_positive("tolerance", tolerance)
+    for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
+        if not 0.0 < check_finite(name, om) <= 1.5:
+            raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
+    if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or \
+            max_iterations < 1:
+        raise RailContactError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    if engine not in ENGINES:
+        raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if engine == "numba" and not HAVE_NUMBA:
+        raise RailContactError("engine 'numba' requested but numba is not installed")
+    use_numba = engine in ("auto", "numba") and HAVE_NUMBA
+
+    w = rigid_slip(grid, creepage, spin_offset)
+    bound = mu * pn
+    # Sweep layout: (ny, nx), x contiguous.
+    g = np.ascontiguousarray(bound.T)
+    wx, wy = np.ascontiguousarray(w[0].T), np.ascontiguousarray(w[1].T)
+    if initial_traction is None:
+        px = np.zeros_like(g)
+        py = np.zeros_like(g)
+    else:
+        p0 = np.asarray(initial_traction, dtype=float)
+        if p0.shape != (2, *shape) or not np.all(np.isfinite(p0)):
+            raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
+        px, py = np.ascontiguousarray(p0[0].T), np.ascontiguousarray(p0[1].T)
+        mag = np.hypot(px, py)
+        if initial_state is not None:
+            st0 = np.asarray(initial_state)
+            if st0.shape != shape:
+                raise RailContactError(f"initial_state must have shape {shape}")
+            on_bound = (st0.T == SLIP) & (mag > 0)
+        else:
+            on_bound = np.zeros_like(g, dtype=bool)
+        scale = np.where(on_bound | (mag > g), g / np.where(mag > 0, mag, 1.0), 1.0)
+        px, py = px * scale, py * scale
+        px[g <= 0] = 0.0
+        py[g <= 0] = 0.0
+    state = np.where(g > 0, ADHESION, EXTERIOR).astype(np.int8)
+    contact = g > 0
+    any_row = contact.any(axis=1)
+    lo = np.where(any_row, contact.argmax(axis=1), 1).astype(np.int64)
+    hi = np.where(any_row, g.shape[1] - 1 - contact[:, ::-1].argmax(axis=1), 0).astype(np.int64)
+
+    kern = _gs_kernels(operator)
+    c = operator.self_coefficient
+    cc = (float(c[0, 0]), float(c[0, 1]), float(c[1, 0]), float(c[1, 1]))
+    rows = _row_blocks(contact)
+    w_t = np.stack([wx, wy])
+    floor = 1e-9 * float(np.sqrt(np.sum(g * g)))
+    hist: list[float] = []
+    converged = False
+    its = 0
+    err = 0.0
+    if contact.any():
+        while its < max_iterations:
+            its += 1
+            if use_numba:
+                dif = _sweep_blocked(kern, operator, w_t, g, px, py, state, lo, hi, rows, cc,
+                                     float(omega_h), float(omega_s))
+            else:
+                dif = _sweep_numpy(*kern, wx, wy, g, px, py, state, lo, hi, *cc,
+                                   float(omega_h), float(omega_s))
+            norm = math.sqrt(float(np.sum(px * px + py * py)))
+            err = math.sqrt(dif) / max(norm, floor)
+            hist.append(err)
+            if not math.isfinite(err):
+                break
+            if err < tolerance:
+                converged = True
+                break
+    else:
+        converged = True
+
+    traction = np.stack([px.T, py.T])
+    st = np.ascontiguousarray(state.T)
+    slip = (w + operator.apply(traction)) / grid.dx
+    slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
+    force, mz, ratio, pmax = tangential_summary(grid, traction, st)
+    if not contact.any():
+        message = "no contact: zero normal pressure"
+    elif converged:
+        message = f"converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
+    else:
+        message = f"not converged: eps = {err:.3g} after {its} sweeps (tolerance {tolerance:g})"
+    return TangentialResult(
+        grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
+        slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
+        message=message, wall_time=time.perf_counter() - t0, error=err,
+        history=np.asarray(hist))
