@@ -29,6 +29,17 @@ Schema (keys not listed here are rejected, so that a typo never goes unnoticed):
     tolerance = 1e-3      # eps_n, relative pressure change between iterations
     max_iterations = 500
     fft = "auto"          # "auto" | "pyfftw" | "scipy" | "dense"
+
+    [tangential]          # optional: steady rolling in +x
+    creepage = [1e-3, 0.0, 0.0]  # xi [-], eta [-], phi [1/m]
+    friction = 0.4        # Coulomb coefficient mu [-]
+    model = "bem"         # "bem" | "fastsim" | "fastrip"
+    estimate = "none"     # initial estimate of the BEM: "none" | "fastsim" | "fastrip"
+    tolerance = 1e-2      # eps_tau, relative traction change between sweeps
+    max_iterations = 1000
+    bound = "elliptic"    # FASTSIM traction bound: "elliptic" | "parabolic"
+    strips = [40, 40]     # samples per strip and strips of FASTSIM/FaStrip
+    spin_offset = 0.1667  # where the spin slip is taken in a rolling step (CONTACT: 1/6)
 """
 
 from __future__ import annotations
@@ -48,6 +59,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 NORMAL_ESTIMATES = ("none", "hertz")
+TANGENTIAL_MODELS = ("bem", "fastsim", "fastrip")
+TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
 GEOMETRY_TYPES = ("quadratic",)
 
 _SCHEMA: dict[str, dict[str, str]] = {
@@ -58,6 +71,10 @@ _SCHEMA: dict[str, dict[str, str]] = {
              "margin": "potential-area scale [-]"},
     "normal": {"load": "force [N]", "penetration": "approach [m]", "estimate": "estimate",
                "tolerance": "eps_n", "max_iterations": "count", "fft": "FFT backend"},
+    "tangential": {"creepage": "[xi, eta, phi]", "friction": "mu [-]", "model": "model",
+                   "estimate": "estimate", "tolerance": "eps_tau", "max_iterations": "count",
+                   "bound": "traction bound", "strips": "[nx, ny]",
+                   "spin_offset": "fraction of dx"},
 }
 _REQUIRED_TABLES = ("material", "geometry", "normal")
 
@@ -138,6 +155,8 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
             raise CaseError(f"missing table [{t}]")
     c.setdefault("grid", {})
     for table, keys in _SCHEMA.items():
+        if table not in c:
+            continue
         if not isinstance(c[table], dict):
             raise CaseError(f"[{table}] must be a table, got {c[table]!r}")
         bad = set(c[table]) - set(keys)
@@ -187,5 +206,35 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
     nor["max_iterations"] = _integer("normal", "max_iterations", nor.get("max_iterations", 500),
                                      1)
     nor["fft"] = _choice("normal", "fft", nor.get("fft", "auto"), BACKENDS)
+    if "tangential" in c:
+        _validate_tangential(c["tangential"])
     c.setdefault("name", "case")
     return c
+
+
+def _validate_tangential(tan: dict[str, Any]) -> None:
+    cr = tan.get("creepage")
+    if not isinstance(cr, list) or len(cr) != 3:
+        raise CaseError(f"[tangential] creepage must be [xi, eta, phi] (-, -, 1/m), got {cr!r}")
+    tan["creepage"] = [_number("tangential", f"creepage[{i}]", v, positive=False)
+                       for i, v in enumerate(cr)]
+    if "friction" not in tan:
+        raise CaseError("missing [tangential] friction (Coulomb coefficient mu)")
+    tan["friction"] = _number("tangential", "friction", tan["friction"], allow_zero=True)
+    tan["model"] = _choice("tangential", "model", tan.get("model", "bem"), TANGENTIAL_MODELS)
+    tan["estimate"] = _choice("tangential", "estimate", tan.get("estimate", "none"),
+                              TANGENTIAL_ESTIMATES)
+    tan["tolerance"] = _number("tangential", "tolerance", tan.get("tolerance", 1e-2))
+    tan["max_iterations"] = _integer("tangential", "max_iterations",
+                                     tan.get("max_iterations", 1000), 1)
+    tan["bound"] = _choice("tangential", "bound", tan.get("bound", "elliptic"),
+                           ("elliptic", "parabolic"))
+    strips = tan.get("strips", [40, 40])
+    if not isinstance(strips, list) or len(strips) != 2:
+        raise CaseError(f"[tangential] strips must be [nx, ny], got {strips!r}")
+    tan["strips"] = [_integer("tangential", f"strips[{i}]", v, 2) for i, v in enumerate(strips)]
+    off = _number("tangential", "spin_offset", tan.get("spin_offset", 1.0 / 6.0),
+                  positive=True, allow_zero=True)
+    if off > 1.0:
+        raise CaseError(f"[tangential] spin_offset must lie in [0, 1], got {off:g}")
+    tan["spin_offset"] = off

@@ -32,6 +32,16 @@ def _summary(sol) -> str:
             lines.append(f"  Hertz: a = {h.a:.6g} m, b = {h.b:.6g} m, N = {h.load:.6g} N, "
                          f"delta = {h.penetration:.6g} m, p0 = {h.max_pressure:.6g} Pa, "
                          f"area = {h.area:.6g} m^2")
+        if ps.tangential is not None:
+            t = ps.tangential
+            lines.append(f"  tangential ({ps.tangential_model}, estimate "
+                         f"'{ps.tangential_estimate}'):")
+            lines.append(f"  creep force    Fx = {t.force[0]:.6g} N, Fy = {t.force[1]:.6g} N")
+            lines.append(f"  spin moment    {t.spin_moment:12.6g} N m")
+            lines.append(f"  slip area      {t.slip_area_ratio:12.4f} of the contact area")
+            lines.append(f"  max traction   {t.max_traction:12.6g} Pa")
+            lines.append(f"  iterations     {t.iterations:12d}   ({t.message})")
+            lines.append(f"  wall time      {t.wall_time * 1e3:12.3f} ms")
     return "\n".join(lines)
 
 
@@ -44,12 +54,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     else:
         print(_summary(sol))
     if args.plot:
-        from .plotting import plot_normal
+        from .plotting import plot_solution
 
-        out = plot_normal(sol, args.plot)
+        out = plot_solution(sol, args.plot)
         if not args.json:
             print(f"plot written to {out}")
-    return 0 if all(p.normal.converged for p in sol.patches) else 1
+    ok = all(p.normal.converged and (p.tangential is None or p.tangential.converged)
+             for p in sol.patches)
+    return 0 if ok else 1
 
 
 def build_parser() -> argparse.ArgumentParser:

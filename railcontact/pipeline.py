@@ -14,6 +14,10 @@ from .hertz import HertzSolution, hertz
 from .materials import ElasticPair, Material
 from .normal import NormalResult, solve_normal
 from .operator import influence_operator
+from .tangential import TangentialResult, rolling_operator, solve_tangential
+from .tangential.fastrip import fastrip_hertz
+from .tangential.fastsim import fastsim_hertz
+from .tangential.strips import StripResult, remesh_strips
 
 GROW_FACTOR = 1.5
 MAX_GROW = 4
@@ -37,6 +41,9 @@ class PatchSolution:
     normal: NormalResult
     hertz: HertzSolution | None = None
     estimate: str = "none"
+    tangential: TangentialResult | StripResult | None = None
+    tangential_model: str = "bem"
+    tangential_estimate: str = "none"
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -51,6 +58,15 @@ class PatchSolution:
                          "bounds": list(n.grid.bounds)},
             }
         }
+        if self.tangential is not None:
+            t = self.tangential
+            d["tangential"] = {
+                "force": list(t.force), "spin_moment": t.spin_moment,
+                "slip_area_ratio": t.slip_area_ratio, "max_traction": t.max_traction,
+                "iterations": t.iterations, "converged": t.converged, "message": t.message,
+                "wall_time": t.wall_time, "model": self.tangential_model,
+                "estimate": self.tangential_estimate,
+            }
         if self.hertz is not None:
             h = self.hertz
             d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,
@@ -153,6 +169,41 @@ def solve(case: dict[str, Any] | str | Path) -> Solution:
                 "out for an automatic area")
         xmin, xmax, ymin, ymax = bounds
         bounds = (xmin * GROW_FACTOR, xmax * GROW_FACTOR, ymin * GROW_FACTOR, ymax * GROW_FACTOR)
-    return Solution(case=case, patches=[PatchSolution(normal=res, hertz=hz,
-                                                      estimate=nspec["estimate"])])
+    patch = PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"])
+    if "tangential" in case:
+        _solve_tangential(patch, case["tangential"], pair, A, B, nspec["fft"])
+    return Solution(case=case, patches=[patch])
+
+
+def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
+                          tspec: dict[str, Any]) -> StripResult:
+    """FASTSIM or FaStrip on the Hertz ellipse ``hz`` with the case's settings."""
+    nx, ny = tspec["strips"]
+    args = (hz.a, hz.b, hz.load, pair, tspec["friction"], tuple(tspec["creepage"]))
+    if model == "fastsim":
+        return fastsim_hertz(*args, nx=nx, ny=ny, bound=tspec["bound"])
+    return fastrip_hertz(*args, nx=nx, ny=ny)
+
+
+def _solve_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: ElasticPair,
+                      A: float, B: float, fft: str) -> None:
+    """Add the tangential solution to ``patch`` (same grid as its normal solution)."""
+    res = patch.normal
+    # The simplified models work on the Hertz ellipse that carries the BEM's normal force.
+    hz = hertz(A, B, pair, load=res.force) if res.force > 0 else None
+    model, estimate = tspec["model"], tspec["estimate"]
+    patch.tangential_model, patch.tangential_estimate = model, estimate
+    if model != "bem":
+        if hz is None:
+            raise CaseError("no contact: the simplified tangential models need a load")
+        patch.tangential = simplified_tangential(model, hz, pair, tspec)
+        return
+    p0 = st0 = None
+    if estimate != "none" and hz is not None:
+        p0, st0 = remesh_strips(simplified_tangential(estimate, hz, pair, tspec), res.grid)
+    patch.tangential = solve_tangential(
+        res.grid, rolling_operator(res.grid, pair, fft), res.pressure, tspec["friction"],
+        tuple(tspec["creepage"]), initial_traction=p0, initial_state=st0,
+        tolerance=tspec["tolerance"], max_iterations=tspec["max_iterations"],
+        spin_offset=tspec["spin_offset"])
 

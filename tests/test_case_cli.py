@@ -118,3 +118,40 @@ def test_cli_errors_are_one_line(tmp_path):
                    '[normal]\nload = -10.0\n')
     r = run_cli("solve", str(bad))
     assert r.returncode == 2 and "[normal] load" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_rolling_case_json(root, tmp_path):
+    png = tmp_path / "rolling.png"
+    r = run_cli("solve", str(root / "models/cases/hertz_paper_rolling.toml"), "--json",
+                "--plot", str(png))
+    assert r.returncode == 0, r.stderr
+    tan = json.loads(r.stdout)["patches"][0]["tangential"]
+    for key in ("force", "spin_moment", "slip_area_ratio", "max_traction", "iterations",
+                "converged"):
+        assert key in tan
+    assert tan["converged"] and tan["force"][0] < 0  # xi > 0
+    assert 0 < tan["slip_area_ratio"] < 1
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("model", ["fastsim", "fastrip"])
+def test_simplified_models_through_api(root, model):
+    case = load_case(root / "models/cases/hertz_paper_rolling.toml")
+    case["tangential"]["model"] = model
+    t = solve(case).patches[0].tangential
+    assert t.iterations == 0 and t.force[0] < 0
+
+
+@pytest.mark.parametrize("mutate, match", [
+    (lambda t: t.update(creepage=[1e-3, 0]), "creepage"),
+    (lambda t: t.update(creepage=[float("nan"), 0, 0]), "finite"),
+    (lambda t: t.pop("friction"), "friction"),
+    (lambda t: t.update(friction=-0.2), "friction"),
+    (lambda t: t.update(model="kalker"), "model"),
+    (lambda t: t.update(estimate="hertz"), "estimate"),
+])
+def test_bad_tangential_cases(root, mutate, match):
+    case = load_case(root / "models/cases/hertz_paper_rolling.toml")
+    mutate(case["tangential"])
+    with pytest.raises(CaseError, match=match):
+        solve(case)

@@ -1,0 +1,117 @@
+"""FASTSIM: Kalker's simplified theory of rolling contact (Kalker 1982, VSD 11:1-13).
+
+The surface is a bed of springs, ``u = L p``, with one flexibility per creepage chosen so
+that full adhesion reproduces Kalker's linear theory (CONTACT ``m_hertz.f90:simpflex``)::
+
+    L1 = 8 a / (3 C11 G),   L2 = 8 a / (3 C22 G),   L3 = pi a sqrt(a/b) / (4 C23 G)
+
+Steady rolling in +x: along each strip the traction is integrated from zero at the leading
+edge towards the trailing edge, ``dp = -h (xi/L1 - phi y/L3, eta/L2 + phi x_m/L3)`` over a
+step ``h`` with midpoint ``x_m``, and limited to the traction bound ``mu p_n`` (slip).
+Traction bound: ``"elliptic"`` (Hertz pressure, Vollebregt's recommendation) or
+``"parabolic"`` (Kalker's original, ``p_n = 2N/(pi a b) (1 - x^2/a^2 - y^2/b^2)``), or an
+actual pressure on the strips (non-elliptic patches).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..errors import RailContactError, check_finite, check_positive
+from ..materials import ElasticPair
+from .kalker import creep_coefficients
+from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, summarise
+
+
+def flexibilities(a: float, b: float, pair: ElasticPair) -> tuple[float, float, float]:
+    """Kalker's flexibilities (L1, L2, L3) [m/Pa] for semi-axes a, b [m]."""
+    c = creep_coefficients(a, b, pair.poisson)
+    g = pair.shear
+    return (8 * a / (3 * c.c11 * g), 8 * a / (3 * c.c22 * g),
+            math.pi * a * math.sqrt(a / b) / (4 * c.c23 * g))
+
+
+def hertz_bound(strips: Strips, a: float, b: float, load: float,
+                bound: str = "elliptic") -> np.ndarray:
+    """Normal pressure at the strip samples (ny, nx) [Pa] for a Hertzian patch."""
+    s = 1 - (strips.x / a) ** 2 - (strips.y[:, None] / b) ** 2
+    if bound == "elliptic":
+        return 3 * load / (2 * math.pi * a * b) * np.sqrt(np.clip(s, 0, None))
+    if bound == "parabolic":
+        return 2 * load / (math.pi * a * b) * np.clip(s, 0, None)
+    raise RailContactError(f"bound must be 'elliptic' or 'parabolic', got {bound!r}")
+
+
+def _march(strips: Strips, bound: np.ndarray, creepage, flex, spin_scale=(1.0, 1.0)):
+    """FASTSIM marching on all strips at once. Returns traction (2, ny, nx) and state."""
+    xi, eta, phi = creepage
+    l1, l2, l3 = flex
+    x = strips.x
+    ny, nx = x.shape
+    y = strips.y
+    px = np.zeros(ny)
+    py = np.zeros(ny)
+    x_up = strips.x_hi.copy()
+    traction = np.zeros((2, ny, nx))
+    state = np.zeros((ny, nx), dtype=np.int8)
+    for k in range(nx - 1, -1, -1):  # leading edge (large x) to trailing edge
+        xk = x[:, k]
+        h = x_up - xk
+        xm = 0.5 * (x_up + xk)
+        hx = px - h * (xi / l1 - spin_scale[0] * phi * y / l3)
+        hy = py - h * (eta / l2 + spin_scale[1] * phi * xm / l3)
+        g = bound[:, k]
+        mag = np.hypot(hx, hy)
+        slip = mag > g
+        scale = np.where(slip, g / np.where(mag > 0, mag, 1.0), 1.0)
+        px, py = hx * scale, hy * scale
+        traction[0, :, k] = px
+        traction[1, :, k] = py
+        state[:, k] = np.where(g > 0, np.where(slip, SLIP, ADHESION), EXTERIOR)
+        x_up = xk
+    return traction, state
+
+
+def fastsim(
+    strips: Strips,
+    pressure: np.ndarray,
+    friction: float,
+    creepage: tuple[float, float, float],
+    flexibility: tuple[float, float, float],
+) -> StripResult:
+    """Kalker's FASTSIM on strips.
+
+    Parameters
+    ----------
+    strips
+        The strip discretisation of the patch.
+    pressure
+        Normal pressure at the strip samples [Pa], shape (ny, nx); see :func:`hertz_bound`.
+    friction
+        mu [-].
+    creepage
+        (xi, eta, phi) [-, -, 1/m].
+    flexibility
+        (L1, L2, L3) [m/Pa], e.g. from :func:`flexibilities`.
+    """
+    t0 = time.perf_counter()
+    mu = check_positive("friction", friction, allow_zero=True)
+    cr = tuple(check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage, strict=True))
+    flex = tuple(check_positive(f"L{i + 1}", v, "m/Pa") for i, v in enumerate(flexibility))
+    pn = np.asarray(pressure, dtype=float)
+    if pn.shape != strips.x.shape:
+        raise RailContactError(f"pressure must have the strip shape {strips.x.shape}")
+    traction, state = _march(strips, mu * pn, cr, flex)
+    return summarise(strips, traction, state, pn, "FASTSIM", t0)
+
+
+def fastsim_hertz(a: float, b: float, load: float, pair: ElasticPair, friction: float,
+                  creepage: tuple[float, float, float], *, nx: int = 40, ny: int = 40,
+                  bound: str = "elliptic", quadrature: str = "uniform") -> StripResult:
+    """FASTSIM on the Hertz ellipse (a, b [m], load [N]) with Kalker's flexibilities."""
+    strips = Strips.ellipse(a, b, nx, ny, quadrature)
+    return fastsim(strips, hertz_bound(strips, a, b, load, bound), friction, creepage,
+                   flexibilities(a, b, pair))

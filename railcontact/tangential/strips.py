@@ -1,0 +1,169 @@
+"""Strip discretisation shared by the simplified tangential models (FASTSIM, FaStrip).
+
+A patch is cut into strips along the rolling direction x. Strip ``j`` at lateral position
+``y[j]`` with width (quadrature weight) ``width[j]`` spans ``[x_lo[j], x_hi[j]]`` and is
+sampled at ``nx`` points at normalised positions ``t`` in (-1, 1) with weights ``w``
+(sum 2): the centres of ``nx`` equal sub-intervals (midpoint rule, exact for tractions
+linear in x, as FASTSIM gives in full adhesion for xi and eta), or Gauss–Legendre points
+(exact up to degree 2 nx - 1, so also for the spin part).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.polynomial.legendre import leggauss
+
+from ..errors import RailContactError
+from ..grid import Grid
+
+EXTERIOR, ADHESION, SLIP = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class Strips:
+    """Strips across a contact patch [m]; see the module docstring."""
+
+    y: np.ndarray
+    width: np.ndarray
+    x_lo: np.ndarray
+    x_hi: np.ndarray
+    t: np.ndarray
+    w: np.ndarray
+
+    @property
+    def nx(self) -> int:
+        return len(self.t)
+
+    @property
+    def x(self) -> np.ndarray:
+        """Sample points (ny, nx) [m], increasing in x."""
+        half = 0.5 * (self.x_hi - self.x_lo)
+        mid = 0.5 * (self.x_hi + self.x_lo)
+        return mid[:, None] + half[:, None] * self.t[None, :]
+
+    @property
+    def area(self) -> np.ndarray:
+        """Area represented by each sample (ny, nx) [m^2]."""
+        half = 0.5 * (self.x_hi - self.x_lo)
+        return (self.width * half)[:, None] * self.w[None, :]
+
+    @classmethod
+    def ellipse(cls, a: float, b: float, nx: int = 40, ny: int = 40,
+                quadrature: str = "uniform") -> Strips:
+        """Strips across the ellipse ``x^2/a^2 + y^2/b^2 <= 1``.
+
+        ``quadrature="uniform"``: ``ny`` strips of equal width (Kalker's FASTSIM);
+        ``"gauss"``: Gauss–Legendre strip positions and weights, exact for forces that
+        are polynomials of degree < 2 ny in y (the linear theory's F_x and F_y(eta)).
+        """
+        if nx < 1 or ny < 1:
+            raise RailContactError("strip counts nx, ny must be positive")
+        if quadrature not in ("uniform", "gauss"):
+            raise RailContactError(f"quadrature must be 'uniform' or 'gauss', got {quadrature!r}")
+        ty, wy = _rule(ny, quadrature)
+        y, width = b * ty, b * wy
+        half = a * np.sqrt(np.clip(1 - (y / b) ** 2, 0, None))
+        t, w = _rule(nx, quadrature)
+        return cls(y=y, width=width, x_lo=-half, x_hi=half, t=t, w=w)
+
+
+def _rule(n: int, quadrature: str) -> tuple[np.ndarray, np.ndarray]:
+    """Points and weights on (-1, 1): midpoints of n equal cells, or Gauss–Legendre."""
+    if quadrature == "gauss":
+        return leggauss(n)
+    return -1 + (2 * np.arange(n) + 1) / n, np.full(n, 2 / n)
+
+
+@dataclass
+class StripResult:
+    """Result of a simplified tangential model on strips (SI units).
+
+    Attributes
+    ----------
+    strips
+        The discretisation.
+    traction
+        (p_x, p_y) at the sample points [Pa], shape (2, ny, nx).
+    state
+        1 adhesion, 2 slip (0 outside the patch), shape (ny, nx).
+    pressure
+        Normal pressure used for the traction bound [Pa], (ny, nx).
+    force, spin_moment, slip_area_ratio, max_traction, iterations, converged, message,
+    wall_time
+        As in :class:`railcontact.tangential.TangentialResult` (``iterations`` is 0: the
+        simplified models do not iterate).
+    """
+
+    strips: Strips
+    traction: np.ndarray
+    state: np.ndarray
+    pressure: np.ndarray
+    force: tuple[float, float]
+    spin_moment: float
+    slip_area_ratio: float
+    max_traction: float
+    iterations: int = 0
+    converged: bool = True
+    message: str = ""
+    wall_time: float = 0.0
+    extra: dict = field(default_factory=dict, repr=False)
+
+
+def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure: np.ndarray,
+              message: str, t0: float) -> StripResult:
+    """Integrate a strip traction field into a :class:`StripResult`."""
+    da = strips.area
+    x = strips.x
+    y = strips.y[:, None]
+    fx = float((traction[0] * da).sum())
+    fy = float((traction[1] * da).sum())
+    mz = float(((x * traction[1] - y * traction[0]) * da).sum())
+    ncon = np.count_nonzero(state != EXTERIOR)
+    ratio = float(np.count_nonzero(state == SLIP) / ncon) if ncon else 0.0
+    return StripResult(strips=strips, traction=traction, state=state, pressure=pressure,
+                       force=(fx, fy), spin_moment=mz, slip_area_ratio=ratio,
+                       max_traction=float(np.hypot(*traction).max(initial=0.0)),
+                       message=message, wall_time=time.perf_counter() - t0)
+
+
+def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Traction (2, nx, ny) [Pa] and state (nx, ny) of a strip result on a BEM grid.
+
+    Along each strip the traction is interpolated linearly (zero beyond the strip's ends);
+    across strips linearly between the two nearest strip centres (the nearest one beyond
+    the outermost centres, nothing beyond the patch). The state is taken from the nearest
+    sample.
+    """
+    s = result.strips
+    xs = s.x
+    gx, gy = grid.x, grid.y
+    traction = np.zeros((2, grid.nx, grid.ny))
+    state = np.zeros(grid.shape, dtype=np.int8)
+    order = np.argsort(s.y)
+    ys = s.y[order]
+    half_w = 0.5 * s.width[order]
+    for jj, yv in enumerate(gy):
+        if yv < ys[0] - half_w[0] or yv > ys[-1] + half_w[-1]:
+            continue
+        k = int(np.searchsorted(ys, yv))
+        if k == 0 or k == len(ys):
+            pairs = [(order[min(k, len(ys) - 1)], 1.0)]
+        else:
+            t = (yv - ys[k - 1]) / (ys[k] - ys[k - 1])
+            pairs = [(order[k - 1], 1.0 - t), (order[k], t)]
+        for j, wgt in pairs:
+            lo, hi = s.x_lo[j], s.x_hi[j]
+            xp = np.concatenate(([lo], xs[j], [hi]))
+            for c in range(2):
+                fp = np.concatenate(([result.traction[c, j, 0]], result.traction[c, j],
+                                     [0.0]))
+                inside = (gx >= lo) & (gx <= hi)
+                traction[c, :, jj] += wgt * np.where(inside, np.interp(gx, xp, fp), 0.0)
+        jn = pairs[int(np.argmax([w for _, w in pairs]))][0]
+        inside = (gx >= s.x_lo[jn]) & (gx <= s.x_hi[jn])
+        idx = np.abs(gx[:, None] - xs[jn][None, :]).argmin(axis=1)
+        state[:, jj] = np.where(inside, result.state[jn, idx], EXTERIOR)
+    return traction, state

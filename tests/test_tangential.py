@@ -1,0 +1,228 @@
+"""Steady-rolling tangential contact against Kalker, Carter and CONTACT's reference output."""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+
+import railcontact as rc
+from railcontact import ElasticPair, Grid, Material, hertz, solve_normal
+from railcontact.hertz import curvature_ratio
+from railcontact.operator import influence_operator
+from railcontact.tangential import creep_coefficients, rolling_operator, solve_tangential
+from railcontact.tangential.convexgs import HAVE_NUMBA
+from railcontact.tangential.fastrip import fastrip_hertz
+from railcontact.tangential.fastsim import fastsim_hertz, flexibilities
+from railcontact.tangential.strips import remesh_strips
+
+STEEL = ElasticPair.of(Material(206e9, 0.28))
+CONTACT_G = ElasticPair.from_shear(82e9, 0.28)
+
+
+def hertz_patch(ab, n, pair=STEEL, load=1e5, margin=1.1):
+    """BEM normal solution on an n x n grid around the Hertz ellipse with a/b = ab."""
+    r = curvature_ratio(min(ab, 1 / ab))
+    A, B = (1.0, r) if ab >= 1 else (r, 1.0)
+    hz = hertz(A, B, pair, load=load)
+    g = Grid.from_bounds(-margin * hz.a, margin * hz.a, -margin * hz.b, margin * hz.b, n, n)
+    X, Y = g.mesh()
+    nr = solve_normal(A * X**2 + B * Y**2, g, influence_operator(g, pair), load=load,
+                      tolerance=1e-9)
+    return hz, g, nr
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return hertz_patch(1.0, 31)
+
+
+@pytest.mark.parametrize("creepage, fx_sign, fy_sign, mz_sign", [
+    ((1e-3, 0, 0), -1, 0, 0),
+    ((-1e-3, 0, 0), 1, 0, 0),
+    ((0, 1e-3, 0), 0, -1, 1),
+    ((0, 0, 1.0), 0, -1, -1),
+])
+def test_kalker_sign_convention(sphere, creepage, fx_sign, fy_sign, mz_sign):
+    """xi > 0 gives F_x < 0; eta > 0 gives F_y < 0 and M_z > 0 (F_y = -G c^2 C22 eta,
+    M_z = G c^3 C23 eta); phi > 0 gives F_y < 0 and M_z < 0."""
+    hz, g, nr = sphere
+    r = solve_tangential(g, rolling_operator(g, STEEL), nr.pressure, 0.3, creepage,
+                         tolerance=1e-4)
+    small = 1e-6 * 0.3 * hz.load
+    for value, sign in ((r.force[0], fx_sign), (r.force[1], fy_sign)):
+        assert (abs(value) < small) if sign == 0 else (np.sign(value) == sign)
+    if mz_sign:
+        assert np.sign(r.spin_moment) == mz_sign
+
+
+@pytest.mark.parametrize("creepage", [(0.05, 0, 0), (0, -0.05, 0), (0.03, 0.04, 0)])
+def test_full_sliding(sphere, creepage):
+    """|F| -> mu N, opposite to the rigid slip (xi, eta), all elements sliding."""
+    hz, g, nr = sphere
+    mu = 0.3
+    r = solve_tangential(g, rolling_operator(g, STEEL), nr.pressure, mu, creepage,
+                         tolerance=1e-6)
+    f = np.array(r.force)
+    assert np.linalg.norm(f) == pytest.approx(mu * nr.force, rel=5e-3)
+    w = np.array(creepage[:2])
+    assert np.dot(f, w) / (np.linalg.norm(f) * np.linalg.norm(w)) == pytest.approx(-1, abs=1e-6)
+    assert r.slip_area_ratio == 1.0
+
+
+@pytest.mark.parametrize("ab", [0.5, 1.0, 2.0])
+def test_kalker_linear_theory(ab):
+    """C11, C22, C23 from small creepages (1e-5) within 3 % of Kalker's table (nu = 0.28) on
+    the fine grid, the error falling under refinement."""
+    errors = {}
+    for n in (21, 41):
+        hz, g, nr = hertz_patch(ab, n)
+        c = creep_coefficients(hz.a, hz.b, 0.28)
+        cab, gm = math.sqrt(hz.a * hz.b), STEEL.shear
+        op = rolling_operator(g, STEEL)
+        fx, fy, fs = (solve_tangential(g, op, nr.pressure, 0.3, cr, tolerance=1e-7).force
+                      for cr in ((1e-5, 0, 0), (0, 1e-5, 0), (0, 0, 1e-5 / cab)))
+        c11 = -fx[0] / (gm * cab**2 * 1e-5)
+        c22 = -fy[1] / (gm * cab**2 * 1e-5)
+        c23 = -fs[1] / (gm * cab**3 * 1e-5 / cab)
+        errors[n] = np.abs([c11 / c.c11 - 1, c22 / c.c22 - 1, c23 / c.c23 - 1])
+    assert np.all(errors[41] < 0.03), errors
+    assert np.all(errors[41] < errors[21]), errors
+
+
+def test_carter_two_dimensional():
+    """Carter's rolling cylinder (CONTACT carter2d: R = 500 mm, P' = 178.9 N/mm, mu = 0.3,
+    xi = -2.4e-4): Q/(mu P) = 1 - (a'/a)^2 = 0.64 with a' = 0.6 a. A 200 mm wide single
+    row of elements is the plane-strain strip (constant kernel offsets cancel in A - A')."""
+    n, dx = 110, 0.02e-3
+    g = Grid(n, 1, dx, 0.2, -(n - 1) / 2 * dx, 0.0)
+    X, _ = g.mesh()
+    nr = solve_normal(1.0 * X**2, g, influence_operator(g, CONTACT_G), load=35780.0,
+                      tolerance=1e-10)
+    assert nr.contact.sum() * dx / 2 == pytest.approx(1.0e-3, rel=0.01)  # a = 1 mm
+    r = solve_tangential(g, rolling_operator(g, CONTACT_G), nr.pressure, 0.3,
+                         (-2.4e-4, 0, 0), tolerance=1e-8)
+    assert r.force[0] / (0.3 * 35780.0) == pytest.approx(0.64, rel=0.005)
+    adhesion = g.x[r.state[:, 0] == 1]
+    assert adhesion.max() - adhesion.min() + dx == pytest.approx(1.2e-3, rel=0.02)
+    assert adhesion.max() > 0.95e-3  # adhesion at the leading edge (rolling in +x)
+
+
+def contact_fastsim_case():
+    """CONTACT examples/fastsim.inp, case 1: a = 8 mm, b = 4 mm, N = 82 kN, G = 82 GPa,
+    nu = 0.28, mu = 0.3, eta = -6.25e-4, phi = 6.25e-4 /mm, 44 x 44 elements of
+    0.4 x 0.2 mm (40 x 40 in the patch)."""
+    A, B, N = 0.84642, 2.40616, 82e3
+    g = Grid(44, 44, 0.4e-3, 0.2e-3, -21.5 * 0.4e-3, -21.5 * 0.2e-3)
+    X, Y = g.mesh()
+    nr = solve_normal(A * X**2 + B * Y**2, g, influence_operator(g, CONTACT_G), load=N,
+                      tolerance=1e-8)
+    return g, nr
+
+
+def test_contact_fastsim_example_bem():
+    g, nr = contact_fastsim_case()
+    assert nr.max_pressure == pytest.approx(1223e6, rel=2e-3)
+    r = solve_tangential(g, rolling_operator(g, CONTACT_G), nr.pressure, 0.3,
+                         (0.0, -6.25e-4, 0.625), tolerance=1e-5)
+    assert r.converged
+    assert r.force[1] / (0.3 * 82e3) == pytest.approx(-0.6074, rel=0.02)
+    assert r.spin_moment == pytest.approx(-4.821e4 * 1e-3, rel=0.03)  # N mm -> N m
+
+
+def test_contact_fastsim_example_fastsim():
+    r = fastsim_hertz(8e-3, 4e-3, 82e3, CONTACT_G, 0.3, (0.0, -6.25e-4, 0.625),
+                      nx=40, ny=40, bound="elliptic")
+    assert r.force[1] / (0.3 * 82e3) == pytest.approx(-0.6016, rel=0.02)
+    assert r.max_traction <= 0.3 * r.pressure.max() * (1 + 1e-12)
+
+
+def test_fastsim_flexibilities():
+    """CONTACT's simpflex, a = 8, b = 4 mm, G = 82 GPa (unblended): mm^3/N -> m/Pa."""
+    l1, l2, l3 = flexibilities(8e-3, 4e-3, CONTACT_G)
+    assert (l1, l2, l3) == pytest.approx((4.9996e-14, 5.2331e-14, 4.0790e-14), rel=1e-4)
+
+
+@pytest.mark.parametrize("creepage, block", [((1e-9, 0, 0), "c11"), ((0, 1e-9, 0), "c22")])
+def test_fastsim_linear_limit_is_kalker(creepage, block):
+    """L1, L2 are built to give Kalker's linear theory; with Gauss–Legendre strips the
+    quadrature is exact, so the agreement is to round-off."""
+    a, b, n = 6.304e-3, 12.61e-3, 106.7e3
+    r = fastsim_hertz(a, b, n, CONTACT_G, 0.33, creepage, quadrature="gauss")
+    c = creep_coefficients(a, b, 0.28)
+    lin = -CONTACT_G.shear * a * b * getattr(c, block) * max(creepage)
+    force = r.force[0] if block == "c11" else r.force[1]
+    assert force == pytest.approx(lin, rel=1e-12)
+    assert r.slip_area_ratio == 0.0
+
+
+def test_fastsim_linear_limit_spin():
+    """Spin: F_y = -G (ab)^(3/2) C23 phi; exact in x, the y-integral of (1-t^2)^(3/2) by
+    Gauss–Legendre leaves 2e-8."""
+    a, b = 8e-3, 4e-3
+    r = fastsim_hertz(a, b, 82e3, CONTACT_G, 0.3, (0, 0, 1e-6), quadrature="gauss")
+    c = creep_coefficients(a, b, 0.28)
+    assert r.force[1] == pytest.approx(-CONTACT_G.shear * (a * b) ** 1.5 * c.c23 * 1e-6,
+                                       rel=1e-7)
+
+
+def test_fastrip_pure_creepage_is_carter_on_every_strip():
+    """For pure xi FaStrip's adhesion zone on each strip is Carter's: its share of the strip
+    is the same on every strip that is not fully sliding."""
+    r = fastrip_hertz(6.304e-3, 12.61e-3, 106.7e3, CONTACT_G, 0.33, (5e-4, 0, 0))
+    assert r.force[0] < 0 and abs(r.force[1]) < 1e-9 * abs(r.force[0])
+    assert np.all(np.hypot(*r.traction) <= 0.33 * r.pressure * (1 + 1e-9))
+    # the slip zone length 2d is the same on all strips (d independent of y for pure xi)
+    x = r.strips.x
+    slip_len = [(x[j][r.state[j] == 2].max() - r.strips.x_lo[j]) for j in range(len(x))
+                if (r.state[j] == 1).any()]
+    assert np.ptp(slip_len) < 2.5 * np.max(np.diff(x, axis=1))
+
+
+def test_estimates_cut_iterations(root):
+    """Paper Sec. 4.2.1 (hertz_paper_rolling.toml): the paper reports 31 -> 10 sweeps with
+    FaStrip. The estimates must leave the converged forces unchanged (within eps_tau)."""
+    case = rc.load_case(root / "models" / "cases" / "hertz_paper_rolling.toml")
+    out = {}
+    for est in ("none", "fastsim", "fastrip"):
+        c = copy.deepcopy(case)
+        c["tangential"]["estimate"] = est
+        out[est] = rc.solve(c).patches[0].tangential
+    print({k: v.iterations for k, v in out.items()})
+    assert all(v.converged for v in out.values())
+    assert out["fastrip"].iterations < out["none"].iterations
+    for est in ("fastsim", "fastrip"):
+        assert out[est].force[0] == pytest.approx(out["none"].force[0], rel=1e-2)
+
+
+def test_remesh_keeps_force():
+    r = fastrip_hertz(7.9e-3, 2.7e-3, 74e3, STEEL, 0.4, (1e-3, 0, 0), nx=40, ny=40)
+    g = Grid.from_bounds(-10e-3, 10e-3, -4.5e-3, 4.5e-3, 64, 64)
+    p, st = remesh_strips(r, g)
+    assert p[0].sum() * g.element_area == pytest.approx(r.force[0], rel=0.02)
+    assert set(np.unique(st)) <= {0, 1, 2}
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_numba_and_numpy_sweeps_agree(sphere):
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    a = solve_tangential(g, op, nr.pressure, 0.3, (2e-4, -1e-4, 0.5), engine="numba",
+                         tolerance=1e-6)
+    b = solve_tangential(g, op, nr.pressure, 0.3, (2e-4, -1e-4, 0.5), engine="numpy",
+                         tolerance=1e-6)
+    assert a.iterations == b.iterations
+    assert np.allclose(a.traction, b.traction, rtol=0, atol=1e-9 * a.max_traction)
+
+
+def test_bad_tangential_input(sphere):
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    with pytest.raises(rc.RailContactError, match="friction"):
+        solve_tangential(g, op, nr.pressure, -0.1, (0, 0, 0))
+    with pytest.raises(rc.RailContactError, match="xi"):
+        solve_tangential(g, op, nr.pressure, 0.3, (float("nan"), 0, 0))
+    with pytest.raises(rc.RailContactError, match="pressure"):
+        solve_tangential(g, op, -nr.pressure, 0.3, (0, 0, 0))
+    with pytest.raises(rc.RailContactError, match="dissimilar"):
+        rolling_operator(g, ElasticPair.of(Material(210e9, 0.3), Material(70e9, 0.33)))
