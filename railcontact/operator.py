@@ -47,29 +47,31 @@ _local = threading.local()
 
 
 class _FFTWPlan:
-    """A forward r2c and backward c2r FFTW plan pair with their own aligned buffers."""
+    """Batched forward r2c and backward c2r FFTW plans over ``nc`` components, with their
+    own aligned buffers (the padding of ``real_in`` stays zero)."""
 
-    def __init__(self, shape: tuple[int, int]):
+    def __init__(self, nc: int, shape: tuple[int, int]):
         m, n = shape
-        self.real_in = pyfftw.zeros_aligned((m, n), dtype="float64")
-        self.spec_out = pyfftw.empty_aligned((m, n // 2 + 1), dtype="complex128")
-        self.spec_in = pyfftw.empty_aligned((m, n // 2 + 1), dtype="complex128")
-        self.real_out = pyfftw.empty_aligned((m, n), dtype="float64")
+        self.real_in = pyfftw.zeros_aligned((nc, m, n), dtype="float64")
+        self.spec_out = pyfftw.empty_aligned((nc, m, n // 2 + 1), dtype="complex128")
+        self.spec_in = pyfftw.empty_aligned((nc, m, n // 2 + 1), dtype="complex128")
+        self.spec_tmp = pyfftw.empty_aligned((m, n // 2 + 1), dtype="complex128")
+        self.real_out = pyfftw.empty_aligned((nc, m, n), dtype="float64")
         flags = ("FFTW_MEASURE",)
-        self.forward = pyfftw.FFTW(self.real_in, self.spec_out, axes=(0, 1), flags=flags,
+        self.forward = pyfftw.FFTW(self.real_in, self.spec_out, axes=(1, 2), flags=flags,
                                    threads=1)
-        self.backward = pyfftw.FFTW(self.spec_in, self.real_out, axes=(0, 1),
+        self.backward = pyfftw.FFTW(self.spec_in, self.real_out, axes=(1, 2),
                                     direction="FFTW_BACKWARD", flags=flags, threads=1)
-        self.real_in[...] = 0.0
+        self.real_in[...] = 0.0  # FFTW_MEASURE overwrites the arrays while planning
 
 
-def _fftw_plan(shape: tuple[int, int]) -> _FFTWPlan:
+def _fftw_plan(nc: int, shape: tuple[int, int]) -> _FFTWPlan:
     cache = getattr(_local, "plans", None)
     if cache is None:
         cache = _local.plans = {}
-    plan = cache.get(shape)
+    plan = cache.get((nc, shape))
     if plan is None:
-        plan = cache[shape] = _FFTWPlan(shape)
+        plan = cache[(nc, shape)] = _FFTWPlan(nc, shape)
     return plan
 
 
@@ -160,7 +162,7 @@ class InfluenceOperator:
             # 1/N of the inverse transform folded into the spectra (FFTW does not scale).
             self._spectra = np.fft.rfft2(wrapped) / (4 * nx * ny)
             if self.backend == "pyfftw":
-                _fftw_plan(self._padded)  # plan now, not inside the first solve
+                _fftw_plan(nc, self._padded)  # plan now, not inside the first solve
 
     @property
     def self_coefficient(self) -> np.ndarray:
@@ -192,22 +194,19 @@ class InfluenceOperator:
         return u[0] if single else u
 
     def _apply_fftw(self, p: np.ndarray) -> np.ndarray:
-        plan = _fftw_plan(self._padded)
-        nx, ny = self.nx, self.ny
         nc = p.shape[0]
-        spectra = []
-        for b in range(nc):
-            plan.real_in[:nx, :ny] = p[b]
-            plan.forward.execute()
-            spectra.append(plan.spec_out.copy() if nc > 1 else plan.spec_out)
-        u = np.empty((nc, nx, ny))
+        plan = _fftw_plan(nc, self._padded)
+        nx, ny = self.nx, self.ny
+        plan.real_in[:, :nx, :ny] = p
+        plan.forward.execute()
+        spec, out, tmp = plan.spec_out, plan.spec_in, plan.spec_tmp
         for a in range(nc):
-            np.multiply(self._spectra[a, 0], spectra[0], out=plan.spec_in)
+            np.multiply(self._spectra[a, 0], spec[0], out=out[a])
             for b in range(1, nc):
-                plan.spec_in += self._spectra[a, b] * spectra[b]
-            plan.backward.execute()
-            u[a] = plan.real_out[:nx, :ny]
-        return u
+                np.multiply(self._spectra[a, b], spec[b], out=tmp)
+                out[a] += tmp
+        plan.backward.execute()
+        return plan.real_out[:, :nx, :ny].copy()
 
     def _apply_scipy(self, p: np.ndarray) -> np.ndarray:
         nx, ny = self.nx, self.ny

@@ -84,40 +84,30 @@ def fastrip_hertz(a: float, b: float, load: float, pair: ElasticPair, friction: 
     phi_ = -g_mod * 3 * math.sqrt(a * b) * c.c23 * phi / (2 * mu * p0 * math.pi)
 
     x = strips.x
-    y = strips.y
-    ay = 0.5 * (strips.x_hi - strips.x_lo)
-    xc = 0.5 * (strips.x_hi + strips.x_lo)
-    traction = np.zeros_like(fs_traction)
-    state = np.where(pn > 0, SLIP, EXTERIOR).astype(np.int8)
+    y = strips.y[:, None]
+    ay = 0.5 * (strips.x_hi - strips.x_lo)[:, None]
+    xs = x - 0.5 * (strips.x_hi + strips.x_lo)[:, None]
     bound = mu * pn
+    ex = xi_ - phi_ * y / a
+    with np.errstate(invalid="ignore", divide="ignore"):
+        disc = eta_**2 + (1 - phi_**2) * ex**2
+        d = a / (1 - nu) * (np.sqrt(np.clip(disc, 0, None)) + eta_ * phi_) / (1 - phi_**2)
+        sliding = (abs(phi_) >= 1.0) | (disc < 0) | ~(d >= 0) | ~(d < ay)
+        d = np.where(sliding, 0.0, d)
+        ey = eta_ + phi_ * d / a
+        den = np.hypot(ex, ey)
+        kappa = np.where(den > 0, ex / den, 0.0)
+        lam = np.where(den > 0, ey / den, 0.0)
+    r1 = np.sqrt(np.clip(ay**2 - xs**2, 0, None))
+    r2 = np.sqrt(np.clip((ay - d) ** 2 - (xs - d) ** 2, 0, None))
+    qx = mu * p0 / a * (kappa * r1 - kappa * r2)
+    qy = mu * p0 / a * (lam * r1 - (lam - phi_) * r2)
+    adhesion = (~sliding & (den > 0) & (xs >= -ay + 2 * d) & (pn > 0)
+                & (np.hypot(qx, qy) <= bound * (1 + 1e-12)))
+    state = np.where(pn > 0, np.where(adhesion, ADHESION, SLIP), EXTERIOR).astype(np.int8)
+    # slip: magnitude mu p_n in the direction of the FASTSIM traction at the same point
     fs_mag = np.hypot(fs_traction[0], fs_traction[1])
     with np.errstate(invalid="ignore", divide="ignore"):
         direction = np.where(fs_mag > 0, fs_traction / fs_mag, 0.0)
-    for j in range(len(y)):
-        xs = x[j] - xc[j]
-        ex = xi_ - phi_ * y[j] / a
-        full_slide = abs(phi_) >= 1.0
-        d = math.inf
-        if not full_slide:
-            disc = eta_**2 + (1 - phi_**2) * ex**2
-            if disc >= 0:
-                d = a / (1 - nu) * (math.sqrt(disc) + eta_ * phi_) / (1 - phi_**2)
-            if not 0 <= d < ay[j]:
-                full_slide = True
-        if not full_slide:
-            ey = eta_ + phi_ * d / a
-            den = math.hypot(ex, ey)
-            if den > 0:
-                kappa, lam = ex / den, ey / den
-                adh = xs >= -ay[j] + 2 * d
-                r1 = np.sqrt(np.clip(ay[j] ** 2 - xs**2, 0, None))
-                r2 = np.sqrt(np.clip((ay[j] - d) ** 2 - (xs - d) ** 2, 0, None))
-                qx = mu * p0 / a * (kappa * r1 - kappa * r2)
-                qy = mu * p0 / a * (lam * r1 - (lam - phi_) * r2)
-                ok = adh & (np.hypot(qx, qy) <= bound[j] * (1 + 1e-12))
-                traction[0, j] = np.where(ok, qx, 0.0)
-                traction[1, j] = np.where(ok, qy, 0.0)
-                state[j] = np.where(ok, ADHESION, state[j])
-        slip = state[j] == SLIP
-        traction[:, j] = np.where(slip, bound[j] * direction[:, j], traction[:, j])
+    traction = np.where(adhesion, np.stack([qx, qy]), bound * direction)
     return summarise(strips, traction, state, pn, "FaStrip", t0)

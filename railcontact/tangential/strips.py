@@ -132,38 +132,48 @@ def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure:
 def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     """Traction (2, nx, ny) [Pa] and state (nx, ny) of a strip result on a BEM grid.
 
-    Along each strip the traction is interpolated linearly (zero beyond the strip's ends);
-    across strips linearly between the two nearest strip centres (the nearest one beyond
-    the outermost centres, nothing beyond the patch). The state is taken from the nearest
-    sample.
+    Along each strip the traction is interpolated linearly in the normalised coordinate
+    (the trailing-end sample held to the trailing edge, zero at the leading edge, nothing
+    beyond); across strips linearly between the two nearest strip centres (the nearest one
+    beyond the outermost centres, nothing beyond the patch). The state is taken from the
+    nearest sample of the nearest strip.
     """
     s = result.strips
-    xs = s.x
-    gx, gy = grid.x, grid.y
-    traction = np.zeros((2, grid.nx, grid.ny))
-    state = np.zeros(grid.shape, dtype=np.int8)
+    ns, nt = len(s.y), s.nx
+    half = 0.5 * (s.x_hi - s.x_lo)
+    mid = 0.5 * (s.x_hi + s.x_lo)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tg = (grid.x[None, :] - mid[:, None]) / half[:, None]  # (ns, grid nx)
+    inside = np.abs(tg) <= 1.0
+    tg = np.where(inside, tg, 0.0)
+    knots = np.concatenate(([-1.0], s.t, [1.0]))
+    k = np.clip(np.searchsorted(knots, tg), 1, nt + 1)
+    w = (tg - knots[k - 1]) / (knots[k] - knots[k - 1])
+    rows = np.arange(ns)[:, None]
+    along = np.empty((2, ns, grid.nx))
+    for c in range(2):
+        v = np.concatenate([result.traction[c, :, :1], result.traction[c],
+                            np.zeros((ns, 1))], axis=1)
+        along[c] = np.where(inside, v[rows, k - 1] * (1 - w) + v[rows, k] * w, 0.0)
+    near_sample = np.clip(np.where(w < 0.5, k - 2, k - 1), 0, nt - 1)
+    state_along = np.where(inside, result.state[rows, near_sample], EXTERIOR)
+
+    # across strips: weights (grid ny, ns), two neighbours per grid row
     order = np.argsort(s.y)
     ys = s.y[order]
-    half_w = 0.5 * s.width[order]
-    for jj, yv in enumerate(gy):
-        if yv < ys[0] - half_w[0] or yv > ys[-1] + half_w[-1]:
-            continue
-        k = int(np.searchsorted(ys, yv))
-        if k == 0 or k == len(ys):
-            pairs = [(order[min(k, len(ys) - 1)], 1.0)]
-        else:
-            t = (yv - ys[k - 1]) / (ys[k] - ys[k - 1])
-            pairs = [(order[k - 1], 1.0 - t), (order[k], t)]
-        for j, wgt in pairs:
-            lo, hi = s.x_lo[j], s.x_hi[j]
-            xp = np.concatenate(([lo], xs[j], [hi]))
-            for c in range(2):
-                fp = np.concatenate(([result.traction[c, j, 0]], result.traction[c, j],
-                                     [0.0]))
-                inside = (gx >= lo) & (gx <= hi)
-                traction[c, :, jj] += wgt * np.where(inside, np.interp(gx, xp, fp), 0.0)
-        jn = pairs[int(np.argmax([w for _, w in pairs]))][0]
-        inside = (gx >= s.x_lo[jn]) & (gx <= s.x_hi[jn])
-        idx = np.abs(gx[:, None] - xs[jn][None, :]).argmin(axis=1)
-        state[:, jj] = np.where(inside, result.state[jn, idx], EXTERIOR)
+    edge_lo = ys[0] - 0.5 * s.width[order[0]]
+    edge_hi = ys[-1] + 0.5 * s.width[order[-1]]
+    gy = grid.y
+    j = np.clip(np.searchsorted(ys, gy), 1, max(ns - 1, 1))
+    if ns == 1:
+        t = np.zeros_like(gy)
+        lo_idx = hi_idx = np.zeros(gy.shape, dtype=int)
+    else:
+        t = np.clip((gy - ys[j - 1]) / (ys[j] - ys[j - 1]), 0.0, 1.0)
+        lo_idx, hi_idx = order[j - 1], order[j]
+    valid = (gy >= edge_lo) & (gy <= edge_hi)
+    traction = ((1 - t) * along[:, lo_idx, :].transpose(0, 2, 1)
+                + t * along[:, hi_idx, :].transpose(0, 2, 1)) * valid
+    nearest = np.where(t < 0.5, lo_idx, hi_idx)
+    state = np.where(valid[None, :], state_along[nearest].T, EXTERIOR).astype(np.int8)
     return traction, state
