@@ -1,0 +1,243 @@
+"""Contact search by the trace method, and the undeformed gap of each contact patch.
+
+For a wheel with yaw ``psi`` the contact points lie on the *trace line*: the points of the
+wheel surface whose normal has no component along the track (the rail is prismatic).
+With the wheel surface ``(r sin t, eta, -r cos t)`` in the wheelset frame and
+``r = r0 + F(S(eta))``, this gives ``sin t = -tan(psi) r'(eta)`` (``algorithms.md`` 7.4;
+Wang Kaiyun's trace method). The trace points are moved with the wheelset pose (roll after
+yaw) into the side frame and compared with the placed rail: ``g(eta)`` is the vertical
+distance from the rail to the wheel. For a rigid approach ``delta`` (vertical) every
+connected interval of ``g - min g < delta`` is one contact patch, centred on its local
+minimum of g: one-point or two-point (several-point) contact.
+
+At each contact point the contact tangent plane is inclined by the contact angle
+``gamma = atan(dZ_rail/du)`` (side frame: positive when the normal leans towards the track
+centre, i.e. towards the flange). In that plane, with ``s`` across and ``x`` along the
+track, the undeformed gap is taken as
+
+    h(x, s) = f(s) + A(s) x^2,     A(s) = cos(beta(s)) / (2 r(s)),
+
+``f(s)`` the distance between the profiles normal to the tangent plane (zero at the contact
+point), ``r(s)`` the wheel radius and ``beta(s)`` the wheel profile angle there (Meusnier:
+the wheel's curvature along the rolling direction; the rail is straight). ``A = A(0)`` and
+``B = f''(0)/2`` are the curvatures Hertz needs. Yaw shifts the contact point along x (the
+trace offset) but the gap is taken symmetric in x.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RailContactError, check_positive
+from ..grid import Grid
+from .track import SIDES, Pose, Track, Wheelset
+
+N_TRACE = 6001
+
+
+@dataclass(frozen=True)
+class ContactPoint:
+    """One contact patch's geometry (SI units; side frame unless stated).
+
+    Attributes
+    ----------
+    side
+        "left" or "right".
+    gap
+        Vertical gap of this local minimum above the smallest gap of the wheel [m]; the
+        patch's own approach is ``delta - gap`` (vertical).
+    wheel_s
+        Wheel profile coordinate S of the contact point [m].
+    rail_u
+        Lateral position on the placed rail, side frame [m] (the gauge point is at
+        gauge/2).
+    rail_y
+        Rail profile coordinate of the contact point (uncanted rail frame) [m].
+    position
+        Contact point on the rail in the track frame (X, Y, Z) [m].
+    contact_angle
+        gamma [rad], side frame (positive towards the flange).
+    rolling_radius
+        Wheel radius at the contact point [m].
+    A, B
+        Longitudinal and lateral relative curvatures at the contact point [1/m].
+    s, f, a_of_s
+        Lateral coordinate in the tangent plane [m], normal gap f(s) [m] and A(s) [1/m]
+        (samples around the contact point).
+    """
+
+    side: str
+    gap: float
+    wheel_s: float
+    rail_u: float
+    rail_y: float
+    position: tuple[float, float, float]
+    contact_angle: float
+    rolling_radius: float
+    A: float
+    B: float
+    s: np.ndarray
+    f: np.ndarray
+    a_of_s: np.ndarray
+
+    def normal_penetration(self, approach: float) -> float:
+        """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
+        return max(approach - self.gap, 0.0) * math.cos(self.contact_angle)
+
+    def gap_on_grid(self, grid: Grid) -> np.ndarray:
+        """Undeformed gap h(x, y) = f(y) + A(y) x^2 at the element centres [m], with the
+        grid's y along s (np.inf where the profiles end)."""
+        X, Y = grid.mesh()
+        f = np.interp(Y, self.s, self.f, left=np.inf, right=np.inf)
+        a = np.interp(Y, self.s, self.a_of_s)
+        return f + a * X**2
+
+    def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
+        """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
+        inside = self.f <= delta
+        k0 = int(np.argmin(np.abs(self.s)))
+        lo = k0
+        while lo > 0 and inside[lo - 1]:
+            lo -= 1
+        hi = k0
+        while hi < len(self.s) - 1 and inside[hi + 1]:
+            hi += 1
+        ds = self.s[1] - self.s[0]
+        a, b = self.s[lo] - ds, self.s[hi] + ds
+        return margin * a, margin * b
+
+
+def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """Trace points of one wheel in the side frame: eta, X, u, Z, r, dr/deta."""
+    sgn = SIDES[side]
+    psi, phi = sgn * pose.yaw, sgn * pose.roll
+    u_ws = sgn * pose.lateral
+    s_lo, s_hi = ws.wheel.bounds
+    eta = ws.axial_position(np.linspace(s_lo + 1e-6, s_hi - 1e-6, N_TRACE))
+    S = ws.profile_coordinate(eta)
+    r = ws.radius + ws.wheel.height(S)
+    dr = ws.wheel.slope(S)
+    sin_t = np.clip(-math.tan(psi) * dr, -1.0, 1.0)
+    cos_t = np.sqrt(1.0 - sin_t**2)
+    pw = np.stack([r * sin_t, eta, -r * cos_t])  # wheelset frame, origin on the axle
+    cz, sz = math.cos(psi), math.sin(psi)
+    cx, sx = math.cos(phi), math.sin(phi)
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    p = rx @ rz @ pw
+    return eta, p[0], p[1] + u_ws, p[2] + ws.radius, r, dr
+
+
+def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """Vertical gap g(eta) between the wheel trace and the rail [m], with the trace points.
+
+    Returns ``(eta, x, u, z, g)`` restricted to trace points above the rail.
+    """
+    if side not in SIDES:
+        raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
+    eta, x, u, z, _, _ = _trace(track, ws, pose, side)
+    rail = track.side_rail
+    lo, hi = rail.bounds
+    keep = (u > lo) & (u < hi)
+    if keep.sum() < 10:
+        raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
+                               f"{pose.lateral:g} m is beyond the profiles)")
+    eta, x, u, z = eta[keep], x[keep], u[keep], z[keep]
+    return eta, x, u, z, z - rail.height(u)
+
+
+def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
+                   approach: float = 0.0) -> list[ContactPoint]:
+    """Contact patches of one wheel for a vertical rigid approach ``approach`` [m].
+
+    ``approach = 0`` gives the first point of contact only. Patches are ordered by gap
+    (the first one has gap 0).
+    """
+    approach = check_positive("approach", approach, "m", allow_zero=True)
+    eta, x, u, z, g = vertical_gap(track, ws, pose, side)
+    g = g - g.min()
+    inside = g <= max(approach, 0.0)
+    # connected intervals of interpenetration; always include the global minimum
+    k_min = int(np.argmin(g))
+    inside[k_min] = True
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(int), [0]])))
+    points = []
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        k = a + int(np.argmin(g[a:b]))
+        points.append(_point(track, ws, pose, side, eta, x, u, z, g, k))
+    points.sort(key=lambda c: c.gap)
+    return points
+
+
+def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
+    rail = track.side_rail
+    sgn = SIDES[side]
+    # refine the minimum with a parabola through three samples
+    if 0 < k < len(g) - 1:
+        d = g[k - 1] - 2 * g[k] + g[k + 1]
+        t = 0.5 * (g[k - 1] - g[k + 1]) / d if d > 0 else 0.0
+    else:
+        t = 0.0
+    t = float(np.clip(t, -1, 1))
+    j = k + (1 if t > 0 else -1) if 0 < k < len(g) - 1 else k
+    w = abs(t)
+
+    def lerp(a):
+        return float((1 - w) * a[k] + w * a[j])
+
+    eta_c, x_c, u_c, z_rail = lerp(eta), lerp(x), lerp(u), float(rail.height(lerp(u)))
+    gap_c = max(float(lerp(g)), 0.0)
+    gamma = math.atan(float(rail.slope(u_c)))
+    s_c = float(ws.profile_coordinate(eta_c))
+    r_c = ws.radius + float(ws.wheel.height(s_c))
+
+    # tangent-plane coordinates of both profiles around the contact point
+    cg, sg = math.cos(gamma), math.sin(gamma)
+    s_w = (u - u_c) * cg + (z - z_rail) * sg
+    n_w = -(u - u_c) * sg + (z - z_rail) * cg
+    ur = np.linspace(*rail.bounds, 8001)
+    zr = rail.height(ur)
+    s_r = (ur - u_c) * cg + (zr - z_rail) * sg
+    n_r = -(ur - u_c) * sg + (zr - z_rail) * cg
+    half = 0.025
+    s = np.linspace(-half, half, 1001)
+    f = _monotone_interp(s, s_w, n_w) - _monotone_interp(s, s_r, n_r)
+    f = f - np.nanmin(f[np.abs(s) < 1e-3]) if np.isfinite(f[500]) else f
+    f = np.where(np.isfinite(f), f, np.inf)
+    # A(s) from the wheel at the same s
+    eta_s = _monotone_interp(s, s_w, eta)
+    S_s = ws.profile_coordinate(np.where(np.isfinite(eta_s), eta_s, eta_c))
+    beta = np.arctan(ws.wheel.slope(S_s))
+    a_of_s = np.cos(beta) / (2 * (ws.radius + ws.wheel.height(S_s)))
+    k0 = 500
+    B = float((f[k0 - 5] - 2 * f[k0] + f[k0 + 5]) / (2 * (s[5] - s[0]) ** 2))
+    if not np.isfinite(B) or B <= 0:
+        B = float("nan")
+    return ContactPoint(side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
+                        rail_y=_uncant(track, u_c, z_rail), position=(x_c, sgn * u_c, z_rail),
+                        contact_angle=gamma, rolling_radius=r_c, A=float(a_of_s[k0]), B=B,
+                        s=s, f=f, a_of_s=a_of_s)
+
+
+def _uncant(track: Track, u: float, z: float) -> float:
+    """Rail profile coordinate of a point (u, z) of the placed rail."""
+    r = track.rail
+    y = np.linspace(*r.bounds, 4001)
+    zz = r.height(y)
+    c, s = math.cos(track.inclination), math.sin(track.inclination)
+    yc, zc = y * c - zz * s, y * s + zz * c
+    placed = track.side_rail
+    # placed.y = yc (monotone part) shifted: find the shift from the matching top
+    shift = placed.y[int(np.argmax(placed.z))] - yc[int(np.argmax(zc))]
+    k = int(np.argmin(np.hypot(yc + shift - u, zc - zc.max() - z)))
+    return float(y[k])
+
+
+def _monotone_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Interpolate y(x) on the part of the curve where x increases through x_new's range."""
+    ok = np.concatenate([[True], np.diff(x) > 0])
+    xs, ys = x[ok], y[ok]
+    return np.interp(x_new, xs, ys, left=np.nan, right=np.nan)

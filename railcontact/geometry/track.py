@@ -1,0 +1,147 @@
+"""Track and wheelset: where the rails and wheels are, in one frame per side.
+
+Track frame: X along the track (forward), Y lateral **positive to the left**, Z up.
+Each side is handled in its own *side frame* ``(X, u, Z)`` with ``u = s Y``, ``s = +1`` for
+the left and ``-1`` for the right rail, so that ``u`` points to that side's field side and
+one profile (written with y to the field side) serves both sides. Mirroring Y reverses
+rotations about Z and X: in the side frame the yaw is ``s psi`` and the roll ``s phi``.
+
+Rail placement (side frame): the profile is canted by the inclination with its top towards
+the track centre, its highest point at ``Z = 0``, and its gauge point - the gauge-side
+point ``gauge_depth`` (14 mm) below the top - at ``u = gauge / 2``.
+
+Wheel placement: the wheel profile coordinate ``S`` (y of the wheel profile) and the axial
+coordinate ``eta`` (from the wheelset centre towards the field side) are related by the
+flange-back distance: the flange back ``S = flange_back`` sits at ``eta = back_to_back/2``,
+so ``S = eta - back_to_back/2 + flange_back`` (S1002: taping line at eta = 0.75 m).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import RailContactError, check_finite, check_positive
+from .profiles import Profile
+
+SIDES = {"left": 1, "right": -1}
+
+
+@dataclass(frozen=True)
+class Track:
+    """Rail profile and track layout.
+
+    Attributes
+    ----------
+    rail
+        Rail profile (railcontact frame: y to the field side, z up).
+    inclination
+        Rail cant [rad], top towards the track centre (1:40 -> atan(1/40)). Give 0 for a
+        profile file that is canted already.
+    gauge
+        Track gauge [m], measured ``gauge_depth`` below the top of rail.
+    gauge_depth
+        Depth of the gauge measurement [m] (14 mm).
+    """
+
+    rail: Profile
+    inclination: float = math.atan(1 / 40)
+    gauge: float = 1.435
+    gauge_depth: float = 0.014
+
+    def __post_init__(self) -> None:
+        if self.rail.kind != "rail":
+            raise RailContactError(f"track.rail must be a rail profile, got a {self.rail.kind}")
+        inc = check_finite("inclination", self.inclination, "rad")
+        if abs(inc) > 0.2:
+            raise RailContactError(f"inclination must be a small cant angle in rad (1:40 = "
+                                   f"0.025), got {inc:g}")
+        check_positive("gauge", self.gauge, "m")
+        check_positive("gauge_depth", self.gauge_depth, "m")
+
+    @cached_property
+    def side_rail(self) -> Profile:
+        """The rail in the side frame: Z(u), canted and placed (see the module docstring)."""
+        r = self.rail
+        y = np.linspace(*r.bounds, 4001)
+        z = r.height(y)
+        c, s = math.cos(self.inclination), math.sin(self.inclination)
+        yc, zc = y * c - z * s, y * s + z * c  # top towards -y (the gauge side)
+        keep = np.concatenate([[True], np.diff(yc) > 0])  # drop any fold-back of the flank
+        yc, zc = yc[keep], zc[keep]
+        zc = zc - zc.max()
+        # gauge point: gauge side (left of the top), z = -gauge_depth
+        top = int(np.argmax(zc))
+        side = slice(0, top + 1)
+        if zc[side].min() > -self.gauge_depth:
+            raise RailContactError(f"rail profile {r.name!r} does not reach {self.gauge_depth} m "
+                                   "below its top on the gauge side; cannot place the gauge")
+        yg = float(np.interp(-self.gauge_depth, zc[side], yc[side]))
+        return Profile(yc - yg + self.gauge / 2, zc, "rail", r.name + " (placed)")
+
+
+@dataclass(frozen=True)
+class Wheelset:
+    """Wheel profile and wheelset dimensions.
+
+    Attributes
+    ----------
+    wheel
+        Wheel profile (y = S to the field side, z = radius increment).
+    radius
+        Nominal rolling radius r0 at the taping line [m].
+    back_to_back
+        Flange-back distance [m] (1360 mm).
+    flange_back
+        S of the flange back in the wheel profile [m] (S1002: -70 mm).
+    """
+
+    wheel: Profile
+    radius: float = 0.46
+    back_to_back: float = 1.360
+    flange_back: float = -0.070
+
+    def __post_init__(self) -> None:
+        if self.wheel.kind != "wheel":
+            raise RailContactError(f"wheelset.wheel must be a wheel profile, got a "
+                                   f"{self.wheel.kind}")
+        check_positive("wheel_radius", self.radius, "m")
+        check_positive("back_to_back", self.back_to_back, "m")
+        check_finite("flange_back", self.flange_back, "m")
+
+    def profile_coordinate(self, eta: np.ndarray) -> np.ndarray:
+        """Wheel profile coordinate S [m] of the axial position eta [m] (side frame)."""
+        return np.asarray(eta) - self.back_to_back / 2 + self.flange_back
+
+    def axial_position(self, s: np.ndarray) -> np.ndarray:
+        """Inverse of :meth:`profile_coordinate`."""
+        return np.asarray(s) + self.back_to_back / 2 - self.flange_back
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Wheelset displacement relative to the centred position (track frame).
+
+    Attributes
+    ----------
+    lateral
+        Lateral displacement y [m], positive to the left.
+    yaw
+        Yaw angle psi [rad] about Z (positive: nose to the left).
+    roll
+        Roll angle phi [rad] about X (positive: left side down... right-hand rule on X).
+    """
+
+    lateral: float = 0.0
+    yaw: float = 0.0
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_finite("lateral_displacement", self.lateral, "m")
+        check_finite("yaw", self.yaw, "rad")
+        check_finite("roll", self.roll, "rad")
+        if abs(self.yaw) > 0.1 or abs(self.roll) > 0.1:
+            raise RailContactError("yaw and roll must be small angles (|angle| < 0.1 rad)")

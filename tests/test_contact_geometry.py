@@ -1,0 +1,95 @@
+"""Trace-method contact search on S1002 / 60E1 at 1:40."""
+
+import math
+
+import numpy as np
+import pytest
+
+from railcontact import RailContactError
+from railcontact.geometry.contact import contact_points, vertical_gap
+from railcontact.geometry.profiles import builtin_profile
+from railcontact.geometry.track import Pose, Track, Wheelset
+
+TRACK = Track(builtin_profile("60E1"))
+WS = Wheelset(builtin_profile("S1002"))
+
+
+def first(y, side, yaw=0.0, approach=0.0):
+    return contact_points(TRACK, WS, Pose(lateral=y, yaw=yaw), side, approach)[0]
+
+
+def test_track_layout():
+    rail = TRACK.side_rail
+    # gauge point 14 mm below the top at gauge/2; the 1:40 canted crown rises to the field side
+    u_g = np.interp(-0.014, rail.z[: np.argmax(rail.z)], rail.y[: np.argmax(rail.z)])
+    assert u_g == pytest.approx(1.435 / 2, abs=1e-6)
+    assert rail.slope(rail.y[np.argmax(rail.z)] - 0.0) == pytest.approx(0.0, abs=2e-3)
+    # taping line at 750 mm from the wheelset centre
+    assert WS.axial_position(0.0) == pytest.approx(0.750)
+
+
+def test_left_right_symmetry_at_zero():
+    left, right = first(0.0, "left"), first(0.0, "right")
+    assert left.rolling_radius == pytest.approx(right.rolling_radius, abs=1e-9)
+    assert left.contact_angle == pytest.approx(right.contact_angle, abs=1e-9)
+    assert left.position[1] == pytest.approx(-right.position[1], abs=1e-9)
+    assert left.B == pytest.approx(right.B, rel=1e-6)
+
+
+@pytest.mark.parametrize("y", [1e-3, 3e-3, 4.5e-3, 6e-3])
+def test_rolling_radius_difference_is_odd(y):
+    def drr(v):
+        return first(v, "left").rolling_radius - first(v, "right").rolling_radius
+
+    assert drr(y) > 0  # moving left: the left wheel rolls on a larger radius
+    assert drr(-y) == pytest.approx(-drr(y), abs=1e-9)
+
+
+def test_flange_contact_at_large_displacement():
+    c = first(8e-3, "left")
+    assert math.degrees(c.contact_angle) > 60  # S1002 flange angle 70 deg
+    assert -0.045 < c.wheel_s < -0.035  # on the flange flank
+    tread = first(8e-3, "right")
+    assert math.degrees(tread.contact_angle) < 5
+
+
+def test_two_patches_for_two_gap_minima():
+    """At 5.0 mm the gap has separate minima on the tread and at the gauge corner (0.03 mm
+    apart): one patch for a small approach, two once the approach exceeds the gap."""
+    one = contact_points(TRACK, WS, Pose(lateral=5.0e-3), "left", approach=0.02e-3)
+    two = contact_points(TRACK, WS, Pose(lateral=5.0e-3), "left", approach=0.05e-3)
+    assert len(one) == 1 and len(two) == 2
+    assert two[1].gap == pytest.approx(0.0306e-3, abs=2e-6)
+    assert two[1].contact_angle > two[0].contact_angle
+    _, _, _, _, g = vertical_gap(TRACK, WS, Pose(lateral=5.0e-3), "left")
+    minima = np.flatnonzero((g[1:-1] < g[:-2]) & (g[1:-1] <= g[2:]))
+    assert len(minima) >= 2
+
+
+@pytest.mark.parametrize("y", [0.0, -2e-3, 3e-3])
+def test_gap_curvature_is_the_profiles_curvature(y):
+    """B = f''(0)/2 equals half the relative curvature of the two profiles at the contact
+    point, -(kappa_wheel + kappa_rail)/2 (curvature of Z = const - F(S) and of the rail,
+    invariant under the rotation into the tangent plane); the even part of f is B s^2."""
+    c = first(y, "left")
+    kw = float(WS.wheel.curvature(c.wheel_s))
+    kr = float(TRACK.side_rail.curvature(c.rail_u))
+    assert c.B == pytest.approx(-(kw + kr) / 2, rel=0.02)
+    s = c.s
+    k0 = int(np.argmin(np.abs(s)))
+    even = 0.5 * (c.f[k0 + 1:k0 + 6] + c.f[k0 - 1:k0 - 6:-1])
+    assert np.allclose(even, c.B * s[k0 + 1:k0 + 6] ** 2, rtol=0.03)
+    assert c.A == pytest.approx(math.cos(math.atan(WS.wheel.slope(c.wheel_s)))
+                                / (2 * c.rolling_radius), rel=1e-3)
+
+
+def test_yaw_moves_contact_along_track():
+    a = first(7.5e-3, "left", yaw=5e-3)
+    b = first(7.5e-3, "left", yaw=-5e-3)
+    assert a.position[0] == pytest.approx(-b.position[0], rel=1e-3)
+    assert abs(a.position[0]) > 1e-3  # flange contact leads/lags by millimetres
+
+
+def test_beyond_the_profiles():
+    with pytest.raises(RailContactError, match="beyond the profiles"):
+        contact_points(TRACK, WS, Pose(lateral=0.2), "left")
