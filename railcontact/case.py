@@ -13,6 +13,22 @@ Schema (keys not listed here are rejected, so that a typo never goes unnoticed):
     A = 1.0               # longitudinal relative curvature [1/m]
     B = 5.0               # lateral relative curvature [1/m]
 
+    [geometry]            # ... or a wheel on a rail (railcontact.geometry)
+    type = "wheel-rail"
+    wheel = "S1002"       # built-in name or file (.prw SIMPACK or two columns y z)
+    rail = "60E1"         # built-in (60E1/UIC60, CN60) or file (.prr or two columns)
+    profile_unit = "mm"   # unit of two-column profile files
+    inclination = 0.025   # rail cant [rad] (1:40); 0 for a file that is canted already
+    gauge = 1.435         # [m], measured gauge_depth = 0.014 m below the top of rail
+    back_to_back = 1.360  # flange-back distance [m]
+    wheel_radius = 0.46   # nominal rolling radius [m]
+    lateral_displacement = -0.002  # wheelset, positive to the left [m]
+    yaw = 0.0             # [rad]
+    roll = 0.0            # [rad]
+    side = "left"         # "left" | "right" | "both"
+    # with wheel-rail, [normal] load is the vertical wheel load [N] and penetration the
+    # vertical approach of the wheel [m]
+
     [grid]                # all optional
     nx = 64               # element counts (default 64 x 64) ...
     ny = 64
@@ -61,11 +77,16 @@ else:  # pragma: no cover
 NORMAL_ESTIMATES = ("none", "hertz")
 TANGENTIAL_MODELS = ("bem", "fastsim", "fastrip")
 TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
-GEOMETRY_TYPES = ("quadratic",)
+GEOMETRY_TYPES = ("quadratic", "wheel-rail")
 
 _SCHEMA: dict[str, dict[str, str]] = {
     "material": {"young": "Young's modulus [Pa]", "poisson": "Poisson's ratio [-]"},
-    "geometry": {"type": "geometry type", "A": "curvature [1/m]", "B": "curvature [1/m]"},
+    "geometry": {"type": "geometry type", "A": "curvature [1/m]", "B": "curvature [1/m]",
+                 "wheel": "profile", "rail": "profile", "inclination": "rad",
+                 "gauge": "m", "back_to_back": "m", "wheel_radius": "m",
+                 "lateral_displacement": "m", "yaw": "rad", "roll": "rad", "side": "side",
+                 "profile_unit": "unit of profile files", "gauge_depth": "m",
+                 "flange_back": "m"},
     "grid": {"nx": "element count", "ny": "element count", "dx": "element size [m]",
              "dy": "element size [m]", "x": "x range [m]", "y": "y range [m]",
              "margin": "potential-area scale [-]"},
@@ -178,10 +199,13 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
 
     geo = c["geometry"]
     geo["type"] = _choice("geometry", "type", geo.get("type", "quadratic"), GEOMETRY_TYPES)
-    for key in ("A", "B"):
-        if key not in geo:
-            raise CaseError(f"missing [geometry] {key} (curvature [1/m])")
-        _number("geometry", key, geo[key])
+    if geo["type"] == "quadratic":
+        for key in ("A", "B"):
+            if key not in geo:
+                raise CaseError(f"missing [geometry] {key} (curvature [1/m])")
+            _number("geometry", key, geo[key])
+    else:
+        _validate_wheel_rail(geo)
 
     grid = c["grid"]
     for key in ("nx", "ny"):
@@ -210,6 +234,29 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
         _validate_tangential(c["tangential"])
     c.setdefault("name", "case")
     return c
+
+
+def _validate_wheel_rail(geo: dict[str, Any]) -> None:
+    for key in ("A", "B"):
+        if key in geo:
+            raise CaseError(f"[geometry] {key} is for type = 'quadratic'; a wheel-rail case "
+                            "computes its curvatures from the profiles")
+    geo.setdefault("wheel", "S1002")
+    geo.setdefault("rail", "60E1")
+    for key in ("wheel", "rail"):
+        if not isinstance(geo[key], str) or not geo[key]:
+            raise CaseError(f"[geometry] {key} must be a built-in name or a file path")
+    defaults = {"inclination": math.atan(1 / 40), "gauge": 1.435, "back_to_back": 1.360,
+                "wheel_radius": 0.46, "gauge_depth": 0.014, "flange_back": -0.070}
+    for key, val in defaults.items():
+        geo[key] = _number("geometry", key, geo.get(key, val),
+                           positive=key not in ("inclination", "flange_back"))
+    for key in ("lateral_displacement", "yaw", "roll"):
+        geo[key] = _number("geometry", key, geo.get(key, 0.0), positive=False)
+    geo["side"] = _choice("geometry", "side", geo.get("side", "left"),
+                          ("left", "right", "both"))
+    geo["profile_unit"] = _choice("geometry", "profile_unit", geo.get("profile_unit", "mm"),
+                                  ("m", "mm", "cm", "in"))
 
 
 def _validate_tangential(tan: dict[str, Any]) -> None:

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from .case import load_case, validate_case
 from .errors import CaseError
@@ -44,6 +47,8 @@ class PatchSolution:
     tangential: TangentialResult | StripResult | None = None
     tangential_model: str = "bem"
     tangential_estimate: str = "none"
+    curvatures: tuple[float, float] | None = None
+    geometry: Any = None
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -58,6 +63,16 @@ class PatchSolution:
                          "bounds": list(n.grid.bounds)},
             }
         }
+        if self.geometry is not None:
+            g = self.geometry
+            d["side"] = g.side
+            d["contact_point"] = list(g.position)
+            d["contact_angle"] = g.contact_angle
+            d["rolling_radius"] = g.rolling_radius
+            d["wheel_profile_coordinate"] = g.wheel_s
+            d["rail_profile_coordinate"] = g.rail_y
+            d["curvatures"] = [g.A, g.B]
+            d["gap"] = g.gap
         if self.tangential is not None:
             t = self.tangential
             d["tangential"] = {
@@ -141,38 +156,69 @@ def solve(case: dict[str, Any] | str | Path) -> Solution:
     """
     case = load_case(case) if isinstance(case, (str, Path)) else validate_case(case)
     pair = elastic_pair(case["material"])
-    geo, gspec, nspec = case["geometry"], case["grid"], case["normal"]
-    A, B = float(geo["A"]), float(geo["B"])
-    control = {"load": nspec["load"]} if "load" in nspec else {
-        "penetration": nspec["penetration"]}
-    hz = hertz(A, B, pair, **control)
+    if case["geometry"]["type"] == "wheel-rail":
+        from .wheelrail import solve_wheel_rail
 
-    automatic = "x" not in gspec or "y" not in gspec
-    auto = potential_area(A, B, hz.penetration if hz.penetration > 0 else 1e-12,
-                          gspec["margin"])
-    bounds = (*gspec.get("x", auto[:2]), *gspec.get("y", auto[2:]))
+        patches = solve_wheel_rail(case, pair)
+    else:
+        patches = [_solve_quadratic(case, pair)]
+    if "tangential" in case:
+        for patch in patches:
+            if patch.normal.force > 0:
+                _solve_tangential(patch, case["tangential"], pair, case["normal"]["fft"])
+    return Solution(case=case, patches=patches)
 
+
+def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds, gspec: dict[str, Any],
+                       nspec: dict[str, Any], pair: ElasticPair, control: dict[str, float],
+                       hz: HertzSolution | None, automatic: bool = True) -> NormalResult:
+    """BEM normal solution of one patch on the potential area ``bounds`` [m].
+
+    ``gap_of(grid)`` gives the undeformed gap on a grid; ``control`` is ``{"load": N}`` or
+    ``{"penetration": delta}``. An automatic area is grown by :data:`GROW_FACTOR` while the
+    contact reaches its edge; a user-given one that is too small is an error.
+    """
     for _ in range(MAX_GROW + 1):
         grid = _make_grid(gspec, bounds)
         op = influence_operator(grid, pair, "z", nspec["fft"])
-        X, Y = grid.mesh()
-        gap = A * X**2 + B * Y**2
-        p0 = hz.pressure(X, Y) if nspec["estimate"] == "hertz" else None
-        res = solve_normal(gap, grid, op, initial_pressure=p0, tolerance=nspec["tolerance"],
-                           max_iterations=nspec["max_iterations"], **control)
+        p0 = None
+        if nspec["estimate"] == "hertz" and hz is not None:
+            X, Y = grid.mesh()
+            p0 = hz.pressure(X, Y)
+        res = solve_normal(gap_of(grid), grid, op, initial_pressure=p0,
+                           tolerance=nspec["tolerance"], max_iterations=nspec["max_iterations"],
+                           **control)
         if not res.touches_boundary:
-            break
+            return res
         if not automatic:
             raise CaseError(
                 "potential contact area too small: the contact reaches the edge of [grid] "
                 f"x = {gspec.get('x')} , y = {gspec.get('y')} m; enlarge it or leave x and y "
                 "out for an automatic area")
         xmin, xmax, ymin, ymax = bounds
-        bounds = (xmin * GROW_FACTOR, xmax * GROW_FACTOR, ymin * GROW_FACTOR, ymax * GROW_FACTOR)
-    patch = PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"])
-    if "tangential" in case:
-        _solve_tangential(patch, case["tangential"], pair, A, B, nspec["fft"])
-    return Solution(case=case, patches=[patch])
+        xc, yc = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
+        bounds = (xc + (xmin - xc) * GROW_FACTOR, xc + (xmax - xc) * GROW_FACTOR,
+                  yc + (ymin - yc) * GROW_FACTOR, yc + (ymax - yc) * GROW_FACTOR)
+    return res
+
+
+def _solve_quadratic(case: dict[str, Any], pair: ElasticPair) -> PatchSolution:
+    geo, gspec, nspec = case["geometry"], case["grid"], case["normal"]
+    A, B = float(geo["A"]), float(geo["B"])
+    control = {"load": nspec["load"]} if "load" in nspec else {
+        "penetration": nspec["penetration"]}
+    hz = hertz(A, B, pair, **control)
+    automatic = "x" not in gspec or "y" not in gspec
+    auto = potential_area(A, B, hz.penetration if hz.penetration > 0 else 1e-12,
+                          gspec["margin"])
+    bounds = (*gspec.get("x", auto[:2]), *gspec.get("y", auto[2:]))
+
+    def gap_of(grid: Grid) -> np.ndarray:
+        X, Y = grid.mesh()
+        return A * X**2 + B * Y**2
+
+    res = solve_patch_normal(gap_of, bounds, gspec, nspec, pair, control, hz, automatic)
+    return PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"], curvatures=(A, B))
 
 
 def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
@@ -186,9 +232,10 @@ def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
 
 
 def _solve_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: ElasticPair,
-                      A: float, B: float, fft: str) -> None:
+                      fft: str) -> None:
     """Add the tangential solution to ``patch`` (same grid as its normal solution)."""
     res = patch.normal
+    A, B = patch.curvatures
     # The simplified models work on the Hertz ellipse that carries the BEM's normal force.
     hz = hertz(A, B, pair, load=res.force) if res.force > 0 else None
     model, estimate = tspec["model"], tspec["estimate"]

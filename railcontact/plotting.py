@@ -96,9 +96,8 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
     if res.force > 0:
         from .hertz import hertz
 
-        geo = sol.case["geometry"]
         pair = elastic_pair(sol.case["material"])
-        hz = hertz(geo["A"], geo["B"], pair, load=res.force)
+        hz = hertz(*ps.curvatures, pair, load=res.force)
         for model, style in (("fastsim", "--"), ("fastrip", "-.")):
             r = simplified_tangential(model, hz, pair, tspec)
             k = int(np.argmin(np.abs(r.strips.y)))

@@ -1,0 +1,132 @@
+"""Wheel–rail cases: profiles -> contact search -> one BEM problem per contact patch.
+
+``[normal] penetration`` is the vertical approach of the wheel towards the rail [m] beyond
+first contact; patch ``k`` (vertical gap ``g_k`` above the first contact, contact angle
+``gamma_k``) then has the normal penetration ``(delta - g_k) cos(gamma_k)``.
+``[normal] load`` is the vertical wheel load Q [N]: the approach is found such that the
+vertical components of the patches' normal forces add up to Q, ``sum N_k cos(gamma_k) = Q``
+(tangential forces ignored). One patch: force control with ``N = Q / cos(gamma)``, exact
+in one solve, started from Hertz's penetration when an estimate is asked for; several
+patches: a secant iteration on the approach from Hertz's value.
+
+The potential contact area of a patch follows the paper (Sec. 2.1): ``A x^2 <= delta_0``
+along the track and ``f(s) <= delta_0`` across it (``delta_0`` the patch's normal
+penetration), scaled by ``[grid] margin`` and grown when the contact reaches its edge.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from .errors import CaseError, RailContactError
+from .geometry.contact import ContactPoint, contact_points
+from .geometry.profiles import read_profile
+from .geometry.track import Pose, Track, Wheelset
+from .hertz import hertz
+from .materials import ElasticPair
+from .pipeline import PatchSolution, solve_patch_normal
+
+LOAD_RTOL = 1e-6
+MAX_SECANT = 30
+
+
+def build_geometry(geo: dict[str, Any]) -> tuple[Track, Wheelset, Pose]:
+    """Track, wheelset and pose from a validated ``[geometry]`` table."""
+    unit = geo["profile_unit"]
+    try:
+        track = Track(read_profile(geo["rail"], "rail", unit), geo["inclination"], geo["gauge"],
+                      geo["gauge_depth"])
+        ws = Wheelset(read_profile(geo["wheel"], "wheel", unit), geo["wheel_radius"],
+                      geo["back_to_back"], geo["flange_back"])
+        pose = Pose(geo["lateral_displacement"], geo["yaw"], geo["roll"])
+    except RailContactError as exc:
+        raise CaseError(f"[geometry]: {exc}") from None
+    return track, ws, pose
+
+
+def _patches(cps: list[ContactPoint], approach: float, case: dict[str, Any],
+             pair: ElasticPair, loads: list[float] | None = None) -> list[PatchSolution]:
+    gspec, nspec = case["grid"], case["normal"]
+    out = []
+    for k, cp in enumerate(cps):
+        dn = cp.normal_penetration(approach)
+        if dn <= 0 and loads is None:
+            continue
+        if not (math.isfinite(cp.B) and cp.B > 0 and cp.A > 0):
+            raise CaseError(f"{cp.side} wheel: no convex contact at S = {cp.wheel_s:.4g} m "
+                            "(conformal or concave gap); cannot set up the patch")
+        control = {"load": loads[k]} if loads is not None else {"penetration": dn}
+        hz = hertz(cp.A, cp.B, pair, **control)
+        d0 = hz.penetration if loads is not None else dn
+        xl = gspec["margin"] * math.sqrt(d0 / cp.A)
+        ylo, yhi = cp.lateral_extent(d0, gspec["margin"])
+        res = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), gspec, nspec, pair,
+                                 control, hz)
+        out.append(PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"],
+                                 curvatures=(cp.A, cp.B), geometry=cp))
+    return out
+
+
+def _vertical_force(patches: list[PatchSolution]) -> float:
+    return sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in patches)
+
+
+def _solve_wheel(track, ws, pose, side, case, pair) -> list[PatchSolution]:
+    nspec = case["normal"]
+    if "penetration" in nspec:
+        approach = nspec["penetration"]
+        return _patches(contact_points(track, ws, pose, side, approach), approach, case, pair)
+    q = nspec["load"]
+    if q == 0:
+        return []
+    first = contact_points(track, ws, pose, side, 0.0)[0]
+    cosg = math.cos(first.contact_angle)
+    # one patch: force control (exact); check that the approach it needs adds no patch
+    single = _patches([first], 0.0, case, pair, loads=[q / cosg])
+    approach = single[0].normal.penetration / cosg
+    if len(contact_points(track, ws, pose, side, approach)) == 1:
+        return single
+    # several patches: secant on the vertical approach
+    def residual(a: float) -> tuple[float, list[PatchSolution]]:
+        ps = _patches(contact_points(track, ws, pose, side, a), a, case, pair)
+        return _vertical_force(ps) - q, ps
+
+    a0 = approach
+    r0, ps0 = residual(a0)
+    a1 = a0 * (0.9 if r0 > 0 else 1.1)
+    r1, ps1 = residual(a1)
+    for _ in range(MAX_SECANT):
+        if abs(r1) < LOAD_RTOL * q:
+            return ps1
+        if r1 == r0:
+            break
+        a2 = a1 - r1 * (a1 - a0) / (r1 - r0)
+        a2 = min(max(a2, 0.5 * a1), 2.0 * a1)
+        a0, r0 = a1, r1
+        a1 = a2
+        r1, ps1 = residual(a1)
+    if abs(r1) > 1e-3 * q:
+        raise CaseError(f"{side} wheel: load control did not converge (vertical force "
+                        f"{r1 + q:.6g} N for load {q:.6g} N)")
+    return ps1
+
+
+def solve_wheel_rail(case: dict[str, Any], pair: ElasticPair) -> list[PatchSolution]:
+    """All contact patches of the case's wheel(s), each with its BEM normal solution."""
+    geo, gspec = case["geometry"], case["grid"]
+    if "x" in gspec or "y" in gspec:
+        raise CaseError("[grid] x and y are for quadratic cases; a wheel-rail case sets the "
+                        "potential area of each patch automatically (use margin, nx/ny or "
+                        "dx/dy)")
+    track, ws, pose = build_geometry(geo)
+    sides = ["left", "right"] if geo["side"] == "both" else [geo["side"]]
+    patches: list[PatchSolution] = []
+    for side in sides:
+        try:
+            patches += _solve_wheel(track, ws, pose, side, case, pair)
+        except RailContactError as exc:
+            if isinstance(exc, CaseError):
+                raise
+            raise CaseError(f"{side} wheel: {exc}") from None
+    return patches
