@@ -141,7 +141,7 @@ def test_bad_files(tmp_path):
     empty.write_text("header.begin\n type = 0\nheader.end\n")
     with pytest.raises(RailContactError, match="no profile points"):
         read_simpack(empty)
-    with pytest.raises(RailContactError, match="not found"):
+    with pytest.raises(RailContactError, match="nor an existing file"):
         read_profile(tmp_path / "missing.prr", "rail")
     with pytest.raises(RailContactError, match="not a rail"):
         read_profile("S1002", "rail")

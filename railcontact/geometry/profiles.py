@@ -336,6 +336,10 @@ def read_profile(spec: str | Path, kind: str, unit: str = "mm") -> Profile:
             raise RailContactError(f"profile {s!r} is a {prof.kind} profile, not a {kind}")
         return prof
     p = Path(s)
+    if not p.is_file():
+        raise RailContactError(f"{kind} profile {s!r} is neither a built-in profile "
+                               f"({', '.join(sorted(_BUILTIN))}; aliases "
+                               f"{', '.join(sorted(_ALIASES))}) nor an existing file")
     if p.suffix.lower() in (".prr", ".prw"):
         prof = read_simpack(p)
         if prof.kind != kind:

@@ -1,0 +1,104 @@
+"""Wheel–rail cases through the case API and the CLI."""
+
+import copy
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+import railcontact as rc
+from railcontact import CaseError, hertz
+from railcontact.pipeline import elastic_pair
+
+
+@pytest.fixture(scope="module")
+def base(request):
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    return rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+
+
+def variant(case, **geometry):
+    c = copy.deepcopy(case)
+    normal = geometry.pop("normal", None)
+    c["geometry"].update(geometry)
+    if normal is not None:
+        c["normal"] = {"tolerance": 1e-8, "estimate": "none", **normal}
+    return c
+
+
+@pytest.mark.parametrize("dy", [0.0, -0.002])
+def test_small_approach_is_hertz_of_the_local_curvatures(base, dy):
+    """For a small approach the gap is locally quadratic: the wheel-rail BEM equals the
+    quadratic-gap BEM with the contact point's A, B, and both approach Hertz."""
+    case = variant(base, lateral_displacement=dy, normal={"penetration": 2e-6})
+    sol = rc.solve(case)
+    assert len(sol.patches) == 1
+    p = sol.patches[0]
+    A, B = p.curvatures
+    delta_n = p.geometry.normal_penetration(2e-6)
+    assert p.normal.penetration == pytest.approx(delta_n)
+    quad = copy.deepcopy(case)
+    quad["geometry"] = {"type": "quadratic", "A": A, "B": B}
+    quad["normal"]["penetration"] = delta_n
+    qn = rc.solve(quad).patches[0].normal
+    hz = hertz(A, B, elastic_pair(case["material"]), penetration=delta_n)
+    assert p.normal.force == pytest.approx(qn.force, rel=0.02)
+    assert p.normal.force == pytest.approx(hz.load, rel=0.03)
+    assert p.normal.max_pressure == pytest.approx(hz.max_pressure, rel=0.03)
+
+
+def test_load_control_meets_the_wheel_load(base):
+    sol = rc.solve(base)
+    (p,) = sol.patches
+    vertical = p.normal.force * math.cos(p.geometry.contact_angle)
+    assert vertical == pytest.approx(83.3e3, rel=1e-9)
+    assert p.normal.converged and not p.normal.touches_boundary
+
+
+def test_two_patch_case_solves_each_patch(base):
+    case = variant(base, lateral_displacement=0.005, normal={"penetration": 5e-5})
+    # gap minima 0.0306 mm apart, saddle at 0.0597 mm: two patches for 0.05 mm
+    sol = rc.solve(case)
+    assert len(sol.patches) == 2
+    angles = sorted(p.geometry.contact_angle for p in sol.patches)
+    assert math.degrees(angles[0]) < 10 < math.degrees(angles[1])
+    for p in sol.patches:
+        assert p.normal.force > 0 and p.normal.converged
+
+
+def test_both_wheels_symmetric_at_zero(base):
+    sol = rc.solve(variant(base, lateral_displacement=0.0, side="both"))
+    left, right = sol.patches
+    assert left.normal.force == pytest.approx(right.normal.force, rel=1e-9)
+    assert left.geometry.position[1] == pytest.approx(-right.geometry.position[1])
+
+
+def test_cli_json_has_contact_geometry(root):
+    r = subprocess.run([sys.executable, "-m", "railcontact", "solve",
+                        str(root / "models/cases/s1002_60e1_dy-2mm.toml"), "--json"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    p = json.loads(r.stdout)["patches"][0]
+    assert len(p["contact_point"]) == 3
+    assert 0.70 < abs(p["contact_point"][1]) < 0.78  # on the left rail head (Y > 0)
+    assert 0 < p["contact_angle"] < 0.2
+    assert 0.45 < p["rolling_radius"] < 0.47
+    assert p["normal"]["force"] * math.cos(p["contact_angle"]) == pytest.approx(83.3e3)
+
+
+@pytest.mark.parametrize("geometry, match", [
+    ({"wheel": "XYZ123"}, "wheel profile"),
+    ({"rail": "no/such/file.prr"}, "nor an existing file"),
+    ({"lateral_displacement": 0.3}, "beyond the profiles"),
+    ({"side": "middle"}, "side"),
+    ({"A": 1.0}, "quadratic"),
+])
+def test_bad_wheel_rail_cases(base, geometry, match):
+    case = copy.deepcopy(base)
+    case["geometry"].update(geometry)
+    with pytest.raises(CaseError, match=match):
+        rc.solve(case)
