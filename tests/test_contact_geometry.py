@@ -66,7 +66,7 @@ def test_two_patches_for_two_gap_minima():
     assert len(minima) >= 2
 
 
-@pytest.mark.parametrize("y", [0.0, -2e-3, 3e-3])
+@pytest.mark.parametrize("y", [0.0, -2e-3, 3e-3, 7.78e-3])  # 7.78 mm: flange, 70 deg
 def test_gap_curvature_is_the_profiles_curvature(y):
     """B = f''(0)/2 equals half the relative curvature of the two profiles at the contact
     point, -(kappa_wheel + kappa_rail)/2 (curvature of Z = const - F(S) and of the rail,

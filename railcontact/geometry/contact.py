@@ -158,7 +158,9 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     """
     approach = check_positive("approach", approach, "m", allow_zero=True)
     eta, x, u, z, g = vertical_gap(track, ws, pose, side)
-    g = g - g.min()
+    g_min = g.min()
+    g = g - g_min
+    z = z - g_min  # the wheel lowered (or lifted) into first contact
     inside = g <= max(approach, 0.0)
     # connected intervals of interpenetration; always include the global minimum
     k_min = int(np.argmin(g))
@@ -204,11 +206,13 @@ def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
     n_r = -(ur - u_c) * sg + (zr - z_rail) * cg
     half = 0.025
     s = np.linspace(-half, half, 1001)
-    f = _monotone_interp(s, s_w, n_w) - _monotone_interp(s, s_r, n_r)
+    kw = int(np.argmin(np.abs(u - u_c)))
+    kr = int(np.argmin(np.abs(ur - u_c)))
+    f = _branch_interp(s, s_w, n_w, kw) - _branch_interp(s, s_r, n_r, kr)
     f = f - np.nanmin(f[np.abs(s) < 1e-3]) if np.isfinite(f[500]) else f
     f = np.where(np.isfinite(f), f, np.inf)
     # A(s) from the wheel at the same s
-    eta_s = _monotone_interp(s, s_w, eta)
+    eta_s = _branch_interp(s, s_w, eta, kw)
     S_s = ws.profile_coordinate(np.where(np.isfinite(eta_s), eta_s, eta_c))
     beta = np.arctan(ws.wheel.slope(S_s))
     a_of_s = np.cos(beta) / (2 * (ws.radius + ws.wheel.height(S_s)))
@@ -236,8 +240,15 @@ def _uncant(track: Track, u: float, z: float) -> float:
     return float(y[k])
 
 
-def _monotone_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Interpolate y(x) on the part of the curve where x increases through x_new's range."""
-    ok = np.concatenate([[True], np.diff(x) > 0])
-    xs, ys = x[ok], y[ok]
-    return np.interp(x_new, xs, ys, left=np.nan, right=np.nan)
+def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
+    """Interpolate y(x) along the branch of the curve through sample ``k`` on which x
+    increases (rotated into a steep tangent plane a profile can fold back over itself,
+    e.g. over the flange tip; the other branches are not part of this contact)."""
+    up = np.diff(x) > 0
+    lo = k
+    while lo > 0 and up[lo - 1]:
+        lo -= 1
+    hi = k
+    while hi < len(up) and up[hi]:
+        hi += 1
+    return np.interp(x_new, x[lo:hi + 1], y[lo:hi + 1], left=np.nan, right=np.nan)
