@@ -49,3 +49,11 @@ def check_positive(name: str, value: object, unit: str = "", allow_zero: bool = 
         bound = "non-negative" if allow_zero else "positive"
         raise RailContactError(f"{name}{suffix} must be {bound}, got {x:g}")
     return x
+
+
+def check_count(name: str, value: object, minimum: int = 1) -> int:
+    """Return ``value`` as an int, or raise if it is not an integer >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value \
+            or value < minimum:
+        raise RailContactError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import RailContactError, check_positive
+from ..errors import RailContactError, check_count, check_positive
 from ..grid import Grid, touches_boundary
 from ..operator import InfluenceOperator
 
@@ -157,9 +157,7 @@ def solve_normal(
     if operator.components != "z" or (operator.nx, operator.ny) != shape:
         raise RailContactError("operator must be a 'z' influence operator for this grid")
     tolerance = check_positive("tolerance", tolerance)
-    if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or \
-            max_iterations < 1:
-        raise RailContactError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    max_iterations = check_count("max_iterations", max_iterations)
     if (load is None) == (penetration is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
     force_control = load is not None

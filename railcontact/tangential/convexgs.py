@@ -28,7 +28,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import RailContactError, check_finite, check_positive
+from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..grid import Grid
 from ..operator import InfluenceOperator
 from .rolling import rigid_slip
@@ -319,9 +319,7 @@ def solve_tangential(
     for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
         if not 0.0 < check_finite(name, om) <= 1.5:
             raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
-    if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or \
-            max_iterations < 1:
-        raise RailContactError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    max_iterations = check_count("max_iterations", max_iterations)
     if engine not in ENGINES:
         raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
     if engine == "numba" and not HAVE_NUMBA:
