@@ -41,7 +41,8 @@ Schema (keys not listed here are rejected, so that a typo never goes unnoticed):
     [normal]
     load = 83.3e3         # normal force [N] ... (give one of the two)
     penetration = 1e-4    # ... or rigid approach [m]
-    estimate = "none"     # initial estimate: "none" | "hertz"
+    estimate = "none"     # initial estimate: "none" | "hertz" | "kp" | "infcon"
+    estimate_grid = [40, 40]  # KP/INFCON estimate grid (n_x, n_y), re-meshed onto the BEM
     tolerance = 1e-3      # eps_n, relative pressure change between iterations
     max_iterations = 500
     fft = "auto"          # "auto" | "pyfftw" | "scipy" | "dense"
@@ -74,7 +75,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-NORMAL_ESTIMATES = ("none", "hertz")
+NORMAL_ESTIMATES = ("none", "hertz", "kp", "infcon")
 TANGENTIAL_MODELS = ("bem", "fastsim", "fastrip")
 TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
 GEOMETRY_TYPES = ("quadratic", "wheel-rail")
@@ -91,7 +92,8 @@ _SCHEMA: dict[str, dict[str, str]] = {
              "dy": "element size [m]", "x": "x range [m]", "y": "y range [m]",
              "margin": "potential-area scale [-]"},
     "normal": {"load": "force [N]", "penetration": "approach [m]", "estimate": "estimate",
-               "tolerance": "eps_n", "max_iterations": "count", "fft": "FFT backend"},
+               "tolerance": "eps_n", "max_iterations": "count", "fft": "FFT backend",
+               "estimate_grid": "[nx, ny] of KP/INFCON"},
     "tangential": {"creepage": "[xi, eta, phi]", "friction": "mu [-]", "model": "model",
                    "estimate": "estimate", "tolerance": "eps_tau", "max_iterations": "count",
                    "bound": "traction bound", "strips": "[nx, ny]",
@@ -230,6 +232,11 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
     nor["max_iterations"] = _integer("normal", "max_iterations", nor.get("max_iterations", 500),
                                      1)
     nor["fft"] = _choice("normal", "fft", nor.get("fft", "auto"), BACKENDS)
+    eg = nor.get("estimate_grid", [40, 40])
+    if not isinstance(eg, list) or len(eg) != 2:
+        raise CaseError(f"[normal] estimate_grid must be [nx, ny], got {eg!r}")
+    nor["estimate_grid"] = [_integer("normal", f"estimate_grid[{i}]", v, 4)
+                            for i, v in enumerate(eg)]
     if "tangential" in c:
         _validate_tangential(c["tangential"])
     c.setdefault("name", "case")

@@ -101,3 +101,31 @@ class Grid:
 def touches_boundary(mask: np.ndarray) -> bool:
     """True when any element on the outer ring of the grid is set in ``mask``."""
     return bool(mask[0, :].any() or mask[-1, :].any() or mask[:, 0].any() or mask[:, -1].any())
+
+
+def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = False
+           ) -> np.ndarray:
+    """A field on ``source`` interpolated (bilinearly, zero outside) onto ``target``.
+
+    With ``conserve=True`` the result is scaled so that its integral (sum times element
+    area) equals the source's, e.g. to keep the total force of a pressure estimate.
+    """
+    from scipy.interpolate import RegularGridInterpolator
+
+    v = np.asarray(values, dtype=float)
+    if v.shape != source.shape:
+        raise RailContactError(f"values must have the source grid's shape {source.shape}")
+    # pad with a ring of zeros half an element outside, so the field falls to zero at the
+    # edge of the source grid instead of stopping at its outer element centres
+    x = np.concatenate([[source.x[0] - source.dx / 2], source.x, [source.x[-1] + source.dx / 2]])
+    y = np.concatenate([[source.y[0] - source.dy / 2], source.y, [source.y[-1] + source.dy / 2]])
+    vp = np.pad(v, 1)
+    interp = RegularGridInterpolator((x, y), vp, bounds_error=False, fill_value=0.0)
+    X, Y = target.mesh()
+    out = interp(np.stack([X, Y], axis=-1))
+    if conserve:
+        total = out.sum() * target.element_area
+        want = v.sum() * source.element_area
+        if total > 0:
+            out *= want / total
+    return out

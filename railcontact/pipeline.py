@@ -16,6 +16,7 @@ from .grid import Grid
 from .hertz import HertzSolution, hertz
 from .materials import ElasticPair, Material
 from .normal import NormalResult, solve_normal
+from .normal.virtual import virtual_penetration
 from .operator import influence_operator
 from .tangential import TangentialResult, rolling_operator, solve_tangential
 from .tangential.fastrip import fastrip_hertz
@@ -169,22 +170,40 @@ def solve(case: dict[str, Any] | str | Path) -> Solution:
     return Solution(case=case, patches=patches)
 
 
+def normal_estimate(nspec: dict[str, Any], hz: HertzSolution | None, s: np.ndarray,
+                    f: np.ndarray, a_of_s: np.ndarray, pair: ElasticPair,
+                    control: dict[str, float]) -> Callable[[Grid], np.ndarray | None]:
+    """The case's initial estimate of the pressure, as a function of the BEM grid.
+
+    "hertz": Hertz's pressure at the element centres; "kp" / "infcon": the virtual
+    penetration model, its amplitude set on its estimate grid (``[normal] estimate_grid``),
+    evaluated at the BEM element centres; "none": no estimate.
+    """
+    method = nspec["estimate"]
+    if method == "hertz" and hz is not None:
+        return lambda grid: hz.pressure(*grid.mesh())
+    if method in ("kp", "infcon"):
+        nx, ny = nspec["estimate_grid"]
+        est = virtual_penetration(method, s, f, a_of_s, pair, nx=nx, ny=ny, **control)
+        return lambda grid: est.pressure_at(*grid.mesh())
+    return lambda grid: None
+
+
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds, gspec: dict[str, Any],
                        nspec: dict[str, Any], pair: ElasticPair, control: dict[str, float],
-                       hz: HertzSolution | None, automatic: bool = True) -> NormalResult:
+                       estimate_of: Callable[[Grid], np.ndarray | None],
+                       automatic: bool = True) -> NormalResult:
     """BEM normal solution of one patch on the potential area ``bounds`` [m].
 
-    ``gap_of(grid)`` gives the undeformed gap on a grid; ``control`` is ``{"load": N}`` or
-    ``{"penetration": delta}``. An automatic area is grown by :data:`GROW_FACTOR` while the
-    contact reaches its edge; a user-given one that is too small is an error.
+    ``gap_of(grid)`` gives the undeformed gap on a grid, ``estimate_of(grid)`` the initial
+    pressure (or None); ``control`` is ``{"load": N}`` or ``{"penetration": delta}``. An
+    automatic area is grown by :data:`GROW_FACTOR` while the contact reaches its edge; a
+    user-given one that is too small is an error.
     """
     for _ in range(MAX_GROW + 1):
         grid = _make_grid(gspec, bounds)
         op = influence_operator(grid, pair, "z", nspec["fft"])
-        p0 = None
-        if nspec["estimate"] == "hertz" and hz is not None:
-            X, Y = grid.mesh()
-            p0 = hz.pressure(X, Y)
+        p0 = estimate_of(grid)
         res = solve_normal(gap_of(grid), grid, op, initial_pressure=p0,
                            tolerance=nspec["tolerance"], max_iterations=nspec["max_iterations"],
                            **control)
@@ -217,7 +236,9 @@ def _solve_quadratic(case: dict[str, Any], pair: ElasticPair) -> PatchSolution:
         X, Y = grid.mesh()
         return A * X**2 + B * Y**2
 
-    res = solve_patch_normal(gap_of, bounds, gspec, nspec, pair, control, hz, automatic)
+    s = np.linspace(bounds[2], bounds[3], 2001)
+    est = normal_estimate(nspec, hz, s, B * s**2, np.full_like(s, A), pair, control)
+    res = solve_patch_normal(gap_of, bounds, gspec, nspec, pair, control, est, automatic)
     return PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"], curvatures=(A, B))
 
 

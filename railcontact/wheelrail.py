@@ -25,7 +25,7 @@ from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .hertz import hertz
 from .materials import ElasticPair
-from .pipeline import PatchSolution, solve_patch_normal
+from .pipeline import PatchSolution, normal_estimate, solve_patch_normal
 
 LOAD_RTOL = 1e-6
 MAX_SECANT = 30
@@ -61,8 +61,9 @@ def _patches(cps: list[ContactPoint], approach: float, case: dict[str, Any],
         d0 = hz.penetration if loads is not None else dn
         xl = gspec["margin"] * math.sqrt(d0 / cp.A)
         ylo, yhi = cp.lateral_extent(d0, gspec["margin"])
+        est = normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         res = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), gspec, nspec, pair,
-                                 control, hz)
+                                 control, est)
         out.append(PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"],
                                  curvatures=(cp.A, cp.B), geometry=cp))
     return out

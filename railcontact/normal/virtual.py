@@ -1,0 +1,212 @@
+"""Virtual-penetration estimates of the normal contact: Kik–Piotrowski and INFCON.
+
+Both work on the gap ``h(x, s) = f(s) + A(s) x^2`` of a patch (``f`` the lateral gap with
+minimum 0 at ``s = 0``, ``A(s)`` the longitudinal curvature) and a normal penetration
+``delta``. The patch is the region of *virtual* interpenetration: strip ``s`` is in
+contact for ``|x| <= x_l(s)``, with the pressure semi-elliptic along x,
+
+    p(x, s) = p0 sqrt(x_l(s)^2 - x^2) / x_l(s0),
+
+``s0`` the strip of maximum penetration. ``p0`` follows from the condition that the
+elastic displacement at ``(0, s0)`` equals ``delta`` (Love's coefficients on the estimate
+grid, as CONTACT does it); for a prescribed force the penetration is found by a secant.
+
+Kik–Piotrowski (Piotrowski & Kik, VSD 46:27-48, 2008): ``x_l(s)^2 = (eps delta - f(s)) /
+A(s)`` with the virtual penetration factor ``eps = 0.55``.
+
+INFCON (An & Wang; the paper's Sec. 2.2.3, ``chi = n_e^2 B_e / (r_e (A + B_e))``). The
+original definition of the "equivalent" quantities was not available; railcontact resolves
+it as follows (``algorithms.md`` 4.3 marks this as uncertain):
+
+* ``B_e`` is the curvature of the parabola through the ends of the rigid interpenetration
+  region ``{f(s) <= delta}`` (``B_e = delta / w^2``, ``w`` its half width);
+* ``n_e, r_e`` are Hertz's coefficients (``algorithms.md`` 1.2) for the curvatures
+  ``(A, B_e)``, so ``chi = B_e b^2 / delta`` is Hertz's lateral virtual-penetration factor
+  (chi = 1/2 for a circle, and ``A a^2 / delta = 1 - chi`` along x);
+* the patch is KP's construction with ``delta_0 = chi delta`` across the track and the
+  longitudinal half-lengths scaled to Hertz's, ``x_l(s)^2 = (1-chi)/chi (chi delta - f(s))
+  / A(s)``.
+
+With these choices INFCON reproduces Hertz exactly for a quadratic gap, and follows the
+actual lateral gap ``f(s)`` otherwise (non-elliptic patches, several patches).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RailContactError, check_positive
+from ..grid import Grid
+from ..hertz import hertz
+from ..influence import coefficients_at
+from ..materials import ElasticPair
+
+KP_FACTOR = 0.55
+METHODS = ("kp", "infcon")
+
+
+@dataclass
+class NormalEstimate:
+    """A simplified normal solution on its own grid (SI units).
+
+    Attributes
+    ----------
+    grid
+        Estimate grid (n_x, n_y) covering the virtual patch.
+    pressure
+        Pressure [Pa], (nx, ny).
+    contact
+        Contact mask.
+    force, penetration, max_pressure, area
+        As for the BEM [N, m, Pa, m^2].
+    factor
+        Virtual-penetration factor used (0.55 for KP, chi for INFCON).
+    method, message, wall_time
+    """
+
+    grid: Grid
+    pressure: np.ndarray
+    contact: np.ndarray
+    force: float
+    penetration: float
+    max_pressure: float
+    area: float
+    factor: float
+    method: str
+    message: str
+    wall_time: float
+    half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
+    amplitude: float = 0.0
+
+    def pressure_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The model's pressure [Pa] at any points (x, y) [m]: this is how the estimate is
+        re-meshed onto the BEM grid (the estimate grid only fixes the amplitude)."""
+        xl = self.half_length(np.asarray(y, dtype=float))
+        inside = (np.asarray(y) >= self.grid.bounds[2]) & (np.asarray(y) <= self.grid.bounds[3])
+        return np.where(inside, self.amplitude * np.sqrt(np.clip(xl**2 - np.asarray(x) ** 2,
+                                                                 0, None)), 0.0)
+
+
+def infcon_factor(A: float, B_e: float) -> float:
+    """chi = n^2 B_e / (r (A + B_e)) = B_e b^2 / delta from Hertz for curvatures (A, B_e)."""
+    A = check_positive("A", A, "1/m")
+    B_e = check_positive("B_e", B_e, "1/m")
+    h = hertz(A, B_e, ElasticPair(shear=1.0, poisson=0.0), penetration=1.0)
+    return B_e * h.b**2 / h.penetration
+
+
+def _half_width(s: np.ndarray, f: np.ndarray, level: float) -> tuple[float, float]:
+    """Ends (lo, hi) of the connected region around s = 0 where f <= level (interpolated)."""
+    k0 = int(np.argmin(np.abs(s)))
+    inside = f <= level
+    lo = k0
+    while lo > 0 and inside[lo - 1]:
+        lo -= 1
+    hi = k0
+    while hi < len(s) - 1 and inside[hi + 1]:
+        hi += 1
+
+    def cross(i_in, i_out):
+        if i_out < 0 or i_out >= len(s) or not np.isfinite(f[i_out]):
+            return s[i_in]
+        t = (level - f[i_in]) / (f[i_out] - f[i_in])
+        return s[i_in] + t * (s[i_out] - s[i_in])
+
+    return cross(lo, lo - 1), cross(hi, hi + 1)
+
+
+def _shape(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, delta: float):
+    """Virtual patch: factor, half-length function on s, lateral extent."""
+    if method == "kp":
+        factor, stretch = KP_FACTOR, 1.0
+    else:
+        lo, hi = _half_width(s, f, delta)
+        w = 0.5 * (hi - lo)
+        a0 = float(np.interp(0.0, s, a_of_s))
+        factor = infcon_factor(a0, delta / w**2)
+        stretch = (1 - factor) / factor
+    d0 = factor * delta
+    lo, hi = _half_width(s, f, d0)
+
+    def x_half(sv):
+        g = d0 - np.interp(sv, s, f)
+        return np.sqrt(np.clip(stretch * g / np.interp(sv, s, a_of_s), 0, None))
+
+    return factor, x_half, lo, hi
+
+
+def _estimate_at(method, s, f, a_of_s, delta, pair, nx, ny, t0) -> NormalEstimate:
+    factor, x_half, lo, hi = _shape(method, s, f, a_of_s, delta)
+    ys = np.linspace(lo, hi, 801)
+    xmax = float(x_half(ys).max())
+    if not xmax > 0 or hi <= lo:
+        raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
+    grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
+    X, Y = grid.mesh()
+    xl = x_half(Y)
+    shape = np.sqrt(np.clip(xl**2 - X**2, 0, None))
+    contact = shape > 0
+    # displacement at the point of maximum penetration (0, s0 = 0) for unit amplitude
+    u = float(np.sum(coefficients_at("zz", -X, -Y, grid.dx, grid.dy, pair) * shape))
+    p = shape * (delta / u)
+    area_el = grid.element_area
+    force = float(p.sum() * area_el)
+    return NormalEstimate(grid=grid, pressure=p, contact=contact, force=force,
+                          penetration=delta, max_pressure=float(p.max()),
+                          area=float(contact.sum() * area_el), factor=factor, method=method,
+                          message=f"{method}: factor {factor:.4f}",
+                          wall_time=time.perf_counter() - t0, half_length=x_half,
+                          amplitude=delta / u)
+
+
+def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray,
+                        pair: ElasticPair, *, penetration: float | None = None,
+                        load: float | None = None, nx: int = 40, ny: int = 40
+                        ) -> NormalEstimate:
+    """Kik–Piotrowski (``"kp"``) or INFCON (``"infcon"``) estimate of one patch.
+
+    Parameters
+    ----------
+    method
+        "kp" or "infcon".
+    s, f, a_of_s
+        Lateral coordinate [m] (increasing, through 0), lateral gap f(s) [m] (minimum 0 at
+        s = 0) and longitudinal curvature A(s) [1/m] of the patch.
+    pair
+        Combined elastic parameters.
+    penetration, load
+        Normal penetration [m] or normal force [N] (one of them).
+    nx, ny
+        Estimate grid (the paper's (n_x, n_y)).
+    """
+    t0 = time.perf_counter()
+    if method not in METHODS:
+        raise RailContactError(f"method must be one of {METHODS}, got {method!r}")
+    s, f, a_of_s = (np.asarray(v, dtype=float) for v in (s, f, a_of_s))
+    if (penetration is None) == (load is None):
+        raise RailContactError("give exactly one of load [N] and penetration [m]")
+    if penetration is not None:
+        return _estimate_at(method, s, f, a_of_s,
+                            check_positive("penetration", penetration, "m"), pair, nx, ny, t0)
+    load = check_positive("load", load, "N")
+    # secant on delta, started from Hertz with the curvatures at s = 0
+    b0 = max(float((f[np.argmin(np.abs(s)) + 5]) / (s[np.argmin(np.abs(s)) + 5] ** 2)), 1e-9)
+    a0 = float(np.interp(0.0, s, a_of_s))
+    d1 = hertz(a0, b0, pair, load=load).penetration
+    e1 = _estimate_at(method, s, f, a_of_s, d1, pair, nx, ny, t0)
+    d2 = d1 * (load / e1.force) ** (2 / 3)
+    for _ in range(30):
+        e2 = _estimate_at(method, s, f, a_of_s, d2, pair, nx, ny, t0)
+        if abs(e2.force - load) < 1e-6 * load:
+            break
+        # secant in log-log (force ~ delta^(3/2))
+        slope = (math.log(e2.force) - math.log(e1.force)) / (math.log(d2) - math.log(d1)) \
+            if e2.force != e1.force and d2 != d1 else 1.5
+        d1, e1 = d2, e2
+        d2 = d2 * (load / e2.force) ** (1 / max(slope, 0.5))
+    return e2

@@ -1,0 +1,94 @@
+"""Kik–Piotrowski and INFCON normal estimates, and re-meshing."""
+
+import copy
+
+import numpy as np
+import pytest
+
+import railcontact as rc
+from railcontact import ElasticPair, Grid, Material, hertz
+from railcontact.grid import remesh
+from railcontact.normal.virtual import infcon_factor, virtual_penetration
+
+PAIR = ElasticPair.of(Material(206e9, 0.28))
+
+
+def quadratic(A, B, half=0.02, n=4001):
+    s = np.linspace(-half, half, n)
+    return s, B * s**2, np.full_like(s, A)
+
+
+def test_infcon_factor_circle_and_table():
+    """chi = 1/2 for a circle; chi = n^2 B/(r (A+B)) against the m, n, r table (theta =
+    30 deg: 0.3123, 60 deg: 0.4113, algorithms.md 4.3)."""
+    assert infcon_factor(2.0, 2.0) == pytest.approx(0.5, abs=1e-12)
+    for theta, chi in ((30, 0.3123), (60, 0.4113)):
+        c = np.cos(np.radians(theta))
+        assert infcon_factor(1 - c, 1 + c) == pytest.approx(chi, abs=1e-4)
+
+
+@pytest.mark.parametrize("A, B", [(1.0, 1.0), (1.0, 5.0), (5.0, 1.0)])
+def test_infcon_is_hertz_for_quadratic_gaps(A, B):
+    hz = hertz(A, B, PAIR, penetration=1e-4)
+    e = virtual_penetration("infcon", *quadratic(A, B), PAIR, penetration=1e-4, nx=60, ny=60)
+    assert e.force == pytest.approx(hz.load, rel=5e-3)
+    assert e.max_pressure == pytest.approx(hz.max_pressure, rel=5e-3)
+    assert e.area == pytest.approx(hz.area, rel=0.03)
+    x = np.linspace(-hz.a, hz.a, 41)
+    assert np.allclose(e.pressure_at(x, 0.0 * x), hz.pressure(x, 0.0 * x),
+                       atol=5e-3 * hz.max_pressure)
+
+
+def test_kp_is_close_to_hertz_for_quadratic_gaps():
+    """KP's constant factor 0.55 gives a near-Hertz patch (exact shape only for eps = 1/2
+    on a circle): force and maximum pressure within 10 %, area within 15 %."""
+    hz = hertz(1.0, 5.0, PAIR, penetration=1e-4)
+    e = virtual_penetration("kp", *quadratic(1.0, 5.0), PAIR, penetration=1e-4)
+    assert e.factor == 0.55
+    assert e.force == pytest.approx(hz.load, rel=0.10)
+    assert e.max_pressure == pytest.approx(hz.max_pressure, rel=0.10)
+    assert e.area == pytest.approx(hz.area, rel=0.15)
+
+
+@pytest.mark.parametrize("method", ["kp", "infcon"])
+def test_load_control(method):
+    e = virtual_penetration(method, *quadratic(1.0, 5.0), PAIR, load=5e4)
+    assert e.force == pytest.approx(5e4, rel=1e-5)
+
+
+def test_remesh_conserves_force():
+    hz = hertz(1.0, 5.0, PAIR, load=7e4)
+    src = Grid.from_bounds(-hz.a, hz.a, -hz.b, hz.b, 40, 40)
+    dst = Grid.from_bounds(-1.3 * hz.a, 1.3 * hz.a, -1.3 * hz.b, 1.3 * hz.b, 64, 57)
+    p = hz.pressure(*src.mesh())
+    q = remesh(p, src, dst, conserve=True)
+    assert q.sum() * dst.element_area == pytest.approx(p.sum() * src.element_area, rel=1e-12)
+    assert q.max() == pytest.approx(hz.max_pressure, rel=0.03)
+    assert np.all(q >= 0)
+
+
+def test_infcon_estimate_cuts_iterations_on_paper_case(root):
+    """Paper Sec. 4.1.1: 13 -> 3 iterations with INFCON."""
+    base = rc.load_case(root / "models" / "cases" / "hertz_paper.toml")
+    its = {}
+    for est in ("none", "infcon"):
+        c = copy.deepcopy(base)
+        c["normal"]["estimate"] = est
+        its[est] = rc.solve(c).patches[0].normal.iterations
+    print(its)
+    assert its["infcon"] <= its["none"] / 3
+
+
+def test_wheel_rail_estimates_order(root):
+    """-2 mm wheel-rail case: INFCON <= KP <= none (paper: 5 / 6 / 13 iterations)."""
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    its = {}
+    for est in ("none", "kp", "infcon"):
+        c = copy.deepcopy(base)
+        c["normal"]["estimate"] = est
+        n = rc.solve(c).patches[0].normal
+        assert n.force == pytest.approx(83.3e3 / np.cos(rc.solve(c).patches[0]
+                                                         .geometry.contact_angle), rel=1e-9)
+        its[est] = n.iterations
+    print(its)
+    assert its["infcon"] <= its["kp"] < its["none"]
