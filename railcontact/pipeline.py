@@ -19,9 +19,15 @@ from .normal import NormalResult, solve_normal
 from .normal.virtual import virtual_penetration
 from .operator import influence_operator
 from .tangential import TangentialResult, rolling_operator, solve_tangential
-from .tangential.fastrip import fastrip_hertz
-from .tangential.fastsim import fastsim_hertz
-from .tangential.strips import StripResult, remesh_strips
+from .tangential.fastrip import fastrip, fastrip_hertz
+from .tangential.fastsim import fastsim, fastsim_hertz, flexibilities
+from .tangential.strips import (
+    StripResult,
+    equivalent_ellipse,
+    remesh_strips,
+    sample_on_strips,
+    strips_from_contact,
+)
 
 GROW_FACTOR = 1.5
 MAX_GROW = 4
@@ -243,13 +249,28 @@ def _solve_quadratic(case: dict[str, Any], pair: ElasticPair) -> PatchSolution:
 
 
 def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
-                          tspec: dict[str, Any]) -> StripResult:
-    """FASTSIM or FaStrip on the Hertz ellipse ``hz`` with the case's settings."""
+                          tspec: dict[str, Any], normal: NormalResult | None = None
+                          ) -> StripResult:
+    """FASTSIM or FaStrip with the case's settings.
+
+    Without ``normal``: on the Hertz ellipse ``hz`` (elliptic or parabolic bound). With a
+    normal solution: on the actual patch (strips along its contact rows, its pressure as the
+    traction bound) with the coefficients of its equivalent ellipse - the adaptation for
+    non-elliptic wheel-rail patches.
+    """
     nx, ny = tspec["strips"]
-    args = (hz.a, hz.b, hz.load, pair, tspec["friction"], tuple(tspec["creepage"]))
+    mu, creepage = tspec["friction"], tuple(tspec["creepage"])
+    if normal is None:
+        args = (hz.a, hz.b, hz.load, pair, mu, creepage)
+        if model == "fastsim":
+            return fastsim_hertz(*args, nx=nx, ny=ny, bound=tspec["bound"])
+        return fastrip_hertz(*args, nx=nx, ny=ny)
+    strips = strips_from_contact(normal.grid, normal.contact, nx)
+    pn = sample_on_strips(normal.pressure, normal.grid, strips)
+    a_eq, b_eq = equivalent_ellipse(normal.grid, normal.contact)
     if model == "fastsim":
-        return fastsim_hertz(*args, nx=nx, ny=ny, bound=tspec["bound"])
-    return fastrip_hertz(*args, nx=nx, ny=ny)
+        return fastsim(strips, pn, mu, creepage, flexibilities(a_eq, b_eq, pair))
+    return fastrip(strips, pn, normal.force, a_eq, b_eq, pair, mu, creepage)
 
 
 def _solve_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: ElasticPair,
@@ -261,14 +282,16 @@ def _solve_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: Elastic
     hz = hertz(A, B, pair, load=res.force) if res.force > 0 else None
     model, estimate = tspec["model"], tspec["estimate"]
     patch.tangential_model, patch.tangential_estimate = model, estimate
+    actual = res if patch.geometry is not None else None  # wheel-rail: non-elliptic patch
     if model != "bem":
         if hz is None:
             raise CaseError("no contact: the simplified tangential models need a load")
-        patch.tangential = simplified_tangential(model, hz, pair, tspec)
+        patch.tangential = simplified_tangential(model, hz, pair, tspec, actual)
         return
     p0 = st0 = None
     if estimate != "none" and hz is not None:
-        p0, st0 = remesh_strips(simplified_tangential(estimate, hz, pair, tspec), res.grid)
+        p0, st0 = remesh_strips(simplified_tangential(estimate, hz, pair, tspec, actual),
+                                res.grid)
     patch.tangential = solve_tangential(
         res.grid, rolling_operator(res.grid, pair, fft), res.pressure, tspec["friction"],
         tuple(tspec["creepage"]), initial_traction=p0, initial_state=st0,

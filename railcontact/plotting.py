@@ -99,7 +99,8 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
         pair = elastic_pair(sol.case["material"])
         hz = hertz(*ps.curvatures, pair, load=res.force)
         for model, style in (("fastsim", "--"), ("fastrip", "-.")):
-            r = simplified_tangential(model, hz, pair, tspec)
+            r = simplified_tangential(model, hz, pair, tspec,
+                                      res if ps.geometry is not None else None)
             k = int(np.argmin(np.abs(r.strips.y)))
             ax1.plot(r.strips.x[k] * MM, r.traction[0, k] * MPA, style,
                      label=f"{'FASTSIM' if model == 'fastsim' else 'FaStrip'} $p_x$")

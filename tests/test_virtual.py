@@ -92,3 +92,36 @@ def test_wheel_rail_estimates_order(root):
         its[est] = n.iterations
     print(its)
     assert its["infcon"] <= its["kp"] < its["none"]
+
+
+def test_small_lateral_sweep_estimates_cut_iterations(root):
+    """A handful of displacements (-4 .. 4 mm, 83.3 kN): mean iterations INFCON < none for
+    the normal BEM and FaStrip < none for ConvexGS (xi = eta = 2e-4, phi = 0.2 /m)."""
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    its = {"none": [], "infcon": [], "t_none": [], "t_fastrip": []}
+    for dy in (-0.004, -0.002, 0.0, 0.002, 0.004):
+        for est in ("none", "infcon"):
+            c = copy.deepcopy(base)
+            c["geometry"]["lateral_displacement"] = dy
+            c["normal"]["estimate"] = est
+            if est == "infcon":
+                for test in ("none", "fastrip"):
+                    c["tangential"] = {"creepage": [2e-4, 2e-4, 0.2], "friction": 0.4,
+                                       "estimate": test}
+                    t = rc.solve(c).patches[0].tangential
+                    assert t.converged
+                    its[f"t_{test}"].append(t.iterations)
+            its[est].append(rc.solve(c).patches[0].normal.iterations)
+    means = {k: float(np.mean(v)) for k, v in its.items()}
+    print(means)
+    assert means["infcon"] < means["none"]
+    assert means["t_fastrip"] < means["t_none"]
+
+
+def test_equivalent_ellipse_of_a_hertz_patch():
+    from railcontact.tangential.strips import equivalent_ellipse
+
+    hz = hertz(1.0, 5.0, PAIR, load=7e4)
+    g = Grid.from_bounds(-1.2 * hz.a, 1.2 * hz.a, -1.2 * hz.b, 1.2 * hz.b, 81, 81)
+    a, b = equivalent_ellipse(g, hz.pressure(*g.mesh()) > 0)
+    assert a == pytest.approx(hz.a, rel=0.03) and b == pytest.approx(hz.b, rel=0.03)

@@ -60,14 +60,26 @@ def fastrip_hertz(a: float, b: float, load: float, pair: ElasticPair, friction: 
     nx, ny
         Samples per strip and number of strips.
     """
+    strips = Strips.ellipse(check_positive("a", a, "m"), check_positive("b", b, "m"), nx, ny,
+                            quadrature)
+    return fastrip(strips, hertz_bound(strips, a, b, load, "elliptic"), load, a, b, pair,
+                   friction, creepage)
+
+
+def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: float,
+            pair: ElasticPair, friction: float, creepage: tuple[float, float, float]
+            ) -> StripResult:
+    """FaStrip on any strips: the actual pressure bounds the traction, while Kalker's
+    coefficients, the flexibilities and p0 = 3N/(2 pi a b) come from the (equivalent)
+    ellipse with semi-axes a, b [m]; each strip uses its own half length and centre
+    (the local-ellipse adaptation for non-elliptic patches, ``algorithms.md`` Sec. 3)."""
     t0 = time.perf_counter()
     a = check_positive("a", a, "m")
     b = check_positive("b", b, "m")
     mu = check_positive("friction", friction, allow_zero=True)
     xi, eta, phi = (check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage,
                                                           strict=True))
-    strips = Strips.ellipse(a, b, nx, ny, quadrature)
-    pn = hertz_bound(strips, a, b, load, "elliptic")
+    pn = np.asarray(pressure, dtype=float)
     flex = flexibilities(a, b, pair)
     fs_traction, _ = _march(strips, mu * pn, (xi, eta, phi), flex)
     if mu == 0.0 or load <= 0.0:

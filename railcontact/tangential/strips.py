@@ -70,6 +70,40 @@ class Strips:
         return cls(y=y, width=width, x_lo=-half, x_hi=half, t=t, w=w)
 
 
+def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips:
+    """Strips along the rows of a contact mask on a grid (non-elliptic patches): each row
+    with contact is one strip of width dy, from the trailing to the leading edge of its
+    contact elements (element edges); gaps inside a row are bridged."""
+    rows = np.flatnonzero(contact.any(axis=0))
+    if rows.size == 0:
+        raise RailContactError("no contact elements to build strips from")
+    lo = np.array([grid.x[np.flatnonzero(contact[:, j])[0]] for j in rows]) - grid.dx / 2
+    hi = np.array([grid.x[np.flatnonzero(contact[:, j])[-1]] for j in rows]) + grid.dx / 2
+    t, w = _rule(nx, "uniform")
+    return Strips(y=grid.y[rows], width=np.full(rows.size, grid.dy), x_lo=lo, x_hi=hi, t=t,
+                  w=w)
+
+
+def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarray:
+    """A field on the grid (nx, ny) at the strip samples (ny_s, nx_s), linearly along x on
+    the strip's grid row (strips made by :func:`strips_from_contact`)."""
+    rows = np.searchsorted(grid.y, strips.y - 1e-12 * grid.dy)
+    x = strips.x
+    return np.stack([np.interp(x[k], grid.x, values[:, j]) for k, j in enumerate(rows)])
+
+
+def equivalent_ellipse(grid: Grid, contact: np.ndarray) -> tuple[float, float]:
+    """Semi-axes (a, b) [m] of the ellipse with the patch's area and the aspect ratio of its
+    overall length and width (Kik–Piotrowski / CONTACT's ``equiv_ellipse``)."""
+    area = contact.sum() * grid.element_area
+    ix = np.flatnonzero(contact.any(axis=1))
+    iy = np.flatnonzero(contact.any(axis=0))
+    length = (ix[-1] - ix[0] + 1) * grid.dx
+    width = (iy[-1] - iy[0] + 1) * grid.dy
+    r = np.sqrt(area / np.pi)
+    return float(r * np.sqrt(length / width)), float(r * np.sqrt(width / length))
+
+
 def _rule(n: int, quadrature: str) -> tuple[np.ndarray, np.ndarray]:
     """Points and weights on (-1, 1): midpoints of n equal cells, or Gauss–Legendre."""
     if quadrature == "gauss":
