@@ -221,23 +221,10 @@ def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
     if not np.isfinite(B) or B <= 0:
         B = float("nan")
     return ContactPoint(side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
-                        rail_y=_uncant(track, u_c, z_rail), position=(x_c, sgn * u_c, z_rail),
+                        rail_y=track.rail_coordinate(u_c, z_rail),
+                        position=(x_c, sgn * u_c, z_rail),
                         contact_angle=gamma, rolling_radius=r_c, A=float(a_of_s[k0]), B=B,
                         s=s, f=f, a_of_s=a_of_s)
-
-
-def _uncant(track: Track, u: float, z: float) -> float:
-    """Rail profile coordinate of a point (u, z) of the placed rail."""
-    r = track.rail
-    y = np.linspace(*r.bounds, 4001)
-    zz = r.height(y)
-    c, s = math.cos(track.inclination), math.sin(track.inclination)
-    yc, zc = y * c - zz * s, y * s + zz * c
-    placed = track.side_rail
-    # placed.y = yc (monotone part) shifted: find the shift from the matching top
-    shift = placed.y[int(np.argmax(placed.z))] - yc[int(np.argmax(zc))]
-    k = int(np.argmin(np.hypot(yc + shift - u, zc - zc.max() - z)))
-    return float(y[k])
 
 
 def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:

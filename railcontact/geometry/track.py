@@ -63,24 +63,34 @@ class Track:
         check_positive("gauge_depth", self.gauge_depth, "m")
 
     @cached_property
-    def side_rail(self) -> Profile:
-        """The rail in the side frame: Z(u), canted and placed (see the module docstring)."""
+    def placement(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
+        """The rail profile canted: profile y, canted (u, z) and the offsets (du, dz) that
+        place it (gauge point at gauge/2, top at 0), so that placed = (u + du, z + dz)."""
         r = self.rail
         y = np.linspace(*r.bounds, 4001)
         z = r.height(y)
         c, s = math.cos(self.inclination), math.sin(self.inclination)
-        yc, zc = y * c - z * s, y * s + z * c  # top towards -y (the gauge side)
-        keep = np.concatenate([[True], np.diff(yc) > 0])  # drop any fold-back of the flank
-        yc, zc = yc[keep], zc[keep]
-        zc = zc - zc.max()
-        # gauge point: gauge side (left of the top), z = -gauge_depth
+        uc, zc = y * c - z * s, y * s + z * c  # top towards -y (the gauge side)
+        dz = -float(zc.max())
         top = int(np.argmax(zc))
-        side = slice(0, top + 1)
-        if zc[side].min() > -self.gauge_depth:
+        gauge_side = slice(0, top + 1)
+        if (zc[gauge_side] + dz).min() > -self.gauge_depth:
             raise RailContactError(f"rail profile {r.name!r} does not reach {self.gauge_depth} m "
                                    "below its top on the gauge side; cannot place the gauge")
-        yg = float(np.interp(-self.gauge_depth, zc[side], yc[side]))
-        return Profile(yc - yg + self.gauge / 2, zc, "rail", r.name + " (placed)")
+        ug = float(np.interp(-self.gauge_depth, zc[gauge_side] + dz, uc[gauge_side]))
+        return y, uc, zc, self.gauge / 2 - ug, dz
+
+    @cached_property
+    def side_rail(self) -> Profile:
+        """The rail in the side frame: Z(u), canted and placed (see the module docstring)."""
+        _, uc, zc, du, dz = self.placement
+        keep = np.concatenate([[True], np.diff(uc) > 0])  # drop any fold-back of the flank
+        return Profile(uc[keep] + du, zc[keep] + dz, "rail", self.rail.name + " (placed)")
+
+    def rail_coordinate(self, u: float, z: float) -> float:
+        """Rail profile coordinate y [m] of the point (u, Z) of the placed rail."""
+        y, uc, zc, du, dz = self.placement
+        return float(y[int(np.argmin(np.hypot(uc + du - u, zc + dz - z)))])
 
 
 @dataclass(frozen=True)
