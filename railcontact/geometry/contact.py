@@ -36,6 +36,8 @@ from ..grid import Grid
 from .track import SIDES, Pose, Track, Wheelset
 
 N_TRACE = 6001
+FAR = 1.0
+"""Gap [m] given to elements beyond the profiles: far out of contact."""
 
 
 @dataclass(frozen=True)
@@ -89,11 +91,13 @@ class ContactPoint:
 
     def gap_on_grid(self, grid: Grid) -> np.ndarray:
         """Undeformed gap h(x, y) = f(y) + A(y) x^2 at the element centres [m], with the
-        grid's y along s (np.inf where the profiles end)."""
+        grid's y along s. Where the profiles end (or fold away from this contact) the gap
+        is :data:`FAR` - such elements can never touch."""
         X, Y = grid.mesh()
-        f = np.interp(Y, self.s, self.f, left=np.inf, right=np.inf)
-        a = np.interp(Y, self.s, self.a_of_s)
-        return f + a * X**2
+        f = np.interp(Y, self.s, self.f, left=FAR, right=FAR)
+        a = np.interp(Y, self.s, np.where(np.isfinite(self.a_of_s), self.a_of_s, 0.0))
+        h = f + a * X**2
+        return np.where(np.isfinite(h), h, FAR)
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
