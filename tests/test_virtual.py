@@ -125,3 +125,27 @@ def test_equivalent_ellipse_of_a_hertz_patch():
     g = Grid.from_bounds(-1.2 * hz.a, 1.2 * hz.a, -1.2 * hz.b, 1.2 * hz.b, 81, 81)
     a, b = equivalent_ellipse(g, hz.pressure(*g.mesh()) > 0)
     assert a == pytest.approx(hz.a, rel=0.03) and b == pytest.approx(hz.b, rel=0.03)
+
+
+def test_two_patch_estimates_land_on_their_bem_patches(root):
+    """5.0 mm, vertical approach 0.05 mm: tread and gauge-corner patches. Each patch's
+    INFCON estimate, evaluated on that patch's BEM grid, covers that patch's BEM contact."""
+    from railcontact.hertz import hertz as hertz_solution
+    from railcontact.pipeline import normal_estimate
+
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    c = copy.deepcopy(base)
+    c["geometry"]["lateral_displacement"] = 0.005
+    c["normal"] = {"penetration": 5e-5, "estimate": "infcon", "tolerance": 1e-6}
+    sol = rc.solve(c)
+    assert len(sol.patches) == 2
+    for p in sol.patches:
+        cp, n = p.geometry, p.normal
+        dn = cp.normal_penetration(5e-5)
+        hz = hertz_solution(cp.A, cp.B, PAIR, penetration=dn)
+        est = normal_estimate(c["normal"] | {"estimate_grid": [40, 40]}, hz, cp.s, cp.f,
+                              cp.a_of_s, PAIR, {"penetration": dn})(n.grid)
+        overlap = np.logical_and(est > 0, n.contact).sum()
+        assert overlap >= 0.8 * n.contact.sum()
+        assert overlap >= 0.8 * np.count_nonzero(est > 0)
+        assert n.force == pytest.approx(est.sum() * n.grid.element_area, rel=0.15)
