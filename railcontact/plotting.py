@@ -142,5 +142,3 @@ def plot_solution(solution: Solution, path: str | Path, patch: int = 0) -> Path:
     plt.close(fig)
     return out
 
-
-plot_normal = plot_solution  # name of the first release

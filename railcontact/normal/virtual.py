@@ -195,7 +195,9 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
                             check_positive("penetration", penetration, "m"), pair, nx, ny, t0)
     load = check_positive("load", load, "N")
     # secant on delta, started from Hertz with the curvatures at s = 0
-    b0 = max(float((f[np.argmin(np.abs(s)) + 5]) / (s[np.argmin(np.abs(s)) + 5] ** 2)), 1e-9)
+    k0 = int(np.argmin(np.abs(s)))
+    k = min(k0 + 5, len(s) - 1) if k0 + 1 < len(s) else max(k0 - 5, 0)
+    b0 = max(float(f[k] / s[k] ** 2), 1e-9) if s[k] != 0 else 1.0
     a0 = float(np.interp(0.0, s, a_of_s))
     d1 = hertz(a0, b0, pair, load=load).penetration
     e1 = _estimate_at(method, s, f, a_of_s, d1, pair, nx, ny, t0)
