@@ -103,9 +103,11 @@ def touches_boundary(mask: np.ndarray) -> bool:
     return bool(mask[0, :].any() or mask[-1, :].any() or mask[:, 0].any() or mask[:, -1].any())
 
 
-def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = False
-           ) -> np.ndarray:
+def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = False,
+           method: str = "linear") -> np.ndarray:
     """A field on ``source`` interpolated (bilinearly, zero outside) onto ``target``.
+
+    ``method="nearest"`` takes the nearest source element instead (for maps of states).
 
     With ``conserve=True`` the result is scaled so that its integral (sum times element
     area) equals the source's, e.g. to keep the total force of a pressure estimate.
@@ -120,7 +122,8 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
     x = np.concatenate([[source.x[0] - source.dx / 2], source.x, [source.x[-1] + source.dx / 2]])
     y = np.concatenate([[source.y[0] - source.dy / 2], source.y, [source.y[-1] + source.dy / 2]])
     vp = np.pad(v, 1)
-    interp = RegularGridInterpolator((x, y), vp, bounds_error=False, fill_value=0.0)
+    interp = RegularGridInterpolator((x, y), vp, method=method, bounds_error=False,
+                                     fill_value=0.0)
     X, Y = target.mesh()
     out = interp(np.stack([X, Y], axis=-1))
     if conserve:

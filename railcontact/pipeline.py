@@ -136,16 +136,29 @@ def potential_area(A: float, B: float, delta0: float, margin: float = 1.0
 
 
 def _make_grid(spec: dict[str, Any], bounds: tuple[float, float, float, float]) -> Grid:
+    """The BEM grid on ``bounds`` [m] from the counts or element sizes of ``spec``.
+
+    With element sizes, ``quantum`` rounds the counts up to a multiple (fewer distinct
+    influence operators in a time series) and ``snap`` puts the grid centre on a multiple
+    of the element size, so that the grids of consecutive time steps share one lattice
+    around the contact point and a warm start is not smeared by interpolation.
+    """
     xmin, xmax, ymin, ymax = bounds
     nx, ny = spec["nx"], spec["ny"]
+    q = spec.get("quantum", 1)
+    extra = 1 if spec.get("snap") else 0
     if "dx" in spec:
-        nx = max(2, math.ceil((xmax - xmin) / spec["dx"] - 1e-9))
+        dx = spec["dx"]
+        nx = max(2, q * math.ceil(((xmax - xmin) / dx + extra) / q - 1e-9))
         xc = 0.5 * (xmin + xmax)
-        xmin, xmax = xc - nx * spec["dx"] / 2, xc + nx * spec["dx"] / 2
+        xc = round(xc / dx) * dx if extra else xc
+        xmin, xmax = xc - nx * dx / 2, xc + nx * dx / 2
     if "dy" in spec:
-        ny = max(2, math.ceil((ymax - ymin) / spec["dy"] - 1e-9))
+        dy = spec["dy"]
+        ny = max(2, q * math.ceil(((ymax - ymin) / dy + extra) / q - 1e-9))
         yc = 0.5 * (ymin + ymax)
-        ymin, ymax = yc - ny * spec["dy"] / 2, yc + ny * spec["dy"] / 2
+        yc = round(yc / dy) * dy if extra else yc
+        ymin, ymax = yc - ny * dy / 2, yc + ny * dy / 2
     return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)
 
 
@@ -172,7 +185,7 @@ def solve(case: dict[str, Any] | str | Path) -> Solution:
     if "tangential" in case:
         for patch in patches:
             if patch.normal.force > 0:
-                _solve_tangential(patch, case["tangential"], pair, case["normal"]["fft"])
+                solve_patch_tangential(patch, case["tangential"], pair, case["normal"]["fft"])
     return Solution(case=case, patches=patches)
 
 
@@ -273,9 +286,14 @@ def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
     return fastrip(strips, pn, normal.force, a_eq, b_eq, pair, mu, creepage)
 
 
-def _solve_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: ElasticPair,
-                      fft: str) -> None:
-    """Add the tangential solution to ``patch`` (same grid as its normal solution)."""
+def solve_patch_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: ElasticPair,
+                           fft: str, previous: tuple | None = None) -> None:
+    """Add the tangential solution to ``patch`` (same grid as its normal solution).
+
+    ``previous`` = (traction (2, nx, ny) [Pa], adhesion/slip map) on the patch's grid, e.g.
+    the previous time step's: when it holds a traction it starts the BEM instead of the
+    estimate asked for in ``tspec``.
+    """
     res = patch.normal
     A, B = patch.curvatures
     # The simplified models work on the Hertz ellipse that carries the BEM's normal force.
@@ -288,8 +306,8 @@ def _solve_tangential(patch: PatchSolution, tspec: dict[str, Any], pair: Elastic
             raise CaseError("no contact: the simplified tangential models need a load")
         patch.tangential = simplified_tangential(model, hz, pair, tspec, actual)
         return
-    p0 = st0 = None
-    if estimate != "none" and hz is not None:
+    p0, st0 = previous if previous is not None else (None, None)
+    if p0 is None and estimate != "none" and hz is not None:
         p0, st0 = remesh_strips(simplified_tangential(estimate, hz, pair, tspec, actual),
                                 res.grid)
     patch.tangential = solve_tangential(

@@ -17,16 +17,20 @@ penetration), scaled by ``[grid] margin`` and grown when the contact reaches its
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 from .errors import CaseError, RailContactError
 from .geometry.contact import ContactPoint, contact_points
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
-from .hertz import hertz
+from .grid import Grid
+from .hertz import HertzSolution, hertz
 from .materials import ElasticPair
 from .pipeline import PatchSolution, normal_estimate, solve_patch_normal
 
+EstimateFor = Callable[[ContactPoint, HertzSolution, dict[str, float]],
+                       Callable[[Grid], Any]]
 LOAD_RTOL = 1e-6
 MAX_SECANT = 30
 
@@ -46,7 +50,8 @@ def build_geometry(geo: dict[str, Any]) -> tuple[Track, Wheelset, Pose]:
 
 
 def _patches(cps: list[ContactPoint], approach: float, case: dict[str, Any],
-             pair: ElasticPair, loads: list[float] | None = None) -> list[PatchSolution]:
+             pair: ElasticPair, loads: list[float] | None = None,
+             estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
     gspec, nspec = case["grid"], case["normal"]
     out = []
     for k, cp in enumerate(cps):
@@ -61,7 +66,10 @@ def _patches(cps: list[ContactPoint], approach: float, case: dict[str, Any],
         d0 = hz.penetration if loads is not None else dn
         xl = gspec["margin"] * math.sqrt(d0 / cp.A)
         ylo, yhi = cp.lateral_extent(d0, gspec["margin"])
-        est = normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, control)
+        if estimate_for is None:
+            est = normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, control)
+        else:
+            est = estimate_for(cp, hz, control)
         res = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), gspec, nspec, pair,
                                  control, est)
         out.append(PatchSolution(normal=res, hertz=hz, estimate=nspec["estimate"],
@@ -73,24 +81,37 @@ def _vertical_force(patches: list[PatchSolution]) -> float:
     return sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in patches)
 
 
-def _solve_wheel(track, ws, pose, side, case, pair) -> list[PatchSolution]:
+def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, case: dict[str, Any],
+                pair: ElasticPair, estimate_for: EstimateFor | None = None
+                ) -> list[PatchSolution]:
+    """The BEM normal solutions of one wheel's contact patches.
+
+    ``case`` needs the ``[grid]`` and ``[normal]`` tables (``load`` the vertical wheel load
+    [N] or ``penetration`` the vertical approach [m]). ``estimate_for(cp, hertz, control)``
+    replaces the case's estimate: it returns a function of the BEM grid giving the initial
+    pressure (or None), e.g. the previous time step's.
+    """
     nspec = case["normal"]
     if "penetration" in nspec:
         approach = nspec["penetration"]
-        return _patches(contact_points(track, ws, pose, side, approach), approach, case, pair)
+        if approach <= 0:
+            return []
+        return _patches(contact_points(track, ws, pose, side, approach), approach, case, pair,
+                        estimate_for=estimate_for)
     q = nspec["load"]
     if q == 0:
         return []
     first = contact_points(track, ws, pose, side, 0.0)[0]
     cosg = math.cos(first.contact_angle)
     # one patch: force control (exact); check that the approach it needs adds no patch
-    single = _patches([first], 0.0, case, pair, loads=[q / cosg])
+    single = _patches([first], 0.0, case, pair, loads=[q / cosg], estimate_for=estimate_for)
     approach = single[0].normal.penetration / cosg
     if len(contact_points(track, ws, pose, side, approach)) == 1:
         return single
     # several patches: secant on the vertical approach
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
-        ps = _patches(contact_points(track, ws, pose, side, a), a, case, pair)
+        ps = _patches(contact_points(track, ws, pose, side, a), a, case, pair,
+                      estimate_for=estimate_for)
         return _vertical_force(ps) - q, ps
 
     a0 = approach
@@ -125,7 +146,7 @@ def solve_wheel_rail(case: dict[str, Any], pair: ElasticPair) -> list[PatchSolut
     patches: list[PatchSolution] = []
     for side in sides:
         try:
-            patches += _solve_wheel(track, ws, pose, side, case, pair)
+            patches += solve_wheel(track, ws, pose, side, case, pair)
         except RailContactError as exc:
             if isinstance(exc, CaseError):
                 raise

@@ -1,0 +1,121 @@
+"""Initial estimates for a time step: the previous steps' solutions on the new grid.
+
+In a time-stepping simulation the contact patch moves and changes a little from one step
+to the next. The previous step's pressure, traction and adhesion/slip map are kept in the
+patch's own coordinates (x along the track, y across it in the contact plane, both from the
+contact point), re-meshed onto the current BEM grid, and - when the two previous steps and
+their times are known - extrapolated linearly in time to the current step::
+
+    p_pred = p_k + (t - t_k) / (t_k - t_{k-1}) (p_k - p_{k-1}),   p_pred >= 0
+
+(the factor is limited to [0, 2]). That field starts the BEM alone (``"previous"``; a patch
+without a previous step starts cold) or with a simplified model's estimate as the fallback
+(``"previous+estimate"``: a patch without a previous step - the first step, a flange
+contact that has just appeared - starts from the estimate).
+
+Why patch coordinates and not the rail's: measured on S1002/60E1 near 1 mm lateral
+displacement, a 0.01 mm step of the wheelset moves the contact point 0.0065 mm on the rail,
+but the pressure centroid 0.04 mm, and the pressure changes by 0.6 % (L1) whichever of the
+two is held fixed (0.7 % on the rail, 0.6 % at the contact point). The linear
+extrapolation brings this to 0.01 %, the traction's error from 1.2 % to 0.2 %.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .grid import Grid, remesh
+
+WARM_STARTS = ("none", "estimate", "previous", "previous+estimate")
+MATCH_DISTANCE = 0.005
+"""Largest move [m] of a contact point between steps for which the previous patch is used."""
+MAX_EXTRAPOLATION = 2.0
+
+
+@dataclass(frozen=True)
+class PatchMemory:
+    """What a time step keeps of one contact patch for the next one (SI units).
+
+    Attributes
+    ----------
+    grid
+        The patch's BEM grid (x along the track, y across it in the contact plane, origin at
+        the contact point) [m].
+    pressure
+        Normal pressure [Pa], (nx, ny).
+    traction
+        Tangential traction [Pa], (2, nx, ny), in the side frame (see
+        :mod:`railcontact.wheelset`), or None without a tangential solution.
+    state
+        Adhesion/slip map (0 exterior, 1 adhesion, 2 slip), (nx, ny), or None.
+    u, z
+        Contact point on the rail: lateral (side frame) and vertical [m].
+    time
+        Simulation time of the step [s], or None.
+    older
+        The same patch one step earlier (its own ``older`` dropped), or None.
+    """
+
+    grid: Grid
+    pressure: np.ndarray
+    traction: np.ndarray | None
+    state: np.ndarray | None
+    u: float
+    z: float
+    time: float | None = None
+    older: PatchMemory | None = None
+
+    def extrapolation(self, time: float | None) -> float:
+        """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when
+        it cannot be formed."""
+        o = self.older
+        if time is None or self.time is None or o is None or o.time is None:
+            return 0.0
+        dt = self.time - o.time
+        if not dt > 0:
+            return 0.0
+        return float(np.clip((time - self.time) / dt, 0.0, MAX_EXTRAPOLATION))
+
+
+def match(memories: list[PatchMemory], u: float, z: float) -> PatchMemory | None:
+    """The remembered patch closest to the contact point ``(u, z)`` (side frame) [m], if it
+    lies within :data:`MATCH_DISTANCE`."""
+    best, dist = None, MATCH_DISTANCE
+    for m in memories:
+        d = math.hypot(m.u - u, m.z - z)
+        if d <= dist:
+            best, dist = m, d
+    return best
+
+
+def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None
+                      ) -> np.ndarray:
+    """The predicted pressure [Pa] on ``grid`` at ``time`` [s] (module docstring)."""
+    p = remesh(memory.pressure, memory.grid, grid)
+    c = memory.extrapolation(time)
+    if c > 0:
+        o = memory.older
+        p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
+    return p
+
+
+def previous_tangential(memory: PatchMemory, grid: Grid
+                        ) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
+    """The previous traction [Pa] (2, nx, ny) and adhesion/slip map on ``grid``.
+
+    Not extrapolated: on a hunting wheelset (S1002/60E1, 1.5 Hz, 1 ms steps) extrapolating
+    the traction too took ConvexGS from 3.3 to 9.6 sweeps per step - the adhesion/slip
+    boundary does not move linearly with the traction values.
+    """
+    if memory.traction is None or memory.state is None:
+        return None, None
+
+    def on_grid(m: PatchMemory) -> np.ndarray:
+        return np.stack([remesh(m.traction[k], m.grid, grid) for k in range(2)])
+
+    t = on_grid(memory)
+    st = np.rint(remesh(memory.state.astype(float), memory.grid, grid, method="nearest"))
+    return t, st.astype(np.int8)

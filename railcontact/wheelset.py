@@ -1,0 +1,431 @@
+"""Wheel–rail contact of a whole wheelset, one time step after the other.
+
+:class:`WheelsetContact` is what a vehicle-dynamics code (and the FMU) calls every time
+step: given the wheelset's pose, its wheel loads (or vertical displacement) and its creepages
+(or velocities) it returns the contact forces of both wheels, each patch solved by the BEM,
+warm-started as :attr:`ContactSettings.warm_start` says, and it remembers the solution for
+the next step.
+
+Frames and signs (SI units):
+
+* Track frame ``(X, Y, Z)``: X forward, Y to the left, Z up; wheelset lateral displacement
+  y and yaw psi as in :class:`railcontact.geometry.Pose`.
+* Contact frame of a patch: x forward, y in the contact plane pointing to the left (towards
+  +Y), n = x × y (up, normal to the contact plane). It is right-handed on both wheels.
+* Creepages (xi, eta, phi) are the wheel's velocity relative to the rail at the contact
+  point divided by the forward speed V: xi and eta [-] along x and y, phi [1/m] the
+  relative angular velocity about n divided by V.
+* Creep forces F_x, F_y and spin moment M_z act **on the wheel** in its contact frame; for
+  small creepages F_x = -f11 xi (Kalker). The normal force N [N] is the rail's push on
+  the wheel along n.
+* ``contact_angle`` gamma [rad] is positive when the contact plane leans towards the
+  flange (it is the same on both wheels for a centred wheelset).
+
+Kinematic creepages (``Kinematics``; wheelset spin speed Omega about the axle, rolling
+forward when positive; roll rate neglected), for a patch at lateral position Y_c, rolling
+radius r and contact angle gamma, with side sign s = +1 left, -1 right::
+
+    xi  = (V - Omega r - psi_dot (Y_c - y)) / V
+    eta = (y_dot - V psi) / (V cos gamma)
+    phi = (-s Omega sin gamma + psi_dot cos gamma) / V
+
+Each wheel is solved in its side frame (:mod:`railcontact.geometry.track`), where the
+right wheel is mirrored; lateral components and the spin change sign there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from time import perf_counter
+from typing import Any
+
+import numpy as np
+
+from .case import NORMAL_ESTIMATES, TANGENTIAL_ESTIMATES
+from .errors import RailContactError, check_finite, check_positive
+from .geometry.contact import ContactPoint, vertical_gap
+from .geometry.track import SIDES, Pose, Track, Wheelset
+from .hertz import HertzSolution
+from .materials import ElasticPair
+from .operator import BACKENDS
+from .pipeline import PatchSolution, normal_estimate, solve_patch_tangential
+from .warmstart import (
+    WARM_STARTS,
+    PatchMemory,
+    match,
+    previous_pressure,
+    previous_tangential,
+)
+from .wheelrail import solve_wheel
+
+OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
+STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
+                OUT_OF_RANGE: "out of range"}
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """Solver settings of :class:`WheelsetContact` (SI units).
+
+    Attributes
+    ----------
+    friction
+        Coulomb coefficient mu [-].
+    element_size
+        BEM element size dx = dy [m].
+    margin
+        Scale of the automatic potential contact area [-].
+    normal_tolerance, tangential_tolerance
+        eps_n and eps_tau.
+    normal_estimate
+        "none" | "hertz" | "kp" | "infcon".
+    tangential_estimate
+        "none" | "fastsim" | "fastrip".
+    warm_start
+        "none": every step cold (the estimates are not used); "estimate": the simplified
+        models above; "previous": the previous step's solution (cold when there is none);
+        "previous+estimate": the previous step's, and the estimate for a patch that has none.
+    fft
+        Convolution backend.
+    """
+
+    friction: float = 0.4
+    element_size: float = 0.5e-3
+    margin: float = 1.2
+    normal_tolerance: float = 1e-3
+    tangential_tolerance: float = 1e-2
+    normal_estimate: str = "infcon"
+    tangential_estimate: str = "fastrip"
+    warm_start: str = "previous+estimate"
+    fft: str = "auto"
+    max_iterations_normal: int = 500
+    max_iterations_tangential: int = 1000
+    estimate_grid: tuple[int, int] = (40, 40)
+    strips: tuple[int, int] = (40, 40)
+    spin_offset: float = 1.0 / 6.0
+    quantum: int = 8
+
+    def __post_init__(self) -> None:
+        check_positive("friction", self.friction, "-")
+        check_positive("element_size", self.element_size, "m")
+        if self.element_size > 0.005:
+            raise RailContactError(f"element_size = {self.element_size:g} m is too coarse for "
+                                   "a wheel-rail patch (use at most 5e-3 m)")
+        check_positive("margin", self.margin, "-")
+        for name in ("normal_tolerance", "tangential_tolerance"):
+            v = check_positive(name, getattr(self, name), "-")
+            if v >= 1:
+                raise RailContactError(f"{name} must be below 1, got {v:g}")
+        for name, allowed in (("normal_estimate", NORMAL_ESTIMATES),
+                              ("tangential_estimate", TANGENTIAL_ESTIMATES),
+                              ("warm_start", WARM_STARTS), ("fft", BACKENDS)):
+            if getattr(self, name) not in allowed:
+                raise RailContactError(f"{name} must be one of {', '.join(allowed)}; got "
+                                       f"{getattr(self, name)!r}")
+
+    @property
+    def uses_estimate(self) -> bool:
+        return self.warm_start in ("estimate", "previous+estimate")
+
+    @property
+    def uses_previous(self) -> bool:
+        return self.warm_start in ("previous", "previous+estimate")
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Wheelset velocities from which the creepages are computed.
+
+    Attributes
+    ----------
+    speed
+        Forward speed V [m/s] (> 0).
+    lateral_velocity
+        dy/dt [m/s].
+    yaw_rate
+        dpsi/dt [rad/s].
+    spin_speed
+        Angular speed Omega of the wheelset about its axle [rad/s] (V / r0 for pure
+        rolling at the nominal radius).
+    """
+
+    speed: float
+    lateral_velocity: float = 0.0
+    yaw_rate: float = 0.0
+    spin_speed: float | None = None
+
+    def __post_init__(self) -> None:
+        check_positive("speed", self.speed, "m/s")
+        check_finite("lateral_velocity", self.lateral_velocity, "m/s")
+        check_finite("yaw_rate", self.yaw_rate, "rad/s")
+        if self.spin_speed is not None:
+            check_finite("spin_speed", self.spin_speed, "rad/s")
+
+    def creepage(self, cp: ContactPoint, pose: Pose, r0: float) -> tuple[float, float, float]:
+        """(xi, eta, phi) of the patch ``cp`` in its contact frame (module docstring)."""
+        v = self.speed
+        omega = v / r0 if self.spin_speed is None else self.spin_speed
+        s = SIDES[cp.side]
+        g = cp.contact_angle
+        d = cp.position[1] - pose.lateral
+        xi = (v - omega * cp.rolling_radius - self.yaw_rate * d) / v
+        eta = (self.lateral_velocity - v * pose.yaw) / (v * math.cos(g))
+        phi = (-s * omega * math.sin(g) + self.yaw_rate * math.cos(g)) / v
+        return xi, eta, phi
+
+
+@dataclass
+class WheelContact:
+    """Contact of one wheel at one time step (SI units; see the module docstring).
+
+    Forces are summed over the wheel's patches; the contact-point quantities are those of
+    the patch with the largest normal force.
+    """
+
+    side: str
+    status: int = NO_CONTACT
+    message: str = "no contact"
+    patches: list[PatchSolution] = field(default_factory=list)
+    creepages: list[tuple[float, float, float]] = field(default_factory=list)
+    normal_force: float = 0.0
+    creep_force: tuple[float, float] = (0.0, 0.0)
+    spin_moment: float = 0.0
+    track_force: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw_moment: float = 0.0
+    wheel_position: float = 0.0
+    rail_position: float = 0.0
+    lateral_position: float = 0.0
+    contact_angle: float = 0.0
+    rolling_radius: float = 0.0
+    area: float = 0.0
+    max_pressure: float = 0.0
+    slip_area_ratio: float = 0.0
+    normal_iterations: int = 0
+    tangential_iterations: int = 0
+
+    @property
+    def n_patches(self) -> int:
+        return len(self.patches)
+
+
+@dataclass
+class WheelsetResult:
+    """Both wheels at one time step, with the totals on the wheelset (track frame)."""
+
+    left: WheelContact
+    right: WheelContact
+    wall_time: float = 0.0
+
+    @property
+    def wheels(self) -> tuple[WheelContact, WheelContact]:
+        return (self.left, self.right)
+
+    @property
+    def status(self) -> int:
+        return max(w.status for w in self.wheels)
+
+    @property
+    def force(self) -> tuple[float, float, float]:
+        """Total force (X, Y, Z) of the rails on the wheelset [N]."""
+        return tuple(float(self.left.track_force[k] + self.right.track_force[k])
+                     for k in range(3))
+
+    @property
+    def yaw_moment(self) -> float:
+        """Total moment about the vertical axis through the wheelset centre [N m]."""
+        return self.left.yaw_moment + self.right.yaw_moment
+
+
+class WheelsetContact:
+    """The contact solver of a wheelset, with the memory that warm-starts the next step.
+
+    Parameters
+    ----------
+    track, wheelset
+        Geometry (:mod:`railcontact.geometry`).
+    pair
+        Combined elastic parameters of wheel and rail.
+    settings
+        :class:`ContactSettings`.
+    """
+
+    def __init__(self, track: Track, wheelset: Wheelset, pair: ElasticPair,
+                 settings: ContactSettings | None = None) -> None:
+        self.track, self.wheelset, self.pair = track, wheelset, pair
+        self.settings = settings or ContactSettings()
+        self.memory: dict[str, list[PatchMemory]] = {"left": [], "right": []}
+
+    def reset(self) -> None:
+        """Forget the previous step (the next one starts without it)."""
+        self.memory = {"left": [], "right": []}
+
+    # -- the time step -----------------------------------------------------------------
+    def solve(self, pose: Pose, *, loads: tuple[float, float] | None = None,
+              vertical: float | None = None,
+              creepages: tuple[tuple[float, float, float], tuple[float, float, float]]
+              | None = None, kinematics: Kinematics | None = None,
+              time: float | None = None, remember: bool = True) -> WheelsetResult:
+        """Solve both wheels.
+
+        Parameters
+        ----------
+        pose
+            Lateral displacement, yaw and roll of the wheelset.
+        loads
+            Vertical wheel loads (left, right) [N] (load control) ...
+        vertical
+            ... or the wheelset's vertical displacement [m], positive up, from the position
+            where its centre is one nominal radius above the top of the rails (penetration
+            control; with roll from ``pose``).
+        creepages
+            ((xi, eta, phi) left, (xi, eta, phi) right) in the contact frames, the same for
+            every patch of a wheel ...
+        kinematics
+            ... or the wheelset velocities (per-patch creepages); neither: normal problem
+            only.
+        time
+            Simulation time [s] of this step; with the times of the two previous steps the
+            warm start is extrapolated linearly (:mod:`railcontact.warmstart`).
+        remember
+            Keep this step's solution as the next step's warm start.
+        """
+        t0 = perf_counter()
+        if (loads is None) == (vertical is None):
+            raise RailContactError("give exactly one of loads [N] and vertical [m]")
+        wheels = []
+        new_memory: dict[str, list[PatchMemory]] = {}
+        for k, side in enumerate(("left", "right")):
+            if loads is not None:
+                q = check_positive(f"{side} wheel load", loads[k], "N", allow_zero=True)
+                control: dict[str, float] = {"load": q}
+            else:
+                check_finite("vertical", vertical, "m")
+                control = {"penetration": self._approach(pose, side, vertical)}
+            creep = None if creepages is None else tuple(float(c) for c in creepages[k])
+            wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
+            wheels.append(wheel)
+            new_memory[side] = mem
+        if remember:
+            self.memory = new_memory
+        return WheelsetResult(wheels[0], wheels[1], perf_counter() - t0)
+
+    def _approach(self, pose: Pose, side: str, vertical: float) -> float:
+        """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
+        ``-vertical``."""
+        g = vertical_gap(self.track, self.wheelset, pose, side)[4]
+        return max(-(float(g.min()) + vertical), 0.0)
+
+    def _specs(self) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+        st = self.settings
+        gspec = {"nx": 64, "ny": 64, "dx": st.element_size, "dy": st.element_size,
+                 "margin": st.margin, "quantum": st.quantum, "snap": True}
+        nspec = {"estimate": st.normal_estimate if st.uses_estimate else "none",
+                 "estimate_grid": list(st.estimate_grid), "tolerance": st.normal_tolerance,
+                 "max_iterations": st.max_iterations_normal, "fft": st.fft}
+        tspec = {"friction": st.friction, "model": "bem",
+                 "estimate": st.tangential_estimate if st.uses_estimate else "none",
+                 "tolerance": st.tangential_tolerance,
+                 "max_iterations": st.max_iterations_tangential, "bound": "elliptic",
+                 "strips": list(st.strips), "spin_offset": st.spin_offset}
+        return gspec, nspec, tspec
+
+    def _solve_side(self, side: str, pose: Pose, control: dict[str, float],
+                    creep: tuple[float, float, float] | None, kin: Kinematics | None,
+                    time: float | None) -> tuple[WheelContact, list[PatchMemory]]:
+        sgn = SIDES[side]
+        gspec, nspec, tspec = self._specs()
+        memories = self.memory[side] if self.settings.uses_previous else []
+        pair = self.pair
+
+        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: dict[str, float]):
+            est = normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, ctrl)
+            m = match(memories, cp.rail_u, cp.position[2])
+            if m is None:
+                return est
+
+            def of(grid):
+                p = previous_pressure(m, grid, time)
+                return p if p.sum() > 0 else est(grid)
+            return of
+
+        wheel = WheelContact(side=side)
+        if control.get("load", 1.0) == 0.0 or control.get("penetration", 1.0) == 0.0:
+            return wheel, []
+        patches = solve_wheel(self.track, self.wheelset, pose, side,
+                              {"grid": gspec, "normal": dict(nspec, **control)}, pair,
+                              estimate_for)
+        patches = [p for p in patches if p.normal.force > 0]
+        if not patches:
+            return wheel, []
+        new_memory = []
+        for patch in patches:
+            cp = patch.geometry
+            if creep is not None or kin is not None:
+                c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
+                wheel.creepages.append(c)
+                side_creep = [c[0], sgn * c[1], sgn * c[2]]
+                m = match(memories, cp.rail_u, cp.position[2])
+                prev = previous_tangential(m, patch.normal.grid) if m else None
+                solve_patch_tangential(patch, dict(tspec, creepage=side_creep), pair,
+                                       self.settings.fft, previous=prev)
+            t = patch.tangential
+            m = match(self.memory[side], cp.rail_u, cp.position[2])
+            new_memory.append(PatchMemory(
+                grid=patch.normal.grid, pressure=patch.normal.pressure,
+                traction=None if t is None else t.traction,
+                state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
+                time=time, older=None if m is None else replace(m, older=None)))
+        _resultants(wheel, patches, pose)
+        return wheel, new_memory
+
+
+def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
+    """Fill ``wheel`` with the sums over its patches (module docstring for the frames)."""
+    sgn = SIDES[wheel.side]
+    u_ws = sgn * pose.lateral
+    fx = fs = mn = n_tot = 0.0
+    fu = fz = mz = 0.0
+    converged = True
+    for p in patches:
+        cp, n = p.geometry, p.normal
+        g = cp.contact_angle
+        t = p.tangential
+        px, ps, pm = (0.0, 0.0, 0.0) if t is None else (*t.force, t.spin_moment)
+        n_tot += n.force
+        fx, fs, mn = fx + px, fs + ps, mn + pm
+        f_u = ps * math.cos(g) - n.force * math.sin(g)
+        fu += f_u
+        fz += ps * math.sin(g) + n.force * math.cos(g)
+        mz += cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
+        wheel.normal_iterations += n.iterations
+        converged &= n.converged
+        if t is not None:
+            wheel.tangential_iterations += t.iterations
+            converged &= t.converged
+    main = max(patches, key=lambda p: p.normal.force)
+    cp = main.geometry
+    wheel.normal_force = n_tot
+    wheel.creep_force = (fx, sgn * fs)
+    wheel.spin_moment = sgn * mn
+    wheel.track_force = (fx, sgn * fu, fz)
+    wheel.yaw_moment = sgn * mz
+    wheel.wheel_position = cp.wheel_s
+    wheel.rail_position = cp.rail_y
+    wheel.lateral_position = cp.position[1]
+    wheel.contact_angle = cp.contact_angle
+    wheel.rolling_radius = cp.rolling_radius
+    wheel.area = float(sum(p.normal.area for p in patches))
+    wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
+    ts = [p.tangential for p in patches if p.tangential is not None]
+    if ts:
+        n_el = [int(np.count_nonzero(t.state)) for t in ts]
+        n_slip = [int(np.count_nonzero(t.state == 2)) for t in ts]
+        wheel.slip_area_ratio = sum(n_slip) / max(sum(n_el), 1)
+    wheel.patches = patches
+    wheel.status = OK if converged else NOT_CONVERGED
+    wheel.message = "ok" if converged else "a BEM solve did not converge"
+
+
+__all__ = ["ContactSettings", "Kinematics", "WheelContact", "WheelsetContact",
+           "WheelsetResult", "STATUS_NAMES"]
