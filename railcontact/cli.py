@@ -1,7 +1,8 @@
 """The ``railcontact`` command line.
 
-``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file; errors in the
-input are reported in one line (exit status 2), never as a traceback.
+``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
+``railcontact fmu build [-o dist/RailContact.fmu]`` builds the FMU. Errors in the input are
+reported in one line (exit status 2), never as a traceback.
 """
 
 from __future__ import annotations
@@ -64,6 +65,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     return 0 if ok else 1
 
 
+def _cmd_fmu_build(args: argparse.Namespace) -> int:
+    from .fmu import build_fmu
+
+    out = build_fmu(args.output, args.profile or [])
+    print(f"FMU written to {out}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="railcontact",
                                  description="Exact wheel-rail contact (half-space BEM).")
@@ -73,6 +82,14 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the result as JSON")
     s.add_argument("--plot", metavar="FILE", help="write the patch/pressure figure to FILE")
     s.set_defaults(func=_cmd_solve)
+    f = sub.add_parser("fmu", help="the FMI 2.0 co-simulation unit")
+    fsub = f.add_subparsers(dest="fmu_command", required=True)
+    fb = fsub.add_parser("build", help="build the FMU (gcc and fmpy's FMI headers)")
+    fb.add_argument("-o", "--output", default="dist/RailContact.fmu",
+                    help="the .fmu to write (default dist/RailContact.fmu)")
+    fb.add_argument("--profile", action="append", metavar="FILE",
+                    help="a profile file to put into the FMU's resources (repeatable)")
+    fb.set_defaults(func=_cmd_fmu_build)
     return ap
 
 

@@ -1,0 +1,228 @@
+"""Build the railcontact FMU (FMI 2.0 Co-Simulation, Linux x86-64).
+
+The FMU holds the compiled C shim (``binaries/linux64/<id>.so``), a copy of the railcontact
+package under a module name derived from the model identifier, the Python slave and its
+bootstrap, ``python.cfg`` (the Python and environment it was built with) and any extra
+profile files, all in ``resources/``. No Python is bundled: the FMU runs in the Python it was
+built with (its numpy, scipy, pyfftw and numba).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import site
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import zipfile
+from datetime import datetime, timezone
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+HERE = Path(__file__).resolve().parent
+MODEL_IDENTIFIER = "RailContact"
+
+UNITS = {  # SI base-unit exponents
+    "m": {"m": 1}, "rad": {"rad": 1}, "N": {"kg": 1, "m": 1, "s": -2},
+    "Pa": {"kg": 1, "m": -1, "s": -2}, "N.m": {"kg": 1, "m": 2, "s": -2},
+    "m/s": {"m": 1, "s": -1}, "rad/s": {"rad": 1, "s": -1}, "1/m": {"m": -1},
+    "m2": {"m": 2}, "s": {"s": 1}, "1": {},
+}
+
+
+class BuildError(RuntimeError):
+    """The FMU cannot be built here (missing compiler, headers, Python library)."""
+
+
+def _load_variables():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_railcontact_fmu_variables",
+                                                  HERE / "variables.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses resolve the module by name
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
+                      version: str = "") -> str:
+    """The modelDescription.xml text."""
+    V = _load_variables()
+    variables = V.table()
+    used = sorted({v.unit for v in variables if v.unit})
+    lines = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<fmiModelDescription fmiVersion="2.0" modelName="{model_identifier}" '
+        f'guid="{guid}" description="railcontact: exact wheel-rail rolling contact '
+        f'(half-space BEM) of a wheelset, warm-started" generationTool="railcontact '
+        f'{version}" generationDateAndTime="'
+        f'{datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")}" '
+        'variableNamingConvention="flat" numberOfEventIndicators="0">',
+        f'  <CoSimulation modelIdentifier="{model_identifier}" '
+        'canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="true" '
+        'canSerializeFMUstate="true" canNotUseMemoryManagementFunctions="true" '
+        'canInterpolateInputs="false" maxOutputDerivativeOrder="0"/>',
+        "  <UnitDefinitions>",
+    ]
+    for u in used:
+        exps = " ".join(f'{k}="{e}"' for k, e in UNITS[u].items())
+        lines.append(f'    <Unit name="{u}"><BaseUnit {exps}/></Unit>' if exps else
+                     f'    <Unit name="{u}"><BaseUnit/></Unit>')
+    lines += [
+        "  </UnitDefinitions>",
+        "  <LogCategories>",
+        '    <Category name="logStatusWarning"/>',
+        '    <Category name="logStatusDiscard"/>',
+        '    <Category name="logStatusError"/>',
+        '    <Category name="logAll"/>',
+        "  </LogCategories>",
+        '  <DefaultExperiment startTime="0" stopTime="0.1" stepSize="0.001"/>',
+        "  <ModelVariables>",
+    ]
+    outputs = []
+    for i, v in enumerate(variables, start=1):
+        if v.causality == "parameter":
+            attrs = 'causality="parameter" variability="fixed" initial="exact"'
+        elif v.causality == "input":
+            attrs = 'causality="input" variability="continuous"'
+        else:
+            var = "continuous" if v.type == "Real" else "discrete"
+            attrs = f'causality="output" variability="{var}" initial="calculated"'
+            outputs.append(i)
+        lines.append(f'    <ScalarVariable name="{v.name}" valueReference="{v.vr}" {attrs} '
+                     f'description={quoteattr(v.description)}>')
+        inner = []
+        if v.start is not None and v.causality != "output":
+            inner.append(f"start={quoteattr(_fmt(v.start))}")
+        if v.unit:
+            inner.append(f'unit="{v.unit}"')
+        lines.append(f"      <{v.type} {' '.join(inner)}/>" if inner else f"      <{v.type}/>")
+        lines.append("    </ScalarVariable>")
+    lines += ["  </ModelVariables>", "  <ModelStructure>", "    <Outputs>"]
+    lines += [f'      <Unknown index="{i}"/>' for i in outputs]
+    lines += ["    </Outputs>", "    <InitialUnknowns>"]
+    lines += [f'      <Unknown index="{i}"/>' for i in outputs]
+    lines += ["    </InitialUnknowns>", "  </ModelStructure>", "</fmiModelDescription>", ""]
+    return "\n".join(lines)
+
+
+def fmi_headers() -> Path:
+    """The FMI 2 headers shipped with fmpy."""
+    try:
+        import fmpy
+    except ImportError:
+        raise BuildError("fmpy is needed for the FMI headers: pip install fmpy") from None
+    d = Path(fmpy.__file__).parent / "c-code"
+    if not (d / "fmi2Functions.h").is_file():
+        raise BuildError(f"fmi2Functions.h not found in {d}")
+    return d
+
+
+def libpython() -> Path:
+    """The shared CPython library of this interpreter."""
+    names = [sysconfig.get_config_var(k) for k in ("INSTSONAME", "LDLIBRARY")]
+    dirs = [sysconfig.get_config_var("LIBDIR"), sys.base_prefix + "/lib",
+            f"/usr/lib/{sysconfig.get_config_var('MULTIARCH')}"]
+    for d in dirs:
+        for n in names:
+            if d and n and ".so" in n and (Path(d) / n).is_file():
+                return Path(d) / n
+    raise BuildError(f"this Python ({sys.executable}) has no shared libpython "
+                     f"(Py_ENABLE_SHARED = {sysconfig.get_config_var('Py_ENABLE_SHARED')}); "
+                     "the FMU needs one to start Python in a C host")
+
+
+def compile_shim(out: Path, model_identifier: str = MODEL_IDENTIFIER) -> Path:
+    cc = os.environ.get("CC", "gcc")
+    if shutil.which(cc) is None:
+        raise BuildError(f"C compiler {cc!r} not found (install gcc)")
+    so = out / "binaries" / "linux64" / f"{model_identifier}.so"
+    so.parent.mkdir(parents=True, exist_ok=True)
+    cmd = [cc, "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-std=gnu11",
+           f"-I{fmi_headers()}", str(HERE / "railcontact_fmu.c"), "-o", str(so), "-ldl",
+           "-Wl,-z,nodelete"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise BuildError(f"compiling the shim failed:\n{' '.join(cmd)}\n{r.stderr}")
+    return so
+
+
+def _copy_package(dst: Path, package: str) -> None:
+    import railcontact
+
+    src = Path(railcontact.__file__).resolve().parent
+    shutil.copytree(src, dst / package,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc"))
+    shutil.copy(HERE / "slave.py", dst / package / "_fmu_slave.py")
+    shutil.copy(HERE / "variables.py", dst / package / "_fmu_variables.py")
+    shutil.copy(HERE / "fmu_bootstrap.py", dst / "fmu_bootstrap.py")
+
+
+def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path] = (),
+          model_identifier: str = MODEL_IDENTIFIER) -> Path:
+    """Build the FMU and return its path.
+
+    Parameters
+    ----------
+    output
+        The .fmu file to write.
+    profiles
+        Profile files to put into ``resources/`` (the parameters ``wheel_profile`` and
+        ``rail_profile`` then name them by file name).
+    """
+    import railcontact
+
+    output = Path(output).resolve()
+    package = f"railcontact_fmu_{model_identifier}"
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        compile_shim(root, model_identifier)
+        res = root / "resources"
+        (res / "python").mkdir(parents=True)
+        _copy_package(res / "python", package)
+        for p in profiles:
+            p = Path(p)
+            if not p.is_file():
+                raise BuildError(f"profile file {p} not found")
+            shutil.copy(p, res / p.name)
+        sites = [*site.getsitepackages(), site.getusersitepackages()]
+        cfg = {
+            "version": f"{sys.version_info[0]}.{sys.version_info[1]}",
+            "executable": sys.executable,
+            "libpython": str(libpython()),
+            "home": sys.base_prefix,
+            "site": os.pathsep.join(s for s in sites if Path(s).is_dir()),
+            "package": package,
+            "railcontact": getattr(railcontact, "__version__", ""),
+        }
+        (res / "python.cfg").write_text("".join(f"{k}={v}\n" for k, v in cfg.items()),
+                                        encoding="utf-8")
+        digest = hashlib.sha1()
+        for f in sorted(root.rglob("*")):
+            if f.is_file():
+                digest.update(f.relative_to(root).as_posix().encode())
+                digest.update(f.read_bytes())
+        h = digest.hexdigest()
+        guid = f"{{{h[:8]}-{h[8:12]}-{h[12:16]}-{h[16:20]}-{h[20:32]}}}"
+        (root / "modelDescription.xml").write_text(
+            model_description(guid, model_identifier, cfg["railcontact"]), encoding="utf-8")
+        output.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(output, "w", zipfile.ZIP_DEFLATED) as z:
+            for f in sorted(root.rglob("*")):
+                if f.is_file():
+                    z.write(f, f.relative_to(root).as_posix())
+    return output
+
+
+if __name__ == "__main__":  # pragma: no cover
+    print(build(*sys.argv[1:2]))

@@ -1,0 +1,294 @@
+"""The Python side of the railcontact FMU: one object per FMU instance.
+
+The C shim (``railcontact_fmu.c``) owns nothing but pointers: it reads and writes the Real
+and Integer variables directly in this object's numpy buffers (``buffers()``), and calls the
+methods below, each of which returns an FMI status (0 OK, 1 Warning, 2 Discard, 3 Error)
+and never raises; what went wrong is kept for ``pop_log()``.
+
+This file is copied into the FMU as ``<package>/_fmu_slave.py`` next to a copy of the
+railcontact package, hence the relative imports.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+from . import _fmu_variables as V
+from .errors import RailContactError
+from .geometry.profiles import read_profile
+from .geometry.track import Pose, Track, Wheelset
+from .materials import ElasticPair, Material
+from .wheelset import (
+    NO_CONTACT,
+    NOT_CONVERGED,
+    OUT_OF_RANGE,
+    ContactSettings,
+    Kinematics,
+    WheelsetContact,
+    WheelsetResult,
+)
+
+FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
+OUTPUT, INPUT, PARAMETER = 0, 1, 2
+CONTROLS = ("load", "penetration")
+CREEPAGE_INPUTS = ("direct", "kinematic")
+_CAUSALITY = {"output": OUTPUT, "input": INPUT, "parameter": PARAMETER}
+
+
+class Slave:
+    """One FMU instance.
+
+    Parameters
+    ----------
+    resources
+        The FMU's resources folder (profile files are looked up there).
+    instance_name
+        For messages.
+    """
+
+    def __init__(self, resources: str, instance_name: str = "railcontact") -> None:
+        self.resources = Path(resources)
+        self.instance_name = instance_name
+        self.variables = V.table()
+        self.by_name = {v.name: v for v in self.variables}
+        reals = [v for v in self.variables if v.type == "Real"]
+        ints = [v for v in self.variables if v.type == "Integer"]
+        strs = [v for v in self.variables if v.type == "String"]
+        self.real = np.zeros(len(reals))
+        self.integer = np.zeros(len(ints), dtype=np.int32)
+        self.control = np.zeros(2)  # (current time, step size) written by the shim
+        self.strings = [""] * len(strs)
+        self.string_flags = bytes(_CAUSALITY[v.causality] for v in strs)
+        self.real_flags = bytes(_CAUSALITY[v.causality] for v in reals)
+        self.integer_flags = bytes(_CAUSALITY[v.causality] for v in ints)
+        self.log: list[str] = []
+        self.contact: WheelsetContact | None = None
+        self._start_values()
+
+    # -- plumbing for the shim ------------------------------------------------------------
+    def buffers(self) -> tuple:
+        """Addresses and sizes of the buffers and the causality flags, for the shim."""
+        return (self.real.ctypes.data, len(self.real), self.integer.ctypes.data,
+                len(self.integer), self.control.ctypes.data, self.real_flags,
+                self.integer_flags, self.string_flags)
+
+    def pop_log(self) -> str:
+        """The messages since the last call, one per line."""
+        text, self.log = "\n".join(self.log), []
+        return text
+
+    def _guard(self, what: str, fail: int, fn, *args):
+        try:
+            return fn(*args)
+        except Exception as exc:  # never let an exception reach the simulator
+            self.log.append(f"{what}: {type(exc).__name__}: {exc}\n{traceback.format_exc()}")
+            return fail
+
+    def _start_values(self) -> None:
+        for v in self.variables:
+            if v.type == "Real":
+                self.real[v.vr] = 0.0 if v.start is None else float(v.start)
+            elif v.type == "Integer":
+                self.integer[v.vr] = 0 if v.start is None else int(v.start)
+            else:
+                self.strings[v.vr] = "" if v.start is None else str(v.start)
+
+    def __getitem__(self, name: str):
+        v = self.by_name[name]
+        return {"Real": self.real, "Integer": self.integer, "String": self.strings}[
+            v.type][v.vr]
+
+    def __setitem__(self, name: str, value) -> None:
+        v = self.by_name[name]
+        {"Real": self.real, "Integer": self.integer, "String": self.strings}[
+            v.type][v.vr] = value
+
+    # -- FMI calls ------------------------------------------------------------------------
+    def get_string(self, vr: int) -> str:
+        return self.strings[vr]
+
+    def set_string(self, vr: int, value: str) -> int:
+        if not 0 <= vr < len(self.strings):
+            self.log.append(f"no String variable with value reference {vr}")
+            return FMI_ERROR
+        self.strings[vr] = value
+        return FMI_OK
+
+    def enter_initialization(self) -> int:
+        return FMI_OK
+
+    def exit_initialization(self) -> int:
+        return self._guard("initialization", FMI_ERROR, self._exit_initialization)
+
+    def do_step(self) -> int:
+        return self._guard("doStep", FMI_DISCARD, self._do_step)
+
+    def reset(self) -> int:
+        self._start_values()
+        self.contact = None
+        return FMI_OK
+
+    def get_state(self) -> bytes:
+        memory = None if self.contact is None else self.contact.memory
+        return pickle.dumps((self.real.copy(), self.integer.copy(), list(self.strings),
+                             self.control.copy(), memory), protocol=pickle.HIGHEST_PROTOCOL)
+
+    def set_state(self, state: bytes) -> int:
+        def restore():
+            real, integer, strings, control, memory = pickle.loads(state)
+            np.copyto(self.real, real)  # in place: the shim holds these buffers' addresses
+            np.copyto(self.integer, integer)
+            np.copyto(self.control, control)
+            self.strings[:] = strings
+            if memory is not None:
+                if self.contact is None:
+                    self._build()
+                self.contact.memory = memory
+            elif self.contact is not None:
+                self.contact.reset()
+            return FMI_OK
+        return self._guard("setFMUstate", FMI_ERROR, restore)
+
+    # -- the model ------------------------------------------------------------------------
+    def _profile(self, parameter: str, kind: str):
+        value = self[parameter]
+        path = self.resources / value
+        source = str(path) if value and path.is_file() else value
+        try:
+            return read_profile(source, kind, self["profile_unit"])
+        except RailContactError as exc:
+            raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
+
+    def _build(self) -> None:
+        for name, allowed in (("control", CONTROLS), ("creepage_input", CREEPAGE_INPUTS)):
+            if self[name] not in allowed:
+                raise RailContactError(f"parameter {name} = {self[name]!r}: must be one of "
+                                       f"{', '.join(allowed)}")
+        for v in V.PARAMETERS:
+            if v.type == "Real" and not math.isfinite(self[v.name]):
+                raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
+        wheel, rail = self._profile("wheel_profile", "wheel"), self._profile("rail_profile",
+                                                                            "rail")
+        try:
+            track = Track(rail, float(self["inclination"]), float(self["gauge"]))
+            ws = Wheelset(wheel, float(self["wheel_radius"]),
+                          float(self["flange_back_distance"]))
+            mat = Material(float(self["young"]), float(self["poisson"]))
+            settings = ContactSettings(
+                friction=float(self["friction"]), element_size=float(self["element_size"]),
+                normal_tolerance=float(self["normal_tolerance"]),
+                tangential_tolerance=float(self["tangential_tolerance"]),
+                normal_estimate=self["normal_estimate"],
+                tangential_estimate=self["tangential_estimate"],
+                warm_start=self["warm_start"], fft=self["fft"])
+        except RailContactError as exc:
+            raise RailContactError(f"parameter error: {exc}") from None
+        self.contact = WheelsetContact(track, ws, ElasticPair.of(mat, mat), settings)
+
+    def _exit_initialization(self) -> int:
+        try:
+            self._build()
+        except RailContactError as exc:
+            self.log.append(str(exc))
+            return FMI_ERROR
+        status = self._do_step()
+        return FMI_OK if status == FMI_DISCARD else status
+
+    def _inputs(self, names: list[str]) -> dict[str, float]:
+        values = {n: float(self[n]) for n in names}
+        bad = [f"{n} = {x}" for n, x in values.items() if not math.isfinite(x)]
+        if bad:
+            raise ValueError("inputs not finite: " + ", ".join(bad))
+        return values
+
+    def _do_step(self) -> int:
+        if self.contact is None:
+            self.log.append("doStep before initialization")
+            return FMI_ERROR
+        names = ["lateral_displacement", "yaw", "speed"]
+        penetration = self["control"] == "penetration"
+        names += ["vertical_displacement", "roll"] if penetration else ["load_left",
+                                                                        "load_right"]
+        kinematic = self["creepage_input"] == "kinematic"
+        names += (["lateral_velocity", "yaw_rate", "spin_speed"] if kinematic else
+                  [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
+        try:
+            x = self._inputs(names)
+        except ValueError as exc:
+            self.log.append(str(exc))
+            self["status"] = OUT_OF_RANGE
+            return FMI_DISCARD
+        try:
+            pose = Pose(x["lateral_displacement"], x["yaw"], x.get("roll", 0.0))
+            kw: dict = {"time": float(self.control[0])}
+            if penetration:
+                kw["vertical"] = x["vertical_displacement"]
+            else:
+                kw["loads"] = (max(x["load_left"], 0.0), max(x["load_right"], 0.0))
+            if kinematic:
+                spin = x["spin_speed"]
+                kw["kinematics"] = Kinematics(x["speed"], x["lateral_velocity"], x["yaw_rate"],
+                                              spin if spin > 0 else None)
+            else:
+                kw["creepages"] = tuple(tuple(x[f"{c}_{s}"] for c in ("xi", "eta", "phi"))
+                                        for s in V.SIDES)
+            res = self.contact.solve(pose, **kw)
+        except RailContactError as exc:
+            self.log.append(f"input out of range: {exc}")
+            self._write(None)
+            self["status"] = OUT_OF_RANGE
+            return FMI_WARNING
+        self._write(res)
+        if not np.all(np.isfinite(self.real)):
+            self.log.append("non-finite result; outputs set to zero")
+            self._write(None)
+            self["status"] = OUT_OF_RANGE
+            return FMI_DISCARD
+        if any(w.status == NOT_CONVERGED for w in res.wheels):
+            self.log.append("a BEM solve did not converge within max_iterations")
+            return FMI_WARNING
+        return FMI_OK
+
+    def _write(self, res: WheelsetResult | None) -> None:
+        """Outputs from ``res``; all zero (and no patches) for None."""
+        for v in V.OUTPUTS:
+            self[v.name] = 0
+        if res is None:
+            return
+        for w in res.wheels:
+            s = w.side
+            c = w.creepages[0] if w.creepages else (0.0, 0.0, 0.0)
+            values = {
+                "normal_force": w.normal_force, "creep_force_x": w.creep_force[0],
+                "creep_force_y": w.creep_force[1], "spin_moment": w.spin_moment,
+                "force_longitudinal": w.track_force[0], "force_lateral": w.track_force[1],
+                "force_vertical": w.track_force[2], "wheel_contact_position": w.wheel_position,
+                "rail_contact_position": w.rail_position,
+                "contact_lateral_position": w.lateral_position,
+                "contact_angle": w.contact_angle, "rolling_radius": w.rolling_radius,
+                "contact_area": w.area, "max_pressure": w.max_pressure,
+                "slip_area_ratio": w.slip_area_ratio, "xi_used": c[0], "eta_used": c[1],
+                "phi_used": c[2],
+                "n_patches": w.n_patches, "normal_iterations": w.normal_iterations,
+                "tangential_iterations": w.tangential_iterations}
+            for k, val in values.items():
+                self[f"{k}_{s}"] = val
+        fx, fy, fz = res.force
+        self["force_longitudinal"], self["force_lateral"], self["force_vertical"] = fx, fy, fz
+        self["yaw_moment"] = res.yaw_moment
+        self["solve_time"] = res.wall_time
+        self["normal_iterations"] = sum(w.normal_iterations for w in res.wheels)
+        self["tangential_iterations"] = sum(w.tangential_iterations for w in res.wheels)
+        self["status"] = res.status
+
+
+def make_slave(resources: str, instance_name: str) -> Slave:
+    return Slave(resources, instance_name)
+
+
+__all__ = ["Slave", "make_slave", "NO_CONTACT"]

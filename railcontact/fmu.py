@@ -1,0 +1,50 @@
+"""Building the railcontact FMU from ``fmu_src/`` (the C shim, the Python slave, the
+modelDescription generator): ``railcontact fmu build [-o dist/RailContact.fmu]``.
+
+The sources live beside the package in a source checkout (``pip install -e .``); the built
+FMU runs in the Python environment it was built with.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+from .errors import RailContactError
+
+DEFAULT_OUTPUT = "dist/RailContact.fmu"
+
+
+def fmu_sources() -> Path:
+    """The ``fmu_src`` folder of the source checkout this package was installed from."""
+    d = Path(__file__).resolve().parents[1] / "fmu_src"
+    if not (d / "railcontact_fmu.c").is_file():
+        raise RailContactError(f"FMU sources not found at {d}: build the FMU from a source "
+                               "checkout installed with `pip install -e .`")
+    return d
+
+
+def _builder():
+    name = "_railcontact_fmu_build"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, fmu_sources() / "build.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = ()) -> Path:
+    """Build the FMU (gcc + fmpy's FMI 2 headers) and return its path."""
+    b = _builder()
+    try:
+        return b.build(output, list(profiles))
+    except b.BuildError as exc:
+        raise RailContactError(f"cannot build the FMU: {exc}") from None
+
+
+def model_description(guid: str = "{00000000-0000-0000-0000-000000000000}") -> str:
+    """The modelDescription.xml the builder writes."""
+    return _builder().model_description(guid)
