@@ -1,0 +1,345 @@
+"""The FMU: built once into a temporary folder, then run by fmpy, libcosim and a bare C host.
+
+The reference for the outputs is railcontact's own Python API (WheelsetContact) called with
+the same inputs: the FMU must be a faithful shell around it. The physics of the API is
+verified elsewhere (test_wheel_rail, test_tangential, test_wheelset).
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+from fmpy import simulate_fmu  # noqa: E402
+from fmpy.fmi2 import FMU2Slave  # noqa: E402
+from fmpy.model_description import read_model_description  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+from railcontact.fmu import build_fmu  # noqa: E402
+from railcontact.geometry.profiles import read_profile  # noqa: E402
+from railcontact.geometry.track import Pose, Track, Wheelset  # noqa: E402
+from railcontact.materials import ElasticPair, Material  # noqa: E402
+from railcontact.wheelset import ContactSettings, WheelsetContact  # noqa: E402
+
+STEP = 1e-3
+CREEP = {"xi_left": 1e-3, "eta_left": -5e-4, "phi_left": 0.3,
+         "xi_right": 1e-3, "eta_right": -5e-4, "phi_right": -0.3}
+
+
+@pytest.fixture(scope="module")
+def fmu(tmp_path_factory) -> Path:
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    return build_fmu(tmp_path_factory.mktemp("fmu") / "RailContact.fmu")
+
+
+@pytest.fixture(scope="module")
+def extracted(fmu, tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("unzipped")
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(d)
+    return d
+
+
+@pytest.fixture(scope="module")
+def md(fmu):
+    return read_model_description(str(fmu))
+
+
+def api(warm_start="none", friction=0.4) -> WheelsetContact:
+    mat = Material(206e9, 0.28)
+    return WheelsetContact(
+        Track(read_profile("60E1", "rail"), math.atan(1 / 40), 1.435),
+        Wheelset(read_profile("S1002", "wheel"), 0.46, 1.360), ElasticPair.of(mat, mat),
+        ContactSettings(friction=friction, warm_start=warm_start))
+
+
+class Slave:
+    """FMU2Slave with names."""
+
+    def __init__(self, fmu, extracted, md, name="rc", **start):
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.type = {v.name: v.type for v in md.modelVariables}
+        self.s = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
+                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.s.instantiate()
+        self.s.setupExperiment(startTime=0.0)
+        self.s.enterInitializationMode()
+        self.set(**start)
+        self.s.exitInitializationMode()
+        self.t = 0.0
+
+    def set(self, **values):
+        for k, v in values.items():
+            if self.type[k] == "String":
+                self.s.setString([self.vr[k]], [v])
+            else:
+                self.s.setReal([self.vr[k]], [float(v)])
+
+    def get(self, *names):
+        out = []
+        for n in names:
+            if self.type[n] == "Integer":
+                out.append(self.s.getInteger([self.vr[n]])[0])
+            else:
+                out.append(self.s.getReal([self.vr[n]])[0])
+        return out if len(out) > 1 else out[0]
+
+    def step(self, **inputs):
+        """doStep; its FMI status (fmpy raises for Discard and worse)."""
+        from fmpy.fmi1 import FMICallException
+
+        self.set(**inputs)
+        try:
+            self.s.doStep(self.t, STEP)  # returns nothing for OK and Warning
+        except FMICallException as exc:
+            return exc.status
+        self.t += STEP
+        return 0
+
+    def free(self):
+        self.s.terminate()
+        self.s.freeInstance()
+
+
+def test_validate(fmu):
+    assert validate_fmu(str(fmu)) == []
+
+
+def test_model_description_units_and_variables(md):
+    names = {v.name: v for v in md.modelVariables}
+    for n in ("lateral_displacement", "yaw", "load_left", "vertical_displacement", "roll",
+              "speed", "xi_left", "lateral_velocity", "yaw_rate", "spin_speed",
+              "normal_force_right", "creep_force_x_left", "force_lateral", "yaw_moment",
+              "max_pressure_left", "slip_area_ratio_right", "n_patches_left", "status",
+              "normal_iterations", "tangential_iterations", "solve_time", "warm_start",
+              "element_size", "normal_tolerance", "tangential_tolerance", "fft"):
+        assert n in names, n
+    assert names["load_left"].unit == "N" and names["max_pressure_left"].unit == "Pa"
+    assert names["status"].variability == "discrete"
+
+
+def test_simulate_matches_python_api(fmu):
+    """A structured input signal (lateral sweep +-6 mm, creepages) through
+    fmpy.simulate_fmu; every row equals the API's solution for that row's inputs."""
+    t = np.arange(0.0, 0.0125, 0.001)
+    names = ["lateral_displacement", *CREEP]
+    sig = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in names])
+    sig["time"] = t
+    sig["lateral_displacement"] = 6e-3 * np.sin(2 * np.pi * t / t[-1])
+    for k, v in CREEP.items():
+        sig[k] = v * (1 + 0.5 * np.cos(2 * np.pi * t / t[-1]))
+    outs = ["normal_force_left", "normal_force_right", "creep_force_x_left",
+            "creep_force_y_right", "spin_moment_left", "force_lateral", "yaw_moment",
+            "contact_angle_left", "max_pressure_right"]
+    res = simulate_fmu(str(fmu), stop_time=t[-1], step_size=STEP, input=sig,
+                       output=names + outs, start_values={"warm_start": "none"})
+    ref = api("none")
+    for row in res[1:]:
+        creep = tuple(tuple(row[f"{c}_{s}"] for c in ("xi", "eta", "phi"))
+                      for s in ("left", "right"))
+        r = ref.solve(Pose(row["lateral_displacement"]), loads=(83.3e3, 83.3e3),
+                      creepages=creep)
+        want = [r.left.normal_force, r.right.normal_force, r.left.creep_force[0],
+                r.right.creep_force[1], r.left.spin_moment, r.force[1], r.yaw_moment,
+                r.left.contact_angle, r.right.max_pressure]
+        np.testing.assert_allclose([row[n] for n in outs], want, rtol=1e-9, atol=1e-9)
+    # the sweep reaches flange contact on both sides
+    assert res["contact_angle_left"].max() > 0.3
+
+
+def test_two_instances_with_different_parameters(fmu, extracted, md):
+    a = Slave(fmu, extracted, md, "a", friction=0.4, warm_start="none")
+    b = Slave(fmu, extracted, md, "b", friction=0.15, warm_start="none")
+    inputs = dict(CREEP, lateral_displacement=1e-3, xi_left=3e-3)
+    ra = api("none", 0.4).solve(Pose(1e-3), loads=(83.3e3, 83.3e3),
+                                creepages=((3e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3)))
+    rb = api("none", 0.15).solve(Pose(1e-3), loads=(83.3e3, 83.3e3),
+                                 creepages=((3e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3)))
+    for _ in range(2):  # interleaved
+        a.step(**inputs)
+        b.step(**inputs)
+        assert a.get("creep_force_x_left") == pytest.approx(ra.left.creep_force[0], rel=1e-9)
+        assert b.get("creep_force_x_left") == pytest.approx(rb.left.creep_force[0], rel=1e-9)
+    # lower friction, smaller creep force, bounded by mu N
+    assert abs(b.get("creep_force_x_left")) < abs(a.get("creep_force_x_left"))
+    assert abs(b.get("creep_force_x_left")) <= 0.15 * b.get("normal_force_left") * 1.0001
+    a.free()
+    b.free()
+
+
+def test_state_round_trip_is_bit_identical(fmu, extracted, md):
+    s = Slave(fmu, extracted, md, "state", warm_start="previous")
+    outs = ["normal_force_left", "creep_force_x_left", "creep_force_y_right",
+            "normal_iterations", "tangential_iterations"]
+    ys = [1e-3, 1.05e-3, 1.1e-3, 1.15e-3, 1.2e-3]
+    for y in ys[:2]:
+        s.step(lateral_displacement=y, **CREEP)
+    state = s.s.getFMUstate()
+    serial = s.s.serializeFMUstate(state)
+    t0 = s.t
+    first = []
+    for y in ys[2:]:
+        s.step(lateral_displacement=y, **CREEP)
+        first.append(s.get(*outs))
+    for restore in ("state", "serialized"):
+        if restore == "state":
+            s.s.setFMUstate(state)
+        else:
+            s.s.setFMUstate(s.s.deSerializeFMUstate(serial))
+        s.t = t0
+        again = []
+        for y in ys[2:]:
+            s.step(lateral_displacement=y, **CREEP)
+            again.append(s.get(*outs))
+        assert again == first  # bit-identical, iterations included
+    # the warm start is part of the state: the repeated steps were warm (few iterations)
+    assert first[0][3] <= 6
+    s.s.freeFMUstate(state)
+    s.free()
+
+
+def test_reset(fmu, extracted, md):
+    s = Slave(fmu, extracted, md, "reset", warm_start="none")
+    s.step(lateral_displacement=2e-3, **CREEP)
+    fresh = s.get("creep_force_x_left", "normal_force_left")
+    s.step(lateral_displacement=-3e-3, **CREEP)
+    s.s.reset()
+    s.s.setupExperiment(startTime=0.0)
+    s.s.enterInitializationMode()
+    s.set(warm_start="none")
+    s.s.exitInitializationMode()
+    s.t = 0.0
+    s.step(lateral_displacement=2e-3, **CREEP)
+    assert s.get("creep_force_x_left", "normal_force_left") == fresh
+    s.free()
+
+
+def test_bad_input_is_a_clean_status(fmu, extracted, md):
+    s = Slave(fmu, extracted, md, "bad", warm_start="none")
+    # NaN input: the step is discarded, outputs stay finite, status "out of range"
+    assert s.step(lateral_displacement=float("nan"), **CREEP) == 2
+    assert s.get("status") == 3
+    # lift-off: zero forces, status "no contact"
+    s.step(lateral_displacement=0.0, load_left=0.0, load_right=0.0, **CREEP)
+    assert s.get("status") == 2
+    assert s.get("normal_force_left", "force_vertical") == [0.0, 0.0]
+    # beyond the profiles: a warning (not an error), zero forces, status "out of range"
+    assert s.step(lateral_displacement=0.08, load_left=83.3e3, load_right=83.3e3) == 0
+    assert s.get("status") == 3 and s.get("normal_force_left") == 0.0
+    # back in range
+    assert s.step(lateral_displacement=0.0) == 0
+    assert s.get("status") == 0 and s.get("normal_force_left") > 0
+    s.free()
+
+
+def test_bad_parameter_is_an_error_at_initialization(fmu, extracted, md, capsys):
+    from fmpy.fmi1 import FMICallException
+
+    for name, value, words in (("friction", -0.2, "friction"),
+                               ("element_size", 0.05, "element_size"),
+                               ("warm_start", "yesterday", "warm_start"),
+                               ("rail_profile", "nonexistent.txt", "rail_profile")):
+        s = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="badpar")
+        s.instantiate()  # fmpy's logger prints "[ERROR] message"
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        if isinstance(value, str):
+            s.setString([vr[name]], [value])
+        else:
+            s.setReal([vr[name]], [value])
+        with pytest.raises(FMICallException) as err:
+            s.exitInitializationMode()
+        assert err.value.status == 3  # fmi2Error, not fmi2Fatal
+        s.freeInstance()
+        log = capsys.readouterr().out
+        assert "[ERROR]" in log and words in log, log
+
+
+def test_bare_c_host_clean_environment(extracted, md, tmp_path):
+    """100 steps, three load/unload cycles, in a C program with an empty environment."""
+    headers = Path(fmpy.__file__).parent / "c-code"
+    host = tmp_path / "host"
+    subprocess.run(["gcc", "-O2", f"-I{headers}", str(Path(__file__).parent / "fmu" / "host.c"),
+                    "-o", str(host), "-ldl", "-lm"], check=True)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    binary = extracted / "binaries" / "linux64" / "RailContact.so"
+    env = ["env", "-i", "PATH=/usr/bin:/bin", f"VR_LAT={vr['lateral_displacement']}",
+           f"VR_OUT={vr['normal_force_left']}"]
+    r = subprocess.run(env + [str(host), str(binary), (extracted / "resources").as_uri(),
+                              md.guid, "100", "3"], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "ok: 3 cycles of 100 steps" in r.stdout
+
+
+def test_libcosim(fmu):
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    ex = CosimExecution.from_step_size(step_size=int(1e6))  # 1 ms in ns
+    i = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(fmu), instance_name="rc"))
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(observer=obs)
+    vr = {v.name.decode(): v.reference for v in ex.slave_variables(slave_index=i)}
+    ex.real_initial_value(slave_index=i, variable_reference=vr["lateral_displacement"],
+                          value=2e-3)
+    ex.real_initial_value(slave_index=i, variable_reference=vr["xi_left"], value=1e-3)
+    ex.string_initial_value(slave_index=i, variable_reference=vr["warm_start"], value="none")
+    assert ex.step(step_count=3)
+    got = obs.last_real_values(slave_index=i, variable_references=[
+        vr["normal_force_left"], vr["creep_force_x_left"], vr["force_lateral"]])
+    r = api("none").solve(Pose(2e-3), loads=(83.3e3, 83.3e3),
+                          creepages=((1e-3, 0, 0), (0, 0, 0)))
+    np.testing.assert_allclose(got, [r.left.normal_force, r.left.creep_force[0], r.force[1]],
+                               rtol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def fuzz_slave(fmu, extracted, md):
+    s = Slave(fmu, extracted, md, "fuzz", warm_start="previous+estimate")
+    yield s
+    s.free()
+
+
+def _value(lo, hi):
+    from hypothesis import strategies as st
+
+    return st.one_of(st.floats(lo, hi), st.sampled_from([float("nan"), float("inf"),
+                                                         -float("inf"), 0.0]))
+
+
+def test_fuzz_step_inputs(fuzz_slave, md):
+    """Whatever the step inputs: a clean FMI status, a valid status output, finite
+    outputs."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    reals = [v.name for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+
+    @settings(max_examples=25, deadline=None,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(st.fixed_dictionaries({
+        "lateral_displacement": _value(-0.03, 0.03), "yaw": _value(-0.15, 0.15),
+        "load_left": _value(-5e4, 3e5), "load_right": _value(-5e4, 3e5),
+        "xi_left": _value(-0.05, 0.05), "eta_right": _value(-0.05, 0.05),
+        "phi_left": _value(-5.0, 5.0)}))
+    def run(inputs):
+        status = fuzz_slave.step(**inputs)
+        assert status in (0, 2)  # OK/Warning, or Discard - never Error/Fatal
+        assert fuzz_slave.get("status") in (0, 1, 2, 3)
+        out = [fuzz_slave.get(n) for n in reals]
+        assert np.all(np.isfinite(out))
+
+    run()
