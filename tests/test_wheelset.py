@@ -1,0 +1,126 @@
+"""WheelsetContact: both wheels per time step, frames, kinematic creepages, warm start."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from railcontact.errors import RailContactError
+from railcontact.geometry.profiles import read_profile
+from railcontact.geometry.track import Pose, Track, Wheelset
+from railcontact.materials import ElasticPair, Material
+from railcontact.wheelset import (
+    NO_CONTACT,
+    OK,
+    ContactSettings,
+    Kinematics,
+    WheelsetContact,
+)
+
+Q = 83.3e3
+
+
+def contact(**settings) -> WheelsetContact:
+    mat = Material(206e9, 0.28)
+    return WheelsetContact(Track(read_profile("60E1", "rail"), math.atan(1 / 40)),
+                           Wheelset(read_profile("S1002", "wheel"), 0.46),
+                           ElasticPair.of(mat, mat), ContactSettings(**settings))
+
+
+@pytest.fixture(scope="module")
+def centred():
+    """Centred wheelset, pure rolling at V = 30 m/s (kinematic creepages)."""
+    wc = contact(warm_start="none")
+    return wc.solve(Pose(0.0), loads=(Q, Q), kinematics=Kinematics(30.0))
+
+
+def test_centred_wheelset_is_mirror_symmetric(centred):
+    L, R = centred.left, centred.right
+    assert L.status == R.status == OK
+    # mirror symmetry of the track about its centre line
+    assert R.normal_force == pytest.approx(L.normal_force, rel=1e-9)
+    assert R.creep_force[0] == pytest.approx(L.creep_force[0], rel=1e-6)
+    assert R.creep_force[1] == pytest.approx(-L.creep_force[1], rel=1e-6)
+    assert R.spin_moment == pytest.approx(-L.spin_moment, rel=1e-6)
+    assert R.track_force[1] == pytest.approx(-L.track_force[1], rel=1e-6)
+    assert centred.force[1] == pytest.approx(0.0, abs=1e-6 * Q)
+    assert centred.yaw_moment == pytest.approx(0.0, abs=1e-6 * Q)
+
+
+def test_centred_forces_balance_the_load(centred):
+    L = centred.left
+    g = L.contact_angle
+    # load control: the normal forces' vertical components carry the wheel load
+    assert L.normal_force * math.cos(g) == pytest.approx(Q, rel=1e-5)
+    # the rail pushes the left wheel towards the track centre (-Y) through the cone
+    assert L.track_force[1] < 0
+    assert L.track_force[2] == pytest.approx(Q + L.creep_force[1] * math.sin(g), rel=1e-9)
+
+
+def test_kinematic_creepages_of_pure_rolling(centred):
+    r0 = 0.46
+    for w, s in ((centred.left, 1), (centred.right, -1)):
+        xi, eta, phi = w.creepages[0]
+        assert xi == pytest.approx(1 - w.rolling_radius / r0, abs=1e-12)
+        assert eta == 0.0
+        assert phi == pytest.approx(-s * math.sin(w.contact_angle) / r0, rel=1e-12)
+
+
+def test_creep_force_opposes_creepage_and_is_linear_for_small_creepage():
+    wc = contact(warm_start="none")
+    f = []
+    for xi in (1e-5, 2e-5):
+        r = wc.solve(Pose(0.0), loads=(Q, Q), creepages=((xi, 0, 0), (xi, 0, 0)))
+        f.append(r.left.creep_force[0])
+    assert f[0] < 0  # F_x = -f11 xi on the wheel
+    assert f[1] / f[0] == pytest.approx(2.0, rel=0.02)
+
+
+def test_lift_off_and_out_of_range():
+    wc = contact()
+    r = wc.solve(Pose(0.0), loads=(0.0, Q), creepages=((1e-3, 0, 0), (1e-3, 0, 0)))
+    assert r.left.status == NO_CONTACT and r.left.normal_force == 0.0
+    assert r.right.status == OK and r.right.normal_force > 0
+    with pytest.raises(RailContactError):
+        wc.solve(Pose(0.0), loads=(float("nan"), Q))
+    with pytest.raises(RailContactError):
+        Kinematics(0.0)
+
+
+def test_penetration_control_from_vertical_displacement():
+    wc = contact(warm_start="none")
+    load = wc.solve(Pose(1e-3), loads=(Q, Q))
+    # lower the wheelset by the approach the load needed: same forces back
+    from railcontact.geometry.contact import vertical_gap
+
+    g = vertical_gap(wc.track, wc.wheelset, Pose(1e-3), "left")[4].min()
+    approach = load.left.patches[0].normal.penetration / math.cos(load.left.contact_angle)
+    r = wc.solve(Pose(1e-3), vertical=-(g + approach))
+    assert r.left.normal_force == pytest.approx(load.left.normal_force, rel=1e-3)
+    # lifted: no contact
+    assert wc.solve(Pose(1e-3), vertical=0.01).left.status == NO_CONTACT
+
+
+def test_warm_start_from_previous_step_cuts_iterations_not_accuracy():
+    """Hunting-like motion at 1 ms steps: 'previous' needs far fewer iterations than a
+    cold start and gives the same forces within the solver tolerance."""
+    runs = {}
+    for mode in ("none", "previous"):
+        wc = contact(warm_start=mode)
+        its, fy = [], []
+        for k in range(8):
+            t = k * 1e-3
+            y = 3e-3 * math.sin(2 * math.pi * 1.5 * t + 0.3)
+            r = wc.solve(Pose(y, 1e-3 * math.cos(2 * math.pi * 1.5 * t)), loads=(Q, Q),
+                         kinematics=Kinematics(30.0, 0.03), time=t)
+            its.append(sum(w.normal_iterations + w.tangential_iterations for w in r.wheels))
+            fy.append([r.left.creep_force[0], r.left.creep_force[1], r.right.creep_force[1],
+                       r.left.normal_force])
+        runs[mode] = (np.mean(its[2:]), np.array(fy))
+    cold, warm = runs["none"][0], runs["previous"][0]
+    assert warm < cold / 3
+    # both stop at eps_tau = 1e-2: agree to a fraction of the largest creep force mu N
+    np.testing.assert_allclose(runs["previous"][1], runs["none"][1], rtol=0,
+                               atol=0.005 * 0.4 * Q)
