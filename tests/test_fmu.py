@@ -37,7 +37,8 @@ CREEP = {"xi_left": 1e-3, "eta_left": -5e-4, "phi_left": 0.3,
 def fmu(tmp_path_factory) -> Path:
     if shutil.which("gcc") is None:
         pytest.skip("gcc not available")
-    return build_fmu(tmp_path_factory.mktemp("fmu") / "RailContact.fmu")
+    profile = Path(__file__).resolve().parents[1] / "models" / "profiles" / "S1002.txt"
+    return build_fmu(tmp_path_factory.mktemp("fmu") / "RailContact.fmu", [profile])
 
 
 @pytest.fixture(scope="module")
@@ -204,6 +205,22 @@ def test_state_round_trip_is_bit_identical(fmu, extracted, md):
     assert first[0][3] <= 6
     s.s.freeFMUstate(state)
     s.free()
+
+
+def test_profile_file_in_resources(fmu, extracted, md):
+    """wheel_profile names a file packed into the FMU (built with --profile): the tabulated
+    S1002 gives the built-in S1002's contact (to the table's resolution)."""
+    outs = ("normal_force_left", "contact_angle_left", "rolling_radius_left",
+            "max_pressure_left")
+    built_in = Slave(fmu, extracted, md, "builtin", warm_start="none")
+    built_in.step(lateral_displacement=2e-3)
+    filed = Slave(fmu, extracted, md, "file", warm_start="none", wheel_profile="S1002.txt",
+                  profile_unit="mm")
+    filed.step(lateral_displacement=2e-3)
+    a, b = built_in.get(*outs), filed.get(*outs)
+    np.testing.assert_allclose(b, a, rtol=2e-3)
+    built_in.free()
+    filed.free()
 
 
 def test_reset(fmu, extracted, md):
