@@ -97,7 +97,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=2.0, help="simulated time [s]")
     ap.add_argument("--step", type=float, default=1e-3, help="communication step [s]")
-    ap.add_argument("--csv", default="docs/bench_fmu.csv", help="per-step CSV output")
+    ap.add_argument("--csv", default="", help="per-step CSV output (optional)")
     args = ap.parse_args()
 
     from fmpy.model_description import read_model_description
