@@ -24,7 +24,6 @@ from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .materials import ElasticPair, Material
 from .wheelset import (
-    NO_CONTACT,
     NOT_CONVERGED,
     OUT_OF_RANGE,
     ContactSettings,
@@ -291,4 +290,4 @@ def make_slave(resources: str, instance_name: str) -> Slave:
     return Slave(resources, instance_name)
 
 
-__all__ = ["Slave", "make_slave", "NO_CONTACT"]
+__all__ = ["Slave", "make_slave"]

@@ -44,7 +44,3 @@ def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = 
     except b.BuildError as exc:
         raise RailContactError(f"cannot build the FMU: {exc}") from None
 
-
-def model_description(guid: str = "{00000000-0000-0000-0000-000000000000}") -> str:
-    """The modelDescription.xml the builder writes."""
-    return _builder().model_description(guid)

@@ -112,10 +112,6 @@ def previous_tangential(memory: PatchMemory, grid: Grid
     """
     if memory.traction is None or memory.state is None:
         return None, None
-
-    def on_grid(m: PatchMemory) -> np.ndarray:
-        return np.stack([remesh(m.traction[k], m.grid, grid) for k in range(2)])
-
-    t = on_grid(memory)
+    t = np.stack([remesh(memory.traction[k], memory.grid, grid) for k in range(2)])
     st = np.rint(remesh(memory.state.astype(float), memory.grid, grid, method="nearest"))
     return t, st.astype(np.int8)

@@ -339,14 +339,16 @@ class WheelsetContact:
         pair = self.pair
 
         def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: dict[str, float]):
-            est = normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, ctrl)
+            def estimate():  # KP/INFCON cost a solve of their own: only when needed
+                return normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, ctrl)
+
             m = match(memories, cp.rail_u, cp.position[2])
             if m is None:
-                return est
+                return estimate()
 
             def of(grid):
                 p = previous_pressure(m, grid, time)
-                return p if p.sum() > 0 else est(grid)
+                return p if p.sum() > 0 else estimate()(grid)
             return of
 
         wheel = WheelContact(side=side)
@@ -361,21 +363,21 @@ class WheelsetContact:
         new_memory = []
         for patch in patches:
             cp = patch.geometry
+            m = match(memories, cp.rail_u, cp.position[2])  # None without warm start
             if creep is not None or kin is not None:
                 c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
                 wheel.creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
-                m = match(memories, cp.rail_u, cp.position[2])
                 prev = previous_tangential(m, patch.normal.grid) if m else None
                 solve_patch_tangential(patch, dict(tspec, creepage=side_creep), pair,
                                        self.settings.fft, previous=prev)
-            t = patch.tangential
-            m = match(self.memory[side], cp.rail_u, cp.position[2])
-            new_memory.append(PatchMemory(
-                grid=patch.normal.grid, pressure=patch.normal.pressure,
-                traction=None if t is None else t.traction,
-                state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
-                time=time, older=None if m is None else replace(m, older=None)))
+            if self.settings.uses_previous:
+                t = patch.tangential
+                new_memory.append(PatchMemory(
+                    grid=patch.normal.grid, pressure=patch.normal.pressure,
+                    traction=None if t is None else t.traction,
+                    state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
+                    time=time, older=None if m is None else replace(m, older=None)))
         _resultants(wheel, patches, pose)
         return wheel, new_memory
 
