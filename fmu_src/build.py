@@ -168,6 +168,28 @@ def _copy_package(dst: Path, package: str) -> None:
     shutil.copy(HERE / "fmu_bootstrap.py", dst / "fmu_bootstrap.py")
 
 
+def source_digest(profiles: list[str | Path] = (),
+                  model_identifier: str = MODEL_IDENTIFIER) -> str:
+    """SHA-1 of everything an FMU is built from: the railcontact package, ``fmu_src/``,
+    the Python it runs in and the profile files. A built FMU stores it in
+    ``resources/source.sha1``; a different digest means the FMU is stale."""
+    import railcontact
+
+    digest = hashlib.sha1()
+    digest.update(f"{model_identifier}\n{sys.executable}\n{sys.version}\n".encode())
+    pkg = Path(railcontact.__file__).resolve().parent
+    for base, pattern in ((pkg, "*.py"), (HERE, "*.[pc]*")):
+        for f in sorted(base.rglob(pattern)):
+            if f.is_file() and "__pycache__" not in f.parts:
+                digest.update(f"{base.name}/{f.relative_to(base).as_posix()}".encode())
+                digest.update(f.read_bytes())
+    for p in profiles:
+        p = Path(p)
+        digest.update(p.name.encode())
+        digest.update(p.read_bytes() if p.is_file() else b"missing")
+    return digest.hexdigest()
+
+
 def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path] = (),
           model_identifier: str = MODEL_IDENTIFIER) -> Path:
     """Build the FMU and return its path.
@@ -205,6 +227,8 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
             "package": package,
             "railcontact": getattr(railcontact, "__version__", ""),
         }
+        (res / "source.sha1").write_text(source_digest(profiles, model_identifier) + "\n",
+                                         encoding="utf-8")
         (res / "python.cfg").write_text("".join(f"{k}={v}\n" for k, v in cfg.items()),
                                         encoding="utf-8")
         digest = hashlib.sha1()

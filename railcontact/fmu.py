@@ -44,3 +44,27 @@ def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = 
     except b.BuildError as exc:
         raise RailContactError(f"cannot build the FMU: {exc}") from None
 
+
+
+def fmu_is_current(path: str | Path, profiles: list[str | Path] = ()) -> bool:
+    """Whether the FMU at ``path`` exists and was built from the present sources, Python and
+    profile files (its ``resources/source.sha1``, see ``fmu_src/build.py``)."""
+    import zipfile
+
+    path = Path(path)
+    if not path.is_file():
+        return False
+    try:
+        with zipfile.ZipFile(path) as z:
+            stored = z.read("resources/source.sha1").decode().strip()
+    except (KeyError, OSError, zipfile.BadZipFile):
+        return False
+    return stored == _builder().source_digest(list(profiles))
+
+
+def ensure_fmu(path: str | Path = DEFAULT_OUTPUT,
+               profiles: list[str | Path] = ()) -> tuple[Path, bool]:
+    """Build the FMU at ``path`` if it is missing or stale; returns (path, built)."""
+    if fmu_is_current(path, profiles):
+        return Path(path).resolve(), False
+    return build_fmu(path, profiles), True
