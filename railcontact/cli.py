@@ -1,5 +1,6 @@
 """The ``railcontact`` command line.
 
+``railcontact demo [--quick]`` co-simulates a wheelset with the FMU through fmpy;
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
 ``railcontact fmu build [-o dist/RailContact.fmu]`` builds the FMU. Errors in the input are
 reported in one line (exit status 2), never as a traceback.
@@ -73,10 +74,65 @@ def _cmd_fmu_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from .demo import DemoOptions, run_demo
+
+    opts = DemoOptions(
+        speed=args.speed, duration=args.duration, step=args.step,
+        initial_lateral=args.initial_lateral, wheel_profile=args.wheel_profile,
+        rail_profile=args.rail_profile, profile_unit=args.profile_unit,
+        element_size=args.element_size, warm_start=args.warm_start, free=args.free,
+        cold_every=args.cold_every, quick=args.quick, fmu=args.fmu,
+        output_dir=args.output_dir, plots=not args.no_plots)
+    res = run_demo(opts, progress=not args.no_progress)
+    print(res.text)
+    for f in res.files:
+        print(f"plot written to {f}")
+    return 0 if res.sim.completed else 1
+
+
+def _add_demo(sub) -> None:
+    d = sub.add_parser("demo", help="co-simulate a wheelset on track with the FMU (fmpy)",
+                       description="A wheelset (lateral, yaw, spin; primary suspension to a "
+                       "frame at constant speed; 83.3 kN per wheel) from an initial lateral "
+                       "offset, its wheel-rail forces from the railcontact FMU each step. "
+                       "Builds the FMU when missing or stale, prints a summary and writes "
+                       "plots.")
+    d.add_argument("--quick", action="store_true",
+                   help="short run: 0.6 s, 2 ms steps, 0.8 mm elements (under a minute)")
+    d.add_argument("--speed", type=float, default=30.0, help="forward speed [m/s] (30)")
+    d.add_argument("--duration", type=float, help="simulated time [s] (1.5)")
+    d.add_argument("--step", type=float, help="communication step [s] (0.001)")
+    d.add_argument("--initial-lateral", type=float, default=4e-3,
+                   help="initial lateral displacement [m] (0.004)")
+    d.add_argument("--wheel-profile", default="S1002",
+                   help="built-in wheel profile or a profile file (S1002)")
+    d.add_argument("--rail-profile", default="60E1",
+                   help="built-in rail profile (60E1, UIC60, CN60) or a profile file (60E1)")
+    d.add_argument("--profile-unit", default="mm", choices=("mm", "m"),
+                   help="unit of two-column profile files (mm)")
+    d.add_argument("--element-size", type=float, help="BEM element size [m] (0.0005)")
+    d.add_argument("--warm-start", default="previous+estimate",
+                   choices=("none", "estimate", "previous", "previous+estimate"),
+                   help="warm start of the BEM (previous+estimate)")
+    d.add_argument("--free", action="store_true",
+                   help="no suspension: Klingel's free wheelset (use a low speed)")
+    d.add_argument("--cold-every", type=int, default=10,
+                   help="solve every N-th state also cold, for comparison (0: never; 10)")
+    d.add_argument("--fmu", default="dist/RailContact.fmu",
+                   help="the FMU to use, built if missing or stale (dist/RailContact.fmu)")
+    d.add_argument("--output-dir", default="railcontact_demo",
+                   help="folder for the plots (railcontact_demo)")
+    d.add_argument("--no-plots", action="store_true", help="do not write plots")
+    d.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    d.set_defaults(func=_cmd_demo)
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="railcontact",
                                  description="Exact wheel-rail contact (half-space BEM).")
     sub = ap.add_subparsers(dest="command", required=True)
+    _add_demo(sub)
     s = sub.add_parser("solve", help="solve a TOML case file")
     s.add_argument("case", help="case file (TOML, SI units)")
     s.add_argument("--json", action="store_true", help="print the result as JSON")

@@ -23,6 +23,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -129,6 +130,10 @@ class CoSimResult:
         What was run, with which FMU.
     radius, half_distance
         r0 and e of the centred wheelset [m] (from the FMU's profiles).
+    parameters
+        All FMU parameters of the main instance (start values and ``run.parameters``).
+    track, wheelset
+        The geometry the FMU was given.
     """
 
     time: np.ndarray
@@ -145,6 +150,9 @@ class CoSimResult:
     fmu: Path
     radius: float = 0.0
     half_distance: float = 0.0
+    parameters: dict[str, Any] = field(default_factory=dict)
+    track: Any = None
+    wheelset: Any = None
 
     @property
     def lateral(self) -> np.ndarray:
@@ -155,6 +163,23 @@ class CoSimResult:
     def yaw(self) -> np.ndarray:
         """psi [rad]."""
         return self.position[:, 1]
+
+    def contact_model(self, warm_start: str = "none"):
+        """An in-process :class:`~railcontact.wheelset.WheelsetContact` with the FMU's
+        geometry and settings (e.g. to look at the patches of a recorded state)."""
+        from .materials import ElasticPair, Material
+        from .wheelset import ContactSettings, WheelsetContact
+
+        p = self.parameters
+        mat = Material(float(p["young"]), float(p["poisson"]))
+        settings = ContactSettings(
+            friction=float(p["friction"]), element_size=float(p["element_size"]),
+            normal_tolerance=float(p["normal_tolerance"]),
+            tangential_tolerance=float(p["tangential_tolerance"]),
+            normal_estimate=str(p["normal_estimate"]),
+            tangential_estimate=str(p["tangential_estimate"]), warm_start=warm_start,
+            fft=str(p["fft"]))
+        return WheelsetContact(self.track, self.wheelset, ElasticPair.of(mat, mat), settings)
 
 
 class _Instance:
@@ -346,7 +371,8 @@ def simulate(fmu: str | Path, run: Run,
                        velocity=np.array(rec_v).reshape(-1, 3), outputs=outputs,
                        wall_time=np.array(rec_wall), shadows=shadows, jacobians=jacobians,
                        completed=completed, message=message, run=run, fmu=fmu,
-                       radius=centre.radius, half_distance=centre.half_distance)
+                       radius=centre.radius, half_distance=centre.half_distance,
+                       parameters=params, track=track, wheelset=ws)
 
 
 def print_progress(k: int, n: int) -> None:
