@@ -80,13 +80,13 @@ def _profile_files(opts: DemoOptions) -> tuple[list[Path], dict[str, str]]:
     for key, value in (("wheel_profile", opts.wheel_profile),
                        ("rail_profile", opts.rail_profile)):
         p = Path(value)
-        if p.suffix and p.is_file():
+        if p.is_file():
             files.append(p.resolve())
             params[key] = p.name
-        elif p.suffix:
+        elif p.suffix or p.parent != Path("."):
             raise RailContactError(f"{key}: file {value!r} not found")
         else:
-            params[key] = value
+            params[key] = value  # a built-in profile name
     params["profile_unit"] = opts.profile_unit
     return files, params
 

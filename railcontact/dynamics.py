@@ -18,7 +18,8 @@ longitudinal forces about the axle (no traction or braking torque). The spin deg
 freedom matters: with ``Omega`` held at ``V / r0`` the wheelset is driven or braked
 whenever its mean rolling radius differs from ``r0`` (S1002 on 60E1: 0.35 mm at 3 mm
 displacement), and the resulting common longitudinal creepage, on two patches of different
-size, adds a differential creepage that lengthens the kinematic wavelength by ~10 %.
+size, adds a differential creepage: for a free wheelset at 5 m/s the wavelength came out
+9.72 m with Omega held, 9.32 m with it free (Klingel: 8.8 m).
 Vertical equilibrium is imposed by the contact solver (wheel loads given); the frame takes
 the longitudinal forces.
 

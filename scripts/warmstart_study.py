@@ -14,8 +14,8 @@ iteration ratio to the cold start at the same step, and the largest force differ
 the reference: maximum pressure |dp| / p (the normal forces are the wheel loads, given),
 creep force |dF| / (mu N) and |dF| relative to the peak creep force of the run.
 
-Usage: python scripts/warmstart_study.py [--duration 0.5] [--steps 0.5e-3 1e-3 2e-3 5e-3]
-       [--out docs] [--element-size 0.5e-3]
+Usage: python scripts/warmstart_study.py [--duration 0.6] [--steps 0.5e-3 1e-3 2e-3 5e-3]
+       [--out docs] [--element-size 0.5e-3] [--from-csv docs/warmstart_study.csv]
 """
 
 from __future__ import annotations
@@ -115,6 +115,7 @@ def plot(rows: list[dict], path: Path) -> None:
     for a, title in zip(ax, ("normal iterations per step", "tangential sweeps per step",
                              "solve time per step [ms] (median)"), strict=True):
         a.set_xscale("log")
+        a.minorticks_off()
         a.set_xticks([0.5, 1, 2, 5], ["0.5", "1", "2", "5"])
         a.set_xlabel("communication step [ms]")
         a.set_title(title, fontsize=10)
@@ -129,7 +130,7 @@ def plot(rows: list[dict], path: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=0.5, help="simulated time [s] (0.5)")
+    ap.add_argument("--duration", type=float, default=0.6, help="simulated time [s] (0.6)")
     ap.add_argument("--steps", type=float, nargs="+", default=[0.5e-3, 1e-3, 2e-3, 5e-3],
                     help="communication steps [s]")
     ap.add_argument("--modes", nargs="+", default=list(MODES), choices=MODES)
@@ -138,13 +139,24 @@ def main() -> None:
                     help="reference solves per run (default 25)")
     ap.add_argument("--out", default=str(ROOT / "docs"),
                     help="folder for warmstart_study.csv/.png/.md")
+    ap.add_argument("--from-csv", metavar="FILE",
+                    help="no runs: table and plot from an earlier CSV")
     args = ap.parse_args()
 
     from railcontact.fmu import build_fmu
 
     rows = []
+    if args.from_csv:
+        with open(args.from_csv, newline="") as f:
+            for r in csv.DictReader(f):
+                rows.append({k: (v if k == "warm_start" else float(v)) for k, v in r.items()})
+        for r in rows:
+            for k in ("normal_max", "tangential_max", "steps", "not_converged_steps",
+                      "reference_status"):
+                r[k] = int(r[k])
+        args.steps = []
     with tempfile.TemporaryDirectory() as tmp:
-        fmu = build_fmu(Path(tmp) / "RailContact.fmu")
+        fmu = build_fmu(Path(tmp) / "RailContact.fmu") if args.steps else None
         for step in args.steps:
             for mode in args.modes:
                 print(f"  {mode} at {step * 1e3:g} ms ...", file=sys.stderr, flush=True)

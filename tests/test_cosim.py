@@ -1,0 +1,209 @@
+"""The wheelset co-simulation through the FMU (``railcontact demo``), the equivalent
+conicity and Klingel's kinematic wavelength."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from railcontact.cli import main
+from railcontact.dynamics import WheelsetModel, implicit_step, measure_wavelength
+from railcontact.errors import RailContactError
+from railcontact.fmu import ensure_fmu, fmu_is_current
+from railcontact.geometry.conicity import (
+    centred_contact,
+    equivalent_conicity,
+    klingel_wavelength,
+    rolling_radius_difference,
+)
+from railcontact.geometry.profiles import Profile, builtin_profile
+from railcontact.geometry.track import Track, Wheelset
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def fmu(tmp_path_factory) -> Path:
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    path, built = ensure_fmu(tmp_path_factory.mktemp("cosim") / "RailContact.fmu")
+    assert built
+    return path
+
+
+def s1002_60e1() -> tuple[Track, Wheelset]:
+    return Track(builtin_profile("60E1")), Wheelset(builtin_profile("S1002"))
+
+
+# -- geometry: equivalent conicity --------------------------------------------------------
+@pytest.mark.parametrize("cone", [0.05, 0.1])
+def test_conical_wheel_has_its_cone_angle_as_equivalent_conicity(cone):
+    """A conical wheel on a curved rail: the contact stays on the same rail point, so
+    delta_r = 2 lambda y exactly and the equivalent conicity is lambda at every amplitude."""
+    s = np.linspace(-0.07, 0.065, 541)
+    track = Track(builtin_profile("60E1"))
+    ws = Wheelset(Profile(s, -cone * s, "wheel", "cone"))
+    for amplitude in (1e-3, 3e-3, 6e-3):
+        assert equivalent_conicity(track, ws, amplitude) == pytest.approx(cone, rel=1e-3)
+
+
+def test_s1002_60e1_conicity_and_centred_contact():
+    """S1002 on 60E1 at 1:40, gauge 1435, flange backs 1360: published equivalent
+    conicities at 3 mm amplitude lie around 0.15-0.2 (e.g. Polach, Wear 258 (2005)),
+    higher at small amplitude; delta_r is odd in y; the centred contact points lie near
+    the taping lines (e ~ 0.75 m, r0 ~ 0.46 m)."""
+    track, ws = s1002_60e1()
+    c = centred_contact(track, ws)
+    assert c.radius == pytest.approx(0.46, abs=1e-3)
+    assert c.half_distance == pytest.approx(0.75, abs=0.01)
+    y = np.array([1e-3, 2e-3, 4e-3])
+    np.testing.assert_allclose(rolling_radius_difference(track, ws, -y),
+                               -rolling_radius_difference(track, ws, y), atol=1e-6)
+    lam = [equivalent_conicity(track, ws, a) for a in (1e-3, 3e-3, 5e-3)]
+    assert 0.12 < lam[1] < 0.25
+    assert lam[0] > lam[1] > lam[2]
+
+
+def test_klingel_formula_and_bad_input():
+    assert klingel_wavelength(0.46, 0.75, 0.2) == pytest.approx(
+        2 * math.pi * math.sqrt(0.46 * 0.75 / 0.2))
+    with pytest.raises(RailContactError, match="conicity"):
+        klingel_wavelength(0.46, 0.75, 0.0)
+    track, ws = s1002_60e1()
+    with pytest.raises(RailContactError, match="amplitude"):
+        equivalent_conicity(track, ws, -1e-3)
+
+
+# -- the time step and the wavelength measurement -----------------------------------------
+def test_implicit_step_is_backward_euler_in_the_velocity():
+    """With D the exact Jacobian of a linear damping force F = D v, one step gives the
+    backward-Euler velocity (M - h D)^-1 M v, stable however stiff D is."""
+    model = WheelsetModel.free()
+    d = np.diag([-4e6, -2.4e6, -1e5])
+    v = np.array([0.01, -0.002, 0.5])
+    q = np.zeros(3)
+    h = 5e-3
+    q1, v1 = implicit_step(model, q, v, d @ v, d, h)
+    expected = np.linalg.solve(model.inertia - h * d, model.inertia @ v)
+    np.testing.assert_allclose(v1, expected, rtol=1e-12)
+    np.testing.assert_allclose(q1, h * expected, rtol=1e-12)
+    for _ in range(50):  # h |D| / m = 13: explicit Euler would blow up
+        q, v = implicit_step(model, q, v, d @ v, d, h)
+    assert np.all(np.abs(v) < 1e-6)
+
+
+def test_suspension_forces_enter_the_step():
+    model = WheelsetModel(lateral_stiffness=1e6, longitudinal_stiffness=1e6, semi_spacing=1.0)
+    assert model.yaw_stiffness == pytest.approx(2e6)
+    q = np.array([1e-3, 2e-3, 0.0])
+    _, v1 = implicit_step(model, q, np.zeros(3), np.zeros(3), np.zeros((3, 3)), 1e-3)
+    np.testing.assert_allclose(v1[:2], [-1e6 * 1e-3 * 1e-3 / 1500, -2e6 * 2e-3 * 1e-3 / 700])
+
+
+def test_measure_wavelength_of_a_sine():
+    x = np.linspace(0, 40, 4001)
+    w = measure_wavelength(x, 3e-3 * np.sin(2 * math.pi * x / 9.0 + 0.3))
+    assert w.wavelength == pytest.approx(9.0, rel=1e-4)
+    assert w.amplitude == pytest.approx(3e-3, rel=1e-3)
+    assert math.isnan(measure_wavelength(x[:100], np.ones(100)).wavelength)
+
+
+# -- the FMU co-simulation ----------------------------------------------------------------
+def test_fmu_staleness(fmu, tmp_path):
+    assert fmu_is_current(fmu)
+    profile = ROOT / "models" / "profiles" / "S1002.txt"
+    assert not fmu_is_current(fmu, [profile])  # built without that file
+    assert not fmu_is_current(tmp_path / "missing.fmu")
+    (tmp_path / "broken.fmu").write_text("not a zip")
+    assert not fmu_is_current(tmp_path / "broken.fmu")
+    path, built = ensure_fmu(fmu)
+    assert path == fmu and not built
+
+
+def test_free_wheelset_follows_klingel(fmu):
+    """A free wheelset at 10 m/s (inertia negligible: the linear theory's frequency is
+    within 1 % of the kinematic one) oscillates with Klingel's wavelength for the
+    equivalent conicity of railcontact's geometry at the simulated amplitude."""
+    from railcontact.cosim import Run, simulate
+
+    run = Run(speed=10.0, duration=1.5, step=5e-3, initial_lateral=3e-3,
+              model=WheelsetModel.free(),
+              parameters={"creepage_input": "kinematic", "element_size": 1e-3})
+    sim = simulate(fmu, run)
+    assert sim.completed, sim.message
+    w = measure_wavelength(sim.distance, sim.lateral)
+    track, ws = s1002_60e1()
+    lam = equivalent_conicity(track, ws, w.amplitude)
+    klingel = klingel_wavelength(sim.radius, sim.half_distance, lam)
+    print(f"simulated {w.wavelength:.3f} m at {w.amplitude * 1e3:.2f} mm, Klingel "
+          f"{klingel:.3f} m (lambda {lam:.3f})")
+    assert 2e-3 < w.amplitude < 4e-3
+    assert w.wavelength == pytest.approx(klingel, rel=0.10)
+    # the spin degree of freedom settles at pure rolling on the mean rolling radius
+    assert sim.velocity[-1, 2] * sim.radius / run.speed == pytest.approx(1.0, abs=2e-3)
+
+
+def test_free_conical_wheelset_follows_klingel_exactly(fmu, tmp_path):
+    """Conical wheels (lambda = 0.1, delta_r = 2 lambda y exactly) through the FMU: the
+    co-simulated wavelength is Klingel's to 1 % - the dynamics, the implicit step and the
+    FMU's kinematic creepages add nothing of their own. (S1002's 5 % above is the profile's
+    doing.)"""
+    from railcontact.cosim import Run, simulate
+
+    s = np.linspace(-0.07, 0.065, 541)
+    cone = Profile(s, -0.1 * s, "wheel", "cone").write(tmp_path / "cone.txt")
+    path, _ = ensure_fmu(tmp_path / "cone.fmu", [cone])
+    sim = simulate(path, Run(speed=10.0, duration=1.5, step=5e-3, initial_lateral=3e-3,
+                             model=WheelsetModel.free(),
+                             parameters={"creepage_input": "kinematic", "element_size": 1e-3,
+                                         "wheel_profile": "cone.txt"}))
+    assert sim.completed, sim.message
+    w = measure_wavelength(sim.distance, sim.lateral)
+    assert w.wavelength == pytest.approx(
+        klingel_wavelength(sim.radius, sim.half_distance, 0.1), rel=0.01)
+
+
+def test_demo_quick_runs_and_its_outputs_are_finite(fmu, tmp_path, capsys):
+    out = tmp_path / "demo"
+    code = main(["demo", "--quick", "--duration", "0.3", "--no-progress", "--fmu", str(fmu),
+                 "--output-dir", str(out)])
+    text = capsys.readouterr().out
+    assert code == 0, text
+    assert "up to date" in text and "fewer iterations" in text
+    for name in ("demo_motion.png", "demo_patches.png"):
+        assert (out / name).stat().st_size > 10_000
+    from railcontact.demo import DemoOptions, run_demo
+
+    res = run_demo(DemoOptions(quick=True, duration=0.1, fmu=str(fmu), plots=False),
+                   progress=False)
+    assert res.sim.completed
+    for name, values in res.sim.outputs.items():
+        assert np.all(np.isfinite(values)), name
+    assert np.all(res.sim.outputs["status"] == 0)
+    assert np.all(np.isfinite(res.sim.position)) and np.all(np.isfinite(res.sim.velocity))
+    # the loads are carried by the normal forces (load control: N cos(gamma) = Q per
+    # patch; the creep forces' vertical components, F_y sin(gamma), come on top - under
+    # 1 % here) and the warm start needs fewer iterations than the cold one
+    o = res.sim.outputs
+    for side in ("left", "right"):
+        one = o[f"n_patches_{side}"] == 1
+        assert one.sum() > 10
+        np.testing.assert_allclose((o[f"normal_force_{side}"]
+                                    * np.cos(o[f"contact_angle_{side}"]))[one], 83.3e3,
+                                   rtol=1e-3)
+    np.testing.assert_allclose(o["force_vertical"], 2 * 83.3e3, rtol=1e-2)
+    s = res.summary
+    assert (s["normal_iterations"] + s["tangential_iterations"]
+            < s["cold_normal_iterations"] + s["cold_tangential_iterations"])
+
+
+def test_demo_bad_input_is_one_line(fmu, tmp_path, capsys):
+    assert main(["demo", "--speed", "-3", "--fmu", str(fmu), "--no-plots"]) == 2
+    assert "speed" in capsys.readouterr().err
+    assert main(["demo", "--wheel-profile", str(tmp_path / "nope.txt"), "--fmu", str(fmu),
+                 "--no-plots"]) == 2
+    assert "not found" in capsys.readouterr().err
