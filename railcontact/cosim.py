@@ -241,7 +241,9 @@ def generalized_force(out: Mapping[str, float]) -> np.ndarray:
 
 def _jacobian(inst: _Instance, t: float, h: float, inputs: list[float],
               base: np.ndarray, speed: float, radius: float,
-              half_distance: float) -> np.ndarray:
+              half_distance: float) -> np.ndarray | None:
+    """Finite-difference Jacobian at the state just solved; None if a perturbed state was
+    rejected by the FMU."""
     state = inst.fmu.getFMUState()
     try:
         jac = np.zeros((3, 3))
@@ -250,8 +252,11 @@ def _jacobian(inst: _Instance, t: float, h: float, inputs: list[float],
             dv *= JACOBIAN_PERTURBATION
             pert = list(inputs)
             pert[slot] += dv
-            jac[:, j] = (generalized_force(inst.step(t, h, pert)) - base) / dv
+            out = inst.step(t, h, pert)
             inst.fmu.setFMUState(state)
+            if out["status"] == STATUS_OUT_OF_RANGE:
+                return None
+            jac[:, j] = (generalized_force(out) - base) / dv
     finally:
         inst.fmu.freeFMUState(state)
     return jac
@@ -261,9 +266,10 @@ def simulate(fmu: str | Path, run: Run,
              progress: Callable[[int, int], None] | None = None) -> CoSimResult:
     """Run the wheelset co-simulation with the FMU at ``fmu``.
 
-    Never raises for a failing step: the history up to it is returned with
-    ``completed = False`` and the reason in ``message`` (a wheelset that climbs off the
-    rail, an FMU error).
+    Raises :class:`~railcontact.errors.RailContactError` for parameters or profiles that
+    cannot be used, before any step; never for a failing step: the history up to it is
+    returned with ``completed = False`` and the reason in ``message`` (a wheelset that
+    climbs off the rail, an FMU error).
 
     Parameters
     ----------
@@ -288,16 +294,20 @@ def simulate(fmu: str | Path, run: Run,
     starts = {v.name: v.start for v in md.modelVariables if v.causality == "parameter"}
     params = {**starts, **run.parameters}
     res_dir = Path(unzipdir) / "resources"
-    profiles = []
-    for key, kind in (("wheel_profile", "wheel"), ("rail_profile", "rail")):
-        name = str(params[key])
-        f = res_dir / name
-        profiles.append(read_profile(str(f) if f.is_file() else name, kind,
-                                     str(params["profile_unit"])))
-    track = Track(profiles[1], float(params["inclination"]), float(params["gauge"]))
-    ws = Wheelset(profiles[0], float(params["wheel_radius"]),
-                  float(params["flange_back_distance"]))
-    centre = centred_contact(track, ws)
+    try:
+        profiles = []
+        for key, kind in (("wheel_profile", "wheel"), ("rail_profile", "rail")):
+            name = str(params[key])
+            f = res_dir / name
+            profiles.append(read_profile(str(f) if f.is_file() else name, kind,
+                                         str(params["profile_unit"])))
+        track = Track(profiles[1], float(params["inclination"]), float(params["gauge"]))
+        ws = Wheelset(profiles[0], float(params["wheel_radius"]),
+                      float(params["flange_back_distance"]))
+        centre = centred_contact(track, ws)
+    except (RailContactError, ValueError, KeyError):
+        shutil.rmtree(unzipdir, ignore_errors=True)
+        raise
 
     n = run.steps
     h = run.step
@@ -331,9 +341,11 @@ def simulate(fmu: str | Path, run: Run,
                     shadow_rows[name].append((k, instances[name].step(t, h, inputs)))
             force = generalized_force(out)
             if k % jac_every == 0:
-                jac = _jacobian(main, t, h, inputs, force, run.speed, centre.radius,
+                new = _jacobian(main, t, h, inputs, force, run.speed, centre.radius,
                                 centre.half_distance)
-                jacobians.append((t, jac))
+                if new is not None:
+                    jac = new
+                    jacobians.append((t, jac))
             rec_t.append(t)
             rec_x.append(x.copy())
             rec_v.append(v.copy())
