@@ -26,6 +26,7 @@ from .cosim import CoSimResult, Run, print_progress, simulate
 from .dynamics import WheelsetModel, measure_wavelength
 from .errors import RailContactError, check_count, check_positive
 from .fmu import DEFAULT_OUTPUT, ensure_fmu
+from .plotting import _pyplot
 
 MM, KN = 1e3, 1e-3
 QUICK = {"duration": 0.6, "step": 2e-3, "element_size": 0.8e-3}
@@ -149,10 +150,9 @@ def summarise(sim: CoSimResult) -> dict[str, float]:
         s["cold_normal_iterations"] = float(cold["normal_iterations"][1:].mean())
         s["cold_tangential_iterations"] = float(cold["tangential_iterations"][1:].mean())
         s["cold_solve_time"] = float(np.median(cold["solve_time"][1:]))
-        warm = sim.outputs
         k = cold["step"][1:]
-        s["warm_normal_iterations_sampled"] = float(warm["normal_iterations"][k].mean())
-        s["warm_tangential_iterations_sampled"] = float(warm["tangential_iterations"][k].mean())
+        s["warm_normal_iterations_sampled"] = float(o["normal_iterations"][k].mean())
+        s["warm_tangential_iterations_sampled"] = float(o["tangential_iterations"][k].mean())
     if math.isfinite(w.amplitude) and w.amplitude > 1e-5:
         lam = equivalent_conicity(sim.track, sim.wheelset, w.amplitude)
         s["conicity"] = lam
@@ -206,15 +206,6 @@ def describe(sim: CoSimResult, s: dict[str, float], opts: DemoOptions, built: bo
                      f"{s['cold_solve_time'] * 1e3:.1f} ms solve; warm start needs "
                      f"{cold / warm:.1f}x fewer iterations")
     return "\n".join(lines)
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def plot_motion(sim: CoSimResult, path: Path) -> Path:

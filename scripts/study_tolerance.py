@@ -20,11 +20,10 @@ import argparse
 import copy
 import csv
 import math
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from _sweep import displacements, run_sweep
 
 import railcontact as rc
 
@@ -102,19 +101,8 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("out"))
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    dys = np.round(np.arange(-8.0, 8.0 + 1e-9, args.step), 6) * 1e-3
-    rows, failed = [], []
-    t0 = time.perf_counter()
-    for i, dy in enumerate(dys):
-        try:
-            rows += one_case(float(dy))
-        except rc.RailContactError as exc:
-            failed.append((dy, str(exc)))
-        done = (i + 1) / len(dys)
-        eta = (time.perf_counter() - t0) * (1 / done - 1)
-        print(f"\r[{'#' * int(30 * done):<30}] {i + 1}/{len(dys)} cases, ~{eta:.0f} s left",
-              end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    dys = displacements(args.step)
+    rows, failed = run_sweep(dys, one_case)
     keys = list(rows[0])
     with (args.out / "study_tolerance.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys)

@@ -1,0 +1,36 @@
+"""The lateral sweep shared by the study scripts: displacements and a loop with a progress
+bar (``from _sweep import displacements, run_sweep`` in a script run from ``scripts/``)."""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+import railcontact as rc
+
+
+def displacements(step_mm: float) -> np.ndarray:
+    """Lateral wheelset displacements -8 .. 8 mm in steps of ``step_mm`` [m]."""
+    return np.round(np.arange(-8.0, 8.0 + 1e-9, step_mm), 6) * 1e-3
+
+
+def run_sweep(dys: np.ndarray, one_case: Callable[[float], list[dict]]
+              ) -> tuple[list[dict], list[tuple[float, str]]]:
+    """``one_case(dy)`` for every displacement, with a progress bar on stderr; returns the
+    rows and the (displacement, message) of the cases that raised a RailContactError."""
+    rows, failed = [], []
+    t0 = time.perf_counter()
+    for i, dy in enumerate(dys):
+        try:
+            rows += one_case(float(dy))
+        except rc.RailContactError as exc:
+            failed.append((float(dy), str(exc)))
+        done = (i + 1) / len(dys)
+        eta = (time.perf_counter() - t0) * (1 / done - 1)
+        print(f"\r[{'#' * int(30 * done):<30}] {i + 1}/{len(dys)} cases, ~{eta:.0f} s left",
+              end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    return rows, failed
