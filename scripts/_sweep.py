@@ -1,8 +1,11 @@
-"""The lateral sweep shared by the study scripts: displacements and a loop with a progress
-bar (``from _sweep import displacements, run_sweep`` in a script run from ``scripts/``)."""
+"""Shared by the study scripts: the displacements of the lateral sweep, a loop over them
+with a progress bar, and the approach that carries a wheel load (``from _sweep import ...``
+in a script run from ``scripts/``)."""
 
 from __future__ import annotations
 
+import copy
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -34,3 +37,14 @@ def run_sweep(dys: np.ndarray, one_case: Callable[[float], list[dict]]
               end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
     return rows, failed
+
+
+def approach_for_load(case: dict, load: float) -> float:
+    """Vertical approach [m] at which the wheel of ``case`` (without a ``[normal]`` table)
+    carries the vertical ``load`` [N]: its first patch's normal penetration, load-controlled
+    to eps_n = 1e-9, divided by the cosine of its contact angle. The paper's cases are
+    penetration-controlled with this approach."""
+    c = copy.deepcopy(case)
+    c["normal"] = {"load": load, "tolerance": 1e-9, "estimate": "infcon"}
+    main = rc.solve(c).patches[0]
+    return main.normal.penetration / math.cos(main.geometry.contact_angle)

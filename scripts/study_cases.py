@@ -33,6 +33,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from _sweep import approach_for_load
 
 import railcontact as rc
 from railcontact.pipeline import elastic_pair, normal_estimate, simplified_tangential
@@ -57,15 +58,6 @@ COLOURS = {"none": "0.5", "hertz": "tab:red", "kp": "tab:orange", "infcon": "tab
            "bem": "k", "fastsim": "tab:red", "fastrip": "tab:blue"}
 
 
-def approach_for_load(dy: float) -> float:
-    """Vertical approach [m] at which the left wheel carries LOAD [N] (vertical)."""
-    c = copy.deepcopy(BASE)
-    c["geometry"]["lateral_displacement"] = dy
-    c["normal"] = {"load": LOAD, "tolerance": 1e-9, "estimate": "infcon"}
-    main = rc.solve(c).patches[0]
-    return main.normal.penetration / math.cos(main.geometry.contact_angle)
-
-
 def penetration_case(dy: float, approach: float, tolerance: float, estimate: str) -> dict:
     c = copy.deepcopy(BASE)
     c["geometry"]["lateral_displacement"] = dy
@@ -86,7 +78,9 @@ def l1_error(estimate: np.ndarray, reference: np.ndarray) -> float:
 
 def normal_case(dy: float) -> dict:
     """Estimates, converged BEM and histories of one displacement (all its patches)."""
-    approach = approach_for_load(dy)
+    base = copy.deepcopy(BASE)
+    base["geometry"]["lateral_displacement"] = dy
+    approach = approach_for_load(base, LOAD)
     ref = rc.solve(penetration_case(dy, approach, 1e-9, "none"))
     pair = elastic_pair(ref.case["material"])
     out = {"dy": dy, "approach": approach, "reference": ref, "patches": []}

@@ -20,11 +20,10 @@ import argparse
 import copy
 import csv
 import functools
-import math
 from pathlib import Path
 
 import numpy as np
-from _sweep import displacements, run_sweep
+from _sweep import approach_for_load, displacements, run_sweep
 
 import railcontact as rc
 
@@ -44,11 +43,9 @@ def one_case(dy: float, control: str = "penetration") -> list[dict]:
     base = copy.deepcopy(CASE)
     base["geometry"]["lateral_displacement"] = dy
     if control == "penetration":
-        c = copy.deepcopy(base)
-        c["normal"] = {"load": base["normal"]["load"], "tolerance": 1e-9, "estimate": "infcon"}
-        main = rc.solve(c).patches[0]
-        approach = main.normal.penetration / math.cos(main.geometry.contact_angle)
-        base["normal"] = {"penetration": approach, "tolerance": base["normal"]["tolerance"]}
+        nspec = base.pop("normal")
+        base["normal"] = {"penetration": approach_for_load(base, nspec["load"]),
+                          "tolerance": nspec["tolerance"]}
     normal_its: dict[str, list[int]] = {}
     for est in ("none", "hertz", "kp", "infcon"):
         c = copy.deepcopy(base)

@@ -23,7 +23,7 @@ import math
 from pathlib import Path
 
 import numpy as np
-from _sweep import displacements, run_sweep
+from _sweep import approach_for_load, displacements, run_sweep
 
 import railcontact as rc
 
@@ -51,10 +51,7 @@ def _rel(a: float, b: float) -> float:
 def one_case(dy: float) -> list[dict]:
     base = copy.deepcopy(BASE)
     base["geometry"]["lateral_displacement"] = dy
-    c = copy.deepcopy(base)
-    c["normal"] = {"load": 83.3e3, "tolerance": 1e-9, "estimate": "infcon"}
-    main = rc.solve(c).patches[0]
-    approach = main.normal.penetration / math.cos(main.geometry.contact_angle)
+    approach = approach_for_load(base, 83.3e3)
 
     def normal(tol: float):
         c = copy.deepcopy(base)
