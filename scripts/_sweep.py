@@ -1,14 +1,16 @@
 """Shared by the study scripts: the displacements of the lateral sweep, a loop over them
-with a progress bar, and the approach that carries a wheel load (``from _sweep import ...``
-in a script run from ``scripts/``)."""
+with a progress bar, the approach that carries a wheel load, and the CSV writer
+(``from _sweep import ...`` in a script run from ``scripts/``)."""
 
 from __future__ import annotations
 
 import copy
+import csv
 import math
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
@@ -48,3 +50,12 @@ def approach_for_load(case: dict, load: float) -> float:
     c["normal"] = {"load": load, "tolerance": 1e-9, "estimate": "infcon"}
     main = rc.solve(c).patches[0]
     return main.normal.penetration / math.cos(main.geometry.contact_angle)
+
+
+def write_csv(path: Path, rows: list[dict]) -> None:
+    """Rows as a CSV file with a header (columns in first-seen order; missing cells empty)."""
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    with path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)

@@ -28,12 +28,11 @@ from __future__ import annotations
 
 import argparse
 import copy
-import csv
 import math
 from pathlib import Path
 
 import numpy as np
-from _sweep import approach_for_load
+from _sweep import approach_for_load, write_csv
 
 import railcontact as rc
 from railcontact.pipeline import elastic_pair, normal_estimate, simplified_tangential
@@ -49,6 +48,7 @@ LOAD = 83.3e3
 CASES_MM = (-2.0, 0.0, 7.78)
 NORMAL_ESTIMATES = ("none", "hertz", "kp", "infcon")
 TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
+FRICTION = 0.4
 CREEP = {"case1": 0.5e-4, "case2": 2e-4, "case3": 5e-4}
 TANGENTIAL_DY_MM = -2.0
 PAPER_NORMAL = {-2.0: (13, 9, 6, 5)}  # Fig. 5a; 5b, c: Hertz worse than none (no numbers)
@@ -107,7 +107,7 @@ def normal_case(dy: float) -> dict:
 
 def tangential_case(dy: float, approach: float, creepage: float) -> dict:
     """FASTSIM / FaStrip estimates, converged ConvexGS and histories (first patch)."""
-    tspec = {"creepage": [creepage, creepage, creepage * 1e3], "friction": 0.4}
+    tspec = {"creepage": [creepage, creepage, creepage * 1e3], "friction": FRICTION}
     c = penetration_case(dy, approach, 1e-9, "infcon")
     c["tangential"] = dict(tspec, tolerance=1e-8, max_iterations=5000)
     ref = rc.solve(c)
@@ -127,6 +127,19 @@ def tangential_case(dy: float, approach: float, creepage: float) -> dict:
 def _edges(grid) -> tuple[np.ndarray, np.ndarray]:
     xmin, xmax, ymin, ymax = grid.bounds
     return (np.linspace(xmin, xmax, grid.nx + 1) * MM, np.linspace(ymin, ymax, grid.ny + 1) * MM)
+
+
+def plot_histories(ax, runs: dict, tolerance: float, xlabel: str, ylabel: str) -> None:
+    """Convergence history (error after each iteration) of the BEM from each start."""
+    for est, run in runs.items():
+        h = np.asarray(run.history)
+        ax.semilogy(np.arange(1, len(h) + 1), h, "o-", ms=2.5, color=COLOURS[est],
+                    label=f"{est}: {run.iterations}")
+    ax.axhline(tolerance, color="k", lw=0.8, ls=":")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, title=f"start: {xlabel}s", title_fontsize=7)
 
 
 def plot_normal(cases: list[dict], path: Path) -> None:
@@ -170,15 +183,7 @@ def plot_normal(cases: list[dict], path: Path) -> None:
         a1.set_ylabel(f"pressure at x = {grid.x[i0] * MM:.2f} mm [MPa]")
         a1.grid(alpha=0.3)
         a1.legend(fontsize=7)
-        for est, run in patch["runs"].items():
-            h = np.asarray(run.history)
-            a2.semilogy(np.arange(1, len(h) + 1), h, "o-", ms=3, color=COLOURS[est],
-                        label=f"{est}: {run.iterations}")
-        a2.axhline(1e-3, color="k", lw=0.8, ls=":")
-        a2.set_xlabel("iteration")
-        a2.set_ylabel("eps_n (relative pressure change)")
-        a2.grid(alpha=0.3, which="both")
-        a2.legend(fontsize=7, title="start: iterations", title_fontsize=7)
+        plot_histories(a2, patch["runs"], 1e-3, "iteration", "eps_n (relative pressure change)")
     fig.suptitle("Normal estimates against the BEM (paper Fig. 4) and the BEM's convergence "
                  "from each (Fig. 5)", fontsize=11)
     fig.tight_layout()
@@ -213,23 +218,14 @@ def plot_tangential(cases: dict[str, dict], path: Path) -> None:
         for est in ("fastsim", "fastrip"):
             a.plot(x, case["estimates"][est][0][0, :, jc] * MPA, color=COLOURS[est],
                    label=est)
-        bound = 0.4 * rp.normal.pressure[:, jc] * MPA
+        bound = FRICTION * rp.normal.pressure[:, jc] * MPA
         a.plot(x, bound, "k:", lw=0.8, label="+- mu p")
         a.plot(x, -bound, "k:", lw=0.8)
         a.set_xlabel("x [mm]")
         a.set_ylabel(f"p_x at s = {grid.y[jc] * MM:.2f} mm [MPa]")
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
-        a = ax[4]
-        for est, run in case["runs"].items():
-            h = np.asarray(run.history)
-            a.semilogy(np.arange(1, len(h) + 1), h, "o-", ms=2, color=COLOURS[est],
-                       label=f"{est}: {run.iterations}")
-        a.axhline(1e-2, color="k", lw=0.8, ls=":")
-        a.set_xlabel("sweep")
-        a.set_ylabel("eps_tau")
-        a.grid(alpha=0.3, which="both")
-        a.legend(fontsize=7, title="start: sweeps", title_fontsize=7)
+        plot_histories(ax[4], case["runs"], 1e-2, "sweep", "eps_tau")
     fig.suptitle(f"Tangential estimates against ConvexGS at dy = {TANGENTIAL_DY_MM:+.0f} mm, "
                  "Table 5 creepages (paper Fig. 13) and ConvexGS convergence (Fig. 14)",
                  fontsize=11)
@@ -274,7 +270,7 @@ def main() -> None:
 
     dy = TANGENTIAL_DY_MM * 1e-3
     approach = next(c["approach"] for c in cases if c["dy"] == dy)
-    print(f"\ntangential at {TANGENTIAL_DY_MM:+.0f} mm, mu = 0.4, eps_tau = 1e-2: sweeps, "
+    print(f"\ntangential at {TANGENTIAL_DY_MM:+.0f} mm, mu = {FRICTION:g}, eps_tau = 1e-2: sweeps, "
           "and each estimate's error against the converged ConvexGS")
     print("| case | creepage | none | FASTSIM | FaStrip | paper | FASTSIM slip-set / L1 % | "
           "FaStrip slip-set / L1 % |")
@@ -299,11 +295,7 @@ def main() -> None:
         rows.append(row)
     plot_tangential(tcases, args.out / "study_cases_tangential.png")
 
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with (args.out / "study_cases.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(args.out / "study_cases.csv", rows)
     print(f"\nwrote {args.out / 'study_cases.csv'}, study_cases_normal.png, "
           "study_cases_tangential.png")
 

@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import argparse
 import copy
-import csv
 from pathlib import Path
 
 import numpy as np
+from _sweep import write_csv
 
 import railcontact as rc
+from railcontact.plotting import _pyplot
 
 BASE = {
     "material": {"young": 206e9, "poisson": 0.28},
@@ -65,15 +66,9 @@ def main() -> None:
     means = {k: float(np.mean([r[k] for r in rows])) for k in keys[1:]}
     print("mean      | " + " ".join(f"{k}={v:.2f}" for k, v in means.items()))
     print("paper     | normal: none 13-17, INFCON 1-5; tangential: none 24-33, FaStrip 8-19")
-    with (args.out / "study_hertz.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(args.out / "study_hertz.csv", rows)
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
 
     bs = [r["B_per_mm"] for r in rows]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)

@@ -18,14 +18,14 @@ from __future__ import annotations
 
 import argparse
 import copy
-import csv
 import functools
 from pathlib import Path
 
 import numpy as np
-from _sweep import approach_for_load, displacements, run_sweep
+from _sweep import approach_for_load, displacements, run_sweep, write_csv
 
 import railcontact as rc
+from railcontact.plotting import _pyplot
 
 CASE = {
     "material": {"young": 206e9, "poisson": 0.28},
@@ -82,10 +82,7 @@ def main() -> None:
     rows, failed = run_sweep(dys, functools.partial(one_case, control=args.control))
     print(f"{args.control} control")
     keys = list(rows[0])
-    with (args.out / "study_sweep.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(args.out / "study_sweep.csv", rows)
     mean = {k: float(np.mean([r[k] for r in rows])) for k in keys[2:]}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed")
     for dy, msg in failed:
@@ -105,10 +102,7 @@ def main() -> None:
     print(f"{'paper (Fig. 15)':<22} " + " ".join(f"{PAPER[f'tangential_{e}']:7.2f}"
                                                 for e in ("none", "fastsim", "fastrip")))
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
 
     d = {k: np.array([r[k] for r in rows]) for k in keys}
     order = np.argsort(d["dy_mm"], kind="stable")

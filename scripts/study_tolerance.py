@@ -18,14 +18,14 @@ from __future__ import annotations
 
 import argparse
 import copy
-import csv
 import math
 from pathlib import Path
 
 import numpy as np
-from _sweep import approach_for_load, displacements, run_sweep
+from _sweep import approach_for_load, displacements, run_sweep, write_csv
 
 import railcontact as rc
+from railcontact.plotting import _pyplot
 
 BASE = {
     "material": {"young": 206e9, "poisson": 0.28},
@@ -101,10 +101,7 @@ def main() -> None:
     dys = displacements(args.step)
     rows, failed = run_sweep(dys, one_case)
     keys = list(rows[0])
-    with (args.out / "study_tolerance.csv").open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(args.out / "study_tolerance.csv", rows)
     d = {k: np.array([r[k] for r in rows], dtype=float) for k in keys}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed; "
           f"tangential reference converged on {int(d['ref_t_converged'].sum())}")
@@ -133,10 +130,7 @@ def main() -> None:
               f"{100 * d[k + '_slip'].mean():.3g} | {100 * d[k + '_force'].mean():.3g} | "
               f"{pp[0]} | {pp[1]} | {pp[2]} | {pp[3]} |")
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
 
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.2), constrained_layout=True)
     for tol in NORMAL_TOLS:

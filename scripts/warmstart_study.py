@@ -100,10 +100,9 @@ def table(rows: list[dict]) -> str:
 
 
 def plot(rows: list[dict], path: Path) -> None:
-    import matplotlib
+    from railcontact.plotting import _pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
 
     fig, ax = plt.subplots(1, 3, figsize=(14, 4.2), constrained_layout=True)
     for j, mode in enumerate(MODES):
