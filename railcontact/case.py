@@ -46,6 +46,7 @@ Schema (keys not listed here are rejected, so that a typo never goes unnoticed):
     tolerance = 1e-3      # eps_n, relative pressure change between iterations
     max_iterations = 500
     fft = "auto"          # "auto" | "pyfftw" | "scipy" | "dense"
+    preconditioner = "fft"  # "fft" | "none" (plain Polonsky-Keer CG, as in the paper)
 
     [tangential]          # optional: steady rolling in +x
     creepage = [1e-3, 0.0, 0.0]  # xi [-], eta [-], phi [1/m]
@@ -68,6 +69,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import CaseError
+from .normal.bem import PRECONDITIONERS
 from .operator import BACKENDS
 
 if sys.version_info >= (3, 11):
@@ -93,7 +95,7 @@ _SCHEMA: dict[str, dict[str, str]] = {
              "margin": "potential-area scale [-]"},
     "normal": {"load": "force [N]", "penetration": "approach [m]", "estimate": "estimate",
                "tolerance": "eps_n", "max_iterations": "count", "fft": "FFT backend",
-               "estimate_grid": "[nx, ny] of KP/INFCON"},
+               "estimate_grid": "[nx, ny] of KP/INFCON", "preconditioner": "preconditioner"},
     "tangential": {"creepage": "[xi, eta, phi]", "friction": "mu [-]", "model": "model",
                    "estimate": "estimate", "tolerance": "eps_tau", "max_iterations": "count",
                    "bound": "traction bound", "strips": "[nx, ny]",
@@ -232,6 +234,8 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
     nor["max_iterations"] = _integer("normal", "max_iterations", nor.get("max_iterations", 500),
                                      1)
     nor["fft"] = _choice("normal", "fft", nor.get("fft", "auto"), BACKENDS)
+    nor["preconditioner"] = _choice("normal", "preconditioner",
+                                    nor.get("preconditioner", "fft"), PRECONDITIONERS)
     eg = nor.get("estimate_grid", [40, 40])
     if not isinstance(eg, list) or len(eg) != 2:
         raise CaseError(f"[normal] estimate_grid must be [nx, ny], got {eg!r}")

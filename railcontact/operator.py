@@ -20,7 +20,7 @@ Backends
 from __future__ import annotations
 
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -42,6 +42,11 @@ except ImportError:  # pragma: no cover
 BACKENDS = ("auto", "pyfftw", "scipy", "dense")
 DENSE_MAX = 144
 """Largest grid (elements) on which ``"auto"`` uses the dense product."""
+PRECONDITIONER_FLOOR = 1e-2
+"""Eigenvalues of the circulant kernel below this fraction of the largest are raised to it
+(:meth:`InfluenceOperator.preconditioner`). Stretched elements (dx != dy) give eigenvalues
+down to about -0.008 of the largest; with 1e-2 the preconditioned matrix M A has a
+condition number of 2-4 on square and 1:4 elements (1e-3 and 3e-2 give up to 9)."""
 
 _local = threading.local()
 
@@ -154,6 +159,7 @@ class InfluenceOperator:
         self.kernels = kernels  # (nc, nc, 2nx-1, 2ny-1)
         nx, ny = self.nx, self.ny
         self._padded = (2 * nx, 2 * ny)
+        self._inverse: dict[float, np.ndarray] = {}
         if self.backend == "dense":
             self._matrix = self.dense()
         else:
@@ -187,13 +193,50 @@ class InfluenceOperator:
                                    f"{np.shape(traction)}")
         if self.backend == "dense":
             u = (self._matrix @ p.reshape(-1)).reshape(nc, self.nx, self.ny)
-        elif self.backend == "pyfftw":
-            u = self._apply_fftw(p)
         else:
-            u = self._apply_scipy(p)
+            u = self._convolve(self._spectra, p)
         return u[0] if single else u
 
-    def _apply_fftw(self, p: np.ndarray) -> np.ndarray:
+    def preconditioner(self, floor: float = PRECONDITIONER_FLOOR
+                       ) -> Callable[[np.ndarray], np.ndarray]:
+        """An approximate inverse of a one-component operator, applied by FFT.
+
+        The padded DC-FFT kernel is a circulant matrix; the reciprocal of its spectrum is
+        the inverse of that periodic problem, an approximate inverse of the influence
+        matrix (the role of CONTACT's FFT preconditioner, Vollebregt, JCP 257A, 2014). The
+        half-space kernel falls off as 1/r, so its spectrum grows towards low wave numbers
+        as 1/|k|; its inverse multiplies pressure errors by |k|, which is what the
+        conjugate gradients lack for element-scale errors. The circulant embedding of the
+        (positive definite) Toeplitz matrix can have a few tiny or slightly negative
+        eigenvalues; they are floored at ``floor`` times the largest one.
+
+        Returns ``M(r)``: residual [m] on the grid -> pressure-like correction [Pa].
+        """
+        if len(self.components) != 1:
+            raise RailContactError("the FFT preconditioner is for one-component operators")
+        inverse = self._inverse.get(floor)
+        if inverse is None:
+            spec = np.fft.rfft2(_wraparound(self.kernels[0, 0], self.nx, self.ny)).real
+            spec = np.maximum(spec, floor * spec.max())
+            # scaled as _spectra: the 1/N of the inverse transform folded in
+            inverse = self._inverse[floor] = (1.0 / (spec * 4 * self.nx * self.ny))[None, None]
+
+        def apply(residual: np.ndarray) -> np.ndarray:
+            return self._convolve(inverse, np.asarray(residual, dtype=float)[None])[0]
+
+        return apply
+
+    def _convolve(self, spectra: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Linear convolution of ``p`` (nc, nx, ny) with kernels given by their padded
+        spectra (nc, nc, 2nx, ny+1), scaled by 1/(4 nx ny)."""
+        if self.backend == "pyfftw":
+            return self._convolve_fftw(spectra, p)
+        nx, ny = self.nx, self.ny
+        spec = scipy.fft.rfft2(p, s=self._padded, workers=1)  # (nc, 2nx, ny+1)
+        prod = np.einsum("abij,bij->aij", spectra, spec)
+        return scipy.fft.irfft2(prod, s=self._padded, workers=1)[:, :nx, :ny] * (4 * nx * ny)
+
+    def _convolve_fftw(self, spectra: np.ndarray, p: np.ndarray) -> np.ndarray:
         nc = p.shape[0]
         plan = _fftw_plan(nc, self._padded)
         nx, ny = self.nx, self.ny
@@ -201,18 +244,12 @@ class InfluenceOperator:
         plan.forward.execute()
         spec, out, tmp = plan.spec_out, plan.spec_in, plan.spec_tmp
         for a in range(nc):
-            np.multiply(self._spectra[a, 0], spec[0], out=out[a])
+            np.multiply(spectra[a, 0], spec[0], out=out[a])
             for b in range(1, nc):
-                np.multiply(self._spectra[a, b], spec[b], out=tmp)
+                np.multiply(spectra[a, b], spec[b], out=tmp)
                 out[a] += tmp
         plan.backward.execute()
         return plan.real_out[:, :nx, :ny].copy()
-
-    def _apply_scipy(self, p: np.ndarray) -> np.ndarray:
-        nx, ny = self.nx, self.ny
-        spec = scipy.fft.rfft2(p, s=self._padded, workers=1)  # (nc, 2nx, ny+1)
-        prod = np.einsum("abij,bij->aij", self._spectra, spec)
-        return scipy.fft.irfft2(prod, s=self._padded, workers=1)[:, :nx, :ny] * (4 * nx * ny)
 
     def dense(self) -> np.ndarray:
         """The full influence matrix (nc*nx*ny, nc*nx*ny) [m/Pa] (for tests and tiny grids)."""

@@ -225,7 +225,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds, gspec: dict
         p0 = estimate_of(grid)
         res = solve_normal(gap_of(grid), grid, op, initial_pressure=p0,
                            tolerance=nspec["tolerance"], max_iterations=nspec["max_iterations"],
-                           **control)
+                           preconditioner=nspec.get("preconditioner", "fft"), **control)
         if not res.touches_boundary:
             return res
         if not automatic:

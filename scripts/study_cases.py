@@ -7,7 +7,8 @@ displacements -2, 0 and 7.78 mm. As in the paper, the vertical approach that car
 Normal (Fig. 4, 5): the initial estimates Hertz, KP and INFCON on the BEM grid against the
 converged BEM (eps_n = 1e-9): contact outlines, pressure across the patch (lateral, at the
 element row nearest x = 0), and the BEM's convergence history (eps_n = 1e-3) from none /
-Hertz / KP / INFCON.
+Hertz / KP / INFCON, with railcontact's solver (Polonsky–Keer CG with the FFT
+preconditioner) and with the paper's plain Polonsky–Keer CG.
 
 Tangential (Fig. 13, 14), at -2 mm with the three creepage cases of the paper's Table 5
 (xi = eta = c, phi = c /mm with c = 0.5e-4, 2e-4, 5e-4), mu = 0.4: FASTSIM and FaStrip
@@ -28,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import itertools
 import math
 from pathlib import Path
 
@@ -48,6 +50,7 @@ LOAD = 83.3e3
 CASES_MM = (-2.0, 0.0, 7.78)
 NORMAL_ESTIMATES = ("none", "hertz", "kp", "infcon")
 TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
+SOLVERS = {"fft": "runs", "none": "runs_pk"}  # normal preconditioner -> key of its runs
 FRICTION = 0.4
 CREEP = {"case1": 0.5e-4, "case2": 2e-4, "case3": 5e-4}
 TANGENTIAL_DY_MM = -2.0
@@ -58,11 +61,12 @@ COLOURS = {"none": "0.5", "hertz": "tab:red", "kp": "tab:orange", "infcon": "tab
            "bem": "k", "fastsim": "tab:red", "fastrip": "tab:blue"}
 
 
-def penetration_case(dy: float, approach: float, tolerance: float, estimate: str) -> dict:
+def penetration_case(dy: float, approach: float, tolerance: float, estimate: str,
+                     preconditioner: str = "fft") -> dict:
     c = copy.deepcopy(BASE)
     c["geometry"]["lateral_displacement"] = dy
     c["normal"] = {"penetration": approach, "tolerance": tolerance, "estimate": estimate,
-                   "max_iterations": 2000}
+                   "max_iterations": 2000, "preconditioner": preconditioner}
     return c
 
 
@@ -87,21 +91,21 @@ def normal_case(dy: float) -> dict:
     for rp in ref.patches:
         cp, grid = rp.geometry, rp.normal.grid
         control = {"penetration": cp.normal_penetration(approach)}
-        patch = {"reference": rp, "estimates": {}, "runs": {}}
+        patch = {"reference": rp, "estimates": {}, "runs": {}, "runs_pk": {}}
         for est in NORMAL_ESTIMATES[1:]:
             nspec = dict(ref.case["normal"], estimate=est)
             p0 = normal_estimate(nspec, rp.hertz, cp.s, cp.f, cp.a_of_s, pair, control)(grid)
             patch["estimates"][est] = np.clip(p0, 0.0, None)
         out["patches"].append(patch)
-    for est in NORMAL_ESTIMATES:
-        sol = rc.solve(penetration_case(dy, approach, 1e-3, est))
+    for est, (pre, runs) in itertools.product(NORMAL_ESTIMATES, SOLVERS.items()):
+        sol = rc.solve(penetration_case(dy, approach, 1e-3, est, pre))
         if len(sol.patches) != len(ref.patches):
             raise rc.RailContactError(f"{dy * MM:+.2f} mm: patch count depends on the estimate")
         for patch, sp in zip(out["patches"], sol.patches, strict=True):
             if sp.normal.grid.shape != patch["reference"].normal.grid.shape or not np.allclose(
                     sp.normal.grid.bounds, patch["reference"].normal.grid.bounds):
                 raise rc.RailContactError("the potential area depends on the estimate")
-            patch["runs"][est] = sp.normal
+            patch[runs][est] = sp.normal
     return out
 
 
@@ -184,6 +188,10 @@ def plot_normal(cases: list[dict], path: Path) -> None:
         a1.grid(alpha=0.3)
         a1.legend(fontsize=7)
         plot_histories(a2, patch["runs"], 1e-3, "iteration", "eps_n (relative pressure change)")
+        for est, run in patch["runs_pk"].items():
+            h = np.asarray(run.history)
+            a2.semilogy(np.arange(1, len(h) + 1), h, ":", lw=0.9, color=COLOURS[est])
+        a2.set_title("solid: PK CG + FFT preconditioner; dotted: plain PK CG", fontsize=8)
     fig.suptitle("Normal estimates against the BEM (paper Fig. 4) and the BEM's convergence "
                  "from each (Fig. 5)", fontsize=11)
     fig.tight_layout()
@@ -243,9 +251,9 @@ def main() -> None:
 
     print("normal, penetration control (approach for 83.3 kN), eps_n = 1e-3: iterations, "
           "and each estimate's error against the converged BEM")
-    print("| dy [mm] | patch | contact angle [deg] | none | Hertz | KP | INFCON | paper | "
-          "Hertz set / L1 % | KP set / L1 % | INFCON set / L1 % |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| dy [mm] | patch | contact angle [deg] | none | Hertz | KP | INFCON | plain PK CG "
+          "| paper | Hertz set / L1 % | KP set / L1 % | INFCON set / L1 % |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     cases = []
     for dy_mm in CASES_MM:
         case = normal_case(dy_mm * 1e-3)
@@ -253,16 +261,20 @@ def main() -> None:
         for k, patch in enumerate(case["patches"]):
             rp = patch["reference"].normal
             its = [patch["runs"][e].iterations for e in NORMAL_ESTIMATES]
+            its_pk = [patch["runs_pk"][e].iterations for e in NORMAL_ESTIMATES]
             errs = {e: (set_error(p0 > 0, rp.contact), l1_error(p0, rp.pressure))
                     for e, p0 in patch["estimates"].items()}
             paper = PAPER_NORMAL.get(dy_mm)
             angle = math.degrees(patch["reference"].geometry.contact_angle)
             print(f"| {dy_mm:+.2f} | {k} | {angle:.1f} | " + " | ".join(map(str, its))
-                  + f" | {' / '.join(map(str, paper)) if paper else '-'} | "
+                  + f" | {' / '.join(map(str, its_pk))}"
+                  + f" | {' / '.join(map(str, paper)) if paper else 'Hertz > none'} | "
                   + " | ".join(f"{s:.1f} / {e:.1f}" for s, e in errs.values()) + " |")
             row = {"problem": "normal", "dy_mm": dy_mm, "patch": k, "case": "",
                    "approach_m": case["approach"], "contact_angle_deg": angle}
             row.update({f"its_{e}": n for e, n in zip(NORMAL_ESTIMATES, its, strict=True)})
+            row.update({f"its_pk_{e}": n for e, n in zip(NORMAL_ESTIMATES, its_pk,
+                                                         strict=True)})
             for e, (s, l1) in errs.items():
                 row[f"set_{e}_pct"], row[f"l1_{e}_pct"] = s, l1
             rows.append(row)

@@ -116,6 +116,47 @@ def test_hertz_estimate_cuts_iterations_on_paper_case():
     assert warm.force == pytest.approx(cold.force, rel=2e-3)
 
 
+@pytest.mark.parametrize("control", ["load", "penetration"])
+def test_preconditioned_and_plain_cg_reach_the_same_hertz_solution(control):
+    """The FFT preconditioner changes the path, not the solution: both solvers give Hertz's
+    force, peak pressure and semi-axes within 1 % on 45 x 45 elements, and agree with each
+    other to the tolerance."""
+    A, B = curvatures(2.0)
+    hz = hertz(A, B, PAIR, load=50e3)
+    kw = {"load": hz.load} if control == "load" else {"penetration": hz.penetration}
+    runs = {}
+    for pre in ("fft", "none"):
+        g, res = solve_on_box(A, B, hz, 45, preconditioner=pre, **kw)
+        assert res.converged, res.message
+        errs = errors(g, res, hz)
+        for key in ("force", "max_pressure", "a", "b"):
+            assert errs[key] < 0.01, (pre, key, errs)
+        runs[pre] = res
+    assert np.array_equal(runs["fft"].contact, runs["none"].contact)
+    assert np.max(np.abs(runs["fft"].pressure - runs["none"].pressure)) < \
+        1e-6 * hz.max_pressure
+    assert runs["fft"].iterations < runs["none"].iterations
+
+
+def test_fft_preconditioner_is_spd_and_conditions_the_influence_matrix():
+    """M (the reciprocal spectrum of the circulant kernel) is symmetric positive definite and
+    M A has a much smaller spread of eigenvalues than A: the half-space operator damps
+    element-scale pressure modes (eigenvalues ~ 1/|k|), M amplifies them (~ |k|)."""
+    g = Grid.from_bounds(-1e-3, 1e-3, -1.5e-3, 1.5e-3, 12, 16)
+    op = influence_operator(g, PAIR, "z", "dense")
+    A = op.dense()
+    apply = op.preconditioner()
+    M = np.column_stack([apply(e.reshape(g.shape)).ravel() for e in np.eye(g.size)])
+    assert np.allclose(M, M.T, rtol=1e-9, atol=1e-9 * np.abs(M).max())
+    assert np.linalg.eigvalsh(0.5 * (M + M.T)).min() > 0
+    lam_a = np.linalg.eigvalsh(A)
+    lam_ma = np.sort(np.linalg.eigvals(M @ A).real)  # similar to M^1/2 A M^1/2: real, > 0
+    assert lam_ma.min() > 0
+    cond_a, cond_ma = lam_a.max() / lam_a.min(), lam_ma.max() / lam_ma.min()
+    print(f"condition number: A {cond_a:.1f}, M A {cond_ma:.2f}")
+    assert cond_ma < 3.0 and cond_ma < cond_a / 5
+
+
 def test_no_contact_and_zero_load():
     g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 8, 8)
     X, Y = g.mesh()
@@ -154,6 +195,7 @@ def test_nonconvergence_is_reported():
     (dict(load=1.0, max_iterations=0), "max_iterations"),
     (dict(load=1.0, initial_pressure=np.zeros((3, 3))), "initial_pressure"),
     (dict(load=1.0, initial_pressure=np.full((8, 8), np.nan)), "NaN"),
+    (dict(load=1.0, preconditioner="jacobi"), "preconditioner"),
 ])
 def test_bad_input(kwargs, match):
     g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 8, 8)
