@@ -90,6 +90,16 @@ def _wraparound(kernel: np.ndarray, nx: int, ny: int) -> np.ndarray:
     return k
 
 
+def _scaled_spectra(kernels: np.ndarray) -> np.ndarray:
+    """Spectra (nc, nc, 2nx, ny+1) of the wrapped-around kernels, with the 1/N of the inverse
+    transform folded in (FFTW does not scale)."""
+    nc, _, mx, my = kernels.shape
+    nx, ny = (mx + 1) // 2, (my + 1) // 2
+    wrapped = np.stack([[_wraparound(kernels[a, b], nx, ny) for b in range(nc)]
+                        for a in range(nc)])
+    return np.fft.rfft2(wrapped) / (4 * nx * ny)
+
+
 def _dense_matrix(kernel: np.ndarray, nx: int, ny: int) -> np.ndarray:
     """Full (nx*ny, nx*ny) matrix A[I, J] = kernel[I - J] (row-major element order)."""
     i = np.arange(nx)
@@ -163,10 +173,7 @@ class InfluenceOperator:
         if self.backend == "dense":
             self._matrix = self.dense()
         else:
-            wrapped = np.stack([[_wraparound(self.kernels[a, b], nx, ny) for b in range(nc)]
-                                for a in range(nc)])
-            # 1/N of the inverse transform folded into the spectra (FFTW does not scale).
-            self._spectra = np.fft.rfft2(wrapped) / (4 * nx * ny)
+            self._spectra = _scaled_spectra(self.kernels)
             if self.backend == "pyfftw":
                 _fftw_plan(nc, self._padded)  # plan now, not inside the first solve
 
@@ -216,10 +223,11 @@ class InfluenceOperator:
             raise RailContactError("the FFT preconditioner is for one-component operators")
         inverse = self._inverse.get(floor)
         if inverse is None:
-            spec = np.fft.rfft2(_wraparound(self.kernels[0, 0], self.nx, self.ny)).real
-            spec = np.maximum(spec, floor * spec.max())
-            # scaled as _spectra: the 1/N of the inverse transform folded in
-            inverse = self._inverse[floor] = (1.0 / (spec * 4 * self.nx * self.ny))[None, None]
+            spec = self._spectra if self.backend != "dense" else _scaled_spectra(self.kernels)
+            spec = spec.real  # the kernel is even: its spectrum is real
+            inverse = self._inverse[floor] = 1.0 / np.maximum(spec, floor * spec.max())
+            # _convolve folds 1/N into the spectra, so the inverse gets 1/N^2 of its own
+            inverse /= (4 * self.nx * self.ny) ** 2
 
         def apply(residual: np.ndarray) -> np.ndarray:
             return self._convolve(inverse, np.asarray(residual, dtype=float)[None])[0]
