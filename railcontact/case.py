@@ -24,7 +24,8 @@ Schema (keys not listed here are rejected, so that a typo never goes unnoticed):
     wheel_radius = 0.46   # nominal rolling radius [m]
     lateral_displacement = -0.002  # wheelset, positive to the left [m]
     yaw = 0.0             # [rad]
-    roll = 0.0            # [rad]
+    roll = 0.0            # [rad], or "rigid" (both wheels touch their rails) or
+                          # "equal-loads" (both wheels carry [normal] load; Manchester)
     side = "left"         # "left" | "right" | "both"
     # with wheel-rail, [normal] load is the vertical wheel load [N] and penetration the
     # vertical approach of the wheel [m]
@@ -81,13 +82,14 @@ NORMAL_ESTIMATES = ("none", "hertz", "kp", "infcon")
 TANGENTIAL_MODELS = ("bem", "fastsim", "fastrip")
 TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
 GEOMETRY_TYPES = ("quadratic", "wheel-rail")
+ROLL_MODES = ("rigid", "equal-loads")
 
 _SCHEMA: dict[str, dict[str, str]] = {
     "material": {"young": "Young's modulus [Pa]", "poisson": "Poisson's ratio [-]"},
     "geometry": {"type": "geometry type", "A": "curvature [1/m]", "B": "curvature [1/m]",
                  "wheel": "profile", "rail": "profile", "inclination": "rad",
                  "gauge": "m", "back_to_back": "m", "wheel_radius": "m",
-                 "lateral_displacement": "m", "yaw": "rad", "roll": "rad", "side": "side",
+                 "lateral_displacement": "m", "yaw": "rad", "roll": "rad or mode", "side": "side",
                  "profile_unit": "unit of profile files", "gauge_depth": "m",
                  "flange_back": "m"},
     "grid": {"nx": "element count", "ny": "element count", "dx": "element size [m]",
@@ -241,6 +243,9 @@ def validate_case(case: dict[str, Any]) -> dict[str, Any]:
         raise CaseError(f"[normal] estimate_grid must be [nx, ny], got {eg!r}")
     nor["estimate_grid"] = [_integer("normal", f"estimate_grid[{i}]", v, 4)
                             for i, v in enumerate(eg)]
+    if geo.get("roll") == "equal-loads" and not has_load:
+        raise CaseError("[geometry] roll = 'equal-loads' needs [normal] load (the load of each "
+                        "wheel [N]); with a penetration use roll = 'rigid' or a number")
     if "tangential" in c:
         _validate_tangential(c["tangential"])
     c.setdefault("name", "case")
@@ -262,8 +267,13 @@ def _validate_wheel_rail(geo: dict[str, Any]) -> None:
     for key, val in defaults.items():
         geo[key] = _number("geometry", key, geo.get(key, val),
                            positive=key not in ("inclination", "flange_back"))
-    for key in ("lateral_displacement", "yaw", "roll"):
+    for key in ("lateral_displacement", "yaw"):
         geo[key] = _number("geometry", key, geo.get(key, 0.0), positive=False)
+    roll = geo.get("roll", 0.0)
+    if isinstance(roll, str):
+        geo["roll"] = _choice("geometry", "roll", roll, ROLL_MODES)
+    else:
+        geo["roll"] = _number("geometry", "roll", roll, positive=False)
     geo["side"] = _choice("geometry", "side", geo.get("side", "left"),
                           ("left", "right", "both"))
     geo["profile_unit"] = _choice("geometry", "profile_unit", geo.get("profile_unit", "mm"),

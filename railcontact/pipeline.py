@@ -98,15 +98,23 @@ class PatchSolution:
 
 @dataclass
 class Solution:
-    """The solution of a case: one entry per contact patch."""
+    """The solution of a case: one entry per contact patch.
+
+    ``roll`` [rad] is the wheelset roll the wheel-rail patches were solved at (resolved
+    when the case gives ``roll = "rigid"`` or ``"equal-loads"``); None for a quadratic case.
+    """
 
     case: dict[str, Any]
     patches: list[PatchSolution] = field(default_factory=list)
+    roll: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (SI units)."""
-        return {"name": self.case.get("name", "case"),
-                "patches": [p.to_dict() for p in self.patches]}
+        d: dict[str, Any] = {"name": self.case.get("name", "case")}
+        if self.roll is not None:
+            d["roll"] = self.roll
+        d["patches"] = [p.to_dict() for p in self.patches]
+        return d
 
 
 def elastic_pair(material: dict[str, Any]) -> ElasticPair:
@@ -179,14 +187,15 @@ def solve(case: dict[str, Any] | str | Path) -> Solution:
     if case["geometry"]["type"] == "wheel-rail":
         from .wheelrail import solve_wheel_rail
 
-        patches = solve_wheel_rail(case, pair)
+        patches, pose = solve_wheel_rail(case, pair)
+        roll = pose.roll
     else:
-        patches = [_solve_quadratic(case, pair)]
+        patches, roll = [_solve_quadratic(case, pair)], None
     if "tangential" in case:
         for patch in patches:
             if patch.normal.force > 0:
                 solve_patch_tangential(patch, case["tangential"], pair, case["normal"]["fft"])
-    return Solution(case=case, patches=patches)
+    return Solution(case=case, patches=patches, roll=roll)
 
 
 def normal_estimate(nspec: dict[str, Any], hz: HertzSolution | None, s: np.ndarray,

@@ -9,6 +9,13 @@ vertical components of the patches' normal forces add up to Q, ``sum N_k cos(gam
 in one solve, started from Hertz's penetration when an estimate is asked for; several
 patches: a secant iteration on the approach from Hertz's value.
 
+``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
+wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or
+``"equal-loads"`` (both wheels carry ``[normal] load``, as in the Manchester benchmark): a
+fixed point on the roll, each pass solving both wheels by the BEM and putting the difference
+of their vertical approaches into :func:`~railcontact.geometry.roll.contact_roll`, until the
+roll changes by less than :data:`ROLL_TOL`.
+
 The potential contact area of a patch follows the paper (Sec. 2.1): ``A x^2 <= delta_0``
 along the track and ``f(s) <= delta_0`` across it (``delta_0`` the patch's normal
 penetration), scaled by ``[grid] margin`` and grown when the contact reaches its edge.
@@ -23,6 +30,7 @@ from typing import Any
 from .errors import CaseError, RailContactError
 from .geometry.contact import ContactPoint, contact_points
 from .geometry.profiles import read_profile
+from .geometry.roll import contact_roll
 from .geometry.track import Pose, Track, Wheelset
 from .grid import Grid
 from .hertz import HertzSolution, hertz
@@ -33,17 +41,27 @@ EstimateFor = Callable[[ContactPoint, HertzSolution, dict[str, float]],
                        Callable[[Grid], Any]]
 LOAD_RTOL = 1e-6
 MAX_SECANT = 30
+ROLL_TOL = 1e-8
+"""Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
+MAX_ROLL_PASSES = 8
 
 
 def build_geometry(geo: dict[str, Any]) -> tuple[Track, Wheelset, Pose]:
-    """Track, wheelset and pose from a validated ``[geometry]`` table."""
+    """Track, wheelset and pose from a validated ``[geometry]`` table.
+
+    A roll given as ``"rigid"`` or ``"equal-loads"`` is returned as the rigid contact roll
+    (the start of the equal-loads iteration).
+    """
     unit = geo["profile_unit"]
     try:
         track = Track(read_profile(geo["rail"], "rail", unit), geo["inclination"], geo["gauge"],
                       geo["gauge_depth"])
         ws = Wheelset(read_profile(geo["wheel"], "wheel", unit), geo["wheel_radius"],
                       geo["back_to_back"], geo["flange_back"])
-        pose = Pose(geo["lateral_displacement"], geo["yaw"], geo["roll"])
+        roll = geo["roll"]
+        if isinstance(roll, str):
+            roll = contact_roll(track, ws, geo["lateral_displacement"], geo["yaw"])
+        pose = Pose(geo["lateral_displacement"], geo["yaw"], roll)
     except RailContactError as exc:
         raise CaseError(f"[geometry]: {exc}") from None
     return track, ws, pose
@@ -134,8 +152,49 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, case: dict[st
     return ps1
 
 
-def solve_wheel_rail(case: dict[str, Any], pair: ElasticPair) -> list[PatchSolution]:
-    """All contact patches of the case's wheel(s), each with its BEM normal solution."""
+def _approach(patches: list[PatchSolution]) -> float:
+    """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
+    if not patches:
+        return 0.0
+    p = min(patches, key=lambda q: q.geometry.gap)
+    return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
+
+
+def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str],
+                 case: dict[str, Any], pair: ElasticPair) -> dict[str, list[PatchSolution]]:
+    out = {}
+    for side in sides:
+        try:
+            out[side] = solve_wheel(track, ws, pose, side, case, pair)
+        except RailContactError as exc:
+            if isinstance(exc, CaseError):
+                raise
+            raise CaseError(f"{side} wheel: {exc}") from None
+    return out
+
+
+def _equal_loads(track: Track, ws: Wheelset, pose: Pose, case: dict[str, Any],
+                 pair: ElasticPair) -> tuple[Pose, dict[str, list[PatchSolution]]]:
+    """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions."""
+    for _ in range(MAX_ROLL_PASSES):
+        per_side = _solve_sides(track, ws, pose, ["left", "right"], case, pair)
+        offset = _approach(per_side["right"]) - _approach(per_side["left"])
+        try:
+            roll = contact_roll(track, ws, pose.lateral, pose.yaw, offset)
+        except RailContactError as exc:
+            raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
+        if abs(roll - pose.roll) <= ROLL_TOL:
+            return pose, per_side
+        pose = Pose(pose.lateral, pose.yaw, roll)
+    raise CaseError(f"[geometry] roll = 'equal-loads' did not converge in {MAX_ROLL_PASSES} "
+                    f"passes (last change {abs(roll - pose.roll):.3g} rad)")
+
+
+def solve_wheel_rail(case: dict[str, Any], pair: ElasticPair
+                     ) -> tuple[list[PatchSolution], Pose]:
+    """All contact patches of the case's wheel(s), each with its BEM normal solution, and
+    the wheelset pose they were solved at (its roll resolved when the case asks for
+    ``"rigid"`` or ``"equal-loads"``)."""
     geo, gspec = case["geometry"], case["grid"]
     if "x" in gspec or "y" in gspec:
         raise CaseError("[grid] x and y are for quadratic cases; a wheel-rail case sets the "
@@ -143,12 +202,8 @@ def solve_wheel_rail(case: dict[str, Any], pair: ElasticPair) -> list[PatchSolut
                         "dx/dy)")
     track, ws, pose = build_geometry(geo)
     sides = ["left", "right"] if geo["side"] == "both" else [geo["side"]]
-    patches: list[PatchSolution] = []
-    for side in sides:
-        try:
-            patches += solve_wheel(track, ws, pose, side, case, pair)
-        except RailContactError as exc:
-            if isinstance(exc, CaseError):
-                raise
-            raise CaseError(f"{side} wheel: {exc}") from None
-    return patches
+    if geo["roll"] == "equal-loads":
+        pose, per_side = _equal_loads(track, ws, pose, case, pair)
+    else:
+        per_side = _solve_sides(track, ws, pose, sides, case, pair)
+    return [p for side in sides for p in per_side[side]], pose

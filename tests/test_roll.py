@@ -1,0 +1,121 @@
+"""Wheelset roll: rigid contact on both rails and the Manchester benchmark's equal loads."""
+
+import math
+from pathlib import Path
+
+import pytest
+
+import railcontact as rc
+from railcontact import CaseError
+from railcontact.geometry.contact import contact_points
+from railcontact.geometry.profiles import builtin_profile, read_profile
+from railcontact.geometry.roll import contact_roll, first_contact_gap
+from railcontact.geometry.track import Pose, Track, Wheelset
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "profiles"
+needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/profiles not present")
+
+# Roll angles [rad] of the Manchester benchmark case A-2.2 (10 kN per wheel, yaw 2.4 y mrad),
+# solved by CONTACT for equal wheel loads: CONTACT examples/mbench_a22_left.inp, lateral
+# shift [mm] -> roll in CONTACT's sign (left side down positive); ours is the opposite.
+CONTACT_A22_ROLL = {2.0: -0.00011280, 4.5: -0.00029770, 8.0: -0.00860600,
+                    10.0: -0.01126431}
+
+
+@pytest.fixture(scope="module")
+def s1002_60e1():
+    return Track(builtin_profile("60E1")), Wheelset(builtin_profile("S1002"))
+
+
+def test_centred_wheelset_does_not_roll(s1002_60e1):
+    track, ws = s1002_60e1
+    assert abs(contact_roll(track, ws, 0.0)) < 1e-9
+
+
+def test_roll_is_odd_in_the_lateral_displacement(s1002_60e1):
+    track, ws = s1002_60e1
+    for y in (2e-3, 7e-3):
+        assert contact_roll(track, ws, -y) == pytest.approx(-contact_roll(track, ws, y),
+                                                            rel=1e-6)
+
+
+def test_rigid_roll_closes_the_loop_through_both_contact_points(s1002_60e1):
+    """Both wheels touch: the rolled axle reaches both contact points. With the contact
+    points P_s (track frame) at rolling radius r_s and axial position eta_s, the axle
+    centre is at P_s + (0, -s eta_s cos phi, r_s) rotated, so for small phi:
+    phi (eta_L + eta_R) = (r_L - r_R) + (Z_L - Z_R)."""
+    track, ws = s1002_60e1
+    y = 3e-3
+    phi = contact_roll(track, ws, y)
+    pose = Pose(y, 0.0, phi)
+    left, right = (contact_points(track, ws, pose, side)[0] for side in ("left", "right"))
+    assert first_contact_gap(track, ws, pose, "left") == pytest.approx(
+        first_contact_gap(track, ws, pose, "right"), abs=1e-10)
+    eta_l = float(ws.axial_position(left.wheel_s))
+    eta_r = float(ws.axial_position(right.wheel_s))
+    lhs = phi * (eta_l + eta_r)
+    rhs = (left.rolling_radius - right.rolling_radius) + (left.position[2] - right.position[2])
+    assert phi > 0  # the left wheel runs on the larger radius: the left side rises
+    assert lhs == pytest.approx(rhs, rel=1e-3)
+
+
+def _a22(shift_mm: float, roll) -> dict:
+    return {
+        "material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
+        "geometry": {"type": "wheel-rail", "wheel": str(SHARED / "MBench_S1002_v3.prw"),
+                     "rail": str(SHARED / "MBench_UIC60_v3.prr"), "inclination": 0.0,
+                     "lateral_displacement": shift_mm * 1e-3, "yaw": 2.4e-3 * shift_mm,
+                     "side": "both", "roll": roll},
+        "grid": {"nx": 40, "ny": 40},
+        "normal": {"load": 10e3, "tolerance": 1e-4},
+    }
+
+
+@needs_shared
+@pytest.mark.parametrize("shift_mm", sorted(CONTACT_A22_ROLL))
+def test_equal_loads_roll_against_contact_manchester_a22(shift_mm):
+    """Tread (2, 4.5 mm) and flange (8, 10 mm) contact: CONTACT's roll within 0.5 %.
+    The rigid roll is further off: the elastic approaches differ between the wheels."""
+    ref = -CONTACT_A22_ROLL[shift_mm]
+    sol = rc.solve(_a22(shift_mm, "equal-loads"))
+    assert sol.roll == pytest.approx(ref, rel=5e-3)
+    rigid = rc.solve(_a22(shift_mm, "rigid")).roll
+    assert abs(rigid - ref) > abs(sol.roll - ref)
+    for side in ("left", "right"):  # each wheel carries 10 kN
+        fz = sum(p.normal.force * math.cos(p.geometry.contact_angle)
+                 for p in sol.patches if p.geometry.side == side)
+        assert fz == pytest.approx(10e3, rel=1e-5)
+
+
+@needs_shared
+def test_equal_loads_wheelset_is_one_rigid_body():
+    """Lowered by one vertical distance, the wheels reach their approaches together (to
+    50 nm, 0.1 % of the approaches: the roll is converged to 1e-8 rad)."""
+    case = _a22(6.0, "equal-loads")
+    sol = rc.solve(case)
+    track = Track(read_profile(case["geometry"]["rail"], "rail"), 0.0)
+    ws = Wheelset(read_profile(case["geometry"]["wheel"], "wheel"))
+    pose = Pose(6e-3, 2.4e-3 * 6.0, sol.roll)
+    lowered = []
+    for side in ("left", "right"):
+        p = min((q for q in sol.patches if q.geometry.side == side),
+                key=lambda q: q.geometry.gap)
+        approach = p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
+        lowered.append(approach + first_contact_gap(track, ws, pose, side))
+    assert lowered[0] == pytest.approx(lowered[1], abs=5e-8)
+
+
+def test_roll_modes_in_case_and_json(tmp_path):
+    base = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "lateral_displacement": 3e-3, "roll": "rigid"},
+            "grid": {"nx": 24, "ny": 24}, "normal": {"penetration": 5e-5}}
+    sol = rc.solve(base)
+    track, ws = Track(builtin_profile("60E1")), Wheelset(builtin_profile("S1002"))
+    assert sol.roll == pytest.approx(contact_roll(track, ws, 3e-3), abs=1e-12)
+    assert sol.to_dict()["roll"] == sol.roll
+    bad = {**base, "geometry": {**base["geometry"], "roll": "equal-loads"}}
+    with pytest.raises(CaseError, match="needs \\[normal\\] load"):
+        rc.solve(bad)
+    bad["geometry"]["roll"] = "level"
+    with pytest.raises(CaseError, match="roll must be one of"):
+        rc.solve(bad)
