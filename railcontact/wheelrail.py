@@ -14,7 +14,8 @@ wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or
 ``"equal-loads"`` (both wheels carry ``[normal] load``, as in the Manchester benchmark): a
 fixed point on the roll, each pass solving both wheels by the BEM and putting the difference
 of their vertical approaches into :func:`~railcontact.geometry.roll.contact_roll`, until the
-roll changes by less than :data:`ROLL_TOL`.
+roll changes by less than :data:`ROLL_TOL` (Brent's method once two passes bracket the
+root, see :func:`_equal_loads`).
 
 The potential contact area of a patch follows the paper (Sec. 2.1): ``A x^2 <= delta_0``
 along the track and ``f(s) <= delta_0`` across it (``delta_0`` the patch's normal
@@ -27,10 +28,12 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from scipy.optimize import brentq
+
 from .errors import CaseError, RailContactError
 from .geometry.contact import ContactPoint, contact_points
 from .geometry.profiles import read_profile
-from .geometry.roll import contact_roll
+from .geometry.roll import contact_roll, first_contact_gap
 from .geometry.track import Pose, Track, Wheelset
 from .grid import Grid
 from .hertz import HertzSolution, hertz
@@ -43,7 +46,7 @@ LOAD_RTOL = 1e-6
 MAX_SECANT = 30
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
-MAX_ROLL_PASSES = 8
+MAX_ROLL_PASSES = 16
 
 
 def build_geometry(geo: dict[str, Any]) -> tuple[Track, Wheelset, Pose]:
@@ -175,19 +178,62 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str],
 
 def _equal_loads(track: Track, ws: Wheelset, pose: Pose, case: dict[str, Any],
                  pair: ElasticPair) -> tuple[Pose, dict[str, list[PatchSolution]]]:
-    """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions."""
-    for _ in range(MAX_ROLL_PASSES):
-        per_side = _solve_sides(track, ws, pose, ["left", "right"], case, pair)
-        offset = _approach(per_side["right"]) - _approach(per_side["left"])
-        try:
-            roll = contact_roll(track, ws, pose.lateral, pose.yaw, offset)
-        except RailContactError as exc:
-            raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
-        if abs(roll - pose.roll) <= ROLL_TOL:
-            return pose, per_side
-        pose = Pose(pose.lateral, pose.yaw, roll)
-    raise CaseError(f"[geometry] roll = 'equal-loads' did not converge in {MAX_ROLL_PASSES} "
-                    f"passes (last change {abs(roll - pose.roll):.3g} rad)")
+    """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions.
+
+    The residual ``F(phi) = m_left - m_right - (delta_right - delta_left)`` (first-contact
+    gaps minus the difference of the loaded wheels' vertical approaches) is driven to zero by
+    the fixed point ``phi <- contact_roll(offset = delta_right - delta_left)``. Where a wheel
+    switches between tread and flange the approaches jump (a flange carrying the vertical
+    load needs a far larger vertical approach) and the fixed point oscillates, and on a
+    flange it contracts slowly; so a pass takes the secant step on F when that goes
+    further (at most 4 fixed-point steps), and as soon as two passes bracket a sign change
+    of F, Brent's method finishes on the bracket. Where the contact jumps between the
+    flange root and the flange, F itself jumps (one planar patch across the root carries
+    its vertical load at the flange angle); the roll found is then the jump, to
+    :data:`ROLL_TOL`, and the two wheels' vertical positions differ by up to the jump of the
+    approach.
+    """
+    solved: dict[float, dict[str, list[PatchSolution]]] = {}
+
+    def residual(phi: float) -> float:
+        p = Pose(pose.lateral, pose.yaw, phi)
+        per_side = _solve_sides(track, ws, p, ["left", "right"], case, pair)
+        solved[phi] = per_side
+        return (first_contact_gap(track, ws, p, "left") - first_contact_gap(track, ws, p, "right")
+                - _approach(per_side["right"]) + _approach(per_side["left"]))
+
+    def offset(phi: float) -> float:
+        return _approach(solved[phi]["right"]) - _approach(solved[phi]["left"])
+
+    phi = pose.roll
+    f = residual(phi)
+    prev: tuple[float, float] | None = None
+    try:
+        for _ in range(MAX_ROLL_PASSES):
+            new = contact_roll(track, ws, pose.lateral, pose.yaw, offset(phi))
+            step = new - phi
+            if abs(step) <= ROLL_TOL:
+                break
+            if prev is not None and f != prev[1]:  # secant on F, if it goes further
+                secant = -f * (phi - prev[0]) / (f - prev[1])
+                if secant * step > 0:
+                    new = phi + math.copysign(min(max(abs(secant), abs(step)), 4 * abs(step)),
+                                              step)
+            f_new = residual(new)
+            if (f_new > 0) != (f > 0):
+                phi = brentq(residual, min(phi, new), max(phi, new), xtol=ROLL_TOL)
+                if phi not in solved:
+                    residual(phi)
+                break
+            prev, phi, f = (phi, f), new, f_new
+        else:
+            raise CaseError(f"[geometry] roll = 'equal-loads' did not converge in "
+                            f"{MAX_ROLL_PASSES} passes (roll {phi:.6g} rad)")
+    except RailContactError as exc:
+        if isinstance(exc, CaseError):
+            raise
+        raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
+    return Pose(pose.lateral, pose.yaw, phi), solved[phi]
 
 
 def solve_wheel_rail(case: dict[str, Any], pair: ElasticPair

@@ -12,7 +12,12 @@ FASTSIM / FaStrip at eps_tau = 1e-2, mu = 0.4, for the creepages of the paper's 
 count separately. Writes a CSV and a PNG and prints the means beside the paper's
 (normal 13.84 / 14.90 / 5.65 / 4.27; tangential 23.02 / 22.71 / 9.92).
 
-Usage: python scripts/study_sweep.py [--step 0.1] [--control penetration|load] [--out out/]
+The wheelset is not rolled (the paper says nothing of roll); ``--roll equal-loads`` (or
+``rigid``) rolls it as a wheelset on both rails carrying 83.3 kN per wheel (or touching both
+rails), the roll found once per displacement and then held for every solve.
+
+Usage: python scripts/study_sweep.py [--step 0.1] [--control penetration|load]
+                                     [--roll 0|rigid|equal-loads] [--out out/]
 (0.01 mm: 1601 cases)
 """
 
@@ -42,10 +47,21 @@ PAPER = {"normal_none": 13.84, "normal_hertz": 14.90, "normal_kp": 5.65, "normal
          "tangential_none": 23.02, "tangential_fastsim": 22.71, "tangential_fastrip": 9.92}
 
 
-def one_case(dy: float, control: str = "penetration") -> list[dict]:
+def wheelset_roll(dy: float, mode: str) -> float:
+    """Roll [rad] of the wheelset at ``dy`` on both rails: ``mode`` "rigid" or
+    "equal-loads" (83.3 kN per wheel)."""
+    c = copy.deepcopy(CASE)
+    c["geometry"].update(lateral_displacement=dy, side="both", roll=mode)
+    c["normal"]["estimate"] = "infcon"
+    return rc.solve(c).roll
+
+
+def one_case(dy: float, control: str = "penetration", roll: str = "0") -> list[dict]:
     rows = []
     base = copy.deepcopy(CASE)
     base["geometry"]["lateral_displacement"] = dy
+    base["geometry"]["roll"] = float(roll) if roll not in ("rigid", "equal-loads") else \
+        wheelset_roll(dy, roll)
     if control == "penetration":
         nspec = base.pop("normal")
         base["normal"] = {"penetration": approach_for_load(base, nspec["load"]),
@@ -58,7 +74,8 @@ def one_case(dy: float, control: str = "penetration") -> list[dict]:
             sol = rc.solve(c)
             normal_its[f"{prefix}_{est}"] = [p.normal.iterations for p in sol.patches]
     for k, patch_its in enumerate(zip(*normal_its.values(), strict=True)):
-        rows.append({"dy_mm": dy * 1e3, "patch": k, **dict(zip(normal_its, patch_its,
+        rows.append({"dy_mm": dy * 1e3, "patch": k, "roll_mrad": base["geometry"]["roll"] * 1e3,
+                     **dict(zip(normal_its, patch_its,
                                                                strict=True))})
     for name, cr in CREEP.items():
         tan_its = {}
@@ -80,15 +97,18 @@ def main() -> None:
     ap.add_argument("--step", type=float, default=0.1, help="displacement step [mm]")
     ap.add_argument("--control", choices=("penetration", "load"), default="penetration",
                     help="penetration (the approach for 83.3 kN, as the paper) or load")
+    ap.add_argument("--roll", default="0",
+                    help="wheelset roll: an angle [rad], 'rigid' or 'equal-loads'")
     ap.add_argument("--out", type=Path, default=Path("out"))
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     dys = displacements(args.step)
-    rows, failed = run_sweep(dys, functools.partial(one_case, control=args.control))
-    print(f"{args.control} control")
+    rows, failed = run_sweep(dys, functools.partial(one_case, control=args.control,
+                                                    roll=args.roll))
+    print(f"{args.control} control, roll {args.roll}")
     keys = list(rows[0])
     write_csv(args.out / "study_sweep.csv", rows)
-    mean = {k: float(np.mean([r[k] for r in rows])) for k in keys[2:]}
+    mean = {k: float(np.mean([r[k] for r in rows])) for k in keys[3:]}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed")
     for dy, msg in failed:
         print(f"  failed at {dy * 1e3:+.2f} mm: {msg}")
