@@ -187,15 +187,12 @@ def solve(case: dict[str, Any] | str | Path) -> Solution:
     if case["geometry"]["type"] == "wheel-rail":
         from .wheelrail import solve_wheel_rail
 
-        patches, pose = solve_wheel_rail(case, pair)
-        roll = pose.roll
-    else:
-        patches, roll = [_solve_quadratic(case, pair)], None
-    if "tangential" in case:
-        for patch in patches:
-            if patch.normal.force > 0:
-                solve_patch_tangential(patch, case["tangential"], pair, case["normal"]["fft"])
-    return Solution(case=case, patches=patches, roll=roll)
+        patches, pose = solve_wheel_rail(case, pair)  # with the tangential problem
+        return Solution(case=case, patches=patches, roll=pose.roll)
+    patch = _solve_quadratic(case, pair)
+    if "tangential" in case and patch.normal.force > 0:
+        solve_patch_tangential(patch, case["tangential"], pair, case["normal"]["fft"])
+    return Solution(case=case, patches=[patch])
 
 
 def normal_estimate(nspec: dict[str, Any], hz: HertzSolution | None, s: np.ndarray,

@@ -3,11 +3,16 @@
 ``[normal] penetration`` is the vertical approach of the wheel towards the rail [m] beyond
 first contact; patch ``k`` (vertical gap ``g_k`` above the first contact, contact angle
 ``gamma_k``) then has the normal penetration ``(delta - g_k) cos(gamma_k)``.
-``[normal] load`` is the vertical wheel load Q [N]: the approach is found such that the
-vertical components of the patches' normal forces add up to Q, ``sum N_k cos(gamma_k) = Q``
-(tangential forces ignored). One patch: force control with ``N = Q / cos(gamma)``, exact
-in one solve, started from Hertz's penetration when an estimate is asked for; several
-patches: a secant iteration on the approach from Hertz's value.
+``[normal] load`` is the vertical wheel load Q [N], the total vertical force of the rail on
+the wheel as CONTACT's FZ: ``sum_k (N_k cos(gamma_k) + F_s,k sin(gamma_k)) = Q``, ``F_s,k``
+the patch's creep force across the track (towards the field side, in the contact plane),
+zero without a ``[tangential]`` table. For the normal forces' share: one patch, force control
+with ``N = Q / cos(gamma)``, exact in one solve, started from Hertz's penetration when an
+estimate is asked for; several patches, a secant iteration on the approach from Hertz's
+value. With creep forces an outer secant iteration on that share (normal and tangential
+BEM solved at each pass) makes the total vertical force Q to :data:`CREEP_LOAD_RTOL`; on a
+flange the creep force carries a large part of the load (``mu tan(gamma)`` ~ 0.8 at 70 deg
+with mu = 0.3).
 
 ``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
 wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or
@@ -38,7 +43,7 @@ from .geometry.track import Pose, Track, Wheelset
 from .grid import Grid
 from .hertz import HertzSolution, hertz
 from .materials import ElasticPair
-from .pipeline import PatchSolution, normal_estimate, solve_patch_normal
+from .pipeline import PatchSolution, normal_estimate, solve_patch_normal, solve_patch_tangential
 
 EstimateFor = Callable[[ContactPoint, HertzSolution, dict[str, float]],
                        Callable[[Grid], Any]]
@@ -47,6 +52,8 @@ MAX_SECANT = 30
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16
+CREEP_LOAD_RTOL = 1e-5
+"""Relative tolerance on the total vertical force when creep forces carry part of it."""
 
 
 def build_geometry(geo: dict[str, Any]) -> tuple[Track, Wheelset, Pose]:
@@ -99,19 +106,75 @@ def _patches(cps: list[ContactPoint], approach: float, case: dict[str, Any],
 
 
 def _vertical_force(patches: list[PatchSolution]) -> float:
-    return sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in patches)
+    """Vertical force of the rail on the wheel [N]: normal and (solved) creep forces."""
+    total = 0.0
+    for p in patches:
+        g = p.geometry.contact_angle
+        total += p.normal.force * math.cos(g)
+        if p.tangential is not None:
+            total += p.tangential.force[1] * math.sin(g)
+    return total
+
+
+def _add_tangential(patches: list[PatchSolution], case: dict[str, Any],
+                    pair: ElasticPair) -> list[PatchSolution]:
+    for p in patches:
+        if p.normal.force > 0:
+            solve_patch_tangential(p, case["tangential"], pair, case["normal"]["fft"])
+    return patches
 
 
 def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, case: dict[str, Any],
                 pair: ElasticPair, estimate_for: EstimateFor | None = None
                 ) -> list[PatchSolution]:
-    """The BEM normal solutions of one wheel's contact patches.
+    """The BEM solutions of one wheel's contact patches.
 
     ``case`` needs the ``[grid]`` and ``[normal]`` tables (``load`` the vertical wheel load
-    [N] or ``penetration`` the vertical approach [m]). ``estimate_for(cp, hertz, control)``
-    replaces the case's estimate: it returns a function of the BEM grid giving the initial
-    pressure (or None), e.g. the previous time step's.
+    [N] or ``penetration`` the vertical approach [m]); with a ``[tangential]`` table the
+    patches are solved for it too and the load includes the creep forces' vertical
+    components (module docstring). ``estimate_for(cp, hertz, control)`` replaces the case's
+    estimate: it returns a function of the BEM grid giving the initial pressure (or None),
+    e.g. the previous time step's.
     """
+    nspec = case["normal"]
+    if "tangential" not in case:
+        return _solve_wheel_normal(track, ws, pose, side, case, pair, estimate_for)
+    if "penetration" in nspec or nspec["load"] == 0:
+        return _add_tangential(
+            _solve_wheel_normal(track, ws, pose, side, case, pair, estimate_for), case, pair)
+    q = nspec["load"]
+
+    def residual(qn: float) -> tuple[float, list[PatchSolution]]:
+        c = dict(case, normal=dict(nspec, load=qn))
+        ps = _add_tangential(_solve_wheel_normal(track, ws, pose, side, c, pair,
+                                                 estimate_for), case, pair)
+        return _vertical_force(ps) - q, ps
+
+    q0 = q
+    r0, ps = residual(q0)
+    if abs(r0) <= CREEP_LOAD_RTOL * q:
+        return ps
+    q1 = max(q0 - r0, 0.05 * q)
+    r1, ps = residual(q1)
+    for _ in range(MAX_SECANT):
+        if abs(r1) <= CREEP_LOAD_RTOL * q:
+            return ps
+        if r1 == r0:
+            break
+        q2 = q1 - r1 * (q1 - q0) / (r1 - r0)
+        q0, r0 = q1, r1
+        q1 = min(max(q2, 0.5 * q1, 0.05 * q), 2.0 * q1)
+        r1, ps = residual(q1)
+    if abs(r1) > 1e-3 * q:
+        raise CaseError(f"{side} wheel: the vertical load with creep forces did not converge "
+                        f"(vertical force {r1 + q:.6g} N for load {q:.6g} N)")
+    return ps
+
+
+def _solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str,
+                        case: dict[str, Any], pair: ElasticPair,
+                        estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+    """The BEM normal solutions of one wheel's patches (creep forces not counted)."""
     nspec = case["normal"]
     if "penetration" in nspec:
         approach = nspec["penetration"]

@@ -111,3 +111,23 @@ def test_patch_grid_beyond_the_profiles(base):
     (p,) = sol.patches
     assert 30 < math.degrees(p.geometry.contact_angle) < 40
     assert p.normal.converged and not p.normal.touches_boundary
+
+
+@pytest.mark.parametrize("eta", [0.01, -0.01])
+def test_load_with_sliding_flange_follows_nadal(base, eta):
+    """70 deg flange, lateral creepage large enough for full sliding: the creep force is
+    mu N across the patch, and the vertical load Q = N cos(gamma) + F_s sin(gamma) gives
+    N = Q / (cos(gamma) -+ mu sin(gamma)) (Nadal's balance; sliding up the flange, the
+    friction nearly cancels the vertical support: mu tan(gamma) = 0.82)."""
+    mu, q = 0.3, 83.3e3
+    c = variant(base, lateral_displacement=7e-3, normal={"load": q, "tolerance": 1e-3})
+    c["grid"] = {"nx": 40, "ny": 40}
+    c["tangential"] = {"creepage": [0.0, eta, 0.0], "friction": mu, "estimate": "fastrip"}
+    (patch,) = rc.solve(c).patches
+    g, n, fs = patch.geometry.contact_angle, patch.normal.force, patch.tangential.force[1]
+    assert math.degrees(g) == pytest.approx(70.0, abs=0.5)
+    # full sliding but for a few leading-edge elements (a few 1e-6 of the force); the
+    # climbing direction amplifies that by tan(gamma) / (1 - mu tan(gamma)) ~ 15 in N
+    assert fs == pytest.approx(-math.copysign(mu * n, eta), rel=1e-5)
+    assert n == pytest.approx(q / (math.cos(g) - math.copysign(mu, eta) * math.sin(g)),
+                              rel=2e-4)
