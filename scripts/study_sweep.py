@@ -16,8 +16,14 @@ The wheelset is not rolled (the paper says nothing of roll); ``--roll equal-load
 ``rigid``) rolls it as a wheelset on both rails carrying 83.3 kN per wheel (or touching both
 rails), the roll found once per displacement and then held for every solve.
 
+Another profile pair (the paper's S1002CN on CN60, when their files are at hand): ``--wheel``
+and ``--rail`` take built-in names or profile files, ``--back-to-back`` [m] and
+``--inclination`` [rad] the wheelset and track (defaults 1.360 m, 1:40).
+
 Usage: python scripts/study_sweep.py [--step 0.1] [--control penetration|load]
                                      [--roll 0|rigid|equal-loads] [--out out/]
+                                     [--wheel S1002] [--rail 60E1] [--back-to-back 1.360]
+                                     [--inclination 0.025]
 (0.01 mm: 1601 cases)
 """
 
@@ -26,6 +32,7 @@ from __future__ import annotations
 import argparse
 import copy
 import functools
+import math
 from pathlib import Path
 
 import numpy as np
@@ -100,12 +107,19 @@ def main() -> None:
     ap.add_argument("--roll", default="0",
                     help="wheelset roll: an angle [rad], 'rigid' or 'equal-loads'")
     ap.add_argument("--out", type=Path, default=Path("out"))
+    ap.add_argument("--wheel", default="S1002", help="built-in wheel or profile file")
+    ap.add_argument("--rail", default="60E1", help="built-in rail or profile file")
+    ap.add_argument("--back-to-back", type=float, default=1.360, help="flange-back distance [m]")
+    ap.add_argument("--inclination", type=float, default=math.atan(1 / 40), help="rail cant [rad]")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
+    CASE["geometry"].update(wheel=args.wheel, rail=args.rail, back_to_back=args.back_to_back,
+                            inclination=args.inclination)
     dys = displacements(args.step)
     rows, failed = run_sweep(dys, functools.partial(one_case, control=args.control,
                                                     roll=args.roll))
-    print(f"{args.control} control, roll {args.roll}")
+    print(f"{args.wheel} on {args.rail}, back-to-back {args.back_to_back} m, cant "
+          f"{args.inclination:.5f} rad; {args.control} control, roll {args.roll}")
     keys = list(rows[0])
     write_csv(args.out / "study_sweep.csv", rows)
     mean = {k: float(np.mean([r[k] for r in rows])) for k in keys[3:]}
