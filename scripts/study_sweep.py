@@ -67,8 +67,8 @@ def one_case(dy: float, control: str = "penetration", roll: str = "0") -> list[d
     rows = []
     base = copy.deepcopy(CASE)
     base["geometry"]["lateral_displacement"] = dy
-    base["geometry"]["roll"] = float(roll) if roll not in ("rigid", "equal-loads") else \
-        wheelset_roll(dy, roll)
+    solved = roll in ("rigid", "equal-loads")
+    base["geometry"]["roll"] = wheelset_roll(dy, roll) if solved else float(roll)
     if control == "penetration":
         nspec = base.pop("normal")
         base["normal"] = {"penetration": approach_for_load(base, nspec["load"]),
@@ -82,8 +82,7 @@ def one_case(dy: float, control: str = "penetration", roll: str = "0") -> list[d
             normal_its[f"{prefix}_{est}"] = [p.normal.iterations for p in sol.patches]
     for k, patch_its in enumerate(zip(*normal_its.values(), strict=True)):
         rows.append({"dy_mm": dy * 1e3, "patch": k, "roll_mrad": base["geometry"]["roll"] * 1e3,
-                     **dict(zip(normal_its, patch_its,
-                                                               strict=True))})
+                     **dict(zip(normal_its, patch_its, strict=True))})
     for name, cr in CREEP.items():
         tan_its = {}
         for est in ("none", "fastsim", "fastrip"):
@@ -122,7 +121,8 @@ def main() -> None:
           f"{args.inclination:.5f} rad; {args.control} control, roll {args.roll}")
     keys = list(rows[0])
     write_csv(args.out / "study_sweep.csv", rows)
-    mean = {k: float(np.mean([r[k] for r in rows])) for k in keys[3:]}
+    mean = {k: float(np.mean([r[k] for r in rows])) for k in keys
+            if k not in ("dy_mm", "patch", "roll_mrad")}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed")
     for dy, msg in failed:
         print(f"  failed at {dy * 1e3:+.2f} mm: {msg}")
