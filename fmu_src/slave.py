@@ -36,6 +36,7 @@ FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
 CONTROLS = ("load", "penetration")
 CREEPAGE_INPUTS = ("direct", "kinematic")
+LOAD_DEFINITIONS = ("total", "normal")
 _CAUSALITY = {"output": OUTPUT, "input": INPUT, "parameter": PARAMETER}
 
 
@@ -164,7 +165,8 @@ class Slave:
             raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
 
     def _build(self) -> None:
-        for name, allowed in (("control", CONTROLS), ("creepage_input", CREEPAGE_INPUTS)):
+        for name, allowed in (("control", CONTROLS), ("creepage_input", CREEPAGE_INPUTS),
+                              ("load_definition", LOAD_DEFINITIONS)):
             if self[name] not in allowed:
                 raise RailContactError(f"parameter {name} = {self[name]!r}: must be one of "
                                        f"{', '.join(allowed)}")
@@ -184,7 +186,9 @@ class Slave:
                 tangential_tolerance=float(self["tangential_tolerance"]),
                 normal_estimate=self["normal_estimate"],
                 tangential_estimate=self["tangential_estimate"],
-                warm_start=self["warm_start"], fft=self["fft"])
+                warm_start=self["warm_start"], fft=self["fft"],
+                load_includes_creep=self["load_definition"] == "total",
+                load_tolerance=float(self["load_tolerance"]))
         except RailContactError as exc:
             raise RailContactError(f"parameter error: {exc}") from None
         self.contact = WheelsetContact(track, ws, ElasticPair.of(mat, mat), settings)

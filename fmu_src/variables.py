@@ -38,6 +38,9 @@ PARAMETERS = [
     Variable("control", "String", "parameter", "load", "",
              "normal problem: load (wheel loads given) or penetration (vertical "
              "displacement and roll given)"),
+    Variable("load_definition", "String", "parameter", "total", "",
+             "what a wheel load is (control=load): total (vertical force of normal and creep "
+             "forces, as CONTACT's FZ) or normal (normal forces only)"),
     Variable("creepage_input", "String", "parameter", "direct", "",
              "direct (creepages per wheel) or kinematic (from the wheelset velocities)"),
     Variable("normal_estimate", "String", "parameter", "infcon", "",
@@ -62,6 +65,9 @@ PARAMETERS = [
              "eps_n, relative pressure change between iterations"),
     Variable("tangential_tolerance", "Real", "parameter", 1e-2, "1",
              "eps_tau, relative traction change between sweeps"),
+    Variable("load_tolerance", "Real", "parameter", 1e-3, "1",
+             "relative tolerance on a wheel load when the creep forces count "
+             "(load_definition=total)"),
 ]
 
 INPUTS = [

@@ -57,6 +57,9 @@ class PatchMemory:
         Simulation time of the step [s], or None.
     older
         The same patch one step earlier (its own ``older`` dropped), or None.
+    vertical_creep
+        Vertical component ``F_s sin(gamma)`` of the patch's creep force [N]: the next
+        step's first guess of the share of a wheel load the creep forces carry.
     """
 
     grid: Grid
@@ -67,6 +70,7 @@ class PatchMemory:
     z: float
     time: float | None = None
     older: PatchMemory | None = None
+    vertical_creep: float = 0.0
 
     def extrapolation(self, time: float | None) -> float:
         """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when

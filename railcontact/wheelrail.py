@@ -10,9 +10,11 @@ zero without a ``[tangential]`` table. For the normal forces' share: one patch, 
 with ``N = Q / cos(gamma)``, exact in one solve, started from Hertz's penetration when an
 estimate is asked for; several patches, a secant iteration on the approach from Hertz's
 value. With creep forces an outer secant iteration on that share (normal and tangential
-BEM solved at each pass) makes the total vertical force Q to :data:`CREEP_LOAD_RTOL`; on a
-flange the creep force carries a large part of the load (``mu tan(gamma)`` ~ 0.8 at 70 deg
-with mu = 0.3).
+BEM solved at each pass, :func:`creep_load_secant`) makes the total vertical force Q to
+:data:`CREEP_LOAD_RTOL`, or as close as the tangential tolerance lets it (an error beyond
+1e-3); on a flange the creep force carries a large part of the load (``mu tan(gamma)`` ~
+0.8 at 70 deg with mu = 0.3), and beyond Nadal's limit (``mu tan(gamma) > 1``, sliding up)
+no normal force carries it: an error.
 
 ``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
 wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or
@@ -31,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 from scipy.optimize import brentq
 
@@ -49,11 +51,19 @@ EstimateFor = Callable[[ContactPoint, HertzSolution, dict[str, float]],
                        Callable[[Grid], Any]]
 LOAD_RTOL = 1e-6
 MAX_SECANT = 30
+T = TypeVar("T")
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16
 CREEP_LOAD_RTOL = 1e-5
 """Relative tolerance on the total vertical force when creep forces carry part of it."""
+MAX_STALLED = 3
+"""Passes in a row that do not halve the smallest residual, after which the creep-load
+iteration stops."""
+MAX_SHARE = 100.0
+"""Largest normal share of a vertical load the creep-load iteration tries: a flange near
+Nadal's limit (``cos(gamma) - mu sin(gamma)`` -> 0) needs N >> Q; beyond it the load
+cannot be carried (the wheel climbs)."""
 
 
 def build_geometry(geo: dict[str, Any]) -> tuple[Track, Wheelset, Pose]:
@@ -105,7 +115,7 @@ def _patches(cps: list[ContactPoint], approach: float, case: dict[str, Any],
     return out
 
 
-def _vertical_force(patches: list[PatchSolution]) -> float:
+def vertical_force(patches: list[PatchSolution]) -> float:
     """Vertical force of the rail on the wheel [N]: normal and (solved) creep forces."""
     total = 0.0
     for p in patches:
@@ -148,27 +158,75 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, case: dict[st
         c = dict(case, normal=dict(nspec, load=qn))
         ps = _add_tangential(_solve_wheel_normal(track, ws, pose, side, c, pair,
                                                  estimate_for), case, pair)
-        return _vertical_force(ps) - q, ps
+        return vertical_force(ps) - q, ps
 
-    q0 = q
-    r0, ps = residual(q0)
-    if abs(r0) <= CREEP_LOAD_RTOL * q:
-        return ps
-    q1 = max(q0 - r0, 0.05 * q)
-    r1, ps = residual(q1)
+    ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
+    if failure and abs(vertical_force(ps) - q) > 1e-3 * q:
+        raise CaseError(f"{side} wheel: {failure}")
+    return ps
+
+
+def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float, start: float,
+                      rtol: float) -> tuple[T, str]:
+    """Secant iteration on the normal forces' share of a vertical wheel load.
+
+    Parameters
+    ----------
+    residual
+        ``residual(qn)`` solves the wheel with its normal forces carrying the vertical load
+        ``qn`` [N] and returns (total vertical force including creep forces - ``load`` [N],
+        the solution).
+    load
+        The vertical wheel load Q [N].
+    start
+        First guess of the normal share [N] (Q, or Q less the previous time step's creep
+        share).
+    rtol
+        Tolerance on ``|residual| / load``.
+
+    Returns
+    -------
+    solution, message
+        The pass closest to the load, and "" when it meets ``rtol``, else why not: beyond
+        Nadal's limit (the vertical force is negative and falls as the normal share grows:
+        the creep force pulls a sliding flange up more than the normal force pushes it,
+        ``mu tan(gamma) > 1``; then the first pass's solution), or the tolerance not
+        reached. The iteration stops when :data:`MAX_STALLED` passes in a row do not halve
+        the smallest residual: the tangential BEM stops at ``eps_tau``, and an element
+        changing between adhesion and slip moves the vertical force by steps (~1e-3 of the
+        load on a flange at ``eps_tau = 1e-2``), so the residual has a noise floor.
+    """
+    q0 = start
+    r0, sol = residual(q0)
+    if abs(r0) <= rtol * load:
+        return sol, ""
+    first = best = sol
+    best_r, stalled = abs(r0), 0
+    # First step as if the creep forces grew in proportion to the normal forces (as in
+    # full slip); from then on secant steps.
+    vertical = r0 + load
+    q1 = q0 * load / vertical if vertical > 0 else 2.0 * q0
+    q1 = min(max(q1, 0.05 * load), MAX_SHARE * load)
+    r1, sol = residual(q1)
     for _ in range(MAX_SECANT):
-        if abs(r1) <= CREEP_LOAD_RTOL * q:
-            return ps
-        if r1 == r0:
+        stalled = 0 if abs(r1) < 0.5 * best_r else stalled + 1
+        if abs(r1) < best_r:
+            best, best_r = sol, abs(r1)
+        if best_r <= rtol * load or stalled >= MAX_STALLED or r1 == r0:
             break
+        if r1 + load <= 0 and r0 + load <= 0 and (r1 - r0) * (q1 - q0) <= 0:
+            return first, (f"beyond Nadal's limit: the creep forces pull the wheel up more "
+                           f"than the normal forces push it (vertical force {r0 + load:.6g} "
+                           f"N at a normal share of {q0:.6g} N, {r1 + load:.6g} N at "
+                           f"{q1:.6g} N); no normal force carries the load {load:.6g} N")
         q2 = q1 - r1 * (q1 - q0) / (r1 - r0)
         q0, r0 = q1, r1
-        q1 = min(max(q2, 0.5 * q1, 0.05 * q), 2.0 * q1)
-        r1, ps = residual(q1)
-    if abs(r1) > 1e-3 * q:
-        raise CaseError(f"{side} wheel: the vertical load with creep forces did not converge "
-                        f"(vertical force {r1 + q:.6g} N for load {q:.6g} N)")
-    return ps
+        q1 = min(max(q2, 0.5 * q1, 0.05 * load), 2.0 * q1, MAX_SHARE * load)
+        r1, sol = residual(q1)
+    if best_r <= rtol * load:
+        return best, ""
+    return best, (f"the vertical load with creep forces did not converge (vertical force "
+                  f"off by {best_r:.6g} N for load {load:.6g} N)")
 
 
 def _solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -196,7 +254,7 @@ def _solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str,
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
         ps = _patches(contact_points(track, ws, pose, side, a), a, case, pair,
                       estimate_for=estimate_for)
-        return _vertical_force(ps) - q, ps
+        return vertical_force(ps) - q, ps
 
     a0 = approach
     r0, ps0 = residual(a0)

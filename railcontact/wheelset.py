@@ -29,6 +29,16 @@ radius r and contact angle gamma, with side sign s = +1 left, -1 right::
     eta = (y_dot - V psi) / (V cos gamma)
     phi = (-s Omega sin gamma + psi_dot cos gamma) / V
 
+A wheel load Q [N] is the rail's total vertical force on the wheel, as CONTACT's FZ and
+:func:`railcontact.solve`: ``sum (N cos(gamma) + F_y sin(gamma)) = Q`` over the patches.
+With creepages the creep forces carry part of it (most of it on a flange near Nadal's
+limit), so a secant iteration on the normal forces' share solves the wheel (normal, then
+tangential BEM) until the total is met to :attr:`ContactSettings.load_tolerance`; the first
+guess is Q less the previous step's creep share (with a warm start from it), later passes
+start from the one before (in every warm-start mode: it is the same step), and
+:attr:`WheelContact.load_passes` counts them. ``load_includes_creep=False`` lets the normal
+forces alone carry Q (one pass).
+
 Each wheel is solved in its side frame (:mod:`railcontact.geometry.track`), where the
 right wheel is mirrored; lateral components and the spin change sign there.
 """
@@ -57,7 +67,7 @@ from .warmstart import (
     previous_pressure,
     previous_tangential,
 )
-from .wheelrail import solve_wheel
+from .wheelrail import MAX_SHARE, creep_load_secant, solve_wheel, vertical_force
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
 STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
@@ -88,6 +98,14 @@ class ContactSettings:
         "previous+estimate": the previous step's, and the estimate for a patch that has none.
     fft
         Convolution backend.
+    load_includes_creep
+        With wheel loads given and creepages: True (default) makes the load the total
+        vertical force of the rail on the wheel, normal and creep forces, as CONTACT's FZ
+        and :func:`railcontact.solve` (a secant iteration on the normal forces' share,
+        started from the previous step's creep share; every pass counts in the
+        iterations); False lets the normal forces alone carry it (one pass).
+    load_tolerance
+        Relative tolerance on the vertical load when the creep forces count [-].
     """
 
     friction: float = 0.4
@@ -105,6 +123,8 @@ class ContactSettings:
     strips: tuple[int, int] = (40, 40)
     spin_offset: float = 1.0 / 6.0
     quantum: int = 8
+    load_includes_creep: bool = True
+    load_tolerance: float = 1e-3
 
     def __post_init__(self) -> None:
         check_positive("friction", self.friction, "-")
@@ -113,7 +133,7 @@ class ContactSettings:
             raise RailContactError(f"element_size = {self.element_size:g} m is too coarse for "
                                    "a wheel-rail patch (use at most 5e-3 m)")
         check_positive("margin", self.margin, "-")
-        for name in ("normal_tolerance", "tangential_tolerance"):
+        for name in ("normal_tolerance", "tangential_tolerance", "load_tolerance"):
             v = check_positive(name, getattr(self, name), "-")
             if v >= 1:
                 raise RailContactError(f"{name} must be below 1, got {v:g}")
@@ -203,6 +223,9 @@ class WheelContact:
     slip_area_ratio: float = 0.0
     normal_iterations: int = 0
     tangential_iterations: int = 0
+    load_passes: int = 1
+    """Normal-and-tangential solves of the wheel this step (more than one when a wheel
+    load counts the creep forces, :attr:`ContactSettings.load_includes_creep`)."""
 
     @property
     def n_patches(self) -> int:
@@ -333,16 +356,67 @@ class WheelsetContact:
     def _solve_side(self, side: str, pose: Pose, control: dict[str, float],
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
                     time: float | None) -> tuple[WheelContact, list[PatchMemory]]:
+        previous = self.memory[side] if self.settings.uses_previous else []
+        wheel = WheelContact(side=side)
+        if control.get("load", 1.0) == 0.0 or control.get("penetration", 1.0) == 0.0:
+            return wheel, []
+        tangential = creep is not None or kin is not None
+        if not ("load" in control and tangential and self.settings.load_includes_creep):
+            patches, creepages, memory = self._pass(side, pose, control, creep, kin, time,
+                                                    previous, previous)
+            return (self._finish(wheel, patches, creepages, pose),
+                    memory if self.settings.uses_previous else [])
+        # The load counts the creep forces: secant on the normal share (module docstring).
+        q = control["load"]
+        passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
+
+        def residual(qn: float) -> tuple[float, tuple]:
+            source = passes[-1][2] if passes else previous  # later passes: the one before
+            passes.append(self._pass(side, pose, {"load": qn}, creep, kin, time, previous,
+                                     source))
+            return vertical_force(passes[-1][0]) - q, passes[-1]
+
+        start = min(max(q - sum(m.vertical_creep for m in previous), 0.05 * q), MAX_SHARE * q)
+        (patches, creepages, memory), failure = creep_load_secant(
+            residual, q, start, self.settings.load_tolerance)
+        self._finish(wheel, patches, creepages, pose)
+        if not self.settings.uses_previous:
+            memory = []
+        wheel.load_passes = len(passes)
+        for earlier, _, _ in passes[:-1]:  # the work of every pass counts
+            wheel.normal_iterations += sum(p.normal.iterations for p in earlier)
+            wheel.tangential_iterations += sum(p.tangential.iterations for p in earlier
+                                               if p.tangential is not None)
+        if failure:
+            wheel.status = NOT_CONVERGED
+            wheel.message = failure
+        return wheel, memory
+
+    @staticmethod
+    def _finish(wheel: WheelContact, patches: list[PatchSolution], creepages: list,
+                pose: Pose) -> WheelContact:
+        if patches:
+            wheel.creepages = creepages
+            _resultants(wheel, patches, pose)
+        return wheel
+
+    def _pass(self, side: str, pose: Pose, control: dict[str, float],
+              creep: tuple[float, float, float] | None, kin: Kinematics | None,
+              time: float | None, previous: list[PatchMemory], source: list[PatchMemory]
+              ) -> tuple[list[PatchSolution], list[tuple[float, float, float]],
+                         list[PatchMemory]]:
+        """One solve of a wheel's patches: the normal BEM under ``control``, then the
+        tangential BEM; warm-started from ``source`` (the previous step's memory, or an
+        earlier pass of this step), remembering ``previous`` as the older step."""
         sgn = SIDES[side]
         gspec, nspec, tspec = self._specs()
-        memories = self.memory[side] if self.settings.uses_previous else []
         pair = self.pair
 
         def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: dict[str, float]):
             def estimate():  # KP/INFCON cost a solve of their own: only when needed
                 return normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, ctrl)
 
-            m = match(memories, cp.rail_u, cp.position[2])
+            m = match(source, cp.rail_u, cp.position[2])
             if m is None:
                 return estimate()
 
@@ -351,35 +425,31 @@ class WheelsetContact:
                 return p if p.sum() > 0 else estimate()(grid)
             return of
 
-        wheel = WheelContact(side=side)
-        if control.get("load", 1.0) == 0.0 or control.get("penetration", 1.0) == 0.0:
-            return wheel, []
         patches = solve_wheel(self.track, self.wheelset, pose, side,
                               {"grid": gspec, "normal": dict(nspec, **control)}, pair,
                               estimate_for)
         patches = [p for p in patches if p.normal.force > 0]
-        if not patches:
-            return wheel, []
-        new_memory = []
+        creepages, memory = [], []
         for patch in patches:
             cp = patch.geometry
-            m = match(memories, cp.rail_u, cp.position[2])  # None without warm start
+            m = match(source, cp.rail_u, cp.position[2])  # None without warm start
             if creep is not None or kin is not None:
                 c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
-                wheel.creepages.append(c)
+                creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
                 prev = previous_tangential(m, patch.normal.grid) if m else None
                 solve_patch_tangential(patch, dict(tspec, creepage=side_creep), pair,
                                        self.settings.fft, previous=prev)
-            if self.settings.uses_previous:
-                t = patch.tangential
-                new_memory.append(PatchMemory(
-                    grid=patch.normal.grid, pressure=patch.normal.pressure,
-                    traction=None if t is None else t.traction,
-                    state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
-                    time=time, older=None if m is None else replace(m, older=None)))
-        _resultants(wheel, patches, pose)
-        return wheel, new_memory
+            t = patch.tangential
+            older = match(previous, cp.rail_u, cp.position[2])
+            memory.append(PatchMemory(
+                grid=patch.normal.grid, pressure=patch.normal.pressure,
+                traction=None if t is None else t.traction,
+                state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
+                time=time, older=None if older is None else replace(older, older=None),
+                vertical_creep=0.0 if t is None else
+                float(t.force[1] * math.sin(cp.contact_angle))))
+        return patches, creepages, memory
 
 
 def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:

@@ -131,3 +131,13 @@ def test_load_with_sliding_flange_follows_nadal(base, eta):
     assert fs == pytest.approx(-math.copysign(mu * n, eta), rel=1e-5)
     assert n == pytest.approx(q / (math.cos(g) - math.copysign(mu, eta) * math.sin(g)),
                               rel=2e-4)
+
+
+def test_load_beyond_nadals_limit_is_an_error(base):
+    """mu tan(gamma) = 1.1 > 1 on the 70 deg flange, sliding up: the creep force pulls the
+    wheel up more than the normal force pushes it, so no normal force carries the load."""
+    c = variant(base, lateral_displacement=7e-3, normal={"load": 83.3e3, "tolerance": 1e-3})
+    c["grid"] = {"nx": 40, "ny": 40}
+    c["tangential"] = {"creepage": [0.0, 0.01, 0.0], "friction": 0.4}
+    with pytest.raises(CaseError, match="Nadal"):
+        rc.solve(c)
