@@ -33,7 +33,8 @@ A wheel load Q [N] is the rail's total vertical force on the wheel, as CONTACT's
 :func:`railcontact.solve`: ``sum (N cos(gamma) + F_y sin(gamma)) = Q`` over the patches.
 With creepages the creep forces carry part of it (most of it on a flange near Nadal's
 limit), so a secant iteration on the normal forces' share solves the wheel (normal, then
-tangential BEM) until the total is met to :attr:`ContactSettings.load_tolerance`; the first
+tangential BEM) until the total is met to :attr:`ContactSettings.load_tolerance` (or to
+``eps_tau`` of the creep forces' vertical share, the accuracy they have); the first
 guess is Q less the previous step's creep share (with a warm start from it), later passes
 start from the one before (in every warm-start mode: it is the same step), and
 :attr:`WheelContact.load_passes` counts them. ``load_includes_creep=False`` lets the normal
@@ -67,7 +68,7 @@ from .warmstart import (
     previous_pressure,
     previous_tangential,
 )
-from .wheelrail import MAX_SHARE, creep_load_secant, solve_wheel, vertical_force
+from .wheelrail import MAX_SHARE, creep_load_secant, load_met, solve_wheel, vertical_force
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
 STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
@@ -387,7 +388,8 @@ class WheelsetContact:
             wheel.normal_iterations += sum(p.normal.iterations for p in earlier)
             wheel.tangential_iterations += sum(p.tangential.iterations for p in earlier
                                                if p.tangential is not None)
-        if failure:
+        if failure and not load_met(patches, q, self.settings.load_tolerance,
+                                    self.settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
             wheel.message = failure
         return wheel, memory

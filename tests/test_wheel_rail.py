@@ -141,3 +141,36 @@ def test_load_beyond_nadals_limit_is_an_error(base):
     c["tangential"] = {"creepage": [0.0, 0.01, 0.0], "friction": 0.4}
     with pytest.raises(CaseError, match="Nadal"):
         rc.solve(c)
+
+
+def test_creep_load_secant_on_model_functions():
+    """The normal share qn that makes the vertical force Q: a smooth model of a flange
+    (vertical = qn (1 - k qn^0.1)), the same with a noise floor of 50 N, and one beyond
+    Nadal's limit (vertical falls as qn grows)."""
+    from railcontact.wheelrail import MAX_STALLED, creep_load_secant
+
+    q = 83.3e3
+    calls = []
+
+    def smooth(qn):
+        calls.append(qn)
+        return qn * (1 - 0.05 * (qn / q) ** 0.1) - q, qn
+
+    qn, msg = creep_load_secant(smooth, q, q, 1e-9)
+    assert msg == "" and smooth(qn)[0] == pytest.approx(0.0, abs=1e-9 * q)
+    assert len(calls) < 10
+
+    def noisy(qn):
+        calls.append(qn)
+        return qn * (1 - 0.05) - q + 50.0 * math.sin(1e3 * qn), qn
+
+    calls.clear()
+    qn, msg = creep_load_secant(noisy, q, q, 1e-5)
+    assert "did not converge" in msg
+    assert abs(noisy(qn)[0]) <= 100.0 and len(calls) <= 2 + MAX_STALLED + 4
+
+    def climbing(qn):
+        return -0.1 * qn - q, qn  # vertical force -0.1 qn
+
+    first, msg = creep_load_secant(climbing, q, q, 1e-5)
+    assert "Nadal" in msg and first == q
