@@ -380,6 +380,8 @@ class WheelsetContact:
         start = min(max(q - sum(m.vertical_creep for m in previous), 0.05 * q), MAX_SHARE * q)
         (patches, creepages, memory), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
+        if not patches:
+            return wheel, []
         self._finish(wheel, patches, creepages, pose)
         if not self.settings.uses_previous:
             memory = []

@@ -1,0 +1,80 @@
+"""Check: is the Hertz estimate worse when sized by the wheel load instead of the penetration?
+
+The lateral sweep (``study_sweep.py``) solves every case penetration-controlled with the
+approach that carries 83.3 kN, and sizes each estimate for that penetration. The paper
+computes its potential area from "the penetration calculated by the Hertz contact theory"
+for the load (Sec. 2.1), so its Hertz estimate may have been sized by the load. This
+script runs the sweep's normal problem three ways - no estimate, Hertz for the
+penetration, Hertz for the normal load Q / cos(gamma) - and prints the mean iterations.
+
+Usage: python scripts/study_hertz_sizing.py [--step 0.5] [--preconditioner fft|none]
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+
+import numpy as np
+from _sweep import approach_for_load, displacements, run_sweep
+
+from railcontact.case import validate_case
+from railcontact.hertz import hertz
+from railcontact.pipeline import elastic_pair
+from railcontact.wheelrail import build_geometry, solve_wheel
+
+Q = 83.3e3
+CASE = {
+    "material": {"young": 206e9, "poisson": 0.28},
+    "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
+    "grid": {"nx": 64, "ny": 64},
+}
+COLUMNS = ("none", "hertz_penetration", "hertz_load")
+
+
+def hertz_by_load(pair):
+    """An ``estimate_for`` hook: Hertz's pressure for the normal load Q / cos(gamma)."""
+    def estimate_for(cp, hz, control):
+        h = hertz(cp.A, cp.B, pair, load=Q / math.cos(cp.contact_angle))
+        return lambda grid: h.pressure(*grid.mesh())
+    return estimate_for
+
+
+def one_case(dy: float, preconditioner: str) -> list[dict]:
+    base = copy.deepcopy(CASE)
+    base["geometry"]["lateral_displacement"] = dy
+    approach = approach_for_load(base, Q)
+    its = {}
+    for column in COLUMNS:
+        c = copy.deepcopy(base)
+        c["normal"] = {"penetration": approach, "tolerance": 1e-3,
+                       "preconditioner": preconditioner,
+                       "estimate": "none" if column == "none" else "hertz"}
+        c = validate_case(c)
+        pair = elastic_pair(c["material"])
+        track, ws, pose = build_geometry(c["geometry"])
+
+        patches = solve_wheel(track, ws, pose, "left", c, pair,
+                              hertz_by_load(pair) if column == "hertz_load" else None)
+        its[column] = patches[0].normal.iterations
+    return [{"dy_mm": dy * 1e3, **its}]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--step", type=float, default=0.5, help="displacement step [mm]")
+    ap.add_argument("--preconditioner", choices=("fft", "none"), default="fft")
+    args = ap.parse_args()
+    rows, failed = run_sweep(displacements(args.step),
+                             lambda dy: one_case(dy, args.preconditioner))
+    print(f"{len(rows)} cases ({len(failed)} failed), preconditioner {args.preconditioner}, "
+          "mean normal iterations at eps_n = 1e-3:")
+    for column in COLUMNS:
+        print(f"  {column:<18} {np.mean([r[column] for r in rows]):6.2f}")
+    worse = sum(r["hertz_load"] > r["none"] for r in rows)
+    print(f"Hertz sized by the load costs more than none on {worse} of {len(rows)} cases")
+
+
+if __name__ == "__main__":
+    main()
