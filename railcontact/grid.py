@@ -117,6 +117,14 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
     v = np.asarray(values, dtype=float)
     if v.shape != source.shape:
         raise RailContactError(f"values must have the source grid's shape {source.shape}")
+    shift = _lattice_shift(source, target)
+    if shift is not None:  # the same lattice: interpolation at element centres is a copy
+        out = _shifted_copy(v, target.shape, *shift)
+        if conserve:
+            total = out.sum() * target.element_area
+            if total > 0:
+                out *= v.sum() * source.element_area / total
+        return out
     # pad with a ring of zeros half an element outside, so the field falls to zero at the
     # edge of the source grid instead of stopping at its outer element centres
     x = np.concatenate([[source.x[0] - source.dx / 2], source.x, [source.x[-1] + source.dx / 2]])
@@ -131,4 +139,28 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
         want = v.sum() * source.element_area
         if total > 0:
             out *= want / total
+    return out
+
+
+def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
+    """Whole-element offset (i, j) of ``target``'s element (0, 0) in ``source``, when both
+    grids have the same element size and their centres lie on one lattice; else None."""
+    if not (np.isclose(source.dx, target.dx, rtol=1e-12)
+            and np.isclose(source.dy, target.dy, rtol=1e-12)):
+        return None
+    fi = (target.x0 - source.x0) / source.dx
+    fj = (target.y0 - source.y0) / source.dy
+    i, j = round(fi), round(fj)
+    if abs(fi - i) > 1e-9 or abs(fj - j) > 1e-9:
+        return None
+    return int(i), int(j)
+
+
+def _shifted_copy(v: np.ndarray, shape: tuple[int, int], i: int, j: int) -> np.ndarray:
+    """``out[a, b] = v[a + i, b + j]`` where that lies in ``v``, else 0."""
+    out = np.zeros(shape)
+    a0, a1 = max(0, -i), min(shape[0], v.shape[0] - i)
+    b0, b1 = max(0, -j), min(shape[1], v.shape[1] - j)
+    if a1 > a0 and b1 > b0:
+        out[a0:a1, b0:b1] = v[a0 + i:a1 + i, b0 + j:b1 + j]
     return out

@@ -93,3 +93,17 @@ def test_yaw_moves_contact_along_track():
 def test_beyond_the_profiles():
     with pytest.raises(RailContactError, match="beyond the profiles"):
         contact_points(TRACK, WS, Pose(lateral=0.2), "left")
+
+
+def test_branch_interpolation_keeps_to_the_branch_through_the_sample():
+    """A curve folding back over itself (x rises, falls, rises): interpolating along the
+    rising branch through sample k uses that branch only (NaN beyond it)."""
+    from railcontact.geometry.contact import _branch_interp
+
+    t = np.linspace(0.0, 3.0, 301)
+    x = np.where(t < 1, t, np.where(t < 2, 2 - t, t - 2))  # up 0..1, down 1..0, up 0..1
+    y = t  # tells the branches apart
+    xs = np.array([0.25, 0.5, 0.75])
+    np.testing.assert_allclose(_branch_interp(xs, x, y, 50), xs, atol=1e-12)  # first
+    np.testing.assert_allclose(_branch_interp(xs, x, y, 250), 2 + xs, atol=1e-12)  # third
+    assert np.isnan(_branch_interp(np.array([1.5]), x, y, 250)).all()

@@ -151,3 +151,27 @@ def test_two_patch_estimates_land_on_their_bem_patches(root):
         assert overlap >= 0.8 * n.contact.sum()
         assert overlap >= 0.8 * np.count_nonzero(est > 0)
         assert n.force == pytest.approx(est.sum() * n.grid.element_area, rel=0.15)
+
+
+def test_remesh_on_a_shared_lattice_is_the_interpolation():
+    """Grids on one lattice (same element size, centres a whole number of elements apart):
+    the fast copy equals bilinear and nearest interpolation at the element centres, zero
+    outside the source."""
+    import railcontact.grid as grid_module
+
+    rng = np.random.default_rng(3)
+    src = Grid(12, 9, 0.5e-3, 0.4e-3, -3e-3, 1e-3)
+    v = rng.random(src.shape)
+    for di, dj, nx, ny in [(0, 0, 12, 9), (3, -2, 10, 15), (-20, 0, 5, 5), (5, 4, 20, 20)]:
+        dst = Grid(nx, ny, 0.5e-3, 0.4e-3, src.x0 + di * src.dx, src.y0 + dj * src.dy)
+        fast = [remesh(v, src, dst), remesh(v, src, dst, method="nearest")]
+        shift, grid_module._lattice_shift = grid_module._lattice_shift, lambda a, b: None
+        try:
+            slow = [remesh(v, src, dst), remesh(v, src, dst, method="nearest")]
+        finally:
+            grid_module._lattice_shift = shift
+        for f, s in zip(fast, slow, strict=True):
+            np.testing.assert_allclose(f, s, rtol=0, atol=1e-14)
+    # half an element off the lattice: interpolated, not copied
+    dst = Grid(12, 9, 0.5e-3, 0.4e-3, src.x0 + 0.25e-3, src.y0)
+    assert grid_module._lattice_shift(src, dst) is None

@@ -235,11 +235,8 @@ def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> n
     """Interpolate y(x) along the branch of the curve through sample ``k`` on which x
     increases (rotated into a steep tangent plane a profile can fold back over itself,
     e.g. over the flange tip; the other branches are not part of this contact)."""
-    up = np.diff(x) > 0
-    lo = k
-    while lo > 0 and up[lo - 1]:
-        lo -= 1
-    hi = k
-    while hi < len(up) and up[hi]:
-        hi += 1
+    breaks = np.flatnonzero(np.diff(x) <= 0)  # sample i where x stops increasing to i + 1
+    i = int(np.searchsorted(breaks, k))
+    lo = int(breaks[i - 1]) + 1 if i > 0 else 0
+    hi = int(breaks[i]) if i < len(breaks) else len(x) - 1
     return np.interp(x_new, x[lo:hi + 1], y[lo:hi + 1], left=np.nan, right=np.nan)
