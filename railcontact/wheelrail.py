@@ -39,7 +39,7 @@ from typing import Any, TypeVar
 from scipy.optimize import brentq
 
 from .errors import CaseError, RailContactError
-from .geometry.contact import ContactPoint, contact_points
+from .geometry.contact import ContactPoint, contact_points, count_contacts
 from .geometry.profiles import read_profile
 from .geometry.roll import contact_roll, first_contact_gap
 from .geometry.track import Pose, Track, Wheelset
@@ -260,7 +260,7 @@ def _solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str,
     # one patch: force control (exact); check that the approach it needs adds no patch
     single = _patches([first], 0.0, case, pair, loads=[q / cosg], estimate_for=estimate_for)
     approach = single[0].normal.penetration / cosg
-    if len(contact_points(track, ws, pose, side, approach)) == 1:
+    if count_contacts(track, ws, pose, side, approach) == 1:
         return single
     # several patches: secant on the vertical approach
     def residual(a: float) -> tuple[float, list[PatchSolution]]:

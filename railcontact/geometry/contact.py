@@ -36,6 +36,8 @@ from ..grid import Grid
 from .track import SIDES, Pose, Track, Wheelset
 
 N_TRACE = 6001
+N_RAIL = 8001
+"""Rail samples from which a patch's tangent-plane gap is interpolated."""
 FAR = 1.0
 """Gap [m] given to elements beyond the profiles: far out of contact."""
 
@@ -161,21 +163,48 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     (the first one has gap 0).
     """
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    eta, x, u, z, g = vertical_gap(track, ws, pose, side)
+    eta, x, u, z, g = _vertical_gap_of_pose(track, ws, pose, side)
     g_min = g.min()
     g = g - g_min
     z = z - g_min  # the wheel lowered (or lifted) into first contact
-    inside = g <= max(approach, 0.0)
-    # connected intervals of interpenetration; always include the global minimum
-    k_min = int(np.argmin(g))
-    inside[k_min] = True
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(int), [0]])))
-    points = []
-    for a, b in zip(edges[::2], edges[1::2], strict=True):
-        k = a + int(np.argmin(g[a:b]))
-        points.append(_point(track, ws, pose, side, eta, x, u, z, g, k))
+    points = [_point(track, ws, pose, side, eta, x, u, z, g, a + int(np.argmin(g[a:b])))
+              for a, b in _intervals(g, approach)]
     points.sort(key=lambda c: c.gap)
     return points
+
+
+def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
+                   approach: float = 0.0) -> int:
+    """The number of patches :func:`contact_points` finds, without their geometry."""
+    approach = check_positive("approach", approach, "m", allow_zero=True)
+    g = _vertical_gap_of_pose(track, ws, pose, side)[4]
+    return len(_intervals(g - g.min(), approach))
+
+
+def _intervals(g: np.ndarray, approach: float) -> list[tuple[int, int]]:
+    """Index ranges [a, b) of the connected intervals where the gap above first contact
+    ``g`` is at most ``approach``; the global minimum is always in one."""
+    inside = g <= max(approach, 0.0)
+    inside[int(np.argmin(g))] = True
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(int), [0]])))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+_LAST_GAP: list = [None]
+
+
+def _vertical_gap_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """:func:`vertical_gap`, remembered for the last (track, wheelset, pose, side): a load
+    iteration asks for the same wheel's contact several times."""
+    last = _LAST_GAP[0]
+    if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
+            and last[3] == side):
+        return last[4]
+    out = vertical_gap(track, ws, pose, side)
+    for a in out:
+        a.flags.writeable = False
+    _LAST_GAP[0] = (track, ws, pose, side, out)
+    return out
 
 
 def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
@@ -204,8 +233,7 @@ def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
     cg, sg = math.cos(gamma), math.sin(gamma)
     s_w = (u - u_c) * cg + (z - z_rail) * sg
     n_w = -(u - u_c) * sg + (z - z_rail) * cg
-    ur = np.linspace(*rail.bounds, 8001)
-    zr = rail.height(ur)
+    ur, zr = rail.samples(N_RAIL)
     s_r = (ur - u_c) * cg + (zr - z_rail) * sg
     n_r = -(ur - u_c) * sg + (zr - z_rail) * cg
     half = 0.025

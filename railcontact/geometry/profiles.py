@@ -96,6 +96,17 @@ class Profile:
         """z(y) [m] (radius increment for a wheel, height for a rail)."""
         return self._spline(y)
 
+    def samples(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """``n`` equally spaced points (y, z(y)) over the profile's extent [m], computed once
+        per ``n`` (read-only arrays)."""
+        cache = self.__dict__.setdefault("_samples", {})
+        if n not in cache:
+            y = np.linspace(*self.bounds, n)
+            z = self.height(y)
+            y.flags.writeable = z.flags.writeable = False
+            cache[n] = (y, z)
+        return cache[n]
+
     def slope(self, y: np.ndarray | float) -> np.ndarray:
         """dz/dy [-]."""
         return self._spline(y, 1)
