@@ -48,11 +48,11 @@ from .hertz import HertzSolution, hertz
 from .materials import ElasticPair
 from .pipeline import PatchSolution, normal_estimate, solve_patch_normal, solve_patch_tangential
 
+T = TypeVar("T")
 EstimateFor = Callable[[ContactPoint, HertzSolution, dict[str, float]],
                        Callable[[Grid], Any]]
 LOAD_RTOL = 1e-6
 MAX_SECANT = 30
-T = TypeVar("T")
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16

@@ -357,7 +357,8 @@ class WheelsetContact:
     def _solve_side(self, side: str, pose: Pose, control: dict[str, float],
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
                     time: float | None) -> tuple[WheelContact, list[PatchMemory]]:
-        previous = self.memory[side] if self.settings.uses_previous else []
+        keep = self.settings.uses_previous  # remember this step for the next one
+        previous = self.memory[side] if keep else []
         wheel = WheelContact(side=side)
         if control.get("load", 1.0) == 0.0 or control.get("penetration", 1.0) == 0.0:
             return wheel, []
@@ -365,8 +366,7 @@ class WheelsetContact:
         if not ("load" in control and tangential and self.settings.load_includes_creep):
             patches, creepages, memory = self._pass(side, pose, control, creep, kin, time,
                                                     previous, previous)
-            return (self._finish(wheel, patches, creepages, pose),
-                    memory if self.settings.uses_previous else [])
+            return self._finish(wheel, patches, creepages, pose), memory if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
         q = control["load"]
         passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
@@ -383,8 +383,6 @@ class WheelsetContact:
         if not patches:
             return wheel, []
         self._finish(wheel, patches, creepages, pose)
-        if not self.settings.uses_previous:
-            memory = []
         wheel.load_passes = len(passes)
         for earlier, _, _ in passes[:-1]:  # the work of every pass counts
             wheel.normal_iterations += sum(p.normal.iterations for p in earlier)
@@ -394,7 +392,7 @@ class WheelsetContact:
                                     self.settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
             wheel.message = failure
-        return wheel, memory
+        return wheel, memory if keep else []
 
     @staticmethod
     def _finish(wheel: WheelContact, patches: list[PatchSolution], creepages: list,

@@ -142,7 +142,7 @@ class Pose:
     yaw
         Yaw angle psi [rad] about Z (positive: nose to the left).
     roll
-        Roll angle phi [rad] about X (positive: left side down... right-hand rule on X).
+        Roll angle phi [rad] about X (positive: left side up, right-hand rule about X).
     """
 
     lateral: float = 0.0
