@@ -1,8 +1,9 @@
 """Build the railcontact FMU (FMI 2.0 Co-Simulation, Linux x86-64).
 
 The FMU holds the compiled C shim (``binaries/linux64/<id>.so``), a copy of the railcontact
-package under a module name derived from the model identifier, the Python slave and its
-bootstrap, ``python.cfg`` (the Python and environment it was built with) and any extra
+package under a module name derived from the model identifier (its variable table is
+``railcontact.fmu.variables``), the Python slave and its bootstrap, ``python.cfg`` (the
+Python and environment it was built with) and any extra
 profile files, all in ``resources/``. No Python is bundled: the FMU runs in the Python it was
 built with (its numpy, scipy, pyfftw and numba).
 """
@@ -37,17 +38,6 @@ class BuildError(RuntimeError):
     """The FMU cannot be built here (missing compiler, headers, Python library)."""
 
 
-def _load_variables():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("_railcontact_fmu_variables",
-                                                  HERE / "variables.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # dataclasses resolve the module by name
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def _fmt(value) -> str:
     if isinstance(value, float):
         return repr(value)
@@ -57,8 +47,9 @@ def _fmt(value) -> str:
 def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
                       version: str = "") -> str:
     """The modelDescription.xml text."""
-    V = _load_variables()
-    variables = V.table()
+    from railcontact.fmu.variables import table
+
+    variables = table()
     used = sorted({v.unit for v in variables if v.unit})
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -164,7 +155,6 @@ def _copy_package(dst: Path, package: str) -> None:
     shutil.copytree(src, dst / package,
                     ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc"))
     shutil.copy(HERE / "slave.py", dst / package / "_fmu_slave.py")
-    shutil.copy(HERE / "variables.py", dst / package / "_fmu_variables.py")
     shutil.copy(HERE / "fmu_bootstrap.py", dst / "fmu_bootstrap.py")
 
 

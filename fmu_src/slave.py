@@ -18,25 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _fmu_variables as V
 from .errors import RailContactError
+from .fmu import variables as V
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
-from .materials import ElasticPair, Material
-from .wheelset import (
-    NOT_CONVERGED,
-    OUT_OF_RANGE,
-    ContactSettings,
-    Kinematics,
-    WheelsetContact,
-    WheelsetResult,
-)
+from .settings import FMUModes
+from .timestep import Kinematics, WheelsetContact, WheelsetResult
+from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
-CONTROLS = ("load", "penetration")
-CREEPAGE_INPUTS = ("direct", "kinematic")
-LOAD_DEFINITIONS = ("total", "normal")
 _CAUSALITY = {"output": OUTPUT, "input": INPUT, "parameter": PARAMETER}
 
 
@@ -68,6 +59,7 @@ class Slave:
         self.integer_flags = bytes(_CAUSALITY[v.causality] for v in ints)
         self.log: list[str] = []
         self.contact: WheelsetContact | None = None
+        self.modes: FMUModes | None = None
         self._start_values()
 
     # -- plumbing for the shim ------------------------------------------------------------
@@ -165,33 +157,20 @@ class Slave:
             raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
 
     def _build(self) -> None:
-        for name, allowed in (("control", CONTROLS), ("creepage_input", CREEPAGE_INPUTS),
-                              ("load_definition", LOAD_DEFINITIONS)):
-            if self[name] not in allowed:
-                raise RailContactError(f"parameter {name} = {self[name]!r}: must be one of "
-                                       f"{', '.join(allowed)}")
         for v in V.PARAMETERS:
             if v.type == "Real" and not math.isfinite(self[v.name]):
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
+        ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS})
+        self.modes = ps.modes
         wheel, rail = self._profile("wheel_profile", "wheel"), self._profile("rail_profile",
                                                                             "rail")
+        g = ps.geometry
         try:
-            track = Track(rail, float(self["inclination"]), float(self["gauge"]))
-            ws = Wheelset(wheel, float(self["wheel_radius"]),
-                          float(self["flange_back_distance"]))
-            mat = Material(float(self["young"]), float(self["poisson"]))
-            settings = ContactSettings(
-                friction=float(self["friction"]), element_size=float(self["element_size"]),
-                normal_tolerance=float(self["normal_tolerance"]),
-                tangential_tolerance=float(self["tangential_tolerance"]),
-                normal_estimate=self["normal_estimate"],
-                tangential_estimate=self["tangential_estimate"],
-                warm_start=self["warm_start"], fft=self["fft"],
-                load_includes_creep=self["load_definition"] == "total",
-                load_tolerance=float(self["load_tolerance"]))
+            track = Track(rail, g.inclination, g.gauge, g.gauge_depth)
+            ws = Wheelset(wheel, g.wheel_radius, g.back_to_back, g.flange_back)
         except RailContactError as exc:
             raise RailContactError(f"parameter error: {exc}") from None
-        self.contact = WheelsetContact(track, ws, ElasticPair.of(mat, mat), settings)
+        self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact)
 
     def _exit_initialization(self) -> int:
         try:
@@ -214,10 +193,10 @@ class Slave:
             self.log.append("doStep before initialization")
             return FMI_ERROR
         names = ["lateral_displacement", "yaw", "speed"]
-        penetration = self["control"] == "penetration"
+        penetration = self.modes.control == "penetration"
         names += ["vertical_displacement", "roll"] if penetration else ["load_left",
                                                                         "load_right"]
-        kinematic = self["creepage_input"] == "kinematic"
+        kinematic = self.modes.creepage_input == "kinematic"
         names += (["lateral_velocity", "yaw_rate", "spin_speed"] if kinematic else
                   [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
         try:

@@ -1,26 +1,64 @@
 """railcontact: exact wheel–rail rolling contact with fast initial estimates.
 
+The package is layered; each layer imports only the ones below it (checked by
+import-linter, contract in ``pyproject.toml``; see ``docs/architecture.md``)::
+
+    cli                         the railcontact command
+    sim                         wheelset dynamics, co-simulation, demo
+    fmu  | io                   the FMU's variables and build | JSON, plots
+    timestep                    WheelsetContact: both wheels per step, warm start
+    contact                     one patch; quadratic and wheel-rail cases; load loop; results
+    settings                    typed settings records, case files
+    geometry | normal | tangential   profiles, contact search | normal BEM, KP, INFCON |
+                                tangential BEM, FASTSIM, FaStrip, Kalker
+    halfspace                   materials, grid, influence coefficients, DC-FFT, Hertz
+    errors
+
 Public API
 ----------
-solve(case) -> Solution       solve a case dictionary or TOML file
-load_case(path) -> dict       read and validate a TOML case file
-hertz(A, B, pair, ...)        Hertz's solution
-solve_normal(...)             the normal BEM (Polonsky–Keer CG) on plain arrays
+solve(case) -> Solution        solve a case (Case, dictionary or TOML file)
+load_case(path) -> Case        read and validate a TOML case file
+hertz(A, B, pair, ...)         Hertz's solution
+solve_normal(...)              the normal BEM (Polonsky–Keer CG) on plain arrays
+solve_tangential(...)          the steady-rolling tangential BEM (ConvexGS) on plain arrays
+WheelsetContact, ContactSettings, Kinematics   the time-step solver
 """
 
-from .case import load_case, validate_case
+from .contact import PatchSolution, Solution, solve
 from .errors import CaseError, RailContactError
-from .grid import Grid
-from .hertz import HertzSolution, hertz
-from .materials import STEEL, ElasticPair, Material
+from .geometry import Profile, read_profile
+from .geometry.track import Pose, Track, Wheelset
+from .halfspace import (
+    STEEL,
+    ElasticPair,
+    Grid,
+    HertzSolution,
+    InfluenceOperator,
+    Material,
+    hertz,
+    influence_operator,
+)
 from .normal import NormalResult, solve_normal
-from .operator import InfluenceOperator, influence_operator
-from .pipeline import PatchSolution, Solution, solve
+from .settings import (
+    Case,
+    ContactSettings,
+    GridSettings,
+    NormalSettings,
+    TangentialSettings,
+    load_case,
+    validate_case,
+)
+from .tangential import TangentialResult, rolling_operator, solve_tangential
+from .timestep import Kinematics, WheelContact, WheelsetContact, WheelsetResult
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "STEEL", "CaseError", "ElasticPair", "Grid", "HertzSolution", "InfluenceOperator",
-    "Material", "NormalResult", "PatchSolution", "RailContactError", "Solution",
-    "hertz", "influence_operator", "load_case", "solve", "solve_normal", "validate_case",
+    "STEEL", "Case", "CaseError", "ContactSettings", "ElasticPair", "Grid", "GridSettings",
+    "HertzSolution", "InfluenceOperator", "Kinematics", "Material", "NormalResult",
+    "NormalSettings", "PatchSolution", "Pose", "Profile", "RailContactError", "Solution",
+    "TangentialResult", "TangentialSettings", "Track", "WheelContact", "Wheelset",
+    "WheelsetContact", "WheelsetResult", "hertz", "influence_operator", "load_case",
+    "read_profile", "rolling_operator", "solve", "solve_normal", "solve_tangential",
+    "validate_case",
 ]

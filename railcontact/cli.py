@@ -2,22 +2,23 @@
 
 ``railcontact demo [--quick]`` co-simulates a wheelset with the FMU through fmpy;
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
-``railcontact fmu build [-o dist/RailContact.fmu]`` builds the FMU. Errors in the input are
+``railcontact fmu build [-o dist/RailContact.fmu]`` builds the FMU; ``railcontact settings``
+prints the reference of every setting. Errors in the input are
 reported in one line (exit status 2), never as a traceback.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 
 from .errors import RailContactError
+from .settings.choices import WARM_STARTS
 
 
 def _summary(sol) -> str:
-    lines = [f"case: {sol.case.get('name', 'case')}"]
+    lines = [f"case: {sol.case.name}"]
     for k, ps in enumerate(sol.patches):
         n = ps.normal
         g = n.grid
@@ -48,15 +49,16 @@ def _summary(sol) -> str:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    from .pipeline import solve
+    from .contact import solve
+    from .io.jsonout import solution_json
 
     sol = solve(args.case)
     if args.json:
-        print(json.dumps(sol.to_dict(), indent=2))
+        print(solution_json(sol))
     else:
         print(_summary(sol))
     if args.plot:
-        from .plotting import plot_solution
+        from .io.plotting import plot_solution
 
         out = plot_solution(sol, args.plot)
         if not args.json:
@@ -64,6 +66,13 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     ok = all(p.normal.converged and (p.tangential is None or p.tangential.converged)
              for p in sol.patches)
     return 0 if ok else 1
+
+
+def _cmd_settings(args: argparse.Namespace) -> int:
+    from .settings import markdown
+
+    print(markdown())
+    return 0
 
 
 def _cmd_fmu_build(args: argparse.Namespace) -> int:
@@ -75,7 +84,7 @@ def _cmd_fmu_build(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from .demo import DemoOptions, run_demo
+    from .sim.demo import DemoOptions, run_demo
 
     opts = DemoOptions(
         speed=args.speed, duration=args.duration, step=args.step,
@@ -112,8 +121,7 @@ def _add_demo(sub) -> None:
     d.add_argument("--profile-unit", default="mm", choices=("mm", "m"),
                    help="unit of two-column profile files (mm)")
     d.add_argument("--element-size", type=float, help="BEM element size [m] (0.0005)")
-    d.add_argument("--warm-start", default="previous+estimate",
-                   choices=("none", "estimate", "previous", "previous+estimate"),
+    d.add_argument("--warm-start", default="previous+estimate", choices=WARM_STARTS,
                    help="warm start of the BEM (previous+estimate)")
     d.add_argument("--free", action="store_true",
                    help="no suspension: Klingel's free wheelset (use a low speed)")
@@ -138,6 +146,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the result as JSON")
     s.add_argument("--plot", metavar="FILE", help="write the patch/pressure figure to FILE")
     s.set_defaults(func=_cmd_solve)
+    st = sub.add_parser("settings", help="print every setting (case-file keys, time-step and "
+                        "FMU settings) with default, unit and allowed values (Markdown)")
+    st.set_defaults(func=_cmd_settings)
     f = sub.add_parser("fmu", help="the FMI 2.0 co-simulation unit")
     fsub = f.add_subparsers(dest="fmu_command", required=True)
     fb = fsub.add_parser("build", help="build the FMU (gcc and fmpy's FMI headers)")

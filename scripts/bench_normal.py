@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from railcontact import ElasticPair, Grid, Material, hertz, solve_normal
-from railcontact.operator import HAVE_PYFFTW, InfluenceOperator
+from railcontact.halfspace.operator import HAVE_PYFFTW, InfluenceOperator
 
 
 def main() -> None:

@@ -19,7 +19,8 @@ from functools import partial
 import numpy as np
 
 from railcontact import ElasticPair, Grid, Material, hertz, influence_operator, solve_normal
-from railcontact.pipeline import simplified_tangential
+from railcontact.contact import simplified_tangential
+from railcontact.settings import TangentialSettings
 from railcontact.tangential import rolling_operator, solve_tangential
 from railcontact.tangential.convexgs import (
     HAVE_NUMBA,
@@ -56,8 +57,7 @@ def main() -> None:
 
     pair = ElasticPair.of(Material(206e9, 0.28))
     A, B, delta, mu, creepage, tol = 1.0, 5.0, 1e-4, 0.4, (1e-3, 0.0, 0.0), 1e-2
-    tspec = {"friction": mu, "creepage": list(creepage), "strips": [40, 40],
-             "bound": "elliptic"}
+    tspec = TangentialSettings(creepage=creepage, friction=mu)
     print(f"paper rolling case: xi = {creepage[0]:g}, mu = {mu:g}, eps_tau = {tol:g}, "
           f"median of {args.repeat}, numba: {HAVE_NUMBA}")
     print(f"{'grid':>7} {'estimate':>9} {'median ms':>10} {'sweeps':>7} {'ratio':>6} "

@@ -31,14 +31,16 @@ import argparse
 import copy
 import itertools
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from _sweep import approach_for_load, write_csv
 
 import railcontact as rc
-from railcontact.pipeline import elastic_pair, normal_estimate, simplified_tangential
-from railcontact.plotting import _pyplot
+from railcontact.contact import normal_estimate, simplified_tangential
+from railcontact.io.plotting import _pyplot
+from railcontact.settings import Control
 from railcontact.tangential.strips import remesh_strips
 
 BASE = {
@@ -86,15 +88,15 @@ def normal_case(dy: float) -> dict:
     base["geometry"]["lateral_displacement"] = dy
     approach = approach_for_load(base, LOAD)
     ref = rc.solve(penetration_case(dy, approach, 1e-9, "none"))
-    pair = elastic_pair(ref.case["material"])
+    pair = ref.case.pair
     out = {"dy": dy, "approach": approach, "reference": ref, "patches": []}
     for rp in ref.patches:
         cp, grid = rp.geometry, rp.normal.grid
-        control = {"penetration": cp.normal_penetration(approach)}
+        control = Control(penetration=cp.normal_penetration(approach))
         patch = {"reference": rp, "estimates": {}, "runs": {}, "runs_pk": {}}
         for est in NORMAL_ESTIMATES[1:]:
-            nspec = dict(ref.case["normal"], estimate=est)
-            p0 = normal_estimate(nspec, rp.hertz, cp.s, cp.f, cp.a_of_s, pair, control)(grid)
+            settings = replace(ref.case.normal, estimate=est)
+            p0 = normal_estimate(settings, rp.hertz, cp.s, cp.f, cp.a_of_s, pair, control)(grid)
             patch["estimates"][est] = np.clip(p0, 0.0, None)
         out["patches"].append(patch)
     for est, (pre, runs) in itertools.product(NORMAL_ESTIMATES, SOLVERS.items()):
@@ -116,10 +118,10 @@ def tangential_case(dy: float, approach: float, creepage: float) -> dict:
     c["tangential"] = dict(tspec, tolerance=1e-8, max_iterations=5000)
     ref = rc.solve(c)
     rp = ref.patches[0]
-    pair = elastic_pair(ref.case["material"])
+    pair = ref.case.pair
     out = {"reference": rp, "estimates": {}, "runs": {}}
     for est in TANGENTIAL_ESTIMATES[1:]:
-        strip = simplified_tangential(est, rp.hertz, pair, ref.case["tangential"], rp.normal)
+        strip = simplified_tangential(est, rp.hertz, pair, ref.case.tangential, rp.normal)
         out["estimates"][est] = remesh_strips(strip, rp.normal.grid)
     for est in TANGENTIAL_ESTIMATES:
         c = penetration_case(dy, approach, 1e-9, "infcon")

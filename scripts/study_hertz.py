@@ -23,7 +23,7 @@ import numpy as np
 from _sweep import write_csv
 
 import railcontact as rc
-from railcontact.plotting import _pyplot
+from railcontact.io.plotting import _pyplot
 
 BASE = {
     "material": {"young": 206e9, "poisson": 0.28},

@@ -19,10 +19,9 @@ import math
 import numpy as np
 from _sweep import approach_for_load, displacements, run_sweep
 
-from railcontact.case import validate_case
-from railcontact.hertz import hertz
-from railcontact.pipeline import elastic_pair
-from railcontact.wheelrail import build_geometry, solve_wheel
+from railcontact.contact.wheelrail import build_geometry, solve_wheel
+from railcontact.halfspace.hertz import hertz
+from railcontact.settings import validate_case
 
 Q = 83.3e3
 CASE = {
@@ -52,10 +51,9 @@ def one_case(dy: float, preconditioner: str) -> list[dict]:
                        "preconditioner": preconditioner,
                        "estimate": "none" if column == "none" else "hertz"}
         c = validate_case(c)
-        pair = elastic_pair(c["material"])
-        track, ws, pose = build_geometry(c["geometry"])
-
-        patches = solve_wheel(track, ws, pose, "left", c, pair,
+        pair = c.pair
+        track, ws, pose = build_geometry(c.geometry)
+        patches = solve_wheel(track, ws, pose, "left", c.normal.control, c.patch_settings, pair,
                               hertz_by_load(pair) if column == "hertz_load" else None)
         its[column] = patches[0].normal.iterations
     return [{"dy_mm": dy * 1e3, **its}]

@@ -39,7 +39,7 @@ import numpy as np
 from _sweep import approach_for_load, displacements, run_sweep, write_csv
 
 import railcontact as rc
-from railcontact.plotting import _pyplot
+from railcontact.io.plotting import _pyplot
 
 CASE = {
     "material": {"young": 206e9, "poisson": 0.28},

@@ -25,7 +25,7 @@ import numpy as np
 from _sweep import approach_for_load, displacements, run_sweep, write_csv
 
 import railcontact as rc
-from railcontact.plotting import _pyplot
+from railcontact.io.plotting import _pyplot
 
 BASE = {
     "material": {"young": 206e9, "poisson": 0.28},

@@ -57,7 +57,7 @@ def force_errors(sim, friction: float) -> dict[str, float]:
 
 def run_case(fmu: Path, mode: str, step: float, duration: float, element_size: float,
              samples: int) -> dict:
-    from railcontact.cosim import Run, simulate
+    from railcontact.sim.cosim import Run, simulate
 
     n = int(round(duration / step))
     every = max(1, n // samples)
@@ -100,7 +100,7 @@ def table(rows: list[dict]) -> str:
 
 
 def plot(rows: list[dict], path: Path) -> None:
-    from railcontact.plotting import _pyplot
+    from railcontact.io.plotting import _pyplot
 
     plt = _pyplot()
 

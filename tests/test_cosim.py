@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from railcontact.cli import main
-from railcontact.dynamics import WheelsetModel, implicit_step, measure_wavelength
 from railcontact.errors import RailContactError
 from railcontact.fmu import ensure_fmu, fmu_is_current
 from railcontact.geometry.conicity import (
@@ -22,6 +21,7 @@ from railcontact.geometry.conicity import (
 )
 from railcontact.geometry.profiles import Profile, builtin_profile
 from railcontact.geometry.track import Track, Wheelset
+from railcontact.sim.dynamics import WheelsetModel, implicit_step, measure_wavelength
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -128,7 +128,7 @@ def test_free_wheelset_follows_klingel(fmu):
     """A free wheelset at 10 m/s (inertia negligible: the linear theory's frequency is
     within 1 % of the kinematic one) oscillates with Klingel's wavelength for the
     equivalent conicity of railcontact's geometry at the simulated amplitude."""
-    from railcontact.cosim import Run, simulate
+    from railcontact.sim.cosim import Run, simulate
 
     run = Run(speed=10.0, duration=1.5, step=5e-3, initial_lateral=3e-3,
               model=WheelsetModel.free(),
@@ -152,7 +152,7 @@ def test_free_conical_wheelset_follows_klingel_exactly(fmu, tmp_path):
     co-simulated wavelength is Klingel's to 1 % - the dynamics, the implicit step and the
     FMU's kinematic creepages add nothing of their own. (S1002's 5 % above is the profile's
     doing.)"""
-    from railcontact.cosim import Run, simulate
+    from railcontact.sim.cosim import Run, simulate
 
     s = np.linspace(-0.07, 0.065, 541)
     cone = Profile(s, -0.1 * s, "wheel", "cone").write(tmp_path / "cone.txt")
@@ -176,7 +176,7 @@ def test_demo_quick_runs_and_its_outputs_are_finite(fmu, tmp_path, capsys):
     assert "up to date" in text and "fewer iterations" in text
     for name in ("demo_motion.png", "demo_patches.png"):
         assert (out / name).stat().st_size > 10_000
-    from railcontact.demo import DemoOptions, run_demo
+    from railcontact.sim.demo import DemoOptions, run_demo
 
     res = run_demo(DemoOptions(quick=True, duration=0.1, fmu=str(fmu), plots=False),
                    progress=False)

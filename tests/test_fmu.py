@@ -25,8 +25,8 @@ from fmpy.validation import validate_fmu  # noqa: E402
 from railcontact.fmu import build_fmu  # noqa: E402
 from railcontact.geometry.profiles import read_profile  # noqa: E402
 from railcontact.geometry.track import Pose, Track, Wheelset  # noqa: E402
-from railcontact.materials import ElasticPair, Material  # noqa: E402
-from railcontact.wheelset import ContactSettings, WheelsetContact  # noqa: E402
+from railcontact.halfspace.materials import ElasticPair, Material  # noqa: E402
+from railcontact.timestep.wheelset import ContactSettings, WheelsetContact  # noqa: E402
 
 STEP = 1e-3
 CREEP = {"xi_left": 1e-3, "eta_left": -5e-4, "phi_left": 0.3,

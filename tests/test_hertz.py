@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from railcontact import ElasticPair, Material, RailContactError, hertz
-from railcontact.hertz import axis_ratio, curvature_ratio
+from railcontact.halfspace.hertz import axis_ratio, curvature_ratio
 
 # Hertz/Timoshenko m, n, r table (algorithms.md Sec. 1.2; classical values at 30 and 45 deg).
 TABLE = [  # theta [deg], m, n, r

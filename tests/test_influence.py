@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import dblquad
 
 from railcontact import ElasticPair
-from railcontact.influence import coefficients_at
+from railcontact.halfspace.influence import coefficients_at
 
 PAIR = ElasticPair(shear=1.0, poisson=0.28)
 

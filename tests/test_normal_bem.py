@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from railcontact import ElasticPair, Grid, Material, RailContactError, hertz, solve_normal
-from railcontact.hertz import curvature_ratio
-from railcontact.operator import HAVE_PYFFTW, influence_operator
+from railcontact.halfspace.hertz import curvature_ratio
+from railcontact.halfspace.operator import HAVE_PYFFTW, influence_operator
 
 PAIR = ElasticPair.of(Material(206e9, 0.28))
 

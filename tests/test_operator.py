@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from railcontact import ElasticPair, Grid, InfluenceOperator, Material, RailContactError
-from railcontact.influence import coefficients_at
-from railcontact.operator import HAVE_PYFFTW, influence_operator
+from railcontact.halfspace.influence import coefficients_at
+from railcontact.halfspace.operator import HAVE_PYFFTW, influence_operator
 
 FFT_BACKENDS = ["scipy"] + (["pyfftw"] if HAVE_PYFFTW else [])
 STEEL = ElasticPair.of(Material(206e9, 0.28))

@@ -7,7 +7,7 @@ import pytest
 
 import railcontact as rc
 from railcontact import ElasticPair, Grid, Material, hertz
-from railcontact.grid import remesh
+from railcontact.halfspace.grid import remesh
 from railcontact.normal.virtual import infcon_factor, virtual_penetration
 
 PAIR = ElasticPair.of(Material(206e9, 0.28))
@@ -69,7 +69,7 @@ def test_remesh_conserves_force():
 
 def test_infcon_estimate_cuts_iterations_on_paper_case(root):
     """Paper Sec. 4.1.1: 13 -> 3 iterations with INFCON."""
-    base = rc.load_case(root / "models" / "cases" / "hertz_paper.toml")
+    base = rc.load_case(root / "models" / "cases" / "hertz_paper.toml").to_dict()
     its = {}
     for est in ("none", "infcon"):
         c = copy.deepcopy(base)
@@ -81,7 +81,7 @@ def test_infcon_estimate_cuts_iterations_on_paper_case(root):
 
 def test_wheel_rail_estimates_order(root):
     """-2 mm wheel-rail case: INFCON <= KP <= none (paper: 5 / 6 / 13 iterations)."""
-    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
     its = {}
     for est in ("none", "kp", "infcon"):
         c = copy.deepcopy(base)
@@ -97,7 +97,7 @@ def test_wheel_rail_estimates_order(root):
 def test_small_lateral_sweep_estimates_cut_iterations(root):
     """A handful of displacements (-4 .. 4 mm, 83.3 kN): mean iterations INFCON < none for
     the normal BEM and FaStrip < none for ConvexGS (xi = eta = 2e-4, phi = 0.2 /m)."""
-    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
     its = {"none": [], "infcon": [], "t_none": [], "t_fastrip": []}
     for dy in (-0.004, -0.002, 0.0, 0.002, 0.004):
         for est in ("none", "infcon"):
@@ -132,10 +132,11 @@ def test_equivalent_ellipse_of_a_hertz_patch():
 def test_two_patch_estimates_land_on_their_bem_patches(root):
     """5.0 mm, vertical approach 0.05 mm: tread and gauge-corner patches. Each patch's
     INFCON estimate, evaluated on that patch's BEM grid, covers that patch's BEM contact."""
-    from railcontact.hertz import hertz as hertz_solution
-    from railcontact.pipeline import normal_estimate
+    from railcontact.contact import normal_estimate
+    from railcontact.halfspace.hertz import hertz as hertz_solution
+    from railcontact.settings import Control, NormalSettings
 
-    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
     c = copy.deepcopy(base)
     c["geometry"]["lateral_displacement"] = 0.005
     c["normal"] = {"penetration": 5e-5, "estimate": "infcon", "tolerance": 1e-6}
@@ -145,8 +146,8 @@ def test_two_patch_estimates_land_on_their_bem_patches(root):
         cp, n = p.geometry, p.normal
         dn = cp.normal_penetration(5e-5)
         hz = hertz_solution(cp.A, cp.B, PAIR, penetration=dn)
-        est = normal_estimate(c["normal"] | {"estimate_grid": [40, 40]}, hz, cp.s, cp.f,
-                              cp.a_of_s, PAIR, {"penetration": dn})(n.grid)
+        est = normal_estimate(NormalSettings(estimate="infcon", estimate_grid=(40, 40)), hz,
+                              cp.s, cp.f, cp.a_of_s, PAIR, Control(penetration=dn))(n.grid)
         overlap = np.logical_and(est > 0, n.contact).sum()
         assert overlap >= 0.8 * n.contact.sum()
         assert overlap >= 0.8 * np.count_nonzero(est > 0)
@@ -157,7 +158,7 @@ def test_remesh_on_a_shared_lattice_is_the_interpolation():
     """Grids on one lattice (same element size, centres a whole number of elements apart):
     the fast copy equals bilinear and nearest interpolation at the element centres, zero
     outside the source."""
-    import railcontact.grid as grid_module
+    import railcontact.halfspace.grid as grid_module
 
     rng = np.random.default_rng(3)
     src = Grid(12, 9, 0.5e-3, 0.4e-3, -3e-3, 1e-3)

@@ -10,7 +10,6 @@ import pytest
 
 import railcontact as rc
 from railcontact import CaseError, hertz
-from railcontact.pipeline import elastic_pair
 
 
 @pytest.fixture(scope="module")
@@ -18,7 +17,7 @@ def base(request):
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
-    return rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml")
+    return rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
 
 
 def variant(case, **geometry):
@@ -45,7 +44,7 @@ def test_small_approach_is_hertz_of_the_local_curvatures(base, dy):
     quad["geometry"] = {"type": "quadratic", "A": A, "B": B}
     quad["normal"]["penetration"] = delta_n
     qn = rc.solve(quad).patches[0].normal
-    hz = hertz(A, B, elastic_pair(case["material"]), penetration=delta_n)
+    hz = hertz(A, B, rc.validate_case(case).pair, penetration=delta_n)
     assert p.normal.force == pytest.approx(qn.force, rel=0.02)
     assert p.normal.force == pytest.approx(hz.load, rel=0.03)
     assert p.normal.max_pressure == pytest.approx(hz.max_pressure, rel=0.03)
@@ -147,7 +146,7 @@ def test_creep_load_secant_on_model_functions():
     """The normal share qn that makes the vertical force Q: a smooth model of a flange
     (vertical = qn (1 - k qn^0.1)), the same with a noise floor of 50 N, and one beyond
     Nadal's limit (vertical falls as qn grows)."""
-    from railcontact.wheelrail import MAX_STALLED, creep_load_secant
+    from railcontact.contact.loadloop import MAX_STALLED, creep_load_secant
 
     q = 83.3e3
     calls = []

@@ -10,8 +10,8 @@ import pytest
 from railcontact.errors import RailContactError
 from railcontact.geometry.profiles import read_profile
 from railcontact.geometry.track import Pose, Track, Wheelset
-from railcontact.materials import ElasticPair, Material
-from railcontact.wheelset import (
+from railcontact.halfspace.materials import ElasticPair, Material
+from railcontact.timestep.wheelset import (
     NO_CONTACT,
     NOT_CONVERGED,
     OK,

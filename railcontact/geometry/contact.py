@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RailContactError, check_positive
-from ..grid import Grid
+from ..halfspace.grid import Grid
 from .track import SIDES, Pose, Track, Wheelset
 
 N_TRACE = 6001

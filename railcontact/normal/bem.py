@@ -41,8 +41,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RailContactError, check_count, check_positive
-from ..grid import Grid, touches_boundary
-from ..operator import InfluenceOperator
+from ..halfspace.grid import Grid, touches_boundary
+from ..halfspace.operator import InfluenceOperator
 
 PRECONDITIONERS = ("fft", "none")
 

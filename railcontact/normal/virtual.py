@@ -41,10 +41,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RailContactError, check_positive
-from ..grid import Grid
-from ..hertz import hertz
-from ..influence import coefficients_at
-from ..materials import ElasticPair
+from ..halfspace.grid import Grid
+from ..halfspace.hertz import hertz
+from ..halfspace.influence import coefficients_at
+from ..halfspace.materials import ElasticPair
 
 KP_FACTOR = 0.55
 METHODS = ("kp", "infcon")

@@ -29,8 +29,8 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import RailContactError, check_count, check_finite, check_positive
-from ..grid import Grid
-from ..operator import InfluenceOperator
+from ..halfspace.grid import Grid
+from ..halfspace.operator import InfluenceOperator
 from .rolling import rigid_slip
 
 try:

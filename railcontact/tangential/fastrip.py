@@ -34,7 +34,7 @@ import time
 import numpy as np
 
 from ..errors import check_finite, check_positive
-from ..materials import ElasticPair
+from ..halfspace.materials import ElasticPair
 from .fastsim import _march, flexibilities, hertz_bound
 from .kalker import creep_coefficients
 from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, summarise

@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
-from ..materials import ElasticPair
+from ..halfspace.materials import ElasticPair
 from .kalker import creep_coefficients
 from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, summarise
 

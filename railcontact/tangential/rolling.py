@@ -30,10 +30,10 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import RailContactError, check_finite
-from ..grid import Grid
-from ..influence import coefficients_at
-from ..materials import ElasticPair
-from ..operator import InfluenceOperator, resolve_backend
+from ..halfspace.grid import Grid
+from ..halfspace.influence import coefficients_at
+from ..halfspace.materials import ElasticPair
+from ..halfspace.operator import InfluenceOperator, resolve_backend
 
 
 def steady_rolling_kernels(nx: int, ny: int, dx: float, dy: float,

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from ..errors import RailContactError
-from ..grid import Grid
+from ..halfspace.grid import Grid
 
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
 

@@ -28,7 +28,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk, elliprd, elliprf
 
-from .errors import RailContactError, check_positive
+from ..errors import RailContactError, check_positive
 from .materials import ElasticPair
 
 _CIRCLE_TOL = 1e-12

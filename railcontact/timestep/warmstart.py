@@ -27,9 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .grid import Grid, remesh
+from ..halfspace.grid import Grid, remesh
 
-WARM_STARTS = ("none", "estimate", "previous", "previous+estimate")
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
 MAX_EXTRAPOLATION = 2.0

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RailContactError, check_finite, check_positive
+from ..errors import RailContactError, check_finite, check_positive
 
 
 @dataclass(frozen=True)

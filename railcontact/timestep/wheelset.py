@@ -49,109 +49,24 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from time import perf_counter
-from typing import Any
 
 import numpy as np
 
-from .case import NORMAL_ESTIMATES, TANGENTIAL_ESTIMATES
-from .errors import RailContactError, check_finite, check_positive
-from .geometry.contact import ContactPoint, vertical_gap
-from .geometry.track import SIDES, Pose, Track, Wheelset
-from .hertz import HertzSolution
-from .materials import ElasticPair
-from .operator import BACKENDS
-from .pipeline import PatchSolution, normal_estimate, solve_patch_tangential
-from .warmstart import (
-    WARM_STARTS,
-    PatchMemory,
-    match,
-    previous_pressure,
-    previous_tangential,
-)
-from .wheelrail import MAX_SHARE, creep_load_secant, load_met, solve_wheel, vertical_force
+from ..contact.loadloop import MAX_SHARE, creep_load_secant, load_met, vertical_force
+from ..contact.patch import normal_estimate, solve_patch_tangential
+from ..contact.results import PatchSolution
+from ..contact.wheelrail import solve_wheel_normal
+from ..errors import RailContactError, check_finite, check_positive
+from ..geometry.contact import ContactPoint, vertical_gap
+from ..geometry.track import SIDES, Pose, Track, Wheelset
+from ..halfspace.hertz import HertzSolution
+from ..halfspace.materials import ElasticPair
+from ..settings import ContactSettings, Control
+from .warmstart import PatchMemory, match, previous_pressure, previous_tangential
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
 STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
                 OUT_OF_RANGE: "out of range"}
-
-
-@dataclass(frozen=True)
-class ContactSettings:
-    """Solver settings of :class:`WheelsetContact` (SI units).
-
-    Attributes
-    ----------
-    friction
-        Coulomb coefficient mu [-].
-    element_size
-        BEM element size dx = dy [m].
-    margin
-        Scale of the automatic potential contact area [-].
-    normal_tolerance, tangential_tolerance
-        eps_n and eps_tau.
-    normal_estimate
-        "none" | "hertz" | "kp" | "infcon".
-    tangential_estimate
-        "none" | "fastsim" | "fastrip".
-    warm_start
-        "none": every step cold (the estimates are not used); "estimate": the simplified
-        models above; "previous": the previous step's solution (cold when there is none);
-        "previous+estimate": the previous step's, and the estimate for a patch that has none.
-    fft
-        Convolution backend.
-    load_includes_creep
-        With wheel loads given and creepages: True (default) makes the load the total
-        vertical force of the rail on the wheel, normal and creep forces, as CONTACT's FZ
-        and :func:`railcontact.solve` (a secant iteration on the normal forces' share,
-        started from the previous step's creep share; every pass counts in the
-        iterations); False lets the normal forces alone carry it (one pass).
-    load_tolerance
-        Relative tolerance on the vertical load when the creep forces count [-].
-    """
-
-    friction: float = 0.4
-    element_size: float = 0.5e-3
-    margin: float = 1.2
-    normal_tolerance: float = 1e-3
-    tangential_tolerance: float = 1e-2
-    normal_estimate: str = "infcon"
-    tangential_estimate: str = "fastrip"
-    warm_start: str = "previous+estimate"
-    fft: str = "auto"
-    max_iterations_normal: int = 500
-    max_iterations_tangential: int = 1000
-    estimate_grid: tuple[int, int] = (40, 40)
-    strips: tuple[int, int] = (40, 40)
-    spin_offset: float = 1.0 / 6.0
-    quantum: int = 8
-    load_includes_creep: bool = True
-    load_tolerance: float = 1e-3
-
-    def __post_init__(self) -> None:
-        check_positive("friction", self.friction, "-")
-        check_positive("element_size", self.element_size, "m")
-        if self.element_size > 0.005:
-            raise RailContactError(f"element_size = {self.element_size:g} m is too coarse for "
-                                   "a wheel-rail patch (use at most 5e-3 m)")
-        check_positive("margin", self.margin, "-")
-        for name in ("normal_tolerance", "tangential_tolerance", "load_tolerance"):
-            v = check_positive(name, getattr(self, name), "-")
-            if v >= 1:
-                raise RailContactError(f"{name} must be below 1, got {v:g}")
-        for name, allowed in (("normal_estimate", NORMAL_ESTIMATES),
-                              ("tangential_estimate", TANGENTIAL_ESTIMATES),
-                              ("warm_start", WARM_STARTS), ("fft", BACKENDS)):
-            if getattr(self, name) not in allowed:
-                raise RailContactError(f"{name} must be one of {', '.join(allowed)}; got "
-                                       f"{getattr(self, name)!r}")
-
-    @property
-    def uses_estimate(self) -> bool:
-        return self.warm_start in ("estimate", "previous+estimate")
-
-    @property
-    def uses_previous(self) -> bool:
-        return self.warm_start in ("previous", "previous+estimate")
 
 
 @dataclass(frozen=True)
@@ -322,10 +237,10 @@ class WheelsetContact:
         for k, side in enumerate(("left", "right")):
             if loads is not None:
                 q = check_positive(f"{side} wheel load", loads[k], "N", allow_zero=True)
-                control: dict[str, float] = {"load": q}
+                control = Control(load=q)
             else:
                 check_finite("vertical", vertical, "m")
-                control = {"penetration": self._approach(pose, side, vertical)}
+                control = Control(penetration=self._approach(pose, side, vertical))
             creep = None if creepages is None else tuple(float(c) for c in creepages[k])
             wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
             wheels.append(wheel)
@@ -340,40 +255,26 @@ class WheelsetContact:
         g = vertical_gap(self.track, self.wheelset, pose, side)[4]
         return max(-(float(g.min()) + vertical), 0.0)
 
-    def _specs(self) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
-        st = self.settings
-        gspec = {"nx": 64, "ny": 64, "dx": st.element_size, "dy": st.element_size,
-                 "margin": st.margin, "quantum": st.quantum, "snap": True}
-        nspec = {"estimate": st.normal_estimate if st.uses_estimate else "none",
-                 "estimate_grid": list(st.estimate_grid), "tolerance": st.normal_tolerance,
-                 "max_iterations": st.max_iterations_normal, "fft": st.fft}
-        tspec = {"friction": st.friction, "model": "bem",
-                 "estimate": st.tangential_estimate if st.uses_estimate else "none",
-                 "tolerance": st.tangential_tolerance,
-                 "max_iterations": st.max_iterations_tangential, "bound": "elliptic",
-                 "strips": list(st.strips), "spin_offset": st.spin_offset}
-        return gspec, nspec, tspec
-
-    def _solve_side(self, side: str, pose: Pose, control: dict[str, float],
+    def _solve_side(self, side: str, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
                     time: float | None) -> tuple[WheelContact, list[PatchMemory]]:
         keep = self.settings.uses_previous  # remember this step for the next one
         previous = self.memory[side] if keep else []
         wheel = WheelContact(side=side)
-        if control.get("load", 1.0) == 0.0 or control.get("penetration", 1.0) == 0.0:
+        if control.value == 0.0:
             return wheel, []
         tangential = creep is not None or kin is not None
-        if not ("load" in control and tangential and self.settings.load_includes_creep):
+        if not (control.by_load and tangential and self.settings.load_includes_creep):
             patches, creepages, memory = self._pass(side, pose, control, creep, kin, time,
                                                     previous, previous)
             return self._finish(wheel, patches, creepages, pose), memory if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
-        q = control["load"]
+        q = control.load
         passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
 
         def residual(qn: float) -> tuple[float, tuple]:
             source = passes[-1][2] if passes else previous  # later passes: the one before
-            passes.append(self._pass(side, pose, {"load": qn}, creep, kin, time, previous,
+            passes.append(self._pass(side, pose, Control(load=qn), creep, kin, time, previous,
                                      source))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
@@ -402,7 +303,7 @@ class WheelsetContact:
             _resultants(wheel, patches, pose)
         return wheel
 
-    def _pass(self, side: str, pose: Pose, control: dict[str, float],
+    def _pass(self, side: str, pose: Pose, control: Control,
               creep: tuple[float, float, float] | None, kin: Kinematics | None,
               time: float | None, previous: list[PatchMemory], source: list[PatchMemory]
               ) -> tuple[list[PatchSolution], list[tuple[float, float, float]],
@@ -411,12 +312,13 @@ class WheelsetContact:
         tangential BEM; warm-started from ``source`` (the previous step's memory, or an
         earlier pass of this step), remembering ``previous`` as the older step."""
         sgn = SIDES[side]
-        gspec, nspec, tspec = self._specs()
+        settings = self.settings
         pair = self.pair
 
-        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: dict[str, float]):
+        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: Control):
             def estimate():  # KP/INFCON cost a solve of their own: only when needed
-                return normal_estimate(nspec, hz, cp.s, cp.f, cp.a_of_s, pair, ctrl)
+                return normal_estimate(settings.normal_settings, hz, cp.s, cp.f, cp.a_of_s,
+                                       pair, ctrl)
 
             m = match(source, cp.rail_u, cp.position[2])
             if m is None:
@@ -427,9 +329,8 @@ class WheelsetContact:
                 return p if p.sum() > 0 else estimate()(grid)
             return of
 
-        patches = solve_wheel(self.track, self.wheelset, pose, side,
-                              {"grid": gspec, "normal": dict(nspec, **control)}, pair,
-                              estimate_for)
+        patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
+                                     settings.patch_settings, pair, estimate_for)
         patches = [p for p in patches if p.normal.force > 0]
         creepages, memory = [], []
         for patch in patches:
@@ -440,8 +341,8 @@ class WheelsetContact:
                 creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
                 prev = previous_tangential(m, patch.normal.grid) if m else None
-                solve_patch_tangential(patch, dict(tspec, creepage=side_creep), pair,
-                                       self.settings.fft, previous=prev)
+                solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
+                                       creepage=side_creep, previous=prev)
             t = patch.tangential
             older = match(previous, cp.rail_u, cp.position[2])
             memory.append(PatchMemory(

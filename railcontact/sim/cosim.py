@@ -21,14 +21,14 @@ import shutil
 import sys
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..errors import RailContactError, check_count, check_finite, check_positive
 from .dynamics import WheelsetModel, implicit_step
-from .errors import RailContactError, check_count, check_finite, check_positive
 
 STATUS_OUT_OF_RANGE = 3
 INPUTS = ("lateral_displacement", "yaw", "lateral_velocity", "yaw_rate", "speed",
@@ -165,21 +165,14 @@ class CoSimResult:
         return self.position[:, 1]
 
     def contact_model(self, warm_start: str = "none"):
-        """An in-process :class:`~railcontact.wheelset.WheelsetContact` with the FMU's
+        """An in-process :class:`~railcontact.timestep.WheelsetContact` with the FMU's
         geometry and settings (e.g. to look at the patches of a recorded state)."""
-        from .materials import ElasticPair, Material
-        from .wheelset import ContactSettings, WheelsetContact
+        from ..fmu.variables import parameter_settings
+        from ..timestep import WheelsetContact
 
-        p = self.parameters
-        mat = Material(float(p["young"]), float(p["poisson"]))
-        settings = ContactSettings(
-            friction=float(p["friction"]), element_size=float(p["element_size"]),
-            normal_tolerance=float(p["normal_tolerance"]),
-            tangential_tolerance=float(p["tangential_tolerance"]),
-            normal_estimate=str(p["normal_estimate"]),
-            tangential_estimate=str(p["tangential_estimate"]), warm_start=warm_start,
-            fft=str(p["fft"]))
-        return WheelsetContact(self.track, self.wheelset, ElasticPair.of(mat, mat), settings)
+        ps = parameter_settings(self.parameters)
+        return WheelsetContact(self.track, self.wheelset, ps.material.elastic_pair(),
+                               replace(ps.contact, warm_start=warm_start))
 
 
 class _Instance:
@@ -284,9 +277,9 @@ def simulate(fmu: str | Path, run: Run,
     from fmpy.fmi1 import FMICallException
     from fmpy.model_description import read_model_description
 
-    from .geometry.conicity import centred_contact
-    from .geometry.profiles import read_profile
-    from .geometry.track import Track, Wheelset
+    from ..geometry.conicity import centred_contact
+    from ..geometry.profiles import read_profile
+    from ..geometry.track import Track, Wheelset
 
     fmu = Path(fmu).resolve()
     md = read_model_description(str(fmu))

@@ -1,5 +1,6 @@
 """Building the railcontact FMU from ``fmu_src/`` (the C shim, the Python slave, the
-modelDescription generator): ``railcontact fmu build [-o dist/RailContact.fmu]``.
+modelDescription generator): ``railcontact fmu build [-o dist/RailContact.fmu]``. The
+variable table is :mod:`railcontact.fmu.variables`.
 
 The sources live beside the package in a source checkout (``pip install -e .``); the built
 FMU runs in the Python environment it was built with.
@@ -11,14 +12,14 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from .errors import RailContactError
+from ..errors import RailContactError
 
 DEFAULT_OUTPUT = "dist/RailContact.fmu"
 
 
 def fmu_sources() -> Path:
     """The ``fmu_src`` folder of the source checkout this package was installed from."""
-    d = Path(__file__).resolve().parents[1] / "fmu_src"
+    d = Path(__file__).resolve().parents[2] / "fmu_src"
     if not (d / "railcontact_fmu.c").is_file():
         raise RailContactError(f"FMU sources not found at {d}: build the FMU from a source "
                                "checkout installed with `pip install -e .`")
@@ -43,7 +44,6 @@ def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = 
         return b.build(output, list(profiles))
     except b.BuildError as exc:
         raise RailContactError(f"cannot build the FMU: {exc}") from None
-
 
 
 def fmu_is_current(path: str | Path, profiles: list[str | Path] = ()) -> bool:

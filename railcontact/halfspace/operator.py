@@ -26,7 +26,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.fft
 
-from .errors import RailContactError
+from ..errors import RailContactError
 from .grid import Grid
 from .influence import influence_kernel
 from .materials import ElasticPair

@@ -2,14 +2,25 @@
 
 SI units. Value references are numbered per type in the order of the table (Real,
 Integer, String); Booleans are not used. Per-wheel quantities have a ``_left`` and a
-``_right`` variable. Frames and signs as in :mod:`railcontact.wheelset`.
+``_right`` variable. Frames and signs as in :mod:`railcontact.timestep.wheelset`.
+
+The parameters are not written here: each is a setting of :mod:`railcontact.settings`
+(:data:`PARAMETER_SOURCES` says which), and takes its default, unit and description from
+there; :func:`parameter_settings` turns the parameter values back into those records.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+from ..settings import ContactSettings, FMUModes, MaterialSettings, WheelRailGeometry
+from ..settings.fields import Record, default_of, spec_of
 
 SIDES = ("left", "right")
+UNITS = {"-": "1", "": ""}
+"""Settings units that FMI writes otherwise (dimensionless is "1")."""
 
 
 @dataclass(frozen=True)
@@ -28,47 +39,84 @@ def _wheel(name, type_, unit, description, causality="output", start=None):
             for s in SIDES]
 
 
-PARAMETERS = [
-    Variable("wheel_profile", "String", "parameter", "S1002", "",
-             "wheel profile: built-in name (S1002) or a file in the FMU's resources"),
-    Variable("rail_profile", "String", "parameter", "60E1", "",
-             "rail profile: built-in name (60E1, UIC60, CN60) or a file in the resources"),
-    Variable("profile_unit", "String", "parameter", "mm", "",
-             "unit of two-column profile files: mm or m"),
-    Variable("control", "String", "parameter", "load", "",
-             "normal problem: load (wheel loads given) or penetration (vertical "
-             "displacement and roll given)"),
-    Variable("load_definition", "String", "parameter", "total", "",
-             "what a wheel load is (control=load): total (vertical force of normal and creep "
-             "forces, as CONTACT's FZ) or normal (normal forces only)"),
-    Variable("creepage_input", "String", "parameter", "direct", "",
-             "direct (creepages per wheel) or kinematic (from the wheelset velocities)"),
-    Variable("normal_estimate", "String", "parameter", "infcon", "",
-             "initial estimate of the normal BEM: none, hertz, kp, infcon"),
-    Variable("tangential_estimate", "String", "parameter", "fastrip", "",
-             "initial estimate of the tangential BEM: none, fastsim, fastrip"),
-    Variable("warm_start", "String", "parameter", "previous+estimate", "",
-             "none, estimate, previous, previous+estimate"),
-    Variable("fft", "String", "parameter", "auto", "",
-             "convolution backend: auto, pyfftw, scipy, dense"),
-    Variable("inclination", "Real", "parameter", 0.024994793618920156, "rad",
-             "rail inclination (1:40)"),
-    Variable("gauge", "Real", "parameter", 1.435, "m", "track gauge, 14 mm below the rail top"),
-    Variable("flange_back_distance", "Real", "parameter", 1.360, "m",
-             "distance between the flange backs of the wheelset"),
-    Variable("wheel_radius", "Real", "parameter", 0.46, "m", "nominal rolling radius"),
-    Variable("young", "Real", "parameter", 206e9, "Pa", "Young's modulus of wheel and rail"),
-    Variable("poisson", "Real", "parameter", 0.28, "1", "Poisson's ratio of wheel and rail"),
-    Variable("friction", "Real", "parameter", 0.4, "1", "Coulomb friction coefficient"),
-    Variable("element_size", "Real", "parameter", 0.5e-3, "m", "BEM element size dx = dy"),
-    Variable("normal_tolerance", "Real", "parameter", 1e-3, "1",
-             "eps_n, relative pressure change between iterations"),
-    Variable("tangential_tolerance", "Real", "parameter", 1e-2, "1",
-             "eps_tau, relative traction change between sweeps"),
-    Variable("load_tolerance", "Real", "parameter", 1e-3, "1",
-             "relative tolerance on a wheel load when the creep forces count "
-             "(load_definition=total)"),
-]
+PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
+    ("wheel_profile", WheelRailGeometry, "wheel"),
+    ("rail_profile", WheelRailGeometry, "rail"),
+    ("profile_unit", WheelRailGeometry, "profile_unit"),
+    ("control", FMUModes, "control"),
+    ("load_definition", FMUModes, "load_definition"),
+    ("creepage_input", FMUModes, "creepage_input"),
+    ("normal_estimate", ContactSettings, "normal_estimate"),
+    ("tangential_estimate", ContactSettings, "tangential_estimate"),
+    ("warm_start", ContactSettings, "warm_start"),
+    ("fft", ContactSettings, "fft"),
+    ("inclination", WheelRailGeometry, "inclination"),
+    ("gauge", WheelRailGeometry, "gauge"),
+    ("flange_back_distance", WheelRailGeometry, "back_to_back"),
+    ("wheel_radius", WheelRailGeometry, "wheel_radius"),
+    ("young", MaterialSettings, "young"),
+    ("poisson", MaterialSettings, "poisson"),
+    ("friction", ContactSettings, "friction"),
+    ("element_size", ContactSettings, "element_size"),
+    ("normal_tolerance", ContactSettings, "normal_tolerance"),
+    ("tangential_tolerance", ContactSettings, "tangential_tolerance"),
+    ("load_tolerance", ContactSettings, "load_tolerance"),
+)
+"""FMU parameter name, the settings record and the field it sets (wheel and rail share
+one material in the FMU)."""
+
+
+def _parameter(name: str, record: type[Record], key: str) -> Variable:
+    f = next(f for f in fields(record) if f.name == key)  # type: ignore[arg-type]
+    s = spec_of(f)
+    default = default_of(f)
+    if isinstance(default, tuple):  # a material constant: one value for both bodies
+        default = default[0]
+    numeric = s.kind in ("float", "floats12")
+    doc = s.doc.replace(" (one value, or [body 1, body 2])", " of wheel and rail")
+    if s.kind == "choice":
+        doc += ": " + ", ".join(s.choices)
+    return Variable(name, "Real" if numeric else "String", "parameter", default,
+                    UNITS.get(s.unit, s.unit), doc)
+
+
+PARAMETERS = [_parameter(*source) for source in PARAMETER_SOURCES]
+
+
+@dataclass(frozen=True)
+class ParameterSettings:
+    """The settings records that the FMU parameters set."""
+
+    geometry: WheelRailGeometry
+    material: MaterialSettings
+    contact: ContactSettings
+    modes: FMUModes
+
+
+def parameter_settings(values: Mapping[str, Any]) -> ParameterSettings:
+    """The settings records from FMU parameter values (by parameter name, numbers or the
+    strings of a modelDescription; absent ones take their defaults). Raises
+    :class:`~railcontact.errors.RailContactError` naming a bad one.
+    """
+    per_record: dict[type[Record], dict[str, Any]] = {}
+    numeric = {v.name for v in PARAMETERS if v.type == "Real"}
+    for name, record, key in PARAMETER_SOURCES:
+        if name in values:
+            value = values[name]
+            if name in numeric and isinstance(value, str):  # a modelDescription start value
+                try:
+                    value = float(value)
+                except ValueError:
+                    pass  # reported as not a number below
+            per_record.setdefault(record, {})[key] = record.check_value(
+                key, value, f"parameter {name}")
+    modes = FMUModes(**per_record.get(FMUModes, {}))
+    contact = per_record.get(ContactSettings, {})
+    contact["load_includes_creep"] = modes.load_definition == "total"
+    return ParameterSettings(WheelRailGeometry(**per_record.get(WheelRailGeometry, {})),
+                             MaterialSettings(**per_record.get(MaterialSettings, {})),
+                             ContactSettings(**contact), modes)
+
 
 INPUTS = [
     Variable("lateral_displacement", "Real", "input", 0.0, "m",

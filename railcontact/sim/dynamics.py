@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RailContactError, check_positive
+from ..errors import RailContactError, check_positive
 
 
 @dataclass(frozen=True)

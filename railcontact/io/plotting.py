@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .pipeline import Solution, elastic_pair, simplified_tangential
+from ..contact import Solution, simplified_tangential
 
 MM, MPA = 1e3, 1e-6
 
@@ -55,10 +55,10 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
     from matplotlib.colors import ListedColormap
 
     tan, res = ps.tangential, ps.normal
-    tspec = sol.case["tangential"]
+    tangential = sol.case.tangential
     g = res.grid
     xmin, xmax, ymin, ymax = g.bounds
-    mu = tspec["friction"]
+    mu = tangential.friction
     if ps.tangential_model == "bem":
         xe = np.linspace(xmin, xmax, g.nx + 1) * MM
         ye = np.linspace(ymin, ymax, g.ny + 1) * MM
@@ -94,19 +94,19 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
     ax1.step(g.x * MM, mu * res.pressure[:, j0] * MPA, "k:", where="mid", label=r"$\mu p_n$")
     ax1.step(g.x * MM, -mu * res.pressure[:, j0] * MPA, "k:", where="mid")
     if res.force > 0:
-        from .hertz import hertz
+        from ..halfspace.hertz import hertz
 
-        pair = elastic_pair(sol.case["material"])
+        pair = sol.case.pair
         hz = hertz(*ps.curvatures, pair, load=res.force)
         for model, style in (("fastsim", "--"), ("fastrip", "-.")):
-            r = simplified_tangential(model, hz, pair, tspec,
+            r = simplified_tangential(model, hz, pair, tangential,
                                       res if ps.geometry is not None else None)
             k = int(np.argmin(np.abs(r.strips.y)))
             ax1.plot(r.strips.x[k] * MM, r.traction[0, k] * MPA, style,
                      label=f"{'FASTSIM' if model == 'fastsim' else 'FaStrip'} $p_x$")
     ax1.set_xlabel("x [mm]")
     ax1.set_ylabel("traction [MPa]")
-    cr = tspec["creepage"]
+    cr = tangential.creepage
     ax1.set_title(f"traction near y = 0; creepage ({cr[0]:g}, {cr[1]:g}, {cr[2]:g} 1/m), "
                   f"mu = {mu:g}", fontsize=10)
     ax1.legend(fontsize=8)

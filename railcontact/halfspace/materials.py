@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import RailContactError, check_positive
+from ..errors import RailContactError, check_positive
 
 
 @dataclass(frozen=True)

@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import RailContactError, check_count, check_positive
+from ..fmu import DEFAULT_OUTPUT, ensure_fmu
+from ..io.plotting import _pyplot
 from .cosim import CoSimResult, Run, print_progress, simulate
 from .dynamics import WheelsetModel, measure_wavelength
-from .errors import RailContactError, check_count, check_positive
-from .fmu import DEFAULT_OUTPUT, ensure_fmu
-from .plotting import _pyplot
 
 MM, KN = 1e3, 1e-3
 QUICK = {"duration": 0.6, "step": 2e-3, "element_size": 0.8e-3}
@@ -119,7 +119,7 @@ def run_demo(opts: DemoOptions, progress: bool = True) -> DemoResult:
 
 def summarise(sim: CoSimResult) -> dict[str, float]:
     """Numbers of the summary (SI units)."""
-    from .geometry.conicity import equivalent_conicity, klingel_wavelength
+    from ..geometry.conicity import equivalent_conicity, klingel_wavelength
 
     o = sim.outputs
     w = measure_wavelength(sim.distance, sim.lateral)
@@ -276,8 +276,8 @@ def plot_patches(sim: CoSimResult, path: Path, count: int = 3) -> Path:
     rail profile coordinate."""
     from matplotlib.colors import ListedColormap
 
-    from .geometry.track import Pose
-    from .wheelset import Kinematics
+    from ..geometry.track import Pose
+    from ..timestep import Kinematics
 
     plt = _pyplot()
     contact = sim.contact_model()

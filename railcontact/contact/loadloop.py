@@ -1,0 +1,115 @@
+"""The load loop of a wheel: the vertical force of its patches, and the secant iteration
+that makes normal and creep forces together carry a vertical wheel load.
+
+A vertical wheel load Q [N] is the rail's total vertical force on the wheel, as CONTACT's
+FZ: ``sum_k (N_k cos(gamma_k) + F_s,k sin(gamma_k)) = Q``, ``F_s,k`` the patch's creep
+force across the track (in the contact plane, towards the field side). On a flange the
+creep force carries a large part of it (``mu tan(gamma)`` ~ 0.8 at 70 deg with mu = 0.3),
+and beyond Nadal's limit (``mu tan(gamma) > 1``, sliding up) no normal force carries it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TypeVar
+
+from .results import PatchSolution
+
+T = TypeVar("T")
+MAX_SECANT = 30
+"""Secant steps at most, of the approach and of the normal share."""
+CREEP_LOAD_RTOL = 1e-5
+"""Relative tolerance on the total vertical force when creep forces carry part of it."""
+MAX_STALLED = 3
+"""Passes in a row that do not halve the smallest residual, after which the creep-load
+iteration stops."""
+MAX_SHARE = 100.0
+"""Largest normal share of a vertical load the creep-load iteration tries: a flange near
+Nadal's limit (``cos(gamma) - mu sin(gamma)`` -> 0) needs N >> Q; beyond it the load
+cannot be carried (the wheel climbs)."""
+
+
+def vertical_force(patches: list[PatchSolution]) -> float:
+    """Vertical force of the rail on the wheel [N]: normal and (solved) creep forces."""
+    total = 0.0
+    for p in patches:
+        g = p.geometry.contact_angle
+        total += p.normal.force * math.cos(g)
+        if p.tangential is not None:
+            total += p.tangential.force[1] * math.sin(g)
+    return total
+
+
+def load_met(patches: list[PatchSolution], load: float, rtol: float,
+             tangential_tolerance: float) -> bool:
+    """Whether the wheel's vertical force is the ``load`` [N] to ``rtol``, or to the
+    accuracy its creep forces have: ``eps_tau`` of their vertical components (on a flange
+    near Nadal's limit N is many times the load, and so is the noise of ``F_s sin(gamma)``
+    that the tangential BEM's tolerance leaves)."""
+    creep = sum(abs(p.tangential.force[1] * math.sin(p.geometry.contact_angle))
+                for p in patches if p.tangential is not None)
+    return abs(vertical_force(patches) - load) <= max(rtol * load, tangential_tolerance * creep)
+
+
+def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float, start: float,
+                      rtol: float) -> tuple[T, str]:
+    """Secant iteration on the normal forces' share of a vertical wheel load.
+
+    Parameters
+    ----------
+    residual
+        ``residual(qn)`` solves the wheel with its normal forces carrying the vertical load
+        ``qn`` [N] and returns (total vertical force including creep forces - ``load`` [N],
+        the solution).
+    load
+        The vertical wheel load Q [N].
+    start
+        First guess of the normal share [N] (Q, or Q less the previous time step's creep
+        share).
+    rtol
+        Tolerance on ``|residual| / load``.
+
+    Returns
+    -------
+    solution, message
+        The pass closest to the load, and "" when it meets ``rtol``, else why not: beyond
+        Nadal's limit (the vertical force is negative and falls as the normal share grows:
+        the creep force pulls a sliding flange up more than the normal force pushes it,
+        ``mu tan(gamma) > 1``; then the first pass's solution), or the tolerance not
+        reached. The iteration stops when :data:`MAX_STALLED` passes in a row do not halve
+        the smallest residual: the tangential BEM stops at ``eps_tau``, and an element
+        changing between adhesion and slip moves the vertical force by steps (~1e-3 of the
+        load on a flange at ``eps_tau = 1e-2``), so the residual has a noise floor.
+    """
+    q0 = start
+    r0, sol = residual(q0)
+    if abs(r0) <= rtol * load:
+        return sol, ""
+    first = best = sol
+    best_r, stalled = abs(r0), 0
+    # First step as if the creep forces grew in proportion to the normal forces (as in
+    # full slip); from then on secant steps.
+    vertical = r0 + load
+    q1 = q0 * load / vertical if vertical > 0 else 2.0 * q0
+    q1 = min(max(q1, 0.05 * load), MAX_SHARE * load)
+    r1, sol = residual(q1)
+    for _ in range(MAX_SECANT):
+        stalled = 0 if abs(r1) < 0.5 * best_r else stalled + 1
+        if abs(r1) < best_r:
+            best, best_r = sol, abs(r1)
+        if best_r <= rtol * load or stalled >= MAX_STALLED or r1 == r0:
+            break
+        if r1 + load <= 0 and r0 + load <= 0 and (r1 - r0) * (q1 - q0) <= 0:
+            return first, (f"beyond Nadal's limit: the creep forces pull the wheel up more "
+                           f"than the normal forces push it (vertical force {r0 + load:.6g} "
+                           f"N at a normal share of {q0:.6g} N, {r1 + load:.6g} N at "
+                           f"{q1:.6g} N); no normal force carries the load {load:.6g} N")
+        q2 = q1 - r1 * (q1 - q0) / (r1 - r0)
+        q0, r0 = q1, r1
+        q1 = min(max(q2, 0.5 * q1, 0.05 * load), 2.0 * q1, MAX_SHARE * load)
+        r1, sol = residual(q1)
+    if best_r <= rtol * load:
+        return best, ""
+    return best, (f"the vertical load with creep forces did not converge (vertical force "
+                  f"off by {best_r:.6g} N for load {load:.6g} N)")

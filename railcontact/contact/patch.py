@@ -1,0 +1,194 @@
+"""One contact patch: grid -> initial estimate -> normal BEM -> tangential solution.
+
+This is the generic problem that the quadratic case, the wheel-rail case and the time step
+are built on: a patch is given by its gap as a function of the grid, its potential contact
+area and its control (load or penetration); the settings records say how to solve it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import CaseError
+from ..halfspace.grid import Grid
+from ..halfspace.hertz import HertzSolution, hertz
+from ..halfspace.materials import ElasticPair
+from ..halfspace.operator import influence_operator
+from ..normal import NormalResult, solve_normal
+from ..normal.virtual import virtual_penetration
+from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
+from ..tangential import rolling_operator, solve_tangential
+from ..tangential.fastrip import fastrip, fastrip_hertz
+from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
+from ..tangential.strips import (
+    StripResult,
+    equivalent_ellipse,
+    remesh_strips,
+    sample_on_strips,
+    strips_from_contact,
+)
+from .results import PatchSolution
+
+GROW_FACTOR = 1.5
+"""Factor by which an automatic potential area grows when the contact reaches its edge."""
+MAX_GROW = 4
+"""Enlargements of an automatic potential area at most."""
+
+Bounds = tuple[float, float, float, float]
+"""A potential contact area (xmin, xmax, ymin, ymax) [m]."""
+PressureEstimate = Callable[[Grid], "np.ndarray | None"]
+"""An initial pressure [Pa] as a function of the BEM grid (None: no estimate)."""
+
+
+def potential_area(A: float, B: float, delta0: float, margin: float = 1.0) -> Bounds:
+    """Potential contact area for a quadratic gap (paper Sec. 2.1) [m].
+
+    ``A x^2 <= delta0`` and ``B y^2 <= delta0``, i.e. the rigid interpenetration region
+    for the estimated penetration ``delta0``, scaled by ``margin``. It contains the Hertz
+    ellipse, since ``A a^2 + B b^2 = delta0``.
+    """
+    xl = margin * math.sqrt(delta0 / A)
+    yl = margin * math.sqrt(delta0 / B)
+    return (-xl, xl, -yl, yl)
+
+
+def _axis(lo: float, hi: float, n: int, h: float | None, settings: GridSettings
+          ) -> tuple[float, float, int]:
+    """One axis of a grid: the counts, or the element size ``h`` with the quantum and snap
+    rules of ``settings``."""
+    if h is None:
+        return lo, hi, n
+    extra = 1 if settings.snap else 0
+    q = settings.quantum
+    n = max(2, q * math.ceil(((hi - lo) / h + extra) / q - 1e-9))
+    c = 0.5 * (lo + hi)
+    c = round(c / h) * h if extra else c
+    return c - n * h / 2, c + n * h / 2, n
+
+
+def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
+    """The BEM grid on ``bounds`` [m] from the counts or element sizes of ``settings``.
+
+    With element sizes, ``quantum`` rounds the counts up to a multiple (fewer distinct
+    influence operators in a time series) and ``snap`` puts the grid centre on a multiple
+    of the element size, so that the grids of consecutive time steps share one lattice
+    around the contact point and a warm start is not smeared by interpolation.
+    """
+    xmin, xmax, nx = _axis(bounds[0], bounds[1], settings.nx, settings.dx, settings)
+    ymin, ymax, ny = _axis(bounds[2], bounds[3], settings.ny, settings.dy, settings)
+    return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)
+
+
+def normal_estimate(settings: NormalSettings, hz: HertzSolution | None, s: np.ndarray,
+                    f: np.ndarray, a_of_s: np.ndarray, pair: ElasticPair,
+                    control: Control) -> PressureEstimate:
+    """The initial estimate of the pressure that ``settings.estimate`` asks for.
+
+    "hertz": Hertz's pressure at the element centres; "kp" / "infcon": the virtual
+    penetration model on the lateral samples ``s`` [m] with the gap ``f(s)`` [m] and the
+    longitudinal curvature ``a_of_s`` [1/m], its amplitude set on its own grid
+    (``estimate_grid``), evaluated at the BEM element centres; "none": no estimate.
+    """
+    method = settings.estimate
+    if method == "hertz" and hz is not None:
+        return lambda grid: hz.pressure(*grid.mesh())
+    if method in ("kp", "infcon"):
+        nx, ny = settings.estimate_grid
+        est = virtual_penetration(method, s, f, a_of_s, pair, nx=nx, ny=ny, **control.kwargs())
+        return lambda grid: est.pressure_at(*grid.mesh())
+    return lambda grid: None
+
+
+def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
+                       grid_settings: GridSettings, settings: NormalSettings,
+                       pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
+                       automatic: bool = True) -> NormalResult:
+    """BEM normal solution of one patch on the potential area ``bounds`` [m].
+
+    ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``estimate_of(grid)`` the
+    initial pressure [Pa] (or None). An automatic area is grown by :data:`GROW_FACTOR`
+    while the contact reaches its edge; a user-given one that is too small is an error.
+    """
+    for _ in range(MAX_GROW + 1):
+        grid = make_grid(grid_settings, bounds)
+        op = influence_operator(grid, pair, "z", settings.fft)
+        res = solve_normal(gap_of(grid), grid, op, initial_pressure=estimate_of(grid),
+                           tolerance=settings.tolerance, max_iterations=settings.max_iterations,
+                           preconditioner=settings.preconditioner, **control.kwargs())
+        if not res.touches_boundary:
+            return res
+        if not automatic:
+            x = None if grid_settings.x is None else list(grid_settings.x)
+            y = None if grid_settings.y is None else list(grid_settings.y)
+            raise CaseError(
+                "potential contact area too small: the contact reaches the edge of [grid] "
+                f"x = {x} , y = {y} m; enlarge it or leave x and y out for an automatic area")
+        xmin, xmax, ymin, ymax = bounds
+        xc, yc = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
+        bounds = (xc + (xmin - xc) * GROW_FACTOR, xc + (xmax - xc) * GROW_FACTOR,
+                  yc + (ymin - yc) * GROW_FACTOR, yc + (ymax - yc) * GROW_FACTOR)
+    return res
+
+
+def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
+                          settings: TangentialSettings, normal: NormalResult | None = None,
+                          creepage: tuple[float, float, float] | None = None) -> StripResult:
+    """FASTSIM or FaStrip (``model``) with the settings' friction, strips and bound.
+
+    Without ``normal``: on the Hertz ellipse ``hz`` (elliptic or parabolic bound). With a
+    normal solution: on the actual patch (strips along its contact rows, its pressure as the
+    traction bound) with the coefficients of its equivalent ellipse - the adaptation for
+    non-elliptic wheel-rail patches. ``creepage`` (xi, eta, phi) replaces the settings'.
+    """
+    nx, ny = settings.strips
+    mu = settings.friction
+    creepage = settings.creepage if creepage is None else creepage
+    if normal is None:
+        args = (hz.a, hz.b, hz.load, pair, mu, creepage)
+        if model == "fastsim":
+            return fastsim_hertz(*args, nx=nx, ny=ny, bound=settings.bound)
+        return fastrip_hertz(*args, nx=nx, ny=ny)
+    strips = strips_from_contact(normal.grid, normal.contact, nx)
+    pn = sample_on_strips(normal.pressure, normal.grid, strips)
+    a_eq, b_eq = equivalent_ellipse(normal.grid, normal.contact)
+    if model == "fastsim":
+        return fastsim(strips, pn, mu, creepage, flexibilities(a_eq, b_eq, pair))
+    return fastrip(strips, pn, normal.force, a_eq, b_eq, pair, mu, creepage)
+
+
+def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
+                           pair: ElasticPair, fft: str,
+                           creepage: tuple[float, float, float] | None = None,
+                           previous: tuple | None = None) -> None:
+    """Add the tangential solution to ``patch`` (same grid as its normal solution).
+
+    ``creepage`` (xi [-], eta [-], phi [1/m]) replaces the settings' (a time step gives
+    each patch its own); ``fft`` is the convolution backend. ``previous`` = (traction
+    (2, nx, ny) [Pa], adhesion/slip map) on the patch's grid, e.g. the previous time
+    step's: when it holds a traction it starts the BEM instead of the estimate asked for in
+    ``settings``.
+    """
+    res = patch.normal
+    A, B = patch.curvatures
+    creepage = settings.creepage if creepage is None else tuple(creepage)
+    # The simplified models work on the Hertz ellipse that carries the BEM's normal force.
+    hz = hertz(A, B, pair, load=res.force) if res.force > 0 else None
+    model, estimate = settings.model, settings.estimate
+    patch.tangential_model, patch.tangential_estimate = model, estimate
+    actual = res if patch.geometry is not None else None  # wheel-rail: non-elliptic patch
+    if model != "bem":
+        if hz is None:
+            raise CaseError("no contact: the simplified tangential models need a load")
+        patch.tangential = simplified_tangential(model, hz, pair, settings, actual, creepage)
+        return
+    p0, st0 = previous if previous is not None else (None, None)
+    if p0 is None and estimate != "none" and hz is not None:
+        p0, st0 = remesh_strips(
+            simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
+    patch.tangential = solve_tangential(
+        res.grid, rolling_operator(res.grid, pair, fft), res.pressure, settings.friction,
+        creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,
+        max_iterations=settings.max_iterations, spin_offset=settings.spin_offset)

@@ -1,0 +1,42 @@
+"""A quadratic gap ``h = A x^2 + B y^2``: one patch, the paper's Hertzian cases."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..halfspace.grid import Grid
+from ..halfspace.hertz import hertz
+from ..settings import Case, QuadraticGeometry
+from .patch import normal_estimate, potential_area, solve_patch_normal, solve_patch_tangential
+from .results import PatchSolution
+
+
+def solve_quadratic(case: Case) -> PatchSolution:
+    """The patch of a quadratic case: the normal BEM, then the tangential problem when the
+    case has one and the patch carries a load.
+
+    The potential area is the case's ``[grid] x, y`` or the paper's automatic one from
+    Hertz's penetration (:func:`~railcontact.contact.patch.potential_area`).
+    """
+    geo = case.geometry
+    assert isinstance(geo, QuadraticGeometry)
+    grid_settings, settings, pair = case.grid, case.normal, case.pair
+    A, B = geo.A, geo.B
+    control = settings.control
+    hz = hertz(A, B, pair, **control.kwargs())
+    auto = potential_area(A, B, hz.penetration if hz.penetration > 0 else 1e-12,
+                          grid_settings.margin)
+    bounds = (*(grid_settings.x or auto[:2]), *(grid_settings.y or auto[2:]))
+
+    def gap_of(grid: Grid) -> np.ndarray:
+        X, Y = grid.mesh()
+        return A * X**2 + B * Y**2
+
+    s = np.linspace(bounds[2], bounds[3], 2001)
+    est = normal_estimate(settings, hz, s, B * s**2, np.full_like(s, A), pair, control)
+    res = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
+                             grid_settings.automatic)
+    patch = PatchSolution(normal=res, hertz=hz, estimate=settings.estimate, curvatures=(A, B))
+    if case.tangential is not None and res.force > 0:
+        solve_patch_tangential(patch, case.tangential, pair, settings.fft)
+    return patch

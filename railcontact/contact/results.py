@@ -1,0 +1,105 @@
+"""The result types of a contact solve: one patch, and a whole case."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..geometry.contact import ContactPoint
+from ..halfspace.hertz import HertzSolution
+from ..normal import NormalResult
+from ..settings import Case
+from ..tangential import TangentialResult
+from ..tangential.strips import StripResult
+
+
+@dataclass
+class PatchSolution:
+    """Solution on one contact patch.
+
+    Attributes
+    ----------
+    normal
+        The BEM normal solution.
+    hertz
+        Hertz's solution for the same curvatures and the same load (force control) or
+        penetration (penetration control), for comparison and as an estimate.
+    estimate
+        The name of the initial estimate used.
+    tangential
+        The tangential solution (BEM, FASTSIM or FaStrip), or None.
+    tangential_model, tangential_estimate
+        The tangential model and the BEM's initial estimate.
+    curvatures
+        Relative curvatures (A, B) [1/m] of the gap at the patch origin.
+    geometry
+        The wheel-rail contact point of the patch, or None for a quadratic case.
+    """
+
+    normal: NormalResult
+    hertz: HertzSolution | None = None
+    estimate: str = "none"
+    tangential: TangentialResult | StripResult | None = None
+    tangential_model: str = "bem"
+    tangential_estimate: str = "none"
+    curvatures: tuple[float, float] | None = None
+    geometry: ContactPoint | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        n = self.normal
+        d: dict[str, Any] = {
+            "normal": {
+                "force": n.force, "penetration": n.penetration,
+                "max_pressure": n.max_pressure, "area": n.area,
+                "iterations": n.iterations, "converged": n.converged,
+                "message": n.message, "wall_time": n.wall_time, "error": n.error,
+                "estimate": self.estimate,
+                "grid": {"nx": n.grid.nx, "ny": n.grid.ny, "dx": n.grid.dx, "dy": n.grid.dy,
+                         "bounds": list(n.grid.bounds)},
+            }
+        }
+        if self.geometry is not None:
+            g = self.geometry
+            d["side"] = g.side
+            d["contact_point"] = list(g.position)
+            d["contact_angle"] = g.contact_angle
+            d["rolling_radius"] = g.rolling_radius
+            d["wheel_profile_coordinate"] = g.wheel_s
+            d["rail_profile_coordinate"] = g.rail_y
+            d["curvatures"] = [g.A, g.B]
+            d["gap"] = g.gap
+        if self.tangential is not None:
+            t = self.tangential
+            d["tangential"] = {
+                "force": list(t.force), "spin_moment": t.spin_moment,
+                "slip_area_ratio": t.slip_area_ratio, "max_traction": t.max_traction,
+                "iterations": t.iterations, "converged": t.converged, "message": t.message,
+                "wall_time": t.wall_time, "model": self.tangential_model,
+                "estimate": self.tangential_estimate,
+            }
+        if self.hertz is not None:
+            h = self.hertz
+            d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,
+                          "max_pressure": h.max_pressure, "area": h.area}
+        return d
+
+
+@dataclass
+class Solution:
+    """The solution of a case: one entry per contact patch.
+
+    ``roll`` [rad] is the wheelset roll the wheel-rail patches were solved at (resolved
+    when the case gives ``roll = "rigid"`` or ``"equal-loads"``); None for a quadratic case.
+    """
+
+    case: Case
+    patches: list[PatchSolution] = field(default_factory=list)
+    roll: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (SI units)."""
+        d: dict[str, Any] = {"name": self.case.name}
+        if self.roll is not None:
+            d["roll"] = self.roll
+        d["patches"] = [p.to_dict() for p in self.patches]
+        return d

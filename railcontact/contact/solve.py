@@ -1,0 +1,38 @@
+"""``solve(case)``: dispatch a case to the quadratic or the wheel-rail solver."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..settings import Case, load_case, validate_case
+from .quadratic import solve_quadratic
+from .results import Solution
+from .wheelrail import solve_wheel_rail
+
+
+def solve(case: Case | Mapping[str, Any] | str | Path) -> Solution:
+    """Solve a contact case.
+
+    Parameters
+    ----------
+    case
+        A :class:`~railcontact.settings.Case`, a case dictionary with the tables of a case
+        file (:mod:`railcontact.settings.case`), or the path of a TOML case file.
+
+    Returns
+    -------
+    Solution
+        One :class:`~railcontact.contact.PatchSolution` per contact patch.
+
+    Raises
+    ------
+    CaseError
+        For a case that breaks the schema or cannot be solved as given.
+    """
+    case = load_case(case) if isinstance(case, (str, Path)) else validate_case(case)
+    if case.wheel_rail:
+        patches, pose = solve_wheel_rail(case)  # with the tangential problem
+        return Solution(case=case, patches=patches, roll=pose.roll)
+    return Solution(case=case, patches=[solve_quadratic(case)])

@@ -1,0 +1,300 @@
+"""Wheel–rail cases: profiles -> contact search -> one BEM problem per contact patch.
+
+``[normal] penetration`` is the vertical approach of the wheel towards the rail [m] beyond
+first contact; patch ``k`` (vertical gap ``g_k`` above the first contact, contact angle
+``gamma_k``) then has the normal penetration ``(delta - g_k) cos(gamma_k)``.
+``[normal] load`` is the vertical wheel load Q [N], the total vertical force of the rail on
+the wheel as CONTACT's FZ: ``sum_k (N_k cos(gamma_k) + F_s,k sin(gamma_k)) = Q``, ``F_s,k``
+the patch's creep force across the track (towards the field side, in the contact plane),
+zero without a ``[tangential]`` table. For the normal forces' share: one patch, force
+control with ``N = Q / cos(gamma)``, exact in one solve, started from Hertz's penetration
+when an estimate is asked for; several patches, a secant iteration on the approach from
+Hertz's value. With creep forces an outer secant iteration on that share (normal and
+tangential BEM solved at each pass, :func:`~.loadloop.creep_load_secant`) makes the total
+vertical force Q to :data:`~.loadloop.CREEP_LOAD_RTOL`, or as close as the tangential
+tolerance lets it (an error beyond 1e-3 and beyond ``eps_tau`` of the creep forces' share,
+:func:`~.loadloop.load_met`); on a flange the creep force carries a large part of the load
+(``mu tan(gamma)`` ~ 0.8 at 70 deg with mu = 0.3), and beyond Nadal's limit
+(``mu tan(gamma) > 1``, sliding up) no normal force carries it: an error.
+
+``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
+wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or
+``"equal-loads"`` (both wheels carry ``[normal] load``, as in the Manchester benchmark): a
+fixed point on the roll, each pass solving both wheels by the BEM and putting the difference
+of their vertical approaches into :func:`~railcontact.geometry.roll.contact_roll`, until the
+roll changes by less than :data:`ROLL_TOL` (Brent's method once two passes bracket the
+root, see :func:`_equal_loads`).
+
+The potential contact area of a patch follows the paper (Sec. 2.1): ``A x^2 <= delta_0``
+along the track and ``f(s) <= delta_0`` across it (``delta_0`` the patch's normal
+penetration), scaled by ``[grid] margin`` and grown when the contact reaches its edge.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from scipy.optimize import brentq
+
+from ..errors import CaseError, RailContactError
+from ..geometry.contact import ContactPoint, contact_points, count_contacts
+from ..geometry.profiles import read_profile
+from ..geometry.roll import contact_roll, first_contact_gap
+from ..geometry.track import Pose, Track, Wheelset
+from ..halfspace.grid import Grid
+from ..halfspace.hertz import HertzSolution, hertz
+from ..halfspace.materials import ElasticPair
+from ..settings import Case, Control, PatchSettings, WheelRailGeometry
+from .loadloop import CREEP_LOAD_RTOL, MAX_SECANT, creep_load_secant, load_met, vertical_force
+from .patch import normal_estimate, solve_patch_normal, solve_patch_tangential
+from .results import PatchSolution
+
+EstimateFor = Callable[[ContactPoint, HertzSolution, Control], Callable[[Grid], Any]]
+"""``estimate_for(contact point, hertz, control)``: the initial pressure of a patch as a
+function of its BEM grid (e.g. the previous time step's)."""
+LOAD_RTOL = 1e-6
+"""Relative tolerance on the vertical load carried by the normal forces of several patches."""
+ROLL_TOL = 1e-8
+"""Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
+MAX_ROLL_PASSES = 16
+
+
+def build_geometry(geo: WheelRailGeometry) -> tuple[Track, Wheelset, Pose]:
+    """Track, wheelset and pose from the ``[geometry]`` settings of a wheel-rail case.
+
+    A roll given as ``"rigid"`` or ``"equal-loads"`` is returned as the rigid contact roll
+    (the start of the equal-loads iteration).
+    """
+    try:
+        track = Track(read_profile(geo.rail, "rail", geo.profile_unit), geo.inclination,
+                      geo.gauge, geo.gauge_depth)
+        ws = Wheelset(read_profile(geo.wheel, "wheel", geo.profile_unit), geo.wheel_radius,
+                      geo.back_to_back, geo.flange_back)
+        roll = geo.roll
+        if isinstance(roll, str):
+            roll = contact_roll(track, ws, geo.lateral_displacement, geo.yaw)
+        pose = Pose(geo.lateral_displacement, geo.yaw, roll)
+    except RailContactError as exc:
+        raise CaseError(f"[geometry]: {exc}") from None
+    return track, ws, pose
+
+
+def _patches(cps: list[ContactPoint], approach: float, settings: PatchSettings,
+             pair: ElasticPair, loads: list[float] | None = None,
+             estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+    """The normal BEM solution of each contact point's patch: at the vertical ``approach``
+    [m], or carrying the normal ``loads`` [N] (one per point)."""
+    grid, normal = settings.grid, settings.normal
+    out = []
+    for k, cp in enumerate(cps):
+        dn = cp.normal_penetration(approach)
+        if dn <= 0 and loads is None:
+            continue
+        if not (math.isfinite(cp.B) and cp.B > 0 and cp.A > 0):
+            raise CaseError(f"{cp.side} wheel: no convex contact at S = {cp.wheel_s:.4g} m "
+                            "(conformal or concave gap); cannot set up the patch")
+        control = Control(load=loads[k]) if loads is not None else Control(penetration=dn)
+        hz = hertz(cp.A, cp.B, pair, **control.kwargs())
+        d0 = hz.penetration if loads is not None else dn
+        xl = grid.margin * math.sqrt(d0 / cp.A)
+        ylo, yhi = cp.lateral_extent(d0, grid.margin)
+        if estimate_for is None:
+            est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
+        else:
+            est = estimate_for(cp, hz, control)
+        res = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), grid, normal, pair,
+                                 control, est)
+        out.append(PatchSolution(normal=res, hertz=hz, estimate=normal.estimate,
+                                 curvatures=(cp.A, cp.B), geometry=cp))
+    return out
+
+
+def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
+                    pair: ElasticPair) -> list[PatchSolution]:
+    for p in patches:
+        if p.normal.force > 0:
+            solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft)
+    return patches
+
+
+def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
+                settings: PatchSettings, pair: ElasticPair,
+                estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+    """The BEM solutions of one wheel's contact patches.
+
+    ``control`` is the vertical wheel load [N] or the vertical approach [m]; with
+    ``settings.tangential`` the patches are solved for it too and the load includes the
+    creep forces' vertical components (module docstring). ``estimate_for(cp, hertz,
+    control)`` replaces the settings' estimate: it returns a function of the BEM grid
+    giving the initial pressure (or None), e.g. the previous time step's.
+    """
+    if settings.tangential is None:
+        return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for)
+    if not control.by_load or control.load == 0:
+        return _add_tangential(
+            solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for),
+            settings, pair)
+    q = control.load
+
+    def residual(qn: float) -> tuple[float, list[PatchSolution]]:
+        ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(load=qn),
+                                                settings, pair, estimate_for), settings, pair)
+        return vertical_force(ps) - q, ps
+
+    ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
+    if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
+        raise CaseError(f"{side} wheel: {failure}")
+    return ps
+
+
+def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
+                       settings: PatchSettings, pair: ElasticPair,
+                       estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+    """The BEM normal solutions of one wheel's patches (creep forces not counted).
+
+    ``control``: the vertical approach [m] beyond first contact, or the vertical load [N]
+    that the normal forces carry (one patch: force control with ``N = Q / cos(gamma)``,
+    exact in one solve; several patches: a secant iteration on the approach).
+    """
+    if not control.by_load:
+        approach = control.penetration
+        if approach <= 0:
+            return []
+        return _patches(contact_points(track, ws, pose, side, approach), approach, settings,
+                        pair, estimate_for=estimate_for)
+    q = control.load
+    if q == 0:
+        return []
+    first = contact_points(track, ws, pose, side, 0.0)[0]
+    cosg = math.cos(first.contact_angle)
+    # one patch: force control (exact); check that the approach it needs adds no patch
+    single = _patches([first], 0.0, settings, pair, loads=[q / cosg],
+                      estimate_for=estimate_for)
+    approach = single[0].normal.penetration / cosg
+    if count_contacts(track, ws, pose, side, approach) == 1:
+        return single
+    # several patches: secant on the vertical approach
+    def residual(a: float) -> tuple[float, list[PatchSolution]]:
+        ps = _patches(contact_points(track, ws, pose, side, a), a, settings, pair,
+                      estimate_for=estimate_for)
+        return vertical_force(ps) - q, ps
+
+    a0 = approach
+    r0, ps0 = residual(a0)
+    a1 = a0 * (0.9 if r0 > 0 else 1.1)
+    r1, ps1 = residual(a1)
+    for _ in range(MAX_SECANT):
+        if abs(r1) < LOAD_RTOL * q:
+            return ps1
+        if r1 == r0:
+            break
+        a2 = a1 - r1 * (a1 - a0) / (r1 - r0)
+        a2 = min(max(a2, 0.5 * a1), 2.0 * a1)
+        a0, r0 = a1, r1
+        a1 = a2
+        r1, ps1 = residual(a1)
+    if abs(r1) > 1e-3 * q:
+        raise CaseError(f"{side} wheel: load control did not converge (vertical force "
+                        f"{r1 + q:.6g} N for load {q:.6g} N)")
+    return ps1
+
+
+def _approach(patches: list[PatchSolution]) -> float:
+    """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
+    if not patches:
+        return 0.0
+    p = min(patches, key=lambda q: q.geometry.gap)
+    return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
+
+
+def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
+                 settings: PatchSettings, pair: ElasticPair
+                 ) -> dict[str, list[PatchSolution]]:
+    out = {}
+    for side in sides:
+        try:
+            out[side] = solve_wheel(track, ws, pose, side, control, settings, pair)
+        except RailContactError as exc:
+            if isinstance(exc, CaseError):
+                raise
+            raise CaseError(f"{side} wheel: {exc}") from None
+    return out
+
+
+def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
+                 settings: PatchSettings, pair: ElasticPair
+                 ) -> tuple[Pose, dict[str, list[PatchSolution]]]:
+    """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions.
+
+    The residual ``F(phi) = m_left - m_right - (delta_right - delta_left)`` (first-contact
+    gaps minus the difference of the loaded wheels' vertical approaches) is driven to zero by
+    the fixed point ``phi <- contact_roll(offset = delta_right - delta_left)``. Where a wheel
+    switches between tread and flange the approaches jump (a flange carrying the vertical
+    load needs a far larger vertical approach) and the fixed point oscillates, and on a
+    flange it contracts slowly; so a pass takes the secant step on F when that goes
+    further (at most 4 fixed-point steps), and as soon as two passes bracket a sign change
+    of F, Brent's method finishes on the bracket. Where the contact jumps between the
+    flange root and the flange, F itself jumps (one planar patch across the root carries
+    its vertical load at the flange angle); the roll found is then the jump, to
+    :data:`ROLL_TOL`, and the two wheels' vertical positions differ by up to the jump of the
+    approach.
+    """
+    solved: dict[float, dict[str, list[PatchSolution]]] = {}
+
+    def residual(phi: float) -> float:
+        p = Pose(pose.lateral, pose.yaw, phi)
+        per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair)
+        solved[phi] = per_side
+        return (first_contact_gap(track, ws, p, "left") - first_contact_gap(track, ws, p, "right")
+                - _approach(per_side["right"]) + _approach(per_side["left"]))
+
+    def offset(phi: float) -> float:
+        return _approach(solved[phi]["right"]) - _approach(solved[phi]["left"])
+
+    phi = pose.roll
+    f = residual(phi)
+    prev: tuple[float, float] | None = None
+    try:
+        for _ in range(MAX_ROLL_PASSES):
+            new = contact_roll(track, ws, pose.lateral, pose.yaw, offset(phi))
+            step = new - phi
+            if abs(step) <= ROLL_TOL:
+                break
+            if prev is not None and f != prev[1]:  # secant on F, if it goes further
+                secant = -f * (phi - prev[0]) / (f - prev[1])
+                if secant * step > 0:
+                    new = phi + math.copysign(min(max(abs(secant), abs(step)), 4 * abs(step)),
+                                              step)
+            f_new = residual(new)
+            if (f_new > 0) != (f > 0):
+                phi = brentq(residual, min(phi, new), max(phi, new), xtol=ROLL_TOL)
+                if phi not in solved:
+                    residual(phi)
+                break
+            prev, phi, f = (phi, f), new, f_new
+        else:
+            raise CaseError(f"[geometry] roll = 'equal-loads' did not converge in "
+                            f"{MAX_ROLL_PASSES} passes (roll {phi:.6g} rad)")
+    except RailContactError as exc:
+        if isinstance(exc, CaseError):
+            raise
+        raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
+    return Pose(pose.lateral, pose.yaw, phi), solved[phi]
+
+
+def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
+    """All contact patches of the case's wheel(s), each with its BEM normal (and tangential)
+    solution, and the wheelset pose they were solved at (its roll resolved when the case
+    asks for ``"rigid"`` or ``"equal-loads"``)."""
+    geo = case.geometry
+    assert isinstance(geo, WheelRailGeometry)
+    track, ws, pose = build_geometry(geo)
+    control, settings, pair = case.normal.control, case.patch_settings, case.pair
+    sides = ["left", "right"] if geo.side == "both" else [geo.side]
+    if geo.roll == "equal-loads":
+        pose, per_side = _equal_loads(track, ws, pose, control, settings, pair)
+    else:
+        per_side = _solve_sides(track, ws, pose, sides, control, settings, pair)
+    return [p for side in sides for p in per_side[side]], pose

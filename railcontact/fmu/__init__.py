@@ -1,0 +1,8 @@
+"""The FMI 2.0 co-simulation unit: its variable table (:mod:`.variables`, the parameters
+generated from :mod:`railcontact.settings`) and its build and staleness check
+(:mod:`.build`; the C shim, the Python slave and the builder are in the top-level
+``fmu_src/``)."""
+
+from .build import DEFAULT_OUTPUT, build_fmu, ensure_fmu, fmu_is_current, fmu_sources
+
+__all__ = ["DEFAULT_OUTPUT", "build_fmu", "ensure_fmu", "fmu_is_current", "fmu_sources"]

@@ -1,0 +1,1 @@
+"""Output of solutions: strict JSON (:mod:`.jsonout`) and figures (:mod:`.plotting`)."""

@@ -1,0 +1,418 @@
+"""The settings of a contact case, one frozen record per table of a case file.
+
+A case file is TOML in SI units; :func:`load_case` reads one and :meth:`Case.from_dict`
+builds the same :class:`Case` from a dictionary with the same tables. Keys not declared
+here are rejected, so a typo never goes unnoticed; every problem of a case is reported at
+once. The reference of every key (default, unit, rule) is generated from these
+declarations: ``railcontact settings`` or ``docs/settings.md``.
+
+Example::
+
+    name = "optional title"
+
+    [material]            # identical bodies, or [wheel, rail] pairs for two materials
+    young = 206e9
+    poisson = 0.28
+
+    [geometry]
+    type = "quadratic"    # h = A x^2 + B y^2 (or "wheel-rail": profiles, see below)
+    A = 1.0
+    B = 5.0
+
+    [normal]
+    penetration = 1e-4    # or load = ... [N]
+
+    [tangential]          # optional: steady rolling in +x
+    creepage = [1e-3, 0.0, 0.0]
+    friction = 0.4
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Mapping
+from dataclasses import MISSING, dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+from ..errors import CaseError
+from ..halfspace.materials import ElasticPair, Material
+from .choices import (
+    CASE_SIDES,
+    FFT_BACKENDS,
+    GEOMETRY_TYPES,
+    NORMAL_ESTIMATES,
+    NORMAL_PRECONDITIONERS,
+    PROFILE_UNITS,
+    ROLL_MODES,
+    TANGENTIAL_ESTIMATES,
+    TANGENTIAL_MODELS,
+    TRACTION_BOUNDS,
+)
+from .fields import Record, document, setting
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+@document
+@dataclass(frozen=True)
+class MaterialSettings(Record):
+    """Elastic constants of the two bodies (one value: identical bodies)."""
+
+    TABLE: ClassVar[str] = "material"
+    young: tuple[float, ...] = setting((206e9,), "floats12", "Pa",
+                                       "Young's modulus E (one value, or [body 1, body 2])",
+                                       minimum=0.0, open_min=True, required=True)
+    poisson: tuple[float, ...] = setting((0.28,), "floats12", "-",
+                                         "Poisson's ratio (one value, or [body 1, body 2])",
+                                         minimum=0.0, maximum=0.5, open_max=True,
+                                         required=True)
+
+    def elastic_pair(self) -> ElasticPair:
+        """The combined elastic parameters of the two bodies."""
+        ys, ns = list(self.young), list(self.poisson)
+        ys = ys * 2 if len(ys) == 1 else ys
+        ns = ns * 2 if len(ns) == 1 else ns
+        return ElasticPair.of(*(Material(e, n) for e, n in zip(ys, ns, strict=True)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: v[0] if len(v) == 1 else list(v)
+                for k, v in (("young", self.young), ("poisson", self.poisson))}
+
+
+@document
+@dataclass(frozen=True)
+class QuadraticGeometry(Record):
+    """A quadratic undeformed gap ``h = A x^2 + B y^2`` (``type = "quadratic"``)."""
+
+    TABLE: ClassVar[str] = "geometry"
+    TYPE: ClassVar[str] = "quadratic"
+    A: float = setting(MISSING, "float", "1/m", "longitudinal relative curvature",
+                       minimum=0.0, open_min=True, required=True)
+    B: float = setting(MISSING, "float", "1/m", "lateral relative curvature",
+                       minimum=0.0, open_min=True, required=True)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": self.TYPE, **super().to_dict()}
+
+
+@document
+@dataclass(frozen=True)
+class WheelRailGeometry(Record):
+    """A wheel on a rail (``type = "wheel-rail"``): profiles, track, wheelset position.
+
+    Profiles are written with y to the field side (wheel: y = S, z = radius increment;
+    rail: uncanted, crown at 0, z up); with a load, ``[normal] load`` is the vertical wheel
+    load and ``penetration`` the vertical approach of the wheel.
+    """
+
+    TABLE: ClassVar[str] = "geometry"
+    TYPE: ClassVar[str] = "wheel-rail"
+    wheel: str = setting("S1002", "str", "",
+                         "wheel profile: built-in name (S1002) or file (.prw, two columns y z)")
+    rail: str = setting("60E1", "str", "",
+                        "rail profile: built-in name (60E1, UIC60, CN60) or file (.prr, two "
+                        "columns)")
+    profile_unit: str = setting("mm", "choice", "", "unit of two-column profile files",
+                                choices=PROFILE_UNITS)
+    inclination: float = setting(math.atan(1 / 40), "float", "rad",
+                                 "rail cant (1:40; 0 for a file that is canted already)")
+    gauge: float = setting(1.435, "float", "m", "track gauge, measured gauge_depth below the "
+                           "top of rail", minimum=0.0, open_min=True)
+    gauge_depth: float = setting(0.014, "float", "m", "depth below the top of rail at which "
+                                 "the gauge is measured", minimum=0.0, open_min=True)
+    back_to_back: float = setting(1.360, "float", "m", "flange-back distance of the wheelset",
+                                  minimum=0.0, open_min=True)
+    flange_back: float = setting(-0.070, "float", "m",
+                                 "wheel profile coordinate S of the flange back")
+    wheel_radius: float = setting(0.46, "float", "m", "nominal rolling radius",
+                                  minimum=0.0, open_min=True)
+    lateral_displacement: float = setting(0.0, "float", "m",
+                                          "wheelset lateral displacement, positive to the left")
+    yaw: float = setting(0.0, "float", "rad", "wheelset yaw angle")
+    roll: float | str = setting(0.0, "float|choice", "rad",
+                                "wheelset roll (left side up), or 'rigid' (both wheels touch) "
+                                "or 'equal-loads' (both carry [normal] load)",
+                                choices=ROLL_MODES)
+    side: str = setting("left", "choice", "", "wheel(s) to solve", choices=CASE_SIDES)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"type": self.TYPE, **super().to_dict()}
+
+
+@document
+@dataclass(frozen=True)
+class GridSettings(Record):
+    """The BEM grid of a patch: element counts or sizes, and the potential contact area.
+
+    By default the area is the paper's (Sec. 2.1): ``A x^2 <= delta0``, ``B y^2 <= delta0``
+    with delta0 from Hertz, scaled by ``margin``, grown when the contact reaches its edge.
+    """
+
+    TABLE: ClassVar[str] = "grid"
+    nx: int = setting(64, "int", "", "elements along x (rolling)", minimum=2)
+    ny: int = setting(64, "int", "", "elements along y (lateral)", minimum=2)
+    dx: float | None = setting(None, "float", "m", "element size along x (overrides nx)",
+                               minimum=0.0, open_min=True)
+    dy: float | None = setting(None, "float", "m", "element size along y (overrides ny)",
+                               minimum=0.0, open_min=True)
+    x: tuple[float, float] | None = setting(None, "range", "m",
+                                            "potential contact area along x [min, max] "
+                                            "(quadratic cases; default automatic)")
+    y: tuple[float, float] | None = setting(None, "range", "m",
+                                            "potential contact area along y [min, max] "
+                                            "(quadratic cases; default automatic)")
+    margin: float = setting(1.0, "float", "-", "scale of the automatic potential area",
+                            minimum=0.0, open_min=True)
+    quantum: int = setting(1, "int", "", "element counts rounded up to a multiple of this "
+                           "(fewer operators in a time series)", minimum=1, case=False)
+    snap: bool = setting(False, "bool", "", "grid centre on a multiple of the element size "
+                         "(consecutive time steps share one lattice)", case=False)
+
+    @property
+    def automatic(self) -> bool:
+        """Whether the potential area is chosen (and grown) by the solver."""
+        return self.x is None or self.y is None
+
+
+@dataclass(frozen=True)
+class Control:
+    """What fixes a normal problem: the normal force [N] or the rigid approach [m]."""
+
+    load: float | None = None
+    penetration: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.load is None) == (self.penetration is None):
+            raise CaseError("give exactly one of load [N] and penetration [m]")
+
+    @property
+    def by_load(self) -> bool:
+        return self.load is not None
+
+    @property
+    def value(self) -> float:
+        """The load [N] or the penetration [m]."""
+        return self.load if self.load is not None else self.penetration  # type: ignore
+
+    def kwargs(self) -> dict[str, float]:
+        """``{"load": N}`` or ``{"penetration": m}``, the keyword of the solvers."""
+        return {"load": self.load} if self.load is not None else {
+            "penetration": self.penetration}  # type: ignore[dict-item]
+
+
+@document
+@dataclass(frozen=True)
+class NormalSettings(Record):
+    """The normal problem and its BEM solver (Polonsky–Keer CG)."""
+
+    TABLE: ClassVar[str] = "normal"
+    load: float | None = setting(None, "float", "N", "normal force (quadratic) or vertical "
+                                 "wheel load (wheel-rail); give load or penetration",
+                                 minimum=0.0)
+    penetration: float | None = setting(None, "float", "m", "rigid approach (quadratic) or "
+                                        "vertical approach of the wheel (wheel-rail)",
+                                        minimum=0.0)
+    estimate: str = setting("none", "choice", "", "initial estimate of the pressure",
+                            choices=NORMAL_ESTIMATES)
+    estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",
+                                             "KP/INFCON estimate grid [nx, ny]", minimum=4)
+    tolerance: float = setting(1e-3, "float", "-", "eps_n, relative pressure change between "
+                               "iterations", minimum=0.0, open_min=True)
+    max_iterations: int = setting(500, "int", "", "CG iterations at most", minimum=1)
+    fft: str = setting("auto", "choice", "", "convolution backend", choices=FFT_BACKENDS)
+    preconditioner: str = setting("fft", "choice", "", "'fft' or 'none' (plain "
+                                  "Polonsky-Keer CG, as in the paper)",
+                                  choices=NORMAL_PRECONDITIONERS)
+
+    @property
+    def control(self) -> Control:
+        """The case's load or penetration (an error when it gives neither or both)."""
+        if (self.load is None) == (self.penetration is None):
+            raise CaseError("[normal] needs exactly one of load [N] and penetration [m]")
+        return Control(self.load, self.penetration)
+
+
+@document
+@dataclass(frozen=True)
+class TangentialSettings(Record):
+    """The tangential problem: steady rolling in +x, and its model and solver."""
+
+    TABLE: ClassVar[str] = "tangential"
+    creepage: tuple[float, float, float] = setting((0.0, 0.0, 0.0), "floats3", "-, -, 1/m",
+                                                   "creepages [xi, eta, phi]", required=True)
+    friction: float = setting(0.4, "float", "-", "Coulomb coefficient mu", minimum=0.0,
+                              required=True)
+    model: str = setting("bem", "choice", "", "tangential model", choices=TANGENTIAL_MODELS)
+    estimate: str = setting("none", "choice", "", "initial estimate of the BEM",
+                            choices=TANGENTIAL_ESTIMATES)
+    tolerance: float = setting(1e-2, "float", "-", "eps_tau, relative traction change between "
+                               "sweeps", minimum=0.0, open_min=True)
+    max_iterations: int = setting(1000, "int", "", "Gauss-Seidel sweeps at most", minimum=1)
+    bound: str = setting("elliptic", "choice", "", "FASTSIM traction bound",
+                         choices=TRACTION_BOUNDS)
+    strips: tuple[int, int] = setting((40, 40), "ints2", "",
+                                      "FASTSIM/FaStrip samples per strip and strips [nx, ny]",
+                                      minimum=2)
+    spin_offset: float = setting(1.0 / 6.0, "float", "-", "where the spin slip is taken in a "
+                                 "rolling step, as a fraction of dx (CONTACT: 1/6)",
+                                 minimum=0.0, maximum=1.0)
+
+
+@dataclass(frozen=True)
+class PatchSettings:
+    """How every patch of a problem is solved: its grid, the normal BEM and, when there is
+    a tangential problem, the tangential model (None: normal contact only)."""
+
+    grid: GridSettings
+    normal: NormalSettings
+    tangential: TangentialSettings | None = None
+
+
+CASE_TABLES: dict[str, tuple[type[Record], ...]] = {
+    "material": (MaterialSettings,),
+    "geometry": (QuadraticGeometry, WheelRailGeometry),
+    "grid": (GridSettings,),
+    "normal": (NormalSettings,),
+    "tangential": (TangentialSettings,),
+}
+"""The tables of a case file and the records they become."""
+_REQUIRED_TABLES = ("material", "geometry", "normal")
+
+
+@dataclass(frozen=True)
+class Case:
+    """A validated contact case: one settings record per table (SI units).
+
+    Build it with :meth:`from_dict` (or :func:`load_case` from a file); the constructor
+    takes the records themselves.
+    """
+
+    material: MaterialSettings
+    geometry: QuadraticGeometry | WheelRailGeometry
+    normal: NormalSettings
+    grid: GridSettings = GridSettings()
+    tangential: TangentialSettings | None = None
+    name: str = "case"
+
+    def __post_init__(self) -> None:
+        self.normal.control  # exactly one of load and penetration  # noqa: B018
+        geo = self.geometry
+        if isinstance(geo, WheelRailGeometry):
+            if geo.roll == "equal-loads" and self.normal.load is None:
+                raise CaseError("[geometry] roll = 'equal-loads' needs [normal] load (the load "
+                                "of each wheel [N]); with a penetration use roll = 'rigid' or "
+                                "a number")
+            if self.grid.x is not None or self.grid.y is not None:
+                raise CaseError("[grid] x and y are for quadratic cases; a wheel-rail case "
+                                "sets the potential area of each patch automatically (use "
+                                "margin, nx/ny or dx/dy)")
+
+    @property
+    def wheel_rail(self) -> bool:
+        return isinstance(self.geometry, WheelRailGeometry)
+
+    @property
+    def patch_settings(self) -> PatchSettings:
+        """The grid, normal and tangential settings of the case's patches."""
+        return PatchSettings(self.grid, self.normal, self.tangential)
+
+    @property
+    def pair(self) -> ElasticPair:
+        """The combined elastic parameters of the two bodies."""
+        return self.material.elastic_pair()
+
+    @classmethod
+    def from_dict(cls, case: Mapping[str, Any]) -> Case:
+        """Check a case dictionary (the tables of a case file) and build the case.
+
+        Raises
+        ------
+        CaseError
+            Naming the table and key at fault; all problems at once when there are several.
+        """
+        if not isinstance(case, Mapping):
+            raise CaseError(f"a case must be a dictionary of tables, got {type(case).__name__}")
+        unknown = set(case) - set(CASE_TABLES) - {"name"}
+        if unknown:
+            raise CaseError(f"unknown table(s) {sorted(unknown)}; known: {sorted(CASE_TABLES)}")
+        problems: list[str] = [f"missing table [{t}]" for t in _REQUIRED_TABLES
+                               if t not in case]
+        records: dict[str, Any] = {}
+        for table in CASE_TABLES:
+            if table not in case:
+                continue
+            try:
+                records[table] = _record(table, case[table])
+            except CaseError as exc:
+                problems.append(str(exc))
+        name = case.get("name", "case")
+        if not isinstance(name, str):
+            problems.append(f"name must be a string, got {name!r}")
+        if problems:
+            raise CaseError(problems[0] if len(problems) == 1 else
+                            f"{len(problems)} problems in the case:\n  " + "\n  ".join(problems))
+        return cls(name=name, **records)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The case as a dictionary of tables with every default filled in (SI units)."""
+        out: dict[str, Any] = {"name": self.name}
+        for table in CASE_TABLES:
+            rec = getattr(self, table)
+            if rec is not None:
+                out[table] = rec.to_dict()
+        return out
+
+
+def _record(table: str, values: Any) -> Record:
+    if table != "geometry":
+        return CASE_TABLES[table][0].from_mapping(values)
+    if not isinstance(values, Mapping):
+        raise CaseError(f"[geometry] must be a table, got {values!r}")
+    kind = values.get("type", "quadratic")
+    if kind not in GEOMETRY_TYPES:
+        raise CaseError(f"[geometry] type must be one of "
+                        f"{', '.join(map(repr, GEOMETRY_TYPES))}, got {kind!r}")
+    rest = {k: v for k, v in values.items() if k != "type"}
+    if kind == "wheel-rail":
+        for key in ("A", "B"):
+            if key in rest:
+                raise CaseError(f"[geometry] {key} is for type = 'quadratic'; a wheel-rail "
+                                "case computes its curvatures from the profiles")
+        return WheelRailGeometry.from_mapping(rest)
+    return QuadraticGeometry.from_mapping(rest)
+
+
+def validate_case(case: Mapping[str, Any] | Case) -> Case:
+    """A :class:`Case` from a case dictionary (a Case is returned as it is).
+
+    Raises
+    ------
+    CaseError
+        Naming the table and key at fault.
+    """
+    return case if isinstance(case, Case) else Case.from_dict(case)
+
+
+def load_case(path: str | Path) -> Case:
+    """Read a TOML case file (SI units) and return the validated case.
+
+    Raises
+    ------
+    CaseError
+        When the file does not exist, does not parse, or breaks the schema.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise CaseError(f"case file not found: {p}")
+    try:
+        with p.open("rb") as f:
+            raw = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"case file {p} is not valid TOML: {exc}") from None
+    raw.setdefault("name", p.stem)
+    return Case.from_dict(raw)

@@ -1,0 +1,83 @@
+"""Every setting in one list, generated from the records' declarations: the reference
+that ``railcontact settings`` prints and ``docs/settings.md`` holds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from .case import (
+    GridSettings,
+    MaterialSettings,
+    NormalSettings,
+    QuadraticGeometry,
+    TangentialSettings,
+    WheelRailGeometry,
+)
+from .fields import Record, default_of, spec_of
+from .timestep import ContactSettings, FMUModes
+
+RECORDS: tuple[type[Record], ...] = (
+    MaterialSettings, QuadraticGeometry, WheelRailGeometry, GridSettings, NormalSettings,
+    TangentialSettings, ContactSettings, FMUModes)
+"""Every settings record, in the order of the reference."""
+
+
+@dataclass(frozen=True)
+class SettingRow:
+    """One setting: where it is set, its default, unit, allowed values and meaning."""
+
+    record: str
+    table: str
+    key: str
+    default: object
+    unit: str
+    allowed: str
+    doc: str
+    required: bool
+    case: bool
+
+
+def setting_rows(records: tuple[type[Record], ...] = RECORDS) -> list[SettingRow]:
+    """The settings of ``records``, one row per field."""
+    rows = []
+    for rec in records:
+        for f in fields(rec):  # type: ignore[arg-type]
+            s = spec_of(f)
+            rows.append(SettingRow(rec.__name__, rec.TABLE, f.name, default_of(f), s.unit,
+                                   s.bounds_text(), s.doc, s.required, s.case))
+    return rows
+
+
+def case_keys() -> set[tuple[str, str]]:
+    """Every (table, key) a case file may hold (``type`` of ``[geometry]`` included)."""
+    keys = {(r.table, r.key) for r in setting_rows() if r.table and r.case}
+    return keys | {("geometry", "type")}
+
+
+def _fmt(value: object) -> str:
+    if value is None:
+        return "—"
+    if isinstance(value, tuple):
+        value = list(value) if len(value) > 1 else value[0]
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return repr(value) if isinstance(value, str) else str(value).lower() \
+        if isinstance(value, bool) else str(value)
+
+
+def markdown() -> str:
+    """The settings reference as Markdown (one table per record)."""
+    out = ["# Settings reference", "",
+           "Generated from the declarations in `railcontact/settings/` by "
+           "`railcontact settings`; do not edit by hand. SI units.", ""]
+    for rec in RECORDS:
+        title = f"`[{rec.TABLE}]` — `{rec.__name__}`" if rec.TABLE else f"`{rec.__name__}`"
+        doc = (rec.__doc__ or "").split("\n\n")[0].replace("\n", " ").strip()
+        out += [f"## {title}", "", doc, "",
+                "| key | default | unit | allowed | meaning |", "|---|---|---|---|---|"]
+        for r in setting_rows((rec,)):
+            default = "required" if r.required and r.case else _fmt(r.default)
+            where = r.key if r.case or not r.table else f"{r.key} (not in case files)"
+            out.append(f"| `{where}` | {default} | {r.unit} | {r.allowed} | {r.doc} |")
+        out.append("")
+    return "\n".join(out)

@@ -1,0 +1,137 @@
+"""The settings of the time-step solver (:class:`railcontact.WheelsetContact`, the FMU).
+
+:class:`ContactSettings` is what a dynamics code sets once: friction, element size,
+tolerances, estimates, warm start. The grid, normal and tangential records that the patch
+solvers take are built from it once (:attr:`ContactSettings.grid_settings` ...), not per
+step. :class:`FMUModes` are the FMU's switches that are not solver settings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import ClassVar
+
+from ..errors import RailContactError
+from .case import GridSettings, NormalSettings, PatchSettings, TangentialSettings
+from .choices import (
+    CONTROLS,
+    CREEPAGE_INPUTS,
+    FFT_BACKENDS,
+    LOAD_DEFINITIONS,
+    NORMAL_ESTIMATES,
+    TANGENTIAL_ESTIMATES,
+    WARM_STARTS,
+)
+from .fields import Record, document, setting
+
+MAX_ELEMENT_SIZE = 0.005
+"""Coarsest element [m] that still resolves a wheel-rail patch."""
+
+
+@document
+@dataclass(frozen=True)
+class ContactSettings(Record):
+    """Solver settings of :class:`~railcontact.timestep.WheelsetContact` (SI units).
+
+    ``warm_start``: "none", every step cold (the estimates are not used); "estimate", the
+    simplified models; "previous", the previous step's solution (cold when there is none);
+    "previous+estimate", the previous step's, and the estimate for a patch that has none.
+    ``load_includes_creep``: with wheel loads and creepages, True makes the load the total
+    vertical force of the rail on the wheel (normal and creep forces, as CONTACT's FZ and
+    :func:`railcontact.solve`; a secant iteration on the normal share), False lets the
+    normal forces alone carry it (one pass).
+    """
+
+    ERROR: ClassVar[type[RailContactError]] = RailContactError
+    friction: float = setting(0.4, "float", "-", "Coulomb friction coefficient mu",
+                              minimum=0.0, open_min=True)
+    element_size: float = setting(0.5e-3, "float", "m", "BEM element size dx = dy",
+                                  minimum=0.0, open_min=True, maximum=MAX_ELEMENT_SIZE)
+    margin: float = setting(1.2, "float", "-", "scale of the automatic potential contact "
+                            "area", minimum=0.0, open_min=True)
+    normal_tolerance: float = setting(1e-3, "float", "-", "eps_n, relative pressure change "
+                                      "between iterations", minimum=0.0, open_min=True,
+                                      maximum=1.0, open_max=True)
+    tangential_tolerance: float = setting(1e-2, "float", "-", "eps_tau, relative traction "
+                                          "change between sweeps", minimum=0.0, open_min=True,
+                                          maximum=1.0, open_max=True)
+    normal_estimate: str = setting("infcon", "choice", "", "initial estimate of the normal "
+                                   "BEM", choices=NORMAL_ESTIMATES)
+    tangential_estimate: str = setting("fastrip", "choice", "", "initial estimate of the "
+                                       "tangential BEM", choices=TANGENTIAL_ESTIMATES)
+    warm_start: str = setting("previous+estimate", "choice", "", "how a step starts the BEM",
+                              choices=WARM_STARTS)
+    fft: str = setting("auto", "choice", "", "convolution backend", choices=FFT_BACKENDS)
+    max_iterations_normal: int = setting(500, "int", "", "normal CG iterations at most",
+                                         minimum=1)
+    max_iterations_tangential: int = setting(1000, "int", "", "tangential sweeps at most",
+                                             minimum=1)
+    estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",
+                                             "KP/INFCON estimate grid [nx, ny]", minimum=4)
+    strips: tuple[int, int] = setting((40, 40), "ints2", "",
+                                      "FASTSIM/FaStrip samples per strip and strips [nx, ny]",
+                                      minimum=2)
+    spin_offset: float = setting(1.0 / 6.0, "float", "-", "where the spin slip is taken in a "
+                                 "rolling step, as a fraction of dx", minimum=0.0, maximum=1.0)
+    quantum: int = setting(8, "int", "", "element counts rounded up to a multiple of this",
+                           minimum=1)
+    load_includes_creep: bool = setting(True, "bool", "", "a wheel load is the total vertical "
+                                        "force, creep forces included")
+    load_tolerance: float = setting(1e-3, "float", "-", "relative tolerance on a wheel load "
+                                    "when the creep forces count", minimum=0.0, open_min=True,
+                                    maximum=1.0, open_max=True)
+
+    @property
+    def uses_estimate(self) -> bool:
+        return self.warm_start in ("estimate", "previous+estimate")
+
+    @property
+    def uses_previous(self) -> bool:
+        return self.warm_start in ("previous", "previous+estimate")
+
+    @cached_property
+    def grid_settings(self) -> GridSettings:
+        """The patch grids: square elements of ``element_size`` on a shared lattice."""
+        return GridSettings(dx=self.element_size, dy=self.element_size, margin=self.margin,
+                            quantum=self.quantum, snap=True)
+
+    @cached_property
+    def normal_settings(self) -> NormalSettings:
+        """The normal BEM's settings (the estimate only when the warm start uses it)."""
+        return NormalSettings(
+            estimate=self.normal_estimate if self.uses_estimate else "none",
+            estimate_grid=self.estimate_grid, tolerance=self.normal_tolerance,
+            max_iterations=self.max_iterations_normal, fft=self.fft)
+
+    @cached_property
+    def tangential_settings(self) -> TangentialSettings:
+        """The tangential BEM's settings (creepages are given per patch and step)."""
+        return TangentialSettings(
+            friction=self.friction, model="bem",
+            estimate=self.tangential_estimate if self.uses_estimate else "none",
+            tolerance=self.tangential_tolerance, max_iterations=self.max_iterations_tangential,
+            strips=self.strips, spin_offset=self.spin_offset)
+
+    @cached_property
+    def patch_settings(self) -> PatchSettings:
+        """The grid and normal settings of a wheel's normal solve (the time step solves the
+        tangential problem itself, patch by patch)."""
+        return PatchSettings(self.grid_settings, self.normal_settings)
+
+
+@document
+@dataclass(frozen=True)
+class FMUModes(Record):
+    """The FMU's switches: which inputs it reads and what a wheel load means."""
+
+    ERROR: ClassVar[type[RailContactError]] = RailContactError
+    control: str = setting("load", "choice", "", "normal problem: load (wheel loads given) or "
+                           "penetration (vertical displacement and roll given)",
+                           choices=CONTROLS)
+    load_definition: str = setting("total", "choice", "", "a wheel load is the total vertical "
+                                   "force (normal and creep forces, CONTACT's FZ) or the "
+                                   "normal forces' share", choices=LOAD_DEFINITIONS)
+    creepage_input: str = setting("direct", "choice", "", "creepages per wheel (direct) or "
+                                  "from the wheelset velocities (kinematic)",
+                                  choices=CREEPAGE_INPUTS)
