@@ -23,6 +23,10 @@
 
 #include "fmi2Functions.h"
 
+/* the slave's buffers are numpy float64 and int32 arrays */
+_Static_assert(sizeof(fmi2Real) == sizeof(double), "fmi2Real must be a double");
+_Static_assert(sizeof(fmi2Integer) == sizeof(int32_t), "fmi2Integer must be 32 bits");
+
 typedef void PyObject;
 typedef int PyGILState_STATE;
 
@@ -489,32 +493,47 @@ static int settable(Instance *c, unsigned char flag) {
     return 0;
 }
 
+/* Real and Integer values live in the slave's numpy buffers (double, int32): get and set
+ * copy them element by element, checking the value reference (and, to set, the causality). */
+static fmi2Status get_values(Instance *c, const char *type, const fmi2ValueReference vr[],
+                             size_t n, const void *buffer, size_t count, size_t size,
+                             void *value) {
+    for (size_t k = 0; k < n; ++k) {
+        if (vr[k] >= count) {
+            logf_(c, fmi2Error, "logStatusError", "no %s variable %u", type, vr[k]);
+            return fmi2Error;
+        }
+        memcpy((char *)value + k * size, (const char *)buffer + vr[k] * size, size);
+    }
+    return fmi2OK;
+}
+
+static fmi2Status set_values(Instance *c, const char *type, const fmi2ValueReference vr[],
+                             size_t n, void *buffer, const unsigned char *flags, size_t count,
+                             size_t size, const void *value) {
+    for (size_t k = 0; k < n; ++k) {
+        if (vr[k] >= count || !settable(c, flags[vr[k]])) {
+            logf_(c, fmi2Error, "logStatusError", "%s variable %u cannot be set now", type,
+                  vr[k]);
+            return fmi2Error;
+        }
+        memcpy((char *)buffer + vr[k] * size, (const char *)value + k * size, size);
+    }
+    return fmi2OK;
+}
+
 fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
                        fmi2Real value[]) {
     Instance *c = comp;
     if (!c) return fmi2Error;
-    for (size_t k = 0; k < n; ++k) {
-        if (vr[k] >= c->n_real) {
-            logf_(c, fmi2Error, "logStatusError", "no Real variable %u", vr[k]);
-            return fmi2Error;
-        }
-        value[k] = c->real[vr[k]];
-    }
-    return fmi2OK;
+    return get_values(c, "Real", vr, n, c->real, c->n_real, sizeof *value, value);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
                           fmi2Integer value[]) {
     Instance *c = comp;
     if (!c) return fmi2Error;
-    for (size_t k = 0; k < n; ++k) {
-        if (vr[k] >= c->n_integer) {
-            logf_(c, fmi2Error, "logStatusError", "no Integer variable %u", vr[k]);
-            return fmi2Error;
-        }
-        value[k] = c->integer[vr[k]];
-    }
-    return fmi2OK;
+    return get_values(c, "Integer", vr, n, c->integer, c->n_integer, sizeof *value, value);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
@@ -561,29 +580,16 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
                        const fmi2Real value[]) {
     Instance *c = comp;
     if (!c) return fmi2Error;
-    for (size_t k = 0; k < n; ++k) {
-        if (vr[k] >= c->n_real || !settable(c, c->real_flags[vr[k]])) {
-            logf_(c, fmi2Error, "logStatusError", "Real variable %u cannot be set now", vr[k]);
-            return fmi2Error;
-        }
-        c->real[vr[k]] = value[k];
-    }
-    return fmi2OK;
+    return set_values(c, "Real", vr, n, c->real, c->real_flags, c->n_real, sizeof *value,
+                      value);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
                           const fmi2Integer value[]) {
     Instance *c = comp;
     if (!c) return fmi2Error;
-    for (size_t k = 0; k < n; ++k) {
-        if (vr[k] >= c->n_integer || !settable(c, c->integer_flags[vr[k]])) {
-            logf_(c, fmi2Error, "logStatusError", "Integer variable %u cannot be set now",
-                  vr[k]);
-            return fmi2Error;
-        }
-        c->integer[vr[k]] = value[k];
-    }
-    return fmi2OK;
+    return set_values(c, "Integer", vr, n, c->integer, c->integer_flags, c->n_integer,
+                      sizeof *value, value);
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], size_t n,

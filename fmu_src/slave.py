@@ -242,31 +242,8 @@ class Slave:
             self[v.name] = 0
         if res is None:
             return
-        for w in res.wheels:
-            s = w.side
-            c = w.creepages[0] if w.creepages else (0.0, 0.0, 0.0)
-            values = {
-                "normal_force": w.normal_force, "creep_force_x": w.creep_force[0],
-                "creep_force_y": w.creep_force[1], "spin_moment": w.spin_moment,
-                "force_longitudinal": w.track_force[0], "force_lateral": w.track_force[1],
-                "force_vertical": w.track_force[2], "wheel_contact_position": w.wheel_position,
-                "rail_contact_position": w.rail_position,
-                "contact_lateral_position": w.lateral_position,
-                "contact_angle": w.contact_angle, "rolling_radius": w.rolling_radius,
-                "contact_area": w.area, "max_pressure": w.max_pressure,
-                "slip_area_ratio": w.slip_area_ratio, "xi_used": c[0], "eta_used": c[1],
-                "phi_used": c[2],
-                "n_patches": w.n_patches, "normal_iterations": w.normal_iterations,
-                "tangential_iterations": w.tangential_iterations}
-            for k, val in values.items():
-                self[f"{k}_{s}"] = val
-        fx, fy, fz = res.force
-        self["force_longitudinal"], self["force_lateral"], self["force_vertical"] = fx, fy, fz
-        self["yaw_moment"] = res.yaw_moment
-        self["solve_time"] = res.wall_time
-        self["normal_iterations"] = sum(w.normal_iterations for w in res.wheels)
-        self["tangential_iterations"] = sum(w.tangential_iterations for w in res.wheels)
-        self["status"] = res.status
+        for v in V.OUTPUTS:
+            self[v.name] = v.value(res)
 
 
 def make_slave(resources: str, instance_name: str) -> Slave:

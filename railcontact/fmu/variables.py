@@ -11,8 +11,8 @@ there; :func:`parameter_settings` turns the parameter values back into those rec
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from ..settings import ContactSettings, FMUModes, MaterialSettings, WheelRailGeometry
@@ -25,18 +25,29 @@ UNITS = {"-": "1", "": ""}
 
 @dataclass(frozen=True)
 class Variable:
+    """One FMU variable (SI units); an output knows how to read its value from a
+    :class:`~railcontact.timestep.WheelsetResult`."""
+
     name: str
     type: str            # "Real" | "Integer" | "String"
     causality: str       # "parameter" | "input" | "output"
     start: object = None
     unit: str = ""
     description: str = ""
+    value: Callable[[Any], float] | None = field(default=None, compare=False, repr=False)
     vr: int = -1
 
 
-def _wheel(name, type_, unit, description, causality="output", start=None):
-    return [Variable(f"{name}_{s}", type_, causality, start, unit, f"{description}, {s} wheel")
+def _wheel(name, type_, unit, description, causality="output", start=None, value=None):
+    """The ``_left`` and ``_right`` variables of a wheel quantity; ``value(wheel)`` reads an
+    output from a :class:`~railcontact.timestep.WheelContact`."""
+    return [Variable(f"{name}_{s}", type_, causality, start, unit, f"{description}, {s} wheel",
+                     None if value is None else _of_wheel(value, s))
             for s in SIDES]
+
+
+def _of_wheel(value: Callable[[Any], float], side: str) -> Callable[[Any], float]:
+    return lambda result: value(getattr(result, side))
 
 
 PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
@@ -145,44 +156,77 @@ INPUTS = [
              "V / wheel_radius"),
 ]
 
+def _used(k: int):
+    """The creepage ``k`` used on a wheel's main patch (0 without creepages)."""
+    return lambda w: w.creepages[0][k] if w.creepages else 0.0
+
+
+def _total(attribute: str):
+    """The sum of a wheel quantity over both wheels."""
+    return lambda r: sum(getattr(w, attribute) for w in r.wheels)
+
+
 OUTPUTS = [
-    *_wheel("normal_force", "Real", "N", "normal force on the wheel (sum over patches)"),
-    *_wheel("creep_force_x", "Real", "N", "longitudinal creep force on the wheel, contact frame"),
-    *_wheel("creep_force_y", "Real", "N", "lateral creep force on the wheel, contact frame"),
-    *_wheel("spin_moment", "Real", "N.m", "spin moment on the wheel about the contact normal"),
-    *_wheel("force_longitudinal", "Real", "N", "force of the rail on the wheel, track X"),
-    *_wheel("force_lateral", "Real", "N", "force of the rail on the wheel, track Y"),
-    *_wheel("force_vertical", "Real", "N", "force of the rail on the wheel, track Z"),
-    *_wheel("wheel_contact_position", "Real", "m", "wheel profile coordinate of the contact"),
-    *_wheel("rail_contact_position", "Real", "m", "rail profile coordinate of the contact"),
-    *_wheel("contact_lateral_position", "Real", "m", "contact point, track Y"),
-    *_wheel("contact_angle", "Real", "rad", "contact angle (positive towards the flange)"),
-    *_wheel("rolling_radius", "Real", "m", "wheel radius at the contact point"),
-    *_wheel("contact_area", "Real", "m2", "contact area (sum over patches)"),
-    *_wheel("max_pressure", "Real", "Pa", "maximum pressure"),
-    *_wheel("slip_area_ratio", "Real", "1", "slip area / contact area"),
-    *_wheel("xi_used", "Real", "1", "longitudinal creepage used (main patch)"),
-    *_wheel("eta_used", "Real", "1", "lateral creepage used (main patch)"),
-    *_wheel("phi_used", "Real", "1/m", "spin creepage used (main patch)"),
+    *_wheel("normal_force", "Real", "N", "normal force on the wheel (sum over patches)",
+            value=lambda w: w.normal_force),
+    *_wheel("creep_force_x", "Real", "N", "longitudinal creep force on the wheel, contact frame",
+            value=lambda w: w.creep_force[0]),
+    *_wheel("creep_force_y", "Real", "N", "lateral creep force on the wheel, contact frame",
+            value=lambda w: w.creep_force[1]),
+    *_wheel("spin_moment", "Real", "N.m", "spin moment on the wheel about the contact normal",
+            value=lambda w: w.spin_moment),
+    *_wheel("force_longitudinal", "Real", "N", "force of the rail on the wheel, track X",
+            value=lambda w: w.track_force[0]),
+    *_wheel("force_lateral", "Real", "N", "force of the rail on the wheel, track Y",
+            value=lambda w: w.track_force[1]),
+    *_wheel("force_vertical", "Real", "N", "force of the rail on the wheel, track Z",
+            value=lambda w: w.track_force[2]),
+    *_wheel("wheel_contact_position", "Real", "m", "wheel profile coordinate of the contact",
+            value=lambda w: w.wheel_position),
+    *_wheel("rail_contact_position", "Real", "m", "rail profile coordinate of the contact",
+            value=lambda w: w.rail_position),
+    *_wheel("contact_lateral_position", "Real", "m", "contact point, track Y",
+            value=lambda w: w.lateral_position),
+    *_wheel("contact_angle", "Real", "rad", "contact angle (positive towards the flange)",
+            value=lambda w: w.contact_angle),
+    *_wheel("rolling_radius", "Real", "m", "wheel radius at the contact point",
+            value=lambda w: w.rolling_radius),
+    *_wheel("contact_area", "Real", "m2", "contact area (sum over patches)",
+            value=lambda w: w.area),
+    *_wheel("max_pressure", "Real", "Pa", "maximum pressure", value=lambda w: w.max_pressure),
+    *_wheel("slip_area_ratio", "Real", "1", "slip area / contact area",
+            value=lambda w: w.slip_area_ratio),
+    *_wheel("xi_used", "Real", "1", "longitudinal creepage used (main patch)", value=_used(0)),
+    *_wheel("eta_used", "Real", "1", "lateral creepage used (main patch)", value=_used(1)),
+    *_wheel("phi_used", "Real", "1/m", "spin creepage used (main patch)", value=_used(2)),
     Variable("force_longitudinal", "Real", "output", None, "N",
-             "total force of the rails on the wheelset, track X"),
+             "total force of the rails on the wheelset, track X", lambda r: r.force[0]),
     Variable("force_lateral", "Real", "output", None, "N",
-             "total force of the rails on the wheelset, track Y"),
+             "total force of the rails on the wheelset, track Y", lambda r: r.force[1]),
     Variable("force_vertical", "Real", "output", None, "N",
-             "total force of the rails on the wheelset, track Z"),
+             "total force of the rails on the wheelset, track Z", lambda r: r.force[2]),
     Variable("yaw_moment", "Real", "output", None, "N.m",
-             "moment of the rails on the wheelset about the vertical through its centre"),
-    Variable("solve_time", "Real", "output", None, "s", "wall time of the last step's solve"),
-    *_wheel("n_patches", "Integer", "", "number of contact patches"),
-    *_wheel("normal_iterations", "Integer", "", "BEM normal iterations (sum over patches)"),
-    *_wheel("tangential_iterations", "Integer", "", "ConvexGS sweeps (sum over patches)"),
+             "moment of the rails on the wheelset about the vertical through its centre",
+             lambda r: r.yaw_moment),
+    Variable("solve_time", "Real", "output", None, "s", "wall time of the last step's solve",
+             lambda r: r.wall_time),
+    *_wheel("n_patches", "Integer", "", "number of contact patches",
+            value=lambda w: w.n_patches),
+    *_wheel("normal_iterations", "Integer", "", "BEM normal iterations (sum over patches)",
+            value=lambda w: w.normal_iterations),
+    *_wheel("tangential_iterations", "Integer", "", "ConvexGS sweeps (sum over patches)",
+            value=lambda w: w.tangential_iterations),
     Variable("normal_iterations", "Integer", "output", None, "",
-             "BEM normal iterations of the last step, both wheels"),
+             "BEM normal iterations of the last step, both wheels",
+             _total("normal_iterations")),
     Variable("tangential_iterations", "Integer", "output", None, "",
-             "ConvexGS sweeps of the last step, both wheels"),
+             "ConvexGS sweeps of the last step, both wheels", _total("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
-             "0 ok, 1 not converged, 2 no contact, 3 out of range (input rejected)"),
+             "0 ok, 1 not converged, 2 no contact, 3 out of range (input rejected)",
+             lambda r: r.status),
 ]
+"""The outputs; ``value(result)`` reads each from a
+:class:`~railcontact.timestep.WheelsetResult`."""
 
 
 def table() -> list[Variable]:
@@ -192,5 +236,5 @@ def table() -> list[Variable]:
     for v in PARAMETERS + INPUTS + OUTPUTS:
         k = counters.get(v.type, 0)
         counters[v.type] = k + 1
-        out.append(Variable(v.name, v.type, v.causality, v.start, v.unit, v.description, k))
+        out.append(replace(v, vr=k))
     return out
