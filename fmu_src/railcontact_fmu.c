@@ -649,21 +649,26 @@ fmi2Status fmi2CancelStep(fmi2Component comp) {
     return fmi2Error;
 }
 
+/* keep the state bytes b (a new reference, or NULL on a Python error) in *state,
+ * allocating the State on first use; called with the GIL held */
+static fmi2Status store_state(fmi2FMUstate *state, PyObject *b) {
+    if (!b) {
+        py.ErrClear();
+        return fmi2Error;
+    }
+    State *st = *state ? (State *)*state : calloc(1, sizeof(State));
+    if (st->bytes) py.DecRef(st->bytes);
+    st->bytes = b;
+    *state = st;
+    return fmi2OK;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state) {
     Instance *c = comp;
     if (!c || !state) return fmi2Error;
-    fmi2Status s = fmi2OK;
     ENTER;
     PyObject *b = py.CallObject(c->m_get_state, NULL);
-    if (!b) {
-        py.ErrClear();
-        s = fmi2Error;
-    } else {
-        State *st = *state ? (State *)*state : calloc(1, sizeof(State));
-        if (st->bytes) py.DecRef(st->bytes);
-        st->bytes = b;
-        *state = st;
-    }
+    fmi2Status s = store_state(state, b);
     LEAVE;
     return s;
 }
@@ -722,18 +727,9 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte data[], si
                                    fmi2FMUstate *state) {
     (void)comp;
     if (!state) return fmi2Error;
-    fmi2Status s = fmi2OK;
     ENTER;
     PyObject *b = py.BytesFromStringAndSize((const char *)data, (long)size);
-    if (!b) {
-        py.ErrClear();
-        s = fmi2Error;
-    } else {
-        State *st = *state ? (State *)*state : calloc(1, sizeof(State));
-        if (st->bytes) py.DecRef(st->bytes);
-        st->bytes = b;
-        *state = st;
-    }
+    fmi2Status s = store_state(state, b);
     LEAVE;
     return s;
 }

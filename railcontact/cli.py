@@ -69,10 +69,17 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _cmd_settings(args: argparse.Namespace) -> int:
+    print(settings_reference())
+    return 0
+
+
+def settings_reference() -> str:
+    """Every setting (case files, time step, FMU modes) and the FMU parameters, as Markdown
+    (the text of ``docs/settings.md``)."""
+    from .fmu.variables import parameters_markdown
     from .settings import markdown
 
-    print(markdown())
-    return 0
+    return markdown() + "\n" + parameters_markdown()
 
 
 def _cmd_fmu_build(args: argparse.Namespace) -> int:

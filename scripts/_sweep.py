@@ -1,6 +1,7 @@
 """Shared by the study scripts: the displacements of the lateral sweep, a loop over them
-with a progress bar, the approach that carries a wheel load, and the CSV writer
-(``from _sweep import ...`` in a script run from ``scripts/``)."""
+with a progress bar, the approach that carries a wheel load, the report of failed cases, the
+CSV writer and the figure's common finish (``from _sweep import ...`` in a script run from
+``scripts/``)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,16 @@ from pathlib import Path
 import numpy as np
 
 import railcontact as rc
+
+
+def paper_case() -> dict:
+    """The studies' wheel-rail case without its ``[normal]`` table: S1002 on 60E1 (1:40),
+    the left wheel, 64 x 64 elements, steel (a fresh dictionary each call)."""
+    return {
+        "material": {"young": 206e9, "poisson": 0.28},
+        "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
+        "grid": {"nx": 64, "ny": 64},
+    }
 
 
 def displacements(step_mm: float) -> np.ndarray:
@@ -50,6 +61,25 @@ def approach_for_load(case: dict, load: float) -> float:
     c["normal"] = {"load": load, "tolerance": 1e-9, "estimate": "infcon"}
     main = rc.solve(c).patches[0]
     return main.normal.penetration / math.cos(main.geometry.contact_angle)
+
+
+def report_failed(failed: list[tuple[float, str]]) -> None:
+    """Print the displacements whose case raised, with the reason."""
+    for dy, msg in failed:
+        print(f"  failed at {dy * 1e3:+.2f} mm: {msg}")
+
+
+def save_figure(fig, axes, out: Path, name: str, xlabel: str = "lateral displacement [mm]",
+                ylabel: str = "iterations", legend_size: float | None = 8) -> None:
+    """Label, grid and legend on every axis, the figure saved as ``out/name.png``, and the
+    CSV and PNG paths printed (the CSV written before by :func:`write_csv`)."""
+    for a in axes:
+        a.set_xlabel(xlabel)
+        a.set_ylabel(ylabel)
+        a.grid(alpha=0.3)
+        a.legend(fontsize=legend_size)
+    fig.savefig(out / f"{name}.png", dpi=120)
+    print(out / f"{name}.csv", out / f"{name}.png")
 
 
 def write_csv(path: Path, rows: list[dict]) -> None:

@@ -35,23 +35,18 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from _sweep import approach_for_load, write_csv
+from _sweep import approach_for_load, paper_case, write_csv
 
 import railcontact as rc
 from railcontact.contact import normal_estimate, simplified_tangential
 from railcontact.io.plotting import _pyplot
 from railcontact.settings import Control
+from railcontact.settings.choices import NORMAL_ESTIMATES, TANGENTIAL_ESTIMATES
 from railcontact.tangential.strips import remesh_strips
 
-BASE = {
-    "material": {"young": 206e9, "poisson": 0.28},
-    "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
-    "grid": {"nx": 64, "ny": 64},
-}
+BASE = paper_case()
 LOAD = 83.3e3
 CASES_MM = (-2.0, 0.0, 7.78)
-NORMAL_ESTIMATES = ("none", "hertz", "kp", "infcon")
-TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
 SOLVERS = {"fft": "runs", "none": "runs_pk"}  # normal preconditioner -> key of its runs
 FRICTION = 0.4
 CREEP = {"case1": 0.5e-4, "case2": 2e-4, "case3": 5e-4}

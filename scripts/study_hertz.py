@@ -20,7 +20,7 @@ import copy
 from pathlib import Path
 
 import numpy as np
-from _sweep import write_csv
+from _sweep import save_figure, write_csv
 
 import railcontact as rc
 from railcontact.io.plotting import _pyplot
@@ -84,13 +84,8 @@ def main() -> None:
     for est in ("none", "fastsim", "fastrip"):
         a2.semilogx(bs, [r[f"tangential_{est}"] for r in rows], "o-", label=est)
     a2.set_title("tangential BEM (ConvexGS), eps_tau = 1e-2")
-    for a in (a1, a2):
-        a.set_xlabel("B [1/mm] (A = 0.001 /mm)")
-        a.set_ylabel("iterations")
-        a.grid(alpha=0.3)
-        a.legend()
-    fig.savefig(args.out / "study_hertz.png", dpi=120)
-    print(args.out / "study_hertz.csv", args.out / "study_hertz.png")
+    save_figure(fig, (a1, a2), args.out, "study_hertz", xlabel="B [1/mm] (A = 0.001 /mm)",
+                legend_size=None)
 
 
 if __name__ == "__main__":

@@ -17,18 +17,14 @@ import copy
 import math
 
 import numpy as np
-from _sweep import approach_for_load, displacements, run_sweep
+from _sweep import approach_for_load, displacements, paper_case, run_sweep
 
 from railcontact.contact.wheelrail import build_geometry, solve_wheel
 from railcontact.halfspace.hertz import hertz
 from railcontact.settings import validate_case
 
 Q = 83.3e3
-CASE = {
-    "material": {"young": 206e9, "poisson": 0.28},
-    "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
-    "grid": {"nx": 64, "ny": 64},
-}
+CASE = paper_case()
 COLUMNS = ("none", "hertz_penetration", "hertz_load")
 
 

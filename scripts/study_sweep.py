@@ -36,17 +36,20 @@ import math
 from pathlib import Path
 
 import numpy as np
-from _sweep import approach_for_load, displacements, run_sweep, write_csv
+from _sweep import (
+    approach_for_load,
+    displacements,
+    paper_case,
+    report_failed,
+    run_sweep,
+    save_figure,
+    write_csv,
+)
 
 import railcontact as rc
 from railcontact.io.plotting import _pyplot
 
-CASE = {
-    "material": {"young": 206e9, "poisson": 0.28},
-    "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
-    "grid": {"nx": 64, "ny": 64},
-    "normal": {"load": 83.3e3, "tolerance": 1e-3},
-}
+CASE = {**paper_case(), "normal": {"load": 83.3e3, "tolerance": 1e-3}}
 CREEP = {"case1": 0.5e-4, "case2": 2e-4, "case3": 5e-4}
 NORMAL = ("none", "hertz", "kp", "infcon")
 SOLVERS = {"fft": "normal", "none": "normal_pk"}  # preconditioner -> column prefix
@@ -124,8 +127,7 @@ def main() -> None:
     mean = {k: float(np.mean([r[k] for r in rows])) for k in keys
             if k not in ("dy_mm", "patch", "roll_mrad")}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed")
-    for dy, msg in failed:
-        print(f"  failed at {dy * 1e3:+.2f} mm: {msg}")
+    report_failed(failed)
     print(f"{'normal':<22} {'none':>7} {'hertz':>7} {'kp':>7} {'infcon':>7}")
     for label, prefix in (("railcontact", "normal"), ("plain PK CG", "normal_pk")):
         print(f"{label:<22} " + " ".join(f"{mean[f'{prefix}_{e}']:7.2f}" for e in NORMAL))
@@ -157,13 +159,7 @@ def main() -> None:
         a2.plot(d["dy_mm"][order], d[f"case2_{e}"][order], ".", ms=4,
                 label=f"{e} (mean {mean[f'case2_{e}']:.2f})")
     a2.set_title("tangential BEM, Table 5 case 2, eps_tau = 1e-2", fontsize=9)
-    for a in (a0, a1, a2):
-        a.set_xlabel("lateral displacement [mm]")
-        a.set_ylabel("iterations")
-        a.grid(alpha=0.3)
-        a.legend(fontsize=8)
-    fig.savefig(args.out / "study_sweep.png", dpi=120)
-    print(args.out / "study_sweep.csv", args.out / "study_sweep.png")
+    save_figure(fig, (a0, a1, a2), args.out, "study_sweep")
 
 
 if __name__ == "__main__":

@@ -22,16 +22,20 @@ import math
 from pathlib import Path
 
 import numpy as np
-from _sweep import approach_for_load, displacements, run_sweep, write_csv
+from _sweep import (
+    approach_for_load,
+    displacements,
+    paper_case,
+    report_failed,
+    run_sweep,
+    save_figure,
+    write_csv,
+)
 
 import railcontact as rc
 from railcontact.io.plotting import _pyplot
 
-BASE = {
-    "material": {"young": 206e9, "poisson": 0.28},
-    "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
-    "grid": {"nx": 64, "ny": 64},
-}
+BASE = paper_case()
 NORMAL_TOLS = (1e-2, 1e-3, 1e-5, 1e-7)
 NORMAL_REF = 1e-10
 TANGENTIAL_TOLS = (1e-1, 1e-2, 1e-3, 1e-5)
@@ -92,6 +96,20 @@ def one_case(dy: float) -> list[dict]:
     return rows
 
 
+def print_table(title: str, header: str, d: dict, prefix: str, tols: tuple,
+                errors: tuple[str, str, str], fmt: str, paper: dict) -> None:
+    """One Markdown table: per tolerance the mean iterations and errors [%] beside the
+    paper's."""
+    print(f"\n{title}")
+    print(header)
+    print("|---|---|---|---|---|---|---|---|---|")
+    for tol in tols:
+        k = f"{prefix}{tol:g}"
+        errs = " | ".join(f"{100 * d[f'{k}_{e}'].mean():{fmt}}" for e in errors)
+        print(f"| {tol:g} | {d[k + '_it'].mean():.2f} | {errs} | "
+              + " | ".join(str(x) for x in paper[tol]) + " |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--step", type=float, default=0.1, help="displacement step [mm]")
@@ -105,30 +123,17 @@ def main() -> None:
     d = {k: np.array([r[k] for r in rows], dtype=float) for k in keys}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed; "
           f"tangential reference converged on {int(d['ref_t_converged'].sum())}")
-    for dy, msg in failed:
-        print(f"  failed at {dy * 1e3:+.2f} mm: {msg}")
-    print("\nnormal (INFCON estimate, penetration control), mean over patches; "
-          f"reference eps_n = {NORMAL_REF:g}")
-    print("| eps_n | iterations | max pressure err. % | area err. % | force err. % | "
-          "paper: iterations | pressure % | area % | force % |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for tol in NORMAL_TOLS:
-        k = f"n{tol:g}"
-        pp = PAPER_NORMAL[tol]
-        print(f"| {tol:g} | {d[k + '_it'].mean():.2f} | {100 * d[k + '_p'].mean():.3f} | "
-              f"{100 * d[k + '_area'].mean():.3f} | {100 * d[k + '_force'].mean():.3f} | "
-              f"{pp[0]} | {pp[1]} | {pp[2]} | {pp[3]} |")
-    print("\ntangential (FaStrip estimate, Table 5 case 2), mean over patches; "
-          f"reference eps_tau = {TANGENTIAL_REF:g}")
-    print("| eps_tau | sweeps | max traction err. % | slip area err. % | creep force err. % | "
-          "paper: iterations | col. 2 % | col. 3 % | col. 4 % |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for tol in TANGENTIAL_TOLS:
-        k = f"t{tol:g}"
-        pp = PAPER_TANGENTIAL[tol]
-        print(f"| {tol:g} | {d[k + '_it'].mean():.2f} | {100 * d[k + '_q'].mean():.3g} | "
-              f"{100 * d[k + '_slip'].mean():.3g} | {100 * d[k + '_force'].mean():.3g} | "
-              f"{pp[0]} | {pp[1]} | {pp[2]} | {pp[3]} |")
+    report_failed(failed)
+    print_table(f"normal (INFCON estimate, penetration control), mean over patches; "
+                f"reference eps_n = {NORMAL_REF:g}",
+                "| eps_n | iterations | max pressure err. % | area err. % | force err. % | "
+                "paper: iterations | pressure % | area % | force % |",
+                d, "n", NORMAL_TOLS, ("p", "area", "force"), ".3f", PAPER_NORMAL)
+    print_table(f"tangential (FaStrip estimate, Table 5 case 2), mean over patches; "
+                f"reference eps_tau = {TANGENTIAL_REF:g}",
+                "| eps_tau | sweeps | max traction err. % | slip area err. % | "
+                "creep force err. % | paper: iterations | col. 2 % | col. 3 % | col. 4 % |",
+                d, "t", TANGENTIAL_TOLS, ("q", "slip", "force"), ".3g", PAPER_TANGENTIAL)
 
     plt = _pyplot()
 
@@ -143,13 +148,7 @@ def main() -> None:
                        label=f"eps_tau = {tol:g} ({d[k + '_it'].mean():.1f} sweeps)")
     ax[0].set_title("normal force, relative error (penetration control)", fontsize=10)
     ax[1].set_title("creep force |F|, relative error (Table 5 case 2)", fontsize=10)
-    for a in ax:
-        a.set_xlabel("lateral displacement [mm]")
-        a.set_ylabel("relative error")
-        a.grid(alpha=0.3)
-        a.legend(fontsize=8)
-    fig.savefig(args.out / "study_tolerance.png", dpi=120)
-    print(args.out / "study_tolerance.csv", args.out / "study_tolerance.png")
+    save_figure(fig, ax, args.out, "study_tolerance", ylabel="relative error")
 
 
 if __name__ == "__main__":

@@ -86,7 +86,7 @@ def _parameter(name: str, record: type[Record], key: str) -> Variable:
     numeric = s.kind in ("float", "floats12")
     doc = s.doc.replace(" (one value, or [body 1, body 2])", " of wheel and rail")
     if s.kind == "choice":
-        doc += ": " + ", ".join(s.choices)
+        doc += " (" + " | ".join(s.choices) + ")"
     return Variable(name, "Real" if numeric else "String", "parameter", default,
                     UNITS.get(s.unit, s.unit), doc)
 
@@ -227,6 +227,18 @@ OUTPUTS = [
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""
+
+
+def parameters_markdown() -> str:
+    """The FMU parameters as a Markdown table: the setting behind each, default, unit."""
+    out = ["## FMU parameters", "",
+           "Each parameter of the FMU sets one of the settings above (the material is one "
+           "for wheel and rail).", "",
+           "| parameter | type | setting | default | unit | meaning |", "|---|---|---|---|---|---|"]
+    for v, (_, record, key) in zip(PARAMETERS, PARAMETER_SOURCES, strict=True):
+        out.append(f"| `{v.name}` | {v.type} | `{record.__name__}.{key}` | {v.start!r} | "
+                   f"{v.unit} | {v.description} |")
+    return "\n".join(out) + "\n"
 
 
 def table() -> list[Variable]:

@@ -21,7 +21,7 @@ found by Brent's method on +-:data:`MAX_ROLL`.
 
 ``offset = 0`` is the kinematic (rigid-body) roll used for rolling-radius-difference
 tables; the Manchester contact benchmark solves the roll for equal wheel loads
-(:func:`railcontact.wheelrail.solve_wheel_rail` with ``roll = "equal-loads"``).
+(:func:`railcontact.contact.wheelrail.solve_wheel_rail` with ``roll = "equal-loads"``).
 """
 
 from __future__ import annotations

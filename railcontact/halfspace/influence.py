@@ -3,7 +3,7 @@
 A unit traction on the element centred at the origin, of size ``dx * dy``, displaces the
 surface point (X, Y). The coefficients are the combined displacement *differences* of the
 two bodies (Kalker's convention) with the combined parameters G, nu, K of
-:class:`railcontact.materials.ElasticPair`. With the corner operator
+:class:`railcontact.halfspace.materials.ElasticPair`. With the corner operator
 
     [[F]] = F(X+dx/2, Y+dy/2) - F(X+dx/2, Y-dy/2) - F(X-dx/2, Y+dy/2) + F(X-dx/2, Y-dy/2)
 

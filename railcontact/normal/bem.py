@@ -19,7 +19,7 @@ the number of CG steps taken (each costs two convolutions, three with the precon
 
 Preconditioning (``preconditioner="fft"``, the default): the gradient on the contact set is
 multiplied by an FFT approximate inverse of the influence matrix
-(:meth:`~railcontact.operator.InfluenceOperator.preconditioner`, the idea of CONTACT's
+(:meth:`~railcontact.halfspace.operator.InfluenceOperator.preconditioner`, the idea of CONTACT's
 NormCG, Vollebregt, JCP 257A (2014) 333-351) and projected back onto the contact set
 (and, under force control, onto zero mean), which keeps the step symmetric positive
 definite on each active set. Plain Polonsky–Keer CG (``"none"``) reduces the pressure

@@ -69,10 +69,14 @@ def markdown() -> str:
     """The settings reference as Markdown (one table per record)."""
     out = ["# Settings reference", "",
            "Generated from the declarations in `railcontact/settings/` by "
-           "`railcontact settings`; do not edit by hand. SI units.", ""]
+           "`railcontact settings`; do not edit by hand. SI units; `-` is dimensionless. "
+           "A case file holds the tables `[material]`, `[geometry]` (`type = \"quadratic\"` "
+           "or `\"wheel-rail\"`), `[grid]`, `[normal]` and `[tangential]`; "
+           "`ContactSettings` and `FMUModes` are the time step's and the FMU's.", ""]
     for rec in RECORDS:
         title = f"`[{rec.TABLE}]` — `{rec.__name__}`" if rec.TABLE else f"`{rec.__name__}`"
-        doc = (rec.__doc__ or "").split("\n\n")[0].replace("\n", " ").strip()
+        doc = (rec.__doc__ or "").split("\n\n")[0].replace("\n", " ").replace("``", "`")
+        doc = " ".join(doc.split())
         out += [f"## {title}", "", doc, "",
                 "| key | default | unit | allowed | meaning |", "|---|---|---|---|---|"]
         for r in setting_rows((rec,)):

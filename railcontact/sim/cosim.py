@@ -1,6 +1,6 @@
 """Co-simulation of one wheelset with the railcontact FMU, driven through fmpy.
 
-Python integrates the wheelset (:mod:`railcontact.dynamics`); every communication step the
+Python integrates the wheelset (:mod:`railcontact.sim.dynamics`); every communication step the
 FMU gets the wheelset's lateral displacement, yaw, their rates and the speed (creepages
 ``kinematic``, wheel loads given) and returns the forces of the rails. Optional *shadow*
 instances of the same FMU with other parameters (e.g. ``warm_start = none`` for the cold

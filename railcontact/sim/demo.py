@@ -2,9 +2,9 @@
 from the railcontact FMU through fmpy every communication step.
 
 The FMU is built (``dist/RailContact.fmu``) when it is missing or stale. The wheelset
-(:mod:`railcontact.dynamics`: lateral, yaw and spin degrees of freedom, primary suspension
+(:mod:`railcontact.sim.dynamics`: lateral, yaw and spin degrees of freedom, primary suspension
 to a frame moving at constant speed, 83.3 kN per wheel, S1002 on 60E1 at 1:40) starts from
-a lateral offset; :mod:`railcontact.cosim` integrates it. A second FMU instance with
+a lateral offset; :mod:`railcontact.sim.cosim` integrates it. A second FMU instance with
 ``warm_start = none`` gets the same inputs every few steps, so the cold-start iterations are
 measured on exactly the same states. The summary gives the speed, the wavelength beside
 Klingel's (equivalent conicity from railcontact's own geometry at the simulated

@@ -35,7 +35,7 @@ the velocities* (semi-implicit Euler with an interface Jacobian):
 
 with ``D = dF/dv`` (3 x 3, contact plus suspension damping). The Jacobian only has to be
 roughly right for stability (a ``D`` between half and several times the true one is
-stable); the scheme is first-order accurate whatever ``D`` is. :mod:`railcontact.cosim`
+stable); the scheme is first-order accurate whatever ``D`` is. :mod:`railcontact.sim.cosim`
 measures ``D`` by finite differences through the FMU (state saved and restored).
 """
 

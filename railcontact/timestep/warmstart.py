@@ -47,7 +47,7 @@ class PatchMemory:
         Normal pressure [Pa], (nx, ny).
     traction
         Tangential traction [Pa], (2, nx, ny), in the side frame (see
-        :mod:`railcontact.wheelset`), or None without a tangential solution.
+        :mod:`railcontact.timestep.wheelset`), or None without a tangential solution.
     state
         Adhesion/slip map (0 exterior, 1 adhesion, 2 slip), (nx, ny), or None.
     u, z

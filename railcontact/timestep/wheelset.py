@@ -225,7 +225,7 @@ class WheelsetContact:
             only.
         time
             Simulation time [s] of this step; with the times of the two previous steps the
-            warm start is extrapolated linearly (:mod:`railcontact.warmstart`).
+            warm start is extrapolated linearly (:mod:`railcontact.timestep.warmstart`).
         remember
             Keep this step's solution as the next step's warm start.
         """

@@ -1,0 +1,181 @@
+"""The public API the README shows, and the settings: declared once, documented from the
+declarations, and the README and the FMU in step with them."""
+
+from __future__ import annotations
+
+import ast
+import math
+import re
+from dataclasses import fields
+
+import pytest
+
+import railcontact as rc
+from railcontact.cli import settings_reference
+from railcontact.errors import CaseError, RailContactError
+from railcontact.fmu import variables as V
+from railcontact.settings import (
+    Case,
+    ContactSettings,
+    FMUModes,
+    MaterialSettings,
+    NormalSettings,
+    TangentialSettings,
+    WheelRailGeometry,
+)
+from railcontact.settings.fields import default_of
+from railcontact.settings.reference import case_keys
+
+
+def _blocks(text: str, lang: str) -> list[str]:
+    return re.findall(rf"```{lang}\n(.*?)```", text, flags=re.S)
+
+
+@pytest.fixture
+def readme(root) -> str:
+    return (root / "README.md").read_text(encoding="utf-8")
+
+
+def test_every_import_the_readme_shows_works(readme):
+    """Each import statement of the README's Python blocks runs, and every ``rc.<name>``
+    it uses exists."""
+    n = 0
+    for block in _blocks(readme, "python"):
+        for node in ast.walk(ast.parse(block)):
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                exec(compile(ast.Module([node], []), "<README>", "exec"), {})
+                n += 1
+        for name in re.findall(r"\brc\.(\w+)", block):
+            assert hasattr(rc, name), f"README uses rc.{name}, which railcontact lacks"
+    assert n >= 3
+
+
+def test_public_names_of_the_issue_are_top_level():
+    for name in ("solve", "solve_normal", "solve_tangential", "WheelsetContact",
+                 "ContactSettings", "Kinematics", "load_case", "Case"):
+        assert name in rc.__all__ and hasattr(rc, name)
+
+
+def test_settings_reference_is_generated_and_current(root):
+    """docs/settings.md is what ``railcontact settings`` prints (regenerate it with
+    ``railcontact settings > docs/settings.md``)."""
+    doc = (root / "docs" / "settings.md").read_text(encoding="utf-8")
+    assert doc.strip() == settings_reference().strip()
+
+
+def _readme_case_keys(readme: str) -> set[tuple[str, str]]:
+    keys = set()
+    for block in _blocks(readme, "toml"):
+        table = ""
+        for line in block.splitlines():
+            if m := re.match(r"\s*\[(\w+)\]", line):
+                table = m.group(1)
+            elif m := re.match(r"\s*#?\s*(\w+)\s*=", line):
+                keys.add((table, m.group(1)))
+    return keys
+
+
+def test_readme_case_files_show_exactly_the_declared_keys(readme):
+    shown = _readme_case_keys(readme) - {("", "name")}
+    declared = case_keys()
+    assert shown - declared == set(), "README shows keys a case file does not accept"
+    assert declared - shown == set(), "README does not show these case-file keys"
+
+
+def test_readme_lists_exactly_the_fmu_parameters(readme):
+    part = readme.split("<!-- fmu-parameters")[1].split("<!-- /fmu-parameters -->")[0]
+    listed = {w for w in re.findall(r"`([a-z_]+)`", part)}
+    assert listed == {v.name for v in V.PARAMETERS}
+
+
+def test_fmu_parameters_take_defaults_units_and_meaning_from_the_settings():
+    for v, (name, record, key) in zip(V.PARAMETERS, V.PARAMETER_SOURCES, strict=True):
+        f = next(f for f in fields(record) if f.name == key)
+        default = default_of(f)
+        assert v.name == name
+        assert v.start == (default[0] if isinstance(default, tuple) else default)
+        assert v.description.startswith(f.metadata["spec"].doc.split(" (one value")[0])
+    start = V.parameter_settings({v.name: v.start for v in V.PARAMETERS})
+    assert start.contact == ContactSettings()
+    assert start.geometry == WheelRailGeometry()
+    assert start.material == MaterialSettings()
+    assert start.modes == FMUModes()
+    # the strings of a modelDescription are read as numbers
+    text = V.parameter_settings({v.name: str(v.start) for v in V.PARAMETERS})
+    assert text.contact == ContactSettings()
+
+
+def test_fmu_parameter_errors_name_the_parameter():
+    with pytest.raises(RailContactError, match="parameter flange_back_distance"):
+        V.parameter_settings({"flange_back_distance": -1.0})
+    with pytest.raises(RailContactError, match="parameter warm_start"):
+        V.parameter_settings({"warm_start": "sometimes"})
+    assert not V.parameter_settings({"load_definition": "normal"}).contact.load_includes_creep
+
+
+@pytest.mark.parametrize("name", ["hertz_paper", "hertz_paper_rolling", "s1002_60e1_dy-2mm"])
+def test_a_case_survives_its_dictionary(root, name):
+    case = rc.load_case(root / "models" / "cases" / f"{name}.toml")
+    assert Case.from_dict(case.to_dict()) == case
+    assert rc.validate_case(case) is case
+
+
+def test_a_case_reports_every_problem_at_once():
+    bad = {"material": {"young": -1.0, "poisson": 0.3},
+           "geometry": {"type": "quadratic", "A": 1.0},
+           "normal": {"penetration": 1e-4, "tolerance": 0.0},
+           "tangential": {"creepage": [0, 0, 0], "friction": 0.3, "strips": [1, 40]}}
+    with pytest.raises(CaseError) as err:
+        Case.from_dict(bad)
+    msg = str(err.value)
+    for part in ("4 problems", "[material] young", "[geometry] B", "[normal] tolerance",
+                 "[tangential] strips[0]"):
+        assert part in msg
+
+
+@pytest.mark.parametrize("field, value, match", [
+    ("element_size", 0.01, r"element_size \[m\] must be > 0 and <= 0.005"),
+    ("element_size", -1e-4, "element_size"),
+    ("friction", 0.0, "friction must be positive"),
+    ("normal_tolerance", 1.0, "normal_tolerance"),
+    ("warm_start", "always", "warm_start must be one of"),
+    ("estimate_grid", (3, 40), r"estimate_grid\[0\] must be an integer >= 4"),
+    ("max_iterations_normal", 2.5, "max_iterations_normal"),
+    ("spin_offset", float("nan"), "finite"),
+    ("load_includes_creep", 1, "true or false"),
+])
+def test_contact_settings_reject_bad_values(field, value, match):
+    with pytest.raises(RailContactError, match=match):
+        ContactSettings(**{field: value})
+
+
+def test_time_step_records_are_built_once_from_contact_settings():
+    cs = ContactSettings(normal_tolerance=1e-4, tangential_tolerance=1e-3, friction=0.3,
+                         element_size=1e-3, warm_start="previous")
+    assert cs.normal_settings is cs.normal_settings  # cached, not rebuilt per pass
+    assert cs.patch_settings.normal is cs.normal_settings
+    assert cs.patch_settings.grid is cs.grid_settings and cs.patch_settings.tangential is None
+    assert (cs.normal_settings.tolerance, cs.normal_settings.estimate) == (1e-4, "none")
+    t = cs.tangential_settings
+    assert (t.friction, t.tolerance, t.estimate, t.model) == (0.3, 1e-3, "none", "bem")
+    g = cs.grid_settings
+    assert (g.dx, g.dy, g.quantum, g.snap) == (1e-3, 1e-3, 8, True)
+    with_estimate = ContactSettings(warm_start="previous+estimate")
+    assert with_estimate.normal_settings.estimate == "infcon"
+    assert with_estimate.tangential_settings.estimate == "fastrip"
+
+
+def test_records_normalise_their_values():
+    n = NormalSettings(estimate_grid=[30, 20], max_iterations=50.0, load=10)
+    assert n.estimate_grid == (30, 20) and isinstance(n.max_iterations, int)
+    assert isinstance(n.load, float) and n.control.kwargs() == {"load": 10.0}
+    assert TangentialSettings(creepage=[1, 0, 0]).creepage == (1.0, 0.0, 0.0)
+    pair = MaterialSettings(young=[210e9, 200e9], poisson=0.3).elastic_pair()
+    assert pair == rc.ElasticPair.of(rc.Material(210e9, 0.3), rc.Material(200e9, 0.3))
+    assert WheelRailGeometry().inclination == pytest.approx(math.atan(1 / 40))
+
+
+def test_record_docstrings_carry_units_and_defaults():
+    doc = NormalSettings.__doc__
+    assert "Attributes" in doc and "load [N]" in doc and "tolerance [-]" in doc
+    assert "default 0.001" in doc
