@@ -179,3 +179,13 @@ def test_record_docstrings_carry_units_and_defaults():
     doc = NormalSettings.__doc__
     assert "Attributes" in doc and "load [N]" in doc and "tolerance [-]" in doc
     assert "default 0.001" in doc
+
+
+def test_demo_flags_are_checked_as_settings_before_anything_runs():
+    from railcontact.sim.demo import DemoOptions
+
+    with pytest.raises(RailContactError, match=r"parameter element_size \[m\]"):
+        DemoOptions(element_size=0.01).resolved()
+    with pytest.raises(RailContactError, match="parameter warm_start"):
+        DemoOptions(warm_start="sometimes").resolved()
+    assert DemoOptions().resolved()["element_size"] == ContactSettings().element_size

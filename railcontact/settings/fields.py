@@ -10,6 +10,7 @@ records' docstrings and the settings reference (:mod:`railcontact.settings.refer
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field, fields
@@ -237,7 +238,7 @@ def default_of(f) -> Any:
 def document(cls):
     """Class decorator: append an ``Attributes`` section, from the field specs, to the
     docstring of a settings record (so that ``help()`` shows every unit and default)."""
-    lines = [(cls.__doc__ or "").rstrip(), "", "Attributes", "----------"]
+    lines = [inspect.cleandoc(cls.__doc__ or ""), "", "Attributes", "----------"]
     for f in fields(cls):
         s = spec_of(f)
         unit = f" [{s.unit}]" if s.unit else ""

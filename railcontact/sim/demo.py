@@ -24,7 +24,9 @@ import numpy as np
 
 from ..errors import RailContactError, check_count, check_positive
 from ..fmu import DEFAULT_OUTPUT, ensure_fmu
+from ..fmu.variables import parameter_settings
 from ..io.plotting import _pyplot
+from ..settings import ContactSettings
 from .cosim import CoSimResult, Run, print_progress, simulate
 from .dynamics import WheelsetModel, measure_wavelength
 
@@ -54,13 +56,17 @@ class DemoOptions:
 
     def resolved(self) -> dict[str, Any]:
         """duration, step, element_size with the defaults (or ``--quick``) filled in."""
-        base = QUICK if self.quick else {"duration": 1.5, "step": 1e-3, "element_size": 0.5e-3}
+        base = QUICK if self.quick else {"duration": 1.5, "step": 1e-3,
+                                         "element_size": ContactSettings().element_size}
         out = {k: getattr(self, k) if getattr(self, k) is not None else v
                for k, v in base.items()}
         check_positive("speed", self.speed, "m/s")
         check_count("cold_every", self.cold_every, 0)
         for k, v in out.items():
             check_positive(k, v, "s" if k != "element_size" else "m")
+        # the solver flags are FMU parameters: checked here, before the FMU is built
+        parameter_settings({"element_size": out["element_size"], "warm_start": self.warm_start,
+                            "profile_unit": self.profile_unit})
         return out
 
 
