@@ -98,10 +98,6 @@ class Record:
             if value is None and f.default is None and not spec_of(f).required:
                 continue
             object.__setattr__(self, f.name, self._validate(f.name, spec_of(f), value))
-        self._check()
-
-    def _check(self) -> None:
-        """Rules that involve several fields (subclasses)."""
 
     @classmethod
     def _where(cls, key: str) -> str:
