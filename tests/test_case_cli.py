@@ -68,6 +68,7 @@ def test_element_size_and_growing_automatic_area():
     (lambda c: c["grid"].update(x=[-1e-3, 1e-3], y=[-1e-3, 1e-3]), "too small"),
     (lambda c: c["normal"].update(estimate="magic"), "estimate"),
     (lambda c: c["normal"].update(lod=3), "unknown key"),
+    (lambda c: c["geometry"].update(wheel="S1002"), "for type = 'wheel-rail'"),
     (lambda c: c.update(extra={}), "unknown table"),
     (lambda c: c.pop("material"), r"missing table \[material\]"),
     (lambda c: c["material"].update(poisson=0.7), "poisson"),

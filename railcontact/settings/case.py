@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Mapping
-from dataclasses import MISSING, dataclass
+from dataclasses import MISSING, dataclass, fields
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -384,6 +384,10 @@ def _record(table: str, values: Any) -> Record:
                 raise CaseError(f"[geometry] {key} is for type = 'quadratic'; a wheel-rail "
                                 "case computes its curvatures from the profiles")
         return WheelRailGeometry.from_mapping(rest)
+    wheel_rail_keys = sorted(set(rest) & {f.name for f in fields(WheelRailGeometry)})
+    if wheel_rail_keys:
+        raise CaseError(f"[geometry] {', '.join(wheel_rail_keys)}: for type = 'wheel-rail'; a "
+                        "quadratic case takes A and B")
     return QuadraticGeometry.from_mapping(rest)
 
 
