@@ -45,7 +45,15 @@ def _summary(sol) -> str:
             lines.append(f"  max traction   {t.max_traction:12.6g} Pa")
             lines.append(f"  iterations     {t.iterations:12d}   ({t.message})")
             lines.append(f"  wall time      {t.wall_time * 1e3:12.3f} ms")
+        lines.append(f"  all work       {_work(ps.work)}")
+    lines.append(f"total: {_work(sol.work)}")
     return "\n".join(lines)
+
+
+def _work(w) -> str:
+    return (f"{w.normal_iterations} normal + {w.tangential_iterations} tangential iterations, "
+            f"{w.load_passes} load pass(es), {w.remeshes} re-mesh(es), "
+            f"{w.seconds * 1e3:.3g} ms")
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:

@@ -11,7 +11,7 @@ and beyond Nadal's limit (``mu tan(gamma) > 1``, sliding up) no normal force car
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import TypeVar
 
 from .results import PatchSolution
@@ -28,6 +28,35 @@ MAX_SHARE = 100.0
 """Largest normal share of a vertical load the creep-load iteration tries: a flange near
 Nadal's limit (``cos(gamma) - mu sin(gamma)`` -> 0) needs N >> Q; beyond it the load
 cannot be carried (the wheel climbs)."""
+
+
+def count_passes(final: list[PatchSolution],
+                 passes: Iterable[list[PatchSolution]]) -> list[PatchSolution]:
+    """Charge the work of every discarded pass to the patches of ``final`` and return them.
+
+    ``passes`` are the solves of one wheel (``final`` among them or not); the iterations,
+    re-meshes and time of each patch of another pass go to the patch of ``final`` nearest to
+    it on the rail, and the load passes add up, so that the totals over ``final`` are the
+    totals of all the work done.
+    """
+    extra = 0
+    for ps in passes:
+        if ps is final:
+            continue
+        extra += max((p.work.load_passes for p in ps), default=1)
+        for p in ps if final else ():
+            _nearest(final, p).work.absorb(p.work)
+    for f in final:
+        f.work.load_passes += extra
+    return final
+
+
+def _nearest(patches: list[PatchSolution], p: PatchSolution) -> PatchSolution:
+    if p.geometry is None:
+        return patches[0]
+    u, z = p.geometry.rail_u, p.geometry.position[2]
+    return min(patches, key=lambda f: math.inf if f.geometry is None else
+               math.hypot(f.geometry.rail_u - u, f.geometry.position[2] - z))
 
 
 def vertical_force(patches: list[PatchSolution]) -> float:

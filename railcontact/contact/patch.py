@@ -8,6 +8,7 @@ area and its control (load or penetration); the settings records say how to solv
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 
 import numpy as np
@@ -30,7 +31,7 @@ from ..tangential.strips import (
     sample_on_strips,
     strips_from_contact,
 )
-from .results import PatchSolution
+from .results import PatchSolution, Work
 
 GROW_FACTOR = 1.5
 """Factor by which an automatic potential area grows when the contact reaches its edge."""
@@ -105,21 +106,27 @@ def normal_estimate(settings: NormalSettings, hz: HertzSolution | None, s: np.nd
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
-                       automatic: bool = True) -> NormalResult:
-    """BEM normal solution of one patch on the potential area ``bounds`` [m].
+                       automatic: bool = True) -> tuple[NormalResult, Work]:
+    """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
+    it took.
 
     ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``estimate_of(grid)`` the
     initial pressure [Pa] (or None). An automatic area is grown by :data:`GROW_FACTOR`
-    while the contact reaches its edge; a user-given one that is too small is an error.
+    while the contact reaches its edge (each growth a re-mesh, its iterations counted in
+    the work); a user-given one that is too small is an error.
     """
+    t0 = time.perf_counter()
+    work = Work(remeshes=-1)
     for _ in range(MAX_GROW + 1):
+        work.remeshes += 1
         grid = make_grid(grid_settings, bounds)
         op = influence_operator(grid, pair, "z", settings.fft)
         res = solve_normal(gap_of(grid), grid, op, initial_pressure=estimate_of(grid),
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, **control.kwargs())
+        work.normal_iterations += res.iterations
         if not res.touches_boundary:
-            return res
+            break
         if not automatic:
             x = None if grid_settings.x is None else list(grid_settings.x)
             y = None if grid_settings.y is None else list(grid_settings.y)
@@ -130,7 +137,8 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         xc, yc = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
         bounds = (xc + (xmin - xc) * GROW_FACTOR, xc + (xmax - xc) * GROW_FACTOR,
                   yc + (ymin - yc) * GROW_FACTOR, yc + (ymax - yc) * GROW_FACTOR)
-    return res
+    work.seconds = time.perf_counter() - t0
+    return res, work
 
 
 def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
@@ -169,8 +177,20 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
     each patch its own); ``fft`` is the convolution backend. ``previous`` = (traction
     (2, nx, ny) [Pa], adhesion/slip map) on the patch's grid, e.g. the previous time
     step's: when it holds a traction it starts the BEM instead of the estimate asked for in
-    ``settings``.
+    ``settings``. The sweeps and the time are added to ``patch.work``.
     """
+    t0 = time.perf_counter()
+    try:
+        _tangential(patch, settings, pair, fft, creepage, previous)
+    finally:
+        patch.work.seconds += time.perf_counter() - t0
+    if patch.tangential is not None:
+        patch.work.tangential_iterations += patch.tangential.iterations
+
+
+def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,
+                fft: str, creepage: tuple[float, float, float] | None,
+                previous: tuple | None) -> None:
     res = patch.normal
     A, B = patch.curvatures
     creepage = settings.creepage if creepage is None else tuple(creepage)

@@ -34,9 +34,10 @@ def solve_quadratic(case: Case) -> PatchSolution:
 
     s = np.linspace(bounds[2], bounds[3], 2001)
     est = normal_estimate(settings, hz, s, B * s**2, np.full_like(s, A), pair, control)
-    res = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
-                             grid_settings.automatic)
-    patch = PatchSolution(normal=res, hertz=hz, estimate=settings.estimate, curvatures=(A, B))
+    res, work = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
+                                   grid_settings.automatic)
+    patch = PatchSolution(normal=res, hertz=hz, estimate=settings.estimate, curvatures=(A, B),
+                          work=work)
     if case.tangential is not None and res.force > 0:
         solve_patch_tangential(patch, case.tangential, pair, settings.fft)
     return patch

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..geometry.contact import ContactPoint
@@ -11,6 +11,48 @@ from ..normal import NormalResult
 from ..settings import Case
 from ..tangential import TangentialResult
 from ..tangential.strips import StripResult
+
+
+@dataclass
+class Work:
+    """The work a result took, counted over all its load passes and re-meshes.
+
+    Attributes
+    ----------
+    normal_iterations
+        Normal CG iterations, every solve included (grown potential areas, load passes).
+    tangential_iterations
+        Tangential Gauss-Seidel sweeps, every solve included.
+    load_passes
+        Solves of the wheel (or quadratic patch) that the result took: the passes of the
+        load loops (approach secant with several patches, creep-load secant, equal-loads
+        roll), 1 when the first solve was the answer.
+    remeshes
+        Normal solves repeated on a grown potential area because the contact reached the
+        edge of the previous one.
+    seconds
+        Wall time [s]: of the patch's solves (estimates included) for a patch, of the
+        whole ``solve()`` (geometry and contact search included) for a solution.
+    """
+
+    normal_iterations: int = 0
+    tangential_iterations: int = 0
+    load_passes: int = 1
+    remeshes: int = 0
+    seconds: float = 0.0
+
+    def absorb(self, other: Work) -> None:
+        """Add the iterations, re-meshes and time of ``other`` (a discarded pass)."""
+        self.normal_iterations += other.normal_iterations
+        self.tangential_iterations += other.tangential_iterations
+        self.remeshes += other.remeshes
+        self.seconds += other.seconds
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"normal_iterations": self.normal_iterations,
+                "tangential_iterations": self.tangential_iterations,
+                "load_passes": self.load_passes, "remeshes": self.remeshes,
+                "seconds": self.seconds}
 
 
 @dataclass
@@ -34,6 +76,9 @@ class PatchSolution:
         Relative curvatures (A, B) [1/m] of the gap at the patch origin.
     geometry
         The wheel-rail contact point of the patch, or None for a quadratic case.
+    work
+        The iterations, passes, re-meshes and time it took, over all passes (the
+        ``iterations`` of ``normal`` and ``tangential`` are those of the last solve only).
     """
 
     normal: NormalResult
@@ -44,6 +89,7 @@ class PatchSolution:
     tangential_estimate: str = "none"
     curvatures: tuple[float, float] | None = None
     geometry: ContactPoint | None = None
+    work: Work = field(default_factory=Work)
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -81,6 +127,7 @@ class PatchSolution:
             h = self.hertz
             d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,
                           "max_pressure": h.max_pressure, "area": h.area}
+        d["work"] = self.work.to_dict()
         return d
 
 
@@ -90,11 +137,22 @@ class Solution:
 
     ``roll`` [rad] is the wheelset roll the wheel-rail patches were solved at (resolved
     when the case gives ``roll = "rigid"`` or ``"equal-loads"``); None for a quadratic case.
+    ``seconds`` is the wall time of the whole solve [s]; :attr:`work` the totals.
     """
 
     case: Case
     patches: list[PatchSolution] = field(default_factory=list)
     roll: float | None = None
+    seconds: float = 0.0
+
+    @property
+    def work(self) -> Work:
+        """The patches' work summed, with the wall time of the whole solve [s]."""
+        total = Work(load_passes=max((p.work.load_passes for p in self.patches), default=1),
+                     seconds=self.seconds)
+        for p in self.patches:
+            total.absorb(replace(p.work, seconds=0.0))
+        return total
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (SI units)."""
@@ -102,4 +160,5 @@ class Solution:
         if self.roll is not None:
             d["roll"] = self.roll
         d["patches"] = [p.to_dict() for p in self.patches]
+        d["work"] = self.work.to_dict()
         return d

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -24,15 +25,20 @@ def solve(case: Case | Mapping[str, Any] | str | Path) -> Solution:
     Returns
     -------
     Solution
-        One :class:`~railcontact.contact.PatchSolution` per contact patch.
+        One :class:`~railcontact.contact.PatchSolution` per contact patch, each with the
+        work it took over all load passes and re-meshes (``patch.work``; totals in
+        ``solution.work``).
 
     Raises
     ------
     CaseError
         For a case that breaks the schema or cannot be solved as given.
     """
+    t0 = time.perf_counter()
     case = load_case(case) if isinstance(case, (str, Path)) else validate_case(case)
     if case.wheel_rail:
         patches, pose = solve_wheel_rail(case)  # with the tangential problem
-        return Solution(case=case, patches=patches, roll=pose.roll)
-    return Solution(case=case, patches=[solve_quadratic(case)])
+        return Solution(case=case, patches=patches, roll=pose.roll,
+                        seconds=time.perf_counter() - t0)
+    return Solution(case=case, patches=[solve_quadratic(case)],
+                    seconds=time.perf_counter() - t0)

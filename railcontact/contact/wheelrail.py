@@ -33,6 +33,7 @@ penetration), scaled by ``[grid] margin`` and grown when the contact reaches its
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -47,7 +48,14 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, PatchSettings, WheelRailGeometry
-from .loadloop import CREEP_LOAD_RTOL, MAX_SECANT, creep_load_secant, load_met, vertical_force
+from .loadloop import (
+    CREEP_LOAD_RTOL,
+    MAX_SECANT,
+    count_passes,
+    creep_load_secant,
+    load_met,
+    vertical_force,
+)
 from .patch import normal_estimate, solve_patch_normal, solve_patch_tangential
 from .results import PatchSolution
 
@@ -100,14 +108,16 @@ def _patches(cps: list[ContactPoint], approach: float, settings: PatchSettings,
         d0 = hz.penetration if loads is not None else dn
         xl = grid.margin * math.sqrt(d0 / cp.A)
         ylo, yhi = cp.lateral_extent(d0, grid.margin)
+        t0 = time.perf_counter()
         if estimate_for is None:
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
-        res = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), grid, normal, pair,
-                                 control, est)
+        res, work = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), grid, normal,
+                                       pair, control, est)
+        work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=normal.estimate,
-                                 curvatures=(cp.A, cp.B), geometry=cp))
+                                 curvatures=(cp.A, cp.B), geometry=cp, work=work))
     return out
 
 
@@ -137,16 +147,18 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for),
             settings, pair)
     q = control.load
+    passes: list[list[PatchSolution]] = []
 
     def residual(qn: float) -> tuple[float, list[PatchSolution]]:
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(load=qn),
                                                 settings, pair, estimate_for), settings, pair)
+        passes.append(ps)
         return vertical_force(ps) - q, ps
 
     ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
     if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
         raise CaseError(f"{side} wheel: {failure}")
-    return ps
+    return count_passes(ps, passes)
 
 
 def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
@@ -176,9 +188,12 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     if count_contacts(track, ws, pose, side, approach) == 1:
         return single
     # several patches: secant on the vertical approach
+    passes = [single]
+
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
         ps = _patches(contact_points(track, ws, pose, side, a), a, settings, pair,
                       estimate_for=estimate_for)
+        passes.append(ps)
         return vertical_force(ps) - q, ps
 
     a0 = approach
@@ -187,7 +202,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     r1, ps1 = residual(a1)
     for _ in range(MAX_SECANT):
         if abs(r1) < LOAD_RTOL * q:
-            return ps1
+            return count_passes(ps1, passes)
         if r1 == r0:
             break
         a2 = a1 - r1 * (a1 - a0) / (r1 - r0)
@@ -198,7 +213,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     if abs(r1) > 1e-3 * q:
         raise CaseError(f"{side} wheel: load control did not converge (vertical force "
                         f"{r1 + q:.6g} N for load {q:.6g} N)")
-    return ps1
+    return count_passes(ps1, passes)
 
 
 def _approach(patches: list[PatchSolution]) -> float:
@@ -242,11 +257,13 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
     approach.
     """
     solved: dict[float, dict[str, list[PatchSolution]]] = {}
+    passes: list[dict[str, list[PatchSolution]]] = []  # every pass, a roll solved twice too
 
     def residual(phi: float) -> float:
         p = Pose(pose.lateral, pose.yaw, phi)
         per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair)
         solved[phi] = per_side
+        passes.append(per_side)
         return (first_contact_gap(track, ws, p, "left") - first_contact_gap(track, ws, p, "right")
                 - _approach(per_side["right"]) + _approach(per_side["left"]))
 
@@ -281,7 +298,10 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
         if isinstance(exc, CaseError):
             raise
         raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
-    return Pose(pose.lateral, pose.yaw, phi), solved[phi]
+    final = solved[phi]
+    for side, patches in final.items():  # every roll pass counts
+        count_passes(patches, [per_side[side] for per_side in passes])
+    return Pose(pose.lateral, pose.yaw, phi), final
 
 
 def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:

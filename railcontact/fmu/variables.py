@@ -212,10 +212,10 @@ OUTPUTS = [
              lambda r: r.wall_time),
     *_wheel("n_patches", "Integer", "", "number of contact patches",
             value=lambda w: w.n_patches),
-    *_wheel("normal_iterations", "Integer", "", "BEM normal iterations (sum over patches)",
-            value=lambda w: w.normal_iterations),
-    *_wheel("tangential_iterations", "Integer", "", "ConvexGS sweeps (sum over patches)",
-            value=lambda w: w.tangential_iterations),
+    *_wheel("normal_iterations", "Integer", "", "BEM normal iterations (all patches, load "
+            "passes and re-meshes)", value=lambda w: w.normal_iterations),
+    *_wheel("tangential_iterations", "Integer", "", "ConvexGS sweeps (all patches, load passes "
+            "and re-meshes)", value=lambda w: w.tangential_iterations),
     Variable("normal_iterations", "Integer", "output", None, "",
              "BEM normal iterations of the last step, both wheels",
              _total("normal_iterations")),
@@ -224,6 +224,10 @@ OUTPUTS = [
     Variable("status", "Integer", "output", None, "",
              "0 ok, 1 not converged, 2 no contact, 3 out of range (input rejected)",
              lambda r: r.status),
+    *_wheel("load_passes", "Integer", "", "solves of the wheel in the last step (load loop)",
+            value=lambda w: w.load_passes),
+    *_wheel("remeshes", "Integer", "", "normal solves repeated on a grown potential area",
+            value=lambda w: w.remeshes),
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""

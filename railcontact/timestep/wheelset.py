@@ -52,9 +52,15 @@ from time import perf_counter
 
 import numpy as np
 
-from ..contact.loadloop import MAX_SHARE, creep_load_secant, load_met, vertical_force
+from ..contact.loadloop import (
+    MAX_SHARE,
+    count_passes,
+    creep_load_secant,
+    load_met,
+    vertical_force,
+)
 from ..contact.patch import normal_estimate, solve_patch_tangential
-from ..contact.results import PatchSolution
+from ..contact.results import PatchSolution, Work
 from ..contact.wheelrail import solve_wheel_normal
 from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.contact import ContactPoint, vertical_gap
@@ -138,10 +144,17 @@ class WheelContact:
     max_pressure: float = 0.0
     slip_area_ratio: float = 0.0
     normal_iterations: int = 0
+    """Normal CG iterations of the step, over all patches, load passes and re-meshes."""
     tangential_iterations: int = 0
-    load_passes: int = 1
-    """Normal-and-tangential solves of the wheel this step (more than one when a wheel
-    load counts the creep forces, :attr:`ContactSettings.load_includes_creep`)."""
+    """Tangential sweeps of the step, over all patches, load passes and re-meshes."""
+    load_passes: int = 0
+    """Solves of the wheel this step: 0 without contact, more than one when a wheel load
+    counts the creep forces (:attr:`ContactSettings.load_includes_creep`) or several
+    patches share it."""
+    remeshes: int = 0
+    """Normal solves repeated on a grown potential area."""
+    seconds: float = 0.0
+    """Wall time of the wheel's patch solves [s] (estimates included)."""
 
     @property
     def n_patches(self) -> int:
@@ -283,12 +296,8 @@ class WheelsetContact:
             residual, q, start, self.settings.load_tolerance)
         if not patches:
             return wheel, []
+        count_passes(patches, [p for p, _, _ in passes])  # the work of every pass counts
         self._finish(wheel, patches, creepages, pose)
-        wheel.load_passes = len(passes)
-        for earlier, _, _ in passes[:-1]:  # the work of every pass counts
-            wheel.normal_iterations += sum(p.normal.iterations for p in earlier)
-            wheel.tangential_iterations += sum(p.tangential.iterations for p in earlier
-                                               if p.tangential is not None)
         if failure and not load_met(patches, q, self.settings.load_tolerance,
                                     self.settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
@@ -362,6 +371,7 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     fx = fs = mn = n_tot = 0.0
     fu = fz = mz = 0.0
     converged = True
+    work = Work()
     for p in patches:
         cp, n = p.geometry, p.normal
         g = cp.contact_angle
@@ -373,11 +383,9 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         fu += f_u
         fz += ps * math.sin(g) + n.force * math.cos(g)
         mz += cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
-        wheel.normal_iterations += n.iterations
-        converged &= n.converged
-        if t is not None:
-            wheel.tangential_iterations += t.iterations
-            converged &= t.converged
+        converged &= n.converged and (t is None or t.converged)
+        work.absorb(p.work)
+        work.load_passes = max(work.load_passes, p.work.load_passes)
     main = max(patches, key=lambda p: p.normal.force)
     cp = main.geometry
     wheel.normal_force = n_tot
@@ -397,6 +405,10 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         n_el = [int(np.count_nonzero(t.state)) for t in ts]
         n_slip = [int(np.count_nonzero(t.state == 2)) for t in ts]
         wheel.slip_area_ratio = sum(n_slip) / max(sum(n_el), 1)
+    wheel.normal_iterations, wheel.tangential_iterations = (work.normal_iterations,
+                                                            work.tangential_iterations)
+    wheel.load_passes, wheel.remeshes, wheel.seconds = (work.load_passes, work.remeshes,
+                                                        work.seconds)
     wheel.patches = patches
     wheel.status = OK if converged else NOT_CONVERGED
     wheel.message = "ok" if converged else "a BEM solve did not converge"

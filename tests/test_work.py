@@ -1,0 +1,122 @@
+"""Every iteration counts: the work a result reports is all the work its solve did.
+
+Each test wraps the BEM solvers so that every call (load passes, re-meshes, roll passes,
+discarded secant steps) is counted independently of the bookkeeping under test, and
+compares the totals the result reports with that count.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import railcontact as rc
+import railcontact.contact.patch as patch_module
+from railcontact.io.jsonout import solution_json
+
+WORK_KEYS = {"normal_iterations", "tangential_iterations", "load_passes", "remeshes", "seconds"}
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    """Every normal and tangential BEM solve made through the patch solvers."""
+    log = {"normal": [], "tangential": []}
+    normal, tangential = patch_module.solve_normal, patch_module.solve_tangential
+
+    def counted_normal(*args, **kwargs):
+        res = normal(*args, **kwargs)
+        log["normal"].append(res.iterations)
+        return res
+
+    def counted_tangential(*args, **kwargs):
+        res = tangential(*args, **kwargs)
+        log["tangential"].append(res.iterations)
+        return res
+
+    monkeypatch.setattr(patch_module, "solve_normal", counted_normal)
+    monkeypatch.setattr(patch_module, "solve_tangential", counted_tangential)
+    return log
+
+
+def wheel_rail(**geometry) -> dict:
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "lateral_displacement": -2e-3, **geometry},
+            "grid": {"nx": 32, "ny": 32}, "normal": {"load": 83.3e3},
+            "tangential": {"creepage": [2e-4, 2e-4, 0.2], "friction": 0.4}}
+    return case
+
+
+def test_regrown_potential_area_counts_every_solve(calls):
+    """A potential area too small for the contact (margin 0.6) is grown and solved again;
+    the work holds both solves."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+            "grid": {"dx": 5e-4, "dy": 2e-4, "margin": 0.6}, "normal": {"penetration": 1e-4}}
+    sol = rc.solve(case)
+    (p,) = sol.patches
+    assert len(calls["normal"]) >= 2
+    assert p.work.remeshes == len(calls["normal"]) - 1
+    assert p.work.normal_iterations == sum(calls["normal"]) > p.normal.iterations
+    assert p.work.load_passes == 1 and sol.work.seconds >= p.work.seconds > 0
+
+
+def test_creep_load_passes_count_every_solve(calls):
+    """A wheel load with creep forces takes several normal + tangential passes; the patch
+    reports all of them."""
+    sol = rc.solve(wheel_rail())
+    (p,) = sol.patches
+    assert p.work.load_passes == len(calls["tangential"]) >= 2
+    assert p.work.normal_iterations == sum(calls["normal"]) > p.normal.iterations
+    assert p.work.tangential_iterations == sum(calls["tangential"]) > p.tangential.iterations
+    w = sol.work
+    assert (w.normal_iterations, w.tangential_iterations) == (sum(calls["normal"]),
+                                                              sum(calls["tangential"]))
+
+
+def test_two_patch_approach_passes_count_every_solve(calls):
+    """A wheel load shared by two patches (5 mm, 20 kN: tread and gauge corner) is met by a
+    secant on the vertical approach; the totals over the patches are all the solves."""
+    case = wheel_rail(lateral_displacement=5e-3)
+    case["normal"]["load"] = 20e3
+    del case["tangential"]
+    sol = rc.solve(case)
+    assert len(sol.patches) == 2
+    assert sum(p.work.normal_iterations for p in sol.patches) == sum(calls["normal"])
+    assert sol.work.normal_iterations == sum(calls["normal"])
+    assert all(p.work.load_passes > 2 for p in sol.patches)
+
+
+def test_equal_loads_roll_passes_count_every_solve(calls):
+    """Both wheels at equal loads: every roll pass solves both wheels, and counts."""
+    case = wheel_rail(roll="equal-loads", side="both")
+    del case["tangential"]
+    sol = rc.solve(case)
+    assert len(sol.patches) == 2 and len(calls["normal"]) > 2
+    assert sol.work.normal_iterations == sum(calls["normal"])
+    assert sum(p.work.load_passes for p in sol.patches) == len(calls["normal"])
+
+
+def test_json_reports_the_work_of_each_patch_and_the_total():
+    d = json.loads(solution_json(rc.solve(wheel_rail())))
+    assert set(d["work"]) == WORK_KEYS
+    for p in d["patches"]:
+        assert set(p["work"]) == WORK_KEYS
+        assert p["work"]["normal_iterations"] >= p["normal"]["iterations"]
+        assert p["work"]["tangential_iterations"] >= p["tangential"]["iterations"]
+
+
+def test_wheelset_step_counts_every_solve(calls):
+    """A time step with wheel loads and creepages: each wheel's iterations are all the
+    solves made for it."""
+    wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 1 / 40),
+                            rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                            rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                            rc.ContactSettings(element_size=1e-3, warm_start="none"))
+    r = wc.solve(rc.Pose(3e-3), loads=(83.3e3, 83.3e3),
+                 creepages=((2e-4, 2e-4, 0.2), (2e-4, 2e-4, 0.2)))
+    assert r.status == 0
+    assert sum(w.normal_iterations for w in r.wheels) == sum(calls["normal"])
+    assert sum(w.tangential_iterations for w in r.wheels) == sum(calls["tangential"])
+    assert sum(w.load_passes for w in r.wheels) == len(calls["tangential"])
+    assert all(w.seconds > 0 for w in r.wheels)
