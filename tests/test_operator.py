@@ -61,3 +61,24 @@ def test_bad_backend_and_shape():
         InfluenceOperator(g, STEEL, "z", "cufft")
     with pytest.raises(RailContactError, match="shape"):
         InfluenceOperator(g, STEEL, "z", "dense").apply(np.zeros((3, 4)))
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
+def test_fft_plans_are_bounded_and_a_dropped_plan_is_made_again():
+    """More grid shapes than MAX_PLANS keep at most MAX_PLANS plans (memory stays bounded
+    in a time series of changing patches); an operator whose plan was dropped plans again
+    and still equals the dense product."""
+    import railcontact.halfspace.operator as operator_module
+
+    g = Grid.from_bounds(-2e-3, 3e-3, -1e-3, 1e-3, 6, 5)
+    op = InfluenceOperator(g, STEEL, "z", "pyfftw")
+    p = np.random.default_rng(3).uniform(0, 1e9, (6, 5))
+    ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
+    first = op.apply(p)
+    for k in range(operator_module.MAX_PLANS + 3):
+        operator_module._fftw_plan(1, (4, 2 * k + 2))
+    plans = operator_module._local.plans
+    assert len(plans) == operator_module.MAX_PLANS and (1, (12, 10)) not in plans
+    again = op.apply(p)  # its plan was dropped: planned anew (FFTW's wisdom: same bits)
+    assert np.max(np.abs(again - ref)) <= 1e-13 * np.max(np.abs(ref))
+    assert np.array_equal(again, first)

@@ -1,0 +1,184 @@
+"""Benchmark of one wheelset time step: wall time, iterations and where the time goes.
+
+The hunting-like run of issue 18, in-process through :class:`railcontact.WheelsetContact`:
+S1002 on 60E1 at 1:40, 0.5 mm elements, mu = 0.4, 83.3 kN per wheel (load control with the
+creep forces counted), 30 m/s with kinematic creepages, a 3 mm lateral sine at 1.5 Hz
+(lateral velocity from it, no yaw), 1 ms steps, ``--steps`` steps (300). For the warm
+(``previous+estimate``) and cold (``none``) starts it prints the median step time and
+iterations, and the breakdown of the step time by stage: contact search, meshing
+(grids, gaps, re-meshing the previous step), estimates (INFCON, FaStrip, previous-step
+prediction), normal BEM, tangential BEM, operators (influence coefficients, kernel spectra
+and FFT planning for a new grid shape) and the rest (load loop, resultants, Python).
+
+A fixed numpy workload is timed in the same run (128 x 128 FFT round trips x 200, then a
+600 x 600 matrix-vector product x 400), and every time is also given as a ratio to it, so
+that figures compare across machines (issue 18's targets: warm step <= 0.03, cold step
+<= 0.25 of the workload). The resident memory (RSS) is printed at the end.
+
+Usage: python scripts/bench_step.py [--steps 300] [--modes previous+estimate,none]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import resource
+import time
+from collections import defaultdict
+from contextlib import contextmanager
+
+import numpy as np
+
+import railcontact as rc
+import railcontact.contact.patch as patch_module
+import railcontact.contact.wheelrail as wheelrail_module
+import railcontact.geometry.contact as geometry_contact
+import railcontact.timestep.warmstart as warmstart_module
+import railcontact.timestep.wheelset as wheelset_module
+
+STAGES = {  # stage: (module, function name) pairs timed as that stage
+    "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
+               (wheelset_module, "vertical_gap")],
+    "meshing": [(patch_module, "make_grid"), (geometry_contact.ContactPoint, "gap_on_grid"),
+                (warmstart_module, "remesh")],
+    "estimate": [(patch_module, "virtual_penetration"), (patch_module, "remesh_strips"),
+                 (patch_module, "fastrip"), (patch_module, "fastsim"),
+                 (patch_module, "strips_from_contact"), (patch_module, "sample_on_strips")],
+    "normal BEM": [(patch_module, "solve_normal")],
+    "tangential BEM": [(patch_module, "solve_tangential")],
+    "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
+}
+
+
+class Breakdown:
+    """Exclusive wall time per stage: a timed call nested in another is taken out of the
+    outer one."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = defaultdict(float)
+        self._stack: list[list[float]] = []
+
+    def wrap(self, stage: str, fn):
+        def timed(*args, **kwargs):
+            self._stack.append([0.0])
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                dt = time.perf_counter() - t0
+                inner = self._stack.pop()[0]
+                self.seconds[stage] += dt - inner
+                if self._stack:
+                    self._stack[-1][0] += dt
+        return timed
+
+    @contextmanager
+    def installed(self):
+        saved = []
+        for stage, targets in STAGES.items():
+            for owner, name in targets:
+                fn = getattr(owner, name)
+                saved.append((owner, name, fn))
+                setattr(owner, name, self.wrap(stage, fn))
+        try:
+            yield self
+        finally:
+            for owner, name, fn in reversed(saved):
+                setattr(owner, name, fn)
+
+
+def fixed_workload() -> float:
+    """Seconds of the reference numpy workload (best of 3)."""
+    rng = np.random.default_rng(0)
+    a = rng.standard_normal((128, 128))
+    m = rng.standard_normal((600, 600))
+    v = rng.standard_normal(600)
+    best = math.inf
+    for _ in range(3):
+        t0 = time.perf_counter()
+        for _ in range(200):
+            a = np.fft.irfft2(np.fft.rfft2(a), s=a.shape)
+        for _ in range(400):
+            v = m @ v
+            v /= np.linalg.norm(v)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def clear_caches() -> None:
+    """Forget the influence operators, FFT plans and FFTW's wisdom, so that each run pays
+    for its own planning."""
+    import railcontact.halfspace.operator as operator_module
+    import railcontact.tangential.rolling as rolling_module
+
+    operator_module._cached_operator.cache_clear()
+    rolling_module._cached.cache_clear()
+    getattr(operator_module._local, "plans", {}).clear()
+    if operator_module.HAVE_PYFFTW:
+        operator_module.pyfftw.forget_wisdom()  # FFTW remembers what it measured
+
+
+def run(mode: str, steps: int, step: float = 1e-3) -> dict:
+    """The hunting-like run with one warm-start mode, from empty operator caches; per-step
+    times and iterations."""
+    clear_caches()
+    wc = rc.WheelsetContact(
+        rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+        rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+        rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+    w = 2 * math.pi * 1.5
+    times, normal, tangential, passes = [], [], [], []
+    bd = Breakdown()
+    with bd.installed():
+        for k in range(steps):
+            t = k * step
+            t0 = time.perf_counter()
+            r = wc.solve(rc.Pose(3e-3 * math.sin(w * t)), loads=(83.3e3, 83.3e3),
+                         kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
+            times.append(time.perf_counter() - t0)
+            normal.append(sum(x.normal_iterations for x in r.wheels))
+            tangential.append(sum(x.tangential_iterations for x in r.wheels))
+            passes.append(sum(x.load_passes for x in r.wheels))
+            if r.status != 0:
+                print(f"  step {k}: status {r.status} ({r.left.message}; {r.right.message})")
+    total = sum(times)
+    return {"mode": mode, "median": float(np.median(times[1:])),
+            "mean": float(np.mean(times[1:])),
+            "normal": float(np.median(normal[1:])),
+            "tangential": float(np.median(tangential[1:])),
+            "passes": float(np.mean(passes[1:])), "first": times[0],
+            "breakdown": {s: bd.seconds.get(s, 0.0) / total for s in STAGES}}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=300)
+    ap.add_argument("--modes", default="previous+estimate,none")
+    args = ap.parse_args()
+    run("none", 5)  # compile the numba sweeps once, outside the measurements
+    ref = fixed_workload()
+    print(f"fixed workload (128^2 FFT round trips x 200 + 600^2 mat-vec x 400): "
+          f"{ref * 1e3:.1f} ms")
+    results = [run(m, args.steps) for m in args.modes.split(",")]
+    print(f"\n{args.steps} steps of 1 ms, S1002/60E1, 0.5 mm, 83.3 kN with creep, 30 m/s, "
+          "3 mm at 1.5 Hz; medians per step (both wheels), first step left out")
+    print(f"{'warm start':<18} {'median [ms]':>11} {'/ workload':>10} {'mean [ms]':>9} "
+          f"{'/ workload':>10} {'normal it':>9} {'tang. it':>8} {'passes':>6} "
+          f"{'first [ms]':>10}")
+    for r in results:
+        print(f"{r['mode']:<18} {r['median'] * 1e3:11.2f} {r['median'] / ref:10.3f} "
+              f"{r['mean'] * 1e3:9.2f} {r['mean'] / ref:10.3f} {r['normal']:9.1f} "
+              f"{r['tangential']:8.1f} {r['passes']:6.2f} {r['first'] * 1e3:10.1f}")
+    print("\nshare of the total step time by stage (exclusive):")
+    print(f"{'stage':<16}" + "".join(f"{r['mode']:>20}" for r in results))
+    for s in [*STAGES, "rest"]:
+        shares = [r["breakdown"][s] if s != "rest" else 1 - sum(r["breakdown"].values())
+                  for r in results]
+        print(f"{s:<16}" + "".join(f"{x:20.1%}" for x in shares))
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"\npeak RSS {rss:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
