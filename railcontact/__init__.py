@@ -24,6 +24,7 @@ solve_tangential(...)          the steady-rolling tangential BEM (ConvexGS) on p
 WheelsetContact, ContactSettings, Kinematics   the time-step solver
 """
 
+from ._moved import install as _install_moved
 from .contact import PatchSolution, Solution, solve
 from .errors import CaseError, RailContactError
 from .geometry import Profile, read_profile
@@ -50,6 +51,8 @@ from .settings import (
 )
 from .tangential import TangentialResult, rolling_operator, solve_tangential
 from .timestep import Kinematics, WheelContact, WheelsetContact, WheelsetResult
+
+_install_moved()  # the module paths of 0.1 still import, with a DeprecationWarning
 
 __version__ = "0.1.0"
 

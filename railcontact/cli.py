@@ -10,20 +10,31 @@ reported in one line (exit status 2), never as a traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Sequence
 
 from .errors import RailContactError
-from .settings.choices import WARM_STARTS
+from .settings import ContactSettings
+from .settings.choices import PROFILE_UNITS, WARM_STARTS
 
 
 def _summary(sol) -> str:
     lines = [f"case: {sol.case.name}"]
+    if sol.roll is not None:
+        lines.append(f"wheelset roll   {sol.roll:12.6g} rad")
+    if not sol.patches:
+        lines.append("no contact")
     for k, ps in enumerate(sol.patches):
         n = ps.normal
         g = n.grid
         lines.append(f"patch {k}: BEM normal contact on {g.nx} x {g.ny} elements "
                      f"({g.dx * 1e3:.4g} x {g.dy * 1e3:.4g} mm), estimate '{ps.estimate}'")
+        if ps.geometry is not None:
+            cp = ps.geometry
+            lines.append(f"  {cp.side} wheel: contact at Y = {cp.position[1] * 1e3:.3f} mm, "
+                         f"angle {math.degrees(cp.contact_angle):.3f} deg, rolling radius "
+                         f"{cp.rolling_radius * 1e3:.3f} mm")
         lines.append(f"  force          {n.force:12.6g} N")
         lines.append(f"  penetration    {n.penetration:12.6g} m")
         lines.append(f"  max pressure   {n.max_pressure:12.6g} Pa")
@@ -133,9 +144,10 @@ def _add_demo(sub) -> None:
                    help="built-in wheel profile or a profile file (S1002)")
     d.add_argument("--rail-profile", default="60E1",
                    help="built-in rail profile (60E1, UIC60, CN60) or a profile file (60E1)")
-    d.add_argument("--profile-unit", default="mm", choices=("mm", "m"),
+    d.add_argument("--profile-unit", default="mm", choices=PROFILE_UNITS,
                    help="unit of two-column profile files (mm)")
-    d.add_argument("--element-size", type=float, help="BEM element size [m] (0.0005)")
+    d.add_argument("--element-size", type=float,
+                   help=f"BEM element size [m] ({ContactSettings().element_size:g})")
     d.add_argument("--warm-start", default="previous+estimate", choices=WARM_STARTS,
                    help="warm start of the BEM (previous+estimate)")
     d.add_argument("--free", action="store_true",

@@ -32,14 +32,14 @@ import numpy as np
 import railcontact as rc
 import railcontact.contact.patch as patch_module
 import railcontact.contact.wheelrail as wheelrail_module
-import railcontact.geometry.contact as geometry_contact
+import railcontact.geometry.search as geometry_search
 import railcontact.timestep.warmstart as warmstart_module
 import railcontact.timestep.wheelset as wheelset_module
 
 STAGES = {  # stage: (module, function name) pairs timed as that stage
     "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
                (wheelset_module, "vertical_gap")],
-    "meshing": [(patch_module, "make_grid"), (geometry_contact.ContactPoint, "gap_on_grid"),
+    "meshing": [(patch_module, "make_grid"), (geometry_search.ContactPoint, "gap_on_grid"),
                 (warmstart_module, "remesh")],
     "estimate": [(patch_module, "virtual_penetration"), (patch_module, "remesh_strips"),
                  (patch_module, "fastrip"), (patch_module, "fastsim"),

@@ -22,8 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import railcontact as rc  # noqa: E402
-from railcontact.geometry.contact import contact_points  # noqa: E402
 from railcontact.geometry.profiles import read_profile  # noqa: E402
+from railcontact.geometry.search import contact_points  # noqa: E402
 from railcontact.geometry.track import SIDES, Pose, Track, Wheelset  # noqa: E402
 
 MM = 1e3
@@ -52,7 +52,7 @@ def main() -> None:
             pose = Pose(lateral=dy)
             cps = contact_points(track, ws, pose, side, 0.0)
             # the wheel lowered into contact, drawn along its trace
-            from railcontact.geometry.contact import vertical_gap
+            from railcontact.geometry.search import vertical_gap
 
             _, _, u, z, g = vertical_gap(track, ws, pose, side)
             ax.plot(sgn * u * MM, (z - g.min()) * MM, color=col, lw=1,

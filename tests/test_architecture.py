@@ -189,3 +189,28 @@ def test_demo_flags_are_checked_as_settings_before_anything_runs():
     with pytest.raises(RailContactError, match="parameter warm_start"):
         DemoOptions(warm_start="sometimes").resolved()
     assert DemoOptions().resolved()["element_size"] == ContactSettings().element_size
+
+
+@pytest.mark.parametrize("old, new", [
+    ("railcontact.materials", "railcontact.halfspace.materials"),
+    ("railcontact.wheelset", "railcontact.timestep.wheelset"),
+    ("railcontact.pipeline", "railcontact.contact"),
+    ("railcontact.case", "railcontact.settings"),
+    ("railcontact.geometry.contact", "railcontact.geometry.search"),
+])
+def test_old_module_paths_still_import_with_a_warning(old, new):
+    import importlib
+    import sys
+
+    sys.modules.pop(old, None)
+    with pytest.warns(DeprecationWarning, match=f"{old} has moved to {new}"):
+        module = importlib.import_module(old)
+    target = importlib.import_module(new)
+    for name in [n for n in dir(target) if not n.startswith("_")][:5]:
+        assert getattr(module, name) is getattr(target, name)
+
+
+def test_a_case_is_not_a_dictionary_and_says_so(root):
+    case = rc.load_case(root / "models" / "cases" / "hertz_paper.toml")
+    with pytest.raises(TypeError, match=r"use case\.normal"):
+        case["normal"]

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from railcontact import RailContactError
-from railcontact.geometry.contact import contact_points, vertical_gap
 from railcontact.geometry.profiles import builtin_profile
+from railcontact.geometry.search import contact_points, vertical_gap
 from railcontact.geometry.track import Pose, Track, Wheelset
 
 TRACK = Track(builtin_profile("60E1"))
@@ -98,7 +98,7 @@ def test_beyond_the_profiles():
 def test_branch_interpolation_keeps_to_the_branch_through_the_sample():
     """A curve folding back over itself (x rises, falls, rises): interpolating along the
     rising branch through sample k uses that branch only (NaN beyond it)."""
-    from railcontact.geometry.contact import _branch_interp
+    from railcontact.geometry.search import _branch_interp
 
     t = np.linspace(0.0, 3.0, 301)
     x = np.where(t < 1, t, np.where(t < 2, 2 - t, t - 2))  # up 0..1, down 1..0, up 0..1

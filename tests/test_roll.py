@@ -7,9 +7,9 @@ import pytest
 
 import railcontact as rc
 from railcontact import CaseError
-from railcontact.geometry.contact import contact_points
 from railcontact.geometry.profiles import builtin_profile, read_profile
 from railcontact.geometry.roll import contact_roll, first_contact_gap
+from railcontact.geometry.search import contact_points
 from railcontact.geometry.track import Pose, Track, Wheelset
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "profiles"

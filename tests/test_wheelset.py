@@ -140,7 +140,7 @@ def test_penetration_control_from_vertical_displacement():
     wc = contact(warm_start="none")
     load = wc.solve(Pose(1e-3), loads=(Q, Q))
     # lower the wheelset by the approach the load needed: same forces back
-    from railcontact.geometry.contact import vertical_gap
+    from railcontact.geometry.search import vertical_gap
 
     g = vertical_gap(wc.track, wc.wheelset, Pose(1e-3), "left")[4].min()
     approach = load.left.patches[0].normal.penetration / math.cos(load.left.contact_angle)

@@ -95,6 +95,7 @@ def test_equal_loads_roll_passes_count_every_solve(calls):
     assert len(sol.patches) == 2 and len(calls["normal"]) > 2
     assert sol.work.normal_iterations == sum(calls["normal"])
     assert sum(p.work.load_passes for p in sol.patches) == len(calls["normal"])
+    assert sol.work.load_passes == len(calls["normal"])  # each wheel's passes, added
 
 
 def test_json_reports_the_work_of_each_patch_and_the_total():

@@ -44,11 +44,18 @@ def count_passes(final: list[PatchSolution],
         if ps is final:
             continue
         extra += max((p.work.load_passes for p in ps), default=1)
-        for p in ps if final else ():
-            _nearest(final, p).work.absorb(p.work)
+        charge(final, ps)
     for f in final:
         f.work.load_passes += extra
     return final
+
+
+def charge(final: list[PatchSolution], others: Iterable[PatchSolution]) -> None:
+    """Add the iterations, re-meshes and time of ``others`` (patches solved and left out,
+    of the same pass or another) to the nearest patch of ``final`` (lost when it is
+    empty: no patch to report them)."""
+    for p in others if final else ():
+        _nearest(final, p).work.absorb(p.work)
 
 
 def _nearest(patches: list[PatchSolution], p: PatchSolution) -> PatchSolution:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..halfspace.grid import Grid
@@ -32,10 +34,12 @@ def solve_quadratic(case: Case) -> PatchSolution:
         X, Y = grid.mesh()
         return A * X**2 + B * Y**2
 
+    t0 = time.perf_counter()
     s = np.linspace(bounds[2], bounds[3], 2001)
     est = normal_estimate(settings, hz, s, B * s**2, np.full_like(s, A), pair, control)
     res, work = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
                                    grid_settings.automatic)
+    work.seconds = time.perf_counter() - t0  # the estimate's set-up included
     patch = PatchSolution(normal=res, hertz=hz, estimate=settings.estimate, curvatures=(A, B),
                           work=work)
     if case.tangential is not None and res.force > 0:

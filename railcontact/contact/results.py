@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..geometry.contact import ContactPoint
+from ..geometry.search import ContactPoint
 from ..halfspace.hertz import HertzSolution
 from ..normal import NormalResult
 from ..settings import Case
@@ -147,9 +147,13 @@ class Solution:
 
     @property
     def work(self) -> Work:
-        """The patches' work summed, with the wall time of the whole solve [s]."""
-        total = Work(load_passes=max((p.work.load_passes for p in self.patches), default=1),
-                     seconds=self.seconds)
+        """The patches' work summed, with the wall time of the whole solve [s]; the load
+        passes of each wheel (the patches of a wheel share them) added over the wheels."""
+        passes: dict[str | None, int] = {}
+        for p in self.patches:
+            side = None if p.geometry is None else p.geometry.side
+            passes[side] = max(passes.get(side, 0), p.work.load_passes)
+        total = Work(load_passes=sum(passes.values()) if passes else 0, seconds=self.seconds)
         for p in self.patches:
             total.absorb(replace(p.work, seconds=0.0))
         return total

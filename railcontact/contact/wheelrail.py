@@ -40,9 +40,9 @@ from typing import Any
 from scipy.optimize import brentq
 
 from ..errors import CaseError, RailContactError
-from ..geometry.contact import ContactPoint, contact_points, count_contacts
 from ..geometry.profiles import read_profile
 from ..geometry.roll import contact_roll, first_contact_gap
+from ..geometry.search import ContactPoint, contact_points, count_contacts
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
@@ -257,15 +257,18 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
     approach.
     """
     solved: dict[float, dict[str, list[PatchSolution]]] = {}
-    passes: list[dict[str, list[PatchSolution]]] = []  # every pass, a roll solved twice too
+    values: dict[float, float] = {}
 
     def residual(phi: float) -> float:
+        if phi in values:  # Brent's method asks again for the ends of its bracket
+            return values[phi]
         p = Pose(pose.lateral, pose.yaw, phi)
         per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair)
         solved[phi] = per_side
-        passes.append(per_side)
-        return (first_contact_gap(track, ws, p, "left") - first_contact_gap(track, ws, p, "right")
-                - _approach(per_side["right"]) + _approach(per_side["left"]))
+        values[phi] = (first_contact_gap(track, ws, p, "left")
+                       - first_contact_gap(track, ws, p, "right")
+                       - _approach(per_side["right"]) + _approach(per_side["left"]))
+        return values[phi]
 
     def offset(phi: float) -> float:
         return _approach(solved[phi]["right"]) - _approach(solved[phi]["left"])
@@ -300,7 +303,7 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
         raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
     final = solved[phi]
     for side, patches in final.items():  # every roll pass counts
-        count_passes(patches, [per_side[side] for per_side in passes])
+        count_passes(patches, [per_side[side] for per_side in solved.values()])
     return Pose(pose.lateral, pose.yaw, phi), final
 
 

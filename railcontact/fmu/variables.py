@@ -240,7 +240,8 @@ def parameters_markdown() -> str:
            "for wheel and rail).", "",
            "| parameter | type | setting | default | unit | meaning |", "|---|---|---|---|---|---|"]
     for v, (_, record, key) in zip(PARAMETERS, PARAMETER_SOURCES, strict=True):
-        out.append(f"| `{v.name}` | {v.type} | `{record.__name__}.{key}` | {v.start!r} | "
+        start = f"{v.start:.6g}" if isinstance(v.start, float) else repr(v.start)
+        out.append(f"| `{v.name}` | {v.type} | `{record.__name__}.{key}` | {start} | "
                    f"{v.unit} | {v.description} |")
     return "\n".join(out) + "\n"
 

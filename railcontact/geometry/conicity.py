@@ -19,7 +19,7 @@ EN 15302's harmonic method):
     lambda(A) = 1 / (2 pi A) * integral_0^2pi delta_r(A sin theta) sin theta dtheta.
 
 Everything here comes from railcontact's own contact search
-(:func:`railcontact.geometry.contact.contact_points`, first point of contact of each
+(:func:`railcontact.geometry.search.contact_points`, first point of contact of each
 wheel), so the conicity is the one the contact solver sees.
 """
 
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RailContactError, check_positive
-from .contact import contact_points
+from .search import contact_points
 from .track import Pose, Track, Wheelset
 
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 from scipy.optimize import brentq
 
 from ..errors import RailContactError, check_finite
-from .contact import vertical_gap
+from .search import vertical_gap
 from .track import Pose, Track, Wheelset
 
 MAX_ROLL = 0.05

@@ -29,7 +29,6 @@ Example::
 
 from __future__ import annotations
 
-import math
 import sys
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, fields
@@ -37,6 +36,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from ..errors import CaseError
+from ..geometry.track import Track, Wheelset
 from ..halfspace.materials import ElasticPair, Material
 from .choices import (
     CASE_SIDES,
@@ -100,6 +100,11 @@ class QuadraticGeometry(Record):
         return {"type": self.TYPE, **super().to_dict()}
 
 
+_TRACK = {f.name: f.default for f in fields(Track)}
+_WHEELSET = {f.name: f.default for f in fields(Wheelset)}
+"""The track and wheelset defaults, declared once by the geometry's own records."""
+
+
 @document
 @dataclass(frozen=True)
 class WheelRailGeometry(Record):
@@ -119,17 +124,19 @@ class WheelRailGeometry(Record):
                         "columns)")
     profile_unit: str = setting("mm", "choice", "", "unit of two-column profile files",
                                 choices=PROFILE_UNITS)
-    inclination: float = setting(math.atan(1 / 40), "float", "rad",
+    inclination: float = setting(_TRACK["inclination"], "float", "rad",
                                  "rail cant (1:40; 0 for a file that is canted already)")
-    gauge: float = setting(1.435, "float", "m", "track gauge, measured gauge_depth below the "
-                           "top of rail", minimum=0.0, open_min=True)
-    gauge_depth: float = setting(0.014, "float", "m", "depth below the top of rail at which "
-                                 "the gauge is measured", minimum=0.0, open_min=True)
-    back_to_back: float = setting(1.360, "float", "m", "flange-back distance of the wheelset",
-                                  minimum=0.0, open_min=True)
-    flange_back: float = setting(-0.070, "float", "m",
+    gauge: float = setting(_TRACK["gauge"], "float", "m", "track gauge, measured gauge_depth "
+                           "below the top of rail", minimum=0.0, open_min=True)
+    gauge_depth: float = setting(_TRACK["gauge_depth"], "float", "m", "depth below the top of "
+                                 "rail at which the gauge is measured", minimum=0.0,
+                                 open_min=True)
+    back_to_back: float = setting(_WHEELSET["back_to_back"], "float", "m",
+                                  "flange-back distance of the wheelset", minimum=0.0,
+                                  open_min=True)
+    flange_back: float = setting(_WHEELSET["flange_back"], "float", "m",
                                  "wheel profile coordinate S of the flange back")
-    wheel_radius: float = setting(0.46, "float", "m", "nominal rolling radius",
+    wheel_radius: float = setting(_WHEELSET["radius"], "float", "m", "nominal rolling radius",
                                   minimum=0.0, open_min=True)
     lateral_displacement: float = setting(0.0, "float", "m",
                                           "wheelset lateral displacement, positive to the left")
@@ -222,7 +229,8 @@ class NormalSettings(Record):
     estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",
                                              "KP/INFCON estimate grid [nx, ny]", minimum=4)
     tolerance: float = setting(1e-3, "float", "-", "eps_n, relative pressure change between "
-                               "iterations", minimum=0.0, open_min=True)
+                               "iterations", minimum=0.0, open_min=True, maximum=1.0,
+                               open_max=True)
     max_iterations: int = setting(500, "int", "", "CG iterations at most", minimum=1)
     fft: str = setting("auto", "choice", "", "convolution backend", choices=FFT_BACKENDS)
     preconditioner: str = setting("fft", "choice", "", "'fft' or 'none' (plain "
@@ -232,9 +240,11 @@ class NormalSettings(Record):
     @property
     def control(self) -> Control:
         """The case's load or penetration (an error when it gives neither or both)."""
-        if (self.load is None) == (self.penetration is None):
-            raise CaseError("[normal] needs exactly one of load [N] and penetration [m]")
-        return Control(self.load, self.penetration)
+        try:
+            return Control(self.load, self.penetration)
+        except CaseError as exc:
+            raise CaseError(f"[normal] needs exactly one of load and penetration: {exc}"
+                            ) from None
 
 
 @document
@@ -251,7 +261,8 @@ class TangentialSettings(Record):
     estimate: str = setting("none", "choice", "", "initial estimate of the BEM",
                             choices=TANGENTIAL_ESTIMATES)
     tolerance: float = setting(1e-2, "float", "-", "eps_tau, relative traction change between "
-                               "sweeps", minimum=0.0, open_min=True)
+                               "sweeps", minimum=0.0, open_min=True, maximum=1.0,
+                               open_max=True)
     max_iterations: int = setting(1000, "int", "", "Gauss-Seidel sweeps at most", minimum=1)
     bound: str = setting("elliptic", "choice", "", "FASTSIM traction bound",
                          choices=TRACTION_BOUNDS)
@@ -300,7 +311,7 @@ class Case:
     name: str = "case"
 
     def __post_init__(self) -> None:
-        self.normal.control  # exactly one of load and penetration  # noqa: B018
+        _ = self.normal.control  # raises unless exactly one of load and penetration
         geo = self.geometry
         if isinstance(geo, WheelRailGeometry):
             if geo.roll == "equal-loads" and self.normal.load is None:
@@ -311,6 +322,11 @@ class Case:
                 raise CaseError("[grid] x and y are for quadratic cases; a wheel-rail case "
                                 "sets the potential area of each patch automatically (use "
                                 "margin, nx/ny or dx/dy)")
+
+    def __getitem__(self, table: str):
+        raise TypeError(f"a Case holds typed settings, not a dictionary: use case.{table} "
+                        f"(or case.to_dict()[{table!r}] for a copy as a dictionary; changing "
+                        "that copy does not change the case)")
 
     @property
     def wheel_rail(self) -> bool:
@@ -350,6 +366,10 @@ class Case:
                 records[table] = _record(table, case[table])
             except CaseError as exc:
                 problems.append(str(exc))
+        normal = case.get("normal")
+        if "normal" not in records and isinstance(normal, Mapping) and (
+                ("load" in normal) == ("penetration" in normal)):
+            problems.append("[normal] needs exactly one of load [N] and penetration [m]")
         name = case.get("name", "case")
         if not isinstance(name, str):
             problems.append(f"name must be a string, got {name!r}")

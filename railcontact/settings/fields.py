@@ -13,7 +13,7 @@ from __future__ import annotations
 import inspect
 import math
 from collections.abc import Mapping
-from dataclasses import MISSING, dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any, ClassVar
 
 from ..errors import CaseError, RailContactError
@@ -78,6 +78,16 @@ def setting(default: Any = MISSING, kind: str = "float", unit: str = "", doc: st
     return field(default=default, metadata={"spec": spec})
 
 
+def inherit(record: type, key: str, default: Any = MISSING, **rule: Any) -> Any:
+    """A field declared as ``record.key`` is (kind, unit, meaning and rule), with its own
+    default where given and its rule changed by the keywords of ``rule``: one declaration
+    of a setting that two records share."""
+    f = next(f for f in fields(record) if f.name == key)
+    spec = replace(spec_of(f), required=False, case=True, **rule)
+    return field(default=default_of(f) if default is MISSING else default,
+                 metadata={"spec": spec})
+
+
 def spec_of(f) -> Spec:
     return f.metadata["spec"]
 
@@ -93,11 +103,17 @@ class Record:
     ERROR: ClassVar[type[RailContactError]] = CaseError
 
     def __post_init__(self) -> None:
+        problems = []
         for f in fields(self):  # type: ignore[arg-type]
             value = getattr(self, f.name)
             if value is None and f.default is None and not spec_of(f).required:
                 continue
-            object.__setattr__(self, f.name, self._validate(f.name, spec_of(f), value))
+            try:
+                object.__setattr__(self, f.name, self._validate(f.name, spec_of(f), value))
+            except RailContactError as exc:
+                problems.append(str(exc))
+        if problems:  # every bad field at once
+            raise self.ERROR("; ".join(problems))
 
     @classmethod
     def _where(cls, key: str) -> str:
@@ -169,10 +185,12 @@ class Record:
 
     @classmethod
     def _number(cls, where: str, unit: str, spec: Spec, value: Any) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) and not hasattr(
-                value, "__float__"):
+        if isinstance(value, (bool, str)):
             cls._fail(f"{where}{unit} must be a number, got {value!r}")
-        x = float(value)
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            cls._fail(f"{where}{unit} must be a number, got {value!r}")
         if not math.isfinite(x):
             cls._fail(f"{where}{unit} must be finite, got {x}")
         lo, hi = spec.minimum, spec.maximum

@@ -69,7 +69,8 @@ def markdown() -> str:
     """The settings reference as Markdown (one table per record)."""
     out = ["# Settings reference", "",
            "Generated from the declarations in `railcontact/settings/` by "
-           "`railcontact settings`; do not edit by hand. SI units; `-` is dimensionless. "
+           "`railcontact settings`; do not edit by hand. SI units; `-` is dimensionless "
+           "(`1` in the FMU's modelDescription). "
            "A case file holds the tables `[material]`, `[geometry]` (`type = \"quadratic\"` "
            "or `\"wheel-rail\"`), `[grid]`, `[normal]` and `[tangential]`; "
            "`ContactSettings` and `FMUModes` are the time step's and the FMU's.", ""]
@@ -81,7 +82,8 @@ def markdown() -> str:
                 "| key | default | unit | allowed | meaning |", "|---|---|---|---|---|"]
         for r in setting_rows((rec,)):
             default = "required" if r.required and r.case else _fmt(r.default)
-            where = r.key if r.case or not r.table else f"{r.key} (not in case files)"
-            out.append(f"| `{where}` | {default} | {r.unit} | {r.allowed} | {r.doc} |")
+            doc = r.doc if r.case or not r.table else f"{r.doc} (set by the time step, not in "\
+                "case files)"
+            out.append(f"| `{r.key}` | {default} | {r.unit} | {r.allowed} | {doc} |")
         out.append("")
     return "\n".join(out)

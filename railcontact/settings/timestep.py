@@ -1,9 +1,11 @@
 """The settings of the time-step solver (:class:`railcontact.WheelsetContact`, the FMU).
 
 :class:`ContactSettings` is what a dynamics code sets once: friction, element size,
-tolerances, estimates, warm start. The grid, normal and tangential records that the patch
-solvers take are built from it once (:attr:`ContactSettings.grid_settings` ...), not per
-step. :class:`FMUModes` are the FMU's switches that are not solver settings.
+tolerances, estimates, warm start. Most of its fields are declared by the case records
+(:func:`~.fields.inherit`: same meaning, unit and rule, a default of its own), and the grid,
+normal and tangential records that the patch solvers take are built from it once
+(:attr:`ContactSettings.grid_settings` ...), not per step. :class:`FMUModes` are the FMU's
+switches that are not solver settings.
 """
 
 from __future__ import annotations
@@ -14,16 +16,8 @@ from typing import ClassVar
 
 from ..errors import RailContactError
 from .case import GridSettings, NormalSettings, PatchSettings, TangentialSettings
-from .choices import (
-    CONTROLS,
-    CREEPAGE_INPUTS,
-    FFT_BACKENDS,
-    LOAD_DEFINITIONS,
-    NORMAL_ESTIMATES,
-    TANGENTIAL_ESTIMATES,
-    WARM_STARTS,
-)
-from .fields import Record, document, setting
+from .choices import CONTROLS, CREEPAGE_INPUTS, LOAD_DEFINITIONS, WARM_STARTS
+from .fields import Record, document, inherit, setting
 
 MAX_ELEMENT_SIZE = 0.005
 """Coarsest element [m] that still resolves a wheel-rail patch."""
@@ -44,38 +38,23 @@ class ContactSettings(Record):
     """
 
     ERROR: ClassVar[type[RailContactError]] = RailContactError
-    friction: float = setting(0.4, "float", "-", "Coulomb friction coefficient mu",
-                              minimum=0.0, open_min=True)
+    friction: float = inherit(TangentialSettings, "friction", 0.4, open_min=True)
     element_size: float = setting(0.5e-3, "float", "m", "BEM element size dx = dy",
                                   minimum=0.0, open_min=True, maximum=MAX_ELEMENT_SIZE)
-    margin: float = setting(1.2, "float", "-", "scale of the automatic potential contact "
-                            "area", minimum=0.0, open_min=True)
-    normal_tolerance: float = setting(1e-3, "float", "-", "eps_n, relative pressure change "
-                                      "between iterations", minimum=0.0, open_min=True,
-                                      maximum=1.0, open_max=True)
-    tangential_tolerance: float = setting(1e-2, "float", "-", "eps_tau, relative traction "
-                                          "change between sweeps", minimum=0.0, open_min=True,
-                                          maximum=1.0, open_max=True)
-    normal_estimate: str = setting("infcon", "choice", "", "initial estimate of the normal "
-                                   "BEM", choices=NORMAL_ESTIMATES)
-    tangential_estimate: str = setting("fastrip", "choice", "", "initial estimate of the "
-                                       "tangential BEM", choices=TANGENTIAL_ESTIMATES)
+    margin: float = inherit(GridSettings, "margin", 1.2)
+    normal_tolerance: float = inherit(NormalSettings, "tolerance")
+    tangential_tolerance: float = inherit(TangentialSettings, "tolerance")
+    normal_estimate: str = inherit(NormalSettings, "estimate", "infcon")
+    tangential_estimate: str = inherit(TangentialSettings, "estimate", "fastrip")
     warm_start: str = setting("previous+estimate", "choice", "", "how a step starts the BEM",
                               choices=WARM_STARTS)
-    fft: str = setting("auto", "choice", "", "convolution backend", choices=FFT_BACKENDS)
-    max_iterations_normal: int = setting(500, "int", "", "normal CG iterations at most",
-                                         minimum=1)
-    max_iterations_tangential: int = setting(1000, "int", "", "tangential sweeps at most",
-                                             minimum=1)
-    estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",
-                                             "KP/INFCON estimate grid [nx, ny]", minimum=4)
-    strips: tuple[int, int] = setting((40, 40), "ints2", "",
-                                      "FASTSIM/FaStrip samples per strip and strips [nx, ny]",
-                                      minimum=2)
-    spin_offset: float = setting(1.0 / 6.0, "float", "-", "where the spin slip is taken in a "
-                                 "rolling step, as a fraction of dx", minimum=0.0, maximum=1.0)
-    quantum: int = setting(8, "int", "", "element counts rounded up to a multiple of this",
-                           minimum=1)
+    fft: str = inherit(NormalSettings, "fft")
+    max_iterations_normal: int = inherit(NormalSettings, "max_iterations")
+    max_iterations_tangential: int = inherit(TangentialSettings, "max_iterations")
+    estimate_grid: tuple[int, int] = inherit(NormalSettings, "estimate_grid")
+    strips: tuple[int, int] = inherit(TangentialSettings, "strips")
+    spin_offset: float = inherit(TangentialSettings, "spin_offset")
+    quantum: int = inherit(GridSettings, "quantum", 8)
     load_includes_creep: bool = setting(True, "bool", "", "a wheel load is the total vertical "
                                         "force, creep forces included")
     load_tolerance: float = setting(1e-3, "float", "-", "relative tolerance on a wheel load "

@@ -54,6 +54,7 @@ import numpy as np
 
 from ..contact.loadloop import (
     MAX_SHARE,
+    charge,
     count_passes,
     creep_load_secant,
     load_met,
@@ -63,7 +64,7 @@ from ..contact.patch import normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
 from ..contact.wheelrail import solve_wheel_normal
 from ..errors import RailContactError, check_finite, check_positive
-from ..geometry.contact import ContactPoint, vertical_gap
+from ..geometry.search import ContactPoint, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.hertz import HertzSolution
 from ..halfspace.materials import ElasticPair
@@ -340,7 +341,9 @@ class WheelsetContact:
 
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
                                      settings.patch_settings, pair, estimate_for)
-        patches = [p for p in patches if p.normal.force > 0]
+        kept = [p for p in patches if p.normal.force > 0]
+        charge(kept, [p for p in patches if p.normal.force <= 0])  # their work counts
+        patches = kept
         creepages, memory = [], []
         for patch in patches:
             cp = patch.geometry
@@ -349,7 +352,9 @@ class WheelsetContact:
                 c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
                 creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
+                t0 = perf_counter()
                 prev = previous_tangential(m, patch.normal.grid) if m else None
+                patch.work.seconds += perf_counter() - t0
                 solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
                                        creepage=side_creep, previous=prev)
             t = patch.tangential
