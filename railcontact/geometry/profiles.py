@@ -42,6 +42,8 @@ from scipy.interpolate import CubicSpline
 from ..errors import RailContactError
 
 KINDS = ("wheel", "rail")
+MAX_PROFILE_SPAN = 1.0
+"""Largest extent [m] of a plausible wheel or rail profile (a larger one has a wrong unit)."""
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,12 @@ class Profile:
                                    "are needed")
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
             raise RailContactError(f"profile {self.name!r} contains NaN or infinite values")
+        span = max(float(y.max() - y.min()), float(np.abs(z).max()))
+        if span > MAX_PROFILE_SPAN:
+            raise RailContactError(
+                f"profile {self.name!r} spans {span:.3g} m; a wheel or rail profile spans "
+                f"about 0.1-0.2 m (at most {MAX_PROFILE_SPAN} m): is its unit right (a "
+                "two-column file in mm needs profile_unit = 'mm')?")
         dy = np.diff(y)
         if not np.all(dy > 0):
             k = int(np.argmax(dy <= 0))
@@ -295,7 +303,14 @@ def read_simpack(path: str | Path) -> Profile:
     ptype = settings.get("header.type")
     kind = "wheel" if ptype == "1" else "rail" if ptype == "0" else (
         "wheel" if p.suffix.lower() == ".prw" else "rail")
-    f = float(settings.get("spline.units.len.f", "1000"))
+    factor = settings.get("spline.units.len.f", "1000")
+    try:
+        f = float(factor)
+    except ValueError:
+        f = math.nan
+    if not (math.isfinite(f) and f > 0):
+        raise RailContactError(f"{p}: spline.units.len.f (the file's length unit per m, 1000 "
+                               f"for mm) must be a positive number, got {factor!r}")
     y, z = a[:, 0] / f, a[:, 1] / f
     if settings.get("spline.mirror.y", "0") == "1":
         y = -y

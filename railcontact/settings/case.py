@@ -100,6 +100,18 @@ class QuadraticGeometry(Record):
         return {"type": self.TYPE, **super().to_dict()}
 
 
+MAX_ELEMENTS = 1 << 18
+"""Default largest grid of a patch (512 x 512 elements, ~0.5 GB with the FFT buffers)."""
+
+
+def check_grid_size(what: str, nx: int, ny: int, budget: int) -> None:
+    """Raise a :class:`CaseError` naming ``what`` when an nx x ny grid exceeds ``budget``."""
+    if nx * ny > budget:
+        raise CaseError(f"{what} = {nx} x {ny} = {nx * ny:.3g} elements, more than the "
+                        f"{budget} of [grid] max_elements (about 2 kB each); use fewer or "
+                        "larger elements, or raise max_elements")
+
+
 _TRACK = {f.name: f.default for f in fields(Track)}
 _WHEELSET = {f.name: f.default for f in fields(Wheelset)}
 """The track and wheelset defaults, declared once by the geometry's own records."""
@@ -175,10 +187,18 @@ class GridSettings(Record):
                                             "(quadratic cases; default automatic)")
     margin: float = setting(1.0, "float", "-", "scale of the automatic potential area",
                             minimum=0.0, open_min=True)
+    max_elements: int = setting(MAX_ELEMENTS, "int", "", "largest grid (nx * ny) a patch may "
+                                "have, checked before anything is allocated (a memory budget: "
+                                "~2 kB per element)", minimum=4)
     quantum: int = setting(1, "int", "", "element counts rounded up to a multiple of this "
                            "(fewer operators in a time series)", minimum=1, case=False)
     snap: bool = setting(False, "bool", "", "grid centre on a multiple of the element size "
                          "(consecutive time steps share one lattice)", case=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.dx is None and self.dy is None:
+            check_grid_size("[grid] nx * ny", self.nx, self.ny, self.max_elements)
 
     @property
     def automatic(self) -> bool:
@@ -227,7 +247,8 @@ class NormalSettings(Record):
     estimate: str = setting("none", "choice", "", "initial estimate of the pressure",
                             choices=NORMAL_ESTIMATES)
     estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",
-                                             "KP/INFCON estimate grid [nx, ny]", minimum=4)
+                                             "KP/INFCON estimate grid [nx, ny]", minimum=4,
+                                             maximum=2048)
     tolerance: float = setting(1e-3, "float", "-", "eps_n, relative pressure change between "
                                "iterations", minimum=0.0, open_min=True, maximum=1.0,
                                open_max=True)
@@ -268,7 +289,7 @@ class TangentialSettings(Record):
                          choices=TRACTION_BOUNDS)
     strips: tuple[int, int] = setting((40, 40), "ints2", "",
                                       "FASTSIM/FaStrip samples per strip and strips [nx, ny]",
-                                      minimum=2)
+                                      minimum=2, maximum=2048)
     spin_offset: float = setting(1.0 / 6.0, "float", "-", "where the spin slip is taken in a "
                                  "rolling step, as a fraction of dx (CONTACT: 1/6)",
                                  minimum=0.0, maximum=1.0)
@@ -438,5 +459,10 @@ def load_case(path: str | Path) -> Case:
             raw = tomllib.load(f)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"case file {p} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"case file {p} is not UTF-8 text ({exc.reason} at byte "
+                        f"{exc.start})") from None
+    except RecursionError:
+        raise CaseError(f"case file {p} nests arrays or tables too deeply") from None
     raw.setdefault("name", p.stem)
     return Case.from_dict(raw)

@@ -206,8 +206,10 @@ class Record:
     def _integer(cls, where: str, spec: Spec, value: Any) -> int:
         lo = int(spec.minimum) if spec.minimum is not None else 0
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or int(value) != value or value < lo:
+                or not math.isfinite(value) or int(value) != value or value < lo:
             cls._fail(f"{where} must be an integer >= {lo}, got {value!r}")
+        if spec.maximum is not None and value > spec.maximum:
+            cls._fail(f"{where} must be an integer <= {spec.maximum:g}, got {value!r}")
         return int(value)
 
     @classmethod

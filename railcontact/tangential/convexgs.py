@@ -377,7 +377,8 @@ def solve_tangential(
                 dif = _sweep_numpy(*kern, wx, wy, g, px, py, state, lo, hi, *cc,
                                    float(omega_h), float(omega_s))
             norm = math.sqrt(float(np.sum(px * px + py * py)))
-            err = math.sqrt(dif) / max(norm, floor)
+            scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+            err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
             hist.append(err)
             if not math.isfinite(err):
                 break
