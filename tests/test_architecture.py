@@ -136,7 +136,7 @@ def test_a_case_reports_every_problem_at_once():
 @pytest.mark.parametrize("field, value, match", [
     ("element_size", 0.01, r"element_size \[m\] must be > 0 and <= 0.005"),
     ("element_size", -1e-4, "element_size"),
-    ("friction", 0.0, "friction must be positive"),
+    ("friction", 0.0, "friction must be > 0 and <= 10"),
     ("normal_tolerance", 1.0, "normal_tolerance"),
     ("warm_start", "always", "warm_start must be one of"),
     ("estimate_grid", (3, 40), r"estimate_grid\[0\] must be an integer >= 4"),

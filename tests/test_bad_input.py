@@ -18,6 +18,11 @@ needs_shared = pytest.mark.skipif(not RELIABILITY.is_dir(),
 
 @needs_shared
 @pytest.mark.parametrize("name, match", [
+    ("F01_nan_success_young_tiny", r"young \[Pa\] must be >= 1e\+06"),
+    ("F01b_nan_success_wr_load_1e300", r"load \[N\] must be"),
+    ("F01c_nan_success_penetration_1e300", r"penetration \[m\] must be"),
+    ("F01d_fastsim_nan_creep_1e300", r"creepage\[0\] must be >= -1000 and <= 1000"),
+    ("F01e_fastrip_inf_friction_1e300", r"friction must be >= 0 and <= 10"),
     ("F09_wrong_profile_unit_accepted", "is its unit right"),
     ("F10_traceback_non_utf8", "not UTF-8"),
     ("F10b_traceback_nx_int64max", r"\[grid\] nx \* ny"),
@@ -29,6 +34,8 @@ needs_shared = pytest.mark.skipif(not RELIABILITY.is_dir(),
     ("F11b_memory_hang_dx_1e-7", "max_elements"),
     ("F11c_memory_estimate_grid", r"estimate_grid\[0\] must be an integer <= 2048"),
     ("F14_tolerance_10_accepted", r"tolerance must be > 0 and < 1"),
+    ("F18_young_1Pa_accepted", r"young\[0\] \[Pa\] must be >= 1e\+06"),
+    ("F18b_load_1e300_absurd", r"load \[N\] must be"),
 ])
 def test_reproducer_ends_in_a_clear_error(name, match, monkeypatch, capsys):
     monkeypatch.chdir(RELIABILITY)  # their profile paths are relative to that folder
@@ -60,3 +67,64 @@ def test_the_grid_budget_is_checked_before_allocating_and_settable():
             "grid": {"dx": 1e-5, "dy": 1e-5}, "normal": {"load": 74e3}}
     with pytest.raises(rc.CaseError, match="max_elements"):
         rc.solve(case)  # ~2000 x 900 elements for the automatic area
+
+
+@needs_shared
+@pytest.mark.parametrize("name", ["F02_edge_truncated_margin", "F02c_nx2_truncated"])
+def test_a_contact_cut_by_the_potential_area_is_not_converged(name, monkeypatch, capsys):
+    """After every enlargement the contact still reaches the edge (margin 0.1; 2 x 2
+    elements): the pressure is truncated (p_max up to 2.5x Hertz), so not converged, exit 1."""
+    monkeypatch.chdir(RELIABILITY)
+    assert main(["solve", f"{name}.toml", "--json"]) == 1
+    d = __import__("json").loads(capsys.readouterr().out)
+    n = d["patches"][0]["normal"]
+    assert not n["converged"] and "still reaches the edge" in n["message"]
+    assert d["patches"][0]["work"]["remeshes"] == 4
+
+
+@needs_shared
+def test_a_user_given_extent_is_never_grown(monkeypatch, capsys):
+    """F02b: [grid] x given, y automatic; the contact reaches the given x: an error, not
+    a silently larger x."""
+    monkeypatch.chdir(RELIABILITY)
+    assert main(["solve", "F02b_user_x_grown_then_truncated.toml"]) == 2
+    assert "potential contact area too small" in capsys.readouterr().err
+
+
+def test_a_non_finite_solution_is_not_converged_and_json_stays_strict(monkeypatch, capsys,
+                                                                      tmp_path):
+    """Whatever makes a solver return NaN, the result says not converged, the JSON holds
+    null (valid JSON) and the command exits 1."""
+    import json
+
+    import railcontact.contact.patch as patch_module
+
+    solve_normal = patch_module.solve_normal
+
+    def poisoned(*args, **kwargs):
+        res = solve_normal(*args, **kwargs)
+        res.pressure[0, 0] = float("nan")
+        res.max_pressure = float("nan")
+        return res
+
+    monkeypatch.setattr(patch_module, "solve_normal", poisoned)
+    case = tmp_path / "c.toml"
+    case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\nA = 1.0\nB = 5.0\n'
+                    '[grid]\nnx = 16\nny = 16\n[normal]\nload = 74e3\n')
+    assert main(["solve", str(case), "--json"]) == 1
+    n = json.loads(capsys.readouterr().out)["patches"][0]["normal"]
+    assert n["max_pressure"] is None and not n["converged"] and "not finite" in n["message"]
+
+
+@pytest.mark.parametrize("table, key, value, match", [
+    ("material", "young", 1.0, r"young\[?0?\]? \[Pa\] must be >= 1e\+06"),
+    ("normal", "load", 1e300, r"load \[N\] must be >= 0 and <= 1e\+08"),
+    ("geometry", "A", 1e300, r"\[geometry\] A"),
+])
+def test_physical_ranges_are_checked_once_in_the_settings(table, key, value, match):
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+            "normal": {"load": 74e3}}
+    case[table][key] = value
+    with pytest.raises(rc.CaseError, match=match):
+        rc.validate_case(case)

@@ -116,18 +116,21 @@ def normal_estimate(settings: NormalSettings, hz: HertzSolution | None, s: np.nd
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
-                       automatic: bool = True) -> tuple[NormalResult, Work]:
+                       automatic: tuple[bool, bool] = (True, True)
+                       ) -> tuple[NormalResult, Work]:
     """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
     it took.
 
     ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``estimate_of(grid)`` the
-    initial pressure [Pa] (or None). An automatic area is grown by :data:`GROW_FACTOR`
-    while the contact reaches its edge (each growth a re-mesh, its iterations counted in
-    the work); a user-given one that is too small is an error.
+    initial pressure [Pa] (or None). ``automatic`` says along which axes (x, y) the area is
+    the solver's: there it is grown by :data:`GROW_FACTOR` while the contact reaches its
+    edge (each growth a re-mesh, its iterations counted in the work), at most
+    :data:`MAX_GROW` times, after which the result is not converged; a user-given extent
+    that the contact reaches is an error. A result that is not finite is not converged.
     """
     t0 = time.perf_counter()
     work = Work(remeshes=-1)
-    for _ in range(MAX_GROW + 1):
+    for k in range(MAX_GROW + 1):
         work.remeshes += 1
         grid = make_grid(grid_settings, bounds)
         op = influence_operator(grid, pair, "z", settings.fft)
@@ -135,20 +138,39 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, **control.kwargs())
         work.normal_iterations += res.iterations
+        if not (math.isfinite(res.force) and math.isfinite(res.penetration)
+                and np.isfinite(res.pressure).all()):
+            res.converged = False
+            res.message = f"the normal solution is not finite ({res.message})"
+            break
         if not res.touches_boundary:
             break
-        if not automatic:
+        c = res.contact
+        edge = (bool(c[0].any() or c[-1].any()), bool(c[:, 0].any() or c[:, -1].any()))
+        if any(e and not auto for e, auto in zip(edge, automatic, strict=True)):
             x = None if grid_settings.x is None else list(grid_settings.x)
             y = None if grid_settings.y is None else list(grid_settings.y)
             raise CaseError(
                 "potential contact area too small: the contact reaches the edge of [grid] "
                 f"x = {x} , y = {y} m; enlarge it or leave x and y out for an automatic area")
-        xmin, xmax, ymin, ymax = bounds
-        xc, yc = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
-        bounds = (xc + (xmin - xc) * GROW_FACTOR, xc + (xmax - xc) * GROW_FACTOR,
-                  yc + (ymin - yc) * GROW_FACTOR, yc + (ymax - yc) * GROW_FACTOR)
+        if k == MAX_GROW:
+            res.converged = False
+            res.message = (f"the contact still reaches the edge of the potential area after "
+                           f"{MAX_GROW} enlargements by {GROW_FACTOR} (raise [grid] margin or "
+                           f"the element counts): {res.message}")
+            break
+        bounds = _grown(bounds, automatic)
     work.seconds = time.perf_counter() - t0
     return res, work
+
+
+def _grown(bounds: Bounds, automatic: tuple[bool, bool]) -> Bounds:
+    """``bounds`` scaled by :data:`GROW_FACTOR` about its centre along the automatic axes."""
+    xmin, xmax, ymin, ymax = bounds
+    xc, yc = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
+    fx, fy = (GROW_FACTOR if auto else 1.0 for auto in automatic)
+    return (xc + (xmin - xc) * fx, xc + (xmax - xc) * fx, yc + (ymin - yc) * fy,
+            yc + (ymax - yc) * fy)
 
 
 def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
@@ -194,8 +216,13 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
         _tangential(patch, settings, pair, fft, creepage, previous)
     finally:
         patch.work.seconds += time.perf_counter() - t0
-    if patch.tangential is not None:
-        patch.work.tangential_iterations += patch.tangential.iterations
+    t = patch.tangential
+    if t is not None:
+        patch.work.tangential_iterations += t.iterations
+        if not (all(math.isfinite(f) for f in (*t.force, t.spin_moment))
+                and np.isfinite(t.traction).all()):
+            t.converged = False
+            t.message = f"the tangential solution is not finite ({t.message})"
 
 
 def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,

@@ -3,21 +3,27 @@
 from __future__ import annotations
 
 import json
+import math
+from typing import Any
 
 from ..contact import Solution
-from ..errors import RailContactError
 
 
 def solution_json(solution: Solution, indent: int | None = 2) -> str:
     """The JSON text of ``solution.to_dict()`` (SI units).
 
-    Raises
-    ------
-    RailContactError
-        When the solution holds a non-finite number (not representable in JSON).
+    A number that is not finite is written as ``null`` (JSON has no NaN); the solve that
+    produced it is reported ``"converged": false``.
     """
-    try:
-        return json.dumps(solution.to_dict(), indent=indent, allow_nan=False)
-    except ValueError as exc:
-        raise RailContactError(f"the solution holds a non-finite number ({exc}); "
-                               "no JSON written") from None
+    return json.dumps(finite(solution.to_dict()), indent=indent, allow_nan=False)
+
+
+def finite(value: Any) -> Any:
+    """``value`` with every non-finite float, at any depth, replaced by None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite(v) for v in value]
+    return value

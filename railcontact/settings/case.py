@@ -66,7 +66,7 @@ class MaterialSettings(Record):
     TABLE: ClassVar[str] = "material"
     young: tuple[float, ...] = setting((206e9,), "floats12", "Pa",
                                        "Young's modulus E (one value, or [body 1, body 2])",
-                                       minimum=0.0, open_min=True, required=True)
+                                       minimum=1e6, maximum=1e13, required=True)
     poisson: tuple[float, ...] = setting((0.28,), "floats12", "-",
                                          "Poisson's ratio (one value, or [body 1, body 2])",
                                          minimum=0.0, maximum=0.5, open_max=True,
@@ -92,9 +92,9 @@ class QuadraticGeometry(Record):
     TABLE: ClassVar[str] = "geometry"
     TYPE: ClassVar[str] = "quadratic"
     A: float = setting(MISSING, "float", "1/m", "longitudinal relative curvature",
-                       minimum=0.0, open_min=True, required=True)
+                       minimum=0.0, open_min=True, maximum=1e6, required=True)
     B: float = setting(MISSING, "float", "1/m", "lateral relative curvature",
-                       minimum=0.0, open_min=True, required=True)
+                       minimum=0.0, open_min=True, maximum=1e6, required=True)
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.TYPE, **super().to_dict()}
@@ -201,9 +201,10 @@ class GridSettings(Record):
             check_grid_size("[grid] nx * ny", self.nx, self.ny, self.max_elements)
 
     @property
-    def automatic(self) -> bool:
-        """Whether the potential area is chosen (and grown) by the solver."""
-        return self.x is None or self.y is None
+    def automatic(self) -> tuple[bool, bool]:
+        """Whether the potential area along x and along y is chosen (and grown) by the
+        solver: where the user gave it, it is never changed."""
+        return self.x is None, self.y is None
 
 
 @dataclass(frozen=True)
@@ -240,10 +241,10 @@ class NormalSettings(Record):
     TABLE: ClassVar[str] = "normal"
     load: float | None = setting(None, "float", "N", "normal force (quadratic) or vertical "
                                  "wheel load (wheel-rail); give load or penetration",
-                                 minimum=0.0)
+                                 minimum=0.0, maximum=1e8)
     penetration: float | None = setting(None, "float", "m", "rigid approach (quadratic) or "
                                         "vertical approach of the wheel (wheel-rail)",
-                                        minimum=0.0)
+                                        minimum=0.0, maximum=0.01)
     estimate: str = setting("none", "choice", "", "initial estimate of the pressure",
                             choices=NORMAL_ESTIMATES)
     estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",
@@ -275,9 +276,10 @@ class TangentialSettings(Record):
 
     TABLE: ClassVar[str] = "tangential"
     creepage: tuple[float, float, float] = setting((0.0, 0.0, 0.0), "floats3", "-, -, 1/m",
-                                                   "creepages [xi, eta, phi]", required=True)
+                                                   "creepages [xi, eta, phi]", minimum=-1e3,
+                                                   maximum=1e3, required=True)
     friction: float = setting(0.4, "float", "-", "Coulomb coefficient mu", minimum=0.0,
-                              required=True)
+                              maximum=10.0, required=True)
     model: str = setting("bem", "choice", "", "tangential model", choices=TANGENTIAL_MODELS)
     estimate: str = setting("none", "choice", "", "initial estimate of the BEM",
                             choices=TANGENTIAL_ESTIMATES)

@@ -195,8 +195,8 @@ class Record:
             cls._fail(f"{where}{unit} must be finite, got {x}")
         lo, hi = spec.minimum, spec.maximum
         if lo is not None and (x < lo or (spec.open_min and x == lo)):
-            word = ("positive" if spec.open_min else "non-negative") if lo == 0 else \
-                f"{'>' if spec.open_min else '>='} {lo:g}"
+            word = ("positive" if spec.open_min else "non-negative") if lo == 0 and hi is None \
+                else spec.bounds_text()
             cls._fail(f"{where}{unit} must be {word}, got {x:g}")
         if hi is not None and (x > hi or (spec.open_max and x == hi)):
             cls._fail(f"{where}{unit} must be {spec.bounds_text()}, got {x:g}")
