@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Sequence
 
@@ -71,14 +72,16 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from .contact import solve
     from .io.jsonout import solution_json
 
+    if args.plot:
+        from .io.plotting import plot_path, plot_solution
+
+        plot_path(args.plot)  # a bad file name is an error before the solve
     sol = solve(args.case)
     if args.json:
         print(solution_json(sol))
     else:
         print(_summary(sol))
     if args.plot:
-        from .io.plotting import plot_solution
-
         out = plot_solution(sol, args.plot)
         if not args.json:
             print(f"plot written to {out}")
@@ -190,9 +193,19 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()  # a failing write shows here, not at exit
+        return code
     except RailContactError as exc:
         print(f"railcontact: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # the reader stopped early (| head): nothing more to say
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
+    except OSError as exc:  # a full disk, a file that cannot be written
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"railcontact: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
 
 

@@ -134,7 +134,7 @@ def test_a_case_reports_every_problem_at_once():
 
 
 @pytest.mark.parametrize("field, value, match", [
-    ("element_size", 0.01, r"element_size \[m\] must be > 0 and <= 0.005"),
+    ("element_size", 0.01, r"element_size \[m\] must be >= 1e-05 and <= 0.005"),
     ("element_size", -1e-4, "element_size"),
     ("friction", 0.0, "friction must be > 0 and <= 10"),
     ("normal_tolerance", 1.0, "normal_tolerance"),

@@ -128,3 +128,65 @@ def test_physical_ranges_are_checked_once_in_the_settings(table, key, value, mat
     case[table][key] = value
     with pytest.raises(rc.CaseError, match=match):
         rc.validate_case(case)
+
+
+def test_profile_files_are_found_beside_the_case_file(root, tmp_path, monkeypatch):
+    """F17: a relative profile path in a case file means the file beside it, wherever the
+    command runs."""
+    folder = tmp_path / "case"
+    folder.mkdir()
+    (folder / "my_rail.txt").write_text((root / "models" / "profiles" / "60E1.txt").read_text())
+    (folder / "c.toml").write_text(
+        '[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = "wheel-rail"\n'
+        'rail = "my_rail.txt"\nlateral_displacement = -0.002\n[grid]\nnx = 24\nny = 24\n'
+        '[normal]\nload = 83.3e3\n')
+    monkeypatch.chdir(tmp_path)
+    sol = rc.solve(folder / "c.toml")
+    builtin = rc.solve({**rc.load_case(folder / "c.toml").to_dict(),
+                        "geometry": {"type": "wheel-rail", "lateral_displacement": -0.002}})
+    assert sol.patches[0].normal.force == pytest.approx(builtin.patches[0].normal.force,
+                                                        rel=1e-3)
+
+
+def test_wheelset_inputs_of_the_wrong_shape_are_named():
+    """F12: loads or creepages that are not one per wheel give a clear error."""
+    wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 1 / 40),
+                            rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                            rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                            rc.ContactSettings(element_size=1e-3))
+    for loads in ((83.3e3,), 83.3e3, (1.0, 2.0, 3.0)):
+        with pytest.raises(rc.RailContactError, match=r"loads must be \(left, right\)"):
+            wc.solve(rc.Pose(), loads=loads)
+    with pytest.raises(rc.RailContactError, match="creepages must be"):
+        wc.solve(rc.Pose(), loads=(1e4, 1e4), creepages=((0.0, 0.0), (0.0, 0.0)))
+    with pytest.raises(rc.RailContactError, match="element_size"):
+        rc.ContactSettings(element_size=1e-7)
+
+
+def test_cli_output_errors_are_one_line(root, tmp_path, capsys):
+    """F19: an unknown figure format or a directory for --plot is an error before the
+    solve; a full disk is an error; a closed pipe ends quietly."""
+    import subprocess
+    import sys
+
+    case = str(root / "models" / "cases" / "hertz_paper.toml")
+    assert main(["solve", case, "--plot", str(tmp_path / "x.xyz")]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "cannot write '.xyz' figures" in err
+    assert main(["solve", case, "--plot", str(tmp_path)]) == 2
+    assert "is a directory" in capsys.readouterr().err
+    assert main(["solve", case, "--plot", str(tmp_path / "fig")]) == 0
+    assert (tmp_path / "fig.png").is_file() and "fig.png" in capsys.readouterr().out
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-m", "railcontact", "solve", case, "--json"],
+                           stdout=full, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert r.returncode == 2 and r.stderr.startswith("railcontact: error: No space left")
+    big = tmp_path / "big.toml"
+    big.write_text(f'name = "{"x" * 200_000}"\n' + (root / "models" / "cases" /
+                                                     "hertz_paper.toml").read_text()
+                   .replace('name = "hertz_paper"', ""))
+    p = subprocess.Popen([sys.executable, "-m", "railcontact", "solve", str(big), "--json"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.read(10)
+    p.stdout.close()
+    assert p.wait(timeout=300) == 1 and p.stderr.read() == b""

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..contact import Solution, simplified_tangential
+from ..errors import RailContactError
 
 MM, MPA = 1e3, 1e-6
 
@@ -136,9 +137,33 @@ def plot_solution(solution: Solution, path: str | Path, patch: int = 0) -> Path:
         fig, axes = plt.subplots(2, 2, figsize=(12, 8.5), constrained_layout=True)
         _pressure_panels(fig, axes[0, 0], axes[0, 1], ps)
         _traction_panels(fig, axes[1, 0], axes[1, 1], solution, ps)
-    out = Path(path)
+    out = plot_path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
     plt.close(fig)
+    return out
+
+
+def plot_path(path: str | Path) -> Path:
+    """The file a figure for ``path`` is written to (``.png`` added when it has no
+    extension), checked before anything is solved.
+
+    Raises
+    ------
+    RailContactError
+        For a directory, or an extension matplotlib cannot write.
+    """
+    out = Path(path)
+    if out.is_dir():
+        raise RailContactError(f"--plot {path}: is a directory; give a file name such as "
+                               f"{out / 'patch.png'}")
+    if not out.suffix:
+        out = out.with_suffix(".png")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    formats = FigureCanvasAgg.get_supported_filetypes()
+    if out.suffix[1:].lower() not in formats:
+        raise RailContactError(f"--plot {path}: cannot write {out.suffix!r} figures; use one "
+                               f"of {', '.join('.' + f for f in sorted(formats))}")
     return out
 

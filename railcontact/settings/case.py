@@ -448,6 +448,9 @@ def validate_case(case: Mapping[str, Any] | Case) -> Case:
 def load_case(path: str | Path) -> Case:
     """Read a TOML case file (SI units) and return the validated case.
 
+    Profile files named by a relative path (``[geometry] wheel``, ``rail``) are looked up
+    beside the case file first, then in the working directory.
+
     Raises
     ------
     CaseError
@@ -467,4 +470,11 @@ def load_case(path: str | Path) -> Case:
     except RecursionError:
         raise CaseError(f"case file {p} nests arrays or tables too deeply") from None
     raw.setdefault("name", p.stem)
+    geo = raw.get("geometry")
+    if isinstance(geo, dict):  # profile files relative to the case file, as a user means
+        for key in ("wheel", "rail"):
+            value = geo.get(key)
+            if isinstance(value, str) and value and not Path(value).is_absolute() \
+                    and (p.parent / value).is_file():
+                geo[key] = str(p.parent / value)
     return Case.from_dict(raw)

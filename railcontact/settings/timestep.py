@@ -21,6 +21,8 @@ from .fields import Record, document, inherit, setting
 
 MAX_ELEMENT_SIZE = 0.005
 """Coarsest element [m] that still resolves a wheel-rail patch."""
+MIN_ELEMENT_SIZE = 1e-5
+"""Finest element [m] (0.01 mm: a patch of 10 mm is then 1000 elements across)."""
 
 
 @document
@@ -40,7 +42,7 @@ class ContactSettings(Record):
     ERROR: ClassVar[type[RailContactError]] = RailContactError
     friction: float = inherit(TangentialSettings, "friction", 0.4, open_min=True)
     element_size: float = setting(0.5e-3, "float", "m", "BEM element size dx = dy",
-                                  minimum=0.0, open_min=True, maximum=MAX_ELEMENT_SIZE)
+                                  minimum=MIN_ELEMENT_SIZE, maximum=MAX_ELEMENT_SIZE)
     margin: float = inherit(GridSettings, "margin", 1.2)
     normal_tolerance: float = inherit(NormalSettings, "tolerance")
     tangential_tolerance: float = inherit(TangentialSettings, "tolerance")

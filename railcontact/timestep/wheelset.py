@@ -246,6 +246,11 @@ class WheelsetContact:
         t0 = perf_counter()
         if (loads is None) == (vertical is None):
             raise RailContactError("give exactly one of loads [N] and vertical [m]")
+        if loads is not None:
+            loads = _per_wheel("loads", loads, 1, "(left, right) [N]")
+        if creepages is not None:
+            creepages = _per_wheel("creepages", creepages, 3,
+                                   "((xi, eta, phi) left, (xi, eta, phi) right)")
         wheels = []
         new_memory: dict[str, list[PatchMemory]] = {}
         for k, side in enumerate(("left", "right")):
@@ -255,7 +260,8 @@ class WheelsetContact:
             else:
                 check_finite("vertical", vertical, "m")
                 control = Control(penetration=self._approach(pose, side, vertical))
-            creep = None if creepages is None else tuple(float(c) for c in creepages[k])
+            creep = None if creepages is None else tuple(
+                check_finite(f"{side} creepage", c) for c in creepages[k])
             wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
             wheels.append(wheel)
             new_memory[side] = mem
@@ -367,6 +373,22 @@ class WheelsetContact:
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle))))
         return patches, creepages, memory
+
+
+def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
+    """``value`` as a pair (left, right) of numbers (``size`` 1) or of ``size``-tuples."""
+    try:
+        pair = tuple(value)
+        if len(pair) == 2 and size > 1:
+            pair = tuple(tuple(v) for v in pair)
+            ok = all(len(v) == size for v in pair)
+        else:
+            ok = len(pair) == 2 and all(not hasattr(v, "__len__") for v in pair)
+    except TypeError:
+        ok = False
+    if not ok:
+        raise RailContactError(f"{name} must be {shape}, got {value!r}")
+    return pair
 
 
 def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
