@@ -24,7 +24,7 @@ from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import FMUModes
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
-from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE
+from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE, STATUS_NAMES
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
@@ -231,10 +231,10 @@ class Slave:
             self._write(None)
             self["status"] = OUT_OF_RANGE
             return FMI_DISCARD
-        if any(w.status == NOT_CONVERGED for w in res.wheels):
-            self.log.append("a BEM solve did not converge within max_iterations")
-            return FMI_WARNING
-        return FMI_OK
+        failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE)]
+        for w in failed:  # each wheel has its own status; the other is still solved
+            self.log.append(f"{w.side} wheel: {STATUS_NAMES[w.status]}: {w.message}")
+        return FMI_WARNING if failed else FMI_OK
 
     def _write(self, res: WheelsetResult | None) -> None:
         """Outputs from ``res``; all zero (and no patches) for None."""

@@ -18,6 +18,11 @@ class CaseError(RailContactError):
     """A case file or case dictionary that cannot be solved as given."""
 
 
+class ConvergenceError(CaseError):
+    """An iteration (a load loop) that did not reach its tolerance: the input is valid, the
+    answer is not good enough to report as one."""
+
+
 def check_finite(name: str, value: object, unit: str = "") -> float:
     """Return ``value`` as a float, or raise if it is not a finite real number.
 

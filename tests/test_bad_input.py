@@ -190,3 +190,86 @@ def test_cli_output_errors_are_one_line(root, tmp_path, capsys):
     p.stdout.read(10)
     p.stdout.close()
     assert p.wait(timeout=300) == 1 and p.stderr.read() == b""
+
+
+def _wheelset(**settings) -> rc.WheelsetContact:
+    return rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 0.024994793618920156),
+                              rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                              rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                              rc.ContactSettings(**{"friction": 0.4, **settings}))
+
+
+def test_a_wheel_that_cannot_be_solved_has_its_own_status():
+    """F05: the right wheel's load loop does not converge; the step does not raise, the
+    right wheel says 'not converged' and the left wheel is solved."""
+    r = _wheelset(warm_start="none").solve(
+        rc.Pose(-0.005877113297002899, 0.04896401559911322),
+        loads=(93953.61051997694, 71137.45807592421),
+        creepages=((0.004562372031981192, -0.0032294992710932263, 0.060495746346152623),
+                   (-0.003545348317482426, 0.0010443776045883889, -0.6567496433399369)))
+    assert r.left.status == 0 and r.left.track_force[2] == pytest.approx(93953.6, rel=2e-3)
+    assert r.right.status == 1 and "did not converge" in r.right.message
+
+
+def test_a_failed_estimate_falls_back_to_none_and_says_so(monkeypatch):
+    """F06: INFCON found no virtual interpenetration for a tiny patch in one load pass and
+    the step raised; now the BEM starts without an estimate, the step is solved, and the
+    patch's estimate names why."""
+    import railcontact.contact.patch as patch_module
+
+    pose = rc.Pose(0.0048965173759137155, 0.02705573330214371, 0.0032096063755148703)
+    loads = (49663.42280485168, 102409.59990026921)
+    kin = rc.Kinematics(speed=0.05, lateral_velocity=-0.03651467122951728,
+                        yaw_rate=-0.05860383933700475)
+    assert _wheelset().solve(pose, loads=loads, kinematics=kin).status == 0
+
+    def fails(method, *args, **kwargs):
+        raise rc.RailContactError(f"{method}: no virtual interpenetration")
+
+    monkeypatch.setattr(patch_module, "virtual_penetration", fails)
+    r = _wheelset(warm_start="estimate").solve(pose, loads=loads)
+    assert r.status == 0
+    labels = [p.estimate for w in r.wheels for p in w.patches]
+    assert labels and all(s.startswith("infcon failed (infcon: no virtual") for s in labels)
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+            "grid": {"nx": 24, "ny": 24}, "normal": {"load": 74e3, "estimate": "kp"}}
+    p = rc.solve(case).patches[0]
+    assert p.normal.converged and p.estimate.startswith("kp failed")
+
+
+def test_a_wheel_far_into_its_rail_is_out_of_range_at_once():
+    """F07: vertical = -1 m used to run for ever (a 1 m patch); now both wheels are out of
+    range before anything is solved."""
+    r = _wheelset(element_size=1e-3).solve(rc.Pose(-2e-3), vertical=-1.0,
+                                           kinematics=rc.Kinematics(speed=30.0))
+    assert [w.status for w in r.wheels] == [3, 3] and "into its rail" in r.left.message
+    assert r.wall_time < 1.0
+
+
+def test_a_derailed_wheelset_is_out_of_range(monkeypatch, capsys):
+    """F08: 0.1 m lateral, the left wheel's contact on the back of its flange: out of
+    range for the wheelset (no forces), an error for a case."""
+    r = _wheelset(warm_start="none").solve(rc.Pose(0.08), loads=(83.3e3, 83.3e3),
+                                           creepages=((0, 0, 0), (0, 0, 0)))
+    assert [w.status for w in r.wheels] == [3, 3] and "back of the flange" in r.left.message
+    assert r.force == (0.0, 0.0, 0.0)
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "lateral_displacement": 0.1},
+            "normal": {"load": 83.3e3}}
+    with pytest.raises(rc.CaseError, match="derailed"):
+        rc.solve(case)
+
+
+def test_a_wheel_load_missed_by_more_than_a_percent_is_not_converged():
+    """F03: on a flange with creep, N = 3.9 MN for 117 kN; the vertical force was 5 % off
+    the load with status ok. The slack for the creep forces' noise is capped at 1 %."""
+    r = _wheelset(warm_start="none").solve(
+        rc.Pose(0.007799220052098445, 0.007321114375577168, 0.0),
+        loads=(117043.56660618541, 92833.25574674284),
+        creepages=((0.0036129489356155984, -3.2344214032708346e-05, 0.4463093476378803),
+                   (-0.0038627785029696085, -0.006833278483494982, 0.3354307986279246)))
+    left = r.left
+    missed = abs(left.track_force[2] - 117043.6) / 117043.6
+    assert left.status == 0 if missed <= 0.01 else left.status == 1
+    assert r.right.status == 0

@@ -24,6 +24,9 @@ CREEP_LOAD_RTOL = 1e-5
 MAX_STALLED = 3
 """Passes in a row that do not halve the smallest residual, after which the creep-load
 iteration stops."""
+LOAD_SLACK_CAP = 0.01
+"""Largest relative miss of a wheel load accepted for the creep forces' noise (a wheel that
+misses its load by more is not converged, whatever its creep forces)."""
 MAX_SHARE = 100.0
 """Largest normal share of a vertical load the creep-load iteration tries: a flange near
 Nadal's limit (``cos(gamma) - mu sin(gamma)`` -> 0) needs N >> Q; beyond it the load
@@ -82,10 +85,12 @@ def load_met(patches: list[PatchSolution], load: float, rtol: float,
     """Whether the wheel's vertical force is the ``load`` [N] to ``rtol``, or to the
     accuracy its creep forces have: ``eps_tau`` of their vertical components (on a flange
     near Nadal's limit N is many times the load, and so is the noise of ``F_s sin(gamma)``
-    that the tangential BEM's tolerance leaves)."""
+    that the tangential BEM's tolerance leaves), but never looser than
+    :data:`LOAD_SLACK_CAP` of the load."""
     creep = sum(abs(p.tangential.force[1] * math.sin(p.geometry.contact_angle))
                 for p in patches if p.tangential is not None)
-    return abs(vertical_force(patches) - load) <= max(rtol * load, tangential_tolerance * creep)
+    slack = min(tangential_tolerance * creep, LOAD_SLACK_CAP * load)
+    return abs(vertical_force(patches) - load) <= max(rtol * load, slack)
 
 
 def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float, start: float,

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import CaseError
+from ..errors import CaseError, RailContactError
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
@@ -108,9 +108,31 @@ def normal_estimate(settings: NormalSettings, hz: HertzSolution | None, s: np.nd
         return lambda grid: hz.pressure(*grid.mesh())
     if method in ("kp", "infcon"):
         nx, ny = settings.estimate_grid
-        est = virtual_penetration(method, s, f, a_of_s, pair, nx=nx, ny=ny, **control.kwargs())
+        try:
+            est = virtual_penetration(method, s, f, a_of_s, pair, nx=nx, ny=ny,
+                                      **control.kwargs())
+        except RailContactError as exc:  # the BEM does not need it: start without
+            return _no_estimate(f"{method} failed ({exc}); no estimate")
         return lambda grid: est.pressure_at(*grid.mesh())
     return lambda grid: None
+
+
+def _no_estimate(why: str) -> PressureEstimate:
+    """An estimate that gives none, with a label that says why."""
+    def none(grid: Grid) -> None:
+        return None
+    return labelled(none, why)
+
+
+def labelled(estimate_of: PressureEstimate, label: str) -> PressureEstimate:
+    """``estimate_of`` carrying the name of the start it gives (reported per patch)."""
+    estimate_of.label = label  # type: ignore[attr-defined]
+    return estimate_of
+
+
+def estimate_label(estimate_of: PressureEstimate, name: str) -> str:
+    """What started the patch: the estimate's own label, else the settings' ``name``."""
+    return getattr(estimate_of, "label", name)
 
 
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,

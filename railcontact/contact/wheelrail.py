@@ -39,7 +39,7 @@ from typing import Any
 
 from scipy.optimize import brentq
 
-from ..errors import CaseError, RailContactError
+from ..errors import CaseError, ConvergenceError, RailContactError
 from ..geometry.profiles import read_profile
 from ..geometry.roll import contact_roll, first_contact_gap
 from ..geometry.search import ContactPoint, contact_points, count_contacts
@@ -56,7 +56,7 @@ from .loadloop import (
     load_met,
     vertical_force,
 )
-from .patch import normal_estimate, solve_patch_normal, solve_patch_tangential
+from .patch import estimate_label, normal_estimate, solve_patch_normal, solve_patch_tangential
 from .results import PatchSolution
 
 EstimateFor = Callable[[ContactPoint, HertzSolution, Control], Callable[[Grid], Any]]
@@ -89,7 +89,7 @@ def build_geometry(geo: WheelRailGeometry) -> tuple[Track, Wheelset, Pose]:
     return track, ws, pose
 
 
-def _patches(cps: list[ContactPoint], approach: float, settings: PatchSettings,
+def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
              pair: ElasticPair, loads: list[float] | None = None,
              estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
     """The normal BEM solution of each contact point's patch: at the vertical ``approach``
@@ -97,6 +97,11 @@ def _patches(cps: list[ContactPoint], approach: float, settings: PatchSettings,
     grid, normal = settings.grid, settings.normal
     out = []
     for k, cp in enumerate(cps):
+        if cp.wheel_s < ws.flange_tip:
+            raise RailContactError(
+                f"contact at S = {cp.wheel_s * 1e3:.4g} mm, on the back of "
+                f"the flange (tip at S = {ws.flange_tip * 1e3:.4g} mm): the wheel is off its "
+                "rail (derailed)")
         dn = cp.normal_penetration(approach)
         if dn <= 0 and loads is None:
             continue
@@ -116,7 +121,8 @@ def _patches(cps: list[ContactPoint], approach: float, settings: PatchSettings,
         res, work = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), grid, normal,
                                        pair, control, est)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
-        out.append(PatchSolution(normal=res, hertz=hz, estimate=normal.estimate,
+        out.append(PatchSolution(normal=res, hertz=hz,
+                                 estimate=estimate_label(est, normal.estimate),
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work))
     return out
 
@@ -157,7 +163,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
 
     ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
     if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
-        raise CaseError(f"{side} wheel: {failure}")
+        raise ConvergenceError(f"{side} wheel: {failure}")
     return count_passes(ps, passes)
 
 
@@ -174,15 +180,15 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         approach = control.penetration
         if approach <= 0:
             return []
-        return _patches(contact_points(track, ws, pose, side, approach), approach, settings,
-                        pair, estimate_for=estimate_for)
+        return _patches(contact_points(track, ws, pose, side, approach), ws, approach,
+                        settings, pair, estimate_for=estimate_for)
     q = control.load
     if q == 0:
         return []
     first = contact_points(track, ws, pose, side, 0.0)[0]
     cosg = math.cos(first.contact_angle)
     # one patch: force control (exact); check that the approach it needs adds no patch
-    single = _patches([first], 0.0, settings, pair, loads=[q / cosg],
+    single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
                       estimate_for=estimate_for)
     approach = single[0].normal.penetration / cosg
     if count_contacts(track, ws, pose, side, approach) == 1:
@@ -191,7 +197,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     passes = [single]
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
-        ps = _patches(contact_points(track, ws, pose, side, a), a, settings, pair,
+        ps = _patches(contact_points(track, ws, pose, side, a), ws, a, settings, pair,
                       estimate_for=estimate_for)
         passes.append(ps)
         return vertical_force(ps) - q, ps
@@ -211,8 +217,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         a1 = a2
         r1, ps1 = residual(a1)
     if abs(r1) > 1e-3 * q:
-        raise CaseError(f"{side} wheel: load control did not converge (vertical force "
-                        f"{r1 + q:.6g} N for load {q:.6g} N)")
+        raise ConvergenceError(f"{side} wheel: load control did not converge (vertical "
+                               f"force {r1 + q:.6g} N for load {q:.6g} N)")
     return count_passes(ps1, passes)
 
 

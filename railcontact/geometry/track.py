@@ -130,6 +130,12 @@ class Wheelset:
         """Inverse of :meth:`profile_coordinate`."""
         return np.asarray(s) + self.back_to_back / 2 - self.flange_back
 
+    @cached_property
+    def flange_tip(self) -> float:
+        """Profile coordinate S [m] of the flange tip (the largest radius increment): a
+        contact at smaller S is on the back of the flange, the wheel off its rail."""
+        return float(self.wheel.y[int(np.argmax(self.wheel.z))])
+
 
 @dataclass(frozen=True)
 class Pose:

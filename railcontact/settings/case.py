@@ -100,6 +100,9 @@ class QuadraticGeometry(Record):
         return {"type": self.TYPE, **super().to_dict()}
 
 
+MAX_PENETRATION = 0.01
+"""Largest rigid approach [m] of a contact (elastic approaches are micrometres; a wheel
+10 mm into its rail is a wrong input)."""
 MAX_ELEMENTS = 1 << 18
 """Default largest grid of a patch (512 x 512 elements, ~0.5 GB with the FFT buffers)."""
 
@@ -244,7 +247,7 @@ class NormalSettings(Record):
                                  minimum=0.0, maximum=1e8)
     penetration: float | None = setting(None, "float", "m", "rigid approach (quadratic) or "
                                         "vertical approach of the wheel (wheel-rail)",
-                                        minimum=0.0, maximum=0.01)
+                                        minimum=0.0, maximum=MAX_PENETRATION)
     estimate: str = setting("none", "choice", "", "initial estimate of the pressure",
                             choices=NORMAL_ESTIMATES)
     estimate_grid: tuple[int, int] = setting((40, 40), "ints2", "",

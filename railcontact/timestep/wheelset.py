@@ -60,15 +60,22 @@ from ..contact.loadloop import (
     load_met,
     vertical_force,
 )
-from ..contact.patch import normal_estimate, solve_patch_tangential
+from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
 from ..contact.wheelrail import solve_wheel_normal
-from ..errors import RailContactError, check_finite, check_positive
+from ..errors import (
+    CaseError,
+    ConvergenceError,
+    RailContactError,
+    check_finite,
+    check_positive,
+)
 from ..geometry.search import ContactPoint, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.hertz import HertzSolution
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
+from ..settings.case import MAX_PENETRATION
 from .warmstart import PatchMemory, match, previous_pressure, previous_tangential
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
@@ -251,20 +258,36 @@ class WheelsetContact:
         if creepages is not None:
             creepages = _per_wheel("creepages", creepages, 3,
                                    "((xi, eta, phi) left, (xi, eta, phi) right)")
+        if loads is not None:
+            loads = tuple(check_positive(f"{s} wheel load", q, "N", allow_zero=True)
+                          for s, q in zip(("left", "right"), loads, strict=True))
+        else:
+            check_finite("vertical", vertical, "m")
+        if creepages is not None:
+            creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
+                              for s, cs in zip(("left", "right"), creepages, strict=True))
         wheels = []
         new_memory: dict[str, list[PatchMemory]] = {}
+        off_track = ""
         for k, side in enumerate(("left", "right")):
-            if loads is not None:
-                q = check_positive(f"{side} wheel load", loads[k], "N", allow_zero=True)
-                control = Control(load=q)
-            else:
-                check_finite("vertical", vertical, "m")
-                control = Control(penetration=self._approach(pose, side, vertical))
-            creep = None if creepages is None else tuple(
-                check_finite(f"{side} creepage", c) for c in creepages[k])
-            wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
+            try:  # a wheel that cannot be solved has its own status; the other still is
+                control = Control(load=loads[k]) if loads is not None else Control(
+                    penetration=self._approach(pose, side, vertical))
+                creep = None if creepages is None else creepages[k]
+                wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
+            except CaseError as exc:  # the load loop, or the patch problem of this wheel
+                status = NOT_CONVERGED if isinstance(exc, ConvergenceError) else OUT_OF_RANGE
+                wheel, mem = WheelContact(side=side, status=status, message=str(exc)), []
+            except RailContactError as exc:  # the pose: beyond the profiles, into the rail
+                off_track = off_track or f"{side} wheel: {exc}"
+                wheel, mem = WheelContact(side=side), []
             wheels.append(wheel)
             new_memory[side] = mem
+        if off_track:  # a wheelset with a wheel off its rail has no contact forces to give
+            msg = f"wheelset out of range: {off_track}"
+            wheels = [WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
+                      for s in ("left", "right")]
+            new_memory = {"left": [], "right": []}
         if remember:
             self.memory = new_memory
         return WheelsetResult(wheels[0], wheels[1], perf_counter() - t0)
@@ -273,7 +296,12 @@ class WheelsetContact:
         """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
         ``-vertical``."""
         g = vertical_gap(self.track, self.wheelset, pose, side)[4]
-        return max(-(float(g.min()) + vertical), 0.0)
+        approach = max(-(float(g.min()) + vertical), 0.0)
+        if approach > MAX_PENETRATION:
+            raise RailContactError(f"{side} wheel: vertical = {vertical:g} m puts the wheel "
+                                   f"{approach * 1e3:.4g} mm into its rail; a contact's "
+                                   f"approach is at most {MAX_PENETRATION * 1e3:g} mm")
+        return approach
 
     def _solve_side(self, side: str, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
@@ -343,7 +371,7 @@ class WheelsetContact:
             def of(grid):
                 p = previous_pressure(m, grid, time)
                 return p if p.sum() > 0 else estimate()(grid)
-            return of
+            return labelled(of, "previous")
 
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
                                      settings.patch_settings, pair, estimate_for)
