@@ -273,3 +273,20 @@ def test_a_wheel_load_missed_by_more_than_a_percent_is_not_converged():
     missed = abs(left.track_force[2] - 117043.6) / 117043.6
     assert left.status == 0 if missed <= 0.01 else left.status == 1
     assert r.right.status == 0
+
+
+def test_a_tolerance_out_of_reach_stalls_instead_of_hanging():
+    """F13: eps = 1e-300 with 1e9 iterations ran for ever; both BEM solvers now stop when
+    their error stops falling (round-off), not converged, saying so."""
+    pair = rc.ElasticPair.of(rc.STEEL, rc.STEEL)
+    grid = rc.Grid.from_bounds(-8e-3, 8e-3, -4e-3, 4e-3, 16, 16)
+    X, Y = grid.mesh()
+    n = rc.solve_normal(X**2 + 5 * Y**2, grid, rc.influence_operator(grid, pair), load=50e3,
+                        tolerance=1e-300, max_iterations=10**9)
+    assert n.iterations < 10**4  # here the CG reaches a fixed point (eps = 0) or stalls
+    assert n.error == 0.0 if n.converged else "stalled" in n.message
+    assert n.force == pytest.approx(50e3, rel=1e-12)
+    t = rc.solve_tangential(grid, rc.rolling_operator(grid, pair), n.pressure, friction=0.4,
+                            creepage=(1e-3, 0.0, 0.0), tolerance=1e-300,
+                            max_iterations=10**9)
+    assert not t.converged and "stalled" in t.message and t.iterations < 10**5

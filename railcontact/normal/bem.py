@@ -45,6 +45,11 @@ from ..halfspace.grid import Grid, touches_boundary
 from ..halfspace.operator import InfluenceOperator
 
 PRECONDITIONERS = ("fft", "none")
+STALL_ITERATIONS = 100
+"""Iterations without progress after which the CG stops, not converged (a tolerance below
+what round-off lets it reach would otherwise run to ``max_iterations``)."""
+STALL_GAIN = 0.99
+"""Progress: the relative pressure change falls below this fraction of its best so far."""
 
 
 @dataclass
@@ -235,7 +240,8 @@ def solve_normal(
     hist: list[float] = []
     err = np.inf
     its = 0
-    converged = False
+    converged = stalled = False
+    best, best_its = np.inf, 0
     delta = penetration if not force_control else 0.0
     for its in range(1, int(max_iterations) + 1):
         u = operator.apply(p)
@@ -285,6 +291,11 @@ def solve_normal(
         if err < tolerance:
             converged = True
             break
+        if err < STALL_GAIN * best:
+            best, best_its = err, its
+        elif its - best_its >= STALL_ITERATIONS:  # at round-off: a tolerance out of reach
+            stalled = True
+            break
 
     u = operator.apply(p)
     c = p > 0.0
@@ -295,6 +306,9 @@ def solve_normal(
     else:
         message = (f"not converged: eps = {err:.3g} after {its} iterations "
                    f"(tolerance {tolerance:g})")
+        if stalled:
+            message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
+                        f"{STALL_ITERATIONS} iterations")
     res = finish(p, u, delta, its, converged, message, err, hist)
     if res.touches_boundary:
         res.message += "; contact reaches the edge of the potential contact area"

@@ -43,6 +43,11 @@ except ImportError:  # pragma: no cover
 
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
 ENGINES = ("auto", "numba", "numpy")
+STALL_SWEEPS = 200
+"""Sweeps without progress after which ConvexGS stops, not converged (a tolerance below
+what round-off lets it reach would otherwise run to ``max_iterations``)."""
+STALL_GAIN = 0.99
+"""Progress: the relative traction change falls below this fraction of its best so far."""
 
 
 def _element_solve(px, py, s0x, s0y, g, c11, c12, c21, c22, omega_h, omega_s):
@@ -364,7 +369,8 @@ def solve_tangential(
     w_t = np.stack([wx, wy])
     floor = 1e-9 * float(np.sqrt(np.sum(g * g)))
     hist: list[float] = []
-    converged = False
+    converged = stalled = False
+    best, best_its = math.inf, 0
     its = 0
     err = 0.0
     if contact.any():
@@ -385,6 +391,11 @@ def solve_tangential(
             if err < tolerance:
                 converged = True
                 break
+            if err < STALL_GAIN * best:
+                best, best_its = err, its
+            elif its - best_its >= STALL_SWEEPS:  # at round-off: a tolerance out of reach
+                stalled = True
+                break
     else:
         converged = True
 
@@ -399,6 +410,9 @@ def solve_tangential(
         message = f"converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
     else:
         message = f"not converged: eps = {err:.3g} after {its} sweeps (tolerance {tolerance:g})"
+        if stalled:
+            message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
+                        f"{STALL_SWEEPS} sweeps")
     return TangentialResult(
         grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
         slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
