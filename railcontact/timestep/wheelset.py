@@ -298,7 +298,7 @@ class WheelsetContact:
         g = vertical_gap(self.track, self.wheelset, pose, side)[4]
         approach = max(-(float(g.min()) + vertical), 0.0)
         if approach > MAX_PENETRATION:
-            raise RailContactError(f"{side} wheel: vertical = {vertical:g} m puts the wheel "
+            raise RailContactError(f"vertical = {vertical:g} m puts the wheel "
                                    f"{approach * 1e3:.4g} mm into its rail; a contact's "
                                    f"approach is at most {MAX_PENETRATION * 1e3:g} mm")
         return approach
