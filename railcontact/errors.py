@@ -36,11 +36,12 @@ def check_finite(name: str, value: object, unit: str = "") -> float:
         Unit shown in the message (e.g. ``"N"``).
     """
     suffix = f" [{unit}]" if unit else ""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) and not hasattr(
-        value, "__float__"
-    ):
+    if isinstance(value, (bool, str)):
         raise RailContactError(f"{name}{suffix} must be a number, got {value!r}")
-    x = float(value)  # type: ignore[arg-type]
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):  # e.g. None, a list, an array of several values
+        raise RailContactError(f"{name}{suffix} must be a number, got {value!r}") from None
     if not math.isfinite(x):
         raise RailContactError(f"{name}{suffix} must be finite, got {x}")
     return x
@@ -58,7 +59,7 @@ def check_positive(name: str, value: object, unit: str = "", allow_zero: bool = 
 
 def check_count(name: str, value: object, minimum: int = 1) -> int:
     """Return ``value`` as an int, or raise if it is not an integer >= ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value \
-            or value < minimum:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or not math.isfinite(value) or int(value) != value or value < minimum:
         raise RailContactError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)

@@ -21,6 +21,7 @@ from ..halfspace.operator import influence_operator
 from ..normal import NormalResult, solve_normal
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
+from ..settings.case import check_grid_size
 from ..tangential import rolling_operator, solve_tangential
 from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
@@ -78,16 +79,12 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
     of the element size, so that the grids of consecutive time steps share one lattice
     around the contact point and a warm start is not smeared by interpolation.
     """
-    size = [(hi - lo) / h if h else n for lo, hi, n, h in (
+    sx, sy = ((hi - lo) / h if h else n for lo, hi, n, h in (
         (bounds[0], bounds[1], settings.nx, settings.dx),
-        (bounds[2], bounds[3], settings.ny, settings.dy))]
-    if not size[0] * size[1] <= settings.max_elements:  # before any count is formed
-        raise CaseError(
-            f"the potential area {(bounds[1] - bounds[0]) * 1e3:.4g} x "
-            f"{(bounds[3] - bounds[2]) * 1e3:.4g} mm needs {size[0]:.3g} x {size[1]:.3g} "
-            f"elements with [grid] dx = {settings.dx}, dy = {settings.dy} m, more than the "
-            f"{settings.max_elements} of [grid] max_elements (about 2 kB each); use larger "
-            "elements, or raise max_elements")
+        (bounds[2], bounds[3], settings.ny, settings.dy)))
+    check_grid_size(f"the potential area {(bounds[1] - bounds[0]) * 1e3:.4g} x "
+                    f"{(bounds[3] - bounds[2]) * 1e3:.4g} mm with [grid] dx = {settings.dx}, "
+                    f"dy = {settings.dy} m", sx, sy, settings.max_elements)
     xmin, xmax, nx = _axis(bounds[0], bounds[1], settings.nx, settings.dx, settings)
     ymin, ymax, ny = _axis(bounds[2], bounds[3], settings.ny, settings.dy, settings)
     return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)

@@ -107,12 +107,13 @@ MAX_ELEMENTS = 1 << 18
 """Default largest grid of a patch (512 x 512 elements, ~0.5 GB with the FFT buffers)."""
 
 
-def check_grid_size(what: str, nx: int, ny: int, budget: int) -> None:
-    """Raise a :class:`CaseError` naming ``what`` when an nx x ny grid exceeds ``budget``."""
-    if nx * ny > budget:
-        raise CaseError(f"{what} = {nx} x {ny} = {nx * ny:.3g} elements, more than the "
-                        f"{budget} of [grid] max_elements (about 2 kB each); use fewer or "
-                        "larger elements, or raise max_elements")
+def check_grid_size(what: str, nx: float, ny: float, budget: int) -> None:
+    """Raise a :class:`CaseError` naming ``what`` when an nx x ny grid exceeds ``budget``
+    (counts may be floats: those an element size would need, before any is formed)."""
+    if not nx * ny <= budget:
+        raise CaseError(f"{what} = {nx:.4g} x {ny:.4g} = {nx * ny:.3g} elements, more than "
+                        f"the {budget} of [grid] max_elements (about 2 kB each); use fewer "
+                        "or larger elements, or raise max_elements")
 
 
 _TRACK = {f.name: f.default for f in fields(Track)}

@@ -11,12 +11,11 @@ records' docstrings and the settings reference (:mod:`railcontact.settings.refer
 from __future__ import annotations
 
 import inspect
-import math
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any, ClassVar
 
-from ..errors import CaseError, RailContactError
+from ..errors import CaseError, RailContactError, check_count, check_finite
 
 
 @dataclass(frozen=True)
@@ -133,13 +132,10 @@ class Record:
     @classmethod
     def _validate(cls, key: str, spec: Spec, value: Any, where: str | None = None) -> Any:
         where = where or cls._where(key)
-        unit = f" [{spec.unit}]" if spec.unit not in ("", "-") else ""
+        unit = spec.unit if spec.unit != "-" else ""
         kind = spec.kind
         if kind == "float|choice":
-            if isinstance(value, str):
-                kind = "choice"
-            else:
-                kind = "float"
+            kind = "choice" if isinstance(value, str) else "float"
         if kind == "choice":
             if value not in spec.choices:
                 cls._fail(f"{where} must be {spec.bounds_text()}, got {value!r}")
@@ -162,7 +158,7 @@ class Record:
         if kind == "floats3":
             items = cls._sequence(where, value, 3, f"[xi, eta, phi] ({spec.unit})")
             return tuple(cls._number(f"{where}[{i}]", "", spec, v)
-                         for i, v in enumerate(items))
+                         for i, v in enumerate(items))  # no unit: they differ
         if kind == "floats12":
             items = list(value) if isinstance(value, (list, tuple)) else [value]
             if len(items) not in (1, 2):
@@ -185,14 +181,11 @@ class Record:
 
     @classmethod
     def _number(cls, where: str, unit: str, spec: Spec, value: Any) -> float:
-        if isinstance(value, (bool, str)):
-            cls._fail(f"{where}{unit} must be a number, got {value!r}")
         try:
-            x = float(value)
-        except (TypeError, ValueError):
-            cls._fail(f"{where}{unit} must be a number, got {value!r}")
-        if not math.isfinite(x):
-            cls._fail(f"{where}{unit} must be finite, got {x}")
+            x = check_finite(where, value, unit)
+        except RailContactError as exc:
+            cls._fail(str(exc))
+        unit = f" [{unit}]" if unit else ""
         lo, hi = spec.minimum, spec.maximum
         if lo is not None and (x < lo or (spec.open_min and x == lo)):
             word = ("positive" if spec.open_min else "non-negative") if lo == 0 and hi is None \
@@ -204,10 +197,10 @@ class Record:
 
     @classmethod
     def _integer(cls, where: str, spec: Spec, value: Any) -> int:
-        lo = int(spec.minimum) if spec.minimum is not None else 0
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value) or int(value) != value or value < lo:
-            cls._fail(f"{where} must be an integer >= {lo}, got {value!r}")
+        try:
+            value = check_count(where, value, int(spec.minimum or 0))
+        except RailContactError as exc:
+            cls._fail(str(exc))
         if spec.maximum is not None and value > spec.maximum:
             cls._fail(f"{where} must be an integer <= {spec.maximum:g}, got {value!r}")
         return int(value)
@@ -244,11 +237,7 @@ class Record:
 
 def default_of(f) -> Any:
     """A field's default value (None when it has none)."""
-    if f.default is not MISSING:
-        return f.default
-    if f.default_factory is not MISSING:  # pragma: no cover - not used by the records
-        return f.default_factory()
-    return None
+    return None if f.default is MISSING else f.default
 
 
 def document(cls):

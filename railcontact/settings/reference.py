@@ -61,8 +61,9 @@ def _fmt(value: object) -> str:
         value = list(value) if len(value) > 1 else value[0]
     if isinstance(value, float):
         return f"{value:.6g}"
-    return repr(value) if isinstance(value, str) else str(value).lower() \
-        if isinstance(value, bool) else str(value)
+    if isinstance(value, bool):
+        return str(value).lower()  # as TOML writes it
+    return repr(value) if isinstance(value, str) else str(value)
 
 
 def markdown() -> str:
