@@ -85,9 +85,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         out = plot_solution(sol, args.plot)
         if not args.json:
             print(f"plot written to {out}")
-    ok = all(p.normal.converged and (p.tangential is None or p.tangential.converged)
-             for p in sol.patches)
-    return 0 if ok else 1
+    return 0 if sol.converged else 1
 
 
 def _cmd_settings(args: argparse.Namespace) -> int:
@@ -109,6 +107,16 @@ def _cmd_fmu_build(args: argparse.Namespace) -> int:
 
     out = build_fmu(args.output, args.profile or [])
     print(f"FMU written to {out}")
+    return 0
+
+
+def _cmd_wisdom(args: argparse.Namespace) -> int:
+    from .halfspace.operator import WISDOM_ENV, save_wisdom
+
+    n = save_wisdom(args.file, args.max_elements)
+    print(f"measured FFT plans for {n} padded shapes (grids up to {args.max_elements} "
+          f"elements per axis), wisdom written to {args.file}; use it with "
+          f"{WISDOM_ENV}={args.file}")
     return 0
 
 
@@ -179,6 +187,18 @@ def build_parser() -> argparse.ArgumentParser:
     st = sub.add_parser("settings", help="print every setting (case-file keys, time-step and "
                         "FMU settings) with default, unit and allowed values (Markdown)")
     st.set_defaults(func=_cmd_settings)
+    w = sub.add_parser("wisdom", help="measure FFTW plans for every padded grid shape once "
+                       "and save them (faster transforms for every later run)",
+                       description="Measures the FFTW plans (FFTW_MEASURE) of the padded "
+                       "shapes of all grids up to --max-elements per axis and writes FFTW's "
+                       "wisdom to FILE. A process whose environment has "
+                       "RAILCONTACT_FFTW_WISDOM=FILE plans those shapes from it at no cost "
+                       "(without it, plans are estimated: ~2 ms each, 20-50 %% slower "
+                       "transforms).")
+    w.add_argument("file", help="the wisdom file to write")
+    w.add_argument("--max-elements", type=int, default=100,
+                   help="largest element count per grid axis covered (100; minutes)")
+    w.set_defaults(func=_cmd_wisdom)
     f = sub.add_parser("fmu", help="the FMI 2.0 co-simulation unit")
     fsub = f.add_subparsers(dest="fmu_command", required=True)
     fb = fsub.add_parser("build", help="build the FMU (gcc and fmpy's FMI headers)")

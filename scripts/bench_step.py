@@ -16,6 +16,7 @@ that figures compare across machines (issue 18's targets: warm step <= 0.03, col
 <= 0.25 of the workload). The resident memory (RSS) is printed at the end.
 
 Usage: python scripts/bench_step.py [--steps 300] [--modes previous+estimate,none]
+       [--solver steadygs|convexgs]
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import railcontact as rc
 import railcontact.contact.patch as patch_module
 import railcontact.contact.wheelrail as wheelrail_module
 import railcontact.geometry.search as geometry_search
+import railcontact.tangential as tangential
 import railcontact.timestep.warmstart as warmstart_module
 import railcontact.timestep.wheelset as wheelset_module
 
@@ -45,7 +47,7 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                  (patch_module, "fastrip"), (patch_module, "fastsim"),
                  (patch_module, "strips_from_contact"), (patch_module, "sample_on_strips")],
     "normal BEM": [(patch_module, "solve_normal")],
-    "tangential BEM": [(patch_module, "solve_tangential")],
+    "tangential BEM": [(tangential.SOLVERS, name) for name in tangential.SOLVERS],
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
 
@@ -77,14 +79,25 @@ class Breakdown:
         saved = []
         for stage, targets in STAGES.items():
             for owner, name in targets:
-                fn = getattr(owner, name)
+                fn = _get(owner, name)
                 saved.append((owner, name, fn))
-                setattr(owner, name, self.wrap(stage, fn))
+                _set(owner, name, self.wrap(stage, fn))
         try:
             yield self
         finally:
             for owner, name, fn in reversed(saved):
-                setattr(owner, name, fn)
+                _set(owner, name, fn)
+
+
+def _get(owner, name):
+    return owner[name] if isinstance(owner, dict) else getattr(owner, name)
+
+
+def _set(owner, name, fn) -> None:
+    if isinstance(owner, dict):
+        owner[name] = fn
+    else:
+        setattr(owner, name, fn)
 
 
 def fixed_workload() -> float:
@@ -118,15 +131,16 @@ def clear_caches() -> None:
         operator_module.pyfftw.forget_wisdom()  # FFTW remembers what it measured
 
 
-def run(mode: str, steps: int, step: float = 1e-3) -> dict:
+def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None) -> dict:
     """The hunting-like run with one warm-start mode, from empty operator caches; per-step
     times and iterations."""
     clear_caches()
+    extra = {} if solver is None else {"tangential_solver": solver}
     wc = rc.WheelsetContact(
         rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
         rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
         rc.ElasticPair.of(rc.STEEL, rc.STEEL),
-        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode, **extra))
     w = 2 * math.pi * 1.5
     times, normal, tangential, passes = [], [], [], []
     bd = Breakdown()
@@ -155,12 +169,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--modes", default="previous+estimate,none")
+    ap.add_argument("--solver", default=None, help="tangential solver (default: the "
+                    "settings' default)")
     args = ap.parse_args()
-    run("none", 5)  # compile the numba sweeps once, outside the measurements
+    run("none", 5, solver=args.solver)  # compile the numba sweeps, outside the measurements
     ref = fixed_workload()
     print(f"fixed workload (128^2 FFT round trips x 200 + 600^2 mat-vec x 400): "
           f"{ref * 1e3:.1f} ms")
-    results = [run(m, args.steps) for m in args.modes.split(",")]
+    results = [run(m, args.steps, solver=args.solver) for m in args.modes.split(",")]
     print(f"\n{args.steps} steps of 1 ms, S1002/60E1, 0.5 mm, 83.3 kN with creep, 30 m/s, "
           "3 mm at 1.5 Hz; medians per step (both wheels), first step left out")
     print(f"{'warm start':<18} {'median [ms]':>11} {'/ workload':>10} {'mean [ms]':>9} "

@@ -108,7 +108,8 @@ def normal_case(dy: float) -> dict:
 
 def tangential_case(dy: float, approach: float, creepage: float) -> dict:
     """FASTSIM / FaStrip estimates, converged ConvexGS and histories (first patch)."""
-    tspec = {"creepage": [creepage, creepage, creepage * 1e3], "friction": FRICTION}
+    tspec = {"creepage": [creepage, creepage, creepage * 1e3], "friction": FRICTION,
+             "solver": "convexgs"}  # the paper's solver
     c = penetration_case(dy, approach, 1e-9, "infcon")
     c["tangential"] = dict(tspec, tolerance=1e-8, max_iterations=5000)
     ref = rc.solve(c)

@@ -30,7 +30,8 @@ BASE = {
     "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
     "grid": {"nx": 64, "ny": 64},
     "normal": {"penetration": 1e-4, "tolerance": 1e-3},
-    "tangential": {"creepage": [1e-3, 0.0, 0.0], "friction": 0.4, "tolerance": 1e-2},
+    "tangential": {"creepage": [1e-3, 0.0, 0.0], "friction": 0.4, "tolerance": 1e-2,
+                   "solver": "convexgs"},  # the paper's solver
 }
 
 

@@ -92,7 +92,7 @@ def one_case(dy: float, control: str = "penetration", roll: str = "0") -> list[d
             c = copy.deepcopy(base)
             c["normal"]["estimate"] = "infcon"
             c["tangential"] = {"creepage": [cr, cr, cr * 1e3], "friction": 0.4,
-                               "tolerance": 1e-2, "estimate": est}
+                               "tolerance": 1e-2, "estimate": est, "solver": "convexgs"}
             sol = rc.solve(c)
             tan_its[est] = [p.tangential.iterations for p in sol.patches]
         for k in range(len(rows)):

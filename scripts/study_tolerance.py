@@ -68,7 +68,8 @@ def one_case(dy: float) -> list[dict]:
         c["normal"] = {"penetration": approach, "tolerance": NORMAL_REF, "estimate": "infcon",
                        "max_iterations": 2000}
         c["tangential"] = {"creepage": CREEPAGE, "friction": 0.4, "tolerance": tol,
-                           "estimate": "fastrip", "max_iterations": 5000}
+                           "estimate": "fastrip", "max_iterations": 5000,
+                           "solver": "convexgs"}  # the paper's solver
         return rc.solve(c)
 
     ref_n = normal(NORMAL_REF)

@@ -179,10 +179,14 @@ def test_two_instances_with_different_parameters(fmu, extracted, md):
 def test_load_definition(fmu, extracted, md):
     """A wheel load is the total vertical force (normal and creep forces, as CONTACT's FZ)
     by default, the normal forces' share with load_definition = "normal"; on the 70 deg
-    flange at 7 mm the two differ by a factor ~4."""
+    flange at 7 mm the two differ by a factor ~4. Near Nadal's limit (N ~ 15 Q) the
+    vertical force is a small difference of large ones: eps_tau = 1e-5 makes the creep
+    forces' noise small enough for the load tolerance 1e-3 (with the default 1e-2 the load
+    loop accepts up to 1 %, :data:`~railcontact.contact.loadloop.LOAD_SLACK_CAP`)."""
     q = 83.3e3
     inputs = dict(CREEP, lateral_displacement=7e-3, eta_left=5e-3, load_left=q, load_right=q)
-    total = Slave(fmu, extracted, md, "total", warm_start="none", friction=0.3)
+    total = Slave(fmu, extracted, md, "total", warm_start="none", friction=0.3,
+                  tangential_tolerance=1e-5)
     normal = Slave(fmu, extracted, md, "normal", warm_start="none", friction=0.3,
                    load_definition="normal")
     for s in (total, normal):

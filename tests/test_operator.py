@@ -79,6 +79,72 @@ def test_fft_plans_are_bounded_and_a_dropped_plan_is_made_again():
         operator_module._fftw_plan(1, (4, 2 * k + 2))
     plans = operator_module._local.plans
     assert len(plans) == operator_module.MAX_PLANS and (1, (12, 10)) not in plans
-    again = op.apply(p)  # its plan was dropped: planned anew (FFTW's wisdom: same bits)
+    again = op.apply(p)  # its plan was dropped: planned anew (estimated: same bits)
     assert np.max(np.abs(again - ref)) <= 1e-13 * np.max(np.abs(ref))
     assert np.array_equal(again, first)
+
+
+def test_fft_sizes_are_the_smallest_5_smooth_numbers():
+    """fft_size(n): the smallest 2^a 3^b 5^c >= n (checked by brute force)."""
+    from railcontact.halfspace.operator import fft_size, padded_shape
+
+    def smooth(m):
+        for f in (2, 3, 5):
+            while m % f == 0:
+                m //= f
+        return m == 1
+
+    for n in range(1, 400):
+        m = fft_size(n)
+        assert m >= n and smooth(m) and not any(smooth(k) for k in range(n, m))
+    assert padded_shape(38, 59) == (80, 120)
+
+
+@pytest.mark.parametrize("backend", FFT_BACKENDS)
+@pytest.mark.parametrize("shape", [(7, 11), (19, 13), (38, 59)])
+def test_padding_to_5_smooth_sizes_keeps_the_convolution_exact(backend, shape):
+    """Grids whose doubled counts are not 5-smooth (14 -> 15, 22 -> 24, 38 -> 40, 118 ->
+    120, ...) still give the dense (exact) product, for one and for two components."""
+    nx, ny = shape
+    g = Grid.from_bounds(-2e-3, 2e-3, -3e-3, 3e-3, nx, ny)
+    rng = np.random.default_rng(nx * ny)
+    for comps in ("z", "xy"):
+        p = rng.uniform(-1e9, 1e9, (len(comps), nx, ny))
+        fast = InfluenceOperator(g, STEEL, comps, backend).apply(p)
+        ref = InfluenceOperator(g, STEEL, comps, "dense").apply(p)
+        assert np.max(np.abs(fast - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
+def test_wisdom_saved_and_loaded_gives_the_same_product(tmp_path):
+    """save_wisdom measures the plans of small grids; after load_wisdom an operator planned
+    from it gives the dense product; a file that is not wisdom is a clear error."""
+    import railcontact.halfspace.operator as operator_module
+
+    path = tmp_path / "wisdom.txt"
+    assert operator_module.save_wisdom(path, max_elements=6) > 0
+    operator_module.load_wisdom(path)
+    g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 5, 6)
+    p = np.random.default_rng(5).uniform(0, 1e9, (5, 6))
+    fast = InfluenceOperator(g, STEEL, "z", "pyfftw").apply(p)
+    ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
+    assert np.max(np.abs(fast - ref)) <= 1e-12 * np.max(np.abs(ref))
+    bad = tmp_path / "bad.txt"
+    bad.write_text("not wisdom")
+    with pytest.raises(RailContactError, match="wisdom"):
+        operator_module.load_wisdom(bad)
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
+def test_grids_sharing_a_padded_shape_do_not_mix():
+    """45 x 45 and 41 x 41 grids share the padded shape 90 x 90 (and its plan and buffers):
+    a product on the smaller grid after one on the larger is still the dense product."""
+    rng = np.random.default_rng(7)
+    out = []
+    for n in (45, 41):
+        g = Grid.from_bounds(-2e-3, 2e-3, -2e-3, 2e-3, n, n)
+        p = rng.uniform(0, 1e9, (n, n))
+        fast = InfluenceOperator(g, STEEL, "z", "pyfftw").apply(p)
+        ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
+        out.append(np.max(np.abs(fast - ref)) / np.max(np.abs(ref)))
+    assert max(out) <= 1e-12

@@ -22,20 +22,23 @@ WORK_KEYS = {"normal_iterations", "tangential_iterations", "load_passes", "remes
 def calls(monkeypatch):
     """Every normal and tangential BEM solve made through the patch solvers."""
     log = {"normal": [], "tangential": []}
-    normal, tangential = patch_module.solve_normal, patch_module.solve_tangential
+    normal = patch_module.solve_normal
 
     def counted_normal(*args, **kwargs):
         res = normal(*args, **kwargs)
         log["normal"].append(res.iterations)
         return res
 
-    def counted_tangential(*args, **kwargs):
-        res = tangential(*args, **kwargs)
-        log["tangential"].append(res.iterations)
-        return res
+    def counted(solver):
+        def counted_tangential(*args, **kwargs):
+            res = solver(*args, **kwargs)
+            log["tangential"].append(res.iterations)
+            return res
+        return counted_tangential
 
     monkeypatch.setattr(patch_module, "solve_normal", counted_normal)
-    monkeypatch.setattr(patch_module, "solve_tangential", counted_tangential)
+    for name, solver in patch_module.SOLVERS.items():
+        monkeypatch.setitem(patch_module.SOLVERS, name, counted(solver))
     return log
 
 

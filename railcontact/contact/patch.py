@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import CaseError, RailContactError
-from ..halfspace.grid import Grid
+from ..halfspace.grid import Grid, remesh
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.operator import influence_operator
@@ -22,7 +22,7 @@ from ..normal import NormalResult, solve_normal
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
 from ..settings.case import check_grid_size
-from ..tangential import rolling_operator, solve_tangential
+from ..tangential import SOLVERS, TangentialResult, rolling_operator
 from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
 from ..tangential.strips import (
@@ -135,10 +135,14 @@ def estimate_label(estimate_of: PressureEstimate, name: str) -> str:
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
-                       automatic: tuple[bool, bool] = (True, True)
+                       automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None
                        ) -> tuple[NormalResult, Work]:
     """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
     it took.
+
+    ``grid`` (e.g. the grid of an earlier load pass of the same patch) is the first grid
+    instead of the one meshed on ``bounds``, so that a solution on it can start the next
+    solve without interpolation.
 
     ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``estimate_of(grid)`` the
     initial pressure [Pa] (or None). ``automatic`` says along which axes (x, y) the area is
@@ -151,7 +155,8 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     work = Work(remeshes=-1)
     for k in range(MAX_GROW + 1):
         work.remeshes += 1
-        grid = make_grid(grid_settings, bounds)
+        if grid is None or k > 0:
+            grid = make_grid(grid_settings, bounds)
         op = influence_operator(grid, pair, "z", settings.fft)
         res = solve_normal(gap_of(grid), grid, op, initial_pressure=estimate_of(grid),
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
@@ -178,7 +183,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                            f"{MAX_GROW} enlargements by {GROW_FACTOR} (raise [grid] margin or "
                            f"the element counts): {res.message}")
             break
-        bounds = _grown(bounds, automatic)
+        bounds = _grown(grid.bounds, automatic)
     work.seconds = time.perf_counter() - t0
     return res, work
 
@@ -216,6 +221,21 @@ def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
     if model == "fastsim":
         return fastsim(strips, pn, mu, creepage, flexibilities(a_eq, b_eq, pair))
     return fastrip(strips, pn, normal.force, a_eq, b_eq, pair, mu, creepage)
+
+
+def start_from(patch: PatchSolution, grid: Grid
+               ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """The pressure [Pa], traction [Pa] (2, nx, ny) and adhesion/slip map of a solved
+    ``patch`` on ``grid`` (a copy when it is the patch's own lattice; traction and map None
+    without a BEM tangential solution): the start of another solve of the same patch."""
+    src = patch.normal.grid
+    p = remesh(patch.normal.pressure, src, grid)
+    t = patch.tangential
+    if not isinstance(t, TangentialResult):
+        return p, None, None
+    traction = np.stack([remesh(t.traction[k], src, grid) for k in range(2)])
+    state = np.rint(remesh(t.state.astype(float), src, grid, method="nearest"))
+    return p, traction, state.astype(np.int8)
 
 
 def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
@@ -264,7 +284,7 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     if p0 is None and estimate != "none" and hz is not None:
         p0, st0 = remesh_strips(
             simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
-    patch.tangential = solve_tangential(
+    patch.tangential = SOLVERS[settings.solver](
         res.grid, rolling_operator(res.grid, pair, fft), res.pressure, settings.friction,
         creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,
         max_iterations=settings.max_iterations, spin_offset=settings.spin_offset)

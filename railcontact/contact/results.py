@@ -146,6 +146,12 @@ class Solution:
     seconds: float = 0.0
 
     @property
+    def converged(self) -> bool:
+        """Whether every patch's normal and tangential solutions converged."""
+        return all(p.normal.converged and (p.tangential is None or p.tangential.converged)
+                   for p in self.patches)
+
+    @property
     def work(self) -> Work:
         """The patches' work summed, with the wall time of the whole solve [s]; the load
         passes of each wheel (the patches of a wheel share them) added over the wheels."""

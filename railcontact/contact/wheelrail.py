@@ -56,7 +56,14 @@ from .loadloop import (
     load_met,
     vertical_force,
 )
-from .patch import estimate_label, normal_estimate, solve_patch_normal, solve_patch_tangential
+from .patch import (
+    estimate_label,
+    labelled,
+    normal_estimate,
+    solve_patch_normal,
+    solve_patch_tangential,
+    start_from,
+)
 from .results import PatchSolution
 
 EstimateFor = Callable[[ContactPoint, HertzSolution, Control], Callable[[Grid], Any]]
@@ -67,6 +74,13 @@ LOAD_RTOL = 1e-6
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16
+KEEP_SLACK = 0.05
+"""A later load pass keeps the grid of the one before when its potential area reaches at
+most this fraction of the grid's size beyond it (the area has a margin over the contact);
+else it meshes its own area and the earlier solution is interpolated onto it."""
+PASS_MATCH = 1e-3
+"""Largest distance [m] between the contact points of a patch in two load passes of a wheel
+for the earlier one to start the later one."""
 
 
 def build_geometry(geo: WheelRailGeometry) -> tuple[Track, Wheelset, Pose]:
@@ -89,11 +103,37 @@ def build_geometry(geo: WheelRailGeometry) -> tuple[Track, Wheelset, Pose]:
     return track, ws, pose
 
 
+def same_patch(patches: list[PatchSolution] | None, cp: ContactPoint
+               ) -> PatchSolution | None:
+    """The patch of ``patches`` (an earlier load pass of the wheel) whose contact point is
+    nearest to ``cp``, within :data:`PASS_MATCH`."""
+    best, dist = None, PASS_MATCH
+    for p in patches or ():
+        g = p.geometry
+        d = math.hypot(g.rail_u - cp.rail_u, g.position[2] - cp.position[2])
+        if d <= dist:
+            best, dist = p, d
+    return best
+
+
+def _covers(outer: tuple[float, float, float, float],
+            inner: tuple[float, float, float, float]) -> bool:
+    """Whether the area ``outer`` [m] holds ``inner`` but for :data:`KEEP_SLACK` of its
+    size on each side (then an earlier pass's grid is kept for ``inner``)."""
+    sx, sy = KEEP_SLACK * (outer[1] - outer[0]), KEEP_SLACK * (outer[3] - outer[2])
+    return (inner[0] >= outer[0] - sx and inner[1] <= outer[1] + sx
+            and inner[2] >= outer[2] - sy and inner[3] <= outer[3] + sy)
+
+
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
              pair: ElasticPair, loads: list[float] | None = None,
-             estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+             estimate_for: EstimateFor | None = None,
+             previous: list[PatchSolution] | None = None) -> list[PatchSolution]:
     """The normal BEM solution of each contact point's patch: at the vertical ``approach``
-    [m], or carrying the normal ``loads`` [N] (one per point)."""
+    [m], or carrying the normal ``loads`` [N] (one per point).
+
+    A patch of ``previous`` (the wheel's last load pass) at the same contact point starts
+    the solve: its grid is kept and its pressure is the initial estimate."""
     grid, normal = settings.grid, settings.normal
     out = []
     for k, cp in enumerate(cps):
@@ -114,12 +154,17 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         xl = grid.margin * math.sqrt(d0 / cp.A)
         ylo, yhi = cp.lateral_extent(d0, grid.margin)
         t0 = time.perf_counter()
-        if estimate_for is None:
+        last = same_patch(previous, cp)
+        if last is not None:
+            est = labelled(lambda g, last=last: start_from(last, g)[0], last.estimate)
+        elif estimate_for is None:
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
-        res, work = solve_patch_normal(cp.gap_on_grid, (-xl, xl, ylo, yhi), grid, normal,
-                                       pair, control, est)
+        bounds = (-xl, xl, ylo, yhi)
+        keep = last is not None and _covers(last.normal.grid.bounds, bounds)
+        res, work = solve_patch_normal(cp.gap_on_grid, bounds, grid, normal, pair, control,
+                                       est, grid=last.normal.grid if keep else None)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz,
                                  estimate=estimate_label(est, normal.estimate),
@@ -128,10 +173,18 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
 
 
 def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
-                    pair: ElasticPair) -> list[PatchSolution]:
+                    pair: ElasticPair, previous: list[PatchSolution] | None = None
+                    ) -> list[PatchSolution]:
+    """The tangential solution of each loaded patch, started from the traction of the same
+    patch in ``previous`` (the wheel's last load pass) where there is one."""
     for p in patches:
         if p.normal.force > 0:
-            solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft)
+            last = same_patch(previous, p.geometry)
+            start = None if last is None else start_from(last, p.normal.grid)[1:]
+            if start is not None and start[0] is None:
+                start = None
+            solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft,
+                                   previous=start)
     return patches
 
 
@@ -156,8 +209,10 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     passes: list[list[PatchSolution]] = []
 
     def residual(qn: float) -> tuple[float, list[PatchSolution]]:
+        last = passes[-1] if passes else None  # each pass starts from the one before
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(load=qn),
-                                                settings, pair, estimate_for), settings, pair)
+                                                settings, pair, estimate_for, last),
+                             settings, pair, last)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -169,19 +224,22 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
 
 def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
                        settings: PatchSettings, pair: ElasticPair,
-                       estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+                       estimate_for: EstimateFor | None = None,
+                       previous: list[PatchSolution] | None = None) -> list[PatchSolution]:
     """The BEM normal solutions of one wheel's patches (creep forces not counted).
 
     ``control``: the vertical approach [m] beyond first contact, or the vertical load [N]
     that the normal forces carry (one patch: force control with ``N = Q / cos(gamma)``,
-    exact in one solve; several patches: a secant iteration on the approach).
+    exact in one solve; several patches: a secant iteration on the approach, each pass
+    started from the one before). ``previous``: an earlier solve of the wheel whose patches
+    start those at the same contact points (grid and pressure, see :func:`_patches`).
     """
     if not control.by_load:
         approach = control.penetration
         if approach <= 0:
             return []
         return _patches(contact_points(track, ws, pose, side, approach), ws, approach,
-                        settings, pair, estimate_for=estimate_for)
+                        settings, pair, estimate_for=estimate_for, previous=previous)
     q = control.load
     if q == 0:
         return []
@@ -189,7 +247,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     cosg = math.cos(first.contact_angle)
     # one patch: force control (exact); check that the approach it needs adds no patch
     single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
-                      estimate_for=estimate_for)
+                      estimate_for=estimate_for, previous=previous)
     approach = single[0].normal.penetration / cosg
     if count_contacts(track, ws, pose, side, approach) == 1:
         return single
@@ -198,7 +256,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
         ps = _patches(contact_points(track, ws, pose, side, a), ws, a, settings, pair,
-                      estimate_for=estimate_for)
+                      estimate_for=estimate_for, previous=passes[-1])
         passes.append(ps)
         return vertical_force(ps) - q, ps
 

@@ -72,6 +72,7 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("normal_tolerance", ContactSettings, "normal_tolerance"),
     ("tangential_tolerance", ContactSettings, "tangential_tolerance"),
     ("load_tolerance", ContactSettings, "load_tolerance"),
+    ("tangential_solver", ContactSettings, "tangential_solver"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""

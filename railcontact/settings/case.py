@@ -48,6 +48,7 @@ from .choices import (
     ROLL_MODES,
     TANGENTIAL_ESTIMATES,
     TANGENTIAL_MODELS,
+    TANGENTIAL_SOLVERS,
     TRACTION_BOUNDS,
 )
 from .fields import Record, document, setting
@@ -287,6 +288,9 @@ class TangentialSettings(Record):
     model: str = setting("bem", "choice", "", "tangential model", choices=TANGENTIAL_MODELS)
     estimate: str = setting("none", "choice", "", "initial estimate of the BEM",
                             choices=TANGENTIAL_ESTIMATES)
+    solver: str = setting(TANGENTIAL_SOLVERS[0], "choice", "", "the BEM's solver: steadygs "
+                          "(the fastest) or convexgs (the paper's)",
+                          choices=TANGENTIAL_SOLVERS)
     tolerance: float = setting(1e-2, "float", "-", "eps_tau, relative traction change between "
                                "sweeps", minimum=0.0, open_min=True, maximum=1.0,
                                open_max=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from ..halfspace.operator import BACKENDS
 from ..normal.bem import PRECONDITIONERS
+from ..tangential import SOLVERS
 
 FFT_BACKENDS = BACKENDS
 """Convolution backends of the influence operator."""
@@ -14,6 +15,8 @@ NORMAL_ESTIMATES = ("none", "hertz", "kp", "infcon")
 """Initial estimates of the normal BEM."""
 TANGENTIAL_MODELS = ("bem", "fastsim", "fastrip")
 """Tangential models: the exact BEM or a simplified one."""
+TANGENTIAL_SOLVERS = tuple(SOLVERS)
+"""Exact steady-rolling solvers of the tangential BEM (the first the default)."""
 TANGENTIAL_ESTIMATES = ("none", "fastsim", "fastrip")
 """Initial estimates of the tangential BEM."""
 TRACTION_BOUNDS = ("elliptic", "parabolic")

@@ -48,6 +48,7 @@ class ContactSettings(Record):
     tangential_tolerance: float = inherit(TangentialSettings, "tolerance")
     normal_estimate: str = inherit(NormalSettings, "estimate", "infcon")
     tangential_estimate: str = inherit(TangentialSettings, "estimate", "fastrip")
+    tangential_solver: str = inherit(TangentialSettings, "solver")
     warm_start: str = setting("previous+estimate", "choice", "", "how a step starts the BEM",
                               choices=WARM_STARTS)
     fft: str = inherit(NormalSettings, "fft")
@@ -92,7 +93,7 @@ class ContactSettings(Record):
             friction=self.friction, model="bem",
             estimate=self.tangential_estimate if self.uses_estimate else "none",
             tolerance=self.tangential_tolerance, max_iterations=self.max_iterations_tangential,
-            strips=self.strips, spin_offset=self.spin_offset)
+            strips=self.strips, spin_offset=self.spin_offset, solver=self.tangential_solver)
 
     @cached_property
     def patch_settings(self) -> PatchSettings:

@@ -1,0 +1,399 @@
+"""SteadyGS: Vollebregt's Gauss–Seidel solver specialised for steady rolling.
+
+The algorithm is the one of CONTACT's ``stdygs`` (E.A.H. Vollebregt, CONTACT,
+``src/m_solvpt.f90``; Vollebregt, "A Gauss–Seidel type solver for special convex programs,
+with application to frictional contact mechanics", JOTA 87, 1995), written anew in this
+package's conventions (rolling in +x, traction ``(2, nx, ny)``, the slip
+``S = W + B p`` of :mod:`railcontact.tangential.rolling`).
+
+Idea
+----
+With ``B[k] = A[k] - A[k + 1]`` the slip is ``S = W + A dp`` with the *differences*
+``dp_I = p_I - p_{I+1}`` along the rolling direction (``I + 1`` is the upstream neighbour,
+towards the leading edge; ``p`` is zero off the grid). In the adhesion area the natural
+unknown is ``dp`` (``A dp = -W`` is a problem of the normal problem's kind), whereas
+ConvexGS updates ``p`` element by element, which moves the information from the leading
+edge into the adhesion area only one element per sweep. SteadyGS therefore visits each row
+from the trailing to the leading edge (increasing x), and a change ``delta`` of the
+traction of element ``(ix, iy)`` is applied with the ``dp`` of the adhesion elements
+behind it held fixed: the traction of the whole run of adhesion elements
+``jx < j < ix`` trailing ``ix`` (up to the first slip or exterior element ``jx``) moves
+by ``delta`` as well. In ``dp`` terms this is ``+delta`` at ``ix`` and ``-delta`` at
+``jx``, so the element sees the 2x2 coefficient
+
+    C = A[0] - A[ix - jx] = sum_{m = 0}^{ix - jx - 1} B[m]     (x offsets, same row)
+
+instead of ConvexGS's ``B[0]``. With it the element is solved as in ConvexGS:
+``S0 = S - C p_I``; adhesion ``p = -C^-1 S0`` (relaxed by ``omega_h``) when within the
+bound ``g = mu p_n``, else slip ``p = g (cos a, sin a)`` with ``S0 + C p`` anti-parallel
+to ``p`` (Newton on ``a``, relaxed by ``omega_s``). A trailing adhesion element pushed
+over its bound by the shift is put on it (as CONTACT does), and the shift continues from
+there.
+
+Implementation
+--------------
+The shift of every element is exact at every element update: as in ConvexGS the rows are
+grouped into blocks; the shift at the start of a block comes from one DC-FFT product
+with the steady-rolling operator ``B`` and the changes made inside the block are added by
+direct summation with ``B`` (all traction changes, including those of the shifted
+adhesion runs). The sweep is compiled with numba; a numpy version (vectorised shift per
+element, no blocks) gives the same iterates where numba is missing or on request.
+
+Convergence as ConvexGS's: one iteration is one sweep over all contact elements and
+``||p^k - p^(k-1)||_2 < tolerance ||p^k||_2`` with ``p^k`` the whole traction field after
+sweep ``k`` (the shifted runs included). When that measure has not fallen below
+:data:`STALL_GAIN` of its best for :data:`STALL_SWEEPS` sweeps the iteration stops, not
+converged, and says so; a non-finite measure stops it too.
+
+Relaxation: ``omega_h = 0.65``, ``omega_s = 0.9`` by default, the best on S1002/60E1
+patches (about 20-25 sweeps from zero traction at eps 1e-5, 30-33 on the most
+spin-dominated flange patch, against 80-120 of ConvexGS; without relaxation 25-40).
+Over-relaxation, and sweeping the rows alternately forward and backward in y or from the
+leading to the trailing edge, slowed the iteration down or made it diverge.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from functools import lru_cache
+
+import numpy as np
+
+from ..errors import RailContactError, check_count, check_finite, check_positive
+from ..halfspace.grid import Grid
+from ..halfspace.operator import InfluenceOperator
+from .convexgs import (
+    ADHESION,
+    ENGINES,
+    EXTERIOR,
+    HAVE_NUMBA,
+    SLIP,
+    TangentialResult,
+    _element_solve,
+    _gs_kernels,
+    _row_blocks,
+    tangential_summary,
+)
+from .rolling import rigid_slip
+
+try:
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
+STALL_SWEEPS = 50
+"""Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
+what round-off lets it reach would otherwise run to ``max_iterations``)."""
+STALL_GAIN = 0.99
+"""Progress: the relative traction change falls below this fraction of its best so far."""
+
+
+def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
+    """Move the tractions [Pa] of the adhesion run ``jx < j < ix`` of row ``iy`` by
+    ``(ex, ey)``, each put back on its bound ``g`` when pushed over it (the shift then goes
+    on with that element's actual change); the changes are added to ``dpx``, ``dpy``."""
+    for j in range(ix - 1, jx, -1):
+        if ex == 0.0 and ey == 0.0:
+            break
+        ox = px[iy, j]
+        oy = py[iy, j]
+        qx = ox + ex
+        qy = oy + ey
+        m = math.hypot(qx, qy)
+        gj = g[iy, j]
+        if m > gj:
+            qx *= gj / m
+            qy *= gj / m
+        ex = qx - ox
+        ey = qy - oy
+        px[iy, j] = qx
+        py[iy, j] = qy
+        dpx[iy, j] += ex
+        dpy[iy, j] += ey
+
+
+def _run_start(state, iy, ix):
+    """Index of the first non-adhesion element trailing ``ix`` in row ``iy`` (-1: none)."""
+    jx = ix - 1
+    while jx >= 0 and state[iy, jx] == ADHESION:
+        jx -= 1
+    return jx
+
+
+def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
+           omega_h, omega_s, iy, ix):
+    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`)."""
+    ny, nx = g.shape
+    gi = g[iy, ix]
+    sx = ux[iy, ix]
+    sy = uy[iy, ix]
+    bx = nx - 1 - ix
+    for jy in range(r0, r1):
+        r = ny - 1 - iy + jy
+        for jx in range(lo[jy], hi[jy] + 1):
+            k = bx + jx
+            qx = dpx[jy, jx]
+            qy = dpy[jy, jx]
+            sx += rxx[r, k] * qx + rxy[r, k] * qy
+            sy += ryx[r, k] * qx + ryy[r, k] * qy
+    jx = _run_start_c(state, iy, ix)
+    n = ix - jx
+    c11 = cum[0, n]
+    c12 = cum[1, n]
+    c21 = cum[2, n]
+    c22 = cum[3, n]
+    ox = px[iy, ix]
+    oy = py[iy, ix]
+    s0x = sx - c11 * ox - c12 * oy
+    s0y = sy - c21 * ox - c22 * oy
+    new_x, new_y, st = _element_solve_c(ox, oy, s0x, s0y, gi, c11, c12, c21, c22,
+                                        omega_h, omega_s)
+    px[iy, ix] = new_x
+    py[iy, ix] = new_y
+    dpx[iy, ix] += new_x - ox
+    dpy[iy, ix] += new_y - oy
+    state[iy, ix] = st
+    _shift_run_c(px, py, g, dpx, dpy, iy, ix, jx, new_x - ox, new_y - oy)
+
+
+def _steady_block(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
+                  r0, r1, omega_h, omega_s):
+    """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled).
+
+    ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
+    the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
+    direct sum with the reversed kernels (as ConvexGS's ``_block_sweep``), so every
+    element sees the newest tractions. ``cum[:, L]`` holds the run coefficient
+    ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for a run of ``L`` elements.
+    """
+    for iy in range(r0, r1):
+        for ix in range(lo[iy], hi[iy] + 1):
+            if g[iy, ix] > 0.0:
+                _visit_c(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
+                         r0, r1, omega_h, omega_s, iy, ix)
+
+
+if HAVE_NUMBA:
+    _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
+    _shift_run_c = numba.njit(cache=True, inline="always")(_shift_run)
+    _run_start_c = numba.njit(cache=True, inline="always")(_run_start)
+    _visit_c = numba.njit(cache=True, inline="always")(_visit)
+    _steady_block_numba = numba.njit(cache=True, fastmath=True)(_steady_block)
+else:  # pragma: no cover
+    _element_solve_c = _element_solve
+    _shift_run_c = _shift_run
+    _run_start_c = _run_start
+    _visit_c = _visit
+    _steady_block_numba = None
+
+
+def _sweep_blocked(kern, cum, op, w_t, g, px, py, state, lo, hi, rows, omega_h, omega_s):
+    """One SteadyGS sweep, row block by row block; between blocks the shift is brought up
+    to date with one DC-FFT product of the block's changes (as ConvexGS's sweep)."""
+    u = w_t + op.apply(np.stack([px.T, py.T])).transpose(0, 2, 1)
+    ux, uy = np.ascontiguousarray(u[0]), np.ascontiguousarray(u[1])
+    dpx = np.zeros_like(px)
+    dpy = np.zeros_like(py)
+    for b, (r0, r1) in enumerate(rows):
+        _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
+                            omega_h, omega_s)
+        if b + 1 < len(rows):
+            du = op.apply(np.stack([dpx.T, dpy.T]))
+            ux += du[0].T
+            uy += du[1].T
+            dpx[r0:r1] = 0.0
+            dpy[r0:r1] = 0.0
+
+
+def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
+    """The plain sweep: the shift of each element as a vectorised sum over all elements."""
+    rxx, rxy, ryx, ryy = kern
+    ny, nx = g.shape
+    scratch = np.zeros_like(px), np.zeros_like(py)
+    for iy in range(ny):
+        for ix in range(lo[iy], hi[iy] + 1):
+            gi = g[iy, ix]
+            if gi <= 0.0:
+                continue
+            win = (slice(ny - 1 - iy, 2 * ny - 1 - iy), slice(nx - 1 - ix, 2 * nx - 1 - ix))
+            sx = wx[iy, ix] + np.vdot(rxx[win], px) + np.vdot(rxy[win], py)
+            sy = wy[iy, ix] + np.vdot(ryx[win], px) + np.vdot(ryy[win], py)
+            jx = _run_start(state, iy, ix)
+            c11, c12, c21, c22 = cum[:, ix - jx]
+            ox, oy = px[iy, ix], py[iy, ix]
+            new_x, new_y, st = _element_solve(ox, oy, sx - c11 * ox - c12 * oy,
+                                              sy - c21 * ox - c22 * oy, gi, c11, c12, c21,
+                                              c22, omega_h, omega_s)
+            px[iy, ix], py[iy, ix], state[iy, ix] = new_x, new_y, st
+            _shift_run(px, py, g, *scratch, iy, ix, jx, new_x - ox, new_y - oy)
+
+
+@lru_cache(maxsize=16)
+def _run_coefficients(operator: InfluenceOperator) -> np.ndarray:
+    """``cum[:, L] = sum_{m<L} B[m, 0]`` (xx, xy, yx, yy) [m/Pa] for runs of L = 0 .. nx
+    elements: the coefficient of a traction change applied to an element and the L - 1
+    elements trailing it in its row."""
+    k = operator.kernels[:, :, operator.nx - 1:, operator.ny - 1]  # offsets 0 .. nx-1
+    cum = np.zeros((4, operator.nx + 1))
+    cum[:, 1:] = np.cumsum(k.reshape(4, operator.nx), axis=1)
+    return cum
+
+
+def solve_steadygs(
+    grid: Grid,
+    operator: InfluenceOperator,
+    pressure: np.ndarray,
+    friction: float,
+    creepage: tuple[float, float, float],
+    *,
+    initial_traction: np.ndarray | None = None,
+    initial_state: np.ndarray | None = None,
+    tolerance: float = 1e-2,
+    max_iterations: int = 1000,
+    omega_h: float = 0.65,
+    omega_s: float = 0.9,
+    engine: str = "auto",
+    spin_offset: float = 1.0 / 6.0,
+) -> TangentialResult:
+    """Solve steady rolling with Coulomb friction by SteadyGS.
+
+    Same problem, inputs and result as :func:`railcontact.tangential.solve_tangential`
+    (ConvexGS); ``iterations`` counts sweeps over all contact elements.
+
+    Parameters
+    ----------
+    grid
+        Potential-contact grid, the same as the normal solution's.
+    operator
+        Steady-rolling operator from :func:`railcontact.tangential.rolling_operator`.
+    pressure
+        Normal pressure [Pa], shape (nx, ny) (from the normal solution).
+    friction
+        Coefficient of friction mu [-].
+    creepage
+        (xi, eta, phi): longitudinal, lateral creepage [-] and spin [1/m].
+    initial_traction
+        Initial estimate (2, nx, ny) [Pa]; default zero traction. It is clipped to the
+        traction bound.
+    initial_state
+        Adhesion/slip map (nx, ny) of the estimate (1 adhesion, 2 slip): slip elements start
+        on the traction bound.
+    tolerance
+        eps_tau for ``||p^k - p^(k-1)|| < eps_tau ||p^k||``.
+    max_iterations
+        Largest number of sweeps.
+    omega_h, omega_s
+        Relaxation in adhesion and slip (0 < omega <= 1.5).
+    engine
+        "auto" (numba when installed), "numba" or "numpy".
+    spin_offset
+        Where in the rolling step the spin part of the rigid slip is taken, as a fraction
+        of dx (see :func:`railcontact.tangential.rigid_slip`).
+    """
+    t0 = time.perf_counter()
+    shape = grid.shape
+    if operator.components != "xy" or (operator.nx, operator.ny) != shape:
+        raise RailContactError("operator must be the 'xy' steady-rolling operator of this grid")
+    pn = np.asarray(pressure, dtype=float)
+    if pn.shape != shape or not np.all(np.isfinite(pn)) or np.any(pn < 0):
+        raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
+    mu = check_positive("friction", friction, allow_zero=True)
+    tolerance = check_positive("tolerance", tolerance)
+    for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
+        if not 0.0 < check_finite(name, om) <= 1.5:
+            raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
+    max_iterations = check_count("max_iterations", max_iterations)
+    if engine not in ENGINES:
+        raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if engine == "numba" and not HAVE_NUMBA:
+        raise RailContactError("engine 'numba' requested but numba is not installed")
+    use_numba = engine in ("auto", "numba") and HAVE_NUMBA
+
+    w = rigid_slip(grid, creepage, spin_offset)
+    # Sweep layout: (ny, nx), x contiguous.
+    g = np.ascontiguousarray((mu * pn).T)
+    wx, wy = np.ascontiguousarray(w[0].T), np.ascontiguousarray(w[1].T)
+    if initial_traction is None:
+        px = np.zeros_like(g)
+        py = np.zeros_like(g)
+    else:
+        p0 = np.asarray(initial_traction, dtype=float)
+        if p0.shape != (2, *shape) or not np.all(np.isfinite(p0)):
+            raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
+        px, py = np.ascontiguousarray(p0[0].T), np.ascontiguousarray(p0[1].T)
+        mag = np.hypot(px, py)
+        on_bound = np.zeros_like(g, dtype=bool)
+        if initial_state is not None:
+            st0 = np.asarray(initial_state)
+            if st0.shape != shape:
+                raise RailContactError(f"initial_state must have shape {shape}")
+            on_bound = (st0.T == SLIP) & (mag > 0)
+        scale = np.where(on_bound | (mag > g), g / np.where(mag > 0, mag, 1.0), 1.0)
+        px, py = px * scale, py * scale
+        px[g <= 0] = 0.0
+        py[g <= 0] = 0.0
+    state = np.where(g > 0, ADHESION, EXTERIOR).astype(np.int8)
+    contact = g > 0
+    any_row = contact.any(axis=1)
+    lo = np.where(any_row, contact.argmax(axis=1), 1).astype(np.int64)
+    hi = np.where(any_row, g.shape[1] - 1 - contact[:, ::-1].argmax(axis=1), 0).astype(np.int64)
+
+    kern = _gs_kernels(operator)
+    cum = _run_coefficients(operator)
+    rows = _row_blocks(contact)
+    w_t = np.stack([wx, wy])
+    floor = 1e-9 * float(np.sqrt(np.sum(g * g)))
+    hist: list[float] = []
+    converged = stalled = False
+    best, best_its = math.inf, 0
+    its = 0
+    err = 0.0
+    if contact.any():
+        while its < max_iterations:
+            its += 1
+            qx, qy = px.copy(), py.copy()
+            if use_numba:
+                _sweep_blocked(kern, cum, operator, w_t, g, px, py, state, lo, hi, rows,
+                               float(omega_h), float(omega_s))
+            else:
+                _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, float(omega_h),
+                             float(omega_s))
+            dif = float(np.sum((px - qx) ** 2 + (py - qy) ** 2))
+            norm = math.sqrt(float(np.sum(px * px + py * py)))
+            scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+            err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
+            hist.append(err)
+            if not math.isfinite(err):
+                break
+            if err < tolerance:
+                converged = True
+                break
+            if err < STALL_GAIN * best:
+                best, best_its = err, its
+            elif its - best_its >= STALL_SWEEPS:  # at round-off: a tolerance out of reach
+                stalled = True
+                break
+    else:
+        converged = True
+
+    traction = np.stack([px.T, py.T])
+    st = np.ascontiguousarray(state.T)
+    slip = (w + operator.apply(traction)) / grid.dx
+    slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
+    force, mz, ratio, pmax = tangential_summary(grid, traction, st)
+    if not contact.any():
+        message = "no contact: zero normal pressure"
+    elif converged:
+        message = f"SteadyGS converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
+    else:
+        message = (f"SteadyGS not converged: eps = {err:.3g} after {its} sweeps "
+                   f"(tolerance {tolerance:g})")
+        if stalled:
+            message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
+                        f"{STALL_SWEEPS} sweeps")
+    return TangentialResult(
+        grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
+        slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
+        message=message, wall_time=time.perf_counter() - t0, error=err,
+        history=np.asarray(hist))

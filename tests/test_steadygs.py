@@ -1,0 +1,225 @@
+"""SteadyGS against Carter, Hertz/Kalker, CONTACT's reference output and ConvexGS."""
+
+import math
+
+import numpy as np
+import pytest
+
+import railcontact as rc
+from railcontact import ElasticPair, Grid, Material, hertz, solve_normal
+from railcontact.halfspace.hertz import curvature_ratio
+from railcontact.halfspace.operator import influence_operator
+from railcontact.settings import Case
+from railcontact.tangential import creep_coefficients, rolling_operator, solve_tangential
+from railcontact.tangential.convexgs import HAVE_NUMBA
+from railcontact.tangential.steadygs import solve_steadygs
+
+STEEL = ElasticPair.of(Material(206e9, 0.28))
+CONTACT_G = ElasticPair.from_shear(82e9, 0.28)
+
+
+def rel_l2(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+def hertz_patch(ab, n, pair=STEEL, load=1e5, margin=1.1):
+    """BEM normal solution on an n x n grid around the Hertz ellipse with a/b = ab."""
+    r = curvature_ratio(min(ab, 1 / ab))
+    A, B = (1.0, r) if ab >= 1 else (r, 1.0)
+    hz = hertz(A, B, pair, load=load)
+    g = Grid.from_bounds(-margin * hz.a, margin * hz.a, -margin * hz.b, margin * hz.b, n, n)
+    X, Y = g.mesh()
+    nr = solve_normal(A * X**2 + B * Y**2, g, influence_operator(g, pair), load=load,
+                      tolerance=1e-9)
+    return hz, g, nr
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return hertz_patch(1.0, 31)
+
+
+@pytest.fixture(scope="module")
+def wheel_rail_patch():
+    """The normal solution of a left S1002 wheel on 60E1 rail (tread contact, 4 mm off
+    centre away from the flange), its elastic pair and creepages."""
+    d = {"material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
+         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left",
+                      "lateral_displacement": -4e-3},
+         "grid": {"dx": 0.5e-3, "dy": 0.5e-3},
+         "normal": {"load": 83.3e3, "tolerance": 1e-5},
+         "tangential": {"friction": 0.4, "creepage": [2e-4, 2e-4, 0.5], "tolerance": 1e-5}}
+    nr = rc.solve(d).patches[0].normal
+    return nr, Case.from_dict(d).pair, (2e-4, 2e-4, 0.5)
+
+
+def test_carter_two_dimensional():
+    """Carter's rolling cylinder (as CONTACT's carter2d, see test_tangential): Q/(mu P) =
+    0.64, adhesion 1.2 mm at the leading edge; the traction is ConvexGS's."""
+    n, dx = 110, 0.02e-3
+    g = Grid(n, 1, dx, 0.2, -(n - 1) / 2 * dx, 0.0)
+    X, _ = g.mesh()
+    nr = solve_normal(1.0 * X**2, g, influence_operator(g, CONTACT_G), load=35780.0,
+                      tolerance=1e-10)
+    op = rolling_operator(g, CONTACT_G)
+    r = solve_steadygs(g, op, nr.pressure, 0.3, (-2.4e-4, 0, 0), tolerance=1e-8)
+    assert r.converged, r.message
+    assert r.force[0] / (0.3 * 35780.0) == pytest.approx(0.64, rel=0.005)
+    adhesion = g.x[r.state[:, 0] == 1]
+    assert adhesion.max() - adhesion.min() + dx == pytest.approx(1.2e-3, rel=0.02)
+    assert adhesion.max() > 0.95e-3  # adhesion at the leading edge (rolling in +x)
+    s = solve_steadygs(g, op, nr.pressure, 0.3, (-2.4e-4, 0, 0), tolerance=1e-6)
+    c = solve_tangential(g, op, nr.pressure, 0.3, (-2.4e-4, 0, 0), tolerance=1e-10,
+                         max_iterations=20_000)
+    assert s.converged and rel_l2(s.traction, c.traction) < 5e-6
+    assert rel_l2(r.traction, c.traction) < 1e-7
+
+
+@pytest.mark.parametrize("creepage", [(2e-4, -1e-4, 0.0), (0.0, 0.0, 2.0),
+                                      (1e-4, 1e-4, 1.0)])
+def test_hertz_same_traction_as_convexgs(sphere, creepage):
+    """Creepage, spin and both: SteadyGS at eps 1e-6 is ConvexGS's converged traction
+    within a few eps, in fewer sweeps (far fewer where adhesion matters, see the
+    wheel-rail test)."""
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    s = solve_steadygs(g, op, nr.pressure, 0.3, creepage, tolerance=1e-6)
+    c = solve_tangential(g, op, nr.pressure, 0.3, creepage, tolerance=1e-10,
+                         max_iterations=20_000)
+    c6 = solve_tangential(g, op, nr.pressure, 0.3, creepage, tolerance=1e-6)
+    assert s.converged and c.converged, (s.message, c.message)
+    assert rel_l2(s.traction, c.traction) < 5e-6
+    assert np.array_equal(s.state, c.state)
+    assert s.iterations < c6.iterations
+    assert np.all(np.hypot(*s.traction) <= 0.3 * nr.pressure * (1 + 1e-12))
+
+
+def test_kalker_linear_theory(sphere):
+    """Small creepages: F_x, F_y and the spin's F_y within 5 % of Kalker's C11, C22, C23 on
+    the 31 x 31 grid (ConvexGS's errors on it are the same, see test_tangential)."""
+    hz, g, nr = sphere
+    c = creep_coefficients(hz.a, hz.b, 0.28)
+    cab, gm = math.sqrt(hz.a * hz.b), STEEL.shear
+    op = rolling_operator(g, STEEL)
+    fx, fy, fs = (solve_steadygs(g, op, nr.pressure, 0.3, cr, tolerance=1e-7).force
+                  for cr in ((1e-5, 0, 0), (0, 1e-5, 0), (0, 0, 1e-5 / cab)))
+    assert -fx[0] / (gm * cab**2 * 1e-5) == pytest.approx(c.c11, rel=0.05)
+    assert -fy[1] / (gm * cab**2 * 1e-5) == pytest.approx(c.c22, rel=0.05)
+    assert -fs[1] / (gm * cab**3 * 1e-5 / cab) == pytest.approx(c.c23, rel=0.05)
+
+
+def test_contact_fastsim_example():
+    """CONTACT examples/fastsim.inp, case 1 (eta and spin on a 44 x 44 grid): F_y/(mu N) =
+    -0.6074 and M_z = -48.21 N m as CONTACT reports."""
+    A, B, N = 0.84642, 2.40616, 82e3
+    g = Grid(44, 44, 0.4e-3, 0.2e-3, -21.5 * 0.4e-3, -21.5 * 0.2e-3)
+    X, Y = g.mesh()
+    nr = solve_normal(A * X**2 + B * Y**2, g, influence_operator(g, CONTACT_G), load=N,
+                      tolerance=1e-8)
+    r = solve_steadygs(g, rolling_operator(g, CONTACT_G), nr.pressure, 0.3,
+                       (0.0, -6.25e-4, 0.625), tolerance=1e-5)
+    assert r.converged, r.message
+    assert r.force[1] / (0.3 * N) == pytest.approx(-0.6074, rel=0.02)
+    assert r.spin_moment == pytest.approx(-4.821e4 * 1e-3, rel=0.03)
+
+
+def test_wheel_rail_patch_in_few_sweeps(wheel_rail_patch):
+    """The wheel-rail patch at eps 1e-5 from zero traction: at most 30 sweeps and 0.4 of
+    ConvexGS's, the same traction to the tolerance."""
+    nr, pair, creepage = wheel_rail_patch
+    g = nr.grid
+    op = rolling_operator(g, pair, "auto")
+    s = solve_steadygs(g, op, nr.pressure, 0.4, creepage, tolerance=1e-5)
+    c = solve_tangential(g, op, nr.pressure, 0.4, creepage, tolerance=1e-5)
+    ref = solve_tangential(g, op, nr.pressure, 0.4, creepage, tolerance=1e-9,
+                           max_iterations=20_000)
+    print(s.iterations, c.iterations)
+    assert s.converged and c.converged
+    assert s.iterations <= 30 and s.iterations <= 0.4 * c.iterations
+    assert rel_l2(s.traction, ref.traction) < 1e-4
+    assert s.force == pytest.approx(ref.force, rel=1e-4)
+
+
+@pytest.mark.parametrize("creepage", [(0.05, 0, 0), (0.03, 0.04, 0)])
+def test_full_sliding(sphere, creepage):
+    """|F| = mu N opposite to the rigid slip, all elements sliding."""
+    hz, g, nr = sphere
+    r = solve_steadygs(g, rolling_operator(g, STEEL), nr.pressure, 0.3, creepage,
+                       tolerance=1e-6)
+    f = np.array(r.force)
+    assert r.converged and r.slip_area_ratio == 1.0
+    assert np.linalg.norm(f) == pytest.approx(0.3 * nr.force, rel=5e-3)
+    w = np.array(creepage[:2])
+    assert np.dot(f, w) / (np.linalg.norm(f) * np.linalg.norm(w)) == pytest.approx(-1, abs=1e-6)
+
+
+def test_zero_creepage_and_zero_pressure(sphere):
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    r = solve_steadygs(g, op, nr.pressure, 0.3, (0, 0, 0), tolerance=1e-6)
+    assert r.converged and r.iterations == 1
+    assert not r.traction.any() and r.force == (0.0, 0.0)
+    z = solve_steadygs(g, op, np.zeros(g.shape), 0.3, (1e-3, 0, 1.0))
+    assert z.converged and z.iterations == 0 and "no contact" in z.message
+    assert not z.traction.any()
+
+
+def test_warm_start_converges_at_once(wheel_rail_patch):
+    nr, pair, creepage = wheel_rail_patch
+    g = nr.grid
+    op = rolling_operator(g, pair, "auto")
+    a = solve_steadygs(g, op, nr.pressure, 0.4, creepage, tolerance=1e-8)
+    for state in (None, a.state):
+        b = solve_steadygs(g, op, nr.pressure, 0.4, creepage, tolerance=1e-5,
+                           initial_traction=a.traction, initial_state=state)
+        assert b.converged and b.iterations <= 2
+        assert rel_l2(b.traction, a.traction) < 1e-6
+
+
+def test_not_converged_and_stalled(sphere):
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    r = solve_steadygs(g, op, nr.pressure, 0.3, (2e-4, 0, 1.0), tolerance=1e-6,
+                       max_iterations=3)
+    assert not r.converged and r.iterations == 3 and "not converged" in r.message
+    r = solve_steadygs(g, op, nr.pressure, 0.3, (2e-4, 0, 1.0), tolerance=1e-30)
+    assert not r.converged and "stalled" in r.message
+    assert np.isfinite(r.traction).all()
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_numba_and_numpy_sweeps_agree():
+    hz, g, nr = hertz_patch(1.5, 17)
+    op = rolling_operator(g, STEEL, "scipy")
+    a = solve_steadygs(g, op, nr.pressure, 0.3, (2e-4, -1e-4, 0.5), engine="numba",
+                       tolerance=1e-6)
+    b = solve_steadygs(g, op, nr.pressure, 0.3, (2e-4, -1e-4, 0.5), engine="numpy",
+                       tolerance=1e-6)
+    assert a.converged and a.iterations == b.iterations
+    assert np.allclose(a.traction, b.traction, rtol=0, atol=1e-9 * a.max_traction)
+
+
+def test_bad_input(sphere):
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    bad = [
+        ("friction", dict(friction=-0.1)),
+        ("xi", dict(creepage=(float("nan"), 0, 0))),
+        ("pressure", dict(pressure=-nr.pressure)),
+        ("tolerance", dict(tolerance=0.0)),
+        ("max_iterations", dict(max_iterations=0)),
+        ("omega_h", dict(omega_h=2.0)),
+        ("omega_s", dict(omega_s=0.0)),
+        ("engine", dict(engine="fortran")),
+        ("initial_traction", dict(initial_traction=np.zeros((2, 3, 3)))),
+        ("initial_state", dict(initial_traction=np.zeros((2, *g.shape)),
+                               initial_state=np.zeros((3, 3)))),
+    ]
+    for match, kw in bad:
+        args = dict(pressure=nr.pressure, friction=0.3, creepage=(1e-4, 0, 0)) | kw
+        with pytest.raises(rc.RailContactError, match=match):
+            solve_steadygs(g, op, args.pop("pressure"), args.pop("friction"),
+                           args.pop("creepage"), **args)
+    normal_op = influence_operator(g, STEEL)
+    with pytest.raises(rc.RailContactError, match="operator"):
+        solve_steadygs(g, normal_op, nr.pressure, 0.3, (1e-4, 0, 0))
