@@ -307,3 +307,37 @@ def test_a_tolerance_out_of_reach_stalls_instead_of_hanging():
                             creepage=(1e-3, 0.0, 0.0), tolerance=1e-300,
                             max_iterations=10**9)
     assert not t.converged and "stalled" in t.message and t.iterations < 10**5
+
+
+def _random_step(number: int) -> tuple[rc.Pose, dict, float]:
+    """Step ``number`` of ../shared/reliability/random_steps_1.jsonl: pose, inputs, time."""
+    import json
+
+    with (RELIABILITY / "random_steps_1.jsonl").open() as f:
+        for line in f:
+            r = json.loads(line)
+            if r["step"] == number:
+                kw = {"loads": tuple(r["kw"]["loads"]),
+                      "creepages": tuple(map(tuple, r["kw"]["creepages"]))}
+                return rc.Pose(r["lat"], r["yaw"], r["roll"]), kw, r["t"]
+    raise LookupError(number)
+
+
+@needs_shared
+def test_f04_warm_and_cold_agree_on_the_same_inputs():
+    """F04: the random run's steps 6518-6520 (flange at 64 deg with lateral creep and spin,
+    2 mm elements), warm-started from each other, then step 6520 cold. The warm step used
+    to end with the left wheel's load on two elements (the normal CG stopped at once from
+    that start, 'converged' with eps = 0): N = 75.9 kN warm against 145.0 kN cold, both
+    'ok'. The vertical-force equation has one root here (mu tan(gamma) = 0.81 < 1), and
+    both starts must find it."""
+    warm = _wheelset(element_size=2e-3)
+    for n in (6518, 6519, 6520):
+        pose, kw, t = _random_step(n)
+        res = warm.solve(pose, time=t, **kw)
+    cold = _wheelset(element_size=2e-3, warm_start="none").solve(pose, **kw)
+    for w, c in zip(res.wheels, cold.wheels, strict=True):
+        assert w.status == c.status == 0
+        assert w.normal_force == pytest.approx(c.normal_force, rel=2e-3)
+        assert w.track_force[2] == pytest.approx(c.track_force[2], rel=2e-3)
+        assert w.load_unique and c.load_unique

@@ -210,3 +210,25 @@ def test_nan_gap_rejected():
     h[2, 2] = np.nan
     with pytest.raises(RailContactError, match="gap"):
         solve_normal(h, g, influence_operator(g, PAIR), load=1.0)
+
+
+@pytest.mark.parametrize("preconditioner", ["fft", "none"])
+def test_a_start_on_two_symmetric_elements_still_reaches_hertz(preconditioner):
+    """F04: force control started from the whole load on the two centre elements of a row
+    (their gaps equal, so the CG step on that set is zero) used to stop at once, 'converged'
+    with eps = 0 and the load on two elements. The elements that overlap outside the set
+    must enter it: the result is the Hertz solution of the cold start."""
+    A, B = curvatures(1.0)
+    hz = hertz(A, B, PAIR, load=50e3)
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 24, 23)
+    X, Y = g.mesh()
+    op = influence_operator(g, PAIR)
+    start = np.zeros(g.shape)
+    start[11:13, 11] = 1e9  # symmetric about x = 0, on the centre line y = 0
+    kw = dict(load=hz.load, tolerance=1e-9, preconditioner=preconditioner)
+    res = solve_normal(A * X**2 + B * Y**2, g, op, initial_pressure=start, **kw)
+    cold = solve_normal(A * X**2 + B * Y**2, g, op, **kw)
+    assert res.converged and res.iterations > 1
+    assert np.array_equal(res.contact, cold.contact)
+    assert np.max(np.abs(res.pressure - cold.pressure)) < 1e-6 * cold.max_pressure
+    assert res.max_pressure == pytest.approx(hz.max_pressure, rel=0.03)

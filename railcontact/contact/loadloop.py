@@ -80,6 +80,25 @@ def vertical_force(patches: list[PatchSolution]) -> float:
     return total
 
 
+def load_unique(patches: list[PatchSolution], friction: float) -> bool:
+    """Whether the wheel load has one solution: the vertical force rises with the wheel's
+    approach when every patch with creep forces has ``mu tan(gamma) < 1``.
+
+    The reason: the Coulomb creep force of a patch is ``F = mu N f(s)``, ``f`` a rising,
+    concave function of the creepage scaled by the patch size (``s ~ N^(-1/3)`` for a
+    Hertzian patch), so ``0 <= dF/dN = mu (f - s f'/3) <= mu``; then
+    ``d(N cos(gamma) + F_s sin(gamma))/dN >= cos(gamma) - mu sin(gamma) > 0`` and the sum
+    over the patches rises with the approach too. With ``mu tan(gamma) >= 1`` on a patch
+    (a flange steeper than Nadal's angle) the vertical force may fall over part of the
+    approach, and a load may be carried at several approaches: the load loop then returns
+    the one its start leads to (the previous time step's creep share in a time series,
+    the continuous one; the normal share Q from cold) and the result says it is not
+    unique.
+    """
+    return all(friction * math.tan(abs(p.geometry.contact_angle)) < 1.0
+               for p in patches if p.tangential is not None and p.geometry is not None)
+
+
 def load_met(patches: list[PatchSolution], load: float, rtol: float,
              tangential_tolerance: float) -> bool:
     """Whether the wheel's vertical force is the ``load`` [N] to ``rtol``, or to the

@@ -90,6 +90,9 @@ class PatchSolution:
     curvatures: tuple[float, float] | None = None
     geometry: ContactPoint | None = None
     work: Work = field(default_factory=Work)
+    load_unique: bool | None = None
+    """Whether the wheel load has one solution (:func:`~.loadloop.load_unique`); None
+    where no load loop with creep forces ran."""
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -127,6 +130,8 @@ class PatchSolution:
             h = self.hertz
             d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,
                           "max_pressure": h.max_pressure, "area": h.area}
+        if self.load_unique is not None:
+            d["load_unique"] = self.load_unique
         d["work"] = self.work.to_dict()
         return d
 

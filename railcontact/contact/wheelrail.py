@@ -54,6 +54,7 @@ from .loadloop import (
     count_passes,
     creep_load_secant,
     load_met,
+    load_unique,
     vertical_force,
 )
 from .patch import (
@@ -219,6 +220,9 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
     if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
         raise ConvergenceError(f"{side} wheel: {failure}")
+    unique = load_unique(ps, settings.tangential.friction)
+    for p in ps:
+        p.load_unique = unique
     return count_passes(ps, passes)
 
 

@@ -215,13 +215,14 @@ OUTPUTS = [
             value=lambda w: w.n_patches),
     *_wheel("normal_iterations", "Integer", "", "BEM normal iterations (all patches, load "
             "passes and re-meshes)", value=lambda w: w.normal_iterations),
-    *_wheel("tangential_iterations", "Integer", "", "ConvexGS sweeps (all patches, load passes "
-            "and re-meshes)", value=lambda w: w.tangential_iterations),
+    *_wheel("tangential_iterations", "Integer", "", "tangential BEM sweeps (all patches, load "
+            "passes and re-meshes)", value=lambda w: w.tangential_iterations),
     Variable("normal_iterations", "Integer", "output", None, "",
              "BEM normal iterations of the last step, both wheels",
              _total("normal_iterations")),
     Variable("tangential_iterations", "Integer", "output", None, "",
-             "ConvexGS sweeps of the last step, both wheels", _total("tangential_iterations")),
+             "tangential BEM sweeps of the last step, both wheels",
+             _total("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
              "0 ok, 1 not converged, 2 no contact, 3 out of range (input rejected)",
              lambda r: r.status),
@@ -229,6 +230,9 @@ OUTPUTS = [
             value=lambda w: w.load_passes),
     *_wheel("remeshes", "Integer", "", "normal solves repeated on a grown potential area",
             value=lambda w: w.remeshes),
+    *_wheel("load_unique", "Integer", "", "1 when the wheel load has one solution, 0 when "
+            "it may have several (mu tan(gamma) >= 1 on a flange; the one continuous with "
+            "the previous step is returned)", value=lambda w: int(w.load_unique)),
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""

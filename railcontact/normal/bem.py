@@ -202,6 +202,7 @@ def solve_normal(
         raise RailContactError(f"initial_contact must have the grid shape {shape}, "
                                f"got {mask.shape}")
     area_el = grid.element_area
+    self_compliance = float(operator.self_coefficient[0, 0])  # [m/Pa]
 
     def finish(p, u, delta, its, converged, message, err, hist):
         contact = p > 0.0
@@ -275,9 +276,12 @@ def solve_normal(
         overlap = (p == 0.0) & (g < 0.0)
         conjugate = not overlap.any()
         if not conjugate:
-            kappa = 1.0 if precondition is None else gg / max(float(np.dot(g[c], g[c])),
-                                                               1e-300)
-            p[overlap] -= tau * kappa * g[overlap]
+            if tau > 0.0:
+                kappa = 1.0 if precondition is None else gg / max(float(np.dot(g[c], g[c])),
+                                                                   1e-300)
+                p[overlap] -= tau * kappa * g[overlap]
+            else:  # exact on the current set (e.g. a start on two symmetric elements):
+                p[overlap] = -g[overlap] / self_compliance  # each closes its own gap
         if force_control:
             total = p.sum()
             if total <= 0.0:

@@ -58,6 +58,7 @@ from ..contact.loadloop import (
     count_passes,
     creep_load_secant,
     load_met,
+    load_unique,
     vertical_force,
 )
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
@@ -163,6 +164,11 @@ class WheelContact:
     """Normal solves repeated on a grown potential area."""
     seconds: float = 0.0
     """Wall time of the wheel's patch solves [s] (estimates included)."""
+    load_unique: bool = True
+    """False when the wheel load (counting the creep forces) may have several solutions
+    (a patch with ``mu tan(gamma) >= 1``, :func:`~railcontact.contact.loadloop.load_unique`):
+    the step returns the one continuous with the previous step, or, cold, the one reached
+    from the normal share Q; the message says so."""
 
     @property
     def n_patches(self) -> int:
@@ -333,10 +339,16 @@ class WheelsetContact:
             return wheel, []
         count_passes(patches, [p for p, _, _ in passes])  # the work of every pass counts
         self._finish(wheel, patches, creepages, pose)
+        wheel.load_unique = load_unique(patches, self.settings.friction)
         if failure and not load_met(patches, q, self.settings.load_tolerance,
                                     self.settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
             wheel.message = failure
+        elif not wheel.load_unique and wheel.status == OK:
+            wheel.message = ("ok; the load may have several solutions (mu tan(gamma) >= 1 "
+                             "on a flange): " + ("the one continuous with the previous step"
+                                                 if previous else "the one reached from "
+                                                 "the normal share Q (cold start)"))
         return wheel, memory if keep else []
 
     @staticmethod
