@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -341,3 +342,21 @@ def test_f04_warm_and_cold_agree_on_the_same_inputs():
         assert w.normal_force == pytest.approx(c.normal_force, rel=2e-3)
         assert w.track_force[2] == pytest.approx(c.track_force[2], rel=2e-3)
         assert w.load_unique and c.load_unique
+
+
+@pytest.mark.parametrize("mu", [0.3, 0.4])
+def test_load_unique_says_whether_the_load_has_one_solution(mu):
+    """On the 70 deg flange (7 mm) with lateral creep the vertical force rises with the
+    approach when mu tan(gamma) < 1 (0.82 at mu = 0.3): one solution. At mu = 0.4
+    (1.10) it may fall over part of it: the wheel says the load may have several solutions
+    and which one it returned; the answer still carries the load."""
+    q = 83.3e3
+    r = _wheelset(friction=mu, warm_start="none").solve(
+        rc.Pose(7e-3), loads=(q, q), creepages=((0.0, 2e-4, 0.0), (0.0, 2e-4, 0.0)))
+    w = r.left
+    assert w.status == 0 and w.track_force[2] == pytest.approx(q, rel=1e-2)
+    steep = mu * math.tan(w.contact_angle) >= 1
+    assert steep == (mu == 0.4)
+    assert w.load_unique == (not steep)
+    assert ("several solutions" in w.message) == steep
+    assert r.right.load_unique  # tread
