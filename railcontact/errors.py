@@ -42,6 +42,9 @@ def check_finite(name: str, value: object, unit: str = "") -> float:
         x = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):  # e.g. None, a list, an array of several values
         raise RailContactError(f"{name}{suffix} must be a number, got {value!r}") from None
+    except OverflowError:  # an int beyond the floats, e.g. 10**400
+        raise RailContactError(f"{name}{suffix} must be finite, got an integer of "
+                               f"{len(str(abs(value)))} digits") from None
     if not math.isfinite(x):
         raise RailContactError(f"{name}{suffix} must be finite, got {x}")
     return x
@@ -59,7 +62,10 @@ def check_positive(name: str, value: object, unit: str = "", allow_zero: bool = 
 
 def check_count(name: str, value: object, minimum: int = 1) -> int:
     """Return ``value`` as an int, or raise if it is not an integer >= ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) \
-            or not math.isfinite(value) or int(value) != value or value < minimum:
-        raise RailContactError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    ok = isinstance(value, int) and not isinstance(value, bool) or (
+        isinstance(value, float) and math.isfinite(value) and value == int(value))
+    if not ok or value < minimum:
+        shown = value if not isinstance(value, int) or abs(value) < 10**30 else \
+            f"an integer of {len(str(abs(value)))} digits"
+        raise RailContactError(f"{name} must be an integer >= {minimum}, got {shown!r}")
     return int(value)

@@ -22,11 +22,13 @@ Usage: python scripts/bench_step.py [--steps 300] [--modes previous+estimate,non
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import resource
 import time
 from collections import defaultdict
 from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
 
@@ -47,7 +49,9 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                  (patch_module, "fastrip"), (patch_module, "fastsim"),
                  (patch_module, "strips_from_contact"), (patch_module, "sample_on_strips")],
     "normal BEM": [(patch_module, "solve_normal")],
-    "tangential BEM": [(tangential.SOLVERS, name) for name in tangential.SOLVERS],
+    "tangential BEM": ([(tangential.SOLVERS, name) for name in tangential.SOLVERS]
+                       if hasattr(tangential, "SOLVERS")  # older versions: one solver
+                       else [(patch_module, "solve_tangential")]),
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
 
@@ -171,6 +175,8 @@ def main() -> None:
     ap.add_argument("--modes", default="previous+estimate,none")
     ap.add_argument("--solver", default=None, help="tangential solver (default: the "
                     "settings' default)")
+    ap.add_argument("--json", type=Path, default=None, help="write the results (for "
+                    "scripts/plot_performance.py)")
     args = ap.parse_args()
     run("none", 5, solver=args.solver)  # compile the numba sweeps, outside the measurements
     ref = fixed_workload()
@@ -194,6 +200,10 @@ def main() -> None:
         print(f"{s:<16}" + "".join(f"{x:20.1%}" for x in shares))
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak RSS {rss:.0f} MB")
+    if args.json:
+        args.json.write_text(json.dumps({"workload": ref, "rss_mb": rss, "runs": results},
+                                        indent=1))
+        print(f"written {args.json}")
 
 
 if __name__ == "__main__":

@@ -81,22 +81,30 @@ def vertical_force(patches: list[PatchSolution]) -> float:
 
 
 def load_unique(patches: list[PatchSolution], friction: float) -> bool:
-    """Whether the wheel load has one solution: the vertical force rises with the wheel's
-    approach when every patch with creep forces has ``mu tan(gamma) < 1``.
+    """Whether the wheel load has one solution: True unless the wheel has several patches
+    and one of them, with a creep force across the track, is steeper than Nadal's angle
+    (``mu tan(gamma) >= 1``).
 
-    The reason: the Coulomb creep force of a patch is ``F = mu N f(s)``, ``f`` a rising,
-    concave function of the creepage scaled by the patch size (``s ~ N^(-1/3)`` for a
-    Hertzian patch), so ``0 <= dF/dN = mu (f - s f'/3) <= mu``; then
-    ``d(N cos(gamma) + F_s sin(gamma))/dN >= cos(gamma) - mu sin(gamma) > 0`` and the sum
-    over the patches rises with the approach too. With ``mu tan(gamma) >= 1`` on a patch
-    (a flange steeper than Nadal's angle) the vertical force may fall over part of the
-    approach, and a load may be carried at several approaches: the load loop then returns
-    the one its start leads to (the previous time step's creep share in a time series,
-    the continuous one; the normal share Q from cold) and the result says it is not
-    unique.
+    The argument, for patches that scale like Hertz's (the similarity the simplified
+    theories rest on): a patch's creep force is ``F_s = -+ mu N f(s)`` with ``f`` a rising,
+    concave function of the creepage scaled by the patch size, ``s ~ N^(-1/3)``, so
+    ``f`` falls as ``N`` grows and ``d(N f)/dN = N (f - s f'/3) / N >= 0``. Its vertical
+    force ``V = N (cos(gamma) -+ mu f sin(gamma))`` is then ``N`` times a rising function:
+    negative up to some ``N_0`` (the creep force pulls the wheel up more than the normal
+    force pushes it) and rising beyond it. One patch therefore carries a load ``Q > 0`` at
+    exactly one normal force. For several patches, which share one approach, the sum of
+    such functions rises when each one does everywhere - ``d V / d N >= cos(gamma) -
+    mu sin(gamma) > 0`` when ``mu tan(gamma) < 1`` - but a steeper patch that pulls while
+    another carries can make the sum fall over part of the approach, and a load may be met
+    at several approaches. The load loop then returns the one its start leads to (the
+    previous time step's creep share in a time series: the continuous one; the normal
+    share Q from cold).
     """
+    loaded = [p for p in patches if p.tangential is not None and p.geometry is not None]
+    if len(loaded) <= 1:
+        return True
     return all(friction * math.tan(abs(p.geometry.contact_angle)) < 1.0
-               for p in patches if p.tangential is not None and p.geometry is not None)
+               or p.tangential.force[1] == 0.0 for p in loaded)
 
 
 def load_met(patches: list[PatchSolution], load: float, rtol: float,

@@ -14,6 +14,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import CaseError, RailContactError
+from ..geometry.search import FAR
 from ..halfspace.grid import Grid, remesh
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
@@ -34,6 +35,9 @@ from ..tangential.strips import (
 )
 from .results import PatchSolution, Work
 
+UNDEFINED_GAP = 0.5 * FAR
+"""Gaps [m] from this up mark elements where the profiles give no gap (the search's
+:data:`~railcontact.geometry.search.FAR`); a contact that reaches them is cut off."""
 GROW_FACTOR = 1.5
 """Factor by which an automatic potential area grows when the contact reaches its edge."""
 MAX_GROW = 4
@@ -79,6 +83,7 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
     of the element size, so that the grids of consecutive time steps share one lattice
     around the contact point and a warm start is not smeared by interpolation.
     """
+    bounds = tuple(float(b) for b in bounds)  # Python floats: an overflow is inf, silently
     sx, sy = ((hi - lo) / h if h else n for lo, hi, n, h in (
         (bounds[0], bounds[1], settings.nx, settings.dx),
         (bounds[2], bounds[3], settings.ny, settings.dy)))
@@ -158,7 +163,8 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         if grid is None or k > 0:
             grid = make_grid(grid_settings, bounds)
         op = influence_operator(grid, pair, "z", settings.fft)
-        res = solve_normal(gap_of(grid), grid, op, initial_pressure=estimate_of(grid),
+        gap = gap_of(grid)
+        res = solve_normal(gap, grid, op, initial_pressure=estimate_of(grid),
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, **control.kwargs())
         work.normal_iterations += res.iterations
@@ -166,6 +172,12 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                 and np.isfinite(res.pressure).all()):
             res.converged = False
             res.message = f"the normal solution is not finite ({res.message})"
+            break
+        if _cut_off(res.contact, gap >= UNDEFINED_GAP):
+            res.converged = False
+            res.message = ("the contact reaches where the profiles end (or turn away), so "
+                           "the patch is cut off there; the pose or the load is beyond the "
+                           f"profiles ({res.message})")
             break
         if not res.touches_boundary:
             break
@@ -186,6 +198,19 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         bounds = _grown(grid.bounds, automatic)
     work.seconds = time.perf_counter() - t0
     return res, work
+
+
+def _cut_off(contact: np.ndarray, undefined: np.ndarray) -> bool:
+    """Whether a contact element is next to (or on) an element where the gap is undefined
+    (no profile there: the geometry gives :data:`UNDEFINED_GAP`)."""
+    if not undefined.any():
+        return False
+    near = contact.copy()
+    near[1:] |= contact[:-1]
+    near[:-1] |= contact[1:]
+    near[:, 1:] |= contact[:, :-1]
+    near[:, :-1] |= contact[:, 1:]
+    return bool((near & undefined).any())
 
 
 def _grown(bounds: Bounds, automatic: tuple[bool, bool]) -> Bounds:
@@ -217,6 +242,9 @@ def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
         return fastrip_hertz(*args, nx=nx, ny=ny)
     strips = strips_from_contact(normal.grid, normal.contact, nx)
     pn = sample_on_strips(normal.pressure, normal.grid, strips)
+    carried = float((pn * strips.area).sum())
+    if carried > 0:  # the samples carry the BEM's force (so |F| <= mu N holds in total)
+        pn = pn * (normal.force / carried)
     a_eq, b_eq = equivalent_ellipse(normal.grid, normal.contact)
     if model == "fastsim":
         return fastsim(strips, pn, mu, creepage, flexibilities(a_eq, b_eq, pair))

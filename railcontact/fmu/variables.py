@@ -231,8 +231,8 @@ OUTPUTS = [
     *_wheel("remeshes", "Integer", "", "normal solves repeated on a grown potential area",
             value=lambda w: w.remeshes),
     *_wheel("load_unique", "Integer", "", "1 when the wheel load has one solution, 0 when "
-            "it may have several (mu tan(gamma) >= 1 on a flange; the one continuous with "
-            "the previous step is returned)", value=lambda w: int(w.load_unique)),
+            "it may have several (several patches, mu tan(gamma) >= 1 on one; the one "
+            "continuous with the previous step is returned)", value=lambda w: int(w.load_unique)),
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""

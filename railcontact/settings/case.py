@@ -112,6 +112,7 @@ def check_grid_size(what: str, nx: float, ny: float, budget: int) -> None:
     """Raise a :class:`CaseError` naming ``what`` when an nx x ny grid exceeds ``budget``
     (counts may be floats: those an element size would need, before any is formed)."""
     if not nx * ny <= budget:
+        nx, ny = (float(n) if n < 1e300 else 1e300 for n in (nx, ny))  # ints beyond floats
         raise CaseError(f"{what} = {nx:.4g} x {ny:.4g} = {nx * ny:.3g} elements, more than "
                         f"the {budget} of [grid] max_elements (about 2 kB each); use fewer "
                         "or larger elements, or raise max_elements")
@@ -191,7 +192,7 @@ class GridSettings(Record):
                                             "potential contact area along y [min, max] "
                                             "(quadratic cases; default automatic)")
     margin: float = setting(1.0, "float", "-", "scale of the automatic potential area",
-                            minimum=0.0, open_min=True)
+                            minimum=0.0, open_min=True, maximum=100.0)
     max_elements: int = setting(MAX_ELEMENTS, "int", "", "largest grid (nx * ny) a patch may "
                                 "have, checked before anything is allocated (a memory budget: "
                                 "~2 kB per element)", minimum=4)

@@ -166,7 +166,8 @@ class WheelContact:
     """Wall time of the wheel's patch solves [s] (estimates included)."""
     load_unique: bool = True
     """False when the wheel load (counting the creep forces) may have several solutions
-    (a patch with ``mu tan(gamma) >= 1``, :func:`~railcontact.contact.loadloop.load_unique`):
+    (several patches, one with ``mu tan(gamma) >= 1``,
+    :func:`~railcontact.contact.loadloop.load_unique`):
     the step returns the one continuous with the previous step, or, cold, the one reached
     from the normal share Q; the message says so."""
 
@@ -272,6 +273,8 @@ class WheelsetContact:
         if creepages is not None:
             creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
                               for s, cs in zip(("left", "right"), creepages, strict=True))
+        if time is not None:
+            time = check_finite("time", time, "s")
         wheels = []
         new_memory: dict[str, list[PatchMemory]] = {}
         off_track = ""
@@ -345,10 +348,10 @@ class WheelsetContact:
             wheel.status = NOT_CONVERGED
             wheel.message = failure
         elif not wheel.load_unique and wheel.status == OK:
-            wheel.message = ("ok; the load may have several solutions (mu tan(gamma) >= 1 "
-                             "on a flange): " + ("the one continuous with the previous step"
-                                                 if previous else "the one reached from "
-                                                 "the normal share Q (cold start)"))
+            which = ("the one continuous with the previous step" if previous else
+                     "the one reached from the normal share Q (cold start)")
+            wheel.message = ("ok; the load may have several solutions (several patches, "
+                             f"mu tan(gamma) >= 1 on one): {which}")
         return wheel, memory if keep else []
 
     @staticmethod
@@ -478,7 +481,9 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
                                                         work.seconds)
     wheel.patches = patches
     wheel.status = OK if converged else NOT_CONVERGED
-    wheel.message = "ok" if converged else "a BEM solve did not converge"
+    failed = [r.message for p in patches for r in (p.normal, p.tangential)
+              if r is not None and not r.converged]
+    wheel.message = "ok" if converged else f"a BEM solve did not converge: {failed[0]}"
 
 
 __all__ = ["ContactSettings", "Kinematics", "WheelContact", "WheelsetContact",
