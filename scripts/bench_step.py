@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import resource
 import time
 from collections import defaultdict
@@ -133,6 +134,9 @@ def clear_caches() -> None:
     getattr(operator_module._local, "plans", {}).clear()
     if operator_module.HAVE_PYFFTW:
         operator_module.pyfftw.forget_wisdom()  # FFTW remembers what it measured
+        wisdom = os.environ.get(getattr(operator_module, "WISDOM_ENV", ""), "")
+        if wisdom:  # a wisdom file given to the run: its plans are the run's own
+            operator_module.load_wisdom(wisdom)
 
 
 def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None) -> dict:

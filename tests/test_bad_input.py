@@ -281,7 +281,9 @@ def test_a_derailed_wheelset_is_out_of_range(monkeypatch, capsys):
 
 def test_a_wheel_load_missed_by_more_than_a_percent_is_not_converged():
     """F03: on a flange with creep, N = 3.9 MN for 117 kN; the vertical force was 5 % off
-    the load with status ok. The slack for the creep forces' noise is capped at 1 %."""
+    the load with status ok. The slack for the creep forces' noise is capped at 1 %; and a
+    3.9 MN patch (Hertz: 111 mm long on a 475 mm wheel) is beyond the half-space model,
+    out of range (status 3) before the load loop gets there."""
     r = _wheelset(warm_start="none").solve(
         rc.Pose(0.007799220052098445, 0.007321114375577168, 0.0),
         loads=(117043.56660618541, 92833.25574674284),
@@ -289,7 +291,8 @@ def test_a_wheel_load_missed_by_more_than_a_percent_is_not_converged():
                    (-0.0038627785029696085, -0.006833278483494982, 0.3354307986279246)))
     left = r.left
     missed = abs(left.track_force[2] - 117043.6) / 117043.6
-    assert left.status == 0 if missed <= 0.01 else left.status == 1
+    assert (left.status == 0 and missed <= 0.01) or left.status in (1, 3)
+    assert left.status != 3 or "half-space" in left.message
     assert r.right.status == 0
 
 
@@ -415,9 +418,11 @@ def test_huge_integers_and_a_bad_time_are_clear_errors():
 def test_a_contact_cut_where_the_profiles_end_is_not_converged():
     """Fuzz finding: a 4.3 mm approach (roll and vertical) spreads the tread contact past
     the end of the profiles; the patch was cut there (p_max on the cut, 24 GPa against
-    Hertz's 5.8 GPa, N = 25.9 MN) and reported ok. It is now not converged, saying so."""
+    Hertz's 5.8 GPa, N = 25.9 MN) and reported ok. Such a patch (Hertz: 83 x 142 mm) is
+    now out of range at once, beyond the half-space model; and a smaller patch cut where
+    the profiles end is not converged (tests F04 at 2 mm, where the flange tip folds)."""
     wc = _wheelset(friction=0.512, element_size=1e-3, warm_start="estimate",
                    normal_estimate="hertz")
     r = wc.solve(rc.Pose(0.003274248598162237, -0.00045678040999203387,
                          -0.004732080758352043), vertical=-0.0009391846026634265)
-    assert r.left.status == 1 and "profiles end" in r.left.message
+    assert r.left.status == 3 and "half-space" in r.left.message

@@ -75,6 +75,9 @@ LOAD_RTOL = 1e-6
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16
+MAX_PATCH_SHARE = 0.1
+"""Largest Hertz semi-axis of a patch as a fraction of the wheel's rolling radius: beyond
+it the patch is no longer small against the bodies (steel at 83 kN: 0.015)."""
 KEEP_SLACK = 0.05
 """A later load pass keeps the grid of the one before when its potential area reaches at
 most this fraction of the grid's size beyond it (the area has a margin over the contact);
@@ -151,6 +154,13 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                             "(conformal or concave gap); cannot set up the patch")
         control = Control(load=loads[k]) if loads is not None else Control(penetration=dn)
         hz = hertz(cp.A, cp.B, pair, **control.kwargs())
+        if max(hz.a, hz.b) > MAX_PATCH_SHARE * cp.rolling_radius:
+            raise CaseError(
+                f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
+                f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
+                f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more than "
+                f"{MAX_PATCH_SHARE:g} of the radius); check [material] young and the load "
+                "or penetration")
         d0 = hz.penetration if loads is not None else dn
         xl = grid.margin * math.sqrt(d0 / cp.A)
         ylo, yhi = cp.lateral_extent(d0, grid.margin)
