@@ -35,6 +35,8 @@ needs_shared = pytest.mark.skipif(not RELIABILITY.is_dir(),
     ("F11b_memory_hang_dx_1e-7", "max_elements"),
     ("F11c_memory_estimate_grid", r"estimate_grid\[0\] must be an integer <= 2048"),
     ("F14_tolerance_10_accepted", r"tolerance must be > 0 and < 1"),
+    ("F15_name_table_accepted", "name must be a string"),
+    ("F16_manchester_default_inclination", r"canted already .* give inclination = 0"),
     ("F18_young_1Pa_accepted", r"young\[0\] \[Pa\] must be >= 1e\+06"),
     ("F18b_load_1e300_absurd", r"load \[N\] must be"),
 ])

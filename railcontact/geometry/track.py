@@ -85,7 +85,16 @@ class Track:
         """The rail in the side frame: Z(u), canted and placed (see the module docstring)."""
         _, uc, zc, du, dz = self.placement
         keep = np.concatenate([[True], np.diff(uc) > 0])  # drop any fold-back of the flank
-        return Profile(uc[keep] + du, zc[keep] + dz, "rail", self.rail.name + " (placed)")
+        try:
+            return Profile(uc[keep] + du, zc[keep] + dz, "rail", self.rail.name + " (placed)")
+        except RailContactError as exc:
+            if self.inclination == 0.0:
+                raise
+            raise RailContactError(
+                f"rail profile {self.rail.name!r} canted by inclination = "
+                f"{self.inclination:g} rad folds back on itself ({exc}); is the file canted "
+                "already (as the Manchester benchmark's UIC60)? Then give inclination = 0"
+            ) from None
 
     def rail_coordinate(self, u: float, z: float) -> float:
         """Rail profile coordinate y [m] of the point (u, Z) of the placed rail."""
