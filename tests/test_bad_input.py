@@ -428,3 +428,25 @@ def test_a_contact_cut_where_the_profiles_end_is_not_converged():
     r = wc.solve(rc.Pose(0.003274248598162237, -0.00045678040999203387,
                          -0.004732080758352043), vertical=-0.0009391846026634265)
     assert r.left.status == 3 and "half-space" in r.left.message
+
+
+def test_a_wheel_that_has_climbed_its_flange_is_out_of_range():
+    """S1002 on 60E1: the flange's steepest point is S = -39 mm at 70 deg. Contacts on the
+    upper flank (8-20 mm lateral, 70 down to 35 deg) are solved; past 35 deg, towards the
+    tip (30 mm: 14 deg at S = -52 mm), the wheel has climbed its flange: out of range at
+    once, for the time step (both wheels, status 3) and for a case file (exit 2)."""
+    ws = rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46)
+    s, angle = ws.flange_flank
+    assert s == pytest.approx(-0.039, abs=1e-3)
+    assert math.degrees(angle) == pytest.approx(70, abs=0.5)
+    wc = _wheelset(warm_start="none")
+    for y, status in ((0.02, 0), (0.03, 3), (0.06, 3)):
+        r = wc.solve(rc.Pose(y), loads=(83.3e3, 83.3e3), creepages=((0, 0, 0), (0, 0, 0)))
+        assert r.left.status == status, (y, r.left.message)
+        if status:
+            assert "climbed its flange" in r.left.message and r.right.status == 3
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "lateral_displacement": 0.03},
+            "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 83.3e3}}
+    with pytest.raises(rc.CaseError, match="climbed its flange"):
+        rc.solve(case)

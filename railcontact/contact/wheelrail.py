@@ -75,6 +75,11 @@ LOAD_RTOL = 1e-6
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16
+CLIMBED_SHARE = 0.5
+"""A contact past the steepest point of the flange whose angle has fallen below this share
+of the flange's steepest angle is out of range: the wheel has climbed its flange (S1002 on
+60E1: beyond about 20 mm lateral displacement). Contacts on the upper flank above it, as
+in the Manchester benchmark at 7-10 mm, are solved."""
 MAX_PATCH_SHARE = 0.1
 """Largest Hertz semi-axis of a patch as a fraction of the wheel's rolling radius: beyond
 it the patch is no longer small against the bodies (steel at 83 kN: 0.015)."""
@@ -146,6 +151,14 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                 f"contact at S = {cp.wheel_s * 1e3:.4g} mm, on the back of "
                 f"the flange (tip at S = {ws.flange_tip * 1e3:.4g} mm): the wheel is off its "
                 "rail (derailed)")
+        s_steep, steepest = ws.flange_flank
+        if cp.wheel_s < s_steep and abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
+            raise RailContactError(
+                f"contact at S = {cp.wheel_s * 1e3:.4g} mm at "
+                f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's steepest "
+                f"point (S = {s_steep * 1e3:.4g} mm, {math.degrees(steepest):.3g} deg) and "
+                f"below {CLIMBED_SHARE:g} of its angle: the wheel has climbed its flange "
+                "(out of range)")
         dn = cp.normal_penetration(approach)
         if dn <= 0 and loads is None:
             continue

@@ -145,6 +145,17 @@ class Wheelset:
         contact at smaller S is on the back of the flange, the wheel off its rail."""
         return float(self.wheel.y[int(np.argmax(self.wheel.z))])
 
+    @cached_property
+    def flange_flank(self) -> tuple[float, float]:
+        """Profile coordinate S [m] of the steepest point of the flange's running flank
+        (between the flange tip and the tread) and its angle [rad] (S1002: -39 mm, 70 deg).
+        A contact between it and the tip means the wheel is climbing its flange."""
+        tip = self.flange_tip
+        s = np.linspace(tip, min(tip + 0.04, self.wheel.bounds[1]), 4001)
+        slope = np.abs(self.wheel.slope(s))
+        k = int(np.argmax(slope))
+        return float(s[k]), float(np.arctan(slope[k]))
+
 
 @dataclass(frozen=True)
 class Pose:
