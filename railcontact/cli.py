@@ -15,6 +15,7 @@ import os
 import sys
 from collections.abc import Sequence
 
+from . import __version__
 from .errors import RailContactError
 from .settings import ContactSettings
 from .settings.choices import PROFILE_UNITS, WARM_STARTS
@@ -72,20 +73,34 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from .contact import solve
     from .io.jsonout import solution_json
 
+    several = len(args.case) > 1
     if args.plot:
         from .io.plotting import plot_path, plot_solution
 
+        if several:
+            raise RailContactError("--plot takes one case file")
         plot_path(args.plot)  # a bad file name is an error before the solve
-    sol = solve(args.case)
-    if args.json:
-        print(solution_json(sol))
-    else:
-        print(_summary(sol))
-    if args.plot:
-        out = plot_solution(sol, args.plot)
-        if not args.json:
-            print(f"plot written to {out}")
-    return 0 if sol.converged else 1
+    code = 0
+    for case in args.case:
+        try:
+            sol = solve(case)
+        except RailContactError as exc:
+            if not several:
+                raise
+            print(f"railcontact: error: {case}: {exc}", file=sys.stderr)
+            code = 2
+            continue
+        if args.json:  # several files: one JSON object per line
+            print(solution_json(sol, indent=None if several else 2))
+        else:
+            print(f"== {case}\n{_summary(sol)}" if several else _summary(sol))
+        if args.plot:
+            out = plot_solution(sol, args.plot)
+            if not args.json:
+                print(f"plot written to {out}")
+        if not sol.converged:
+            code = max(code, 1)
+    return code
 
 
 def _cmd_settings(args: argparse.Namespace) -> int:
@@ -177,11 +192,16 @@ def _add_demo(sub) -> None:
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="railcontact",
                                  description="Exact wheel-rail contact (half-space BEM).")
+    ap.add_argument("--version", action="version", version=f"railcontact {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
     _add_demo(sub)
-    s = sub.add_parser("solve", help="solve a TOML case file")
-    s.add_argument("case", help="case file (TOML, SI units)")
-    s.add_argument("--json", action="store_true", help="print the result as JSON")
+    s = sub.add_parser("solve", help="solve TOML case files",
+                       description="Solve each case file in turn. Exit 0 when every case "
+                       "converged, 1 when one did not, 2 when one was in error (the others "
+                       "are still solved).")
+    s.add_argument("case", nargs="+", help="case file(s) (TOML, SI units)")
+    s.add_argument("--json", action="store_true", help="print the result as JSON (several "
+                   "files: one object per line)")
     s.add_argument("--plot", metavar="FILE", help="write the patch/pressure figure to FILE")
     s.set_defaults(func=_cmd_solve)
     st = sub.add_parser("settings", help="print every setting (case-file keys, time-step and "

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
@@ -450,3 +451,21 @@ def test_a_wheel_that_has_climbed_its_flange_is_out_of_range():
             "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 83.3e3}}
     with pytest.raises(rc.CaseError, match="climbed its flange"):
         rc.solve(case)
+
+
+def test_cli_version_and_several_case_files(capsys):
+    """Issue 20 (CLI): --version; solve takes several files, one JSON object per line, a
+    bad file is a one-line error naming it, the others are still solved, exit 2."""
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"railcontact {rc.__version__}"
+    root = Path(__file__).resolve().parents[1] / "models" / "cases"
+    good = str(root / "hertz_paper.toml")
+    assert main(["solve", good, "missing.toml", good, "--json"]) == 2
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    assert len(lines) == 2 and all(json.loads(x)["name"] == "hertz_paper" for x in lines)
+    assert err.count("\n") == 1 and err.startswith("railcontact: error: missing.toml: ")
+    assert main(["solve", good, good]) == 0
+    assert capsys.readouterr().out.count("== ") == 2

@@ -157,7 +157,7 @@ def test_zero_creepage_and_zero_pressure(sphere):
     hz, g, nr = sphere
     op = rolling_operator(g, STEEL)
     r = solve_steadygs(g, op, nr.pressure, 0.3, (0, 0, 0), tolerance=1e-6)
-    assert r.converged and r.iterations == 1
+    assert r.converged and r.iterations == 0  # no creepage: no sweep
     assert not r.traction.any() and r.force == (0.0, 0.0)
     z = solve_steadygs(g, op, np.zeros(g.shape), 0.3, (1e-3, 0, 1.0))
     assert z.converged and z.iterations == 0 and "no contact" in z.message

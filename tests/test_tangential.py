@@ -226,3 +226,26 @@ def test_bad_tangential_input(sphere):
         solve_tangential(g, op, -nr.pressure, 0.3, (0, 0, 0))
     with pytest.raises(rc.RailContactError, match="dissimilar"):
         rolling_operator(g, ElasticPair.of(Material(210e9, 0.3), Material(70e9, 0.33)))
+
+
+@pytest.mark.parametrize("solver", ["steadygs", "convexgs"])
+def test_zero_creepage_is_zero_traction_at_once(solver):
+    """Issue 20: creepages set back to exactly zero after non-zero ones cost ConvexGS 213
+    sweeps for a zero answer. With no creepage the steady state carries no traction: both
+    solvers return it with no sweep, whatever the start; a time step too."""
+    from railcontact.tangential import SOLVERS
+
+    hz, g, nr = hertz_patch(1.0, 21)
+    op = rolling_operator(g, STEEL)
+    warm = SOLVERS[solver](g, op, nr.pressure, 0.3, (1e-3, 0.0, 0.0), tolerance=1e-6)
+    r = SOLVERS[solver](g, op, nr.pressure, 0.3, (0.0, 0.0, 0.0), tolerance=1e-6,
+                        initial_traction=warm.traction, initial_state=warm.state)
+    assert r.converged and r.iterations == 0 and r.force == (0.0, 0.0)
+    assert not r.traction.any() and r.spin_moment == 0.0
+    wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 0.025),
+                            rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                            rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                            rc.ContactSettings(friction=0.4, tangential_solver=solver))
+    wc.solve(rc.Pose(1e-3), loads=(8e4, 8e4), creepages=((1e-3, 1e-3, 0.1),) * 2)
+    z = wc.solve(rc.Pose(1e-3), loads=(8e4, 8e4), creepages=((0.0, 0.0, 0.0),) * 2)
+    assert all(w.tangential_iterations == 0 and w.creep_force == (0.0, 0.0) for w in z.wheels)

@@ -6,6 +6,7 @@ centres ``x[i] = x0 + i dx`` (rolling direction) and ``y[j] = y0 + j dy`` (later
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -145,8 +146,8 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
 def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
     """Whole-element offset (i, j) of ``target``'s element (0, 0) in ``source``, when both
     grids have the same element size and their centres lie on one lattice; else None."""
-    if not (np.isclose(source.dx, target.dx, rtol=1e-12)
-            and np.isclose(source.dy, target.dy, rtol=1e-12)):
+    if not (math.isclose(source.dx, target.dx, rel_tol=1e-12)
+            and math.isclose(source.dy, target.dy, rel_tol=1e-12)):
         return None
     fi = (target.x0 - source.x0) / source.dx
     fj = (target.y0 - source.y0) / source.dy

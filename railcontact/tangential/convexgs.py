@@ -373,7 +373,11 @@ def solve_tangential(
     best, best_its = math.inf, 0
     its = 0
     err = 0.0
-    if contact.any():
+    rolling = any(c != 0.0 for c in creepage)
+    if not rolling:  # no creepage: the steady state carries no traction, exactly
+        px[...] = 0.0
+        py[...] = 0.0
+    if contact.any() and rolling:
         while its < max_iterations:
             its += 1
             if use_numba:
@@ -406,6 +410,8 @@ def solve_tangential(
     force, mz, ratio, pmax = tangential_summary(grid, traction, st)
     if not contact.any():
         message = "no contact: zero normal pressure"
+    elif not rolling:
+        message = "zero creepage: zero traction, no iterations"
     elif converged:
         message = f"converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
     else:

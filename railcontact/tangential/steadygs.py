@@ -349,7 +349,11 @@ def solve_steadygs(
     best, best_its = math.inf, 0
     its = 0
     err = 0.0
-    if contact.any():
+    rolling = any(c != 0.0 for c in creepage)
+    if not rolling:  # no creepage: the steady state carries no traction, exactly
+        px[...] = 0.0
+        py[...] = 0.0
+    if contact.any() and rolling:
         while its < max_iterations:
             its += 1
             qx, qy = px.copy(), py.copy()
@@ -384,6 +388,8 @@ def solve_steadygs(
     force, mz, ratio, pmax = tangential_summary(grid, traction, st)
     if not contact.any():
         message = "no contact: zero normal pressure"
+    elif not rolling:
+        message = "zero creepage: zero traction, no iterations"
     elif converged:
         message = f"SteadyGS converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
     else:
