@@ -56,6 +56,8 @@ class Slave:
         self.strings = [""] * len(strs)
         self.string_flags = bytes(_CAUSALITY[v.causality] for v in strs)
         self.real_flags = bytes(_CAUSALITY[v.causality] for v in reals)
+        self.real_outputs = np.array([v.vr for v in reals if v.causality == "output"],
+                                     dtype=int)
         self.integer_flags = bytes(_CAUSALITY[v.causality] for v in ints)
         self.log: list[str] = []
         self.contact: WheelsetContact | None = None
@@ -192,12 +194,13 @@ class Slave:
         if self.contact is None:
             self.log.append("doStep before initialization")
             return FMI_ERROR
-        names = ["lateral_displacement", "yaw", "speed"]
+        # only the inputs the modes use are read: a NaN elsewhere is no concern of ours
+        names = ["lateral_displacement", "yaw"]
         penetration = self.modes.control == "penetration"
         names += ["vertical_displacement", "roll"] if penetration else ["load_left",
                                                                         "load_right"]
         kinematic = self.modes.creepage_input == "kinematic"
-        names += (["lateral_velocity", "yaw_rate", "spin_speed"] if kinematic else
+        names += (["speed", "lateral_velocity", "yaw_rate", "spin_speed"] if kinematic else
                   [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
         try:
             x = self._inputs(names)
@@ -226,7 +229,7 @@ class Slave:
             self["status"] = OUT_OF_RANGE
             return FMI_WARNING
         self._write(res)
-        if not np.all(np.isfinite(self.real)):
+        if not np.all(np.isfinite(self.real[self.real_outputs])):  # (inputs may be NaN)
             self.log.append("non-finite result; outputs set to zero")
             self._write(None)
             self["status"] = OUT_OF_RANGE

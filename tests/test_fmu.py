@@ -282,6 +282,27 @@ def test_bad_input_is_a_clean_status(fmu, extracted, md):
     s.free()
 
 
+def test_inputs_the_modes_do_not_use_may_be_nan(fmu, extracted, md):
+    """Issue 20: a NaN in an input the modes do not read (speed and velocities with direct
+    creepages; creepages under kinematic input) changes nothing; a NaN in a used input is
+    fmi2Discard with the previous outputs kept."""
+    nan = float("nan")
+    direct = Slave(fmu, extracted, md, "direct", warm_start="none")
+    assert direct.step(lateral_displacement=1e-3, **CREEP) == 0
+    before = direct.get("normal_force_left")
+    assert direct.step(speed=nan, lateral_velocity=nan, yaw_rate=nan, spin_speed=nan) == 0
+    assert direct.get("status") == 0 and direct.get("normal_force_left") == before
+    assert direct.step(xi_left=nan) == 2  # used: discarded, outputs kept
+    assert direct.get("normal_force_left") == before
+    direct.free()
+    kinematic = Slave(fmu, extracted, md, "kinematic", warm_start="none",
+                      creepage_input="kinematic")
+    assert kinematic.step(lateral_displacement=1e-3, xi_left=nan, eta_right=nan,
+                          phi_left=nan, speed=30.0) == 0
+    assert kinematic.get("status") == 0 and kinematic.get("normal_force_left") > 0
+    kinematic.free()
+
+
 def test_bad_parameter_is_an_error_at_initialization(fmu, extracted, md, capsys):
     from fmpy.fmi1 import FMICallException
 
