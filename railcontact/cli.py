@@ -69,6 +69,10 @@ def _work(w) -> str:
             f"{w.seconds * 1e3:.3g} ms")
 
 
+NO_CONTACT_EXIT = 3
+"""Exit code of ``solve`` when a case has no contact (nothing was solved)."""
+
+
 def _cmd_solve(args: argparse.Namespace) -> int:
     from .contact import solve
     from .io.jsonout import solution_json
@@ -100,6 +104,10 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                 print(f"plot written to {out}")
         if not sol.converged:
             code = max(code, 1)
+        if not any(p.normal.force > 0 for p in sol.patches):
+            print(f"railcontact: warning: {case}: no contact (zero load, or a penetration "
+                  "below the gap): nothing was solved", file=sys.stderr)
+            code = max(code, NO_CONTACT_EXIT)
     return code
 
 
@@ -198,7 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("solve", help="solve TOML case files",
                        description="Solve each case file in turn. Exit 0 when every case "
                        "converged, 1 when one did not, 2 when one was in error (the others "
-                       "are still solved).")
+                       "are still solved), 3 when one had no contact (nothing solved).")
     s.add_argument("case", nargs="+", help="case file(s) (TOML, SI units)")
     s.add_argument("--json", action="store_true", help="print the result as JSON (several "
                    "files: one object per line)")

@@ -278,7 +278,7 @@ def test_a_derailed_wheelset_is_out_of_range(monkeypatch, capsys):
     case = {"material": {"young": 206e9, "poisson": 0.28},
             "geometry": {"type": "wheel-rail", "lateral_displacement": 0.1},
             "normal": {"load": 83.3e3}}
-    with pytest.raises(rc.CaseError, match="derailed"):
+    with pytest.raises(rc.CaseError, match="derailed|off its rail"):
         rc.solve(case)
 
 
@@ -469,3 +469,25 @@ def test_cli_version_and_several_case_files(capsys):
     assert err.count("\n") == 1 and err.startswith("railcontact: error: missing.toml: ")
     assert main(["solve", good, good]) == 0
     assert capsys.readouterr().out.count("== ") == 2
+
+
+def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
+    """Issue 20 (CLI): a zero load solves nothing: a one-line warning and exit 3, not a
+    silent exit 0."""
+    case = tmp_path / "zero.toml"
+    case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = "quadratic"'
+                    '\nA = 1.0\nB = 5.0\n[normal]\nload = 0.0\n')
+    assert main(["solve", str(case)]) == 3
+    err = capsys.readouterr().err
+    assert err.startswith("railcontact: warning: ") and "nothing was solved" in err
+
+
+def test_one_wheel_of_a_wheelset_off_its_rail_is_an_error():
+    """Issue 20 (CLI): lateral displacement -0.05 m, left wheel only, used to solve its
+    outer tread without a word; the wheelset is one body, and its right wheel has climbed
+    its flange: an error naming it."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "lateral_displacement": -0.05, "side": "left"},
+            "normal": {"load": 8e4}}
+    with pytest.raises(rc.CaseError, match="puts the right wheel off its rail"):
+        rc.solve(case)

@@ -125,6 +125,25 @@ def same_patch(patches: list[PatchSolution] | None, cp: ContactPoint
     return best
 
 
+def check_on_rail(cp: ContactPoint, ws: Wheelset) -> None:
+    """Raise a :class:`RailContactError` when the contact point ``cp`` says the wheel is off
+    its rail: on the back of the flange (derailed), or past the flange's steepest point
+    with an angle below :data:`CLIMBED_SHARE` of that point's (climbed its flange)."""
+    if cp.wheel_s < ws.flange_tip:
+        raise RailContactError(
+            f"contact at S = {cp.wheel_s * 1e3:.4g} mm, on the back of "
+            f"the flange (tip at S = {ws.flange_tip * 1e3:.4g} mm): the wheel is off its "
+            "rail (derailed)")
+    s_steep, steepest = ws.flange_flank
+    if cp.wheel_s < s_steep and abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
+        raise RailContactError(
+            f"contact at S = {cp.wheel_s * 1e3:.4g} mm at "
+            f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's steepest "
+            f"point (S = {s_steep * 1e3:.4g} mm, {math.degrees(steepest):.3g} deg) and "
+            f"below {CLIMBED_SHARE:g} of its angle: the wheel has climbed its flange "
+            "(out of range)")
+
+
 def _covers(outer: tuple[float, float, float, float],
             inner: tuple[float, float, float, float]) -> bool:
     """Whether the area ``outer`` [m] holds ``inner`` but for :data:`KEEP_SLACK` of its
@@ -146,19 +165,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
     grid, normal = settings.grid, settings.normal
     out = []
     for k, cp in enumerate(cps):
-        if cp.wheel_s < ws.flange_tip:
-            raise RailContactError(
-                f"contact at S = {cp.wheel_s * 1e3:.4g} mm, on the back of "
-                f"the flange (tip at S = {ws.flange_tip * 1e3:.4g} mm): the wheel is off its "
-                "rail (derailed)")
-        s_steep, steepest = ws.flange_flank
-        if cp.wheel_s < s_steep and abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
-            raise RailContactError(
-                f"contact at S = {cp.wheel_s * 1e3:.4g} mm at "
-                f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's steepest "
-                f"point (S = {s_steep * 1e3:.4g} mm, {math.degrees(steepest):.3g} deg) and "
-                f"below {CLIMBED_SHARE:g} of its angle: the wheel has climbed its flange "
-                "(out of range)")
+        check_on_rail(cp, ws)
         dn = cp.normal_penetration(approach)
         if dn <= 0 and loads is None:
             continue
@@ -407,6 +414,12 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
     track, ws, pose = build_geometry(geo)
     control, settings, pair = case.normal.control, case.patch_settings, case.pair
     sides = ["left", "right"] if geo.side == "both" else [geo.side]
+    for other in {"left", "right"} - set(sides):  # the wheelset is one body
+        try:
+            check_on_rail(contact_points(track, ws, pose, other, 0.0)[0], ws)
+        except RailContactError as exc:
+            raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
+                            f"{other} wheel off its rail: {exc}") from None
     if geo.roll == "equal-loads":
         pose, per_side = _equal_loads(track, ws, pose, control, settings, pair)
     else:
