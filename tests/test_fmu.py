@@ -292,6 +292,10 @@ def test_inputs_the_modes_do_not_use_may_be_nan(fmu, extracted, md):
     before = direct.get("normal_force_left")
     assert direct.step(speed=nan, lateral_velocity=nan, yaw_rate=nan, spin_speed=nan) == 0
     assert direct.get("status") == 0 and direct.get("normal_force_left") == before
+    assert direct.get("status_left") == direct.get("status_right") == 0
+    assert direct.step(load_left=0.0) == 0  # the left wheel lifts off, the right one rolls
+    assert direct.get("status_left", "status_right", "status") == [2, 0, 2]
+    assert direct.step(load_left=83.3e3) == 0
     assert direct.step(xi_left=nan) == 2  # used: discarded, outputs kept
     assert direct.get("normal_force_left") == before
     direct.free()
