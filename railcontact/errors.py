@@ -43,11 +43,17 @@ def check_finite(name: str, value: object, unit: str = "") -> float:
     except (TypeError, ValueError):  # e.g. None, a list, an array of several values
         raise RailContactError(f"{name}{suffix} must be a number, got {value!r}") from None
     except OverflowError:  # an int beyond the floats, e.g. 10**400
-        raise RailContactError(f"{name}{suffix} must be finite, got an integer of "
-                               f"{len(str(abs(value)))} digits") from None
+        raise RailContactError(f"{name}{suffix} must be finite, got an integer of about "
+                               f"{_digits(value)} digits") from None
     if not math.isfinite(x):
         raise RailContactError(f"{name}{suffix} must be finite, got {x}")
     return x
+
+
+def _digits(value: int) -> int:
+    """Decimal digits of a huge int, without forming its decimal text (Python refuses to
+    for more than 4300 digits)."""
+    return int(abs(value).bit_length() * 0.30103) + 1
 
 
 def check_positive(name: str, value: object, unit: str = "", allow_zero: bool = False) -> float:
@@ -66,6 +72,6 @@ def check_count(name: str, value: object, minimum: int = 1) -> int:
         isinstance(value, float) and math.isfinite(value) and value == int(value))
     if not ok or value < minimum:
         shown = value if not isinstance(value, int) or abs(value) < 10**30 else \
-            f"an integer of {len(str(abs(value)))} digits"
+            f"an integer of about {_digits(value)} digits"
         raise RailContactError(f"{name} must be an integer >= {minimum}, got {shown!r}")
     return int(value)

@@ -464,8 +464,9 @@ def test_cli_version_and_several_case_files(capsys):
     good = str(root / "hertz_paper.toml")
     assert main(["solve", good, "missing.toml", good, "--json"]) == 2
     out, err = capsys.readouterr()
-    lines = out.splitlines()
-    assert len(lines) == 2 and all(json.loads(x)["name"] == "hertz_paper" for x in lines)
+    lines = [json.loads(x) for x in out.splitlines()]
+    assert [d["file"] for d in lines] == [good, "missing.toml", good]
+    assert lines[0]["name"] == lines[2]["name"] == "hertz_paper" and "error" in lines[1]
     assert err.count("\n") == 1 and err.startswith("railcontact: error: missing.toml: ")
     assert main(["solve", good, good]) == 0
     assert capsys.readouterr().out.count("== ") == 2
@@ -480,6 +481,7 @@ def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
     assert main(["solve", str(case)]) == 3
     err = capsys.readouterr().err
     assert err.startswith("railcontact: warning: ") and "nothing was solved" in err
+    assert main(["solve", str(case), "missing.toml"]) == 2  # an error outranks no contact
 
 
 def test_one_wheel_of_a_wheelset_off_its_rail_is_an_error():

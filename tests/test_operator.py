@@ -148,3 +148,18 @@ def test_grids_sharing_a_padded_shape_do_not_mix():
         ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
         out.append(np.max(np.abs(fast - ref)) / np.max(np.abs(ref)))
     assert max(out) <= 1e-12
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
+def test_a_bad_wisdom_file_is_a_clear_error(tmp_path):
+    """Review finding: a file holding a tuple of the wrong length made pyfftw raise an
+    IndexError through load_wisdom (and through the import, with RAILCONTACT_FFTW_WISDOM)."""
+    import railcontact.halfspace.operator as operator_module
+
+    for text in ("(b'x',)", "[1, 2, 3]", "(b'a', b'b', 3)"):
+        bad = tmp_path / "bad.txt"
+        bad.write_text(text)
+        with pytest.raises(RailContactError, match="wisdom"):
+            operator_module.load_wisdom(bad)
+    with pytest.raises(RailContactError, match="max_elements"):
+        operator_module.save_wisdom(tmp_path / "w.txt", max_elements=0)

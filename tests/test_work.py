@@ -124,3 +124,25 @@ def test_wheelset_step_counts_every_solve(calls):
     assert sum(w.tangential_iterations for w in r.wheels) == sum(calls["tangential"])
     assert sum(w.load_passes for w in r.wheels) == len(calls["tangential"])
     assert all(w.seconds > 0 for w in r.wheels)
+
+
+def test_a_grown_area_keeps_the_fixed_extent_of_a_snapped_grid():
+    """Review finding: with element sizes and snap, a grid is a little wider than the area
+    asked for; growing the automatic y from the grid's bounds also widened the user's x,
+    one element per growth. The given x stays as asked (to an element)."""
+    from railcontact.contact.patch import make_grid, solve_patch_normal
+    from railcontact.settings import Control, GridSettings, NormalSettings
+
+    gs = GridSettings(dx=2e-4, dy=2e-4, snap=True)
+    pair = rc.ElasticPair.of(rc.STEEL, rc.STEEL)
+
+    def gap(g):
+        X, Y = g.mesh()
+        return 1.0 * X**2 + 5.0 * Y**2
+
+    bounds = (-12e-3, 12e-3, -0.5e-3, 0.5e-3)  # y far too small: grown several times
+    first = make_grid(gs, bounds)
+    res, work = solve_patch_normal(gap, bounds, gs, NormalSettings(), pair,
+                                   Control(load=74e3), lambda g: None, (False, True))
+    assert work.remeshes >= 2
+    assert res.grid.nx == first.nx

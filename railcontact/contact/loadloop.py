@@ -88,17 +88,22 @@ def load_unique(patches: list[PatchSolution], friction: float) -> bool:
     The argument, for patches that scale like Hertz's (the similarity the simplified
     theories rest on): a patch's creep force is ``F_s = -+ mu N f(s)`` with ``f`` a rising,
     concave function of the creepage scaled by the patch size, ``s ~ N^(-1/3)``, so
-    ``f`` falls as ``N`` grows and ``d(N f)/dN = N (f - s f'/3) / N >= 0``. Its vertical
-    force ``V = N (cos(gamma) -+ mu f sin(gamma))`` is then ``N`` times a rising function:
-    negative up to some ``N_0`` (the creep force pulls the wheel up more than the normal
-    force pushes it) and rising beyond it. One patch therefore carries a load ``Q > 0`` at
-    exactly one normal force. For several patches, which share one approach, the sum of
-    such functions rises when each one does everywhere - ``d V / d N >= cos(gamma) -
-    mu sin(gamma) > 0`` when ``mu tan(gamma) < 1`` - but a steeper patch that pulls while
-    another carries can make the sum fall over part of the approach, and a load may be met
-    at several approaches. The load loop then returns the one its start leads to (the
-    previous time step's creep share in a time series: the continuous one; the normal
-    share Q from cold).
+    ``f`` falls as ``N`` grows and ``d(N f)/dN = f - s f'/3 >= 0``. When the creep force
+    pushes the wheel down, ``V = N cos(gamma) + mu N f sin(gamma)`` rises with ``N``.
+    When it pulls the wheel up, ``V = N (cos(gamma) - mu f sin(gamma))`` is ``N`` times a
+    rising function: negative up to some ``N_0`` (the creep force pulls more than the
+    normal force pushes) and rising beyond it. Either way one patch carries a load
+    ``Q > 0`` at one normal force at most (none beyond Nadal's limit in full sliding).
+    For several patches, which share one approach, the sum of such functions rises when
+    each one does everywhere - ``dV/dN >= cos(gamma) - mu sin(gamma) > 0`` when
+    ``mu tan(gamma) < 1`` - but a steeper patch that pulls while another carries can make
+    the sum fall over part of the approach, and a load may be met at several approaches.
+    The load loop then returns the one its start leads to (the previous time step's creep
+    share in a time series: the continuous one; the normal share Q from cold).
+
+    Limitation: the check sees the patches of the returned solution. A steep patch that
+    only appears at a larger approach than the returned one (a flange touching beyond a
+    tread contact) could carry the load a second time there, unseen.
     """
     loaded = [p for p in patches if p.tangential is not None and p.geometry is not None]
     if len(loaded) <= 1:

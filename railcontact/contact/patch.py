@@ -198,7 +198,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                            f"{MAX_GROW} enlargements by {GROW_FACTOR} (raise [grid] margin or "
                            f"the element counts): {res.message}")
             break
-        bounds = _grown(grid.bounds, automatic)
+        bounds = _grown(grid.bounds, bounds, automatic)
     work.seconds = time.perf_counter() - t0
     return res, work
 
@@ -216,13 +216,18 @@ def _cut_off(contact: np.ndarray, undefined: np.ndarray) -> bool:
     return bool((near & undefined).any())
 
 
-def _grown(bounds: Bounds, automatic: tuple[bool, bool]) -> Bounds:
-    """``bounds`` scaled by :data:`GROW_FACTOR` about its centre along the automatic axes."""
-    xmin, xmax, ymin, ymax = bounds
-    xc, yc = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
-    fx, fy = (GROW_FACTOR if auto else 1.0 for auto in automatic)
-    return (xc + (xmin - xc) * fx, xc + (xmax - xc) * fx, yc + (ymin - yc) * fy,
-            yc + (ymax - yc) * fy)
+def _grown(meshed: Bounds, asked: Bounds, automatic: tuple[bool, bool]) -> Bounds:
+    """The area ``meshed`` (the grid's) scaled by :data:`GROW_FACTOR` about its centre
+    along the automatic axes; along the others the area ``asked`` for, unchanged (a grid
+    snapped to the element size is wider than that, and would creep)."""
+    out = list(asked)
+    for axis, auto in enumerate(automatic):
+        if auto:
+            lo, hi = meshed[2 * axis], meshed[2 * axis + 1]
+            c = 0.5 * (lo + hi)
+            out[2 * axis] = c + (lo - c) * GROW_FACTOR
+            out[2 * axis + 1] = c + (hi - c) * GROW_FACTOR
+    return (out[0], out[1], out[2], out[3])
 
 
 def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
@@ -254,13 +259,18 @@ def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
     return fastrip(strips, pn, normal.force, a_eq, b_eq, pair, mu, creepage)
 
 
+def start_pressure(patch: PatchSolution, grid: Grid) -> np.ndarray:
+    """The pressure [Pa] of a solved ``patch`` on ``grid`` (a copy on its own lattice)."""
+    return remesh(patch.normal.pressure, patch.normal.grid, grid)
+
+
 def start_from(patch: PatchSolution, grid: Grid
                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
     """The pressure [Pa], traction [Pa] (2, nx, ny) and adhesion/slip map of a solved
     ``patch`` on ``grid`` (a copy when it is the patch's own lattice; traction and map None
     without a BEM tangential solution): the start of another solve of the same patch."""
     src = patch.normal.grid
-    p = remesh(patch.normal.pressure, src, grid)
+    p = start_pressure(patch, grid)
     t = patch.tangential
     if not isinstance(t, TangentialResult):
         return p, None, None

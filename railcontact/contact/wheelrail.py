@@ -64,6 +64,7 @@ from .patch import (
     solve_patch_normal,
     solve_patch_tangential,
     start_from,
+    start_pressure,
 )
 from .results import PatchSolution
 
@@ -145,12 +146,20 @@ def check_on_rail(cp: ContactPoint, ws: Wheelset) -> None:
 
 
 def _covers(outer: tuple[float, float, float, float],
-            inner: tuple[float, float, float, float]) -> bool:
-    """Whether the area ``outer`` [m] holds ``inner`` but for :data:`KEEP_SLACK` of its
-    size on each side (then an earlier pass's grid is kept for ``inner``)."""
-    sx, sy = KEEP_SLACK * (outer[1] - outer[0]), KEEP_SLACK * (outer[3] - outer[2])
-    return (inner[0] >= outer[0] - sx and inner[1] <= outer[1] + sx
-            and inner[2] >= outer[2] - sy and inner[3] <= outer[3] + sy)
+            inner: tuple[float, float, float, float], by_count: bool) -> bool:
+    """Whether an earlier pass's grid on ``outer`` [m] serves the area ``inner``: it holds
+    ``inner`` but for :data:`KEEP_SLACK` of its size on each side; and, for a grid of
+    given element counts (``by_count``: its element size follows its area), it is at most
+    ``1 + 4 KEEP_SLACK`` times as large along each axis, so that it is not coarser than
+    the grid meshed on ``inner`` would be. (A grid of given element size keeps it however
+    large; the load loops' residuals then stay smooth from pass to pass.)"""
+    wo, ho = outer[1] - outer[0], outer[3] - outer[2]
+    wi, hi = inner[1] - inner[0], inner[3] - inner[2]
+    sx, sy = KEEP_SLACK * wo, KEEP_SLACK * ho
+    holds = (inner[0] >= outer[0] - sx and inner[1] <= outer[1] + sx
+             and inner[2] >= outer[2] - sy and inner[3] <= outer[3] + sy)
+    return holds and (not by_count or (wo <= (1 + 4 * KEEP_SLACK) * wi
+                                       and ho <= (1 + 4 * KEEP_SLACK) * hi))
 
 
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
@@ -187,13 +196,14 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
         if last is not None:
-            est = labelled(lambda g, last=last: start_from(last, g)[0], last.estimate)
+            est = labelled(lambda g, last=last: start_pressure(last, g), last.estimate)
         elif estimate_for is None:
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
         bounds = (-xl, xl, ylo, yhi)
-        keep = last is not None and _covers(last.normal.grid.bounds, bounds)
+        keep = last is not None and _covers(last.normal.grid.bounds, bounds,
+                                            grid.dx is None or grid.dy is None)
         res, work = solve_patch_normal(cp.gap_on_grid, bounds, grid, normal, pair, control,
                                        est, grid=last.normal.grid if keep else None)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included

@@ -232,7 +232,8 @@ OUTPUTS = [
             value=lambda w: w.remeshes),
     *_wheel("load_unique", "Integer", "", "1 when the wheel load has one solution, 0 when "
             "it may have several (several patches, mu tan(gamma) >= 1 on one; the one "
-            "continuous with the previous step is returned)", value=lambda w: int(w.load_unique)),
+            "continuous with the previous step is returned); meaningful with status 0 or 1",
+            value=lambda w: int(w.load_unique)),
     *_wheel("status", "Integer", "", "the wheel's own status: 0 ok, 1 not converged, 2 no "
             "contact, 3 out of range (the wheelset status is the larger of the two)",
             value=lambda w: w.status),

@@ -130,13 +130,17 @@ def _plan(a: np.ndarray, b: np.ndarray, direction: str):
         return pyfftw.FFTW(a, b, flags=("FFTW_ESTIMATE",), **kw)
 
 
-def save_wisdom(path: str | os.PathLike, max_elements: int = 200, components: Sequence[int]
+def save_wisdom(path: str | os.PathLike, max_elements: int = 100, components: Sequence[int]
                 = (1, 2)) -> int:
     """Measure the FFTW plans of every padded shape of grids up to ``max_elements`` per
     axis (the 5-smooth sizes, for 1- and 2-component operators) and write FFTW's wisdom to
-    ``path``; returns the number of shapes. Minutes for the default bound."""
+    ``path``; returns the number of shapes. Here 64 per axis (1,922 shapes) took about 9
+    minutes; the default, 100, has 3,042 shapes, larger ones, and takes longer. The plans
+    cached in this thread are dropped (the others are planned from the new wisdom)."""
     if not HAVE_PYFFTW:
         raise RailContactError("FFTW wisdom needs pyfftw")
+    if not isinstance(max_elements, int) or max_elements < 2:
+        raise RailContactError(f"max_elements must be an integer >= 2, got {max_elements!r}")
     sizes = sorted({fft_size(2 * n) for n in range(2, max_elements + 1)})
     count = 0
     for nc in components:
@@ -150,6 +154,7 @@ def save_wisdom(path: str | os.PathLike, max_elements: int = 200, components: Se
                 count += 1
     with open(path, "wb") as f:
         f.write(repr(pyfftw.export_wisdom()).encode())
+    getattr(_local, "plans", OrderedDict()).clear()
     return count
 
 
@@ -161,9 +166,13 @@ def load_wisdom(path: str | os.PathLike) -> None:
     import ast
 
     try:
-        wisdom = ast.literal_eval(open(path, "rb").read().decode())
+        with open(path, "rb") as f:
+            wisdom = ast.literal_eval(f.read().decode())
+        if not (isinstance(wisdom, tuple) and len(wisdom) == 3
+                and all(isinstance(w, bytes) for w in wisdom)):
+            raise ValueError("not the wisdom tuple that save_wisdom writes")
         ok = pyfftw.import_wisdom(wisdom)
-    except (OSError, ValueError, SyntaxError, TypeError) as exc:
+    except Exception as exc:  # a bad file is an error of ours, whatever pyfftw raised
         raise RailContactError(f"cannot read FFTW wisdom from {path}: {exc}") from None
     if not ok[0]:
         raise RailContactError(f"FFTW wisdom in {path} was not accepted (another FFTW?)")
@@ -396,7 +405,7 @@ def influence_operator(grid: Grid, pair: ElasticPair, components: str | Sequence
 if HAVE_PYFFTW and os.environ.get(WISDOM_ENV):  # pragma: no cover - environment
     try:
         load_wisdom(os.environ[WISDOM_ENV])
-    except RailContactError as _exc:  # a bad file costs speed, never the import
+    except Exception as _exc:  # a bad file costs speed, never the import
         import warnings
 
         warnings.warn(f"{WISDOM_ENV}: {_exc}; FFT plans are estimated", stacklevel=1)

@@ -9,13 +9,15 @@ from typing import Any
 from ..contact import Solution
 
 
-def solution_json(solution: Solution, indent: int | None = 2) -> str:
-    """The JSON text of ``solution.to_dict()`` (SI units).
+def solution_json(solution: Solution, indent: int | None = 2, file: str | None = None) -> str:
+    """The JSON text of ``solution.to_dict()`` (SI units), with ``"file"`` first when the
+    case ``file`` is given.
 
     A number that is not finite is written as ``null`` (JSON has no NaN); the solve that
     produced it is reported ``"converged": false``.
     """
-    return json.dumps(finite(solution.to_dict()), indent=indent, allow_nan=False)
+    d = solution.to_dict() if file is None else {"file": file, **solution.to_dict()}
+    return json.dumps(finite(d), indent=indent, allow_nan=False)
 
 
 def finite(value: Any) -> Any:

@@ -478,6 +478,8 @@ def load_case(path: str | Path) -> Case:
                         f"{exc.start})") from None
     except RecursionError:
         raise CaseError(f"case file {p} nests arrays or tables too deeply") from None
+    except ValueError as exc:  # e.g. an integer literal of more than 4300 digits
+        raise CaseError(f"case file {p}: {exc}") from None
     raw.setdefault("name", p.stem)
     geo = raw.get("geometry")
     if isinstance(geo, dict):  # profile files relative to the case file, as a user means

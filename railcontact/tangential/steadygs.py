@@ -46,8 +46,8 @@ sweep ``k`` (the shifted runs included). When that measure has not fallen below
 converged, and says so; a non-finite measure stops it too.
 
 Relaxation: ``omega_h = 0.65``, ``omega_s = 0.9`` by default, the best on S1002/60E1
-patches (about 20-25 sweeps from zero traction at eps 1e-5, 30-33 on the most
-spin-dominated flange patch, against 80-120 of ConvexGS; without relaxation 25-40).
+patches (about 20-25 sweeps from zero traction at eps 1e-5, 31-33 on the most
+spin-dominated flange patch, against 50-120 of ConvexGS; without relaxation 25-40).
 Over-relaxation, and sweeping the rows alternately forward and backward in y or from the
 leading to the trailing edge, slowed the iteration down or made it diverge.
 """
