@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..geometry.search import ContactPoint
+from ..geometry.search import ContactPoint, ReferencePoint
 from ..halfspace.hertz import HertzSolution
 from ..normal import NormalResult
 from ..settings import Case
@@ -93,6 +93,8 @@ class PatchSolution:
     load_unique: bool | None = None
     """Whether the wheel load has one solution (:func:`~.loadloop.load_unique`); None
     where no load loop with creep forces ran."""
+    reference: ReferencePoint | None = None
+    """CONTACT's contact reference point of the patch (wheel-rail cases)."""
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -117,6 +119,12 @@ class PatchSolution:
             d["rail_profile_coordinate"] = g.rail_y
             d["curvatures"] = [g.A, g.B]
             d["gap"] = g.gap
+        if self.reference is not None:
+            r = self.reference
+            d["reference_point"] = {
+                "position": list(r.position), "rail_profile_coordinate": r.rail_y,
+                "wheel_profile_coordinate": r.wheel_s, "contact_angle": r.contact_angle,
+                "rolling_radius": r.rolling_radius, "offset": list(r.offset)}
         if self.tangential is not None:
             t = self.tangential
             d["tangential"] = {

@@ -42,7 +42,7 @@ from scipy.optimize import brentq
 from ..errors import CaseError, ConvergenceError, RailContactError
 from ..geometry.profiles import read_profile
 from ..geometry.roll import contact_roll, first_contact_gap
-from ..geometry.search import ContactPoint, contact_points, count_contacts
+from ..geometry.search import ContactPoint, contact_points, count_contacts, reference_point
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
@@ -434,4 +434,10 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
         pose, per_side = _equal_loads(track, ws, pose, control, settings, pair)
     else:
         per_side = _solve_sides(track, ws, pose, sides, control, settings, pair)
-    return [p for side in sides for p in per_side[side]], pose
+    patches = [p for side in sides for p in per_side[side]]
+    for p in patches:
+        n = p.normal
+        X, Y = n.grid.mesh()
+        p.reference = reference_point(p.geometry, track, ws, X, Y,
+                                      n.penetration - p.geometry.gap_on_grid(n.grid))
+    return patches, pose

@@ -27,7 +27,7 @@ trace offset) but the gap is taken symmetric in x.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -71,6 +71,9 @@ class ContactPoint:
     s, f, a_of_s
         Lateral coordinate in the tangent plane [m], normal gap f(s) [m] and A(s) [1/m]
         (samples around the contact point).
+    wheel_s_of_s, rail_u_of_s, rail_z_of_s
+        At the same samples: the wheel profile coordinate S [m] and the rail surface point
+        (lateral u, vertical Z, side frame) [m] (NaN where the profiles end).
     """
 
     side: str
@@ -86,6 +89,9 @@ class ContactPoint:
     s: np.ndarray
     f: np.ndarray
     a_of_s: np.ndarray
+    wheel_s_of_s: np.ndarray | None = field(default=None, repr=False)
+    rail_u_of_s: np.ndarray | None = field(default=None, repr=False)
+    rail_z_of_s: np.ndarray | None = field(default=None, repr=False)
 
     def normal_penetration(self, approach: float) -> float:
         """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
@@ -256,7 +262,71 @@ def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
                         rail_y=track.rail_coordinate(u_c, z_rail),
                         position=(x_c, sgn * u_c, z_rail),
                         contact_angle=gamma, rolling_radius=r_c, A=float(a_of_s[k0]), B=B,
-                        s=s, f=f, a_of_s=a_of_s)
+                        s=s, f=f, a_of_s=a_of_s,
+                        wheel_s_of_s=np.where(np.isfinite(eta_s), S_s, np.nan),
+                        rail_u_of_s=_branch_interp(s, s_r, ur, kr),
+                        rail_z_of_s=_branch_interp(s, s_r, zr, kr))
+
+
+@dataclass(frozen=True)
+class ReferencePoint:
+    """CONTACT's contact reference point of a patch (SI units, side frame as
+    :class:`ContactPoint`): the centre of the interpenetration area weighted by the squared
+    interpenetration (CONTACT's ``m_wr_locatecp``, default gap weighting).
+
+    Attributes
+    ----------
+    offset
+        (x, y) of the point in the patch frame, from the rigid contact point [m].
+    position
+        The point on the rail surface in the track frame (X, Y, Z) [m].
+    rail_y, wheel_s
+        Its rail and wheel profile coordinates [m].
+    contact_angle
+        The contact angle weighted as the point [rad].
+    rolling_radius
+        The wheel radius at ``wheel_s`` [m].
+    """
+
+    offset: tuple[float, float]
+    position: tuple[float, float, float]
+    rail_y: float
+    wheel_s: float
+    contact_angle: float
+    rolling_radius: float
+
+
+def reference_point(cp: ContactPoint, track: Track, ws: Wheelset, x: np.ndarray,
+                    y: np.ndarray, interpenetration: np.ndarray) -> ReferencePoint | None:
+    """The reference point of a patch from its undeformed interpenetration [m] at the
+    element centres ``(x, y)`` [m] of its grid (patch frame; positive where the bodies
+    overlap); None without interpenetration.
+
+    ``x``, ``y`` and the contact angle ``gamma(y)`` of the rail surface are averaged with
+    the weight ``interpenetration^2`` over the elements that overlap (CONTACT's
+    ``compute_wgt_center``): the point where a patch that is not symmetric - a flange root
+    - has its centre, rather than the point of first contact.
+    """
+    e = np.where(interpenetration > 0, interpenetration, 0.0)
+    w = e * e
+    total = float(w.sum())
+    if not total > 0 or cp.rail_u_of_s is None:
+        return None
+    xr = float((w * x).sum() / total)
+    yr = float((w * y).sum() / total)
+    ok = np.isfinite(cp.rail_u_of_s)
+    rail = track.side_rail
+    gamma_s = np.arctan(rail.slope(np.where(ok, cp.rail_u_of_s, cp.rail_u)))
+    gamma = float((w * np.interp(y, cp.s[ok], gamma_s[ok])).sum() / total)
+    u = float(np.interp(yr, cp.s[ok], cp.rail_u_of_s[ok]))
+    z = float(np.interp(yr, cp.s[ok], cp.rail_z_of_s[ok]))
+    okw = np.isfinite(cp.wheel_s_of_s)
+    s_w = float(np.interp(yr, cp.s[okw], cp.wheel_s_of_s[okw]))
+    sgn = SIDES[cp.side]
+    return ReferencePoint(offset=(xr, yr), position=(cp.position[0] + xr, sgn * u, z),
+                          rail_y=track.rail_coordinate(u, z), wheel_s=s_w,
+                          contact_angle=gamma,
+                          rolling_radius=ws.radius + float(ws.wheel.height(s_w)))
 
 
 def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
