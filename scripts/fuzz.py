@@ -501,9 +501,17 @@ def classify_cli(code: int | None, out: str, err: str, case: dict) -> Outcome:
         return Outcome("hang", "no answer within the time limit")
     if "MemoryError" in err or code in (-signal.SIGKILL, -signal.SIGSEGV) and not err:
         return Outcome("memory", _last_line(err) or f"killed by signal {-code}")
-    if "Traceback" in err or code not in (0, 1, 2):
+    if "Traceback" in err or code not in (0, 1, 2, 3):
         return Outcome("traceback", _last_line(err) or f"exit {code}")
     err, warnings = _split_warnings(err)
+    if code == 3:  # no contact: nothing solved, one warning line (documented)
+        if not re.fullmatch(r"railcontact: warning: .*nothing was solved\n", err):
+            return Outcome("traceback", f"exit 3 without the warning: {err[:200]!r}")
+        try:
+            strict_json(out)
+        except ValueError as exc:
+            return Outcome("traceback", f"exit 3 with JSON that is not strict: {exc}")
+        return Outcome("clean error", "no contact: nothing was solved", warnings=warnings)
     if code == 2:
         if not _ERROR.match(err):
             return Outcome("traceback", f"exit 2 without a one-line error: {err[:200]!r}")
