@@ -232,3 +232,22 @@ def test_a_start_on_two_symmetric_elements_still_reaches_hertz(preconditioner):
     assert np.array_equal(res.contact, cold.contact)
     assert np.max(np.abs(res.pressure - cold.pressure)) < 1e-6 * cold.max_pressure
     assert res.max_pressure == pytest.approx(hz.max_pressure, rel=0.03)
+
+
+def test_convergence_also_asks_that_nothing_overlaps_outside_the_contact():
+    """The relative pressure change can be small far from the answer (F04); the CG also
+    requires that no element outside the contact overlaps by more than the tolerance. The
+    check sees the two-element start's overlap and passes the converged Hertz solution."""
+    from railcontact.normal.bem import _overlaps
+
+    A, B = curvatures(1.0)
+    hz = hertz(A, B, PAIR, load=50e3)
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 24, 23)
+    X, Y = g.mesh()
+    h = A * X**2 + B * Y**2
+    op = influence_operator(g, PAIR)
+    res = solve_normal(h, g, op, load=hz.load, tolerance=1e-6)
+    assert not _overlaps(h, op.apply(res.pressure), res.pressure, True, 0.0, 1e-6)
+    two = np.zeros(g.shape)
+    two[11:13, 11] = hz.load / (2 * g.element_area)
+    assert _overlaps(h, op.apply(two), two, True, 0.0, 1e-3)

@@ -127,6 +127,22 @@ def _uniform_start(gap: np.ndarray, operator: InfluenceOperator, penetration: fl
     return np.full_like(gap, max(c, 1e-6 * penetration * gap.size / k1))
 
 
+def _overlaps(h: np.ndarray, u: np.ndarray, p: np.ndarray, force_control: bool,
+              delta: float, tolerance: float) -> bool:
+    """Whether elements outside the contact overlap by more than the tolerance allows:
+    the gap ``h + u - delta`` there below ``-tolerance`` times the approach (the
+    complementarity the relative pressure change does not check; a start far from the
+    answer can make that change small while elements that belong to the contact are
+    still out of it)."""
+    c = p > 0.0
+    if not c.any() or c.all():
+        return False
+    g = h + u
+    d = float(g[c].mean()) if force_control else delta
+    scale = max(abs(d - float(h.min())), 1e-300)
+    return bool(float((g[~c] - d).min()) < -tolerance * scale)
+
+
 def solve_normal(
     gap: np.ndarray,
     grid: Grid,
@@ -244,8 +260,10 @@ def solve_normal(
     converged = stalled = False
     best, best_its = np.inf, 0
     delta = penetration if not force_control else 0.0
+    u_next = None  # u = A p of the current p when already formed
     for its in range(1, int(max_iterations) + 1):
-        u = operator.apply(p)
+        u = operator.apply(p) if u_next is None else u_next
+        u_next = None
         c = p > 0.0
         if not c.any():  # pressure vanished (possible under penetration control)
             c = (h + u - delta) < 0
@@ -293,15 +311,17 @@ def solve_normal(
         if not np.isfinite(err):
             break
         if err < tolerance:
-            converged = True
-            break
+            u_next = operator.apply(p)  # reused by the next iteration or the result
+            if not _overlaps(h, u_next, p, force_control, delta, tolerance):
+                converged = True
+                break
         if err < STALL_GAIN * best:
             best, best_its = err, its
         elif its - best_its >= STALL_ITERATIONS:  # at round-off: a tolerance out of reach
             stalled = True
             break
 
-    u = operator.apply(p)
+    u = operator.apply(p) if u_next is None else u_next
     c = p > 0.0
     if force_control:
         delta = float((h + u)[c].mean()) if c.any() else float(h.min())
