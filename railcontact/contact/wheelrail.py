@@ -170,7 +170,10 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
     [m], or carrying the normal ``loads`` [N] (one per point).
 
     A patch of ``previous`` (the wheel's last load pass) at the same contact point starts
-    the solve: its grid is kept and its pressure is the initial estimate."""
+    the solve: its pressure is the initial estimate, and its grid is kept when it serves
+    the new potential area (:func:`_covers`). Raises when the wheel is off its rail
+    (:func:`check_on_rail`) or a patch is beyond the half-space model
+    (:data:`MAX_PATCH_SHARE`)."""
     grid, normal = settings.grid, settings.normal
     out = []
     for k, cp in enumerate(cps):
