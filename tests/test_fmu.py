@@ -139,7 +139,8 @@ def test_simulate_matches_python_api(fmu):
         sig[k] = v * (1 + 0.5 * np.cos(2 * np.pi * t / t[-1]))
     outs = ["normal_force_left", "normal_force_right", "creep_force_x_left",
             "creep_force_y_right", "spin_moment_left", "force_lateral", "yaw_moment",
-            "contact_angle_left", "max_pressure_right"]
+            "contact_angle_left", "max_pressure_right", "contact_longitudinal_position_left",
+            "contact_lateral_position_right", "contact_vertical_position_left"]
     res = simulate_fmu(str(fmu), stop_time=t[-1], step_size=STEP, input=sig,
                        output=names + outs, start_values={"warm_start": "none"})
     ref = api("none")
@@ -150,7 +151,8 @@ def test_simulate_matches_python_api(fmu):
                       creepages=creep)
         want = [r.left.normal_force, r.right.normal_force, r.left.creep_force[0],
                 r.right.creep_force[1], r.left.spin_moment, r.force[1], r.yaw_moment,
-                r.left.contact_angle, r.right.max_pressure]
+                r.left.contact_angle, r.right.max_pressure, r.left.contact_point[0],
+                r.right.contact_point[1], r.left.contact_point[2]]
         np.testing.assert_allclose([row[n] for n in outs], want, rtol=1e-9, atol=1e-9)
     # the sweep reaches flange contact on both sides
     assert res["contact_angle_left"].max() > 0.3

@@ -237,6 +237,10 @@ OUTPUTS = [
     *_wheel("status", "Integer", "", "the wheel's own status: 0 ok, 1 not converged, 2 no "
             "contact, 3 out of range (the wheelset status is the larger of the two)",
             value=lambda w: w.status),
+    *_wheel("contact_longitudinal_position", "Real", "m", "contact point, track X (ahead "
+            "of the axle when the wheelset is yawed)", value=lambda w: w.contact_point[0]),
+    *_wheel("contact_vertical_position", "Real", "m", "contact point, track Z (rail top "
+            "at 0)", value=lambda w: w.contact_point[2]),
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""

@@ -164,6 +164,8 @@ class WheelContact:
     """Normal solves repeated on a grown potential area."""
     seconds: float = 0.0
     """Wall time of the wheel's patch solves [s] (estimates included)."""
+    contact_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """The rigid contact point of the main patch in the track frame (X, Y, Z) [m]."""
     load_unique: bool = True
     """False when the wheel load (counting the creep forces) may have several solutions
     (several patches, one with ``mu tan(gamma) >= 1``,
@@ -466,6 +468,7 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.wheel_position = cp.wheel_s
     wheel.rail_position = cp.rail_y
     wheel.lateral_position = cp.position[1]
+    wheel.contact_point = cp.position
     wheel.contact_angle = cp.contact_angle
     wheel.rolling_radius = cp.rolling_radius
     wheel.area = float(sum(p.normal.area for p in patches))
