@@ -29,6 +29,7 @@ import sys
 import time
 from pathlib import Path
 
+from _sweep import write_csv
 from bench_step import clear_caches, fixed_workload
 
 import railcontact as rc
@@ -160,10 +161,7 @@ def main() -> None:
     print("ratio: railcontact's time / CONTACT's, both relative to the fixed workload "
           "(target <= 0.7 at eps = 1e-5)")
     if args.csv:
-        with args.csv.open("w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(all_rows[0]))
-            w.writeheader()
-            w.writerows(all_rows)
+        write_csv(args.csv, all_rows)
         print(f"written {args.csv}")
 
 

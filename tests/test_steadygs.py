@@ -4,34 +4,19 @@ import math
 
 import numpy as np
 import pytest
+from test_tangential import CONTACT_G, STEEL, hertz_patch  # the Hertz patches of ConvexGS
 
 import railcontact as rc
-from railcontact import ElasticPair, Grid, Material, hertz, solve_normal
-from railcontact.halfspace.hertz import curvature_ratio
+from railcontact import Grid, solve_normal
 from railcontact.halfspace.operator import influence_operator
 from railcontact.settings import Case
 from railcontact.tangential import creep_coefficients, rolling_operator, solve_tangential
 from railcontact.tangential.convexgs import HAVE_NUMBA
 from railcontact.tangential.steadygs import solve_steadygs
 
-STEEL = ElasticPair.of(Material(206e9, 0.28))
-CONTACT_G = ElasticPair.from_shear(82e9, 0.28)
-
 
 def rel_l2(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(a - b) / np.linalg.norm(b))
-
-
-def hertz_patch(ab, n, pair=STEEL, load=1e5, margin=1.1):
-    """BEM normal solution on an n x n grid around the Hertz ellipse with a/b = ab."""
-    r = curvature_ratio(min(ab, 1 / ab))
-    A, B = (1.0, r) if ab >= 1 else (r, 1.0)
-    hz = hertz(A, B, pair, load=load)
-    g = Grid.from_bounds(-margin * hz.a, margin * hz.a, -margin * hz.b, margin * hz.b, n, n)
-    X, Y = g.mesh()
-    nr = solve_normal(A * X**2 + B * Y**2, g, influence_operator(g, pair), load=load,
-                      tolerance=1e-9)
-    return hz, g, nr
 
 
 @pytest.fixture(scope="module")

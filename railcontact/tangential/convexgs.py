@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -267,6 +268,155 @@ def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
     return (fx, fy), mz, ratio, pmax
 
 
+@dataclass
+class SweepProblem:
+    """A steady-rolling problem in the Gauss–Seidel solvers' layout, and their common loop.
+
+    Fields are (ny, nx), x contiguous: the traction bound ``g = mu p_n`` [Pa], the rigid
+    slip ``wx``, ``wy`` [m] (``w`` in the grid's (2, nx, ny) layout), the traction ``px``,
+    ``py`` [Pa] being solved for, the element states, the contact mask and per row the
+    first and last element in contact (``lo``, ``hi``). ConvexGS and SteadyGS differ only
+    in their sweep.
+    """
+
+    grid: Grid
+    operator: InfluenceOperator
+    w: np.ndarray
+    g: np.ndarray
+    wx: np.ndarray
+    wy: np.ndarray
+    px: np.ndarray
+    py: np.ndarray
+    state: np.ndarray
+    contact: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    rolling: bool
+    tolerance: float
+    max_iterations: int
+    use_numba: bool
+
+    @classmethod
+    def set_up(cls, grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,
+               initial_traction, initial_state, tolerance, max_iterations, omega_h, omega_s,
+               engine, spin_offset) -> SweepProblem:
+        """Check the inputs of a solver (see :func:`solve_tangential`) and lay them out."""
+        shape = grid.shape
+        if operator.components != "xy" or (operator.nx, operator.ny) != shape:
+            raise RailContactError("operator must be the 'xy' steady-rolling operator of "
+                                   "this grid")
+        pn = np.asarray(pressure, dtype=float)
+        if pn.shape != shape or not np.all(np.isfinite(pn)) or np.any(pn < 0):
+            raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
+        mu = check_positive("friction", friction, allow_zero=True)
+        tolerance = check_positive("tolerance", tolerance)
+        for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
+            if not 0.0 < check_finite(name, om) <= 1.5:
+                raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
+        max_iterations = check_count("max_iterations", max_iterations)
+        if engine not in ENGINES:
+            raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
+        if engine == "numba" and not HAVE_NUMBA:
+            raise RailContactError("engine 'numba' requested but numba is not installed")
+        w = rigid_slip(grid, creepage, spin_offset)
+        g = np.ascontiguousarray((mu * pn).T)
+        rolling = any(c != 0.0 for c in creepage)
+        if initial_traction is None or not rolling:  # no creepage: no traction, exactly
+            px, py = np.zeros_like(g), np.zeros_like(g)
+        else:
+            px, py = _clipped_start(initial_traction, initial_state, g, shape)
+        contact = g > 0
+        any_row = contact.any(axis=1)
+        return cls(
+            grid=grid, operator=operator, w=w, g=g, wx=np.ascontiguousarray(w[0].T),
+            wy=np.ascontiguousarray(w[1].T), px=px, py=py,
+            state=np.where(contact, ADHESION, EXTERIOR).astype(np.int8), contact=contact,
+            lo=np.where(any_row, contact.argmax(axis=1), 1).astype(np.int64),
+            hi=np.where(any_row, g.shape[1] - 1 - contact[:, ::-1].argmax(axis=1),
+                        0).astype(np.int64),
+            rolling=rolling, tolerance=tolerance, max_iterations=max_iterations,
+            use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
+
+    def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
+              t0: float) -> TangentialResult:
+        """Sweep until ``||p^k - p^(k-1)|| < tolerance ||p^k||`` (``sweep()`` returns the
+        squared norm of its change), stopping when the error is not finite or has not
+        fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
+        px, py = self.px, self.py
+        floor = 1e-9 * float(np.sqrt(np.sum(self.g * self.g)))
+        hist: list[float] = []
+        converged = stalled = False
+        best, best_its = math.inf, 0
+        its = 0
+        err = 0.0
+        if self.contact.any() and self.rolling:
+            while its < self.max_iterations:
+                its += 1
+                dif = sweep()
+                norm = math.sqrt(float(np.sum(px * px + py * py)))
+                scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+                err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
+                hist.append(err)
+                if not math.isfinite(err):
+                    break
+                if err < self.tolerance:
+                    converged = True
+                    break
+                if err < STALL_GAIN * best:
+                    best, best_its = err, its
+                elif its - best_its >= stall_sweeps:  # round-off: a tolerance out of reach
+                    stalled = True
+                    break
+        else:
+            converged = True
+        grid = self.grid
+        traction = np.stack([px.T, py.T])
+        st = np.ascontiguousarray(self.state.T)
+        slip = (self.w + self.operator.apply(traction)) / grid.dx
+        slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
+        force, mz, ratio, pmax = tangential_summary(grid, traction, st)
+        tol = self.tolerance
+        if not self.contact.any():
+            message = "no contact: zero normal pressure"
+        elif not self.rolling:
+            message = "zero creepage: zero traction, no iterations"
+        elif converged:
+            message = f"{name} converged in {its} sweeps (eps = {err:.3g} < {tol:g})"
+        else:
+            message = (f"{name} not converged: eps = {err:.3g} after {its} sweeps "
+                       f"(tolerance {tol:g})")
+            if stalled:
+                message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
+                            f"in {stall_sweeps} sweeps")
+        return TangentialResult(
+            grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
+            slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
+            message=message, wall_time=time.perf_counter() - t0, error=err,
+            history=np.asarray(hist))
+
+
+def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[int, int]
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """An initial traction (2, nx, ny) [Pa] in the sweep layout, clipped to the bound ``g``
+    (elements in slip in ``initial_state`` put on it), zero outside the contact."""
+    p0 = np.asarray(initial_traction, dtype=float)
+    if p0.shape != (2, *shape) or not np.all(np.isfinite(p0)):
+        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
+    px, py = np.ascontiguousarray(p0[0].T), np.ascontiguousarray(p0[1].T)
+    mag = np.hypot(px, py)
+    on_bound = np.zeros_like(g, dtype=bool)
+    if initial_state is not None:
+        st0 = np.asarray(initial_state)
+        if st0.shape != shape:
+            raise RailContactError(f"initial_state must have shape {shape}")
+        on_bound = (st0.T == SLIP) & (mag > 0)
+    scale = np.where(on_bound | (mag > g), g / np.where(mag > 0, mag, 1.0), 1.0)
+    px, py = px * scale, py * scale
+    px[g <= 0] = 0.0
+    py[g <= 0] = 0.0
+    return px, py
+
+
 def solve_tangential(
     grid: Grid,
     operator: InfluenceOperator,
@@ -313,114 +463,21 @@ def solve_tangential(
         "auto" (numba when installed), "numba" or "numpy".
     """
     t0 = time.perf_counter()
-    shape = grid.shape
-    if operator.components != "xy" or (operator.nx, operator.ny) != shape:
-        raise RailContactError("operator must be the 'xy' steady-rolling operator of this grid")
-    pn = np.asarray(pressure, dtype=float)
-    if pn.shape != shape or not np.all(np.isfinite(pn)) or np.any(pn < 0):
-        raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
-    mu = check_positive("friction", friction, allow_zero=True)
-    tolerance = check_positive("tolerance", tolerance)
-    for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
-        if not 0.0 < check_finite(name, om) <= 1.5:
-            raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
-    max_iterations = check_count("max_iterations", max_iterations)
-    if engine not in ENGINES:
-        raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
-    if engine == "numba" and not HAVE_NUMBA:
-        raise RailContactError("engine 'numba' requested but numba is not installed")
-    use_numba = engine in ("auto", "numba") and HAVE_NUMBA
-
-    w = rigid_slip(grid, creepage, spin_offset)
-    bound = mu * pn
-    # Sweep layout: (ny, nx), x contiguous.
-    g = np.ascontiguousarray(bound.T)
-    wx, wy = np.ascontiguousarray(w[0].T), np.ascontiguousarray(w[1].T)
-    if initial_traction is None:
-        px = np.zeros_like(g)
-        py = np.zeros_like(g)
-    else:
-        p0 = np.asarray(initial_traction, dtype=float)
-        if p0.shape != (2, *shape) or not np.all(np.isfinite(p0)):
-            raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-        px, py = np.ascontiguousarray(p0[0].T), np.ascontiguousarray(p0[1].T)
-        mag = np.hypot(px, py)
-        if initial_state is not None:
-            st0 = np.asarray(initial_state)
-            if st0.shape != shape:
-                raise RailContactError(f"initial_state must have shape {shape}")
-            on_bound = (st0.T == SLIP) & (mag > 0)
-        else:
-            on_bound = np.zeros_like(g, dtype=bool)
-        scale = np.where(on_bound | (mag > g), g / np.where(mag > 0, mag, 1.0), 1.0)
-        px, py = px * scale, py * scale
-        px[g <= 0] = 0.0
-        py[g <= 0] = 0.0
-    state = np.where(g > 0, ADHESION, EXTERIOR).astype(np.int8)
-    contact = g > 0
-    any_row = contact.any(axis=1)
-    lo = np.where(any_row, contact.argmax(axis=1), 1).astype(np.int64)
-    hi = np.where(any_row, g.shape[1] - 1 - contact[:, ::-1].argmax(axis=1), 0).astype(np.int64)
-
+    prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
+                               initial_state, tolerance, max_iterations, omega_h, omega_s,
+                               engine, spin_offset)
     kern = _gs_kernels(operator)
     c = operator.self_coefficient
     cc = (float(c[0, 0]), float(c[0, 1]), float(c[1, 0]), float(c[1, 1]))
-    rows = _row_blocks(contact)
-    w_t = np.stack([wx, wy])
-    floor = 1e-9 * float(np.sqrt(np.sum(g * g)))
-    hist: list[float] = []
-    converged = stalled = False
-    best, best_its = math.inf, 0
-    its = 0
-    err = 0.0
-    rolling = any(c != 0.0 for c in creepage)
-    if not rolling:  # no creepage: the steady state carries no traction, exactly
-        px[...] = 0.0
-        py[...] = 0.0
-    if contact.any() and rolling:
-        while its < max_iterations:
-            its += 1
-            if use_numba:
-                dif = _sweep_blocked(kern, operator, w_t, g, px, py, state, lo, hi, rows, cc,
-                                     float(omega_h), float(omega_s))
-            else:
-                dif = _sweep_numpy(*kern, wx, wy, g, px, py, state, lo, hi, *cc,
-                                   float(omega_h), float(omega_s))
-            norm = math.sqrt(float(np.sum(px * px + py * py)))
-            scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
-            err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
-            hist.append(err)
-            if not math.isfinite(err):
-                break
-            if err < tolerance:
-                converged = True
-                break
-            if err < STALL_GAIN * best:
-                best, best_its = err, its
-            elif its - best_its >= STALL_SWEEPS:  # at round-off: a tolerance out of reach
-                stalled = True
-                break
-    else:
-        converged = True
+    rows = _row_blocks(prob.contact)
+    w_t = np.stack([prob.wx, prob.wy])
+    oh, os_ = float(omega_h), float(omega_s)
 
-    traction = np.stack([px.T, py.T])
-    st = np.ascontiguousarray(state.T)
-    slip = (w + operator.apply(traction)) / grid.dx
-    slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
-    force, mz, ratio, pmax = tangential_summary(grid, traction, st)
-    if not contact.any():
-        message = "no contact: zero normal pressure"
-    elif not rolling:
-        message = "zero creepage: zero traction, no iterations"
-    elif converged:
-        message = f"converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
-    else:
-        message = f"not converged: eps = {err:.3g} after {its} sweeps (tolerance {tolerance:g})"
-        if stalled:
-            message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
-                        f"{STALL_SWEEPS} sweeps")
-    return TangentialResult(
-        grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
-        slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
-        message=message, wall_time=time.perf_counter() - t0, error=err,
-        history=np.asarray(hist))
+    def sweep() -> float:
+        if prob.use_numba:
+            return _sweep_blocked(kern, operator, w_t, prob.g, prob.px, prob.py, prob.state,
+                                  prob.lo, prob.hi, rows, cc, oh, os_)
+        return _sweep_numpy(*kern, prob.wx, prob.wy, prob.g, prob.px, prob.py, prob.state,
+                            prob.lo, prob.hi, *cc, oh, os_)
+
+    return prob.solve(sweep, "ConvexGS", STALL_SWEEPS, t0)

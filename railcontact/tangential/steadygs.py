@@ -42,8 +42,9 @@ element, no blocks) gives the same iterates where numba is missing or on request
 Convergence as ConvexGS's: one iteration is one sweep over all contact elements and
 ``||p^k - p^(k-1)||_2 < tolerance ||p^k||_2`` with ``p^k`` the whole traction field after
 sweep ``k`` (the shifted runs included). When that measure has not fallen below
-:data:`STALL_GAIN` of its best for :data:`STALL_SWEEPS` sweeps the iteration stops, not
-converged, and says so; a non-finite measure stops it too.
+:data:`~.convexgs.STALL_GAIN` of its best for :data:`STALL_SWEEPS` sweeps the iteration
+stops, not converged, and says so; a non-finite measure stops it too. Set-up, loop and
+result are ConvexGS's (:class:`~.convexgs.SweepProblem`); only the sweep differs.
 
 Relaxation: ``omega_h = 0.65``, ``omega_s = 0.9`` by default, the best on S1002/60E1
 patches (about 20-25 sweeps from zero traction at eps 1e-5, 31-33 on the most
@@ -60,22 +61,17 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
 from .convexgs import (
     ADHESION,
-    ENGINES,
-    EXTERIOR,
     HAVE_NUMBA,
-    SLIP,
+    SweepProblem,
     TangentialResult,
     _element_solve,
     _gs_kernels,
     _row_blocks,
-    tangential_summary,
 )
-from .rolling import rigid_slip
 
 try:
     import numba
@@ -85,8 +81,6 @@ except ImportError:  # pragma: no cover
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
-STALL_GAIN = 0.99
-"""Progress: the relative traction change falls below this fraction of its best so far."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
@@ -292,114 +286,24 @@ def solve_steadygs(
         of dx (see :func:`railcontact.tangential.rigid_slip`).
     """
     t0 = time.perf_counter()
-    shape = grid.shape
-    if operator.components != "xy" or (operator.nx, operator.ny) != shape:
-        raise RailContactError("operator must be the 'xy' steady-rolling operator of this grid")
-    pn = np.asarray(pressure, dtype=float)
-    if pn.shape != shape or not np.all(np.isfinite(pn)) or np.any(pn < 0):
-        raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
-    mu = check_positive("friction", friction, allow_zero=True)
-    tolerance = check_positive("tolerance", tolerance)
-    for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
-        if not 0.0 < check_finite(name, om) <= 1.5:
-            raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
-    max_iterations = check_count("max_iterations", max_iterations)
-    if engine not in ENGINES:
-        raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
-    if engine == "numba" and not HAVE_NUMBA:
-        raise RailContactError("engine 'numba' requested but numba is not installed")
-    use_numba = engine in ("auto", "numba") and HAVE_NUMBA
-
-    w = rigid_slip(grid, creepage, spin_offset)
-    # Sweep layout: (ny, nx), x contiguous.
-    g = np.ascontiguousarray((mu * pn).T)
-    wx, wy = np.ascontiguousarray(w[0].T), np.ascontiguousarray(w[1].T)
-    if initial_traction is None:
-        px = np.zeros_like(g)
-        py = np.zeros_like(g)
-    else:
-        p0 = np.asarray(initial_traction, dtype=float)
-        if p0.shape != (2, *shape) or not np.all(np.isfinite(p0)):
-            raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-        px, py = np.ascontiguousarray(p0[0].T), np.ascontiguousarray(p0[1].T)
-        mag = np.hypot(px, py)
-        on_bound = np.zeros_like(g, dtype=bool)
-        if initial_state is not None:
-            st0 = np.asarray(initial_state)
-            if st0.shape != shape:
-                raise RailContactError(f"initial_state must have shape {shape}")
-            on_bound = (st0.T == SLIP) & (mag > 0)
-        scale = np.where(on_bound | (mag > g), g / np.where(mag > 0, mag, 1.0), 1.0)
-        px, py = px * scale, py * scale
-        px[g <= 0] = 0.0
-        py[g <= 0] = 0.0
-    state = np.where(g > 0, ADHESION, EXTERIOR).astype(np.int8)
-    contact = g > 0
-    any_row = contact.any(axis=1)
-    lo = np.where(any_row, contact.argmax(axis=1), 1).astype(np.int64)
-    hi = np.where(any_row, g.shape[1] - 1 - contact[:, ::-1].argmax(axis=1), 0).astype(np.int64)
-
+    prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
+                               initial_state, tolerance, max_iterations, omega_h, omega_s,
+                               engine, spin_offset)
+    px, py = prob.px, prob.py
     kern = _gs_kernels(operator)
     cum = _run_coefficients(operator)
-    rows = _row_blocks(contact)
-    w_t = np.stack([wx, wy])
-    floor = 1e-9 * float(np.sqrt(np.sum(g * g)))
-    hist: list[float] = []
-    converged = stalled = False
-    best, best_its = math.inf, 0
-    its = 0
-    err = 0.0
-    rolling = any(c != 0.0 for c in creepage)
-    if not rolling:  # no creepage: the steady state carries no traction, exactly
-        px[...] = 0.0
-        py[...] = 0.0
-    if contact.any() and rolling:
-        while its < max_iterations:
-            its += 1
-            qx, qy = px.copy(), py.copy()
-            if use_numba:
-                _sweep_blocked(kern, cum, operator, w_t, g, px, py, state, lo, hi, rows,
-                               float(omega_h), float(omega_s))
-            else:
-                _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, float(omega_h),
-                             float(omega_s))
-            dif = float(np.sum((px - qx) ** 2 + (py - qy) ** 2))
-            norm = math.sqrt(float(np.sum(px * px + py * py)))
-            scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
-            err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
-            hist.append(err)
-            if not math.isfinite(err):
-                break
-            if err < tolerance:
-                converged = True
-                break
-            if err < STALL_GAIN * best:
-                best, best_its = err, its
-            elif its - best_its >= STALL_SWEEPS:  # at round-off: a tolerance out of reach
-                stalled = True
-                break
-    else:
-        converged = True
+    rows = _row_blocks(prob.contact)
+    w_t = np.stack([prob.wx, prob.wy])
+    oh, os_ = float(omega_h), float(omega_s)
 
-    traction = np.stack([px.T, py.T])
-    st = np.ascontiguousarray(state.T)
-    slip = (w + operator.apply(traction)) / grid.dx
-    slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
-    force, mz, ratio, pmax = tangential_summary(grid, traction, st)
-    if not contact.any():
-        message = "no contact: zero normal pressure"
-    elif not rolling:
-        message = "zero creepage: zero traction, no iterations"
-    elif converged:
-        message = f"SteadyGS converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
-    else:
-        message = (f"SteadyGS not converged: eps = {err:.3g} after {its} sweeps "
-                   f"(tolerance {tolerance:g})")
-        if stalled:
-            message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
-                        f"{STALL_SWEEPS} sweeps")
-    return TangentialResult(
-        grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
-        slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
-        message=message, wall_time=time.perf_counter() - t0, error=err,
-        history=np.asarray(hist))
+    def sweep() -> float:
+        qx, qy = px.copy(), py.copy()  # the runs move many elements: measure the whole field
+        if prob.use_numba:
+            _sweep_blocked(kern, cum, operator, w_t, prob.g, px, py, prob.state, prob.lo,
+                           prob.hi, rows, oh, os_)
+        else:
+            _sweep_numpy(kern, cum, prob.wx, prob.wy, prob.g, px, py, prob.state, prob.lo,
+                         prob.hi, oh, os_)
+        return float(np.sum((px - qx) ** 2 + (py - qy) ** 2))
+
+    return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0)
