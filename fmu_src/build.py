@@ -3,17 +3,21 @@
 The FMU holds the compiled C shim (``binaries/linux64/<id>.so``), a copy of the railcontact
 package under a module name derived from the model identifier (its variable table is
 ``railcontact.fmu.variables``), the Python slave and its bootstrap, ``python.cfg`` (the
-Python and environment it was built with) and any extra
-profile files, all in ``resources/``. No Python is bundled: the FMU runs in the Python it was
-built with (its numpy, scipy, pyfftw and numba).
+Python it was built with, railcontact's version and the dependency versions it needs),
+``python.txt`` when built with ``python=`` (``--python``: the Python to run in) and any
+extra profile files, all in ``resources/``. No Python is bundled: the FMU runs in the Python
+named by ``RAILCONTACT_PYTHON``, ``python.txt`` or ``python.cfg`` (in that order), with that
+environment's numpy, scipy, pyfftw and numba.
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib
+import importlib.util
 import os
+import re
 import shutil
-import site
 import subprocess
 import sys
 import sysconfig
@@ -152,25 +156,29 @@ def _copy_package(dst: Path, package: str) -> None:
     import railcontact
 
     src = Path(railcontact.__file__).resolve().parent
-    shutil.copytree(src, dst / package,
-                    ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc"))
+    shutil.copytree(src, dst / package,  # not _fmu_src: these sources, in a wheel install
+                    ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc",
+                                                  "_fmu_src"))
     shutil.copy(HERE / "slave.py", dst / package / "_fmu_slave.py")
     shutil.copy(HERE / "fmu_bootstrap.py", dst / "fmu_bootstrap.py")
 
 
 def source_digest(profiles: list[str | Path] = (),
-                  model_identifier: str = MODEL_IDENTIFIER) -> str:
+                  model_identifier: str = MODEL_IDENTIFIER, python: str | None = None) -> str:
     """SHA-1 of everything an FMU is built from: the railcontact package, ``fmu_src/``,
-    the Python it runs in and the profile files. A built FMU stores it in
-    ``resources/source.sha1``; a different digest means the FMU is stale."""
+    the Python it runs in (``python``: the one named by ``--python``) and the profile files.
+    A built FMU stores it in ``resources/source.sha1``; a different digest means the FMU is
+    stale."""
     import railcontact
 
     digest = hashlib.sha1()
     digest.update(f"{model_identifier}\n{sys.executable}\n{sys.version}\n".encode())
+    if python is not None:
+        digest.update(f"python.txt={python}\n".encode())
     pkg = Path(railcontact.__file__).resolve().parent
     for base, pattern in ((pkg, "*.py"), (HERE, "*.[pc]*")):
         for f in sorted(base.rglob(pattern)):
-            if f.is_file() and "__pycache__" not in f.parts:
+            if f.is_file() and not {"__pycache__", "_fmu_src"} & set(f.relative_to(base).parts):
                 digest.update(f"{base.name}/{f.relative_to(base).as_posix()}".encode())
                 digest.update(f.read_bytes())
     for p in profiles:
@@ -180,8 +188,56 @@ def source_digest(profiles: list[str | Path] = (),
     return digest.hexdigest()
 
 
+def _bootstrap():
+    """``fmu_bootstrap.py`` (the FMU's start-up code) as a module."""
+    name = "_railcontact_fmu_bootstrap"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, HERE / "fmu_bootstrap.py")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[name]
+
+
+def requirements() -> dict[str, str]:
+    """``python.cfg``'s record of what the FMU needs: ``requires`` (railcontact's minimum
+    versions of the packages the FMU imports, ``numpy>=1.24, ...``), ``requires_python`` and
+    ``built_with`` (the versions in the building environment, for the log)."""
+    from importlib import metadata
+
+    try:
+        declared = metadata.requires("railcontact") or []
+        requires_python = metadata.metadata("railcontact").get("Requires-Python") or ""
+    except metadata.PackageNotFoundError:  # a bare source tree: no minimum versions known
+        declared, requires_python = [], ""
+    minimum = dict.fromkeys(_bootstrap().DEPENDENCIES, "")
+    for r in declared:
+        m = re.fullmatch(r"\s*([A-Za-z0-9_.-]+)\s*(?:>=\s*([0-9][\w.]*))?\s*", r)
+        if m and m.group(1).lower() in minimum:  # conditional ones (extras) do not match
+            minimum[m.group(1).lower()] = m.group(2) or ""
+    built_with = []
+    for module in minimum:
+        mod = importlib.import_module(module)
+        built_with.append(f"{module} {getattr(mod, '__version__', '?')}")
+    return {"requires": ", ".join(f"{k}>={v}" if v else k for k, v in minimum.items()),
+            "requires_python": requires_python,
+            "built_with": "; ".join(built_with)}
+
+
+def named_python(path: str | Path) -> str:
+    """``--python PATH`` as written to ``resources/python.txt``: absolute (symbolic links
+    kept: a venv's ``bin/python`` is one), a python executable or a venv/prefix folder."""
+    p = Path(os.path.abspath(Path(path).expanduser()))
+    if p.is_dir():
+        if not any(os.access(p / "bin" / n, os.X_OK) for n in ("python3", "python")):
+            raise BuildError(f"--python {path}: the folder has no bin/python3 or bin/python")
+    elif not (p.is_file() and os.access(p, os.X_OK)):
+        raise BuildError(f"--python {path}: not a python executable or a venv/prefix folder")
+    return str(p)
+
+
 def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path] = (),
-          model_identifier: str = MODEL_IDENTIFIER) -> Path:
+          model_identifier: str = MODEL_IDENTIFIER, python: str | Path | None = None) -> Path:
     """Build the FMU and return its path.
 
     Parameters
@@ -191,11 +247,16 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
     profiles
         Profile files to put into ``resources/`` (the parameters ``wheel_profile`` and
         ``rail_profile`` then name them by file name).
+    python
+        The Python the FMU is to run in (a python executable or a venv/prefix folder),
+        written to ``resources/python.txt``; it is checked here as ``railcontact fmu check``
+        does (it must have railcontact's dependencies). Default: the Python building it.
     """
     import railcontact
 
     output = Path(output).resolve()
     package = f"railcontact_fmu_{model_identifier}"
+    named = named_python(python) if python is not None else None
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         compile_shim(root, model_identifier)
@@ -207,20 +268,27 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
             if not p.is_file():
                 raise BuildError(f"profile file {p} not found")
             shutil.copy(p, res / p.name)
-        sites = [*site.getsitepackages(), site.getusersitepackages()]
+        if named is None:
+            libpython()  # the build interpreter must be able to start in a C host
         cfg = {
             "version": f"{sys.version_info[0]}.{sys.version_info[1]}",
             "executable": sys.executable,
-            "libpython": str(libpython()),
-            "home": sys.base_prefix,
-            "site": os.pathsep.join(s for s in sites if Path(s).is_dir()),
             "package": package,
             "railcontact": getattr(railcontact, "__version__", ""),
+            **requirements(),
         }
-        (res / "source.sha1").write_text(source_digest(profiles, model_identifier) + "\n",
-                                         encoding="utf-8")
+        (res / "source.sha1").write_text(
+            source_digest(profiles, model_identifier, named) + "\n", encoding="utf-8")
         (res / "python.cfg").write_text("".join(f"{k}={v}\n" for k, v in cfg.items()),
                                         encoding="utf-8")
+        if named is not None:
+            (res / "python.txt").write_text(named + "\n", encoding="utf-8")
+            from railcontact.fmu.check import check_unpacked
+
+            report = check_unpacked(root, use_env=False)
+            if not report.ok:
+                raise BuildError(f"the Python given with --python cannot run the FMU:\n"
+                                 f"{report.text}")
         digest = hashlib.sha1()
         for f in sorted(root.rglob("*")):
             if f.is_file():

@@ -2,24 +2,43 @@
  * railcontact FMU: a thin FMI 2.0 Co-Simulation shim around an embedded CPython.
  *
  * Design (see ../shared/reference/fmu.md):
+ *  - which Python: the environment variable RAILCONTACT_PYTHON (a python executable or a
+ *    venv/prefix folder), else resources/python.txt (`railcontact fmu build --python`),
+ *    else the Python the FMU was built with (resources/python.cfg); the first that is set
+ *    is used, and a broken one is an error, not a reason to try the next;
+ *  - that Python is asked (`PYTHON -I resources/python/fmu_bootstrap.py probe`) for its
+ *    version, environment, site-packages and shared libpython;
  *  - no link-time libpython: the few C-API functions are resolved with dlsym, from the
- *    process when it already runs Python (fmpy, libcosimpy), otherwise from the libpython
- *    recorded in resources/python.cfg (overridable: RAILCONTACT_FMU_LIBPYTHON,
- *    RAILCONTACT_FMU_PYTHONHOME), which is loaded and initialised with Py_InitializeEx(0);
+ *    process when it already runs Python (fmpy, libcosimpy: the FMU then runs in the host's
+ *    interpreter and says so), otherwise from the chosen Python's libpython (overridable:
+ *    RAILCONTACT_FMU_LIBPYTHON), which is loaded and initialised with Py_InitializeEx(0)
+ *    as that Python's own executable, ignoring the environment (PYTHONPATH, PYTHONHOME) and
+ *    the user site-packages: only that environment's site-packages and the FMU's resources;
  *  - Py_Finalize is never called and the library is linked with -z nodelete;
  *  - each host thread keeps one Python thread state; a call only takes and gives back the
  *    GIL;
  *  - Real and Integer values are read and written in C directly in the slave's numpy
  *    buffers; doStep, initialisation, strings and state go to the Python slave, whose
- *    methods return an FMI status and never raise.
+ *    methods return an FMI status and never raise;
+ *  - every message goes to the FMI logger whole, in pieces of at most LOG_PIECE bytes
+ *    (hosts format a message into a fixed buffer: fmpy's holds 4096 bytes).
  */
+#define _GNU_SOURCE
 #include <dlfcn.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <spawn.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <wchar.h>
+
+extern char **environ;
 
 #include "fmi2Functions.h"
 
@@ -62,7 +81,8 @@ static struct {
 } py;
 
 static int py_ready = 0;
-static char py_error[1024] = "";
+static int py_host = 0;             /* the process ran Python before the FMU came */
+static char *py_located = NULL;     /* which Python and how: passed to the bootstrap */
 
 enum { OUTPUT = 0, INPUT = 1, PARAMETER = 2 };
 enum { INSTANTIATED, INITIALIZATION, STEPPING, TERMINATED, FAILED };
@@ -90,15 +110,77 @@ typedef struct {
     PyObject *bytes;
 } State;
 
-/* ---- logging ------------------------------------------------------------------------ */
-static void logf_(Instance *c, fmi2Status status, const char *category, const char *fmt, ...) {
-    if (!c || !c->cb.logger) return;
-    char buf[4096];
+/* ---- growing strings ---------------------------------------------------------------- */
+typedef struct {
+    char *s;
+    size_t n, cap;
+} Str;
+
+static void str_addn(Str *b, const char *t, size_t k) {
+    if (b->n + k + 1 > b->cap) {
+        size_t cap = b->cap ? b->cap : 256;
+        while (cap < b->n + k + 1) cap *= 2;
+        char *s = realloc(b->s, cap);
+        if (!s) return;
+        b->s = s;
+        b->cap = cap;
+    }
+    memcpy(b->s + b->n, t, k);
+    b->n += k;
+    b->s[b->n] = 0;
+}
+
+static void str_add(Str *b, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
+    char *t = NULL;
+    int k = vasprintf(&t, fmt, ap);
     va_end(ap);
-    c->cb.logger(c->cb.componentEnvironment, c->name, status, category, "%s", buf);
+    if (k >= 0) str_addn(b, t, (size_t)k);
+    free(t);
+}
+
+static const char *str_get(const Str *b) { return b->s ? b->s : ""; }
+
+/* ---- logging ------------------------------------------------------------------------ */
+#define LOG_PIECE 1000
+
+/* the whole text, in consecutive pieces of at most LOG_PIECE bytes, cut after a line end
+ * where there is one, never inside a UTF-8 character; a piece's final line end is left to
+ * the logger */
+static void log_text(Instance *c, fmi2Status status, const char *category, const char *text) {
+    if (!c || !c->cb.logger || !text) return;
+    const char *p = text;
+    while (*p) {
+        size_t len = strlen(p), take = len;
+        if (take > LOG_PIECE) {
+            take = LOG_PIECE;
+            const char *nl = memrchr(p, '\n', LOG_PIECE);
+            if (nl && nl > p) {
+                take = (size_t)(nl - p) + 1;
+            } else {
+                while (take > 1 && ((unsigned char)p[take] & 0xC0) == 0x80) --take;
+            }
+        }
+        size_t k = take;
+        if (k && p[k - 1] == '\n') --k;
+        char *piece = strndup(p, k);
+        if (piece && *piece)
+            c->cb.logger(c->cb.componentEnvironment, c->name, status, category, "%s", piece);
+        free(piece);
+        p += take;
+    }
+}
+
+static void logf_(Instance *c, fmi2Status status, const char *category, const char *fmt, ...) {
+    if (!c || !c->cb.logger) return;
+    va_list ap;
+    va_start(ap, fmt);
+    char *t = NULL;
+    int k = vasprintf(&t, fmt, ap);
+    va_end(ap);
+    if (k >= 0) log_text(c, status, category, t);
+    free(t);
 }
 
 static const char *category_of(fmi2Status s) {
@@ -117,11 +199,11 @@ static void *sym(void *lib, const char *name) {
     return p;
 }
 
-static int resolve(void *lib) {
+static int resolve(void *lib, Str *err) {
 #define R(field, name)                                                                 \
     py.field = sym(lib, name);                                                         \
     if (!py.field) {                                                                   \
-        snprintf(py_error, sizeof py_error, "CPython symbol %s not found", name);      \
+        str_add(err, "the CPython function %s is not in the Python library", name);  \
         return 0;                                                                      \
     }
     R(IsInitialized, "Py_IsInitialized");
@@ -154,26 +236,218 @@ static int resolve(void *lib) {
     return 1;
 }
 
-/* read "key=value" from resources/python.cfg */
-static int config_value(const char *resources, const char *key, char *out, size_t n) {
-    char path[4096];
-    snprintf(path, sizeof path, "%s/python.cfg", resources);
-    FILE *f = fopen(path, "r");
-    if (!f) return 0;
-    char line[4096];
+/* the value of "key=value" in a text of such lines (a new string), or NULL */
+static char *text_value(const char *text, const char *key) {
     size_t k = strlen(key);
-    int found = 0;
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, key, k) == 0 && line[k] == '=') {
-            line[strcspn(line, "\r\n")] = 0;
-            snprintf(out, n, "%s", line + k + 1);
-            found = 1;
+    for (const char *p = text; p && *p;) {
+        const char *end = strchr(p, '\n');
+        size_t len = end ? (size_t)(end - p) : strlen(p);
+        if (len > k && strncmp(p, key, k) == 0 && p[k] == '=')
+            return strndup(p + k + 1, len - k - 1);
+        p = end ? end + 1 : NULL;
+    }
+    return NULL;
+}
+
+/* a whole file (a new string), or NULL */
+static char *read_file(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    Str b = {0};
+    char buf[4096];
+    size_t k;
+    while ((k = fread(buf, 1, sizeof buf, f)) > 0) str_addn(&b, buf, k);
+    fclose(f);
+    return b.s ? b.s : strdup("");
+}
+
+/* "key=value" from resources/python.cfg (a new string), or NULL */
+static char *config_value(const char *resources, const char *key) {
+    char *path = NULL;
+    if (asprintf(&path, "%s/python.cfg", resources) < 0) return NULL;
+    char *text = read_file(path);
+    free(path);
+    char *v = text ? text_value(text, key) : NULL;
+    free(text);
+    return v;
+}
+
+/* the first non-blank line of resources/python.txt, trimmed (a new string), or NULL */
+static char *python_txt(const char *resources) {
+    char *path = NULL;
+    if (asprintf(&path, "%s/python.txt", resources) < 0) return NULL;
+    char *text = read_file(path);
+    free(path);
+    if (!text) return NULL;
+    char *line = NULL;
+    for (char *p = strtok(text, "\r\n"); p; p = strtok(NULL, "\r\n")) {
+        while (*p == ' ' || *p == '\t') ++p;
+        size_t n = strlen(p);
+        while (n && (p[n - 1] == ' ' || p[n - 1] == '\t')) p[--n] = 0;
+        if (*p) {
+            line = strdup(p);
             break;
         }
     }
-    fclose(f);
-    return found;
+    free(text);
+    return line;
 }
+
+/* path -> a python executable: itself, or a venv/prefix folder's bin/python3 or bin/python
+ * (a new string), or NULL with the reason in why */
+static char *python_executable(const char *path, Str *why) {
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        str_add(why, "'%s' does not exist (%s): was the environment moved or deleted?", path,
+                strerror(errno));
+        return NULL;
+    }
+    char *exe = NULL;
+    if (S_ISDIR(st.st_mode)) {
+        const char *names[] = {"bin/python3", "bin/python"};
+        for (size_t k = 0; k < 2 && !exe; ++k) {
+            char *cand = NULL;
+            if (asprintf(&cand, "%s/%s", path, names[k]) < 0) return NULL;
+            if (access(cand, X_OK) == 0) exe = cand;
+            else free(cand);
+        }
+        if (!exe) {
+            str_add(why, "'%s' is a folder without an executable bin/python3 or bin/python "
+                    "(or they point at a Python that no longer exists)", path);
+            return NULL;
+        }
+        return exe;
+    }
+    if (access(path, X_OK) != 0) {
+        str_add(why, "'%s' is not an executable file", path);
+        return NULL;
+    }
+    return strdup(path);
+}
+
+/* run PYTHON -I resources/python/fmu_bootstrap.py probe RESOURCES; its output (stdout and
+ * stderr) in out; 1 when it ended with "end=1" */
+static int run_probe(const char *exe, const char *resources, Str *out) {
+    char *script = NULL;
+    if (asprintf(&script, "%s/python/fmu_bootstrap.py", resources) < 0) return 0;
+    int fd[2];
+    if (pipe2(fd, O_CLOEXEC) != 0) {
+        str_add(out, "cannot create a pipe: %s", strerror(errno));
+        free(script);
+        return 0;
+    }
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fd[1], 1);
+    posix_spawn_file_actions_adddup2(&fa, fd[1], 2);
+    char *argv[] = {(char *)exe, "-I", script, "probe", (char *)resources, NULL};
+    pid_t pid;
+    int rc = posix_spawn(&pid, exe, &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    close(fd[1]);
+    if (rc != 0) {
+        str_add(out, "cannot run '%s': %s", exe, strerror(rc));
+        close(fd[0]);
+        free(script);
+        return 0;
+    }
+    char buf[4096];
+    ssize_t k;
+    while ((k = read(fd[0], buf, sizeof buf)) != 0) {
+        if (k < 0) {
+            if (errno == EINTR) continue;
+            break;
+        }
+        str_addn(out, buf, (size_t)k);
+    }
+    close(fd[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    free(script);
+    const char *t = str_get(out);
+    size_t n = strlen(t);
+    return n >= 6 && (strcmp(t + n - 6, "end=1\n") == 0);
+}
+
+/* Which Python the FMU uses and what it is. On success (returns 1) the text is key=value
+ * lines: source, requested, executable and the probe's (version, prefix, libpython, site,
+ * ...); on failure (returns 0) it is the whole message for the user. A new string. */
+static char *locate(const char *resources, int use_env, int *ok) {
+    Str out = {0}, why = {0};
+    *ok = 0;
+    const char *env = use_env ? getenv("RAILCONTACT_PYTHON") : NULL;
+    char *txt = python_txt(resources), *built = config_value(resources, "executable");
+    char *requires = config_value(resources, "requires");
+    const char *requested = NULL, *source = NULL;
+    if (env && *env) {
+        requested = env;
+        source = "the environment variable RAILCONTACT_PYTHON";
+    } else if (txt) {
+        requested = txt;
+        source = "resources/python.txt (written by `railcontact fmu build --python`)";
+    } else if (built && *built) {
+        requested = built;
+        source = "the Python the FMU was built with (resources/python.cfg)";
+    }
+    char *exe = NULL;
+    Str probe = {0};
+    if (!requested) {
+        str_add(&why, "no Python is named: resources/python.cfg is missing or has no "
+                "executable");
+    } else if ((exe = python_executable(requested, &why)) != NULL) {
+        if (!run_probe(exe, resources, &probe)) {
+            str_add(&why, "asking '%s' about itself (%s -I %s/python/fmu_bootstrap.py probe) "
+                    "failed:\n%s", exe, exe, resources, str_get(&probe));
+        } else {
+            char *problem = text_value(str_get(&probe), "problem");
+            if (problem && *problem) str_add(&why, "%s", problem);
+            free(problem);
+        }
+    }
+    if (why.n == 0) {
+        *ok = 1;
+        str_add(&out, "source=%s\nrequested=%s\nexecutable=%s\n%s", source, requested, exe,
+                str_get(&probe));
+    } else {
+        str_add(&out, "cannot start the FMU's Python: %s\n", str_get(&why));
+        if (source) str_add(&out, "That Python was chosen from %s.\n", source);
+        str_add(&out,
+                "The FMU looks for its Python in this order and uses the first that is set:\n"
+                "  1. the environment variable RAILCONTACT_PYTHON (a python executable, or a "
+                "venv/prefix folder): %s%s%s\n"
+                "  2. resources/python.txt, written by `railcontact fmu build --python PATH`: "
+                "%s%s%s\n"
+                "  3. the Python the FMU was built with: %s%s%s\n",
+                env && *env ? "'" : "", env && *env ? env : "not set", env && *env ? "'" : "",
+                txt ? "'" : "", txt ? txt : "none", txt ? "'" : "", built ? "'" : "",
+                built ? built : "unknown", built ? "'" : "");
+        str_add(&out,
+                "In a C host it starts that Python's environment only: its site-packages and "
+                "the FMU's resources, no user site-packages, no PYTHONPATH.\n"
+                "To fix: set RAILCONTACT_PYTHON to a Python or virtual environment that has "
+                "railcontact's dependencies (%s) and restart the host, or rebuild the FMU with "
+                "`railcontact fmu build --python PATH`; `railcontact fmu check FILE.fmu` "
+                "prints what the FMU will use.",
+                requires && *requires ? requires : "numpy, scipy, pyfftw, numba");
+    }
+    free(txt);
+    free(built);
+    free(requires);
+    free(exe);
+    free(probe.s);
+    free(why.s);
+    return out.s ? out.s : strdup("");
+}
+
+/* for `railcontact fmu check` and `railcontact fmu build --python`: what locate() finds
+ * (use_env = 0: as if RAILCONTACT_PYTHON were not set), without starting Python; *ok = 1
+ * when usable. Free the text with railcontact_fmu_free. */
+char *railcontact_fmu_locate(const char *resources, int use_env, int *ok) {
+    return locate(resources, use_env, ok);
+}
+
+void railcontact_fmu_free(char *text) { free(text); }
 
 static __thread int thread_primed = 0;
 
@@ -187,44 +461,105 @@ static void prime_thread(void) {
     thread_primed = 1;
 }
 
-static int start_python(const char *resources) {
+/* set an int configuration global of CPython (Py_NoUserSiteDirectory, ...) if it exists */
+static void set_flag(void *lib, const char *name, int value) {
+    int *flag = sym(lib, name);
+    if (flag) *flag = value;
+}
+
+static int start_python(const char *resources, Str *err) {
     if (py_ready) return 1;
-    void *self_lib = NULL;
     py.IsInitialized = sym(NULL, "Py_IsInitialized");
-    if (py.IsInitialized && py.IsInitialized()) {
-        if (!resolve(NULL)) return 0;
+    int ok = 0;
+    char *loc = locate(resources, 1, &ok);
+    if (py.IsInitialized && py.IsInitialized()) { /* a Python host: use its interpreter */
+        if (!resolve(NULL, err)) {
+            free(loc);
+            return 0;
+        }
+        Str t = {0};
+        str_add(&t, "mode=host\n");
+        if (ok) {
+            str_add(&t, "%s", loc);
+        } else { /* not fatal here: the host's packages may do; the bootstrap says so */
+            for (char *p = loc; *p; ++p)
+                if (*p == '\n') *p = '\x1f';
+            str_add(&t, "locate_error=%s\n", loc);
+        }
+        free(loc);
+        py_located = t.s;
+        py_host = 1;
         py_ready = 1;
         return 1;
     }
-    char lib[4096] = "", home[4096] = "", version[64] = "?";
-    const char *env = getenv("RAILCONTACT_FMU_LIBPYTHON");
-    if (env && *env) snprintf(lib, sizeof lib, "%s", env);
-    else config_value(resources, "libpython", lib, sizeof lib);
-    env = getenv("RAILCONTACT_FMU_PYTHONHOME");
-    if (env && *env) snprintf(home, sizeof home, "%s", env);
-    else config_value(resources, "home", home, sizeof home);
-    config_value(resources, "version", version, sizeof version);
-    self_lib = dlopen(lib, RTLD_NOW | RTLD_GLOBAL);
-    if (!self_lib) {
-        snprintf(py_error, sizeof py_error,
-                 "cannot load the Python %s library '%s' this FMU was built with (%s); "
-                 "install Python %s with its shared library, or set "
-                 "RAILCONTACT_FMU_LIBPYTHON to its libpython path",
-                 version, lib, dlerror(), version);
+    if (!ok) {
+        str_add(err, "%s", loc);
+        free(loc);
         return 0;
     }
-    if (!resolve(self_lib)) return 0;
+    char *lib = NULL, *exe = text_value(loc, "executable");
+    const char *env = getenv("RAILCONTACT_FMU_LIBPYTHON");
+    if (env && *env) lib = strdup(env);
+    else lib = text_value(loc, "libpython");
+    if (!lib || !*lib) {
+        char *why = text_value(loc, "libpython_problem");
+        str_add(err, "cannot start the FMU's Python %s: %s; or set RAILCONTACT_FMU_LIBPYTHON "
+                "to its libpython, or RAILCONTACT_PYTHON to another Python.\n%s",
+                exe, why ? why : "no shared libpython", loc);
+        free(why);
+        free(lib);
+        free(exe);
+        free(loc);
+        return 0;
+    }
+    void *self_lib = dlopen(lib, RTLD_NOW | RTLD_GLOBAL);
+    if (!self_lib) {
+        str_add(err, "cannot load the Python library '%s' of %s: %s; install that Python's "
+                "shared library, or set RAILCONTACT_FMU_LIBPYTHON to it.\n%s", lib, exe,
+                dlerror(), loc);
+        free(lib);
+        free(exe);
+        free(loc);
+        return 0;
+    }
+    if (!resolve(self_lib, err)) {
+        free(lib);
+        free(exe);
+        free(loc);
+        return 0;
+    }
+    Str t = {0};
+    str_add(&t, "mode=started\n%slibpython_loaded=%s\n", loc, lib);
     if (!py.IsInitialized()) {
-        if (*home && py.SetPythonHome) {
-            static wchar_t *whome = NULL; /* must outlive the interpreter */
-            whome = py.DecodeLocale(home, NULL);
-            if (whome) py.SetPythonHome(whome);
-        } else if (*home) {
-            setenv("PYTHONHOME", home, 0);
+        /* start it as the chosen executable would start: Python's own start-up finds the
+         * venv (pyvenv.cfg) and its prefix from the program name; no PYTHONPATH,
+         * PYTHONHOME or user site-packages from the host */
+        void (*set_program_name)(const wchar_t *) = sym(self_lib, "Py_SetProgramName");
+        static wchar_t *wexe = NULL, *whome = NULL; /* must outlive the interpreter */
+        if (set_program_name) {
+            set_flag(self_lib, "Py_IgnoreEnvironmentFlag", 1);
+            set_flag(self_lib, "Py_NoUserSiteDirectory", 1);
+            wexe = py.DecodeLocale(exe, NULL);
+            if (wexe) set_program_name(wexe);
+        } else { /* Python >= 3.13: only the home can be given; the bootstrap adds the
+                  * environment's site-packages */
+            char *home = text_value(loc, "base_prefix");
+            if (home && *home && py.SetPythonHome) {
+                whome = py.DecodeLocale(home, NULL);
+                if (whome) py.SetPythonHome(whome);
+            } else if (home && *home) {
+                setenv("PYTHONHOME", home, 1);
+            }
+            set_flag(self_lib, "Py_NoUserSiteDirectory", 1);
+            free(home);
         }
         py.InitializeEx(0);
         py.EvalSaveThread(); /* the main thread keeps its state, releases the GIL */
     }
+    free(lib);
+    free(exe);
+    free(loc);
+    py_located = t.s;
     py_ready = 1;
     return 1;
 }
@@ -232,13 +567,19 @@ static int start_python(const char *resources) {
 static const char BOOTSTRAP[] =
     "import os, sys, traceback\n"
     "error = ''\n"
+    "info = ''\n"
+    "warning = ''\n"
     "try:\n"
     "    _p = os.path.join(__rc_resources__, 'python', 'fmu_bootstrap.py')\n"
     "    with open(_p) as _f:\n"
     "        exec(compile(_f.read(), _p, 'exec'))\n"
-    "    slave = make_slave(__rc_resources__, __rc_instance__)\n"
-    "except BaseException:\n"
-    "    error = traceback.format_exc()\n";
+    "    _m, info, warning = start(__rc_resources__, __rc_located__)\n"
+    "    slave = _m.make_slave(__rc_resources__, __rc_instance__)\n"
+    "except BaseException as _e:\n"
+    "    if type(_e).__name__ == 'StartError':\n"
+    "        error = str(_e)\n"
+    "    else:\n"
+    "        error = traceback.format_exc()\n";
 
 /* file:///a/b%20c -> /a/b c */
 static char *uri_to_path(const char *uri) {
@@ -360,8 +701,10 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         free_instance(c);
         return NULL;
     }
-    if (!start_python(resources)) {
-        logf_(c, fmi2Error, "logStatusError", "cannot start Python: %s", py_error);
+    Str err = {0};
+    if (!start_python(resources, &err)) {
+        log_text(c, fmi2Error, "logStatusError", str_get(&err));
+        free(err.s);
         free(resources);
         free_instance(c);
         return NULL;
@@ -369,24 +712,35 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     int ok = 0;
     ENTER;
     PyObject *g = py.DictNew();
-    PyObject *s1 = py.UnicodeFromString(resources), *s2 = py.UnicodeFromString(c->name);
+    PyObject *s1 = py.UnicodeFromString(resources), *s2 = py.UnicodeFromString(c->name),
+             *s3 = py.UnicodeFromString(py_located ? py_located : "");
     py.DictSetItemString(g, "__rc_resources__", s1);
     py.DictSetItemString(g, "__rc_instance__", s2);
+    py.DictSetItemString(g, "__rc_located__", s3);
     py.DecRef(s1);
     py.DecRef(s2);
+    py.DecRef(s3);
     PyObject *r = py.RunStringFlags(BOOTSTRAP, Py_file_input, g, g, NULL);
     if (!r) {
         py.ErrClear();
         logf_(c, fmi2Error, "logStatusError", "the FMU's Python bootstrap failed");
     } else {
         py.DecRef(r);
-        PyObject *err = py.DictGetItemString(g, "error"); /* borrowed */
-        const char *etext = err ? py.UnicodeAsUTF8(err) : NULL;
+        PyObject *e = py.DictGetItemString(g, "error"); /* borrowed */
+        const char *etext = e ? py.UnicodeAsUTF8(e) : NULL;
+        PyObject *w = py.DictGetItemString(g, "warning");
+        const char *wtext = w ? py.UnicodeAsUTF8(w) : NULL;
+        PyObject *i = py.DictGetItemString(g, "info");
+        const char *itext = i ? py.UnicodeAsUTF8(i) : NULL;
+        if (py.ErrOccurred()) py.ErrClear();
         PyObject *slave = py.DictGetItemString(g, "slave");
+        if (wtext && *wtext) log_text(c, fmi2Warning, "logStatusWarning", wtext);
         if (etext && *etext) {
-            logf_(c, fmi2Error, "logStatusError", "cannot start the railcontact slave:\n%s",
-                  etext);
+            logf_(c, fmi2Error, "logStatusError", "cannot start the railcontact slave: %s%s",
+                  etext, py_host ? "" : "\n(the FMU started this Python in the process: "
+                  "restart the host after changing the environment)");
         } else if (slave) {
+            if (c->logging && itext && *itext) log_text(c, fmi2OK, "logAll", itext);
             c->slave = py.BuildValue("O", slave); /* a new reference to the borrowed one */
             c->m_do_step = method(slave, "do_step");
             c->m_exit_init = method(slave, "exit_initialization");

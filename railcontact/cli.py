@@ -2,7 +2,8 @@
 
 ``railcontact demo [--quick]`` co-simulates a wheelset with the FMU through fmpy;
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
-``railcontact fmu build [-o dist/RailContact.fmu]`` builds the FMU; ``railcontact settings``
+``railcontact fmu build [-o dist/RailContact.fmu] [--python PATH]`` builds the FMU and
+``railcontact fmu check FILE.fmu`` tells which Python it will run in; ``railcontact settings``
 prints the reference of every setting. Errors in the input are
 reported in one line (exit status 2), never as a traceback.
 """
@@ -135,9 +136,17 @@ def settings_reference() -> str:
 def _cmd_fmu_build(args: argparse.Namespace) -> int:
     from .fmu import build_fmu
 
-    out = build_fmu(args.output, args.profile or [])
+    out = build_fmu(args.output, args.profile or [], python=args.python)
     print(f"FMU written to {out}")
     return 0
+
+
+def _cmd_fmu_check(args: argparse.Namespace) -> int:
+    from .fmu import check_fmu
+
+    report = check_fmu(args.fmu)
+    print(report.text)
+    return 0 if report.ok else 1
 
 
 def _cmd_wisdom(args: argparse.Namespace) -> int:
@@ -242,7 +251,20 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the .fmu to write (default dist/RailContact.fmu)")
     fb.add_argument("--profile", action="append", metavar="FILE",
                     help="a profile file to put into the FMU's resources (repeatable)")
+    fb.add_argument("--python", metavar="PATH",
+                    help="the Python the FMU is to run in: a python executable or a "
+                    "venv/prefix folder with railcontact's dependencies, written to "
+                    "resources/python.txt (default: this Python); RAILCONTACT_PYTHON "
+                    "overrides it where the FMU runs")
     fb.set_defaults(func=_cmd_fmu_build)
+    fc = fsub.add_parser("check", help="which Python an FMU will run in, and whether it can",
+                         description="Asks the FMU which Python it chooses here "
+                         "(RAILCONTACT_PYTHON, else resources/python.txt, else the Python "
+                         "it was built with), starts the FMU's Python code in it as a C host "
+                         "would and prints what it uses. Exit 0 when the FMU can start, 1 "
+                         "when it cannot (with the message the FMU would log).")
+    fc.add_argument("fmu", help="the .fmu file")
+    fc.set_defaults(func=_cmd_fmu_check)
     return ap
 
 

@@ -2,8 +2,10 @@
 modelDescription generator): ``railcontact fmu build [-o dist/RailContact.fmu]``. The
 variable table is :mod:`railcontact.fmu.variables`.
 
-The sources live beside the package in a source checkout (``pip install -e .``); the built
-FMU runs in the Python environment it was built with.
+The sources are ``fmu_src/`` at the top of a source checkout (``pip install -e .``); a wheel
+or sdist carries them as ``railcontact/_fmu_src/`` (``setup.py``). The built FMU runs in the
+Python named by ``RAILCONTACT_PYTHON``, by ``--python`` at build time, or else the one that
+built it (``railcontact fmu check FILE.fmu`` tells which).
 """
 
 from __future__ import annotations
@@ -18,12 +20,16 @@ DEFAULT_OUTPUT = "dist/RailContact.fmu"
 
 
 def fmu_sources() -> Path:
-    """The ``fmu_src`` folder of the source checkout this package was installed from."""
-    d = Path(__file__).resolve().parents[2] / "fmu_src"
-    if not (d / "railcontact_fmu.c").is_file():
-        raise RailContactError(f"FMU sources not found at {d}: build the FMU from a source "
-                               "checkout installed with `pip install -e .`")
-    return d
+    """The FMU's sources: ``railcontact/_fmu_src`` of an installed wheel, or ``fmu_src`` of
+    the source checkout an editable install points at."""
+    package = Path(__file__).resolve().parents[1]
+    places = (package / "_fmu_src", package.parent / "fmu_src")
+    for d in places:
+        if (d / "railcontact_fmu.c").is_file():
+            return d
+    raise RailContactError(f"FMU sources not found (looked in {places[0]} and {places[1]}): "
+                           "reinstall railcontact (`pip install railcontact`, or "
+                           "`pip install .` in a source checkout)")
 
 
 def _builder():
@@ -37,11 +43,14 @@ def _builder():
     return mod
 
 
-def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = ()) -> Path:
-    """Build the FMU (gcc + fmpy's FMI 2 headers) and return its path."""
+def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = (),
+              python: str | Path | None = None) -> Path:
+    """Build the FMU (gcc + fmpy's FMI 2 headers) and return its path; ``python`` (a python
+    executable or a venv/prefix folder) is the Python it is to run in (default: this one),
+    checked before the FMU is written."""
     b = _builder()
     try:
-        return b.build(output, list(profiles))
+        return b.build(output, list(profiles), python=python)
     except b.BuildError as exc:
         raise RailContactError(f"cannot build the FMU: {exc}") from None
 

@@ -6,6 +6,9 @@
  * displacement sweeping +-6 mm), runs N_STEPS steps of 1 ms, checks that every output
  * read is finite, frees the instance and unloads the library. Exit code 0 on success.
  * With "bench" it prints per-call timings (set+get in C; a Python round trip; a step).
+ * Every logger call is printed to stderr as "[instance|status|category] message"; the
+ * environment variable LOGGING=1 instantiates with loggingOn (the FMU then says which
+ * Python it runs in).
  */
 #include <dlfcn.h>
 #include <math.h>
@@ -61,8 +64,9 @@ int main(int argc, char **argv) {
         LOAD(fmi2ExitInitializationMode) LOAD(fmi2DoStep) LOAD(fmi2GetReal) LOAD(fmi2SetReal)
         LOAD(fmi2GetInteger) LOAD(fmi2GetString) LOAD(fmi2Terminate) LOAD(fmi2FreeInstance)
         fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+        const char *logging = getenv("LOGGING");
         fmi2Component c = fmi2Instantiate("host", fmi2CoSimulation, argv[3], argv[2], &cb,
-                                          fmi2False, fmi2False);
+                                          fmi2False, logging && *logging == '1');
         if (!c) {
             fprintf(stderr, "instantiate failed\n");
             return 4;

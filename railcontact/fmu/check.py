@@ -1,0 +1,131 @@
+"""``railcontact fmu check FILE.fmu``: which Python a built FMU will run in, and whether it
+can.
+
+The check asks the FMU's own binary which Python it chooses (``RAILCONTACT_PYTHON``, then
+``resources/python.txt``, then the Python it was built with) and what that Python is (the
+shim's ``railcontact_fmu_locate``, loaded with ctypes; it starts no Python in this process),
+then runs the FMU's start-up (``resources/python/fmu_bootstrap.py check``) in that Python as
+``python -I``, as a C host starts it: the versions of numpy, scipy, pyfftw and numba, the
+FMU's copy of railcontact, a slave made. ``railcontact fmu build --python`` runs the same
+check before it writes the FMU.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import platform
+import subprocess
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import RailContactError
+
+CHECK_TIMEOUT = 300.0
+"""Seconds the start-up check may take in the chosen Python (numba's first import is slow
+on a cold disk)."""
+
+
+@dataclass(frozen=True)
+class FMUCheck:
+    """The outcome of a check.
+
+    Attributes
+    ----------
+    ok
+        Whether the FMU can start in a C host in this environment.
+    text
+        What the FMU will use (Python, where it was chosen from, environment, dependency
+        versions) or, when not ``ok``, the whole message the FMU would log.
+    """
+
+    ok: bool
+    text: str
+
+
+def _binary(root: Path) -> Path:
+    system = platform.system()
+    if system != "Linux" or platform.machine() not in ("x86_64", "AMD64"):
+        raise RailContactError(f"the FMU has a Linux x86-64 binary only; this is {system} "
+                               f"{platform.machine()}")
+    found = sorted((root / "binaries" / "linux64").glob("*.so"))
+    if not found:
+        raise RailContactError(f"no binaries/linux64/*.so in the FMU ({root})")
+    return found[0]
+
+
+def _locate(binary: Path, resources: Path, use_env: bool) -> tuple[bool, str]:
+    """The shim's choice of Python and that Python's probe (or the shim's message)."""
+    try:
+        lib = ctypes.CDLL(str(binary))
+        locate = lib.railcontact_fmu_locate
+    except (OSError, AttributeError) as exc:
+        raise RailContactError(f"cannot ask the FMU's binary {binary.name} which Python it "
+                               f"uses ({exc}): rebuild the FMU with this railcontact") from None
+    locate.restype = ctypes.c_void_p
+    locate.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+    lib.railcontact_fmu_free.argtypes = [ctypes.c_void_p]
+    ok = ctypes.c_int(0)
+    p = locate(os.fsencode(resources), int(use_env), ctypes.byref(ok))
+    try:
+        text = ctypes.string_at(p).decode("utf-8", "replace") if p else ""
+    finally:
+        lib.railcontact_fmu_free(p)
+    return bool(ok.value), text
+
+
+def check_unpacked(root: str | Path, use_env: bool = True) -> FMUCheck:
+    """Check an unpacked FMU (the folder holding ``binaries/`` and ``resources/``).
+
+    Parameters
+    ----------
+    root
+        The unpacked FMU.
+    use_env
+        Whether ``RAILCONTACT_PYTHON`` counts (False: check ``resources/python.txt`` or the
+        build interpreter, as ``fmu build --python`` does).
+    """
+    root = Path(root)
+    resources = root / "resources"
+    ok, located = _locate(_binary(root), resources, use_env)
+    if not ok:
+        return FMUCheck(False, located)
+    values = dict(line.partition("=")[::2] for line in located.splitlines() if "=" in line)
+    exe = values["executable"]
+    try:
+        r = subprocess.run(
+            [exe, "-I", str(resources / "python" / "fmu_bootstrap.py"), "check",
+             str(resources), "mode=check\n" + located],
+            capture_output=True, text=True, timeout=CHECK_TIMEOUT, stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return FMUCheck(False, f"cannot run {exe}: {exc}")
+    head = [f"Python: {exe}", f"  chosen from {values.get('source', '?')}"]
+    if values.get("libpython"):
+        head.append(f"  libpython (started in C hosts): {values['libpython']}")
+    else:
+        head.append(f"  no shared libpython, so C hosts cannot start it: "
+                    f"{values.get('libpython_problem', '')}")
+    out = (r.stdout + r.stderr).rstrip()
+    good = r.returncode == 0 and bool(values.get("libpython"))
+    tail = ("In a Python host (fmpy, libcosimpy) the FMU runs in the host's interpreter "
+            "instead and adds these site-packages after the host's own.")
+    verdict = "The FMU will start." if good else "The FMU will NOT start in a C host."
+    return FMUCheck(good, "\n".join([*head, out, tail, verdict]))
+
+
+def check_fmu(path: str | Path) -> FMUCheck:
+    """Check the FMU file at ``path`` in this environment (``railcontact fmu check``)."""
+    path = Path(path)
+    if not path.is_file():
+        raise RailContactError(f"FMU {path} not found")
+    with tempfile.TemporaryDirectory(prefix="railcontact-check-") as tmp:
+        try:
+            with zipfile.ZipFile(path) as z:
+                z.extractall(tmp)
+        except zipfile.BadZipFile:
+            raise RailContactError(f"{path} is not an FMU (not a zip file)") from None
+        if not (Path(tmp) / "resources" / "python.cfg").is_file():
+            raise RailContactError(f"{path} is not a railcontact FMU (no resources/python.cfg)")
+        return check_unpacked(tmp)
