@@ -150,8 +150,8 @@ def check_dependencies(cfg):
         version = str(getattr(mod, "__version__", "?"))
         where = os.path.dirname(getattr(mod, "__file__", "") or "?")
         if minimum and not at_least(version, minimum):
-            problems.append(f"{module} {version} ({where}) is older than the FMU needs"
-                            f"{need}")
+            problems.append(f"{module} {version} ({where}) is older than the FMU needs "
+                            f"(>={minimum})")
         else:
             report.append(f"  {module} {version}{need} from {where}")
     return report, problems
@@ -223,8 +223,9 @@ def start(resources, located):
     except Exception as exc:  # noqa: BLE001
         raise StartError(f"the FMU's copy of railcontact ({python_dir}) cannot be imported in "
                          f"{here}: {type(exc).__name__}: {exc}\n" + "\n".join(report)) from exc
+    where = os.path.dirname(os.path.dirname(os.path.abspath(module.__file__)))
     report.append(f"  railcontact {cfg.get('railcontact', '?')}: the FMU's own copy "
-                  f"({cfg['package']} in {python_dir})")
+                  f"({cfg['package']} in {where})")
     return module, "railcontact FMU: " + "\n".join(report), "\n".join(warnings)
 
 

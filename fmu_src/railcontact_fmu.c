@@ -579,7 +579,7 @@ static const char BOOTSTRAP[] =
     "    if type(_e).__name__ == 'StartError':\n"
     "        error = str(_e)\n"
     "    else:\n"
-    "        error = traceback.format_exc()\n";
+    "        error = 'the railcontact slave failed to start:\\n' + traceback.format_exc()\n";
 
 /* file:///a/b%20c -> /a/b c */
 static char *uri_to_path(const char *uri) {
@@ -736,9 +736,9 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         PyObject *slave = py.DictGetItemString(g, "slave");
         if (wtext && *wtext) log_text(c, fmi2Warning, "logStatusWarning", wtext);
         if (etext && *etext) {
-            logf_(c, fmi2Error, "logStatusError", "cannot start the railcontact slave: %s%s",
-                  etext, py_host ? "" : "\n(the FMU started this Python in the process: "
-                  "restart the host after changing the environment)");
+            logf_(c, fmi2Error, "logStatusError", "%s%s", etext,
+                  py_host ? "" : "\n(the FMU started this Python in the process: restart "
+                  "the host after changing the environment)");
         } else if (slave) {
             if (c->logging && itext && *itext) log_text(c, fmi2OK, "logAll", itext);
             c->slave = py.BuildValue("O", slave); /* a new reference to the borrowed one */

@@ -13,6 +13,7 @@ file (its own site-packages come first, so ``railcontact`` is the installed copy
 from __future__ import annotations
 
 import os
+import platform
 import re
 import shutil
 import site
@@ -186,20 +187,84 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
         moved.rename(installed)
 
 
-def test_a_long_message_reaches_the_host_whole(installed, host, tmp_path):
+@pytest.fixture(scope="module")
+def plain_fmu(installed, tmp_path_factory) -> Path:
+    """The FMU the installed railcontact builds without --python, unpacked."""
+    d = tmp_path_factory.mktemp("plain")
+    r = _run([installed / "bin" / "railcontact", "fmu", "build", "-o", d / "RailContact.fmu"],
+             cwd=d)
+    assert r.returncode == 0, r.stdout + r.stderr
+    with zipfile.ZipFile(d / "RailContact.fmu") as z:
+        assert "resources/python.txt" not in z.namelist()
+        cfg = z.read("resources/python.cfg").decode()
+        z.extractall(d / "unzipped")
+    assert f"executable={installed}/bin/python\n" in cfg
+    return d / "unzipped"
+
+
+def test_a_long_message_reaches_the_host_whole(plain_fmu, host):
     """A message longer than the 4096 bytes a host's logger may hold arrives complete, in
     pieces: here RAILCONTACT_PYTHON names a 3.4 kB path that does not exist."""
-    fmu = tmp_path / "RailContact.fmu"
-    r = _run([installed / "bin" / "railcontact", "fmu", "build", "-o", fmu], cwd=tmp_path)
-    assert r.returncode == 0, r.stdout + r.stderr
-    with zipfile.ZipFile(fmu) as z:
-        assert "resources/python.txt" not in z.namelist()
-        z.extractall(tmp_path / "unzipped")
     far = "/nonexistent/" + "/".join(f"{k:02d}" + "d" * 198 for k in range(17))
-    code, _, log = run_host(host, tmp_path / "unzipped", RAILCONTACT_PYTHON=far)
+    code, _, log = run_host(host, plain_fmu, RAILCONTACT_PYTHON=far)
     assert code == 4 and [s for s, _ in log] == [3], log
     msg = log[0][1]
     assert len(msg.encode()) > 4096
     # pieces were cut inside the path: join them without the cuts' line ends
     assert msg.replace("\n", "").count(far) == 2
     assert msg.endswith("`railcontact fmu check FILE.fmu` prints what the FMU will use.")
+
+
+def test_dependencies_are_checked(plain_fmu, host, tmp_path):
+    """A Python whose numba is older than railcontact requires, or that has no numpy at all:
+    the C host's instantiate fails naming the package, the version and the requirement;
+    ``fmu check`` prints the same; ``fmu build --python`` refuses such a Python."""
+    old = tmp_path / "old"
+    _run([sys.executable, "-m", "venv", "--without-pip", old]).check_returncode()
+    purelib = Path(_run([old / "bin" / "python", "-c",
+                         "import sysconfig; print(sysconfig.get_path('purelib'))"]
+                        ).stdout.strip())
+    (purelib / "numba").mkdir()
+    (purelib / "numba" / "__init__.py").write_text('__version__ = "0.50.1"\n')
+    (purelib / "_test_dependencies.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    code, out, log = run_host(host, plain_fmu, RAILCONTACT_PYTHON=old)
+    assert code == 4 and [s for s, _ in log] == [3], log
+    msg = log[0][1]
+    assert f"numba 0.50.1 ({purelib / 'numba'}) is older than the FMU needs (>=0.58)" in msg
+    assert re.search(r"numpy [\d.]+ \(needs >=1\.24\) from ", msg)  # the others are fine
+    assert "chosen from the environment variable RAILCONTACT_PYTHON" in msg
+    assert "Install railcontact's dependencies in that environment" in msg
+
+    bare = tmp_path / "bare"
+    _run([sys.executable, "-m", "venv", "--without-pip", bare]).check_returncode()
+    unzipped_fmu = plain_fmu.parent / "RailContact.fmu"
+    r = _run([sys.executable, "-m", "railcontact", "fmu", "check", unzipped_fmu],
+             env=dict(os.environ, RAILCONTACT_PYTHON=str(bare)))
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "numpy (needs >=1.24) cannot be imported: ModuleNotFoundError" in r.stdout
+    assert r.stdout.rstrip().endswith("The FMU will NOT start.")
+
+    r = _run([sys.executable, "-m", "railcontact", "fmu", "build", "-o",
+              tmp_path / "x.fmu", "--python", bare])
+    assert r.returncode == 2 and not (tmp_path / "x.fmu").exists()
+    assert "the Python given with --python cannot run the FMU" in r.stderr
+    assert "numba (needs >=0.58) cannot be imported" in r.stderr
+
+
+def test_in_a_python_host_a_broken_choice_is_a_warning(plain_fmu, monkeypatch, capsys):
+    """fmpy already runs Python: the FMU runs in it, says so, and warns that the Python
+    named for it does not exist (the host's packages suffice here)."""
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.model_description import read_model_description
+
+    monkeypatch.setenv("RAILCONTACT_PYTHON", "/nonexistent/env")
+    md = read_model_description(str(plain_fmu / "modelDescription.xml"))
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(plain_fmu),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="py")
+    s.instantiate(loggingOn=True)
+    log = capsys.readouterr().out
+    s.freeInstance()
+    assert "[WARNING] the FMU's own choice of Python is not usable" in log
+    assert "'/nonexistent/env' does not exist" in log
+    assert f"the host process already runs Python {platform.python_version()} " \
+           f"({sys.executable})" in log

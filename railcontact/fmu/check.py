@@ -111,7 +111,12 @@ def check_unpacked(root: str | Path, use_env: bool = True) -> FMUCheck:
     good = r.returncode == 0 and bool(values.get("libpython"))
     tail = ("In a Python host (fmpy, libcosimpy) the FMU runs in the host's interpreter "
             "instead and adds these site-packages after the host's own.")
-    verdict = "The FMU will start." if good else "The FMU will NOT start in a C host."
+    if good:
+        verdict = "The FMU will start."
+    elif r.returncode == 0:
+        verdict = "The FMU will NOT start in a C host (a Python host may still run it)."
+    else:
+        verdict = "The FMU will NOT start."
     return FMUCheck(good, "\n".join([*head, out, tail, verdict]))
 
 
