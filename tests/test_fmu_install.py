@@ -153,9 +153,17 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
     assert re.search(r"numpy [\d.]+ \(needs >=[\d.]+\)", r.stdout)
     assert str(site_packages) in r.stdout and "The FMU will start." in r.stdout
 
-    code, out, log = run_host(host, unzipped)
+    # isolated from the host's environment: a numpy on PYTHONPATH and one in the user's
+    # site-packages that would fail to import, a PYTHONHOME that does not exist
+    for d in (tmp_path / "pythonpath", tmp_path / "home" / ".local" / "lib" /
+              f"python{sys.version_info[0]}.{sys.version_info[1]}" / "site-packages"):
+        (d / "numpy").mkdir(parents=True)
+        (d / "numpy" / "__init__.py").write_text("raise ImportError('not this numpy')\n")
+    code, out, log = run_host(host, unzipped, PYTHONPATH=tmp_path / "pythonpath",
+                              HOME=tmp_path / "home", PYTHONHOME="/nonexistent")
     assert code == 0 and "ok: 1 cycles of 5 steps" in out, log
     info = log[0][1]
+    assert "pythonpath" not in info and str(tmp_path / "home") not in info
     assert log[0][0] == 0 and f"({installed}/bin/python3), chosen from resources/python.txt" \
         in info, log
     assert "started by the FMU in this process" in info and str(site_packages) in info
