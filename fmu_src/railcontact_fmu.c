@@ -279,8 +279,8 @@ static char *python_txt(const char *resources) {
     char *text = read_file(path);
     free(path);
     if (!text) return NULL;
-    char *line = NULL;
-    for (char *p = strtok(text, "\r\n"); p; p = strtok(NULL, "\r\n")) {
+    char *line = NULL, *save = NULL;
+    for (char *p = strtok_r(text, "\r\n", &save); p; p = strtok_r(NULL, "\r\n", &save)) {
         while (*p == ' ' || *p == '\t') ++p;
         size_t n = strlen(p);
         while (n && (p[n - 1] == ' ' || p[n - 1] == '\t')) p[--n] = 0;

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import pytest
 
+import railcontact
+
 fmpy = pytest.importorskip("fmpy")
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -128,7 +130,8 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
     site_packages = Path(_run([installed / "bin" / "python", "-c",
                                "import sysconfig; print(sysconfig.get_path('purelib'))"]
                               ).stdout.strip())
-    record = (site_packages / "railcontact-0.1.0.dist-info" / "RECORD").read_text()
+    (dist_info,) = site_packages.glob("railcontact-*.dist-info")
+    record = (dist_info / "RECORD").read_text()
     for f in FMU_SOURCES:  # the wheel pip built from the sdist carries them
         assert f"railcontact/_fmu_src/{f}," in record, f
     assert "__editable__" not in " ".join(os.listdir(site_packages))
@@ -149,6 +152,8 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
              env={k: v for k, v in os.environ.items() if k != "RAILCONTACT_PYTHON"})
     assert r.returncode == 0, r.stdout + r.stderr
     assert f"Python: {installed}/bin/python3" in r.stdout
+    assert f"FMU: railcontact {railcontact.__version__}, built with Python " \
+           f"{sys.version_info[0]}.{sys.version_info[1]} ({installed}/bin/python;" in r.stdout
     assert "chosen from resources/python.txt" in r.stdout
     assert re.search(r"numpy [\d.]+ \(needs >=[\d.]+\)", r.stdout)
     assert str(site_packages) in r.stdout and "The FMU will start." in r.stdout
@@ -276,3 +281,17 @@ def test_in_a_python_host_a_broken_choice_is_a_warning(plain_fmu, monkeypatch, c
     assert "'/nonexistent/env' does not exist" in log
     assert f"the host process already runs Python {platform.python_version()} " \
            f"({sys.executable})" in log
+
+
+def test_fmu_check_of_a_file_that_is_no_fmu(tmp_path, capsys):
+    from railcontact.cli import main
+
+    assert main(["fmu", "check", str(tmp_path / "missing.fmu")]) == 2
+    assert "missing.fmu not found" in capsys.readouterr().err
+    (tmp_path / "text.fmu").write_text("not a zip")
+    assert main(["fmu", "check", str(tmp_path / "text.fmu")]) == 2
+    assert "is not an FMU (not a zip file)" in capsys.readouterr().err
+    with zipfile.ZipFile(tmp_path / "other.fmu", "w") as z:
+        z.writestr("modelDescription.xml", "<fmiModelDescription/>")
+    assert main(["fmu", "check", str(tmp_path / "other.fmu")]) == 2
+    assert "is not a railcontact FMU" in capsys.readouterr().err

@@ -101,7 +101,12 @@ def check_unpacked(root: str | Path, use_env: bool = True) -> FMUCheck:
             capture_output=True, text=True, timeout=CHECK_TIMEOUT, stdin=subprocess.DEVNULL)
     except (OSError, subprocess.TimeoutExpired) as exc:
         return FMUCheck(False, f"cannot run {exe}: {exc}")
-    head = [f"Python: {exe}", f"  chosen from {values.get('source', '?')}"]
+    cfg = dict(line.partition("=")[::2] for line in
+               (resources / "python.cfg").read_text(encoding="utf-8").splitlines())
+    head = [f"FMU: railcontact {cfg.get('railcontact', '?')}, built with Python "
+            f"{cfg.get('version', '?')} ({cfg.get('executable', '?')}; "
+            f"{cfg.get('built_with', '?')})",
+            f"Python: {exe}", f"  chosen from {values.get('source', '?')}"]
     if values.get("libpython"):
         head.append(f"  libpython (started in C hosts): {values['libpython']}")
     else:
