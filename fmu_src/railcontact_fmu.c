@@ -740,7 +740,18 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                   py_host ? "" : "\n(the FMU started this Python in the process: restart "
                   "the host after changing the environment)");
         } else if (slave) {
-            if (c->logging && itext && *itext) log_text(c, fmi2OK, "logAll", itext);
+            /* which Python: the whole report with loggingOn, else its first line once per
+             * process */
+            static int told = 0;
+            if (itext && *itext && c->logging) {
+                log_text(c, fmi2OK, "logAll", itext);
+            } else if (itext && *itext && !told) {
+                const char *nl = strchr(itext, '\n');
+                char *line = strndup(itext, nl ? (size_t)(nl - itext) : strlen(itext));
+                log_text(c, fmi2OK, "logAll", line);
+                free(line);
+            }
+            told = 1;
             c->slave = py.BuildValue("O", slave); /* a new reference to the borrowed one */
             c->m_do_step = method(slave, "do_step");
             c->m_exit_init = method(slave, "exit_initialization");
