@@ -84,7 +84,8 @@ def host(tmp_path_factory) -> Path:
     return exe
 
 
-def run_host(host: Path, unzipped: Path, **env) -> tuple[int, str, list[tuple[int, str]]]:
+def run_host(host: Path, unzipped: Path, logging: bool = True,
+             **env) -> tuple[int, str, list[tuple[int, str]]]:
     """The C host with an empty environment (plus ``env``), 5 steps; (exit code, stdout and
     the host's own last line, logged messages as (status, text) with the pieces of one
     message joined)."""
@@ -92,7 +93,7 @@ def run_host(host: Path, unzipped: Path, **env) -> tuple[int, str, list[tuple[in
 
     md = read_model_description(str(unzipped / "modelDescription.xml"))
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    r = _run(["env", "-i", "PATH=/usr/bin:/bin", "LOGGING=1",
+    r = _run(["env", "-i", "PATH=/usr/bin:/bin", f"LOGGING={int(logging)}",
               f"VR_LAT={vr['lateral_displacement']}", f"VR_OUT={vr['normal_force_left']}",
               *(f"{k}={v}" for k, v in env.items()),
               host, unzipped / "binaries" / "linux64" / "RailContact.so",
@@ -189,8 +190,10 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
                  env={k: v for k, v in os.environ.items() if k != "RAILCONTACT_PYTHON"})
         assert r.returncode == 1 and r.stdout.strip() == msg, r.stdout + r.stderr
 
-        code, out, log = run_host(host, unzipped, RAILCONTACT_PYTHON=moved)
+        code, out, log = run_host(host, unzipped, logging=False, RAILCONTACT_PYTHON=moved)
         assert code == 0 and "ok: 1 cycles of 5 steps" in out, log
+        # without loggingOn: one line, which Python and where from
+        assert len(log) == 1 and log[0][0] == 0 and "\n" not in log[0][1], log
         assert f"({moved}/bin/python3), chosen from the environment variable " \
                "RAILCONTACT_PYTHON" in log[0][1]
         r = _run([sys.executable, "-m", "railcontact", "fmu", "check", fmu],
