@@ -20,7 +20,6 @@ import re
 import shutil
 import subprocess
 import sys
-import sysconfig
 import tempfile
 import zipfile
 from datetime import datetime, timezone
@@ -124,17 +123,11 @@ def fmi_headers() -> Path:
 
 
 def libpython() -> Path:
-    """The shared CPython library of this interpreter."""
-    names = [sysconfig.get_config_var(k) for k in ("INSTSONAME", "LDLIBRARY")]
-    dirs = [sysconfig.get_config_var("LIBDIR"), sys.base_prefix + "/lib",
-            f"/usr/lib/{sysconfig.get_config_var('MULTIARCH')}"]
-    for d in dirs:
-        for n in names:
-            if d and n and ".so" in n and (Path(d) / n).is_file():
-                return Path(d) / n
-    raise BuildError(f"this Python ({sys.executable}) has no shared libpython "
-                     f"(Py_ENABLE_SHARED = {sysconfig.get_config_var('Py_ENABLE_SHARED')}); "
-                     "the FMU needs one to start Python in a C host")
+    """The shared CPython library of this interpreter (as the FMU's probe finds it)."""
+    lib, why = _bootstrap().find_libpython()
+    if not lib:
+        raise BuildError(why)
+    return Path(lib)
 
 
 def compile_shim(out: Path, model_identifier: str = MODEL_IDENTIFIER) -> Path:

@@ -70,7 +70,8 @@ def installed(sdist, tmp_path_factory) -> Path:
     Path(purelib, "_test_dependencies.pth").write_text(
         "\n".join(site.getsitepackages()) + "\n", encoding="utf-8")
     r = _run([venv / "bin" / "python", "-m", "pip", "install", "--no-deps",
-              "--no-build-isolation", "--no-index", "-q", sdist], cwd=venv.parent)
+              "--no-build-isolation", "--no-index", "--disable-pip-version-check", "-q",
+              sdist], cwd=venv.parent)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-3000:]
     return venv
 
