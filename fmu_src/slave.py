@@ -24,7 +24,7 @@ from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import FMUModes
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
-from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE, STATUS_NAMES
+from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE, OUTSIDE_VALIDITY, STATUS_NAMES
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
@@ -162,7 +162,7 @@ class Slave:
         for v in V.PARAMETERS:
             if v.type == "Real" and not math.isfinite(self[v.name]):
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
-        ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS})
+        ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS + V.CHOICES})
         self.modes = ps.modes
         wheel, rail = self._profile("wheel_profile", "wheel"), self._profile("rail_profile",
                                                                             "rail")
@@ -234,7 +234,8 @@ class Slave:
             self._write(None)
             self["status"] = OUT_OF_RANGE
             return FMI_DISCARD
-        failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE)]
+        failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
+                                                        OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
             self.log.append(f"{w.side} wheel: {STATUS_NAMES[w.status]}: {w.message}")
         return FMI_WARNING if failed else FMI_OK
