@@ -149,12 +149,12 @@ class Slave:
         return self._guard("setFMUstate", FMI_ERROR, restore)
 
     # -- the model ------------------------------------------------------------------------
-    def _profile(self, parameter: str, kind: str):
+    def _profile(self, parameter: str, kind: str, unit: str):
         value = self[parameter]
         path = self.resources / value
         source = str(path) if value and path.is_file() else value
         try:
-            return read_profile(source, kind, self["profile_unit"])
+            return read_profile(source, kind, unit)
         except RailContactError as exc:
             raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
 
@@ -164,9 +164,9 @@ class Slave:
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
         ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS + V.CHOICES})
         self.modes = ps.modes
-        wheel, rail = self._profile("wheel_profile", "wheel"), self._profile("rail_profile",
-                                                                            "rail")
-        g = ps.geometry
+        g = ps.geometry  # profile_unit: the String or its enumeration
+        wheel = self._profile("wheel_profile", "wheel", g.profile_unit)
+        rail = self._profile("rail_profile", "rail", g.profile_unit)
         try:
             track = Track(rail, g.inclination, g.gauge, g.gauge_depth)
             ws = Wheelset(wheel, g.wheel_radius, g.back_to_back, g.flange_back)

@@ -369,3 +369,43 @@ def table() -> list[Variable]:
         counters[v.type] = k + 1
         out.append(replace(v, vr=k))
     return out
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def _default(v: Variable) -> str:
+    if v.causality == "output" or v.start is None:
+        return ""
+    if v.items:
+        return f"{v.start} ({v.items[v.start - 1]})"
+    if isinstance(v.start, float):
+        return f"{v.start:.6g}"
+    return f"`{v.start}`" if isinstance(v.start, str) else str(v.start)
+
+
+def variables_markdown() -> str:
+    """Every FMU variable as a Markdown table: name, causality, type, unit, default and
+    meaning, in the order parameters, enumerations, inputs, outputs; a ``_left``/``_right``
+    pair is one row. The README's table is this (``scripts/fmu_variables_table.py``
+    writes it; ``tests/test_readme_fmu.py`` checks it)."""
+    everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS
+    names = {v.name for v in everything}
+    out = ["| name | causality | type | unit | default | meaning |",
+           "|---|---|---|---|---|---|"]
+    for v in everything:
+        if v.name.endswith("_right") and v.name[:-6] + "_left" in names:
+            continue
+        name, meaning = f"`{v.name}`", v.description
+        if v.name.endswith("_left") and v.name[:-5] + "_right" in names:
+            name = f"`{v.name[:-5]}_left`, `_right`"
+            meaning = (meaning.replace(", left wheel", "").replace("left wheel", "each wheel")
+                       .replace(", left (", " ("))
+        kind = v.type
+        if v.items:
+            kind = "Enumeration: " + ", ".join(f"{k} {w}" for k, w in
+                                                enumerate(v.items, start=1))
+        out.append(f"| {name} | {v.causality} | {_cell(kind)} | {v.unit} | "
+                   f"{_cell(_default(v))} | {_cell(meaning)} |")
+    return "\n".join(out) + "\n"
