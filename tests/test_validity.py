@@ -201,7 +201,7 @@ def test_roll_moment_of_unequal_loads():
 def test_vertical_and_roll_under_load_control(lateral, loads, rel):
     """The rigid wheelset's vertical displacement and roll that the load-controlled step
     reports, given to a penetration-controlled step, give each wheel the same approach
-    (to 1 nm) and so the same loads: to the grid's accuracy at 0 mm (the two controls mesh
+    (to 10 nm, RIGID_TOL) and so the same loads: to the grid's accuracy at 0 mm (the two controls mesh
     differently), to 1 % at 3 mm, where the rolled wheelset's contact moves by r0 phi =
     0.08 mm and with it the curvatures. Centred with equal loads the roll is zero; at
     +3 mm the left wheel runs on the larger radius and the wheelset rolls left side up,
@@ -215,14 +215,14 @@ def test_vertical_and_roll_under_load_control(lateral, loads, rel):
     p = wc.solve(Pose(lateral, 0.0, phi), vertical=v, creepages=NONE)
     assert p.vertical == v and p.roll == phi
     for a, b, q in zip(r.wheels, p.wheels, loads, strict=True):
-        assert b.approach == pytest.approx(a.approach, abs=1e-9)
+        assert b.approach == pytest.approx(a.approach, abs=1e-8)
         assert b.track_force[2] == pytest.approx(q, rel=rel)
     if lateral == 0.0 and loads[0] == loads[1]:
         assert abs(phi) < 1e-12
     if lateral > 0:
         L, R = r.left, r.right
         brent = contact_roll(wc.track, wc.wheelset, lateral, 0.0, R.approach - L.approach)
-        assert phi > 0 and phi == pytest.approx(brent, abs=1e-9)
+        assert phi > 0 and phi == pytest.approx(brent, abs=1e-8)
         hand = ((L.contact_point[2] + L.rolling_radius) - (R.contact_point[2]
                 + R.rolling_radius)) / (L.contact_point[1] - R.contact_point[1])
         assert phi == pytest.approx(hand, rel=0.05)

@@ -29,8 +29,10 @@ from ..errors import RailContactError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 
-RIGID_TOL = 1e-9
-"""Residual [m] of the two wheels' vertical positions at which the iteration stops."""
+RIGID_TOL = 1e-8
+"""Residual [m] of the two wheels' vertical positions at which the iteration stops: each
+wheel's approach (about 0.1 mm) is then met to 5 nm, 5e-5 of it, a load error below the
+load loop's tolerance (1e-3)."""
 MAX_EVALUATIONS = 3
 """At most this many evaluations of both wheels' first-contact gaps."""
 
