@@ -348,7 +348,8 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], contr
         except RailContactError as exc:
             if isinstance(exc, CaseError):
                 raise
-            raise CaseError(f"{side} wheel: {exc}") from None
+            raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m: "
+                            f"{side} wheel: {exc}") from None
     return out
 
 
