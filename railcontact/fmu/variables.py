@@ -125,8 +125,8 @@ def _choice(name: str, record: type[Record], key: str) -> Variable | None:
         return None
     return Variable(f"{name}{CHOICE_SUFFIX}", "Integer", "parameter",
                     s.choices.index(default_of(f)) + 1, "",
-                    f"{s.doc}; the String parameter {name} as an enumeration (set either: "
-                    "the one set away from its default counts)", items=tuple(s.choices))
+                    f"{s.doc} (the String parameter {name} as an enumeration; set either)",
+                    items=tuple(s.choices))
 
 
 CHOICES = [v for v in (_choice(*source) for source in PARAMETER_SOURCES) if v is not None]
@@ -302,7 +302,8 @@ OUTPUTS = [
              "tangential BEM sweeps of the last step, both wheels",
              _total("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
-             f"the wheelset's status, its wheels' most severe (3, 1, 4, 2, 0): {STATUS}",
+             f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0): "
+             f"{STATUS}",
              lambda r: r.status),
     *_wheel("load_passes", "Integer", "", "solves of the wheel in the last step (load loop)",
             value=lambda w: w.load_passes),
