@@ -618,3 +618,18 @@ def test_new_outputs_match_the_api(fmu, extracted, md):
     assert p.get("wheelset_vertical_displacement", "wheelset_roll") == [-1.9e-4, 1.7e-4]
     assert p.get("status") == 0 and p.get("normal_force_left") > 0
     p.free()
+
+
+def test_enumerations_through_fmpy_start_values(fmu):
+    """fmpy's start_values: the enumerations give what the Strings give (penetration
+    control with kinematic creepages), not the default's."""
+    outs = ["normal_force_left", "xi_used_left", "eta_used_left", "status"]
+    inputs = {"vertical_displacement": -2e-4, "lateral_velocity": 0.01,
+              "warm_start_choice": 1}
+    runs = [simulate_fmu(str(fmu), stop_time=2 * STEP, step_size=STEP, output=outs,
+                         start_values={**inputs, **modes})[-1]
+            for modes in ({"control_choice": 2, "creepage_input_choice": 2},
+                          {"control": "penetration", "creepage_input": "kinematic"}, {})]
+    assert list(runs[0]) == list(runs[1]) and runs[0]["status"] == 0
+    assert runs[0]["eta_used_left"] != 0.0 and runs[2]["eta_used_left"] == 0.0
+    assert runs[0]["normal_force_left"] != pytest.approx(runs[2]["normal_force_left"])
