@@ -865,6 +865,10 @@ def check_wheelset(r, step: dict, settings: dict) -> list[str]:
     if not all(math.isfinite(x) for x in r.force) or not math.isfinite(r.yaw_moment):
         if r.status in (0, 4):
             bad.append(f"wheelset force {r.force} / yaw moment {r.yaw_moment} not finite")
+    rigid = (*r.moment, r.vertical, r.roll)  # the rigid wheelset's, found when asked for
+    if r.status in (0, 4) and not all(math.isfinite(x) for x in rigid):
+        bad.append(f"wheelset moment {r.moment}, vertical {r.vertical}, roll {r.roll} "
+                   "not finite")
     for k, w in enumerate(r.wheels):
         q = loads[k] if loads is not None else None
         if w.status == 2 and q is not None and q > 0:
@@ -876,7 +880,10 @@ def check_wheelset(r, step: dict, settings: dict) -> list[str]:
                 "rolling_radius": w.rolling_radius, "area": w.area,
                 "max_pressure": w.max_pressure, "slip_area_ratio": w.slip_area_ratio,
                 "wheel_position": w.wheel_position, "rail_position": w.rail_position,
-                "lateral_position": w.lateral_position}
+                "lateral_position": w.lateral_position,
+                "derailment_quotient": w.derailment_quotient, "approach": w.approach,
+                "penetration": w.penetration}
+        vals.update({f"moment[{i}]": v for i, v in enumerate(w.moment)})
         vals.update({f"creep_force[{i}]": v for i, v in enumerate(w.creep_force)})
         vals.update({f"track_force[{i}]": v for i, v in enumerate(w.track_force)})
         nonfinite = [f"{k2} = {v}" for k2, v in vals.items() if not math.isfinite(v)]

@@ -79,7 +79,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                 raise
             break
         f = hl - hr
-        if last is not None and f != last[1]:
+        if last is not None and f != last[1] and phi != last[0]:
             secant = (f - last[1]) / (phi - last[0])
             if secant > 0:
                 slope = secant
