@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from ..errors import RailContactError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
@@ -91,4 +92,21 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
     return v, last[0]
 
 
-__all__ = ["vertical_and_roll"]
+@dataclass(frozen=True)
+class RigidWheelset:
+    """The data of :func:`vertical_and_roll`, kept by a load-controlled step's result
+    until its vertical displacement or roll is asked for (a picklable record)."""
+
+    track: Track
+    wheelset: Wheelset
+    pose: Pose
+    approaches: tuple[float, float]
+    contacts: tuple[tuple[float, float, float] | None, ...]
+
+    def solve(self) -> tuple[float, float]:
+        """``(v, phi)`` [m, rad] (:func:`vertical_and_roll`)."""
+        return vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
+                                 self.contacts)
+
+
+__all__ = ["RigidWheelset", "vertical_and_roll"]

@@ -47,7 +47,6 @@ right wheel is mirrored; lateral components and the spin change sign there.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from time import perf_counter
@@ -79,7 +78,7 @@ from ..halfspace.hertz import HertzSolution
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION
-from .rigid import vertical_and_roll
+from .rigid import RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import PatchMemory, match, previous_pressure, previous_tangential
 
@@ -214,9 +213,10 @@ class WheelsetResult:
     wheelset_radius: float = 0.0
     """Nominal rolling radius r0 [m]: the centre's height above the rail tops at
     ``vertical = 0``."""
-    rigid: Callable[[], tuple[float, float]] | None = field(default=None, repr=False,
-                                                            compare=False)
-    """Computes :attr:`vertical` and :attr:`roll` when first asked (load control)."""
+    rigid: RigidWheelset | tuple[float, float] | None = field(default=None, repr=False,
+                                                               compare=False)
+    """:attr:`vertical` and :attr:`roll`: given (penetration control), or the problem
+    that finds them when first asked for (load control); None when out of range."""
 
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:
@@ -229,7 +229,9 @@ class WheelsetResult:
 
     @cached_property
     def _vertical_roll(self) -> tuple[float, float]:
-        return (0.0, 0.0) if self.rigid is None else self.rigid()
+        if self.rigid is None:
+            return (0.0, 0.0)
+        return self.rigid if isinstance(self.rigid, tuple) else self.rigid.solve()
 
     @property
     def vertical(self) -> float:
@@ -368,9 +370,12 @@ class WheelsetContact:
             self.memory = new_memory
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
         if vertical is not None:
-            result.rigid = lambda: (vertical, pose.roll)
+            result.rigid = (vertical, pose.roll)
         elif not off_track:  # found when first asked for: it costs four contact searches
-            result.rigid = lambda: self._vertical_and_roll(pose, wheels)
+            result.rigid = RigidWheelset(
+                self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
+                tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
+                      if w.patches else None for w in wheels))
         return result
 
     def _check_validity(self, wheel: WheelContact) -> None:
@@ -389,13 +394,6 @@ class WheelsetContact:
             wheel.message = f"outside validity: {v.message}{note}"
         else:
             wheel.message += f"; also outside validity: {v.message}"
-
-    def _vertical_and_roll(self, pose: Pose, wheels: list[WheelContact]
-                           ) -> tuple[float, float]:
-        contacts = [(w.lateral_position, w.rolling_radius, w.contact_angle) if w.patches
-                    else None for w in wheels]
-        return vertical_and_roll(self.track, self.wheelset, pose,
-                                 [w.approach for w in wheels], contacts)
 
     def _approach(self, pose: Pose, side: str, vertical: float) -> float:
         """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
