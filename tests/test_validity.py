@@ -203,8 +203,7 @@ def test_vertical_and_roll_under_load_control(lateral, loads, rel):
     reports, given to a penetration-controlled step, give each wheel the same approach
     (to 10 nm, RIGID_TOL) and so the same loads: to the grid's accuracy at 0 mm (the two
     controls mesh differently), to 1 % at 3 mm, where the rolled wheelset's contact moves
-    by r0 phi =
-    0.08 mm and with it the curvatures. Centred with equal loads the roll is zero; at
+    by r0 phi = 0.08 mm and with it the curvatures. Centred with equal loads the roll is zero; at
     +3 mm the left wheel runs on the larger radius and the wheelset rolls left side up,
     as :func:`~railcontact.geometry.roll.contact_roll` (Brent's method on the same
     compatibility) finds, and by about ((Z_L + r_L) - (Z_R + r_R)) / (Y_L - Y_R) from the

@@ -10,7 +10,9 @@ A wheel whose contact was solved (status ok) is *outside validity* when one of t
 * ``NADAL``: ``Y/Q`` exceeds Nadal's limit of the flange,
   ``(tan(beta) - mu) / (1 + mu tan(beta))`` with ``beta`` the steepest angle of the wheel's
   flange (:attr:`~railcontact.geometry.Wheelset.flange_flank`, S1002: 70 deg) and ``mu``
-  the friction coefficient: beyond it a flange sliding upwards climbs.
+  the friction coefficient: the Y/Q of a flange in full sliding with the rail's friction
+  on the wheel pointing up the flank (a leading wheel at a positive angle of attack),
+  beyond which the wheel climbs.
 * ``FLANGE_CLIMB``: a patch lies past the flange's steepest point, on its upper flank,
   at a contact angle more than :data:`FLANGE_CLIMB_MARGIN` below the steepest angle. (Past
   half of that angle the wheel has climbed its flange and the pose is out of range,
