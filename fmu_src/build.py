@@ -50,7 +50,7 @@ def _fmt(value) -> str:
 def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
                       version: str = "") -> str:
     """The modelDescription.xml text."""
-    from railcontact.fmu.variables import table
+    from railcontact.fmu.variables import item_name, table
 
     variables = table()
     used = sorted({v.unit for v in variables if v.unit})
@@ -72,8 +72,17 @@ def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
         exps = " ".join(f'{k}="{e}"' for k, e in UNITS[u].items())
         lines.append(f'    <Unit name="{u}"><BaseUnit {exps}/></Unit>' if exps else
                      f'    <Unit name="{u}"><BaseUnit/></Unit>')
+    lines.append("  </UnitDefinitions>")
+    enumerations = {v.enumeration_type: v for v in variables if v.items}
+    if enumerations:
+        lines.append("  <TypeDefinitions>")
+        for name, v in enumerations.items():
+            lines += [f'    <SimpleType name="{name}">', "      <Enumeration>"]
+            lines += [f'        <Item name="{item_name(w)}" value="{k}" '
+                      f'description={quoteattr(w)}/>' for k, w in enumerate(v.items, start=1)]
+            lines += ["      </Enumeration>", "    </SimpleType>"]
+        lines.append("  </TypeDefinitions>")
     lines += [
-        "  </UnitDefinitions>",
         "  <LogCategories>",
         '    <Category name="logStatusWarning"/>',
         '    <Category name="logStatusDiscard"/>',
@@ -100,7 +109,10 @@ def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
             inner.append(f"start={quoteattr(_fmt(v.start))}")
         if v.unit:
             inner.append(f'unit="{v.unit}"')
-        lines.append(f"      <{v.type} {' '.join(inner)}/>" if inner else f"      <{v.type}/>")
+        if v.items:
+            inner.insert(0, f'declaredType="{v.enumeration_type}"')
+        kind = "Enumeration" if v.items else v.type
+        lines.append(f"      <{kind} {' '.join(inner)}/>" if inner else f"      <{kind}/>")
         lines.append("    </ScalarVariable>")
     lines += ["  </ModelVariables>", "  <ModelStructure>", "    <Outputs>"]
     lines += [f'      <Unknown index="{i}"/>' for i in outputs]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import pickle
+import time
 import traceback
 from pathlib import Path
 
@@ -24,7 +25,7 @@ from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import FMUModes
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
-from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE, STATUS_NAMES
+from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE, OUTSIDE_VALIDITY, STATUS_NAMES
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
@@ -149,12 +150,12 @@ class Slave:
         return self._guard("setFMUstate", FMI_ERROR, restore)
 
     # -- the model ------------------------------------------------------------------------
-    def _profile(self, parameter: str, kind: str):
+    def _profile(self, parameter: str, kind: str, unit: str):
         value = self[parameter]
         path = self.resources / value
         source = str(path) if value and path.is_file() else value
         try:
-            return read_profile(source, kind, self["profile_unit"])
+            return read_profile(source, kind, unit)
         except RailContactError as exc:
             raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
 
@@ -162,11 +163,11 @@ class Slave:
         for v in V.PARAMETERS:
             if v.type == "Real" and not math.isfinite(self[v.name]):
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
-        ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS})
+        ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS + V.CHOICES})
         self.modes = ps.modes
-        wheel, rail = self._profile("wheel_profile", "wheel"), self._profile("rail_profile",
-                                                                            "rail")
-        g = ps.geometry
+        g = ps.geometry  # profile_unit: the String or its enumeration
+        wheel = self._profile("wheel_profile", "wheel", g.profile_unit)
+        rail = self._profile("rail_profile", "rail", g.profile_unit)
         try:
             track = Track(rail, g.inclination, g.gauge, g.gauge_depth)
             ws = Wheelset(wheel, g.wheel_radius, g.back_to_back, g.flange_back)
@@ -228,13 +229,17 @@ class Slave:
             self._write(None)
             self["status"] = OUT_OF_RANGE
             return FMI_WARNING
+        t0 = time.perf_counter()  # the rigid wheelset's vertical and roll are found lazily
+        res.vertical  # noqa: B018
+        res.wall_time += time.perf_counter() - t0  # solve_time: all of the step's solving
         self._write(res)
         if not np.all(np.isfinite(self.real[self.real_outputs])):  # (inputs may be NaN)
             self.log.append("non-finite result; outputs set to zero")
             self._write(None)
             self["status"] = OUT_OF_RANGE
             return FMI_DISCARD
-        failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE)]
+        failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
+                                                        OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
             self.log.append(f"{w.side} wheel: {STATUS_NAMES[w.status]}: {w.message}")
         return FMI_WARNING if failed else FMI_OK

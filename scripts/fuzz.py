@@ -855,27 +855,35 @@ def _cut_patches(patches, where: str) -> list[str]:
 
 
 def check_wheelset(r, step: dict, settings: dict) -> list[str]:
-    """What is wrong with the wheels of a step reported ok (status 0)."""
+    """What is wrong with the wheels of a step reported solved (status 0 ok, or 4
+    outside validity: solved, beyond a limit of railcontact.timestep.validity)."""
     bad = []
     mu = settings.get("friction", 0.4)
     loads = step.get("loads")
     with_creep = settings.get("load_includes_creep", True) and (
         "creepages" in step or "kinematics" in step)
     if not all(math.isfinite(x) for x in r.force) or not math.isfinite(r.yaw_moment):
-        if r.status == 0:
+        if r.status in (0, 4):
             bad.append(f"wheelset force {r.force} / yaw moment {r.yaw_moment} not finite")
+    rigid = (*r.moment, r.vertical, r.roll)  # the rigid wheelset's, found when asked for
+    if r.status in (0, 4) and not all(math.isfinite(x) for x in rigid):
+        bad.append(f"wheelset moment {r.moment}, vertical {r.vertical}, roll {r.roll} "
+                   "not finite")
     for k, w in enumerate(r.wheels):
         q = loads[k] if loads is not None else None
         if w.status == 2 and q is not None and q > 0:
             bad.append(f"{w.side}: status 2 (no contact) under a load of {q:.6g} N")
-        if w.status != 0:
+        if w.status not in (0, 4):
             continue
         vals = {"normal_force": w.normal_force, "spin_moment": w.spin_moment,
                 "yaw_moment": w.yaw_moment, "contact_angle": w.contact_angle,
                 "rolling_radius": w.rolling_radius, "area": w.area,
                 "max_pressure": w.max_pressure, "slip_area_ratio": w.slip_area_ratio,
                 "wheel_position": w.wheel_position, "rail_position": w.rail_position,
-                "lateral_position": w.lateral_position}
+                "lateral_position": w.lateral_position,
+                "derailment_quotient": w.derailment_quotient, "approach": w.approach,
+                "penetration": w.penetration}
+        vals.update({f"moment[{i}]": v for i, v in enumerate(w.moment)})
         vals.update({f"creep_force[{i}]": v for i, v in enumerate(w.creep_force)})
         vals.update({f"track_force[{i}]": v for i, v in enumerate(w.track_force)})
         nonfinite = [f"{k2} = {v}" for k2, v in vals.items() if not math.isfinite(v)]
@@ -940,8 +948,8 @@ def run_step(wc, step: dict, settings: dict, timeout: float | None = None) -> Ou
     problems = check_wheelset(r, step, settings)
     if problems:
         return Outcome("silent-wrong", "; ".join(problems[:4]), dt)
-    if r.status == 0:
-        return Outcome("ok", "", dt)
+    if r.status in (0, 4):  # solved (4: outside validity, a documented status)
+        return Outcome("ok", "" if r.status == 0 else _status_text(r), dt)
     if r.status == 1:
         return Outcome("not converged", _status_text(r), dt)
     if all(w.message for w in r.wheels) and r.status in (2, 3):

@@ -155,3 +155,23 @@ def test_bad_tangential_cases(root, mutate, match):
     mutate(case["tangential"])
     with pytest.raises(CaseError, match=match):
         solve(case)
+
+
+@pytest.mark.parametrize(("lateral", "words"), [
+    (-0.05, "climbed its flange"),      # the other (right) wheel past its flange
+    (0.03, "climbed its flange"),       # the solved (left) wheel past half its flange angle
+    (0.08, "off its rail"),             # the left wheel's flange back on the rail
+    (0.3, "beyond the profiles"),       # nowhere near the rail
+])
+def test_a_lateral_displacement_beyond_the_profiles_is_a_clear_error(root, tmp_path,
+                                                                      lateral, words):
+    """Issue 20 (CLI): nothing is solved: one line naming the input and why, exit 2."""
+    text = (root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").read_text()
+    case = tmp_path / "far.toml"
+    case.write_text(text.replace("lateral_displacement = -0.002",
+                                 f"lateral_displacement = {lateral}"))
+    r = run_cli("solve", str(case))
+    assert r.returncode == 2 and r.stdout == "" and "Traceback" not in r.stderr
+    (line,) = r.stderr.strip().splitlines()
+    assert line.startswith("railcontact: error: [geometry] lateral_displacement = ")
+    assert f"{lateral:g} m" in line and words in line, line

@@ -327,12 +327,15 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     return count_passes(ps1, passes)
 
 
-def _approach(patches: list[PatchSolution]) -> float:
+def vertical_approach(patches: list[PatchSolution]) -> float:
     """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
     if not patches:
         return 0.0
     p = min(patches, key=lambda q: q.geometry.gap)
     return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
+
+
+_approach = vertical_approach
 
 
 def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
@@ -345,7 +348,8 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], contr
         except RailContactError as exc:
             if isinstance(exc, CaseError):
                 raise
-            raise CaseError(f"{side} wheel: {exc}") from None
+            raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m: "
+                            f"{side} wheel: {exc}") from None
     return out
 
 

@@ -11,10 +11,12 @@ there; :func:`parameter_settings` turns the parameter values back into those rec
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
+from ..errors import RailContactError
 from ..settings import ContactSettings, FMUModes, MaterialSettings, WheelRailGeometry
 from ..settings.fields import Record, default_of, spec_of
 
@@ -36,6 +38,22 @@ class Variable:
     description: str = ""
     value: Callable[[Any], float] | None = field(default=None, compare=False, repr=False)
     vr: int = -1
+    items: tuple[str, ...] = ()
+    """An Integer with items is an FMI Enumeration of type :attr:`enumeration_type`:
+    value k (from 1) means ``items[k - 1]``."""
+
+    @property
+    def enumeration_type(self) -> str:
+        """The modelDescription's SimpleType of an enumeration: the name in CamelCase,
+        without the ``_choice`` suffix (warm_start_choice: WarmStart)."""
+        base = self.name.removesuffix(CHOICE_SUFFIX)
+        return "".join(w.capitalize() for w in base.split("_"))
+
+
+def item_name(word: str) -> str:
+    """An enumeration item's name for a choice word (previous+estimate:
+    previous_estimate), a Modelica identifier as tools import them."""
+    return re.sub(r"\W", "_", word)
 
 
 def _wheel(name, type_, unit, description, causality="output", start=None, value=None):
@@ -73,6 +91,9 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("tangential_tolerance", ContactSettings, "tangential_tolerance"),
     ("load_tolerance", ContactSettings, "load_tolerance"),
     ("tangential_solver", ContactSettings, "tangential_solver"),
+    ("max_y_q", ContactSettings, "max_y_q"),
+    ("max_penetration", ContactSettings, "max_penetration"),
+    ("max_wheel_load", ContactSettings, "max_wheel_load"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
@@ -93,6 +114,55 @@ def _parameter(name: str, record: type[Record], key: str) -> Variable:
 
 
 PARAMETERS = [_parameter(*source) for source in PARAMETER_SOURCES]
+"""The parameters, one per setting; a choice among words is a String."""
+CHOICE_SUFFIX = "_choice"
+
+
+def _choice(name: str, record: type[Record], key: str) -> Variable | None:
+    f = next(f for f in fields(record) if f.name == key)  # type: ignore[arg-type]
+    s = spec_of(f)
+    if s.kind != "choice":
+        return None
+    return Variable(f"{name}{CHOICE_SUFFIX}", "Integer", "parameter",
+                    s.choices.index(default_of(f)) + 1, "",
+                    f"{s.doc} (the String parameter {name} as an enumeration; set either)",
+                    items=tuple(s.choices))
+
+
+CHOICES = [v for v in (_choice(*source) for source in PARAMETER_SOURCES) if v is not None]
+"""Every mode switch (a String choice parameter) also as an Integer enumeration,
+``<name>_choice``, with the same default: FMI tools show it as a drop-down, and set it
+before instantiation as they may not a String."""
+
+
+def resolve_choices(values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` by parameter name with each ``<name>_choice`` enumeration turned into
+    its String parameter's word: the enumeration counts when it is set away from its
+    default, the String otherwise; both set away from the default to different words is
+    an error naming both."""
+    out = dict(values)
+    for v in CHOICES:
+        if v.name not in out:
+            continue
+        raw = out.pop(v.name)
+        try:
+            k = int(raw)
+            ok = k == float(raw) and 1 <= k <= len(v.items)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise RailContactError(
+                f"parameter {v.name} must be one of " + ", ".join(
+                    f"{k} ({w})" for k, w in enumerate(v.items, start=1)) + f", got {raw!r}")
+        base = v.name.removesuffix(CHOICE_SUFFIX)
+        word, default = v.items[k - 1], v.items[v.start - 1]
+        string = out.get(base, default)
+        if word != default:
+            if string not in (default, word):
+                raise RailContactError(f"parameters {base} = {string!r} and {v.name} = {k} "
+                                       f"({word!r}) disagree; set one of them")
+            out[base] = word
+    return out
 
 
 @dataclass(frozen=True)
@@ -107,9 +177,11 @@ class ParameterSettings:
 
 def parameter_settings(values: Mapping[str, Any]) -> ParameterSettings:
     """The settings records from FMU parameter values (by parameter name, numbers or the
-    strings of a modelDescription; absent ones take their defaults). Raises
+    strings of a modelDescription; absent ones take their defaults; the ``_choice``
+    enumerations as :func:`resolve_choices` says). Raises
     :class:`~railcontact.errors.RailContactError` naming a bad one.
     """
+    values = resolve_choices(values)
     per_record: dict[type[Record], dict[str, Any]] = {}
     numeric = {v.name for v in PARAMETERS if v.type == "Real"}
     for name, record, key in PARAMETER_SOURCES:
@@ -156,6 +228,12 @@ INPUTS = [
              "wheelset angular speed about the axle (creepage_input=kinematic); <= 0 means "
              "V / wheel_radius"),
 ]
+
+STATUS = ("0 ok, 1 not converged, 2 no contact, 3 out of range (nothing solved: zero "
+          "forces), 4 outside validity (solved, beyond a limit: Y/Q above max_y_q, Nadal's "
+          "limit, flange climb, penetration above max_penetration, load above max_wheel_load)")
+"""The status codes (:data:`railcontact.timestep.wheelset.STATUS_NAMES`)."""
+
 
 def _used(k: int):
     """The creepage ``k`` used on a wheel's main patch (0 without creepages)."""
@@ -224,7 +302,8 @@ OUTPUTS = [
              "tangential BEM sweeps of the last step, both wheels",
              _total("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
-             "0 ok, 1 not converged, 2 no contact, 3 out of range (input rejected)",
+             f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0): "
+             f"{STATUS}",
              lambda r: r.status),
     *_wheel("load_passes", "Integer", "", "solves of the wheel in the last step (load loop)",
             value=lambda w: w.load_passes),
@@ -234,13 +313,36 @@ OUTPUTS = [
             "it may have several (several patches, mu tan(gamma) >= 1 on one; the one "
             "continuous with the previous step is returned); meaningful with status 0 or 1",
             value=lambda w: int(w.load_unique)),
-    *_wheel("status", "Integer", "", "the wheel's own status: 0 ok, 1 not converged, 2 no "
-            "contact, 3 out of range (the wheelset status is the larger of the two)",
+    *_wheel("status", "Integer", "", f"the wheel's own status: {STATUS}",
             value=lambda w: w.status),
     *_wheel("contact_longitudinal_position", "Real", "m", "contact point, track X (ahead "
             "of the axle when the wheelset is yawed)", value=lambda w: w.contact_point[0]),
     *_wheel("contact_vertical_position", "Real", "m", "contact point, track Z (rail top "
             "at 0)", value=lambda w: w.contact_point[2]),
+    Variable("wheelset_vertical_displacement", "Real", "output", None, "m",
+             "wheelset centre's vertical displacement, positive up, from r0 above the rail "
+             "tops: the input under control=penetration; under control=load the rigid "
+             "wheelset's that gives both wheels their approaches", lambda r: r.vertical),
+    Variable("wheelset_roll", "Real", "output", None, "rad",
+             "wheelset roll angle, positive left side up: the input under "
+             "control=penetration; under control=load the rigid wheelset's",
+             lambda r: r.roll),
+    Variable("roll_moment", "Real", "output", None, "N.m",
+             "moment of the rails on the wheelset about the track X axis through its centre "
+             "(positive lifts the left wheel)", lambda r: r.moment[0]),
+    Variable("pitch_moment", "Real", "output", None, "N.m",
+             "moment of the rails on the wheelset about the track Y axis through its centre "
+             "(the axle; right-handed about Y, which points to the left)",
+             lambda r: r.moment[1]),
+    *_wheel("derailment_quotient", "Real", "1", "Y/Q: lateral force of the wheel on the "
+            "rail towards the field side over the vertical force",
+            value=lambda w: w.derailment_quotient),
+    *_wheel("penetration", "Real", "m", "largest normal penetration of the patches",
+            value=lambda w: w.penetration),
+    *_wheel("validity", "Integer", "", "the limits the wheel is beyond, a sum of bits: 1 "
+            "Y/Q above max_y_q, 2 beyond Nadal's limit, 4 flange climb, 8 penetration above "
+            "max_penetration, 16 load above max_wheel_load (0: within all)",
+            value=lambda w: w.validity),
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""
@@ -263,8 +365,48 @@ def table() -> list[Variable]:
     """All variables with their value references (numbered per type from 0)."""
     counters: dict[str, int] = {}
     out = []
-    for v in PARAMETERS + INPUTS + OUTPUTS:
+    for v in PARAMETERS + INPUTS + OUTPUTS + CHOICES:
         k = counters.get(v.type, 0)
         counters[v.type] = k + 1
         out.append(replace(v, vr=k))
     return out
+
+
+def _cell(text: str) -> str:
+    return text.replace("|", "\\|")
+
+
+def _default(v: Variable) -> str:
+    if v.causality == "output" or v.start is None:
+        return ""
+    if v.items:
+        return f"{v.start} ({v.items[v.start - 1]})"
+    if isinstance(v.start, float):
+        return f"{v.start:.6g}"
+    return f"`{v.start}`" if isinstance(v.start, str) else str(v.start)
+
+
+def variables_markdown() -> str:
+    """Every FMU variable as a Markdown table: name, causality, type, unit, default and
+    meaning, in the order parameters, enumerations, inputs, outputs; a ``_left``/``_right``
+    pair is one row. The README's table is this (``scripts/fmu_variables_table.py``
+    writes it; ``tests/test_readme_fmu.py`` checks it)."""
+    everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS
+    names = {v.name for v in everything}
+    out = ["| name | causality | type | unit | default | meaning |",
+           "|---|---|---|---|---|---|"]
+    for v in everything:
+        if v.name.endswith("_right") and v.name[:-6] + "_left" in names:
+            continue
+        name, meaning = f"`{v.name}`", v.description
+        if v.name.endswith("_left") and v.name[:-5] + "_right" in names:
+            name = f"`{v.name[:-5]}_left`, `_right`"
+            meaning = (meaning.replace(", left wheel", "").replace("left wheel", "each wheel")
+                       .replace(", left (", " ("))
+        kind = v.type
+        if v.items:
+            kind = "Enumeration: " + ", ".join(f"{k} {w}" for k, w in
+                                                enumerate(v.items, start=1))
+        out.append(f"| {name} | {v.causality} | {_cell(kind)} | {v.unit} | "
+                   f"{_cell(_default(v))} | {_cell(meaning)} |")
+    return "\n".join(out) + "\n"

@@ -63,6 +63,17 @@ class ContactSettings(Record):
     load_tolerance: float = setting(1e-3, "float", "-", "relative tolerance on a wheel load "
                                     "when the creep forces count", minimum=0.0, open_min=True,
                                     maximum=1.0, open_max=True)
+    # Validity limits: a solved wheel beyond one is reported "outside validity"
+    # (railcontact.timestep.validity); its forces are still given.
+    max_y_q: float = setting(0.8, "float", "-", "derailment quotient Y/Q of a wheel above "
+                             "which it is outside validity (EN 14363's limit; Nadal's limit "
+                             "of the flange is checked as well)", minimum=0.0, open_min=True)
+    max_penetration: float = setting(0.5e-3, "float", "m", "normal penetration of a patch "
+                                     "above which the wheel is outside validity (83 kN on a "
+                                     "tread: 0.07 mm)", minimum=0.0, open_min=True)
+    max_wheel_load: float = setting(400e3, "float", "N", "vertical wheel force above which "
+                                    "the wheel is outside validity (twice a 40 t heavy-haul "
+                                    "axle's static wheel load)", minimum=0.0, open_min=True)
 
     @property
     def uses_estimate(self) -> bool:

@@ -2,11 +2,15 @@
 
 - :mod:`.wheelset`: :class:`WheelsetContact`, both wheels of a wheelset per step,
   kinematic creepages, the load loop with creep forces;
-- :mod:`.warmstart`: the previous steps' solutions as the next step's start.
+- :mod:`.warmstart`: the previous steps' solutions as the next step's start;
+- :mod:`.validity`: where a solved wheel is beyond the model's validity (Y/Q, Nadal,
+  flange climb, penetration, load);
+- :mod:`.rigid`: the rigid wheelset's vertical displacement and roll under load control.
 """
 
 from ..settings import ContactSettings
 from .wheelset import (
+    OUTSIDE_VALIDITY,
     STATUS_NAMES,
     Kinematics,
     WheelContact,
@@ -14,5 +18,5 @@ from .wheelset import (
     WheelsetResult,
 )
 
-__all__ = ["STATUS_NAMES", "ContactSettings", "Kinematics", "WheelContact", "WheelsetContact",
-           "WheelsetResult"]
+__all__ = ["OUTSIDE_VALIDITY", "STATUS_NAMES", "ContactSettings", "Kinematics", "WheelContact",
+           "WheelsetContact", "WheelsetResult"]

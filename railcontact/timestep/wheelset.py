@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from time import perf_counter
 
 import numpy as np
@@ -63,7 +64,7 @@ from ..contact.loadloop import (
 )
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
-from ..contact.wheelrail import solve_wheel_normal
+from ..contact.wheelrail import solve_wheel_normal, vertical_approach
 from ..errors import (
     CaseError,
     ConvergenceError,
@@ -77,11 +78,20 @@ from ..halfspace.hertz import HertzSolution
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION
+from .rigid import RigidWheelset
+from .validity import check_validity, derailment_quotient
 from .warmstart import PatchMemory, match, previous_pressure, previous_tangential
 
-OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
+OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE, OUTSIDE_VALIDITY = 0, 1, 2, 3, 4
 STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
-                OUT_OF_RANGE: "out of range"}
+                OUT_OF_RANGE: "out of range", OUTSIDE_VALIDITY: "outside validity"}
+"""A wheel's status: ok; not converged (a BEM solve or the load loop; forces given, less
+accurate); no contact (zero forces); out of range (the pose or a patch beyond the model:
+nothing solved, zero forces); outside validity (solved, but beyond a limit of
+:mod:`.validity`: Y/Q, Nadal's limit, flange climb, penetration, wheel load)."""
+SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
+"""The statuses from the least to the most severe: the wheelset's status is its wheels'
+most severe."""
 
 
 @dataclass(frozen=True)
@@ -172,6 +182,21 @@ class WheelContact:
     :func:`~railcontact.contact.loadloop.load_unique`):
     the step returns the one continuous with the previous step, or, cold, the one reached
     from the normal share Q; the message says so."""
+    validity: int = 0
+    """The limits of :mod:`~railcontact.timestep.validity` the solved wheel is beyond (bits
+    Y_Q 1, NADAL 2, FLANGE_CLIMB 4, PENETRATION 8, LOAD 16; 0 within all); any makes an
+    otherwise ok wheel's status OUTSIDE_VALIDITY."""
+    derailment_quotient: float = 0.0
+    """Y/Q [-]: the wheel's lateral force on the rail towards the field side over the
+    vertical force (:func:`~railcontact.timestep.validity.derailment_quotient`)."""
+    approach: float = 0.0
+    """Vertical approach of the wheel into its rail beyond first contact [m]."""
+    penetration: float = 0.0
+    """Largest normal penetration of its patches [m]."""
+    moment: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Moment of the rail's forces on the wheel about the point (0, y, 0) of the track
+    frame (under the wheelset centre, at rail-top height), track components (X, Y, Z)
+    [N m], spin moments included."""
 
     @property
     def n_patches(self) -> int:
@@ -185,6 +210,13 @@ class WheelsetResult:
     left: WheelContact
     right: WheelContact
     wall_time: float = 0.0
+    wheelset_radius: float = 0.0
+    """Nominal rolling radius r0 [m]: the centre's height above the rail tops at
+    ``vertical = 0``."""
+    rigid: RigidWheelset | tuple[float, float] | None = field(default=None, repr=False,
+                                                               compare=False)
+    """:attr:`vertical` and :attr:`roll`: given (penetration control), or the problem
+    that finds them when first asked for (load control); None when out of range."""
 
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:
@@ -192,7 +224,39 @@ class WheelsetResult:
 
     @property
     def status(self) -> int:
-        return max(w.status for w in self.wheels)
+        """The wheels' most severe status (:data:`SEVERITY`)."""
+        return max((w.status for w in self.wheels), key=SEVERITY.index)
+
+    @cached_property
+    def _vertical_roll(self) -> tuple[float, float]:
+        if self.rigid is None:
+            return (0.0, 0.0)
+        return self.rigid if isinstance(self.rigid, tuple) else self.rigid.solve()
+
+    @property
+    def vertical(self) -> float:
+        """Vertical displacement of the wheelset centre [m], positive up, from one nominal
+        radius above the rail tops: the input under penetration control; under load
+        control the rigid wheelset's that gives both wheels their approaches
+        (:mod:`~railcontact.timestep.rigid`); 0 when out of range."""
+        return self._vertical_roll[0]
+
+    @property
+    def roll(self) -> float:
+        """Roll angle of the wheelset [rad] (positive: left side up): the input's under
+        penetration control, the rigid wheelset's under load control (:attr:`vertical`)."""
+        return self._vertical_roll[1]
+
+    @property
+    def moment(self) -> tuple[float, float, float]:
+        """Moment of the rails' forces on the wheelset about its centre (0, y, r0 +
+        vertical), track components (M_X roll, M_Y pitch, M_Z yaw) [N m]: right-handed
+        about X forward, Y left, Z up (M_X > 0 lifts the left wheel, M_Z > 0 turns the
+        nose to the left)."""
+        h = self.wheelset_radius + self.vertical
+        fx, fy, _ = self.force
+        m = [self.left.moment[k] + self.right.moment[k] for k in range(3)]
+        return (m[0] + h * fy, m[1] - h * fx, m[2])
 
     @property
     def force(self) -> tuple[float, float, float]:
@@ -299,9 +363,37 @@ class WheelsetContact:
             wheels = [WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
                       for s in ("left", "right")]
             new_memory = {"left": [], "right": []}
+        else:
+            for wheel in wheels:
+                self._check_validity(wheel)
         if remember:
             self.memory = new_memory
-        return WheelsetResult(wheels[0], wheels[1], perf_counter() - t0)
+        result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
+        if vertical is not None:
+            result.rigid = (vertical, pose.roll)
+        elif not off_track:  # found when first asked for: it costs four contact searches
+            result.rigid = RigidWheelset(
+                self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
+                tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
+                      if w.patches else None for w in wheels))
+        return result
+
+    def _check_validity(self, wheel: WheelContact) -> None:
+        """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
+        OUTSIDE_VALIDITY, its message naming each quantity and value."""
+        if not wheel.patches:
+            return
+        v = check_validity(SIDES[wheel.side], wheel.track_force, wheel.patches,
+                           self.wheelset.flange_flank, self.settings)
+        wheel.validity = v.flags
+        if not v.flags:
+            return
+        if wheel.status == OK:
+            note = wheel.message.removeprefix("ok")  # e.g. "; the load may have several ..."
+            wheel.status = OUTSIDE_VALIDITY
+            wheel.message = f"outside validity: {v.message}{note}"
+        else:
+            wheel.message += f"; also outside validity: {v.message}"
 
     def _approach(self, pose: Pose, side: str, vertical: float) -> float:
         """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
@@ -442,6 +534,7 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     u_ws = sgn * pose.lateral
     fx = fs = mn = n_tot = 0.0
     fu = fz = mz = 0.0
+    moment = np.zeros(3)
     converged = True
     work = Work()
     for p in patches:
@@ -455,6 +548,12 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         fu += f_u
         fz += ps * math.sin(g) + n.force * math.cos(g)
         mz += cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
+        # track frame, about (0, y, 0): r x F plus the spin couple (sgn pm) n, with
+        # n = (0, -sgn sin(g), cos(g)) the contact normal
+        lever = np.array([cp.position[0], cp.position[1] - pose.lateral, cp.position[2]])
+        force = np.array([px, sgn * f_u, ps * math.sin(g) + n.force * math.cos(g)])
+        moment += np.cross(lever, force) + np.array([0.0, -pm * math.sin(g),
+                                                     sgn * pm * math.cos(g)])
         converged &= n.converged and (t is None or t.converged)
         work.absorb(p.work)
         work.load_passes = max(work.load_passes, p.work.load_passes)
@@ -465,6 +564,10 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.spin_moment = sgn * mn
     wheel.track_force = (fx, sgn * fu, fz)
     wheel.yaw_moment = sgn * mz
+    wheel.moment = tuple(float(m) for m in moment)
+    wheel.derailment_quotient = derailment_quotient(sgn, wheel.track_force)
+    wheel.approach = vertical_approach(patches)
+    wheel.penetration = float(max(p.normal.penetration for p in patches))
     wheel.wheel_position = cp.wheel_s
     wheel.rail_position = cp.rail_y
     wheel.lateral_position = cp.position[1]

@@ -1,0 +1,124 @@
+"""Where a solved wheel is outside the model's validity, and why.
+
+A wheel whose contact was solved (status ok) is *outside validity* when one of these holds
+(SI units; each a bit of :attr:`~railcontact.timestep.WheelContact.validity`):
+
+* ``Y_Q``: its derailment quotient ``Y/Q`` exceeds :attr:`ContactSettings.max_y_q`
+  (EN 14363's 0.8 by default). ``Y`` is the lateral force of the wheel on the rail towards
+  the rail's field side, ``Y = -s F_Y`` with ``F_Y`` the rail's force on the wheel along
+  track Y and ``s = +1`` left, ``-1`` right; ``Q`` the rail's vertical force on the wheel.
+* ``NADAL``: ``Y/Q`` exceeds Nadal's limit of the flange,
+  ``(tan(beta) - mu) / (1 + mu tan(beta))`` with ``beta`` the steepest angle of the wheel's
+  flange (:attr:`~railcontact.geometry.Wheelset.flange_flank`, S1002: 70 deg) and ``mu``
+  the friction coefficient: the Y/Q of a flange in full sliding with the rail's friction
+  on the wheel pointing up the flank (a leading wheel at a positive angle of attack),
+  beyond which the wheel climbs.
+* ``FLANGE_CLIMB``: a patch lies past the flange's steepest point, on its upper flank,
+  at a contact angle more than :data:`FLANGE_CLIMB_MARGIN` below the steepest angle. (Past
+  half of that angle the wheel has climbed its flange and the pose is out of range,
+  :func:`~railcontact.contact.wheelrail.check_on_rail`.)
+* ``PENETRATION``: a patch's normal penetration exceeds
+  :attr:`ContactSettings.max_penetration`.
+* ``LOAD``: ``Q`` exceeds :attr:`ContactSettings.max_wheel_load`.
+
+The forces are still given; the status says not to trust them as a prediction.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from ..contact.results import PatchSolution
+from ..settings import ContactSettings
+
+Y_Q, NADAL, FLANGE_CLIMB, PENETRATION, LOAD = 1, 2, 4, 8, 16
+VALIDITY_NAMES = {Y_Q: "Y/Q above max_y_q", NADAL: "beyond Nadal's limit",
+                  FLANGE_CLIMB: "flange climb", PENETRATION: "penetration above "
+                  "max_penetration", LOAD: "wheel load above max_wheel_load"}
+"""The bits of a wheel's ``validity`` and their meaning."""
+FLANGE_CLIMB_MARGIN = math.radians(1.0)
+"""How far below the flange's steepest angle [rad] a contact past the steepest point
+counts as climbing: the flank's straight part varies by less (S1002: 70.0 to 69.75 deg
+over the first millimetre past its steepest point)."""
+
+
+def nadal_limit(flange_angle: float, friction: float) -> float:
+    """Nadal's limit ``(tan(beta) - mu) / (1 + mu tan(beta))`` of the derailment quotient
+    Y/Q for a flange angle ``beta`` [rad] and friction coefficient ``mu`` [-]."""
+    t = math.tan(flange_angle)
+    return (t - friction) / (1.0 + friction * t)
+
+
+def derailment_quotient(side_sign: int, track_force: Sequence[float]) -> float:
+    """Y/Q [-] of a wheel from the rail's force on it in the track frame (X, Y, Z) [N]
+    (module docstring); 0 without a vertical force."""
+    q = float(track_force[2])
+    return -side_sign * float(track_force[1]) / q if q > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class Validity:
+    """A wheel's validity check: the bits that are set and a message naming each
+    quantity and its value ("" when none is)."""
+
+    flags: int = 0
+    message: str = ""
+
+
+def check_validity(side_sign: int, track_force: Sequence[float],
+                   patches: Sequence[PatchSolution], flange_flank: tuple[float, float],
+                   settings: ContactSettings) -> Validity:
+    """The validity of a solved wheel (module docstring).
+
+    Parameters
+    ----------
+    side_sign
+        +1 for the left wheel, -1 for the right.
+    track_force
+        The rail's force on the wheel (X, Y, Z) in the track frame [N].
+    patches
+        The wheel's solved patches (their contact points and normal penetrations).
+    flange_flank
+        Profile coordinate S [m] and angle [rad] of the flange's steepest point.
+    settings
+        The limits (and the friction coefficient).
+    """
+    flags, why = 0, []
+    yq = derailment_quotient(side_sign, track_force)
+    q = float(track_force[2])
+    if yq > settings.max_y_q:
+        flags |= Y_Q
+        why.append(f"Y/Q = {yq:.3g} above max_y_q = {settings.max_y_q:g}")
+    s_steep, steepest = flange_flank
+    limit = nadal_limit(steepest, settings.friction)
+    if yq > limit:
+        flags |= NADAL
+        why.append(f"Y/Q = {yq:.3g} beyond Nadal's limit {limit:.3g} (flange "
+                   f"{math.degrees(steepest):.3g} deg, mu {settings.friction:g})")
+    for p in patches:
+        cp = p.geometry
+        if (cp is not None and cp.wheel_s < s_steep
+                and abs(cp.contact_angle) < steepest - FLANGE_CLIMB_MARGIN):
+            flags |= FLANGE_CLIMB
+            why.append(f"flange climb: contact at S = {cp.wheel_s * 1e3:.4g} mm at "
+                       f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's "
+                       f"steepest point (S = {s_steep * 1e3:.4g} mm, "
+                       f"{math.degrees(steepest):.3g} deg)")
+            break
+    penetration = max((p.normal.penetration for p in patches), default=0.0)
+    if penetration > settings.max_penetration:
+        flags |= PENETRATION
+        why.append(f"normal penetration {penetration * 1e3:.3g} mm above max_penetration = "
+                   f"{settings.max_penetration * 1e3:g} mm")
+    if q > settings.max_wheel_load:
+        flags |= LOAD
+        why.append(f"wheel load Q = {q / 1e3:.4g} kN above max_wheel_load = "
+                   f"{settings.max_wheel_load / 1e3:g} kN")
+    return Validity(flags, "; ".join(why))
+
+
+__all__ = ["FLANGE_CLIMB", "FLANGE_CLIMB_MARGIN", "LOAD", "NADAL", "PENETRATION",
+           "VALIDITY_NAMES", "Validity", "Y_Q", "check_validity", "derailment_quotient",
+           "nadal_limit"]
