@@ -123,9 +123,13 @@ def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, 
     sx = ux[iy, ix]
     sy = uy[iy, ix]
     bx = nx - 1 - ix
-    for jy in range(r0, r1):
+    # the changes so far: the block's rows up to this one, and in this row the elements
+    # trailing this one (rows, and elements in a row, are visited in order; the runs shifted
+    # are trailing ones); the rest of the block is unchanged yet (zero in dpx, dpy)
+    for jy in range(r0, iy + 1):
         r = ny - 1 - iy + jy
-        for jx in range(lo[jy], hi[jy] + 1):
+        last = hi[jy] if jy < iy else ix - 1
+        for jx in range(lo[jy], last + 1):
             k = bx + jx
             qx = dpx[jy, jx]
             qy = dpy[jy, jx]

@@ -32,6 +32,10 @@ from ..halfspace.grid import Grid, remesh
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
 MAX_EXTRAPOLATION = 2.0
+AREA_MARGIN_ELEMENTS = 2
+AREA_MARGIN_SHARE = 0.05
+"""The potential area of a warm-started patch: the previous steps' contact, widened on each
+side by this many elements plus this share of its extent (:func:`previous_bounds`)."""
 
 
 @dataclass(frozen=True)
@@ -103,6 +107,41 @@ def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None
         o = memory.older
         p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
     return p
+
+
+def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | None:
+    """The potential contact area (xmin, xmax, ymin, ymax) [m] of a warm-started patch:
+    the box around the contact of the previous two steps (patch coordinates), widened on
+    each side by :data:`AREA_MARGIN_ELEMENTS` elements and :data:`AREA_MARGIN_SHARE` of
+    its extent; None when the previous step had no contact.
+
+    The BEM's answer does not depend on the potential area as long as the contact stays
+    inside it (the grids share one lattice); one that the contact reaches is grown and
+    solved again by the patch solver, so a tight area costs a re-mesh at worst. A warm
+    step then transforms and iterates on a grid a third of the size the Hertz estimate
+    would mesh (whose area, for the wheel load, is the rigid interpenetration area with a
+    margin)."""
+    boxes = [_contact_box(m.pressure, m.grid) for m in (memory, memory.older)
+             if m is not None]
+    boxes = [b for b in boxes if b is not None]
+    if not boxes:
+        return None
+    x0, x1 = min(b[0] for b in boxes), max(b[1] for b in boxes)
+    y0, y1 = min(b[2] for b in boxes), max(b[3] for b in boxes)
+    g = memory.grid
+    mx = AREA_MARGIN_ELEMENTS * g.dx + AREA_MARGIN_SHARE * (x1 - x0)
+    my = AREA_MARGIN_ELEMENTS * g.dy + AREA_MARGIN_SHARE * (y1 - y0)
+    return (x0 - mx, x1 + mx, y0 - my, y1 + my)
+
+
+def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
+    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
+    rows = np.flatnonzero(pressure.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(pressure.any(axis=0))
+    return (grid.x0 + (rows[0] - 0.5) * grid.dx, grid.x0 + (rows[-1] + 0.5) * grid.dx,
+            grid.y0 + (cols[0] - 0.5) * grid.dy, grid.y0 + (cols[-1] + 0.5) * grid.dy)
 
 
 def previous_tangential(memory: PatchMemory, grid: Grid

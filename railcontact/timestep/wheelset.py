@@ -77,7 +77,13 @@ from ..halfspace.hertz import HertzSolution
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION
-from .warmstart import PatchMemory, match, previous_pressure, previous_tangential
+from .warmstart import (
+    PatchMemory,
+    match,
+    previous_bounds,
+    previous_pressure,
+    previous_tangential,
+)
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE = 0, 1, 2, 3
 STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
@@ -388,6 +394,7 @@ class WheelsetContact:
             def of(grid):
                 p = previous_pressure(m, grid, time)
                 return p if p.sum() > 0 else estimate()(grid)
+            of.bounds = previous_bounds(m)  # the potential area: where the contact was
             return labelled(of, "previous")
 
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
