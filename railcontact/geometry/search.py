@@ -101,22 +101,21 @@ class ContactPoint:
         """Undeformed gap h(x, y) = f(y) + A(y) x^2 at the element centres [m], with the
         grid's y along s. Where the profiles end (or fold away from this contact) the gap
         is :data:`FAR` - such elements can never touch."""
-        X, Y = grid.mesh()
-        f = np.interp(Y, self.s, self.f, left=FAR, right=FAR)
-        a = np.interp(Y, self.s, np.where(np.isfinite(self.a_of_s), self.a_of_s, 0.0))
-        h = f + a * X**2
+        y = grid.y  # f and A depend on y alone: interpolated per column
+        f = np.interp(y, self.s, self.f, left=FAR, right=FAR)
+        a = np.interp(y, self.s, np.where(np.isfinite(self.a_of_s), self.a_of_s, 0.0))
+        h = f[None, :] + a[None, :] * grid.x[:, None] ** 2
         return np.where(np.isfinite(h), h, FAR)
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
-        inside = self.f <= delta
         k0 = int(np.argmin(np.abs(self.s)))
-        lo = k0
-        while lo > 0 and inside[lo - 1]:
-            lo -= 1
-        hi = k0
-        while hi < len(self.s) - 1 and inside[hi + 1]:
-            hi += 1
+        inside = self.f <= delta
+        inside[k0] = True
+        outside = np.flatnonzero(~inside)
+        i = int(np.searchsorted(outside, k0))  # the run of samples inside through k0
+        lo = int(outside[i - 1]) + 1 if i > 0 else 0
+        hi = int(outside[i]) - 1 if i < outside.size else len(self.s) - 1
         ds = self.s[1] - self.s[0]
         a, b = self.s[lo] - ds, self.s[hi] + ds
         return margin * a, margin * b
