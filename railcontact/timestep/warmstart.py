@@ -84,7 +84,7 @@ class PatchMemory:
         dt = self.time - o.time
         if not dt > 0:
             return 0.0
-        return float(np.clip((time - self.time) / dt, 0.0, MAX_EXTRAPOLATION))
+        return min(max(float((time - self.time) / dt), 0.0), MAX_EXTRAPOLATION)
 
 
 def match(memories: list[PatchMemory], u: float, z: float) -> PatchMemory | None:
