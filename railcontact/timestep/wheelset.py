@@ -411,7 +411,9 @@ class WheelsetContact:
                 creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
                 t0 = perf_counter()
-                prev = previous_tangential(m, patch.normal.grid) if m else None
+                # the traction extrapolated in time for SteadyGS only (previous_tangential)
+                at = time if settings.tangential_solver != "convexgs" else None
+                prev = previous_tangential(m, patch.normal.grid, at) if m else None
                 patch.work.seconds += perf_counter() - t0
                 solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
                                        creepage=side_creep, previous=prev)
