@@ -312,9 +312,12 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     res = patch.normal
     A, B = patch.curvatures
     creepage = settings.creepage if creepage is None else tuple(creepage)
-    # The simplified models work on the Hertz ellipse that carries the BEM's normal force.
-    hz = hertz(A, B, pair, load=res.force) if res.force > 0 else None
     model, estimate = settings.model, settings.estimate
+    p0, st0 = previous if previous is not None else (None, None)
+    # The simplified models work on the Hertz ellipse that carries the BEM's normal force
+    # (not needed when the BEM starts from a given traction).
+    needs_hertz = model != "bem" or (p0 is None and estimate != "none")
+    hz = hertz(A, B, pair, load=res.force) if res.force > 0 and needs_hertz else None
     patch.tangential_model, patch.tangential_estimate = model, estimate
     actual = res if patch.geometry is not None else None  # wheel-rail: non-elliptic patch
     if model != "bem":
@@ -322,7 +325,6 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
             raise CaseError("no contact: the simplified tangential models need a load")
         patch.tangential = simplified_tangential(model, hz, pair, settings, actual, creepage)
         return
-    p0, st0 = previous if previous is not None else (None, None)
     if p0 is None and estimate != "none" and hz is not None:
         p0, st0 = remesh_strips(
             simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
