@@ -107,3 +107,26 @@ def test_branch_interpolation_keeps_to_the_branch_through_the_sample():
     np.testing.assert_allclose(_branch_interp(xs, x, y, 50), xs, atol=1e-12)  # first
     np.testing.assert_allclose(_branch_interp(xs, x, y, 250), 2 + xs, atol=1e-12)  # third
     assert np.isnan(_branch_interp(np.array([1.5]), x, y, 250)).all()
+
+
+@pytest.mark.parametrize("y", [0.0, 6e-3])
+def test_lateral_extent_is_the_run_of_gap_below_delta_through_the_contact_point(y):
+    """The potential area across the track: the samples around s = 0 where the
+    tangent-plane gap f(s) is at most delta, one sample wider on each side; the patch
+    gap on a grid is f(y) + A(y) x^2 at the element centres."""
+    from railcontact.halfspace.grid import Grid
+
+    cp = contact_points(TRACK, WS, Pose(y), "left")[0]
+    for delta in (2e-5, 1e-4, 5e-4):
+        lo, hi = cp.lateral_extent(delta)
+        ds = cp.s[1] - cp.s[0]
+        inside = (cp.s > lo + 0.5 * ds) & (cp.s < hi - 0.5 * ds)
+        assert np.all(cp.f[inside] <= delta) and np.any(np.abs(cp.s[inside]) < ds)
+        for edge, out in ((lo + ds, -1), (hi - ds, 1)):  # the next sample out: above delta
+            k = int(np.argmin(np.abs(cp.s - edge))) + out
+            assert cp.f[k] > delta
+        assert cp.lateral_extent(delta, 1.5) == pytest.approx((1.5 * lo, 1.5 * hi))
+    g = Grid(6, 5, 1e-3, 2e-3, -2.5e-3, -4e-3)
+    X, Y = g.mesh()
+    want = np.interp(Y, cp.s, cp.f) + np.interp(Y, cp.s, cp.a_of_s) * X**2
+    np.testing.assert_allclose(cp.gap_on_grid(g), want, rtol=1e-14, atol=0)

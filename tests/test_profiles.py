@@ -147,3 +147,28 @@ def test_bad_files(tmp_path):
         read_profile("S1002", "rail")
     with pytest.raises(RailContactError, match="unit"):
         read_xy(bad, "rail", unit="furlong")
+
+
+def test_compiled_spline_evaluation_is_the_cubic_spline():
+    """Long arrays are evaluated by the compiled loop of geometry/spline.py: the same
+    piecewise cubic as scipy's CubicSpline (values and slopes, unordered points, beyond
+    the ends where the end pieces extrapolate, NaN passed through); a cubic is
+    reproduced exactly, as a not-a-knot spline must."""
+    from scipy.interpolate import CubicSpline
+
+    from railcontact.geometry.profiles import Profile
+
+    y = np.linspace(-0.06, 0.07, 400)
+    cubic = Profile(y, 2.0 * y**3 - 0.5 * y**2 + 0.01 * y, "wheel", "cubic")
+    t = np.random.default_rng(3).uniform(-0.07, 0.08, 500)
+    # (to the round-off of the spline's coefficients, amplified where it extrapolates)
+    np.testing.assert_allclose(cubic.height(t), 2.0 * t**3 - 0.5 * t**2 + 0.01 * t,
+                               rtol=0, atol=1e-13)
+    np.testing.assert_allclose(cubic.slope(t), 6.0 * t**2 - t + 0.01, rtol=0, atol=1e-11)
+    rail = read_profile("60E1", "rail")
+    ref = CubicSpline(rail.y, rail.z, bc_type="not-a-knot")
+    t = np.concatenate([np.linspace(rail.y[0] - 1e-3, rail.y[-1] + 1e-3, 3001), t, [np.nan]])
+    for nu, got in ((0, rail.height(t)), (1, rail.slope(t))):
+        want = ref(t, nu)
+        assert np.isnan(got[-1])
+        np.testing.assert_allclose(got[:-1], want[:-1], rtol=1e-12, atol=1e-15)

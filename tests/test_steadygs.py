@@ -208,3 +208,33 @@ def test_bad_input(sphere):
     normal_op = influence_operator(g, STEEL)
     with pytest.raises(rc.RailContactError, match="operator"):
         solve_steadygs(g, normal_op, nr.pressure, 0.3, (1e-4, 0, 0))
+
+
+def test_a_window_around_the_contact_gives_the_whole_grid_answer():
+    """The steady-rolling problem lives on the contact elements alone (zero traction bound
+    elsewhere): the case solver's SteadyGS on the contact's window (counts in multiples of
+    8, far fewer than the potential area's) gives the traction of a solve on the whole
+    grid, zero outside the window."""
+    from railcontact.contact.patch import contact_window
+
+    d = {"material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
+         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left",
+                      "lateral_displacement": 2e-3},
+         "grid": {"dx": 0.5e-3, "dy": 0.5e-3, "margin": 1.5},
+         "normal": {"load": 83.3e3, "tolerance": 1e-8},
+         "tangential": {"friction": 0.4, "creepage": [-1e-3, 5e-4, 0.3], "tolerance": 1e-9,
+                        "solver": "steadygs", "estimate": "none"}}
+    patch = rc.solve(d).patches[0]
+    nr, t = patch.normal, patch.tangential
+    sx, sy = contact_window(nr.contact)
+    assert (sx.stop - sx.start) * (sy.stop - sy.start) < 0.5 * nr.grid.size
+    full = solve_steadygs(nr.grid, rolling_operator(nr.grid, Case.from_dict(d).pair),
+                          nr.pressure, 0.4, (-1e-3, 5e-4, 0.3), tolerance=1e-9)
+    assert t.converged and full.converged
+    assert rel_l2(t.traction, full.traction) < 1e-7
+    np.testing.assert_array_equal(t.state, full.state)
+    np.testing.assert_allclose(t.force, full.force, rtol=1e-7)
+    assert t.spin_moment == pytest.approx(full.spin_moment, rel=1e-6)
+    slip = t.state == 2
+    np.testing.assert_allclose(t.slip[:, slip], full.slip[:, slip], rtol=0,
+                               atol=1e-6 * np.abs(full.slip).max())

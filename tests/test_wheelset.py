@@ -175,3 +175,30 @@ def test_warm_start_from_previous_step_cuts_iterations_not_accuracy():
     # both stop at eps_tau = 1e-2: agree to a fraction of the largest creep force mu N
     np.testing.assert_allclose(runs["previous"][1], runs["none"][1], rtol=0,
                                atol=0.005 * 0.4 * Q)
+
+
+def test_warm_step_meshes_where_the_contact_was_and_grows_when_it_moves():
+    """A warm step meshes the previous steps' contact with a margin (far fewer elements
+    than the Hertz potential area of a cold step); where the patch has moved or grown out
+    of it, the area is grown and the patch solved again (a re-mesh). Either way the forces
+    are those of a cold solve, within the solvers' tolerances."""
+    kin = Kinematics(30.0, 0.02)
+    warm, cold = contact(warm_start="previous"), contact(warm_start="none")
+    hertz_area = contact(warm_start="none", load_includes_creep=False)  # one pass
+    steps = [(0.0, Q), (1e-3, Q), (1.05e-3, Q), (1.1e-3, 2 * Q)]  # lateral [m], load [N]
+    for k, (y, q) in enumerate(steps):
+        t = k * 1e-3
+        rw = warm.solve(Pose(y), loads=(q, q), kinematics=kin, time=t)
+        rc_ = cold.solve(Pose(y), loads=(q, q), kinematics=kin, time=t)
+        for w, c in zip(rw.wheels, rc_.wheels, strict=True):
+            assert w.status == c.status == OK
+            assert w.normal_force == pytest.approx(c.normal_force, rel=2e-3)
+            np.testing.assert_allclose(w.creep_force, c.creep_force, rtol=0,
+                                       atol=0.005 * 0.4 * q)
+        if k == 2:  # a small move: the previous contact's box, no re-mesh
+            rh = hertz_area.solve(Pose(y), loads=(Q, Q), kinematics=kin, time=t)
+            for w, h in zip(rw.wheels, rh.wheels, strict=True):
+                gw, gh = w.patches[0].normal.grid, h.patches[0].normal.grid
+                assert gw.size < 0.75 * gh.size and w.remeshes == 0
+    # the doubled load grew the left patch out of the box it was meshed on
+    assert rw.left.remeshes >= 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -311,9 +312,12 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     res = patch.normal
     A, B = patch.curvatures
     creepage = settings.creepage if creepage is None else tuple(creepage)
-    # The simplified models work on the Hertz ellipse that carries the BEM's normal force.
-    hz = hertz(A, B, pair, load=res.force) if res.force > 0 else None
     model, estimate = settings.model, settings.estimate
+    p0, st0 = previous if previous is not None else (None, None)
+    # The simplified models work on the Hertz ellipse that carries the BEM's normal force
+    # (not needed when the BEM starts from a given traction).
+    needs_hertz = model != "bem" or (p0 is None and estimate != "none")
+    hz = hertz(A, B, pair, load=res.force) if res.force > 0 and needs_hertz else None
     patch.tangential_model, patch.tangential_estimate = model, estimate
     actual = res if patch.geometry is not None else None  # wheel-rail: non-elliptic patch
     if model != "bem":
@@ -321,11 +325,61 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
             raise CaseError("no contact: the simplified tangential models need a load")
         patch.tangential = simplified_tangential(model, hz, pair, settings, actual, creepage)
         return
-    p0, st0 = previous if previous is not None else (None, None)
     if p0 is None and estimate != "none" and hz is not None:
         p0, st0 = remesh_strips(
             simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
-    patch.tangential = SOLVERS[settings.solver](
-        res.grid, rolling_operator(res.grid, pair, fft), res.pressure, settings.friction,
+    grid, pn = res.grid, res.pressure
+    window = None if settings.solver == "convexgs" else contact_window(res.contact)
+    if window is not None:  # solve on the contact's own window, return on the patch's grid
+        sx, sy = window
+        grid = Grid(sx.stop - sx.start, sy.stop - sy.start, grid.dx, grid.dy,
+                    grid.x0 + sx.start * grid.dx, grid.y0 + sy.start * grid.dy)
+        pn = pn[sx, sy]
+        p0 = None if p0 is None else np.asarray(p0)[:, sx, sy]
+        st0 = None if st0 is None else np.asarray(st0)[sx, sy]
+    t = SOLVERS[settings.solver](
+        grid, rolling_operator(grid, pair, fft), pn, settings.friction,
         creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,
         max_iterations=settings.max_iterations, spin_offset=settings.spin_offset)
+    patch.tangential = t if window is None else embedded(t, res.grid, window)
+
+
+WINDOW_QUANTUM = 8
+"""Element counts of a tangential window are multiples of this (few operators and plans)."""
+
+
+def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM
+                   ) -> tuple[slice, slice] | None:
+    """The part of a grid (slices along x and y) on which a tangential solve gives the
+    same answer as on the whole grid: the box around the ``contact`` elements, its counts
+    rounded up to multiples of ``quantum`` (within the grid). Outside the contact the
+    traction bound is zero, so those elements take no part in the steady-rolling problem;
+    a window a fraction of the potential area makes every sweep's transforms that much
+    cheaper. None when it would be the whole grid, or there is no contact."""
+    rows = np.flatnonzero(contact.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(contact.any(axis=0))
+    out = []
+    for lo, hi, n in ((rows[0], rows[-1] + 1, contact.shape[0]),
+                      (cols[0], cols[-1] + 1, contact.shape[1])):
+        m = min(n, quantum * math.ceil((hi - lo) / quantum))
+        start = min(max(int(lo) - (m - (hi - lo)) // 2, 0), n - m)
+        out.append(slice(start, start + m))
+    if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
+        return None
+    return out[0], out[1]
+
+
+def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]
+             ) -> TangentialResult:
+    """A tangential solution on a window of ``grid`` (:func:`contact_window`) as one on the
+    whole grid: traction, slip and states zero outside the window."""
+    sx, sy = window
+    traction = np.zeros((2, *grid.shape))
+    traction[:, sx, sy] = result.traction
+    slip = np.zeros((2, *grid.shape))
+    slip[:, sx, sy] = result.slip
+    state = np.zeros(grid.shape, dtype=result.state.dtype)
+    state[sx, sy] = result.state
+    return replace(result, grid=grid, traction=traction, slip=slip, state=state)

@@ -204,7 +204,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
-        bounds = (-xl, xl, ylo, yhi)
+        # an estimate may know a tighter area (a time step: where the contact was)
+        bounds = getattr(est, "bounds", None) or (-xl, xl, ylo, yhi)
         keep = last is not None and _covers(last.normal.grid.bounds, bounds,
                                             grid.dx is None or grid.dy is None)
         res, work = solve_patch_normal(cp.gap_on_grid, bounds, grid, normal, pair, control,

@@ -40,6 +40,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ..errors import RailContactError
+from .spline import evaluate
 
 KINDS = ("wheel", "rail")
 MAX_PROFILE_SPAN = 1.0
@@ -102,7 +103,8 @@ class Profile:
 
     def height(self, y: np.ndarray | float) -> np.ndarray:
         """z(y) [m] (radius increment for a wheel, height for a rail)."""
-        return self._spline(y)
+        out = evaluate(self._spline.x, self._spline.c, y, 0)  # compiled, for long arrays
+        return self._spline(y) if out is None else out
 
     def samples(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """``n`` equally spaced points (y, z(y)) over the profile's extent [m], computed once
@@ -117,7 +119,8 @@ class Profile:
 
     def slope(self, y: np.ndarray | float) -> np.ndarray:
         """dz/dy [-]."""
-        return self._spline(y, 1)
+        out = evaluate(self._spline.x, self._spline.c, y, 1)
+        return self._spline(y, 1) if out is None else out
 
     def curvature(self, y: np.ndarray | float) -> np.ndarray:
         """Signed curvature z'' / (1 + z'^2)^(3/2) [1/m] (positive: z convex downward... i.e.

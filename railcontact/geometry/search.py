@@ -101,25 +101,41 @@ class ContactPoint:
         """Undeformed gap h(x, y) = f(y) + A(y) x^2 at the element centres [m], with the
         grid's y along s. Where the profiles end (or fold away from this contact) the gap
         is :data:`FAR` - such elements can never touch."""
-        X, Y = grid.mesh()
-        f = np.interp(Y, self.s, self.f, left=FAR, right=FAR)
-        a = np.interp(Y, self.s, np.where(np.isfinite(self.a_of_s), self.a_of_s, 0.0))
-        h = f + a * X**2
+        y = grid.y  # f and A depend on y alone: interpolated per column
+        f = np.interp(y, self.s, self.f, left=FAR, right=FAR)
+        a = np.interp(y, self.s, np.where(np.isfinite(self.a_of_s), self.a_of_s, 0.0))
+        h = f[None, :] + a[None, :] * grid.x[:, None] ** 2
         return np.where(np.isfinite(h), h, FAR)
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
-        inside = self.f <= delta
         k0 = int(np.argmin(np.abs(self.s)))
-        lo = k0
-        while lo > 0 and inside[lo - 1]:
-            lo -= 1
-        hi = k0
-        while hi < len(self.s) - 1 and inside[hi + 1]:
-            hi += 1
+        inside = self.f <= delta
+        inside[k0] = True
+        outside = np.flatnonzero(~inside)
+        i = int(np.searchsorted(outside, k0))  # the run of samples inside through k0
+        lo = int(outside[i - 1]) + 1 if i > 0 else 0
+        hi = int(outside[i]) - 1 if i < outside.size else len(self.s) - 1
         ds = self.s[1] - self.s[0]
         a, b = self.s[lo] - ds, self.s[hi] + ds
         return margin * a, margin * b
+
+
+def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
+    """The pose-independent part of a wheel's trace: axial positions eta, radii r and
+    dr/deta at the :data:`N_TRACE` samples [m], computed once per wheelset (read-only)."""
+    cached = ws.__dict__.get("_trace_samples")
+    if cached is None:
+        s_lo, s_hi = ws.wheel.bounds
+        eta = ws.axial_position(np.linspace(s_lo + 1e-6, s_hi - 1e-6, N_TRACE))
+        S = ws.profile_coordinate(eta)
+        r = ws.radius + ws.wheel.height(S)
+        dr = ws.wheel.slope(S)
+        for a in (eta, r, dr):
+            a.flags.writeable = False
+        cached = (eta, r, dr)
+        object.__setattr__(ws, "_trace_samples", cached)  # a cache on a frozen record
+    return cached
 
 
 def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -127,20 +143,21 @@ def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     u_ws = sgn * pose.lateral
-    s_lo, s_hi = ws.wheel.bounds
-    eta = ws.axial_position(np.linspace(s_lo + 1e-6, s_hi - 1e-6, N_TRACE))
-    S = ws.profile_coordinate(eta)
-    r = ws.radius + ws.wheel.height(S)
-    dr = ws.wheel.slope(S)
-    sin_t = np.clip(-math.tan(psi) * dr, -1.0, 1.0)
-    cos_t = np.sqrt(1.0 - sin_t**2)
-    pw = np.stack([r * sin_t, eta, -r * cos_t])  # wheelset frame, origin on the axle
+    eta, r, dr = _wheel_samples(ws)
     cz, sz = math.cos(psi), math.sin(psi)
     cx, sx = math.cos(phi), math.sin(phi)
-    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    p = rx @ rz @ pw
-    return eta, p[0], p[1] + u_ws, p[2] + ws.radius, r, dr
+    if psi == 0.0:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+        x = np.zeros_like(eta)
+        y, zw = eta, -r
+    else:
+        sin_t = np.clip(-math.tan(psi) * dr, -1.0, 1.0)
+        rc = r * np.sqrt(1.0 - sin_t**2)
+        rs = r * sin_t
+        x = cz * rs - sz * eta  # yaw about the vertical axis ...
+        y = sz * rs + cz * eta
+        zw = -rc
+    # ... then roll about the track axis
+    return eta, x, cx * y - sx * zw + u_ws, sx * y + cx * zw + ws.radius, r, dr
 
 
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -169,6 +186,10 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     (the first one has gap 0).
     """
     approach = check_positive("approach", approach, "m", allow_zero=True)
+    last = _LAST_POINTS[0]  # a load iteration asks again for the same wheel's first contact
+    if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
+            and last[3] == side and last[4] == approach):
+        return list(last[5])
     eta, x, u, z, g = _vertical_gap_of_pose(track, ws, pose, side)
     g_min = g.min()
     g = g - g_min
@@ -176,7 +197,12 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     points = [_point(track, ws, pose, side, eta, x, u, z, g, a + int(np.argmin(g[a:b])))
               for a, b in _intervals(g, approach)]
     points.sort(key=lambda c: c.gap)
+    _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
     return points
+
+
+_LAST_POINTS: list = [None]
+"""The last call of :func:`contact_points` (its arguments and points)."""
 
 
 def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -329,12 +355,31 @@ def reference_point(cp: ContactPoint, track: Track, ws: Wheelset, x: np.ndarray,
                           rolling_radius=ws.radius + float(ws.wheel.height(s_w)))
 
 
-def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
-    """Interpolate y(x) along the branch of the curve through sample ``k`` on which x
-    increases (rotated into a steep tangent plane a profile can fold back over itself,
-    e.g. over the flange tip; the other branches are not part of this contact)."""
+_BRANCHES: list = []
+"""The last few (samples, k, branch) of :func:`_branch_interp`: a patch interpolates
+several quantities along the same branch of the same samples."""
+
+
+def _branch(x: np.ndarray, k: int) -> slice:
+    """The samples of the branch of the curve through sample ``k`` on which x increases
+    (rotated into a steep tangent plane a profile can fold back over itself, e.g. over the
+    flange tip; the other branches are not part of this contact). Remembered for the last
+    arrays asked about (held here, so that ``is`` identifies them; read, not changed)."""
+    for xs, ks, b in _BRANCHES:
+        if xs is x and ks == k:
+            return b
     breaks = np.flatnonzero(np.diff(x) <= 0)  # sample i where x stops increasing to i + 1
     i = int(np.searchsorted(breaks, k))
     lo = int(breaks[i - 1]) + 1 if i > 0 else 0
     hi = int(breaks[i]) if i < len(breaks) else len(x) - 1
-    return np.interp(x_new, x[lo:hi + 1], y[lo:hi + 1], left=np.nan, right=np.nan)
+    b = slice(lo, hi + 1)
+    _BRANCHES.insert(0, (x, k, b))
+    del _BRANCHES[2:]
+    return b
+
+
+def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
+    """Interpolate y(x) along the branch of the curve through sample ``k`` on which x
+    increases (:func:`_branch`); NaN off it."""
+    b = _branch(x, k)
+    return np.interp(x_new, x[b], y[b], left=np.nan, right=np.nan)

@@ -98,8 +98,14 @@ class Track:
 
     def rail_coordinate(self, u: float, z: float) -> float:
         """Rail profile coordinate y [m] of the point (u, Z) of the placed rail."""
-        y, uc, zc, du, dz = self.placement
-        return float(y[int(np.argmin(np.hypot(uc + du - u, zc + dz - z)))])
+        pu, pz = self._placed_points
+        return float(self.placement[0][int(np.argmin((pu - u) ** 2 + (pz - z) ** 2))])
+
+    @cached_property
+    def _placed_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """The samples of :attr:`placement` placed in the side frame (u, Z) [m]."""
+        _, uc, zc, du, dz = self.placement
+        return uc + du, zc + dz
 
 
 @dataclass(frozen=True)

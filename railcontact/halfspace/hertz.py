@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import brentq
@@ -48,9 +49,14 @@ def _shape_ratio(m: float) -> float:
 def axis_ratio(curvature_ratio: float) -> float:
     """Ratio ``g = b_min / a_max <= 1`` of the Hertz ellipse for ``B_max / B_min`` >= 1.
 
-    Solves the shape equation by Brent's method on the parameter ``m = e^2``.
+    Solves the shape equation by Brent's method on the parameter ``m = e^2`` (remembered
+    for the last few ratios: a time step asks for the same patch's ellipse several times).
     """
-    r = float(curvature_ratio)
+    return _axis_ratio(float(curvature_ratio))
+
+
+@lru_cache(maxsize=64)
+def _axis_ratio(r: float) -> float:
     if not r >= 1.0:
         raise RailContactError(f"curvature ratio must be >= 1, got {r}")
     if r - 1.0 < _CIRCLE_TOL:

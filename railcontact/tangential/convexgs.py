@@ -257,11 +257,11 @@ class TangentialResult:
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
     """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
-    X, Y = grid.mesh()
+    x, y = grid.x[:, None], grid.y[None, :]  # the element centres, broadcast
     da = grid.element_area
     fx = float(traction[0].sum() * da)
     fy = float(traction[1].sum() * da)
-    mz = float((X * traction[1] - Y * traction[0]).sum() * da)
+    mz = float((x * traction[1] - y * traction[0]).sum() * da)
     ncon = int(np.count_nonzero(state != EXTERIOR))
     ratio = float(np.count_nonzero(state == SLIP) / ncon) if ncon else 0.0
     pmax = float(np.hypot(traction[0], traction[1]).max(initial=0.0))

@@ -78,5 +78,8 @@ def rigid_slip(grid: Grid, creepage: tuple[float, float, float],
         raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
     xi, eta, phi = (check_finite(n, v, u) for n, v, u in
                     zip(("xi", "eta", "phi"), creepage, ("-", "-", "1/m"), strict=True))
-    X, Y = grid.mesh()
-    return grid.dx * np.stack([xi - phi * Y, eta + phi * (X + spin_offset * grid.dx)])
+    x, y = grid.x[:, None], grid.y[None, :]  # the element centres, broadcast
+    out = np.empty((2, grid.nx, grid.ny))
+    out[0] = xi - phi * y
+    out[1] = eta + phi * (x + spin_offset * grid.dx)
+    return grid.dx * out

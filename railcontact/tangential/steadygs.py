@@ -123,14 +123,27 @@ def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, 
     sx = ux[iy, ix]
     sy = uy[iy, ix]
     bx = nx - 1 - ix
-    for jy in range(r0, r1):
+    # the changes so far: the block's rows up to this one, and in this row the elements
+    # trailing this one (rows, and elements in a row, are visited in order; the runs shifted
+    # are trailing ones); the rest of the block is unchanged yet (zero in dpx, dpy)
+    for jy in range(r0, iy + 1):
         r = ny - 1 - iy + jy
-        for jx in range(lo[jy], hi[jy] + 1):
-            k = bx + jx
-            qx = dpx[jy, jx]
-            qy = dpy[jy, jx]
-            sx += rxx[r, k] * qx + rxy[r, k] * qy
-            sy += ryx[r, k] * qx + ryy[r, k] * qy
+        a = lo[jy]
+        m = (hi[jy] if jy < iy else ix - 1) + 1 - a
+        # contiguous slices and a local sum per row: the loop vectorises (2x the block)
+        kxx = rxx[r, bx + a:bx + a + m]
+        kxy = rxy[r, bx + a:bx + a + m]
+        kyx = ryx[r, bx + a:bx + a + m]
+        kyy = ryy[r, bx + a:bx + a + m]
+        qx = dpx[jy, a:a + m]
+        qy = dpy[jy, a:a + m]
+        ax = 0.0
+        ay = 0.0
+        for j in range(m):
+            ax += kxx[j] * qx[j] + kxy[j] * qy[j]
+            ay += kyx[j] * qx[j] + kyy[j] * qy[j]
+        sx += ax
+        sy += ay
     jx = _run_start_c(state, iy, ix)
     n = ix - jx
     c11 = cum[0, n]

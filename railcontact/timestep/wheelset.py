@@ -80,7 +80,13 @@ from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION
 from .rigid import RigidWheelset
 from .validity import check_validity, derailment_quotient
-from .warmstart import PatchMemory, match, previous_pressure, previous_tangential
+from .warmstart import (
+    PatchMemory,
+    match,
+    previous_bounds,
+    previous_pressure,
+    previous_tangential,
+)
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE, OUTSIDE_VALIDITY = 0, 1, 2, 3, 4
 STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
@@ -480,6 +486,7 @@ class WheelsetContact:
             def of(grid):
                 p = previous_pressure(m, grid, time)
                 return p if p.sum() > 0 else estimate()(grid)
+            of.bounds = previous_bounds(m)  # the potential area: where the contact was
             return labelled(of, "previous")
 
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
@@ -496,7 +503,9 @@ class WheelsetContact:
                 creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
                 t0 = perf_counter()
-                prev = previous_tangential(m, patch.normal.grid) if m else None
+                # the traction extrapolated in time for SteadyGS only (previous_tangential)
+                at = time if settings.tangential_solver != "convexgs" else None
+                prev = previous_tangential(m, patch.normal.grid, at) if m else None
                 patch.work.seconds += perf_counter() - t0
                 solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
                                        creepage=side_creep, previous=prev)
