@@ -25,8 +25,9 @@ class Work:
         Tangential Gauss-Seidel sweeps, every solve included.
     load_passes
         Solves of the wheel (or quadratic patch) that the result took: the passes of the
-        load loops (approach secant with several patches, creep-load secant, equal-loads
-        roll), 1 when the first solve was the answer.
+        load loops (approach secant with several patches, the patch frame formed again at
+        the reference point, creep-load secant, equal-loads roll), 1 when the first solve
+        was the answer.
     remeshes
         Normal solves repeated on a grown potential area because the contact reached the
         edge of the previous one.

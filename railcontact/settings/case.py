@@ -44,6 +44,7 @@ from .choices import (
     GEOMETRY_TYPES,
     NORMAL_ESTIMATES,
     NORMAL_PRECONDITIONERS,
+    PATCH_FRAMES,
     PROFILE_UNITS,
     ROLL_MODES,
     TANGENTIAL_ESTIMATES,
@@ -164,6 +165,11 @@ class WheelRailGeometry(Record):
                                 "or 'equal-loads' (both carry [normal] load)",
                                 choices=ROLL_MODES)
     side: str = setting("left", "choice", "", "wheel(s) to solve", choices=CASE_SIDES)
+    patch_frame: str = setting("reference", "choice", "",
+                               "origin of each patch's frame (where its contact angle, rolling "
+                               "radius, spin and moments are taken): 'reference' = CONTACT's "
+                               "reference point, the overlap's weighted centre; 'rigid' = the "
+                               "rigid contact point", choices=PATCH_FRAMES)
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.TYPE, **super().to_dict()}
