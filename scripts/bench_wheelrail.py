@@ -33,6 +33,7 @@ from _sweep import write_csv
 from bench_step import clear_caches, fixed_workload
 
 import railcontact as rc
+from railcontact.settings.convention import side_creepage
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared"
@@ -58,22 +59,26 @@ def contact_rows(folder: Path, dx_mm: float) -> list[dict]:
 
 
 def wheel_case(row: dict, dx_mm: float, tol: tuple[float, float], start: tuple[str, str],
-               profiles: Path, solver: str | None, patch_frame: str = "reference") -> dict:
-    """The case of one CONTACT row in railcontact's terms: the wheel of the row's side at
-    CONTACT's y negated (its wheelset y runs to the right), with CONTACT's creepages in
-    railcontact's roles and frame: CONTACT's are the rail's velocity relative to the
-    wheel, in a contact frame whose normal points into the rail, mirrored on the right
-    wheel, so ``xi = -cksi`` and ``(eta, phi) = s (ceta, cphi)`` with ``phi [1/m] = cphi
-    [rad/mm] x 1000``, s = 1 left, -1 right. The forces then compare as ``F_x = -FX``,
-    ``(F_s, M_n) = s (FS, MN)`` (CONTACT's act on the rail)."""
+               profiles: Path, solver: str | None, patch_frame: str = "reference",
+               convention: str = "contact") -> dict:
+    """The case of one CONTACT row: the wheel of the row's side at CONTACT's y negated (its
+    wheelset y runs to the right), with CONTACT's creepages (``phi [1/m] = cphi [rad/mm] x
+    1000``). In ``convention = "contact"`` they are read as CONTACT's and the forces are
+    reported as CONTACT's (on the rail: compare FX, FS, MN directly); in
+    ``"railcontact"`` they are turned into railcontact's roles here
+    (:mod:`railcontact.settings.convention`: ``xi = -cksi``, ``(eta, phi) = s (ceta,
+    cphi)``, s = 1 left, -1 right) and the forces compare as ``F_x = -FX``,
+    ``(F_s, M_n) = s (FS, MN)``."""
     y = float(row["y_mm"]) * 1e-3
-    s = 1.0 if row["side"] == "left" else -1.0
-    creepage = [-float(row["cksi"]), s * float(row["ceta"]), s * float(row["cphi"]) * 1e3]
+    creepage = [float(row["cksi"]), float(row["ceta"]), float(row["cphi"]) * 1e3]
+    if convention == "railcontact":
+        creepage = list(side_creepage(creepage, row["side"], "contact"))
     tangential = {"friction": 0.4, "estimate": start[1], "tolerance": tol[1],
                   "creepage": creepage}
     if solver:
         tangential["solver"] = solver
     return {
+        "convention": convention,
         "material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
         "geometry": {"type": "wheel-rail", "wheel": str(profiles / "MBench_S1002_v3.prw"),
                      "rail": str(profiles / "MBench_UIC60_v3.prr"), "inclination": 0.0,

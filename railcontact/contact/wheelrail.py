@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from scipy.optimize import brentq
@@ -55,6 +56,7 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, PatchSettings, WheelRailGeometry
+from ..settings.convention import side_creepage
 from .loadloop import (
     CREEP_LOAD_RTOL,
     MAX_SECANT,
@@ -431,12 +433,13 @@ def _approach(patches: list[PatchSolution]) -> float:
 
 
 def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
-                 settings: PatchSettings, pair: ElasticPair, reference: bool = True
-                 ) -> dict[str, list[PatchSolution]]:
+                 settings: PatchSettings, pair: ElasticPair, reference: bool = True,
+                 convention: str = "railcontact") -> dict[str, list[PatchSolution]]:
     out = {}
     for side in sides:
         try:
-            out[side] = solve_wheel(track, ws, pose, side, control, settings, pair,
+            out[side] = solve_wheel(track, ws, pose, side, control,
+                                    side_settings(settings, side, convention), pair,
                                     reference=reference)
         except RailContactError as exc:
             if isinstance(exc, CaseError):
@@ -445,8 +448,19 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], contr
     return out
 
 
+def side_settings(settings: PatchSettings, side: str, convention: str) -> PatchSettings:
+    """``settings`` with the creepages read in ``convention`` and turned into the side
+    frame of the ``side`` wheel (:mod:`railcontact.settings.convention`)."""
+    t = settings.tangential
+    if t is None or convention == "railcontact":
+        return settings
+    return replace(settings, tangential=replace(
+        t, creepage=side_creepage(t.creepage, side, convention)))
+
+
 def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
-                 settings: PatchSettings, pair: ElasticPair, reference: bool = True
+                 settings: PatchSettings, pair: ElasticPair, reference: bool = True,
+                 convention: str = "railcontact"
                  ) -> tuple[Pose, dict[str, list[PatchSolution]]]:
     """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions.
 
@@ -471,7 +485,7 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
             return values[phi]
         p = Pose(pose.lateral, pose.yaw, phi)
         per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair,
-                                reference)
+                                reference, convention)
         solved[phi] = per_side
         values[phi] = (first_contact_gap(track, ws, p, "left")
                        - first_contact_gap(track, ws, p, "right")
@@ -518,7 +532,12 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
 def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
     """All contact patches of the case's wheel(s), each with its BEM normal (and tangential)
     solution, and the wheelset pose they were solved at (its roll resolved when the case
-    asks for ``"rigid"`` or ``"equal-loads"``)."""
+    asks for ``"rigid"`` or ``"equal-loads"``).
+
+    With ``case.convention == "contact"`` the creepages are read as CONTACT's
+    (:mod:`railcontact.settings.convention`), each patch is solved at its reference point
+    whatever ``[geometry] patch_frame`` says, and the patches report their forces as
+    CONTACT's (:attr:`PatchSolution.convention`)."""
     geo = case.geometry
     assert isinstance(geo, WheelRailGeometry)
     track, ws, pose = build_geometry(geo)
@@ -530,13 +549,17 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
         except RailContactError as exc:
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
                             f"{other} wheel off its rail: {exc}") from None
-    reference = geo.patch_frame == "reference"
+    convention = case.convention  # CONTACT's: always at the reference point
+    reference = geo.patch_frame == "reference" or convention == "contact"
     if geo.roll == "equal-loads":
-        pose, per_side = _equal_loads(track, ws, pose, control, settings, pair, reference)
+        pose, per_side = _equal_loads(track, ws, pose, control, settings, pair, reference,
+                                      convention)
     else:
-        per_side = _solve_sides(track, ws, pose, sides, control, settings, pair, reference)
+        per_side = _solve_sides(track, ws, pose, sides, control, settings, pair, reference,
+                                convention)
     patches = [p for side in sides for p in per_side[side]]
     for p in patches:
+        p.convention = convention
         n, cp = p.normal, p.geometry
         if cp.rigid is not None:  # solved in the frame at its reference point
             p.reference = ReferencePoint(offset=cp.offset, position=cp.position,
