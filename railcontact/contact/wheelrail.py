@@ -542,6 +542,10 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
     assert isinstance(geo, WheelRailGeometry)
     track, ws, pose = build_geometry(geo)
     control, settings, pair = case.normal.control, case.patch_settings, case.pair
+    convention = case.convention  # CONTACT's: always at the reference point
+    reference = geo.patch_frame == "reference" or convention == "contact"
+    if reference:  # the reference point is an element's centre, as in CONTACT's grids
+        settings = replace(settings, grid=replace(settings.grid, centred=True))
     sides = ["left", "right"] if geo.side == "both" else [geo.side]
     for other in {"left", "right"} - set(sides):  # the wheelset is one body
         try:
@@ -549,8 +553,6 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
         except RailContactError as exc:
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
                             f"{other} wheel off its rail: {exc}") from None
-    convention = case.convention  # CONTACT's: always at the reference point
-    reference = geo.patch_frame == "reference" or convention == "contact"
     if geo.roll == "equal-loads":
         pose, per_side = _equal_loads(track, ws, pose, control, settings, pair, reference,
                                       convention)

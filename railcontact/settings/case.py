@@ -207,6 +207,10 @@ class GridSettings(Record):
                            "(fewer operators in a time series)", minimum=1, case=False)
     snap: bool = setting(False, "bool", "", "grid centre on a multiple of the element size "
                          "(consecutive time steps share one lattice)", case=False)
+    centred: bool = setting(False, "bool", "", "element centres on multiples of the element "
+                            "size from the patch origin, which is an element's centre (as "
+                            "CONTACT's grids; solve() sets it for patches at their reference "
+                            "point)", case=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()
