@@ -380,10 +380,11 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     ``q`` [N] by its normal force, solved in the frame at its reference point, and the
     passes it took.
 
-    The frame is formed at an approach - the previous pass's, else Hertz's for the rigid
-    point - and the patch solved by force control, ``N = q / cos(gamma)``; when the
-    approach this gives differs from the one the frame was formed at by more than
-    :data:`REFERENCE_RTOL`, the frame is formed again there (at most
+    The frame is formed at an approach - the previous pass's scaled to ``q`` as Hertz's
+    (``q^(2/3)``), else Hertz's for the rigid point - and the patch solved by force
+    control, ``N = q / cos(gamma)``; when the approach this gives differs from the one the
+    frame was formed at by more than :data:`REFERENCE_RTOL`, the frame is formed again
+    there (at most
     :data:`MAX_REFERENCE_PASSES` passes, each started from the one before; from the third
     on, a secant step on the difference of the two approaches: on a flange the frame's
     overlap can grow faster with the approach than the vertical motion's normal share, and
@@ -394,8 +395,10 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
         single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
                           estimate_for=estimate_for, previous=previous)
         return single, [single]
-    if previous:
-        approach = _approach(previous)
+    if previous:  # the pass before, its approach scaled to this load as Hertz's
+        q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
+        approach = _approach(previous) * (q / q_prev) ** (2 / 3) if q_prev > 0 else \
+            _approach(previous)
     else:
         cosg = math.cos(first.contact_angle)
         approach = hertz(first.A, first.B, pair, load=q / cosg).penetration / cosg \
