@@ -54,8 +54,10 @@ def _summary(sol) -> str:
             t = ps.tangential
             lines.append(f"  tangential ({ps.tangential_model}, estimate "
                          f"'{ps.tangential_estimate}'):")
-            lines.append(f"  creep force    Fx = {t.force[0]:.6g} N, Fy = {t.force[1]:.6g} N")
-            lines.append(f"  spin moment    {t.spin_moment:12.6g} N m")
+            fx, fy, mz = ps.creep_forces  # in the case's convention
+            lines.append(f"  creep force    Fx = {fx:.6g} N, Fy = {fy:.6g} N"
+                         + ("  (CONTACT's convention)" if ps.convention == "contact" else ""))
+            lines.append(f"  spin moment    {mz:12.6g} N m")
             lines.append(f"  slip area      {t.slip_area_ratio:12.4f} of the contact area")
             lines.append(f"  max traction   {t.max_traction:12.6g} Pa")
             lines.append(f"  iterations     {t.iterations:12d}   ({t.message})")

@@ -20,10 +20,12 @@ import railcontact as rc
 
 def paper_case() -> dict:
     """The studies' wheel-rail case without its ``[normal]`` table: S1002 on 60E1 (1:40),
-    the left wheel, 64 x 64 elements, steel (a fresh dictionary each call)."""
+    the left wheel, 64 x 64 elements, steel, each patch at its rigid contact point as the
+    paper poses it (a fresh dictionary each call)."""
     return {
         "material": {"young": 206e9, "poisson": 0.28},
-        "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left"},
+        "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left",
+                     "patch_frame": "rigid"},
         "grid": {"nx": 64, "ny": 64},
     }
 

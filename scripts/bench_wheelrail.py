@@ -33,6 +33,7 @@ from _sweep import write_csv
 from bench_step import clear_caches, fixed_workload
 
 import railcontact as rc
+from railcontact.settings.convention import side_creepage
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared"
@@ -58,26 +59,32 @@ def contact_rows(folder: Path, dx_mm: float) -> list[dict]:
 
 
 def wheel_case(row: dict, dx_mm: float, tol: tuple[float, float], start: tuple[str, str],
-               profiles: Path, solver: str | None) -> dict:
-    """The case of one CONTACT row in railcontact's terms: the left wheel at CONTACT's y
-    negated (its y runs the other way); the right wheel is CONTACT's mirror of the left,
-    so it is solved as the left wheel at y, its spin (a y-like quantity) negated. With
-    CONTACT's creepages so (xi, eta, phi [1/m] = cphi [rad/mm] x 1000) the normal and
-    lateral forces agree with CONTACT's (83 / 83 kN, F_s within 1-3 %; on the flange
-    158 / 155 kN); F_x differs by the reference point (issue 19)."""
+               profiles: Path, solver: str | None, patch_frame: str = "reference",
+               convention: str = "contact") -> dict:
+    """The case of one CONTACT row: the wheel of the row's side at CONTACT's y negated (its
+    wheelset y runs to the right), with CONTACT's creepages (``phi [1/m] = cphi [rad/mm] x
+    1000``). In ``convention = "contact"`` they are read as CONTACT's and the forces are
+    reported as CONTACT's (on the rail: compare FX, FS, MN directly); in
+    ``"railcontact"`` they are turned into railcontact's roles here
+    (:mod:`railcontact.settings.convention`: ``xi = -cksi``, ``(eta, phi) = s (ceta,
+    cphi)``, s = 1 left, -1 right) and the forces compare as ``F_x = -FX``,
+    ``(F_s, M_n) = s (FS, MN)``."""
     y = float(row["y_mm"]) * 1e-3
-    left = row["side"] == "left"
-    phi = float(row["cphi"]) * 1e3 * (1.0 if left else -1.0)
+    creepage = [float(row["cksi"]), float(row["ceta"]), float(row["cphi"]) * 1e3]
+    if convention == "railcontact":
+        creepage = list(side_creepage(creepage, row["side"], "contact"))
     tangential = {"friction": 0.4, "estimate": start[1], "tolerance": tol[1],
-                  "creepage": [float(row["cksi"]), float(row["ceta"]), phi]}
+                  "creepage": creepage}
     if solver:
         tangential["solver"] = solver
     return {
+        "convention": convention,
         "material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
         "geometry": {"type": "wheel-rail", "wheel": str(profiles / "MBench_S1002_v3.prw"),
                      "rail": str(profiles / "MBench_UIC60_v3.prr"), "inclination": 0.0,
                      "gauge": 1.435, "back_to_back": 1.360, "wheel_radius": 0.46,
-                     "lateral_displacement": -y if left else y, "side": "left"},
+                     "lateral_displacement": -y, "side": row["side"],
+                     "patch_frame": patch_frame},
         "grid": {"dx": dx_mm * 1e-3, "dy": dx_mm * 1e-3},
         "normal": {"load": 83.3e3, "tolerance": tol[0], "estimate": start[0]},
         "tangential": tangential,

@@ -24,6 +24,7 @@ Usage: python scripts/study_sweep.py [--step 0.1] [--control penetration|load]
                                      [--roll 0|rigid|equal-loads] [--out out/]
                                      [--wheel S1002] [--rail 60E1] [--back-to-back 1.360]
                                      [--inclination 0.025]
+                                     [--patch-frame rigid|reference]
 (0.01 mm: 1601 cases)
 """
 
@@ -113,15 +114,19 @@ def main() -> None:
     ap.add_argument("--rail", default="60E1", help="built-in rail or profile file")
     ap.add_argument("--back-to-back", type=float, default=1.360, help="flange-back distance [m]")
     ap.add_argument("--inclination", type=float, default=math.atan(1 / 40), help="rail cant [rad]")
+    ap.add_argument("--patch-frame", choices=("rigid", "reference"), default="rigid",
+                    help="each patch at its rigid contact point (as the paper) or at CONTACT's "
+                         "reference point")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     CASE["geometry"].update(wheel=args.wheel, rail=args.rail, back_to_back=args.back_to_back,
-                            inclination=args.inclination)
+                            inclination=args.inclination, patch_frame=args.patch_frame)
     dys = displacements(args.step)
     rows, failed = run_sweep(dys, functools.partial(one_case, control=args.control,
                                                     roll=args.roll))
     print(f"{args.wheel} on {args.rail}, back-to-back {args.back_to_back} m, cant "
-          f"{args.inclination:.5f} rad; {args.control} control, roll {args.roll}")
+          f"{args.inclination:.5f} rad; {args.control} control, roll {args.roll}, patch "
+          f"frame at the {args.patch_frame} point")
     keys = list(rows[0])
     write_csv(args.out / "study_sweep.csv", rows)
     mean = {k: float(np.mean([r[k] for r in rows])) for k in keys

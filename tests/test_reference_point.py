@@ -6,7 +6,8 @@ weighted by the squared interpenetration, with the contact angle weighted the sa
 railcontact's ``reference_point`` must be the same point: the rail and wheel profile
 coordinates, the contact angle and the lateral track position. CONTACT's y-like
 quantities point the other way (its left wheel's y is ours negated; the right wheel is
-mirrored), hence the signs below.
+mirrored), hence the signs below. CONTACT's rolling radius is its kinematic one
+(``r_roll_kin_mm``): the wheel's along the contact normal through the point.
 """
 
 from __future__ import annotations
@@ -48,10 +49,10 @@ def test_reference_point_is_contacts(row):
     ref = json.loads(solution_json(sol))["patches"][0]["reference_point"]
     mirror = -1.0 if row["side"] == "left" else 1.0  # CONTACT's y against ours
     tread = abs(float(row["y_mm"])) <= 4.0
-    # On the flange the patch is still solved at the rigid contact point (issue 19): its
-    # normal force and approach come out 2-3 % above CONTACT's (159.7 / 156.0 kN at 7 mm),
-    # so the interpenetration, and the point weighted by it, differ a little more there.
-    tol_mm, tol_rad = (0.05, 5e-4) if tread else (0.2, 0.02)
+    # each patch is solved in the frame at its reference point (issue 19, point 3), formed
+    # as CONTACT forms it: CONTACT's point within 0.01 mm, its angle within 1e-4 rad on
+    # the tread and 4e-4 rad on the flange, its kinematic rolling radius within 0.017 mm
+    tol_mm, tol_rad = (0.015, 2e-4) if tread else (0.015, 1e-3)
     assert ref["rail_profile_coordinate"] * 1e3 == pytest.approx(
         mirror * float(row["ycp_r"]), abs=tol_mm)
     assert ref["wheel_profile_coordinate"] * 1e3 == pytest.approx(
@@ -60,6 +61,8 @@ def test_reference_point_is_contacts(row):
                                                  abs=tol_rad)
     assert abs(ref["position"][1]) * 1e3 == pytest.approx(abs(float(row["ycp_tr"])),
                                                            abs=tol_mm)
+    assert ref["rolling_radius"] * 1e3 == pytest.approx(float(row["r_roll_kin_mm"]),
+                                                        abs=0.02)
     # the rigid contact point is not the reference point near the flange root
     if float(row["y_mm"]) * -mirror in (-5.0, 0.0):
-        assert abs(patch.geometry.rail_y - ref["rail_profile_coordinate"]) > 1e-4
+        assert abs(patch.geometry.rigid.rail_y - ref["rail_profile_coordinate"]) > 1e-4

@@ -65,11 +65,15 @@ def potential_area(A: float, B: float, delta0: float, margin: float = 1.0) -> Bo
 def _axis(lo: float, hi: float, n: int, h: float | None, settings: GridSettings
           ) -> tuple[float, float, int]:
     """One axis of a grid: the counts, or the element size ``h`` with the quantum and snap
-    rules of ``settings``."""
+    (or centred) rules of ``settings``."""
     if h is None:
         return lo, hi, n
-    extra = 1 if settings.snap else 0
     q = settings.quantum
+    if settings.centred:  # edges at (i + 1/2) h: the origin is an element's centre
+        first = math.floor(lo / h + 0.5)
+        n = max(2, q * math.ceil((math.ceil(hi / h - 0.5) - first + 1) / q))
+        return (first - 0.5) * h, (first - 0.5 + n) * h, n
+    extra = 1 if settings.snap else 0
     n = max(2, q * math.ceil(((hi - lo) / h + extra) / q - 1e-9))
     c = 0.5 * (lo + hi)
     c = round(c / h) * h if extra else c

@@ -9,6 +9,7 @@ from ..geometry.search import ContactPoint, ReferencePoint
 from ..halfspace.hertz import HertzSolution
 from ..normal import NormalResult
 from ..settings import Case
+from ..settings.convention import reported_forces
 from ..tangential import TangentialResult
 from ..tangential.strips import StripResult
 
@@ -25,8 +26,9 @@ class Work:
         Tangential Gauss-Seidel sweeps, every solve included.
     load_passes
         Solves of the wheel (or quadratic patch) that the result took: the passes of the
-        load loops (approach secant with several patches, creep-load secant, equal-loads
-        roll), 1 when the first solve was the answer.
+        load loops (approach secant with several patches, the patch frame formed again at
+        the reference point, creep-load secant, equal-loads roll), 1 when the first solve
+        was the answer.
     remeshes
         Normal solves repeated on a grown potential area because the contact reached the
         edge of the previous one.
@@ -95,6 +97,21 @@ class PatchSolution:
     where no load loop with creep forces ran."""
     reference: ReferencePoint | None = None
     """CONTACT's contact reference point of the patch (wheel-rail cases)."""
+    convention: str = "railcontact"
+    """The convention :attr:`creep_forces` and the JSON report the forces in: railcontact's
+    (on the wheel, side frame) or CONTACT's (on the rail, its frame and mirroring; the
+    result arrays - tractions - stay railcontact's)."""
+
+    @property
+    def creep_forces(self) -> tuple[float, float, float] | None:
+        """(F_x [N], F_s [N], M_n [N m]) of the tangential solution in :attr:`convention`
+        (:mod:`railcontact.settings.convention`); None without one."""
+        t = self.tangential
+        if t is None:
+            return None
+        if self.geometry is None:  # a quadratic patch: Kalker's convention, as CONTACT's
+            return (*t.force, t.spin_moment)
+        return reported_forces(*t.force, t.spin_moment, self.geometry.side, self.convention)
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -127,8 +144,9 @@ class PatchSolution:
                 "rolling_radius": r.rolling_radius, "offset": list(r.offset)}
         if self.tangential is not None:
             t = self.tangential
+            fx, fs, mn = self.creep_forces
             d["tangential"] = {
-                "force": list(t.force), "spin_moment": t.spin_moment,
+                "force": [fx, fs], "spin_moment": mn,
                 "slip_area_ratio": t.slip_area_ratio, "max_traction": t.max_traction,
                 "iterations": t.iterations, "converged": t.converged, "message": t.message,
                 "wall_time": t.wall_time, "model": self.tangential_model,
@@ -179,7 +197,7 @@ class Solution:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (SI units)."""
-        d: dict[str, Any] = {"name": self.case.name}
+        d: dict[str, Any] = {"name": self.case.name, "convention": self.case.convention}
         if self.roll is not None:
             d["roll"] = self.roll
         d["patches"] = [p.to_dict() for p in self.patches]

@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from scipy.optimize import brentq
@@ -42,12 +43,20 @@ from scipy.optimize import brentq
 from ..errors import CaseError, ConvergenceError, RailContactError
 from ..geometry.profiles import read_profile
 from ..geometry.roll import contact_roll, first_contact_gap
-from ..geometry.search import ContactPoint, contact_points, count_contacts, reference_point
+from ..geometry.search import (
+    ContactPoint,
+    ReferencePoint,
+    at_reference,
+    contact_points,
+    count_contacts,
+    reference_point,
+)
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, PatchSettings, WheelRailGeometry
+from ..settings.convention import side_creepage
 from .loadloop import (
     CREEP_LOAD_RTOL,
     MAX_SECANT,
@@ -88,6 +97,14 @@ KEEP_SLACK = 0.05
 """A later load pass keeps the grid of the one before when its potential area reaches at
 most this fraction of the grid's size beyond it (the area has a margin over the contact);
 else it meshes its own area and the earlier solution is interpolated onto it."""
+REFERENCE_RTOL = 1e-4
+"""A patch frame formed at the reference point for one vertical approach serves an approach
+within this fraction of it: the point moves by far less than an element (0.5 mm elements,
+83 kN: under 0.01 mm on the tread, 0.05 mm at the flange root) and the frame's angle by
+less than 1e-3 rad."""
+MAX_REFERENCE_PASSES = 6
+"""Solves of a single-patch wheel at most, each with its frame formed again at the approach
+of the one before."""
 PASS_MATCH = 1e-3
 """Largest distance [m] between the contact points of a patch in two load passes of a wheel
 for the earlier one to start the later one."""
@@ -177,7 +194,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
     grid, normal = settings.grid, settings.normal
     out = []
     for k, cp in enumerate(cps):
-        check_on_rail(cp, ws)
+        check_on_rail(cp.rigid or cp, ws)
         dn = cp.normal_penetration(approach)
         if dn <= 0 and loads is None:
             continue
@@ -194,6 +211,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                 f"{MAX_PATCH_SHARE:g} of the radius); check [material] young and the load "
                 "or penetration")
         d0 = hz.penetration if loads is not None else dn
+        if loads is not None and cp.approach is not None:  # formed at an approach: its own
+            d0 = max(d0, cp.normal_penetration(cp.approach))
         xl = grid.margin * math.sqrt(d0 / cp.A)
         ylo, yhi = cp.lateral_extent(d0, grid.margin)
         t0 = time.perf_counter()
@@ -235,20 +254,24 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
 
 def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
                 settings: PatchSettings, pair: ElasticPair,
-                estimate_for: EstimateFor | None = None) -> list[PatchSolution]:
+                estimate_for: EstimateFor | None = None, reference: bool = False
+                ) -> list[PatchSolution]:
     """The BEM solutions of one wheel's contact patches.
 
     ``control`` is the vertical wheel load [N] or the vertical approach [m]; with
     ``settings.tangential`` the patches are solved for it too and the load includes the
     creep forces' vertical components (module docstring). ``estimate_for(cp, hertz,
     control)`` replaces the settings' estimate: it returns a function of the BEM grid
-    giving the initial pressure (or None), e.g. the previous time step's.
+    giving the initial pressure (or None), e.g. the previous time step's. ``reference``:
+    each patch is solved in the frame at its reference point (:func:`solve_wheel_normal`).
     """
     if settings.tangential is None:
-        return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for)
+        return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
+                                  reference=reference)
     if not control.by_load or control.load == 0:
         return _add_tangential(
-            solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for),
+            solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
+                               reference=reference),
             settings, pair)
     q = control.load
     passes: list[list[PatchSolution]] = []
@@ -256,7 +279,8 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     def residual(qn: float) -> tuple[float, list[PatchSolution]]:
         last = passes[-1] if passes else None  # each pass starts from the one before
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(load=qn),
-                                                settings, pair, estimate_for, last),
+                                                settings, pair, estimate_for, last,
+                                                reference=reference),
                              settings, pair, last)
         passes.append(ps)
         return vertical_force(ps) - q, ps
@@ -273,7 +297,8 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
 def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
                        settings: PatchSettings, pair: ElasticPair,
                        estimate_for: EstimateFor | None = None,
-                       previous: list[PatchSolution] | None = None) -> list[PatchSolution]:
+                       previous: list[PatchSolution] | None = None,
+                       reference: bool = False) -> list[PatchSolution]:
     """The BEM normal solutions of one wheel's patches (creep forces not counted).
 
     ``control``: the vertical approach [m] beyond first contact, or the vertical load [N]
@@ -281,29 +306,33 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     exact in one solve; several patches: a secant iteration on the approach, each pass
     started from the one before). ``previous``: an earlier solve of the wheel whose patches
     start those at the same contact points (grid and pressure, see :func:`_patches`).
+    ``reference``: each patch is solved in the frame at its reference point
+    (:func:`~railcontact.geometry.search.at_reference`, formed at the approach; under load
+    control a single patch is solved again until the approach it gives is the one its
+    frame was formed at, :func:`_single_patch`), else at its rigid contact point.
     """
+    points = referenced if reference else _rigid
     if not control.by_load:
         approach = control.penetration
         if approach <= 0:
             return []
-        return _patches(contact_points(track, ws, pose, side, approach), ws, approach,
+        return _patches(points(track, ws, pose, side, approach), ws, approach,
                         settings, pair, estimate_for=estimate_for, previous=previous)
     q = control.load
     if q == 0:
         return []
+    # one patch: force control (exact) in the frame at the reference point, formed at the
+    # approach of the pass before (or Hertz's) and again until the approach holds
     first = contact_points(track, ws, pose, side, 0.0)[0]
-    cosg = math.cos(first.contact_angle)
-    # one patch: force control (exact); check that the approach it needs adds no patch
-    single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
-                      estimate_for=estimate_for, previous=previous)
-    approach = single[0].normal.penetration / cosg
+    single, passes = _single_patch(track, ws, pose, first, q, settings, pair, estimate_for,
+                                   previous, reference)
+    approach = _approach(single)
     if count_contacts(track, ws, pose, side, approach) == 1:
-        return single
+        return count_passes(single, passes) if len(passes) > 1 else single
     # several patches: secant on the vertical approach
-    passes = [single]
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
-        ps = _patches(contact_points(track, ws, pose, side, a), ws, a, settings, pair,
+        ps = _patches(points(track, ws, pose, side, a), ws, a, settings, pair,
                       estimate_for=estimate_for, previous=passes[-1])
         passes.append(ps)
         return vertical_force(ps) - q, ps
@@ -328,6 +357,77 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     return count_passes(ps1, passes)
 
 
+def _rigid(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float
+           ) -> list[ContactPoint]:
+    """The rigid contact points of a wheel at the vertical ``approach`` [m]."""
+    return contact_points(track, ws, pose, side, approach)
+
+
+def referenced(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float
+               ) -> list[ContactPoint]:
+    """The contact points of a wheel at the vertical ``approach`` [m], each with its frame
+    at the reference point (:func:`~railcontact.geometry.search.at_reference`) where it
+    overlaps the rail, else at the rigid point."""
+    return [at_reference(cp, track, ws, pose, approach) or cp
+            for cp in contact_points(track, ws, pose, side, approach)]
+
+
+def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q: float,
+                  settings: PatchSettings, pair: ElasticPair,
+                  estimate_for: EstimateFor | None,
+                  previous: list[PatchSolution] | None, reference: bool = True
+                  ) -> tuple[list[PatchSolution], list[list[PatchSolution]]]:
+    """The patch of a wheel with one contact point ``first`` carrying the vertical load
+    ``q`` [N] by its normal force, solved in the frame at its reference point, and the
+    passes it took.
+
+    The frame is formed at an approach - the previous pass's scaled to ``q`` as Hertz's
+    (``q^(2/3)``), else Hertz's for the rigid point - and the patch solved by force
+    control, ``N = q / cos(gamma)``; when the approach this gives differs from the one the
+    frame was formed at by more than :data:`REFERENCE_RTOL`, the frame is formed again
+    there (at most
+    :data:`MAX_REFERENCE_PASSES` passes, each started from the one before; from the third
+    on, a secant step on the difference of the two approaches: on a flange the frame's
+    overlap can grow faster with the approach than the vertical motion's normal share, and
+    the plain iteration then swings). Without ``reference``: one force-controlled solve at
+    the rigid point."""
+    if not reference:
+        cosg = math.cos(first.contact_angle)
+        single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
+                          estimate_for=estimate_for, previous=previous)
+        return single, [single]
+    if previous:  # the pass before, its approach scaled to this load as Hertz's
+        q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
+        approach = _approach(previous) * (q / q_prev) ** (2 / 3) if q_prev > 0 else \
+            _approach(previous)
+    else:
+        cosg = math.cos(first.contact_angle)
+        approach = hertz(first.A, first.B, pair, load=q / cosg).penetration / cosg \
+            if math.isfinite(first.B) and first.B > 0 and first.A > 0 else 0.0
+    passes: list[list[PatchSolution]] = []
+    last = previous
+    tried: list[tuple[float, float]] = []  # (approach formed at, residual)
+    for _ in range(MAX_REFERENCE_PASSES):
+        cp = at_reference(first, track, ws, pose, approach) if approach > 0 else None
+        cp = cp or first
+        ps = _patches([cp], ws, 0.0, settings, pair, loads=[q / math.cos(cp.contact_angle)],
+                      estimate_for=estimate_for, previous=last)
+        passes.append(ps)
+        new = _approach(ps)
+        if cp is first and (approach <= 0 or at_reference(first, track, ws, pose, new)
+                            is None):
+            break  # no reference point to form: the rigid point's patch is the answer
+        if abs(new - approach) <= REFERENCE_RTOL * new:
+            break
+        tried.append((approach, new - approach))
+        last = ps
+        if len(tried) >= 2 and tried[-1][1] != tried[-2][1]:  # secant on the residual
+            (a0, r0), (a1, r1) = tried[-2:]
+            new = min(max(a1 - r1 * (a1 - a0) / (r1 - r0), 0.5 * a1), 2.0 * a1)
+        approach = new
+    return passes[-1], passes
+
+
 def vertical_approach(patches: list[PatchSolution]) -> float:
     """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
     if not patches:
@@ -340,12 +440,14 @@ _approach = vertical_approach
 
 
 def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
-                 settings: PatchSettings, pair: ElasticPair
-                 ) -> dict[str, list[PatchSolution]]:
+                 settings: PatchSettings, pair: ElasticPair, reference: bool = True,
+                 convention: str = "railcontact") -> dict[str, list[PatchSolution]]:
     out = {}
     for side in sides:
         try:
-            out[side] = solve_wheel(track, ws, pose, side, control, settings, pair)
+            out[side] = solve_wheel(track, ws, pose, side, control,
+                                    side_settings(settings, side, convention), pair,
+                                    reference=reference)
         except RailContactError as exc:
             if isinstance(exc, CaseError):
                 raise
@@ -354,8 +456,19 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], contr
     return out
 
 
+def side_settings(settings: PatchSettings, side: str, convention: str) -> PatchSettings:
+    """``settings`` with the creepages read in ``convention`` and turned into the side
+    frame of the ``side`` wheel (:mod:`railcontact.settings.convention`)."""
+    t = settings.tangential
+    if t is None or convention == "railcontact":
+        return settings
+    return replace(settings, tangential=replace(
+        t, creepage=side_creepage(t.creepage, side, convention)))
+
+
 def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
-                 settings: PatchSettings, pair: ElasticPair
+                 settings: PatchSettings, pair: ElasticPair, reference: bool = True,
+                 convention: str = "railcontact"
                  ) -> tuple[Pose, dict[str, list[PatchSolution]]]:
     """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions.
 
@@ -379,7 +492,8 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
         if phi in values:  # Brent's method asks again for the ends of its bracket
             return values[phi]
         p = Pose(pose.lateral, pose.yaw, phi)
-        per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair)
+        per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair,
+                                reference, convention)
         solved[phi] = per_side
         values[phi] = (first_contact_gap(track, ws, p, "left")
                        - first_contact_gap(track, ws, p, "right")
@@ -426,11 +540,20 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
 def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
     """All contact patches of the case's wheel(s), each with its BEM normal (and tangential)
     solution, and the wheelset pose they were solved at (its roll resolved when the case
-    asks for ``"rigid"`` or ``"equal-loads"``)."""
+    asks for ``"rigid"`` or ``"equal-loads"``).
+
+    With ``case.convention == "contact"`` the creepages are read as CONTACT's
+    (:mod:`railcontact.settings.convention`), each patch is solved at its reference point
+    whatever ``[geometry] patch_frame`` says, and the patches report their forces as
+    CONTACT's (:attr:`PatchSolution.convention`)."""
     geo = case.geometry
     assert isinstance(geo, WheelRailGeometry)
     track, ws, pose = build_geometry(geo)
     control, settings, pair = case.normal.control, case.patch_settings, case.pair
+    convention = case.convention  # CONTACT's: always at the reference point
+    reference = geo.patch_frame == "reference" or convention == "contact"
+    if reference:  # the reference point is an element's centre, as in CONTACT's grids
+        settings = replace(settings, grid=replace(settings.grid, centred=True))
     sides = ["left", "right"] if geo.side == "both" else [geo.side]
     for other in {"left", "right"} - set(sides):  # the wheelset is one body
         try:
@@ -439,13 +562,22 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
                             f"{other} wheel off its rail: {exc}") from None
     if geo.roll == "equal-loads":
-        pose, per_side = _equal_loads(track, ws, pose, control, settings, pair)
+        pose, per_side = _equal_loads(track, ws, pose, control, settings, pair, reference,
+                                      convention)
     else:
-        per_side = _solve_sides(track, ws, pose, sides, control, settings, pair)
+        per_side = _solve_sides(track, ws, pose, sides, control, settings, pair, reference,
+                                convention)
     patches = [p for side in sides for p in per_side[side]]
     for p in patches:
-        n = p.normal
-        X, Y = n.grid.mesh()
-        p.reference = reference_point(p.geometry, track, ws, X, Y,
-                                      n.penetration - p.geometry.gap_on_grid(n.grid))
+        p.convention = convention
+        n, cp = p.normal, p.geometry
+        if cp.rigid is not None:  # solved in the frame at its reference point
+            p.reference = ReferencePoint(offset=cp.offset, position=cp.position,
+                                         rail_y=cp.rail_y, wheel_s=cp.wheel_s,
+                                         contact_angle=cp.contact_angle,
+                                         rolling_radius=cp.rolling_radius)
+        else:  # at the rigid point (no reference point formed): from its interpenetration
+            X, Y = n.grid.mesh()
+            p.reference = reference_point(cp, track, ws, X, Y,
+                                          n.penetration - cp.gap_on_grid(n.grid))
     return patches, pose

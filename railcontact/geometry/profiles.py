@@ -22,8 +22,10 @@ Built-in profiles
            Modelled as the 60E1 construction (R300 crown to |y| = 10.228 mm, tangent R80,
            tangent R13, 1:20 flank) with the R80/R13 transition moved so that the head is
            73 mm wide at the flank tangent point, the published CN60 head width (commercial
-           data sheets: head width 73 mm, height 176 mm). Use a profile file when the exact
-           CN60 geometry matters.
+           data sheets: head width 73 mm, head height 48.5 mm, rail height 176 mm; the
+           arcs' tangent points of the drawing were not available). Identical to 60E1 up to
+           |y| = 26 mm, 0.18 mm higher at 30 mm (``scripts/compare_rails.py``). Use a
+           profile file when the exact CN60 geometry matters. ``S1002CN`` is S1002.
 
 Interpolation: a C^2 cubic spline through the points (exact for the built-ins, which are
 sampled every 0.05 mm from their definitions); height, slope and curvature follow from it.

@@ -4,6 +4,7 @@ they are declared.
 - :mod:`.case`: the tables of a case file (:class:`Case`, :func:`load_case`);
 - :mod:`.timestep`: :class:`ContactSettings` of the time-step solver and the FMU's modes;
 - :mod:`.choices`: the words a setting can take;
+- :mod:`.convention`: CONTACT's creepages and forces beside railcontact's;
 - :mod:`.reference`: every setting in one list (``railcontact settings``).
 
 The solvers below this layer take plain keyword arguments; the patch and wheel-rail

@@ -40,10 +40,12 @@ from ..geometry.track import Track, Wheelset
 from ..halfspace.materials import ElasticPair, Material
 from .choices import (
     CASE_SIDES,
+    CONVENTIONS,
     FFT_BACKENDS,
     GEOMETRY_TYPES,
     NORMAL_ESTIMATES,
     NORMAL_PRECONDITIONERS,
+    PATCH_FRAMES,
     PROFILE_UNITS,
     ROLL_MODES,
     TANGENTIAL_ESTIMATES,
@@ -164,6 +166,11 @@ class WheelRailGeometry(Record):
                                 "or 'equal-loads' (both carry [normal] load)",
                                 choices=ROLL_MODES)
     side: str = setting("left", "choice", "", "wheel(s) to solve", choices=CASE_SIDES)
+    patch_frame: str = setting("reference", "choice", "",
+                               "origin of each patch's frame (where its contact angle, rolling "
+                               "radius, spin and moments are taken): 'reference' = CONTACT's "
+                               "reference point, the overlap's weighted centre; 'rigid' = the "
+                               "rigid contact point", choices=PATCH_FRAMES)
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.TYPE, **super().to_dict()}
@@ -200,6 +207,10 @@ class GridSettings(Record):
                            "(fewer operators in a time series)", minimum=1, case=False)
     snap: bool = setting(False, "bool", "", "grid centre on a multiple of the element size "
                          "(consecutive time steps share one lattice)", case=False)
+    centred: bool = setting(False, "bool", "", "element centres on multiples of the element "
+                            "size from the patch origin, which is an element's centre (as "
+                            "CONTACT's grids; solve() sets it for patches at their reference "
+                            "point)", case=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -341,9 +352,11 @@ class Case:
     grid: GridSettings = GridSettings()
     tangential: TangentialSettings | None = None
     name: str = "case"
+    convention: str = "railcontact"
 
     def __post_init__(self) -> None:
         _ = self.normal.control  # raises unless exactly one of load and penetration
+        check_convention(self.convention)
         geo = self.geometry
         if isinstance(geo, WheelRailGeometry):
             if geo.roll == "equal-loads" and self.normal.load is None:
@@ -385,7 +398,7 @@ class Case:
         """
         if not isinstance(case, Mapping):
             raise CaseError(f"a case must be a dictionary of tables, got {type(case).__name__}")
-        unknown = set(case) - set(CASE_TABLES) - {"name"}
+        unknown = set(case) - set(CASE_TABLES) - {"name", "convention"}
         if unknown:
             raise CaseError(f"unknown table(s) {sorted(unknown)}; known: {sorted(CASE_TABLES)}")
         problems: list[str] = [f"missing table [{t}]" for t in _REQUIRED_TABLES
@@ -405,19 +418,33 @@ class Case:
         name = case.get("name", "case")
         if not isinstance(name, str):
             problems.append(f"name must be a string, got {name!r}")
+        convention = case.get("convention", "railcontact")
+        try:
+            check_convention(convention)
+        except CaseError as exc:
+            problems.append(str(exc))
         if problems:
             raise CaseError(problems[0] if len(problems) == 1 else
                             f"{len(problems)} problems in the case:\n  " + "\n  ".join(problems))
-        return cls(name=name, **records)
+        return cls(name=name, convention=convention, **records)
 
     def to_dict(self) -> dict[str, Any]:
         """The case as a dictionary of tables with every default filled in (SI units)."""
-        out: dict[str, Any] = {"name": self.name}
+        out: dict[str, Any] = {"name": self.name, "convention": self.convention}
         for table in CASE_TABLES:
             rec = getattr(self, table)
             if rec is not None:
                 out[table] = rec.to_dict()
         return out
+
+
+def check_convention(value: Any) -> str:
+    """``value`` when it names a convention (:data:`~.choices.CONVENTIONS`), else a
+    :class:`CaseError` naming the allowed ones."""
+    if not isinstance(value, str) or value not in CONVENTIONS:
+        raise CaseError(f"convention must be one of {', '.join(map(repr, CONVENTIONS))}, got "
+                        f"{value!r}")
+    return value
 
 
 def _record(table: str, values: Any) -> Record:

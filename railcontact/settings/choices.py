@@ -24,6 +24,12 @@ TRACTION_BOUNDS = ("elliptic", "parabolic")
 GEOMETRY_TYPES = ("quadratic", "wheel-rail")
 ROLL_MODES = ("rigid", "equal-loads")
 CASE_SIDES = ("left", "right", "both")
+CONVENTIONS = ("railcontact", "contact")
+"""How creepages are read and forces written: railcontact's own roles and frames, or
+CONTACT's (:mod:`railcontact.settings.convention`)."""
+PATCH_FRAMES = ("reference", "rigid")
+"""Where a wheel-rail patch's frame is placed: CONTACT's reference point, or the rigid
+contact point."""
 PROFILE_UNITS = ("m", "mm", "cm", "in")
 WARM_STARTS = ("none", "estimate", "previous", "previous+estimate")
 """How a time step starts the BEM (:mod:`railcontact.timestep.warmstart`)."""

@@ -77,7 +77,8 @@ from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.hertz import HertzSolution
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
-from ..settings.case import MAX_PENETRATION
+from ..settings.case import MAX_PENETRATION, check_convention
+from ..settings.convention import wheel_frame_creepage
 from .rigid import RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import (
@@ -287,12 +288,22 @@ class WheelsetContact:
         Combined elastic parameters of wheel and rail.
     settings
         :class:`ContactSettings`.
+    convention
+        ``"railcontact"`` (the module docstring's frames and signs) or ``"contact"``: the
+        creepages given to :meth:`solve` and the wheels' ``creepages``, ``creep_force`` and
+        ``spin_moment`` (and each patch's ``creep_forces``) are CONTACT's (its body roles,
+        signs and mirroring: :func:`railcontact.settings.convention.wheel_frame_creepage`),
+        and each patch is solved in the frame at its reference point, as CONTACT poses it.
+        The track-frame totals (``track_force``, ``yaw_moment``) and the geometry inputs
+        stay railcontact's.
     """
 
     def __init__(self, track: Track, wheelset: Wheelset, pair: ElasticPair,
-                 settings: ContactSettings | None = None) -> None:
+                 settings: ContactSettings | None = None, *,
+                 convention: str = "railcontact") -> None:
         self.track, self.wheelset, self.pair = track, wheelset, pair
         self.settings = settings or ContactSettings()
+        self.convention = check_convention(convention)
         self.memory: dict[str, list[PatchMemory]] = {"left": [], "right": []}
 
     def reset(self) -> None:
@@ -345,6 +356,8 @@ class WheelsetContact:
         if creepages is not None:
             creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
                               for s, cs in zip(("left", "right"), creepages, strict=True))
+            if self.convention == "contact":
+                creepages = tuple(wheel_frame_creepage(c) for c in creepages)
         if time is not None:
             time = check_finite("time", time, "s")
         wheels = []
@@ -454,12 +467,17 @@ class WheelsetContact:
                              f"mu tan(gamma) >= 1 on one): {which}")
         return wheel, memory if keep else []
 
-    @staticmethod
-    def _finish(wheel: WheelContact, patches: list[PatchSolution], creepages: list,
+    def _finish(self, wheel: WheelContact, patches: list[PatchSolution], creepages: list,
                 pose: Pose) -> WheelContact:
         if patches:
             wheel.creepages = creepages
             _resultants(wheel, patches, pose)
+            if self.convention == "contact":  # the creepages and creep forces as CONTACT's
+                wheel.creepages = [wheel_frame_creepage(c) for c in creepages]
+                fx, fy = wheel.creep_force
+                wheel.creep_force = (-fx, fy)
+                for p in patches:
+                    p.convention = "contact"
         return wheel
 
     def _pass(self, side: str, pose: Pose, control: Control,
@@ -490,7 +508,8 @@ class WheelsetContact:
             return labelled(of, "previous")
 
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
-                                     settings.patch_settings, pair, estimate_for)
+                                     settings.patch_settings, pair, estimate_for,
+                                     reference=self.convention == "contact")
         kept = [p for p in patches if p.normal.force > 0]
         charge(kept, [p for p in patches if p.normal.force <= 0])  # their work counts
         patches = kept
