@@ -75,6 +75,7 @@ def create_store(path: str | Path, spec: TableSpec) -> None:
         IDENTITY: json.dumps(spec.identity()), "railcontact_version": __version__,
         "case_name": spec.case.get("name", "case"), "complete": 0, "messages": "[]"})
     encoding = {v: {"chunks": ds[v].data.chunksize} for v in ds.data_vars}
+    encoding["status"]["_FillValue"] = NOT_COMPUTED  # a lost chunk reads "not computed"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ds.to_zarr(str(path), mode="w-", compute=False, encoding=encoding, zarr_format=2,
@@ -147,7 +148,7 @@ def open_dataset(path: str | Path):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ds = xr.open_zarr(str(p), consolidated=False)
+            ds = xr.open_zarr(str(p), consolidated=False, mask_and_scale=False)
     except Exception as exc:  # noqa: BLE001
         raise RailContactError(f"{p} is not a readable table store: {exc}") from None
     if IDENTITY not in ds.attrs:

@@ -1,0 +1,224 @@
+"""Contact tables (issue 21): built on a 2-process Dask LocalCluster shared by the module's
+tests, on a coarse grid (2 mm elements) so that a point solves in milliseconds.
+
+The truth for the table is the exact solver itself, ``railcontact solve`` at each node:
+the table must hold what the solver gives there, whatever the batching, the warm starts,
+the workers, the resumes. The warm start changes only the solver's path, so with tight
+tolerances (1e-13) a warm-started node equals the cold ``railcontact solve`` to 1e-9; with
+the usual tolerances they differ by up to those tolerances (docs/tables.md).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed")
+pytest.importorskip("xarray")
+pytest.importorskip("zarr")
+
+from railcontact import solve  # noqa: E402
+from railcontact.cli import main  # noqa: E402
+from railcontact.errors import RailContactError  # noqa: E402
+from railcontact.table import ContactTable, load_spec  # noqa: E402
+from railcontact.table.store import open_dataset  # noqa: E402
+
+SPEC = """
+name = "table_test"
+[material]
+young = 206e9
+poisson = 0.28
+[geometry]
+type = "wheel-rail"
+wheel = "S1002"
+rail = "60E1"
+inclination = 0.024994793618920156
+[grid]
+dx = 0.002
+dy = 0.002
+[normal]
+load = 80e3
+estimate = "hertz"
+tolerance = 1e-13
+max_iterations = 2000
+[tangential]
+creepage = [0.0, 0.0, 0.0]
+friction = 0.3
+tolerance = 1e-13
+max_iterations = 5000
+[table]
+lateral_displacement = [-0.002, 0.002, 3]
+creepage_y = [0.0, 0.002, 2]
+load = [60e3, 80e3, 2]
+"""
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    from distributed import LocalCluster
+
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                           dashboard_address=":0")
+    yield cluster.scheduler_address
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory, scheduler):
+    d = tmp_path_factory.mktemp("table")
+    spec = d / "spec.toml"
+    spec.write_text(SPEC)
+    out = d / "t.zarr"
+    assert main(["table", "build", str(spec), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    return spec, out
+
+
+def _wheel(sol, side: str) -> dict[str, float]:
+    """The solver's per-wheel quantities (contact frame of the side, as the table)."""
+    ps = [p for p in sol.patches if p.geometry.side == side]
+    sgn = 1.0 if side == "left" else -1.0
+    main_p = max(ps, key=lambda p: p.normal.force)
+    return {"normal_force": sum(p.normal.force for p in ps),
+            "creep_force_x": sum(p.tangential.force[0] for p in ps),
+            "creep_force_y": sgn * sum(p.tangential.force[1] for p in ps),
+            "max_pressure": max(p.normal.max_pressure for p in ps),
+            "area": sum(p.normal.area for p in ps),
+            "contact_angle": main_p.geometry.contact_angle,
+            "rolling_radius": main_p.geometry.rolling_radius}
+
+
+def test_table_equals_solve_at_its_nodes(built):
+    spec_path, out = built
+    spec = load_spec(spec_path)
+    ds = open_dataset(out)
+    assert ds.sizes == {"lateral_displacement": 3, "creepage_y": 2, "load": 2, "side": 2,
+                        "batch": 1}
+    assert (ds["status"].values == 0).all() and ds["batch_done"].values.all()
+    assert ds.attrs["railcontact_version"] and ds.attrs["complete"] == 1
+    assert json.loads(ds.attrs["railcontact_table"])["case"] == spec.case
+    assert ds["normal_force"].attrs["units"] == "N" and ds["normal_force"].attrs["long_name"]
+    for index in np.ndindex(*spec.shape):
+        sol = solve(spec.case_at(index))  # railcontact solve: both wheels, cold
+        for side in ("left", "right"):
+            exact = _wheel(sol, side)
+            for name, value in exact.items():
+                got = float(ds[name].values[(*index, spec.sides.index(side))])
+                assert got == pytest.approx(value, rel=1e-9, abs=1e-9 * abs(value) + 1e-12), \
+                    (index, side, name)
+    # not a trivial table: the axes change the forces
+    fy = ds["creep_force_y"].sel(side="left").values
+    assert np.abs(fy[:, 1, :]).min() > 1e3 and np.abs(fy[:, 0, :]).max() < 1.0
+
+
+def test_rerun_computes_nothing(built, scheduler, capsys):
+    spec, out = built
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*") if p.is_file()
+              and not p.name.startswith(".")}
+    assert main(["table", "build", str(spec), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    assert "computed 0 " in capsys.readouterr().out
+    after = {p: p.stat().st_mtime_ns for p in before}
+    assert before == after  # no chunk rewritten
+
+
+def test_resume_completes_a_removed_batch(built, scheduler, tmp_path, capsys):
+    spec, out = built
+    cut = tmp_path / "cut.zarr"
+    shutil.copytree(out, cut)
+    # a run killed before batch (1, 0, 0) was written: its chunks and its marker are absent
+    for var in cut.iterdir():
+        for chunk in var.glob("1.0.0*"):
+            chunk.unlink()
+    ds = open_dataset(cut)
+    assert not ds["batch_done"].values[1, 0, 0]
+    assert (ds["status"].values[1, 0] == -1).all()  # a lost chunk reads "not computed"
+    assert np.isnan(ds["normal_force"].values[1, 0]).all()
+    assert main(["table", "build", str(spec), "-o", str(cut), "--scheduler", scheduler,
+                 "--quiet", "--resume"]) == 0
+    assert "computed 2 " in capsys.readouterr().out  # the batch's 2 points, nothing else
+    a, b = open_dataset(out), open_dataset(cut)
+    for name in ("normal_force", "creep_force_y", "max_pressure", "status"):
+        np.testing.assert_array_equal(a[name].values, b[name].values)
+    assert b.attrs["complete"] == 1
+
+
+def test_interpolation_at_nodes_and_between(built):
+    spec_path, out = built
+    spec = load_spec(spec_path)
+    table = ContactTable.open(out)
+    for index in np.ndindex(*spec.shape):
+        point = {n: float(spec.axes[n][i]) for n, i in zip(spec.names, index, strict=True)}
+        for side in spec.sides:
+            got, node = table(point, side), table.node(index, side)
+            assert got.status == 0
+            assert got.values == node.values  # exactly the node
+    # between nodes: between the neighbours' values (linear along load at a node elsewhere)
+    mid = table({"lateral_displacement": 0.0, "creepage_y": 0.002, "load": 70e3})
+    lo, hi = table.node((1, 1, 0)), table.node((1, 1, 1))
+    assert mid["normal_force"] == pytest.approx(0.5 * (lo["normal_force"] + hi["normal_force"]),
+                                                rel=1e-12)
+
+
+@pytest.mark.parametrize("point, match", [
+    ({"lateral_displacement": 0.0025, "creepage_y": 0.0, "load": 70e3},
+     "lateral_displacement = 0.0025 is outside the table"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 50e3}, "load = 50000 is outside"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0}, "missing load"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 7e4, "yaw": 0.0},
+     "not axes of this table: yaw"),
+    ({"lateral_displacement": float("nan"), "creepage_y": 0.0, "load": 7e4}, "outside"),
+])
+def test_outside_the_axes_is_an_error(built, point, match):
+    table = ContactTable.open(built[1])
+    with pytest.raises(RailContactError, match=match):
+        table(point)
+
+
+def test_cubic_needs_four_nodes(built):
+    table = ContactTable.open(built[1])
+    with pytest.raises(RailContactError, match="at least 4 nodes"):
+        table({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 7e4}, method="cubic")
+
+
+def test_bad_input(built, tmp_path, capsys):
+    spec, out = built
+    text = Path(spec).read_text()
+    cases = {
+        "load = [80e3, 60e3, 2]": "start 80000 > stop 60000",
+        "load = [60e3, 80e3, 0]": "count must be at least 1",
+        "speed = [1.0, 2.0, 2]": "unknown axis speed",
+    }
+    for k, (line, match) in enumerate(cases.items()):
+        bad = tmp_path / f"bad{k}.toml"
+        bad.write_text(text.replace("load = [60e3, 80e3, 2]", line))
+        assert main(["table", "build", str(bad), "-o", str(tmp_path / "b.zarr"),
+                     "--quiet"]) == 2
+        assert match in capsys.readouterr().err
+    # another case into the same store: an error, the store untouched
+    other = tmp_path / "other.toml"
+    other.write_text(text.replace("friction = 0.3", "friction = 0.25"))
+    assert main(["table", "build", str(other), "-o", str(out), "--quiet"]) == 2
+    assert "another case or grid (differs in: case tangential)" in capsys.readouterr().err
+    # an unreachable scheduler: a clear error, and no store left behind
+    new = tmp_path / "new.zarr"
+    assert main(["table", "build", str(spec), "-o", str(new), "--quiet",
+                 "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
+    assert not new.exists()
+    assert main(["table", "build", str(spec), "-o", str(new), "--resume", "--quiet"]) == 2
+    assert "no table at" in capsys.readouterr().err
+
+
+def test_show(built, tmp_path, capsys):
+    _, out = built
+    plot = tmp_path / "t.png"
+    assert main(["table", "show", str(out), "--plot", str(plot)]) == 0
+    text = capsys.readouterr().out
+    assert "batches done 6/6" in text and "left   ok 12" in text and "right  ok 12" in text
+    assert "lateral_displacement   [m]     3 from -0.002 to 0.002" in text
+    assert plot.stat().st_size > 1000
