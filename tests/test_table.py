@@ -222,3 +222,43 @@ def test_show(built, tmp_path, capsys):
     assert "batches done 6/6" in text and "left   ok 12" in text and "right  ok 12" in text
     assert "lateral_displacement   [m]     3 from -0.002 to 0.002" in text
     assert plot.stat().st_size > 1000
+
+
+def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
+    """The FMU's table mode (railcontact.table.step.TableContact): a wheelset step at a
+    node returns that node's values for each wheel in the FMU's result record (the right
+    wheel's lateral creepage in its contact frame is the table's with the sign changed);
+    outside the table: status out of range, zero outputs, a message naming the input."""
+    from railcontact.fmu.variables import OUTPUTS
+    from railcontact.geometry.track import Pose
+    from railcontact.table.step import TableContact
+
+    tc = TableContact.open(built[1])
+    table = tc.table
+    index = (2, 1, 0)
+    y, eta, q = (float(table.axes[n][i]) for n, i in zip(table.axes, index, strict=True))
+    res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, q), creepages=((0.0, eta, 0.0),
+                                                               (0.0, -eta, 0.0)))
+    assert res.status == 0
+    outputs = {v.name: v.value(res) for v in OUTPUTS}
+    for side in ("left", "right"):
+        node = table.node(index, side)
+        assert outputs[f"normal_force_{side}"] == node["normal_force"]
+        assert outputs[f"creep_force_y_{side}"] == node["creep_force_y"]
+        assert outputs[f"force_lateral_{side}"] == node["force_lateral"]
+        assert outputs[f"contact_angle_{side}"] == node["contact_angle"]
+        assert outputs[f"contact_lateral_position_{side}"] == node["contact_y"]
+        assert outputs[f"status_{side}"] == 0
+    # the two wheels push the wheelset opposite ways along the creepage
+    assert outputs["creep_force_y_left"] * outputs["creep_force_y_right"] < 0
+    # outside the load axis on the right wheel: that wheel out of range, the left solved
+    res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, 1.5 * q), creepages=((0.0, eta, 0.0),
+                                                                     (0.0, -eta, 0.0)))
+    assert (res.left.status, res.right.status, res.status) == (0, 3, 3)
+    assert "load = 90000 N is outside the table [60000, 80000]" in res.right.message
+    assert res.right.normal_force == 0.0
+    # a yaw the table does not have (its case's yaw is 0): out of range
+    res = tc.solve(Pose(y, 1e-3, 0.0), loads=(q, q), creepages=((0.0, eta, 0.0),) * 2)
+    assert res.status == 3 and "no yaw axis" in res.left.message
+    with pytest.raises(RailContactError, match="by wheel load"):
+        tc.solve(Pose(y, 0.0, 0.0), vertical=-1e-4)

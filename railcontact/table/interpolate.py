@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numba
 import numpy as np
 
 from ..errors import RailContactError
@@ -39,6 +40,70 @@ class Interpolated:
         return self.values[name]
 
 
+@numba.njit(cache=True, nogil=True)
+def _multilinear(knots, starts, counts, strides, x, table, out):  # pragma: no cover - jit
+    """``out`` = the multilinear value at ``x`` (inside the axes) of ``table`` (nodes in C
+    order, quantities); the nodes of axis ``a`` are ``knots[starts[a]:starts[a] +
+    counts[a]]`` and its stride ``strides[a]``. Corners of zero weight are not read (a
+    point on a node is that node exactly). Returns the flat index of the cell's first
+    node."""
+    d = x.shape[0]
+    base = 0
+    ncorner = 1
+    offs = np.zeros(1 << d, np.int64)
+    ws = np.ones(1 << d)
+    for a in range(d):
+        n = counts[a]
+        if n == 1:
+            continue
+        s0 = starts[a]
+        v = x[a]
+        lo, hi = 0, n - 1
+        while hi - lo > 1:
+            mid = (lo + hi) >> 1
+            if knots[s0 + mid] <= v:
+                lo = mid
+            else:
+                hi = mid
+        t = (v - knots[s0 + lo]) / (knots[s0 + lo + 1] - knots[s0 + lo])
+        base += lo * strides[a]
+        if t == 0.0:
+            continue
+        if t == 1.0:
+            base += strides[a]
+            continue
+        for c in range(ncorner):
+            offs[ncorner + c] = offs[c] + strides[a]
+            ws[ncorner + c] = ws[c] * t
+            ws[c] *= 1.0 - t
+        ncorner *= 2
+    nq = table.shape[1]
+    for q in range(nq):
+        out[q] = 0.0
+    for c in range(ncorner):
+        w = ws[c]
+        r = base + offs[c]
+        for q in range(nq):
+            out[q] += w * table[r, q]
+    return base
+
+
+def _cells_ok(ok: np.ndarray) -> np.ndarray:
+    """For each node: whether it and the nodes after it along every axis (the 2^d corners
+    of the cell it starts) are all ok; nodes beyond the last count as ok (never used)."""
+    out = ok.copy()
+    for a in range(ok.ndim):
+        if ok.shape[a] < 2:
+            continue
+        nxt = np.ones_like(out)
+        src = [slice(None)] * ok.ndim
+        dst = [slice(None)] * ok.ndim
+        src[a], dst[a] = slice(1, None), slice(None, -1)
+        nxt[tuple(dst)] = out[tuple(src)]
+        out &= nxt
+    return out
+
+
 class ContactTable:
     """A contact table read into memory, ready to interpolate.
 
@@ -57,8 +122,16 @@ class ContactTable:
         self._nodes = [list(map(float, v)) for v in self.axes.values()]
         shape = values.shape[:-2]
         self._strides = [int(math.prod(shape[k + 1:])) for k in range(len(shape))]
-        self._flat = values.reshape(-1, len(self.sides), len(self.names))
+        self._axes_info = list(zip(self._nodes, self._strides, strict=True))
+        self._knots = np.concatenate([np.asarray(v, float) for v in self._nodes])
+        self._counts = np.array([len(v) for v in self._nodes], dtype=np.int64)
+        self._starts = np.concatenate([[0], np.cumsum(self._counts)[:-1]]).astype(np.int64)
+        self._strides_a = np.array(self._strides, dtype=np.int64)
+        flat = values.reshape(-1, len(self.sides), len(self.names))
+        self._side_values = [np.ascontiguousarray(flat[:, j]) for j in range(len(self.sides))]
         self._flat_status = status.reshape(-1, len(self.sides))
+        self._cell_ok = [_cells_ok(status[..., j] == OK).ravel().tolist()
+                         for j in range(len(self.sides))]
         self._cubic: dict[str, object] = {}
 
     @classmethod
@@ -123,36 +196,33 @@ class ContactTable:
         else:
             raise RailContactError(f"method must be one of {', '.join(METHODS)}, got "
                                    f"{method!r}")
-        return Interpolated(dict(zip(self.names, map(float, vals), strict=True)), status)
+        return Interpolated(dict(zip(self.names, vals.tolist(), strict=True)), status)
 
     def linear(self, x: list[float], j: int) -> tuple[np.ndarray, int]:
         """Multilinear values (quantities in :attr:`names` order) and status at the
-        coordinates ``x`` (inside the axes, in axis order) for the wheel index ``j``."""
-        base = 0
-        corners = [(0, 1.0)]
-        for nodes, stride, v in zip(self._nodes, self._strides, x, strict=True):
+        coordinates ``x`` (inside the axes, in axis order) for the wheel index ``j``
+        (the time loop's path: a compiled kernel on the nodes around ``x``)."""
+        out = np.empty(len(self.names))
+        base = _multilinear(self._knots, self._starts, self._counts, self._strides_a,
+                            np.array(x, dtype=float), self._side_values[j], out)
+        if self._cell_ok[j][base]:  # every node around x is ok (the common case)
+            return out, OK
+        st = self._flat_status[self._corners(x), j]
+        return out, (NOT_COMPUTED if st.min() == NOT_COMPUTED else int(st.max()))
+
+    def _corners(self, x: list[float]) -> list[int]:
+        """The flat indices of the nodes with a non-zero weight at ``x``."""
+        idx = [0]
+        for (nodes, stride), v in zip(self._axes_info, x):  # noqa: B905 - same length
             n = len(nodes)
             if n == 1:
                 continue
             i = min(max(bisect.bisect_right(nodes, v) - 1, 0), n - 2)
             t = (v - nodes[i]) / (nodes[i + 1] - nodes[i])
-            base += i * stride
-            if t == 0.0:
-                continue
-            if t == 1.0:
-                base += stride
-                continue
-            corners = [c for o, w in corners
-                       for c in ((o, w * (1.0 - t)), (o + stride, w * t))]
-        idx = [base + o for o, _ in corners]
-        st = self._flat_status[idx, j]
-        status = int(st.max())
-        if st.min() == NOT_COMPUTED:
-            status = NOT_COMPUTED
-        if len(corners) == 1:
-            return self._flat[idx[0], j].copy(), status
-        w = np.fromiter((w for _, w in corners), float, len(corners))
-        return w @ self._flat[idx, j], status
+            lo = [k + i * stride for k in idx]
+            idx = (lo if t == 0.0 else [k + stride for k in lo] if t == 1.0 else
+                   lo + [k + stride for k in lo])
+        return idx
 
     def _cubic_at(self, x: list[float], j: int) -> tuple[np.ndarray, int]:
         short = [f"{n} ({len(v)})" for n, v in self.axes.items() if len(v) < 4]

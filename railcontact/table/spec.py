@@ -116,6 +116,12 @@ class TableSpec:
         return case_with(self.case, {n: float(self.axes[n][i])
                                      for n, i in zip(self.axes, index, strict=True)}, side)
 
+    def case_at_values(self, values: dict[str, float], side: str | None = None
+                       ) -> dict[str, Any]:
+        """The case dictionary at any state (axis name -> value [SI]), e.g. between the
+        nodes."""
+        return case_with(self.case, values, side)
+
     def identity(self) -> dict[str, Any]:
         """What makes two tables the same: the case, the axes, the sides, the batch."""
         return {"case": self.case, "axes": {n: [float(x) for x in v] for n, v in
