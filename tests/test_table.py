@@ -166,8 +166,8 @@ def test_interpolation_at_nodes_and_between(built):
 
 @pytest.mark.parametrize("point, match", [
     ({"lateral_displacement": 0.0025, "creepage_y": 0.0, "load": 70e3},
-     "lateral_displacement = 0.0025 is outside the table"),
-    ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 50e3}, "load = 50000 is outside"),
+     "lateral_displacement = 0.0025 m is outside the table"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 50e3}, "load = 50000 N is outside"),
     ({"lateral_displacement": 0.0, "creepage_y": 0.0}, "missing load"),
     ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 7e4, "yaw": 0.0},
      "not axes of this table: yaw"),

@@ -22,6 +22,7 @@ import numba
 import numpy as np
 
 from ..errors import RailContactError
+from .spec import AXES
 from .store import IDENTITY, open_dataset
 from .variables import NOT_COMPUTED, OK, QUANTITIES, STATUS_MEANINGS
 
@@ -46,7 +47,7 @@ def _multilinear(knots, starts, counts, strides, x, table, out):  # pragma: no c
     order, quantities); the nodes of axis ``a`` are ``knots[starts[a]:starts[a] +
     counts[a]]`` and its stride ``strides[a]``. Corners of zero weight are not read (a
     point on a node is that node exactly). Returns the flat index of the cell's first
-    node."""
+    node. A point outside axis ``a``: returns ``-1 - a``, ``out`` untouched."""
     d = x.shape[0]
     base = 0
     ncorner = 1
@@ -58,6 +59,8 @@ def _multilinear(knots, starts, counts, strides, x, table, out):  # pragma: no c
             continue
         s0 = starts[a]
         v = x[a]
+        if not knots[s0] <= v <= knots[s0 + n - 1]:  # NaN too
+            return -1 - a
         lo, hi = 0, n - 1
         while hi - lo > 1:
             mid = (lo + hi) >> 1
@@ -86,6 +89,12 @@ def _multilinear(knots, starts, counts, strides, x, table, out):  # pragma: no c
         for q in range(nq):
             out[q] += w * table[r, q]
     return base
+
+
+def outside(name: str, value: float, nodes: list[float]) -> str:
+    """The message for a value outside an axis."""
+    return (f"{name} = {value:g} {AXES[name].unit} is outside the table "
+            f"[{nodes[0]:g}, {nodes[-1]:g}]")
 
 
 def _cells_ok(ok: np.ndarray) -> np.ndarray:
@@ -173,8 +182,7 @@ class ContactTable:
         for n, nodes in zip(self.axes, self._nodes, strict=True):
             v = float(point[n])
             if not nodes[0] <= v <= nodes[-1]:  # NaN fails too
-                raise RailContactError(f"{n} = {v:g} is outside the table "
-                                       f"[{nodes[0]:g}, {nodes[-1]:g}]")
+                raise RailContactError(outside(n, v, nodes))
             x.append(v)
         return x
 
@@ -205,6 +213,8 @@ class ContactTable:
         out = np.empty(len(self.names))
         base = _multilinear(self._knots, self._starts, self._counts, self._strides_a,
                             np.array(x, dtype=float), self._side_values[j], out)
+        if base < 0:
+            self._coordinates(dict(zip(self.axes, x)))  # noqa: B905 - raises, naming it
         if self._cell_ok[j][base]:  # every node around x is ok (the common case)
             return out, OK
         st = self._flat_status[self._corners(x), j]

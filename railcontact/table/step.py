@@ -72,7 +72,8 @@ class TableContact:
         self._take = [order.index(n) for n in table.axes]
         self._absent = [(order.index(n), n, fixed[n]) for n in order if n not in table.axes]
         self._j = {s: table.sides.index(s) for s in table.sides}
-        self._q = [table.names.index(n) for n in _FIELDS]
+        if table.names != _FIELDS:  # _fill unpacks the values in this order
+            raise RailContactError(f"table quantities {table.names} are not {_FIELDS}")
 
     @classmethod
     def open(cls, path: str | Path, method: str = "linear") -> TableContact:
@@ -118,15 +119,17 @@ class TableContact:
                                             f"table has no {name} axis; it holds "
                                             f"{name} = {fixed} only")
         x = [state[k] for k in self._take]
-        for v, nodes, name in zip(x, self.table._nodes, self.table.axes):  # noqa: B905
-            if not nodes[0] <= v <= nodes[-1]:
-                return None, OUT_OF_RANGE, (f"{name} = {v:g} {AXES[name].unit} is outside "
-                                            f"the table [{nodes[0]:g}, {nodes[-1]:g}]")
         if self.method == "linear":
-            vals, status = self.table.linear(x, j)
+            try:
+                vals, status = self.table.linear(x, j)
+            except RailContactError as exc:  # outside an axis
+                return None, OUT_OF_RANGE, str(exc)
         else:
-            r = self.table(dict(zip(self.table.axes, x)), self.table.sides[j],  # noqa: B905
-                           self.method)
+            try:
+                r = self.table(dict(zip(self.table.axes, x)),  # noqa: B905 - same length
+                               self.table.sides[j], self.method)
+            except RailContactError as exc:
+                return None, OUT_OF_RANGE, str(exc)
             vals, status = np.array([r.values[n] for n in self.table.names]), r.status
         if status == NOT_COMPUTED:
             return None, OUT_OF_RANGE, "the table's nodes around this state are not computed"
@@ -163,9 +166,7 @@ class TableContact:
         return self._fill(side, vals, status, creep)
 
     def _fill(self, side: str, vals: np.ndarray, status: int, creep) -> WheelContact:
-        v = vals.tolist()
-        (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl) = (
-            v[k] for k in self._q)
+        (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl) = vals.tolist()
         if status != OK:
             forces = (fn, fx, fy, mz, tx, ty, tz, ym, ar, pm, sl)
             if status == NO_CONTACT or not all(map(math.isfinite, forces)):
