@@ -11,6 +11,7 @@ the usual tolerances they differ by up to those tolerances (docs/tables.md).
 from __future__ import annotations
 
 import json
+import math
 import shutil
 from pathlib import Path
 
@@ -262,3 +263,33 @@ def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
     assert res.status == 3 and "no yaw axis" in res.left.message
     with pytest.raises(RailContactError, match="by wheel load"):
         tc.solve(Pose(y, 0.0, 0.0), vertical=-1e-4)
+
+
+def test_failed_points_have_their_status(scheduler, tmp_path, capsys):
+    """A BEM that stops after 2 iterations (not converged: values kept, status 1) and a
+    wheelset 30 mm off centre (the wheel has climbed its flange: out of range, status 3,
+    NaN values): recorded with their messages; no NaN without a status."""
+    text = SPEC.replace("max_iterations = 2000", "max_iterations = 2").replace(
+        'lateral_displacement = [-0.002, 0.002, 3]\ncreepage_y = [0.0, 0.002, 2]\n'
+        'load = [60e3, 80e3, 2]', "lateral_displacement = { values = [0.0, 0.03] }")
+    spec = tmp_path / "fail.toml"
+    spec.write_text(text)
+    out = tmp_path / "fail.zarr"
+    assert main(["table", "build", str(spec), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    assert "4 point-wheel(s) not ok" in capsys.readouterr().out
+    ds = open_dataset(out)
+    status = ds["status"].values
+    assert status.tolist() == [[1, 1], [3, 3]]
+    f = ds["normal_force"].values
+    assert np.isfinite(f[0]).all() and np.isnan(f[1]).all()
+    for name in ("normal_force", "creep_force_y", "contact_angle", "max_pressure"):
+        assert not (np.isnan(ds[name].values) & (status == 0)).any()
+    assert main(["table", "show", str(out)]) == 0
+    shown = capsys.readouterr().out
+    assert "left   not converged 1, out of range 1" in shown
+    assert "climbed its flange" in shown and "did not converge" in shown
+    with pytest.raises(RailContactError, match="outside the table"):
+        ContactTable.open(out)({"lateral_displacement": 0.031})
+    r = ContactTable.open(out)({"lateral_displacement": 0.01})
+    assert r.status == 3 and math.isnan(r["normal_force"])
