@@ -163,6 +163,29 @@ def error(table: ContactTable, spec, samples: int) -> None:
             print(f"  {m:6s}  {names[q]:28s} {statistics.median(v):10.2e} {max(v):10.2e}")
 
 
+def nodes_vs_cold(table: ContactTable, spec, samples: int) -> None:
+    """The warm-started nodes against cold solves of the same states (the warm start
+    changes the solver's path, not its grid: they differ by the solvers' tolerances)."""
+    rng = np.random.default_rng(3)
+    dn, df, dp, cold_first = [], [], [], []
+    for _ in range(samples):
+        index = tuple(int(rng.integers(0, n)) for n in spec.shape)
+        for side in spec.sides:
+            node = table.node(index, side)
+            exact, _ = solve_point(spec.case_at(index), side)
+            dn.append(abs(node["normal_force"] - exact.normal_force) / LOAD)
+            df.append(max(abs(node["creep_force_x"] - exact.creep_force[0]),
+                          abs(node["creep_force_y"] - exact.creep_force[1])) / (FRICTION * LOAD))
+            dp.append(abs(node["max_pressure"] - exact.max_pressure) / exact.max_pressure)
+            if index[-1] % spec.batch == 0:  # a batch's first point: started cold too
+                cold_first.append(dn[-1] + df[-1] + dp[-1])
+    print(f"stored nodes against cold solves ({samples} nodes x {len(spec.sides)} wheels; "
+          f"eps_n = 1e-3, eps_tau = 1e-2):")
+    print(f"  normal force / Q: max {max(dn):.2e}; creep forces / (mu Q): max {max(df):.2e}; "
+          f"p_max relative: max {max(dp):.2e}; first points of batches: "
+          f"{len(cold_first)}, max difference {max(cold_first, default=0.0):.1e}")
+
+
 def scaling(spec, counts: list[int]) -> None:
     rates = {}
     for n in counts:
@@ -199,6 +222,7 @@ def main(argv: list[str] | None = None) -> int:
         build(spec, out, args.workers)
         table = ContactTable.open(out)
         cost(table, spec)
+        nodes_vs_cold(table, spec, args.samples)
         error(table, spec, args.samples)
         if args.scaling is not None:
             counts = args.scaling or [1, 2]
