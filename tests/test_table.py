@@ -111,6 +111,9 @@ def test_table_equals_solve_at_its_nodes(built):
                 got = float(ds[name].values[(*index, spec.sides.index(side))])
                 assert got == pytest.approx(value, rel=1e-9, abs=1e-9 * abs(value) + 1e-12), \
                     (index, side, name)
+    # Coulomb: the creep force of a patch at most mu N (to the tangential tolerance)
+    fx, fy, n = (ds[q].values for q in ("creep_force_x", "creep_force_y", "normal_force"))
+    assert (np.hypot(fx, fy) <= 0.3 * n * (1 + 1e-9)).all()
     # not a trivial table: the axes change the forces
     fy = ds["creep_force_y"].sel(side="left").values
     assert np.abs(fy[:, 1, :]).min() > 1e3 and np.abs(fy[:, 0, :]).max() < 1.0
@@ -261,6 +264,11 @@ def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
     # a yaw the table does not have (its case's yaw is 0): out of range
     res = tc.solve(Pose(y, 1e-3, 0.0), loads=(q, q), creepages=((0.0, eta, 0.0),) * 2)
     assert res.status == 3 and "no yaw axis" in res.left.message
+    # kinematic creepages: the spin of a coned contact, which this table has no axis for
+    from railcontact.timestep.wheelset import Kinematics
+
+    res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, q), kinematics=Kinematics(30.0))
+    assert res.status == 3 and "no creepage_x axis" in res.left.message
     with pytest.raises(RailContactError, match="by wheel load"):
         tc.solve(Pose(y, 0.0, 0.0), vertical=-1e-4)
 
@@ -293,3 +301,30 @@ def test_failed_points_have_their_status(scheduler, tmp_path, capsys):
         ContactTable.open(out)({"lateral_displacement": 0.031})
     r = ContactTable.open(out)({"lateral_displacement": 0.01})
     assert r.status == 3 and math.isnan(r["normal_force"])
+
+
+def test_cubic_follows_the_creep_curve_between_nodes(scheduler, tmp_path):
+    """Along the lateral creepage (5 nodes, 0 .. 4e-3: from linear creep to full slip) the
+    cubic spline stays within 1 % of mu Q of exact solves between the nodes where the creep
+    curve bends, closer than the linear interpolation; at full slip the force is mu N."""
+    text = SPEC.replace('lateral_displacement = [-0.002, 0.002, 3]\ncreepage_y = [0.0, 0.002, 2]'
+                        '\nload = [60e3, 80e3, 2]', "creepage_y = [0.0, 0.004, 5]")
+    text = text.replace("tolerance = 1e-13", "tolerance = 1e-6")
+    spec_path = tmp_path / "curve.toml"
+    spec_path.write_text(text)
+    out = tmp_path / "curve.zarr"
+    assert main(["table", "build", str(spec_path), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    from railcontact.table.solve import solve_point
+
+    spec = load_spec(spec_path)
+    table = ContactTable.open(out)
+    node = table.node((4,), "left")
+    assert abs(node["creep_force_y"]) == pytest.approx(0.3 * node["normal_force"], rel=1e-3)
+    mu_q = 0.3 * 80e3
+    for eta in (0.0005, 0.0015, 0.0025):
+        exact, _ = solve_point(spec.case_at_values({"creepage_y": eta}), "left")
+        lin = table({"creepage_y": eta}, "left")["creep_force_y"]
+        cub = table({"creepage_y": eta}, "left", method="cubic")["creep_force_y"]
+        e_lin, e_cub = abs(lin - exact.creep_force[1]), abs(cub - exact.creep_force[1])
+        assert e_cub < 0.01 * mu_q and e_cub < e_lin, (eta, e_lin, e_cub)

@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..errors import RailContactError
 from .solve import solve_batch
 from .spec import TableSpec
@@ -105,8 +107,6 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
     if workers is not None and workers < 1:
         raise RailContactError(f"--workers must be at least 1, got {workers}")
     out = Path(out)
-    import numpy as np
-
     store = None
     if out.exists():
         store = Store(out, spec)
@@ -119,7 +119,7 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
     report = BuildReport(points=spec.size)
     report.skipped = sum(len(spec.batch_points(tuple(ix))) for ix in np.argwhere(done))
     if not todo:
-        store.finish([], True)
+        store.finish(True)
         return report
     own = client is None
     if own:
@@ -133,7 +133,6 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                 client.close()
             raise
     t0 = time.perf_counter()
-    messages: list = []
     try:
         from distributed import as_completed
 
@@ -160,21 +159,22 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                 except Exception as exc:  # noqa: BLE001 - a worker's failure, reported
                     report.failed_batches.append(f"batch {ix}: {type(exc).__name__}: {exc}")
                     continue
-                store.write(ix, result)
                 slow = {n_: float(spec.axes[n_][k]) for n_, k in zip(spec.names[:-1], ix[:-1],
                                                                      strict=True)}
-                for i, side, status, msg in result["messages"]:
-                    point = {**slow, spec.names[-1]:
-                             float(spec.axes[spec.names[-1]][ix[-1] * spec.batch + i])}
-                    messages.append({"point": point, "side": side, "status": status,
-                                     "message": msg})
+                fast = spec.axes[spec.names[-1]]
+                messages = [{"batch": list(ix), "side": side, "status": status,
+                             "point": {**slow, spec.names[-1]: float(fast[ix[-1] * spec.batch
+                                                                         + i])},
+                             "message": msg}
+                            for i, side, status, msg in result["messages"]]
+                store.write(ix, result, messages)
                 report.not_ok += len(result["messages"])
                 report.computed += n
                 bar.update(n)
         finally:
             bar.close()
     finally:
-        store.finish(messages, bool(store.done().all()))
+        store.finish(bool(store.done().all()))
         if own:
             cluster = getattr(client, "cluster", None)
             client.close()

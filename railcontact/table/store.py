@@ -105,20 +105,24 @@ class Store:
         """The batches already complete (bool over :attr:`TableSpec.batch_shape`)."""
         return np.asarray(self.group["batch_done"][...], dtype=bool)
 
-    def write(self, index: tuple[int, ...], result: dict[str, Any]) -> None:
-        """Write a batch's arrays, then mark it done (the order that makes a cut-off write
-        incomplete)."""
+    def write(self, index: tuple[int, ...], result: dict[str, Any],
+              messages: list[dict[str, Any]]) -> None:
+        """Write a batch's arrays and the ``messages`` of its points that are not ok, then
+        mark it done (the order that leaves a cut-off write incomplete)."""
         pts = self.spec.batch_points(index)
         *slow, _ = index
         sel = (*slow, slice(pts[0][-1], pts[-1][-1] + 1), slice(None))
         for name in [q.name for q in QUANTITIES + COUNTS] + ["status"]:
             self.group[name][sel] = result[name]
+        old = json.loads(self.group.attrs.get("messages", "[]"))
+        kept = [m for m in old if m.get("batch") != list(index)]  # a batch computed again
+        if messages or len(kept) != len(old):
+            self.group.attrs["messages"] = json.dumps(kept + messages)
         self.group["batch_done"][index] = True
 
-    def finish(self, messages: list, complete: bool) -> None:
-        old = json.loads(self.group.attrs.get("messages", "[]"))
-        self.group.attrs.update({"messages": json.dumps(old + messages),
-                                 "complete": int(complete)})
+    def finish(self, complete: bool) -> None:
+        """Record whether every batch is done."""
+        self.group.attrs["complete"] = int(complete)
 
 
 def check_identity(path: str | Path, found: dict[str, Any], wanted: dict[str, Any]) -> None:
