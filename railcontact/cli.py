@@ -210,8 +210,13 @@ def _cmd_table_build(args: argparse.Namespace) -> int:
     from .table.build import build_table
 
     spec = load_spec(args.spec)
-    rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
-                      resume=args.resume, progress=not args.quiet)
+    try:
+        rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
+                          resume=args.resume, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"railcontact: interrupted; the finished batches are in {args.output}: rerun "
+              "with --resume to complete it", file=sys.stderr)
+        return 130
     print(f"table {args.output}: {rep.points} points x {len(spec.sides)} wheel(s); "
           f"computed {rep.computed} ({rep.rate:.3g} points/s on {rep.workers} worker(s)), "
           f"{rep.skipped} already there; {rep.not_ok} point-wheel(s) not ok (see "

@@ -100,10 +100,12 @@ class Store:
             raise RailContactError(f"{path} is not a railcontact table store (no "
                                    f"{IDENTITY} attribute)")
         check_identity(path, json.loads(found), spec.identity())
+        names = [q.name for q in QUANTITIES + COUNTS] + ["status", "batch_done"]
+        self.arrays = {n: self.group[n] for n in names}  # opened once: metadata read once
 
     def done(self) -> np.ndarray:
         """The batches already complete (bool over :attr:`TableSpec.batch_shape`)."""
-        return np.asarray(self.group["batch_done"][...], dtype=bool)
+        return np.asarray(self.arrays["batch_done"][...], dtype=bool)
 
     def write(self, index: tuple[int, ...], result: dict[str, Any],
               messages: list[dict[str, Any]]) -> None:
@@ -113,12 +115,12 @@ class Store:
         *slow, _ = index
         sel = (*slow, slice(pts[0][-1], pts[-1][-1] + 1), slice(None))
         for name in [q.name for q in QUANTITIES + COUNTS] + ["status"]:
-            self.group[name][sel] = result[name]
+            self.arrays[name][sel] = result[name]
         old = json.loads(self.group.attrs.get("messages", "[]"))
         kept = [m for m in old if m.get("batch") != list(index)]  # a batch computed again
         if messages or len(kept) != len(old):
             self.group.attrs["messages"] = json.dumps(kept + messages)
-        self.group["batch_done"][index] = True
+        self.arrays["batch_done"][index] = True
 
     def finish(self, complete: bool) -> None:
         """Record whether every batch is done."""
