@@ -72,6 +72,9 @@ class TableContact:
         self._take = [order.index(n) for n in table.axes]
         self._absent = [(order.index(n), n, fixed[n]) for n in order if n not in table.axes]
         self._j = {s: table.sides.index(s) for s in table.sides}
+        self.memory: dict[str, list] = {"left": [], "right": []}
+        """Always empty (a table keeps nothing between steps); there so that the FMU's
+        get/set state handles a table as it handles ``WheelsetContact``."""
         if table.names != _FIELDS:  # _fill unpacks the values in this order
             raise RailContactError(f"table quantities {table.names} are not {_FIELDS}")
 
@@ -81,6 +84,7 @@ class TableContact:
 
     def reset(self) -> None:
         """Nothing to forget: a table has no memory between steps."""
+        self.memory = {"left": [], "right": []}
 
     def solve(self, pose: Pose, *, loads: tuple[float, float] | None = None,
               vertical: float | None = None,
