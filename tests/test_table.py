@@ -328,3 +328,26 @@ def test_cubic_follows_the_creep_curve_between_nodes(scheduler, tmp_path):
         cub = table({"creepage_y": eta}, "left", method="cubic")["creep_force_y"]
         e_lin, e_cub = abs(lin - exact.creep_force[1]), abs(cub - exact.creep_force[1])
         assert e_cub < 0.01 * mu_q and e_cub < e_lin, (eta, e_lin, e_cub)
+
+
+@pytest.mark.parametrize("entry, match", [
+    ("[-0.002, 0.002, 2.5]", "needs an integer count, got 2.5"),
+    ("[0.002, 0.001]", "strictly increasing"),
+    ("{ values = [0.0, 0.0] }", "strictly increasing"),
+    ("[0.0, 0.0, 3]", "give count 1"),
+    ("[0.0, 0.001, 1]", "count 1 needs start = stop"),
+    ('["a", 0.001, 2]', "finite numbers"),
+    ("{ value = [0.0] }", "takes only 'values'"),
+])
+def test_bad_axes(entry, match):
+    from railcontact.errors import CaseError
+    from railcontact.table import parse_spec
+    from railcontact.table.spec import tomllib
+
+    raw = tomllib.loads(SPEC.replace("lateral_displacement = [-0.002, 0.002, 3]",
+                                     f"lateral_displacement = {entry}"))
+    with pytest.raises(CaseError, match=match):
+        parse_spec(raw)
+    ok = tomllib.loads(SPEC.replace("lateral_displacement = [-0.002, 0.002, 3]",
+                                    "lateral_displacement = [-0.002, 0.002, 3.0]"))
+    assert parse_spec(ok).shape == (3, 2, 2)

@@ -2,8 +2,8 @@
 
 The ``[table]`` keys are axes, each ``[start, stop, count]`` (count an integer >= 1; the
 ``count`` values from ``start`` to ``stop`` inclusive, evenly spaced) or an explicit list of
-strictly increasing values (``{ values = [...] }``, or any list that is not three numbers
-ending in an integer)::
+strictly increasing values (``{ values = [...] }``, or a plain list of any length but
+three)::
 
     [table]
     lateral_displacement = [-0.004, 0.004, 9]   # m
@@ -159,8 +159,7 @@ def axis_values(name: str, value: Any) -> np.ndarray:
         value = value["values"]
         explicit = True
     else:
-        explicit = not (isinstance(value, list) and len(value) == 3
-                        and isinstance(value[2], int) and not isinstance(value[2], bool))
+        explicit = not (isinstance(value, list) and len(value) == 3)
     if not isinstance(value, list) or not value:
         raise CaseError(f"{where} must be [start, stop, count] or a list of values, got "
                         f"{value!r}")
@@ -173,6 +172,10 @@ def axis_values(name: str, value: Any) -> np.ndarray:
             raise CaseError(f"{where}: the values must be strictly increasing, got {value!r}")
         return x
     start, stop, count = float(value[0]), float(value[1]), value[2]
+    if count != int(count):
+        raise CaseError(f"{where}: [start, stop, count] needs an integer count, got {count!r} "
+                        "(three explicit values: { values = [a, b, c] })")
+    count = int(count)
     if count < 1:
         raise CaseError(f"{where}: count must be at least 1, got {count}")
     if start > stop:
