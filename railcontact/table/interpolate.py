@@ -42,13 +42,15 @@ class Interpolated:
 
 
 @numba.njit(cache=True, nogil=True)
-def _multilinear(knots, starts, counts, strides, x, table, out):  # pragma: no cover - jit
+def _multilinear(knots, meta, x, table, out):  # pragma: no cover - jit
     """``out`` = the multilinear value at ``x`` (inside the axes) of ``table`` (nodes in C
-    order, quantities); the nodes of axis ``a`` are ``knots[starts[a]:starts[a] +
-    counts[a]]`` and its stride ``strides[a]``. Corners of zero weight are not read (a
+    order, quantities); ``meta`` = (starts, counts, strides) of the ``d`` axes: the nodes
+    of axis ``a`` are ``knots[starts[a]:starts[a] + counts[a]]``, its stride
+    ``strides[a]`` (one array: fewer arguments to dispatch). Corners of zero weight are not read (a
     point on a node is that node exactly). Returns the flat index of the cell's first
     node. A point outside axis ``a``: returns ``-1 - a``, ``out`` untouched."""
     d = x.shape[0]
+    starts, counts, strides = meta[:d], meta[d:2 * d], meta[2 * d:]
     base = 0
     ncorner = 1
     offs = np.zeros(1 << d, np.int64)
@@ -133,9 +135,9 @@ class ContactTable:
         self._strides = [int(math.prod(shape[k + 1:])) for k in range(len(shape))]
         self._axes_info = list(zip(self._nodes, self._strides, strict=True))
         self._knots = np.concatenate([np.asarray(v, float) for v in self._nodes])
-        self._counts = np.array([len(v) for v in self._nodes], dtype=np.int64)
-        self._starts = np.concatenate([[0], np.cumsum(self._counts)[:-1]]).astype(np.int64)
-        self._strides_a = np.array(self._strides, dtype=np.int64)
+        counts = np.array([len(v) for v in self._nodes], dtype=np.int64)
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        self._meta = np.concatenate([starts, counts, self._strides]).astype(np.int64)
         flat = values.reshape(-1, len(self.sides), len(self.names))
         self._side_values = [np.ascontiguousarray(flat[:, j]) for j in range(len(self.sides))]
         self._flat_status = status.reshape(-1, len(self.sides))
@@ -211,8 +213,8 @@ class ContactTable:
         coordinates ``x`` (inside the axes, in axis order) for the wheel index ``j``
         (the time loop's path: a compiled kernel on the nodes around ``x``)."""
         out = np.empty(len(self.names))
-        base = _multilinear(self._knots, self._starts, self._counts, self._strides_a,
-                            np.array(x, dtype=float), self._side_values[j], out)
+        base = _multilinear(self._knots, self._meta, np.array(x, dtype=float),
+                            self._side_values[j], out)
         if base < 0:
             self._coordinates(dict(zip(self.axes, x)))  # noqa: B905 - raises, naming it
         if self._cell_ok[j][base]:  # every node around x is ok (the common case)
