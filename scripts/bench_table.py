@@ -18,7 +18,9 @@ machine (``--nodes`` sets the nodes per axis).
    scale), of the contact angle in mrad, of the contact point in mm.
 3. ``--scaling``: the same table built into a fresh store by a LocalCluster of 1, 2, ...
    worker processes; points per second of the solves (cluster start excluded, shown
-   apart) and the efficiency rate_n / (n rate_1).
+   apart) and the efficiency rate_n / (n rate_1); with how busy the workers were (their
+   batches' wall time / (n x the build's)) and how much of that they had a core (CPU time /
+   wall time: below 1 when other processes share the cores).
 
 Usage: python scripts/bench_table.py [--out DIR] [--workers N] [--samples M]
        [--nodes L X Y] [--scaling [N ...]]
@@ -196,7 +198,9 @@ def scaling(spec, counts: list[int]) -> None:
         rates[n] = rep.rate
         print(f"  {n} worker(s): {rep.computed} points in {rep.seconds:.1f} s = "
               f"{rep.rate:.3g} points/s (wall with cluster start {wall:.1f} s), "
-              f"efficiency {rep.rate / (n * rates[counts[0]] / counts[0]):.2f}")
+              f"efficiency {rep.rate / (n * rates[counts[0]] / counts[0]):.2f}; workers "
+              f"busy {rep.task_seconds / (n * rep.seconds):.2f} of the time, on a core "
+              f"{rep.task_cpu_seconds / rep.task_seconds:.2f} of their busy time")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -438,7 +438,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
     asks for ``"rigid"`` or ``"equal-loads"``).
 
     ``starts(side)`` gives the ``(estimate_for, traction_for)`` of each wheel (either None),
-    e.g. a neighbouring solution's start (:mod:`railcontact.table.build`); without it every
+    e.g. a neighbouring solution's start (:mod:`railcontact.table.solve`); without it every
     patch starts as the case's estimates say, as ``railcontact solve`` does.
     """
     geo = case.geometry

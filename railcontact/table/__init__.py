@@ -11,5 +11,7 @@ extra (dask[distributed], xarray, zarr, tqdm).
 
 from .interpolate import ContactTable, Interpolated
 from .spec import AXES, TableSpec, load_spec, parse_spec
+from .step import TableContact
 
-__all__ = ["AXES", "ContactTable", "Interpolated", "TableSpec", "load_spec", "parse_spec"]
+__all__ = ["AXES", "ContactTable", "Interpolated", "TableContact", "TableSpec", "load_spec",
+           "parse_spec"]

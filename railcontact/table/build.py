@@ -46,6 +46,11 @@ class BuildReport:
     not_ok: int = 0
     """Point-wheels of this run whose status is not ok (recorded in the store)."""
     seconds: float = 0.0
+    task_seconds: float = 0.0
+    """Wall time of the batches in their workers, summed [s]."""
+    task_cpu_seconds: float = 0.0
+    """CPU time of the batches in their workers, summed [s]: below ``task_seconds`` when
+    the worker processes waited for a core (a loaded machine)."""
     workers: int = 0
     dashboard: str | None = None
 
@@ -169,6 +174,8 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                             for i, side, status, msg in result["messages"]]
                 store.write(ix, result, messages)
                 report.not_ok += len(result["messages"])
+                report.task_seconds += result["seconds"]
+                report.task_cpu_seconds += result["cpu_seconds"]
                 report.computed += n
                 bar.update(n)
         finally:

@@ -17,6 +17,7 @@ resumed.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -105,10 +106,12 @@ def solve_batch(case: dict[str, Any], sides: tuple[str, ...],
     dict
         Each quantity of :data:`~.variables.QUANTITIES` and :data:`~.variables.COUNTS` as an
         array (points, sides); ``status`` (int8) likewise; ``messages``: the message of
-        every point that is not ok, as ``(point, side, status, message)``. A quantity
+        every point that is not ok, as ``(point, side, status, message)``; ``seconds``
+        and ``cpu_seconds``: the batch's wall and CPU time in its worker [s]. A quantity
         that a point does not define (its geometry without contact, anything after an
         error) is NaN, always with a non-zero status.
     """
+    t0, c0 = time.perf_counter(), time.process_time()
     shape = (len(points), len(sides))
     out: dict[str, Any] = {q.name: np.full(shape, np.nan) for q in QUANTITIES}
     out.update({q.name: np.zeros(shape, dtype=np.int32) for q in COUNTS})
@@ -127,4 +130,6 @@ def solve_batch(case: dict[str, Any], sides: tuple[str, ...],
                         out[q.name][i, j] = q.read(wheel)
             for q in COUNTS:
                 out[q.name][i, j] = q.read(wheel)
+    out["seconds"] = time.perf_counter() - t0
+    out["cpu_seconds"] = time.process_time() - c0
     return out
