@@ -59,8 +59,9 @@ def summary(path: str | Path) -> str:
 
 def plot_table(path: str | Path, out: str | Path) -> Path:
     """Write the forces of the left (first) wheel against each axis (the other axes at
-    their middle nodes) and a heat map of the normal force over the first two axes (or of
-    the lateral creep force, when the table has creepage axes) to ``out``."""
+    their middle nodes) and a heat map over two axes (the first two creepage axes, else the
+    first two axes) of the creep force's magnitude (of the normal force without
+    creepages) to ``out``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -90,17 +91,21 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
         ax.grid(alpha=0.3)
     axs[0, 0].legend(fontsize=7)
     if len(multi) >= 2:
-        a, b = multi[0], multi[1]
-        q = "creep_force_y" if any(AXES[n].table == "tangential" for n in names) \
-            else "normal_force"
+        creep = [n for n in multi if AXES[n].table == "tangential"]
+        a, b = (creep[0], creep[1]) if len(creep) >= 2 else (multi[0], multi[1])
         mid = {m: ds.sizes[m] // 2 for m in names if m not in (a, b)}
-        z = ds[q].where(ok).isel(mid).sel(side=side).transpose(b, a)
+        cut = ds.where(ok).isel(mid).sel(side=side)
+        if creep:  # the creep force's magnitude
+            z, q = np.hypot(cut["creep_force_x"], cut["creep_force_y"]), "|F| creep"
+        else:
+            z, q = cut["normal_force"], "normal force"
+        z = z.transpose(b, a)
         ax = axs[0, -1]
         m = ax.pcolormesh(ds[a].values, ds[b].values, z.values, shading="nearest")
         fig.colorbar(m, ax=ax, label=f"{q} [N]")
         ax.set_xlabel(f"{a} [{AXES[a].unit}]")
         ax.set_ylabel(f"{b} [{AXES[b].unit}]")
-        ax.set_title(f"{q}, {side} wheel", fontsize=8)
+        ax.set_title(f"{q}, {side} wheel; others at middle", fontsize=8)
     fig.tight_layout()
     try:
         fig.savefig(out, dpi=90)
