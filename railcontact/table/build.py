@@ -12,6 +12,7 @@ into the same store, or ``--resume``, computes only the batches not marked done.
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import os
 import sys
@@ -144,7 +145,10 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         report.workers = len(client.scheduler_info().get("workers", {}))
         report.dashboard = getattr(client, "dashboard_link", None)
         if report.dashboard and progress:
-            say(f"Dask dashboard: {report.dashboard}")
+            note = ""
+            if own and importlib.util.find_spec("bokeh") is None:  # the scheduler is ours
+                note = " (its status page needs bokeh >= 3.1: pip install bokeh)"
+            say(f"Dask dashboard: {report.dashboard}{note}")
         futures = {}
         for ix in todo:
             pts = spec.batch_points(ix)
