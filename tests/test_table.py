@@ -351,3 +351,61 @@ def test_bad_axes(entry, match):
     ok = tomllib.loads(SPEC.replace("lateral_displacement = [-0.002, 0.002, 3]",
                                     "lateral_displacement = [-0.002, 0.002, 3.0]"))
     assert parse_spec(ok).shape == (3, 2, 2)
+
+
+def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, tmp_path):
+    """The FMU with contact_model = table (fmu_src/slave.py making TableContact its
+    contact, docs/tables.md) through fmpy: every node of the table, both wheels, exactly;
+    outside the table status 3. Runs once the FMU has the mode (wired with the FMU's
+    enumerations, after issue 21's merge)."""
+    from railcontact.fmu import variables as V
+
+    params = {v.name: v for v in V.PARAMETERS}
+    if "table_file" not in params or "contact_model" not in params:
+        pytest.skip("the FMU has no contact_model = table yet (the slave calls "
+                    "railcontact.table.TableContact, see docs/tables.md)")
+    fmpy = pytest.importorskip("fmpy")
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.model_description import read_model_description
+
+    from railcontact.fmu import build_fmu
+
+    fmu = build_fmu(tmp_path / "RailContact.fmu", [])
+    md = read_model_description(str(fmu))
+    unzipped = fmpy.extract(str(fmu))
+    var = {v.name: v for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="table")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    mode = var["contact_model"]
+    if mode.type == "String":
+        s.setString([mode.valueReference], ["table"])
+    else:  # an enumeration: the value of its item "table"
+        items = {i.name: int(i.value) for i in mode.declaredType.items}
+        s.setInteger([mode.valueReference], [items["table"]])
+    s.setString([var["table_file"].valueReference], [str(built[1].resolve())])
+    s.exitInitializationMode()
+    table = ContactTable.open(built[1])
+    t = 0.0
+    for index in np.ndindex(*(len(v) for v in table.axes.values())):
+        y, eta, q = (float(table.axes[n][i]) for n, i in zip(table.axes, index, strict=True))
+        inputs = {"lateral_displacement": y, "load_left": q, "load_right": q,
+                  "eta_left": eta, "eta_right": -eta}
+        s.setReal([var[k].valueReference for k in inputs], list(inputs.values()))
+        s.doStep(t, 1e-3)
+        t += 1e-3
+        for side in ("left", "right"):
+            node = table.node(index, side)
+            for name in ("normal_force", "creep_force_y", "contact_angle"):
+                got = s.getReal([var[f"{name}_{side}"].valueReference])[0]
+                assert got == node[name], (index, side, name)
+            assert s.getInteger([var[f"status_{side}"].valueReference])[0] == 0
+    s.setReal([var["lateral_displacement"].valueReference], [0.01])
+    s.doStep(t, 1e-3)  # a warning, not an exception
+    assert s.getInteger([var["status"].valueReference])[0] == 3
+    s.terminate()
+    s.freeInstance()
