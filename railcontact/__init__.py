@@ -5,7 +5,7 @@ import-linter, contract in ``pyproject.toml``; see ``docs/architecture.md``)::
 
     cli                         the railcontact command
     sim                         wheelset dynamics, co-simulation, demo
-    fmu  | io                   the FMU's variables and build | JSON, plots
+    fmu  | io  | table          the FMU's variables and build | JSON, plots | contact tables
     timestep                    WheelsetContact: both wheels per step, warm start
     contact                     one patch; quadratic and wheel-rail cases; load loop; results
     settings                    typed settings records, case files

@@ -4,7 +4,8 @@
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
 ``railcontact fmu build [-o dist/RailContact.fmu] [--python PATH]`` builds the FMU and
 ``railcontact fmu check FILE.fmu`` tells which Python it will run in; ``railcontact settings``
-prints the reference of every setting. Errors in the input are
+prints the reference of every setting; ``railcontact table build|show`` makes and
+summarises contact tables (docs/tables.md). Errors in the input are
 reported in one line (exit status 2), never as a traceback.
 """
 
@@ -215,6 +216,64 @@ def _add_demo(sub) -> None:
     d.set_defaults(func=_cmd_demo)
 
 
+def _cmd_table_build(args: argparse.Namespace) -> int:
+    from .table import load_spec
+    from .table.build import build_table
+
+    spec = load_spec(args.spec)
+    try:
+        rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
+                          resume=args.resume, progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"railcontact: interrupted; the finished batches are in {args.output}: rerun "
+              "with --resume to complete it", file=sys.stderr)
+        return 130
+    print(f"table {args.output}: {rep.points} points x {len(spec.sides)} wheel(s); "
+          f"computed {rep.computed} ({rep.rate:.3g} points/s on {rep.workers} worker(s)), "
+          f"{rep.skipped} already there; {rep.not_ok} point-wheel(s) not ok (see "
+          f"'railcontact table show')")
+    for f in rep.failed_batches:
+        print(f"railcontact: error: {f}", file=sys.stderr)
+    if rep.failed_batches:
+        print(f"railcontact: error: {len(rep.failed_batches)} batch(es) failed; rerun with "
+              "--resume to compute them", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _cmd_table_show(args: argparse.Namespace) -> int:
+    from .table.show import plot_table, summary
+
+    print(summary(args.table))
+    if args.plot:
+        print(f"plot written to {plot_table(args.table, args.plot)}")
+    return 0
+
+
+def _add_table(sub) -> None:
+    t = sub.add_parser("table", help="contact tables: exact solves over a grid, on Dask")
+    tsub = t.add_subparsers(dest="table_command", required=True)
+    b = tsub.add_parser("build", help="build (or complete) a table in a Zarr store",
+                        description="Solve a case file at every point of the axes of its "
+                        "[table] (docs/tables.md) on a Dask cluster, writing an xarray "
+                        "Dataset to a Zarr store. Points already in the store are not "
+                        "computed again.")
+    b.add_argument("spec", help="the table spec: a wheel-rail case file with a [table]")
+    b.add_argument("-o", "--output", required=True, help="the Zarr store (OUT.zarr)")
+    b.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
+    b.add_argument("--workers", type=int, help="local worker processes (default: the CPUs)")
+    b.add_argument("--resume", action="store_true",
+                   help="complete an existing store (error when there is none)")
+    b.add_argument("--quiet", action="store_true", help="no progress bar")
+    b.set_defaults(func=_cmd_table_build)
+    s = tsub.add_parser("show", help="summary of a table (axes, ranges, failed points)")
+    s.add_argument("table", help="the Zarr store")
+    s.add_argument("--plot", metavar="FILE",
+                   help="write the forces against each axis and a heat map to FILE")
+    s.set_defaults(func=_cmd_table_show)
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="railcontact",
                                  description="Exact wheel-rail contact (half-space BEM).")
@@ -267,6 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "when it cannot (with the message the FMU would log).")
     fc.add_argument("fmu", help="the .fmu file")
     fc.set_defaults(func=_cmd_fmu_check)
+    _add_table(sub)
     return ap
 
 

@@ -80,6 +80,11 @@ from .results import PatchSolution
 EstimateFor = Callable[[ContactPoint, HertzSolution, Control], Callable[[Grid], Any]]
 """``estimate_for(contact point, hertz, control)``: the initial pressure of a patch as a
 function of its BEM grid (e.g. the previous time step's)."""
+TractionFor = Callable[[PatchSolution], Any]
+"""``traction_for(patch)``: the (traction (2, nx, ny) [Pa], adhesion/slip map) that starts the
+tangential BEM of a normal-solved patch on its grid, or None (e.g. a neighbouring solve's)."""
+Starts = Callable[[str], tuple[EstimateFor | None, TractionFor | None]]
+"""``starts(side)``: the ``(estimate_for, traction_for)`` of a wheel (see :func:`solve_wheel`)."""
 LOAD_RTOL = 1e-6
 """Relative tolerance on the vertical load carried by the normal forces of several patches."""
 ROLL_TOL = 1e-8
@@ -237,14 +242,17 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
 
 
 def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
-                    pair: ElasticPair, previous: list[PatchSolution] | None = None
-                    ) -> list[PatchSolution]:
+                    pair: ElasticPair, previous: list[PatchSolution] | None = None,
+                    traction_for: TractionFor | None = None) -> list[PatchSolution]:
     """The tangential solution of each loaded patch, started from the traction of the same
-    patch in ``previous`` (the wheel's last load pass) where there is one."""
+    patch in ``previous`` (the wheel's last load pass) where there is one, else from
+    ``traction_for(patch)`` when given."""
     for p in patches:
         if p.normal.force > 0:
             last = same_patch(previous, p.geometry)
             start = None if last is None else start_from(last, p.normal.grid)[1:]
+            if start is None and traction_for is not None:
+                start = traction_for(p)
             if start is not None and start[0] is None:
                 start = None
             solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft,
@@ -254,16 +262,18 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
 
 def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
                 settings: PatchSettings, pair: ElasticPair,
-                estimate_for: EstimateFor | None = None, reference: bool = False
-                ) -> list[PatchSolution]:
+                estimate_for: EstimateFor | None = None, reference: bool = False,
+                traction_for: TractionFor | None = None) -> list[PatchSolution]:
     """The BEM solutions of one wheel's contact patches.
 
     ``control`` is the vertical wheel load [N] or the vertical approach [m]; with
     ``settings.tangential`` the patches are solved for it too and the load includes the
     creep forces' vertical components (module docstring). ``estimate_for(cp, hertz,
     control)`` replaces the settings' estimate: it returns a function of the BEM grid
-    giving the initial pressure (or None), e.g. the previous time step's. ``reference``:
-    each patch is solved in the frame at its reference point (:func:`solve_wheel_normal`).
+    giving the initial pressure (or None), e.g. the previous time step's;
+    ``traction_for(patch)`` likewise starts the tangential BEM of a patch that no earlier
+    load pass of this solve starts. ``reference``: each patch is solved in the frame at its
+    reference point (:func:`solve_wheel_normal`).
     """
     if settings.tangential is None:
         return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
@@ -272,7 +282,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         return _add_tangential(
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                reference=reference),
-            settings, pair)
+            settings, pair, traction_for=traction_for)
     q = control.load
     passes: list[list[PatchSolution]] = []
 
@@ -281,7 +291,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(load=qn),
                                                 settings, pair, estimate_for, last,
                                                 reference=reference),
-                             settings, pair, last)
+                             settings, pair, last, traction_for)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -441,13 +451,15 @@ _approach = vertical_approach
 
 def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
                  settings: PatchSettings, pair: ElasticPair, reference: bool = True,
-                 convention: str = "railcontact") -> dict[str, list[PatchSolution]]:
+                 convention: str = "railcontact", starts: Starts | None = None
+                 ) -> dict[str, list[PatchSolution]]:
     out = {}
     for side in sides:
+        start = (None, None) if starts is None else starts(side)
         try:
             out[side] = solve_wheel(track, ws, pose, side, control,
                                     side_settings(settings, side, convention), pair,
-                                    reference=reference)
+                                    start[0], reference, start[1])
         except RailContactError as exc:
             if isinstance(exc, CaseError):
                 raise
@@ -468,7 +480,7 @@ def side_settings(settings: PatchSettings, side: str, convention: str) -> PatchS
 
 def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
                  settings: PatchSettings, pair: ElasticPair, reference: bool = True,
-                 convention: str = "railcontact"
+                 convention: str = "railcontact", starts: Starts | None = None
                  ) -> tuple[Pose, dict[str, list[PatchSolution]]]:
     """Roll at which both wheels carry ``[normal] load``, with both wheels' solutions.
 
@@ -493,7 +505,7 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
             return values[phi]
         p = Pose(pose.lateral, pose.yaw, phi)
         per_side = _solve_sides(track, ws, p, ["left", "right"], control, settings, pair,
-                                reference, convention)
+                                reference, convention, starts)
         solved[phi] = per_side
         values[phi] = (first_contact_gap(track, ws, p, "left")
                        - first_contact_gap(track, ws, p, "right")
@@ -537,7 +549,8 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
     return Pose(pose.lateral, pose.yaw, phi), final
 
 
-def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
+def solve_wheel_rail(case: Case, starts: Starts | None = None
+                     ) -> tuple[list[PatchSolution], Pose]:
     """All contact patches of the case's wheel(s), each with its BEM normal (and tangential)
     solution, and the wheelset pose they were solved at (its roll resolved when the case
     asks for ``"rigid"`` or ``"equal-loads"``).
@@ -545,7 +558,12 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
     With ``case.convention == "contact"`` the creepages are read as CONTACT's
     (:mod:`railcontact.settings.convention`), each patch is solved at its reference point
     whatever ``[geometry] patch_frame`` says, and the patches report their forces as
-    CONTACT's (:attr:`PatchSolution.convention`)."""
+    CONTACT's (:attr:`PatchSolution.convention`).
+
+    ``starts(side)`` gives the ``(estimate_for, traction_for)`` of each wheel (either None),
+    e.g. a neighbouring solution's start (:mod:`railcontact.table.solve`); without it every
+    patch starts as the case's estimates say, as ``railcontact solve`` does.
+    """
     geo = case.geometry
     assert isinstance(geo, WheelRailGeometry)
     track, ws, pose = build_geometry(geo)
@@ -563,10 +581,10 @@ def solve_wheel_rail(case: Case) -> tuple[list[PatchSolution], Pose]:
                             f"{other} wheel off its rail: {exc}") from None
     if geo.roll == "equal-loads":
         pose, per_side = _equal_loads(track, ws, pose, control, settings, pair, reference,
-                                      convention)
+                                      convention, starts)
     else:
         per_side = _solve_sides(track, ws, pose, sides, control, settings, pair, reference,
-                                convention)
+                                convention, starts)
     patches = [p for side in sides for p in per_side[side]]
     for p in patches:
         p.convention = convention

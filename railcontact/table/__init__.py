@@ -1,0 +1,17 @@
+"""Contact tables: exact BEM solves over a grid of wheelset states, built on Dask and
+stored in Zarr (``railcontact table build``), and interpolated in a time loop
+(:class:`ContactTable`).
+
+Modules: ``spec`` (the ``[table]`` axes), ``solve`` (a batch of points, warm-started along
+the fastest axis), ``store`` (the Zarr layout, resume, completeness), ``build`` (Dask),
+``interpolate`` (:class:`ContactTable`), ``show`` (summary, plots), ``step`` (a wheelset
+step from a table, as the FMU's ``contact_model = table``). Building needs the ``[tables]``
+extra (dask[distributed], xarray, zarr, tqdm).
+"""
+
+from .interpolate import ContactTable, Interpolated
+from .spec import AXES, TableSpec, load_spec, parse_spec
+from .step import TableContact
+
+__all__ = ["AXES", "ContactTable", "Interpolated", "TableContact", "TableSpec", "load_spec",
+           "parse_spec"]

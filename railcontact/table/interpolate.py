@@ -1,0 +1,274 @@
+"""Using a table: :class:`ContactTable` interpolates its quantities at any point inside the
+axes.
+
+``linear`` is multilinear over the axes (the nodes around the point, weights the products
+of the fractions along each axis; a point on a node returns the node's values exactly);
+``cubic`` is scipy's tensor-product cubic spline (``RegularGridInterpolator``, method
+``"cubic"``), which needs at least 4 nodes on every axis. A point outside an axis is a
+:class:`~railcontact.errors.RailContactError` naming the axis and its range. The status of
+an interpolated point is the largest status of the nodes it uses (ok only when all of them
+are); a node not ok (or not computed) makes the values NaN with that status.
+"""
+
+from __future__ import annotations
+
+import bisect
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from ..errors import RailContactError
+from .spec import AXES
+from .store import IDENTITY, open_dataset
+from .variables import NOT_COMPUTED, OK, QUANTITIES, STATUS_MEANINGS
+
+METHODS = ("linear", "cubic")
+
+
+@dataclass(frozen=True)
+class Interpolated:
+    """The table's quantities at one point for one wheel (SI units; names of
+    :data:`~.variables.QUANTITIES`), with the status of the nodes used."""
+
+    values: dict[str, float]
+    status: int
+
+    def __getitem__(self, name: str) -> float:
+        return self.values[name]
+
+
+@numba.njit(cache=True, nogil=True)
+def _multilinear(knots, meta, x, table, out):  # pragma: no cover - jit
+    """``out`` = the multilinear value at ``x`` (inside the axes) of ``table`` (nodes in C
+    order, quantities); ``meta`` = (starts, counts, strides) of the ``d`` axes: the nodes
+    of axis ``a`` are ``knots[starts[a]:starts[a] + counts[a]]``, its stride
+    ``strides[a]`` (one array: fewer arguments to dispatch). Corners of zero weight are not read (a
+    point on a node is that node exactly). Returns the flat index of the cell's first
+    node. A point outside axis ``a``: returns ``-1 - a``, ``out`` untouched."""
+    d = x.shape[0]
+    starts, counts, strides = meta[:d], meta[d:2 * d], meta[2 * d:]
+    base = 0
+    ncorner = 1
+    offs = np.zeros(1 << d, np.int64)
+    ws = np.ones(1 << d)
+    for a in range(d):
+        n = counts[a]
+        if n == 1:
+            continue
+        s0 = starts[a]
+        v = x[a]
+        if not knots[s0] <= v <= knots[s0 + n - 1]:  # NaN too
+            return -1 - a
+        lo, hi = 0, n - 1
+        while hi - lo > 1:
+            mid = (lo + hi) >> 1
+            if knots[s0 + mid] <= v:
+                lo = mid
+            else:
+                hi = mid
+        t = (v - knots[s0 + lo]) / (knots[s0 + lo + 1] - knots[s0 + lo])
+        base += lo * strides[a]
+        if t == 0.0:
+            continue
+        if t == 1.0:
+            base += strides[a]
+            continue
+        for c in range(ncorner):
+            offs[ncorner + c] = offs[c] + strides[a]
+            ws[ncorner + c] = ws[c] * t
+            ws[c] *= 1.0 - t
+        ncorner *= 2
+    nq = table.shape[1]
+    for q in range(nq):
+        out[q] = 0.0
+    for c in range(ncorner):
+        w = ws[c]
+        r = base + offs[c]
+        for q in range(nq):
+            out[q] += w * table[r, q]
+    return base
+
+
+def outside(name: str, value: float, nodes: list[float]) -> str:
+    """The message for a value outside an axis."""
+    return (f"{name} = {value:g} {AXES[name].unit} is outside the table "
+            f"[{nodes[0]:g}, {nodes[-1]:g}]")
+
+
+def _cells_ok(ok: np.ndarray) -> np.ndarray:
+    """For each node: whether it and the nodes after it along every axis (the 2^d corners
+    of the cell it starts) are all ok; nodes beyond the last count as ok (never used)."""
+    out = ok.copy()
+    for a in range(ok.ndim):
+        if ok.shape[a] < 2:
+            continue
+        nxt = np.ones_like(out)
+        src = [slice(None)] * ok.ndim
+        dst = [slice(None)] * ok.ndim
+        src[a], dst[a] = slice(1, None), slice(None, -1)
+        nxt[tuple(dst)] = out[tuple(src)]
+        out &= nxt
+    return out
+
+
+class ContactTable:
+    """A contact table read into memory, ready to interpolate.
+
+    Use :meth:`open`. ``axes`` maps each axis to its nodes, ``sides`` the wheels,
+    ``case`` the case dictionary the table was built from, ``names`` the quantities.
+    """
+
+    def __init__(self, axes: dict[str, np.ndarray], sides: tuple[str, ...],
+                 values: np.ndarray, status: np.ndarray, case: dict, path: str = "") -> None:
+        self.axes = {n: np.asarray(v, dtype=float) for n, v in axes.items()}
+        self.sides = tuple(sides)
+        self.names = tuple(q.name for q in QUANTITIES)
+        self.case, self.path = case, path
+        self._values = values  # (*axes, side, quantity)
+        self._status = status  # (*axes, side)
+        self._nodes = [list(map(float, v)) for v in self.axes.values()]
+        shape = values.shape[:-2]
+        self._strides = [int(math.prod(shape[k + 1:])) for k in range(len(shape))]
+        self._axes_info = list(zip(self._nodes, self._strides, strict=True))
+        self._knots = np.concatenate([np.asarray(v, float) for v in self._nodes])
+        counts = np.array([len(v) for v in self._nodes], dtype=np.int64)
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        self._meta = np.concatenate([starts, counts, self._strides]).astype(np.int64)
+        flat = values.reshape(-1, len(self.sides), len(self.names))
+        self._side_values = [np.ascontiguousarray(flat[:, j]) for j in range(len(self.sides))]
+        self._flat_status = status.reshape(-1, len(self.sides))
+        self._cell_ok = [_cells_ok(status[..., j] == OK).ravel().tolist()
+                         for j in range(len(self.sides))]
+        self._cubic: dict[str, object] = {}
+
+    @classmethod
+    def open(cls, path: str | Path) -> ContactTable:
+        """Read the table at ``path`` (a store of ``railcontact table build``).
+
+        Raises
+        ------
+        RailContactError
+            When there is no table at ``path``.
+        """
+        ds = open_dataset(path)
+        ident = json.loads(ds.attrs[IDENTITY])
+        names = list(ident["axes"])
+        axes = {n: ds[n].values for n in names}
+        values = np.stack([ds[q.name].values for q in QUANTITIES], axis=-1)
+        status = ds["status"].values.astype(np.int8)
+        return cls(axes, tuple(ds["side"].values.tolist()), values, status, ident["case"],
+                   str(path))
+
+    # -- lookup --------------------------------------------------------------------------
+    def _side(self, side: str) -> int:
+        try:
+            return self.sides.index(side)
+        except ValueError:
+            raise RailContactError(f"the table has no {side!r} wheel (it has "
+                                   f"{', '.join(self.sides)})") from None
+
+    def _coordinates(self, point: dict[str, float]) -> list[float]:
+        missing = [n for n in self.axes if n not in point]
+        extra = [n for n in point if n not in self.axes]
+        if missing or extra:
+            raise RailContactError(
+                f"the table's axes are {', '.join(self.axes)}; "
+                + (f"missing {', '.join(missing)}" if missing else "")
+                + ("; " if missing and extra else "")
+                + (f"not axes of this table: {', '.join(extra)}" if extra else ""))
+        x = []
+        for n, nodes in zip(self.axes, self._nodes, strict=True):
+            v = float(point[n])
+            if not nodes[0] <= v <= nodes[-1]:  # NaN fails too
+                raise RailContactError(outside(n, v, nodes))
+            x.append(v)
+        return x
+
+    def __call__(self, point: dict[str, float], side: str = "left",
+                 method: str = "linear") -> Interpolated:
+        """The quantities at ``point`` (axis name -> value [SI]) for the wheel ``side``.
+
+        Raises
+        ------
+        RailContactError
+            For a point outside the axes, a missing axis, an unknown side or method.
+        """
+        j = self._side(side)
+        x = self._coordinates(point)
+        if method == "linear":
+            vals, status = self.linear(x, j)
+        elif method == "cubic":
+            vals, status = self._cubic_at(x, j)
+        else:
+            raise RailContactError(f"method must be one of {', '.join(METHODS)}, got "
+                                   f"{method!r}")
+        return Interpolated(dict(zip(self.names, vals.tolist(), strict=True)), status)
+
+    def linear(self, x: list[float], j: int) -> tuple[np.ndarray, int]:
+        """Multilinear values (quantities in :attr:`names` order) and status at the
+        coordinates ``x`` (inside the axes, in axis order) for the wheel index ``j``
+        (the time loop's path: a compiled kernel on the nodes around ``x``)."""
+        out = np.empty(len(self.names))
+        base = _multilinear(self._knots, self._meta, np.array(x, dtype=float),
+                            self._side_values[j], out)
+        if base < 0:
+            self._coordinates(dict(zip(self.axes, x)))  # noqa: B905 - raises, naming it
+        if self._cell_ok[j][base]:  # every node around x is ok (the common case)
+            return out, OK
+        st = self._flat_status[self._corners(x), j]
+        return out, (NOT_COMPUTED if st.min() == NOT_COMPUTED else int(st.max()))
+
+    def _corners(self, x: list[float]) -> list[int]:
+        """The flat indices of the nodes with a non-zero weight at ``x``."""
+        idx = [0]
+        for (nodes, stride), v in zip(self._axes_info, x):  # noqa: B905 - same length
+            n = len(nodes)
+            if n == 1:
+                continue
+            i = min(max(bisect.bisect_right(nodes, v) - 1, 0), n - 2)
+            t = (v - nodes[i]) / (nodes[i + 1] - nodes[i])
+            lo = [k + i * stride for k in idx]
+            idx = (lo if t == 0.0 else [k + stride for k in lo] if t == 1.0 else
+                   lo + [k + stride for k in lo])
+        return idx
+
+    def _cubic_at(self, x: list[float], j: int) -> tuple[np.ndarray, int]:
+        short = [f"{n} ({len(v)})" for n, v in self.axes.items() if len(v) < 4]
+        if short:
+            raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
+                                   f"{', '.join(short)}; use method='linear'")
+        key = self.sides[j]
+        if key not in self._cubic:
+            from scipy.interpolate import RegularGridInterpolator
+
+            self._cubic[key] = RegularGridInterpolator(
+                tuple(self.axes.values()), self._values[..., j, :], method="cubic")
+        # the nodes whose values the cubic uses: the 4 around x on each axis
+        lo = []
+        for nodes, v in zip(self._nodes, x, strict=True):
+            i = min(max(bisect.bisect_right(nodes, v) - 1, 0), len(nodes) - 2)
+            lo.append(slice(max(i - 1, 0), min(i + 3, len(nodes))))
+        st = self._status[(*lo, j)]
+        status = NOT_COMPUTED if st.min() == NOT_COMPUTED else int(st.max())
+        vals = self._cubic[key](np.array([x]))[0]
+        if status == OK and not np.all(np.isfinite(vals)):  # the splines span whole lines
+            status = int(self._status[..., j].max())
+        return vals, status
+
+    def node(self, index: tuple[int, ...], side: str = "left") -> Interpolated:
+        """The stored values of the node ``index`` (one index per axis)."""
+        j = self._side(side)
+        return Interpolated(dict(zip(self.names, map(float, self._values[(*index, j)]),
+                                     strict=True)), int(self._status[(*index, j)]))
+
+    def describe_status(self, status: int) -> str:
+        return STATUS_MEANINGS.get(status, str(status))
+
+    @property
+    def complete(self) -> bool:
+        """Every point computed and ok."""
+        return bool(np.all(self._status == OK))

@@ -1,0 +1,116 @@
+"""A table's summary (axes, ranges, statuses, failed points) and plots (forces against each
+axis, a heat map over two axes)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RailContactError
+from .spec import AXES
+from .store import IDENTITY, open_dataset
+from .variables import STATUS_MEANINGS
+
+SHOWN = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment", "contact_angle",
+         "max_pressure")
+MAX_MESSAGES = 10
+
+
+def summary(path: str | Path) -> str:
+    """The text of ``railcontact table show``."""
+    ds = open_dataset(path)
+    ident = json.loads(ds.attrs[IDENTITY])
+    names = list(ident["axes"])
+    done = ds["batch_done"].values
+    status = ds["status"].values
+    lines = [f"table {path}: case '{ds.attrs.get('case_name')}', railcontact "
+             f"{ds.attrs.get('railcontact_version')}",
+             f"{status[..., 0].size} points x {ds.sizes['side']} wheel(s) "
+             f"({', '.join(ds['side'].values.tolist())}); batches done "
+             f"{int(done.sum())}/{done.size} along '{names[-1]}' (fastest axis)"
+             + ("" if done.all() else " - incomplete: rerun with --resume")]
+    lines.append("axes:")
+    for n in names:
+        v = ds[n].values
+        lines.append(f"  {n:22s} [{AXES[n].unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}")
+    lines.append("status:")
+    for j, side in enumerate(ds["side"].values.tolist()):
+        counts = {STATUS_MEANINGS[int(k)]: int(c)
+                  for k, c in zip(*np.unique(status[..., j], return_counts=True), strict=True)}
+        lines.append(f"  {side:6s} " + ", ".join(f"{k} {c}" for k, c in counts.items()))
+    lines.append("values (ok points):")
+    ok = status == 0
+    for name in SHOWN:
+        x = ds[name].values[ok]
+        if x.size:
+            lines.append(f"  {name:16s} [{ds[name].attrs.get('units', '')}] from "
+                         f"{x.min():.6g} to {x.max():.6g}")
+    msgs = json.loads(ds.attrs.get("messages", "[]"))
+    if msgs:
+        lines.append(f"points not ok ({len(msgs)}; first {min(len(msgs), MAX_MESSAGES)}):")
+        for m in msgs[:MAX_MESSAGES]:
+            at = ", ".join(f"{k} = {v:.6g}" for k, v in m["point"].items())
+            lines.append(f"  {at}, {m['side']}: {STATUS_MEANINGS.get(m['status'])}: "
+                         f"{m['message']}")
+    return "\n".join(lines)
+
+
+def plot_table(path: str | Path, out: str | Path) -> Path:
+    """Write the forces of the left (first) wheel against each axis (the other axes at
+    their middle nodes) and a heat map over two axes (the first two creepage axes, else the
+    first two axes) of the creep force's magnitude (of the normal force without
+    creepages) to ``out``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ds = open_dataset(path)
+    names = list(json.loads(ds.attrs[IDENTITY])["axes"])
+    out = Path(out)
+    if not out.parent.is_dir():
+        raise RailContactError(f"--plot: folder {out.parent} does not exist")
+    ok = ds["status"] == 0
+    side = ds["side"].values[0]
+    multi = [n for n in names if ds.sizes[n] > 1]
+    ncols = len(multi) + (1 if len(multi) >= 2 else 0)
+    if not ncols:
+        raise RailContactError("the table has one point: nothing to plot")
+    fig, axs = plt.subplots(1, ncols, figsize=(4.2 * ncols, 3.6), squeeze=False)
+    for k, n in enumerate(multi):
+        ax = axs[0, k]
+        mid = {m: ds.sizes[m] // 2 for m in names if m != n}
+        for q in ("normal_force", "creep_force_x", "creep_force_y"):
+            y = ds[q].where(ok).isel(mid).sel(side=side)
+            ax.plot(ds[n].values, y.values, "o-", ms=3, label=q)
+        ax.set_xlabel(f"{n} [{AXES[n].unit}]")
+        ax.set_ylabel("force [N]")
+        ax.set_title(f"{side} wheel; others at middle", fontsize=8)
+        ax.grid(alpha=0.3)
+    axs[0, 0].legend(fontsize=7)
+    if len(multi) >= 2:
+        creep = [n for n in multi if AXES[n].table == "tangential"]
+        a, b = (creep[0], creep[1]) if len(creep) >= 2 else (multi[0], multi[1])
+        mid = {m: ds.sizes[m] // 2 for m in names if m not in (a, b)}
+        cut = ds.where(ok).isel(mid).sel(side=side)
+        if creep:  # the creep force's magnitude
+            z, q = np.hypot(cut["creep_force_x"], cut["creep_force_y"]), "|F| creep"
+        else:
+            z, q = cut["normal_force"], "normal force"
+        z = z.transpose(b, a)
+        ax = axs[0, -1]
+        m = ax.pcolormesh(ds[a].values, ds[b].values, z.values, shading="nearest")
+        fig.colorbar(m, ax=ax, label=f"{q} [N]")
+        ax.set_xlabel(f"{a} [{AXES[a].unit}]")
+        ax.set_ylabel(f"{b} [{AXES[b].unit}]")
+        ax.set_title(f"{q}, {side} wheel; others at middle", fontsize=8)
+    fig.tight_layout()
+    try:
+        fig.savefig(out, dpi=90)
+    except (ValueError, OSError) as exc:
+        raise RailContactError(f"--plot: cannot write {out}: {exc}") from None
+    finally:
+        plt.close(fig)
+    return out

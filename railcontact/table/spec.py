@@ -1,0 +1,265 @@
+"""A table's specification: a wheel–rail case file plus a ``[table]`` of axes.
+
+The ``[table]`` keys are axes, each ``[start, stop, count]`` (count an integer >= 1; the
+``count`` values from ``start`` to ``stop`` inclusive, evenly spaced) or an explicit list of
+strictly increasing values (``{ values = [...] }``, or a plain list of any length but
+three)::
+
+    [table]
+    lateral_displacement = [-0.004, 0.004, 9]   # m
+    creepage_y = { values = [-0.002, 0.0, 0.002] }
+    load = [60e3, 100e3, 3]                      # N
+
+An axis absent from ``[table]`` keeps the case's value. The axes are stored in the order
+written; the last one is the fastest: a batch of work runs along it, each point started
+from the previous one's solution (:mod:`railcontact.table.build`). ``batch`` (an integer,
+optional) cuts the fastest axis into runs of at most that many points (default: the whole
+axis). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
+
+All values in SI units; see :data:`AXES`.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import CaseError
+from ..settings import Case
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+@dataclass(frozen=True)
+class Axis:
+    """What an axis sets in the case: ``table``/``key`` (and ``index`` into a tuple)."""
+
+    table: str
+    key: str
+    index: int | None
+    unit: str
+    long_name: str
+
+
+AXES: dict[str, Axis] = {
+    "lateral_displacement": Axis("geometry", "lateral_displacement", None, "m",
+                                 "lateral displacement of the wheelset"),
+    "yaw": Axis("geometry", "yaw", None, "rad", "yaw angle of the wheelset"),
+    "creepage_x": Axis("tangential", "creepage", 0, "1", "longitudinal creepage xi"),
+    "creepage_y": Axis("tangential", "creepage", 1, "1", "lateral creepage eta"),
+    "spin": Axis("tangential", "creepage", 2, "1/m", "spin creepage phi"),
+    "load": Axis("normal", "load", None, "N", "vertical wheel load"),
+}
+"""The axes a table may have."""
+OPTIONS = ("batch",)
+"""Keys of ``[table]`` that are not axes."""
+MAX_POINTS = 10_000_000
+"""Largest number of grid points of a table."""
+
+
+@dataclass(frozen=True)
+class TableSpec:
+    """A validated table specification.
+
+    Attributes
+    ----------
+    case
+        The case dictionary (every default filled in), its axes at their first values.
+    axes
+        Axis name -> strictly increasing node values (SI units), in storage order; the last
+        axis is the fastest.
+    sides
+        The wheels solved: ``("left", "right")`` or one of them.
+    batch
+        Points per batch along the fastest axis.
+    """
+
+    case: dict[str, Any]
+    axes: dict[str, np.ndarray]
+    sides: tuple[str, ...]
+    batch: int
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        """The batch grid: every axis but the fastest, then the runs along it."""
+        *slow, fast = self.shape
+        return (*slow, -(-fast // self.batch))
+
+    def batch_points(self, index: tuple[int, ...]) -> list[tuple[int, ...]]:
+        """The grid indices of the batch ``index`` (of :attr:`batch_shape`), in order."""
+        *slow, b = index
+        fast = self.shape[-1]
+        return [(*slow, k) for k in range(b * self.batch, min((b + 1) * self.batch, fast))]
+
+    def case_at(self, index: tuple[int, ...], side: str | None = None) -> dict[str, Any]:
+        """The case dictionary of the grid point ``index`` (and of one wheel)."""
+        return case_with(self.case, {n: float(self.axes[n][i])
+                                     for n, i in zip(self.axes, index, strict=True)}, side)
+
+    def case_at_values(self, values: dict[str, float], side: str | None = None
+                       ) -> dict[str, Any]:
+        """The case dictionary at any state (axis name -> value [SI]), e.g. between the
+        nodes."""
+        return case_with(self.case, values, side)
+
+    def identity(self) -> dict[str, Any]:
+        """What makes two tables the same: the case, the axes, the sides, the batch."""
+        return {"case": self.case, "axes": {n: [float(x) for x in v] for n, v in
+                                           self.axes.items()},
+                "sides": list(self.sides), "batch": self.batch}
+
+
+def case_with(case: dict[str, Any], values: dict[str, float], side: str | None = None
+              ) -> dict[str, Any]:
+    """A copy of the case dictionary with the axes' ``values`` (and the wheel ``side``)."""
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in case.items()}
+    for name, x in values.items():
+        ax = AXES[name]
+        tab = out[ax.table]
+        if ax.index is None:
+            tab[ax.key] = x
+            if name == "load":
+                tab.pop("penetration", None)
+        else:
+            c = list(tab.get(ax.key, (0.0, 0.0, 0.0)))
+            c[ax.index] = x
+            tab[ax.key] = c
+    if side is not None:
+        out["geometry"]["side"] = side
+    return out
+
+
+def axis_values(name: str, value: Any) -> np.ndarray:
+    """The node values of an axis from its ``[table]`` entry (module docstring)."""
+    where = f"[table] {name}"
+    if isinstance(value, dict):
+        if set(value) != {"values"}:
+            raise CaseError(f"{where}: an inline table takes only 'values', got "
+                            f"{sorted(value)}")
+        value = value["values"]
+        explicit = True
+    else:
+        explicit = not (isinstance(value, list) and len(value) == 3)
+    if not isinstance(value, list) or not value:
+        raise CaseError(f"{where} must be [start, stop, count] or a list of values, got "
+                        f"{value!r}")
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+               for v in value):
+        raise CaseError(f"{where}: values must be finite numbers, got {value!r}")
+    if explicit:
+        x = np.array(value, dtype=float)
+        if np.any(np.diff(x) <= 0):
+            raise CaseError(f"{where}: the values must be strictly increasing, got {value!r}")
+        return x
+    start, stop, count = float(value[0]), float(value[1]), value[2]
+    if count != int(count):
+        raise CaseError(f"{where}: [start, stop, count] needs an integer count, got {count!r} "
+                        "(three explicit values: { values = [a, b, c] })")
+    count = int(count)
+    if count < 1:
+        raise CaseError(f"{where}: count must be at least 1, got {count}")
+    if start > stop:
+        raise CaseError(f"{where}: start {start:g} > stop {stop:g}")
+    if count == 1 and start != stop:
+        raise CaseError(f"{where}: count 1 needs start = stop, got {start:g} and {stop:g}")
+    if count > 1 and start == stop:
+        raise CaseError(f"{where}: start = stop = {start:g} with count {count}: give "
+                        "count 1")
+    return np.linspace(start, stop, count)
+
+
+def parse_spec(raw: dict[str, Any]) -> TableSpec:
+    """A :class:`TableSpec` from the tables of a spec file (a case plus ``[table]``).
+
+    Raises
+    ------
+    CaseError
+        For a bad case, a missing or empty ``[table]``, an unknown axis, a bad range.
+    """
+    raw = dict(raw)
+    table = raw.pop("table", None)
+    if not isinstance(table, dict) or not table:
+        raise CaseError("a table spec needs a [table] with at least one axis (known: "
+                        f"{', '.join(AXES)})")
+    unknown = sorted(set(table) - set(AXES) - set(OPTIONS))
+    if unknown:
+        raise CaseError(f"[table]: unknown axis {', '.join(unknown)}; known: "
+                        f"{', '.join(AXES)} (and the option {', '.join(OPTIONS)})")
+    names = [k for k in table if k in AXES]
+    if not names:
+        raise CaseError(f"[table] has no axis (known: {', '.join(AXES)})")
+    axes = {n: axis_values(n, table[n]) for n in names}
+    geo = raw.get("geometry")
+    if not isinstance(geo, dict) or geo.get("type") != "wheel-rail":
+        raise CaseError("a table spec needs a wheel-rail case ([geometry] type = "
+                        "'wheel-rail')")
+    sides_given = "side" in geo
+    if any(AXES[n].table == "tangential" for n in names) and "tangential" not in raw:
+        raise CaseError("[table]: a creepage or spin axis needs a [tangential] table in the "
+                        "case")
+    if "load" in names and "penetration" in raw.get("normal", {}):
+        raise CaseError("[table] load: the case controls the penetration ([normal] "
+                        "penetration); a load axis needs [normal] load")
+    first = {n: float(v[0]) for n, v in axes.items()}
+    case = Case.from_dict(case_with(raw, first) if isinstance(raw.get("normal"), dict)
+                          else raw)
+    d = case.to_dict()
+    side = d["geometry"]["side"] if sides_given else "both"
+    sides = ("left", "right") if side == "both" else (side,)
+    d["geometry"]["side"] = side
+    shape = [len(v) for v in axes.values()]
+    if math.prod(shape) > MAX_POINTS:
+        raise CaseError(f"[table]: {math.prod(shape)} points; at most {MAX_POINTS}")
+    batch = table.get("batch", shape[-1])
+    if not isinstance(batch, int) or isinstance(batch, bool) or batch < 1:
+        raise CaseError(f"[table] batch must be an integer >= 1, got {batch!r}")
+    return TableSpec(case=d, axes=axes, sides=sides, batch=min(batch, shape[-1]))
+
+
+def load_spec(path: str | Path) -> TableSpec:
+    """Read a TOML table spec (a case file plus ``[table]``; SI units).
+
+    Profile files named by a relative path are looked up beside the spec first.
+
+    Raises
+    ------
+    CaseError
+        When the file does not exist, does not parse or is not a valid spec.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise CaseError(f"table spec not found: {p}")
+    try:
+        with p.open("rb") as f:
+            raw = tomllib.load(f)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as exc:
+        raise CaseError(f"table spec {p} is not valid TOML: {exc}") from None
+    raw.setdefault("name", p.stem)
+    geo = raw.get("geometry")
+    if isinstance(geo, dict):
+        for key in ("wheel", "rail"):
+            value = geo.get(key)
+            if isinstance(value, str) and value and not Path(value).is_absolute() \
+                    and (p.parent / value).is_file():
+                geo[key] = str((p.parent / value).resolve())
+    return parse_spec(raw)

@@ -1,0 +1,202 @@
+"""A wheelset step from a table: :class:`TableContact` is :class:`WheelsetContact` with the
+exact solve replaced by interpolation in a :class:`ContactTable` (the FMU's
+``contact_model = table``).
+
+``TableContact.open(path).solve(pose, loads=..., creepages=... | kinematics=...)`` returns
+the same :class:`~railcontact.timestep.WheelsetResult` as ``WheelsetContact.solve``, so
+whatever reads one (the FMU's outputs, ``fmu.variables.OUTPUTS``) reads the other. Each
+wheel is looked up at its own state: the lateral displacement and yaw of the pose, its own
+load, its creepages in its side frame (the right wheel's lateral and spin creepages change
+sign, as in :mod:`railcontact.timestep.wheelset`; the table holds both wheels in their side
+frames, as ``railcontact solve`` does). With ``kinematics`` the creepages are those of the
+contact point the table gives at the wheel's pose and load (first looked up at the middle of
+the creepage axes, then at the creepages found).
+
+Statuses: those of the table's nodes (the largest of the nodes used); a state outside the
+table's axes, or different from the case's value on an axis the table does not have, is
+out of range (all outputs of that wheel zero, the message says which input); a node not
+computed is out of range too. Penetration control (``vertical``) is not in a table (it
+is built by load): an error, as for bad input.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from time import perf_counter
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..errors import RailContactError, check_finite
+from ..geometry.track import SIDES, Pose
+from ..timestep.wheelset import (
+    NO_CONTACT,
+    OK,
+    OUT_OF_RANGE,
+    Kinematics,
+    WheelContact,
+    WheelsetResult,
+)
+from .interpolate import ContactTable
+from .spec import AXES
+from .variables import NOT_COMPUTED
+
+ABSENT_RTOL = 1e-9
+"""How close an input must be to the case's value on an axis the table does not have."""
+
+
+class TableContact:
+    """A wheelset's contact from a table, step by step (same interface as
+    :class:`~railcontact.timestep.WheelsetContact`: ``solve``, ``reset``).
+
+    Parameters
+    ----------
+    table
+        The :class:`ContactTable` (both wheels, or the wheel a state asks for).
+    method
+        ``"linear"`` or ``"cubic"``.
+    """
+
+    def __init__(self, table: ContactTable, method: str = "linear") -> None:
+        if method not in ("linear", "cubic"):
+            raise RailContactError(f"method must be 'linear' or 'cubic', got {method!r}")
+        self.table, self.method = table, method
+        case = table.case
+        creep = (case.get("tangential") or {}).get("creepage", (0.0, 0.0, 0.0))
+        fixed = {"lateral_displacement": case["geometry"]["lateral_displacement"],
+                 "yaw": case["geometry"]["yaw"], "load": case["normal"].get("load"),
+                 "creepage_x": creep[0], "creepage_y": creep[1], "spin": creep[2]}
+        self.fixed = fixed
+        order = list(_STATE)
+        self._take = [order.index(n) for n in table.axes]
+        self._absent = [(order.index(n), n, fixed[n]) for n in order if n not in table.axes]
+        self._j = {s: table.sides.index(s) for s in table.sides}
+        self.memory: dict[str, list] = {"left": [], "right": []}
+        """Always empty (a table keeps nothing between steps); there so that the FMU's
+        get/set state handles a table as it handles ``WheelsetContact``."""
+        if table.names != _FIELDS:  # _fill unpacks the values in this order
+            raise RailContactError(f"table quantities {table.names} are not {_FIELDS}")
+
+    @classmethod
+    def open(cls, path: str | Path, method: str = "linear") -> TableContact:
+        return cls(ContactTable.open(path), method)
+
+    def reset(self) -> None:
+        """Nothing to forget: a table has no memory between steps."""
+        self.memory = {"left": [], "right": []}
+
+    def solve(self, pose: Pose, *, loads: tuple[float, float] | None = None,
+              vertical: float | None = None,
+              creepages: tuple[tuple[float, float, float], tuple[float, float, float]]
+              | None = None, kinematics: Kinematics | None = None,
+              time: float | None = None, remember: bool = True) -> WheelsetResult:
+        """Both wheels from the table (arguments as ``WheelsetContact.solve``; ``time`` and
+        ``remember`` are accepted and unused). Without creepages and kinematics the
+        creepages are zero."""
+        t0 = perf_counter()
+        if vertical is not None or loads is None:
+            raise RailContactError("a contact table is built by wheel load: give loads "
+                                   "(left, right) [N] (penetration control is not in a table)")
+        ql, qr = loads
+        if creepages is not None:
+            (xl, el, pl), (xr, er, pr) = creepages
+        else:
+            xl = el = pl = xr = er = pr = 0.0
+        if not math.isfinite(ql + qr + xl + el + pl + xr + er + pr + pose.lateral + pose.yaw):
+            for name, v in (("left wheel load", ql), ("right wheel load", qr)):
+                check_finite(name, v, "N")
+            raise RailContactError(f"creepages must be finite numbers, got {creepages!r}")
+        kin = kinematics if creepages is None else None
+        left = self._wheel("left", pose, ql, (xl, el, pl), kin)
+        right = self._wheel("right", pose, qr, (xr, -er, -pr), kin)
+        return WheelsetResult(left, right, perf_counter() - t0)
+
+    def _lookup(self, j: int, state: tuple[float, ...]):
+        """(values, status, message) at ``state`` (in :data:`_STATE` order); values None
+        when out of range."""
+        for k, name, fixed in self._absent:
+            v = state[k]
+            if v != fixed and (fixed is None or not math.isclose(
+                    v, fixed, rel_tol=ABSENT_RTOL, abs_tol=1e-12)):
+                return None, OUT_OF_RANGE, (f"{name} = {v:g} {AXES[name].unit}: the "
+                                            f"table has no {name} axis; it holds "
+                                            f"{name} = {fixed} only")
+        x = [state[k] for k in self._take]
+        if self.method == "linear":
+            try:
+                vals, status = self.table.linear(x, j)
+            except RailContactError as exc:  # outside an axis
+                return None, OUT_OF_RANGE, str(exc)
+        else:
+            try:
+                r = self.table(dict(zip(self.table.axes, x)),  # noqa: B905 - same length
+                               self.table.sides[j], self.method)
+            except RailContactError as exc:
+                return None, OUT_OF_RANGE, str(exc)
+            vals, status = np.array([r.values[n] for n in self.table.names]), r.status
+        if status == NOT_COMPUTED:
+            return None, OUT_OF_RANGE, "the table's nodes around this state are not computed"
+        return vals, status, ""
+
+    def _wheel(self, side: str, pose: Pose, load: float, creep: tuple[float, float, float],
+               kin: Kinematics | None) -> WheelContact:
+        """One wheel; ``creep`` in its side frame."""
+        j = self._j.get(side)
+        if j is None:
+            return WheelContact(side=side, status=OUT_OF_RANGE,
+                                message=f"the table has no {side} wheel")
+        if load <= 0.0:
+            return WheelContact(side=side)
+        if kin is not None:  # the creepages of the table's contact point
+            mid = {n: 0.5 * (v[0] + v[-1]) for n, v in self.table.axes.items()
+                   if AXES[n].table == "tangential"}
+            state = (pose.lateral, pose.yaw, load, mid.get("creepage_x", self.fixed[
+                "creepage_x"]), mid.get("creepage_y", self.fixed["creepage_y"]),
+                mid.get("spin", self.fixed["spin"]))
+            vals, status, msg = self._lookup(j, state)
+            if vals is None:
+                return WheelContact(side=side, status=status, message=msg)
+            g = dict(zip(self.table.names, vals.tolist(), strict=True))
+            cp = SimpleNamespace(side=side, contact_angle=g["contact_angle"],
+                                 rolling_radius=g["rolling_radius"],
+                                 position=(0.0, g["contact_y"], 0.0))
+            xi, eta, phi = kin.creepage(cp, pose, self.table.case["geometry"]["wheel_radius"])
+            s = SIDES[side]
+            creep = (xi, s * eta, s * phi)
+        vals, status, msg = self._lookup(j, (pose.lateral, pose.yaw, load, *creep))
+        if vals is None:
+            return WheelContact(side=side, status=status, message=msg)
+        return self._fill(side, vals, status, creep)
+
+    def _fill(self, side: str, vals: np.ndarray, status: int, creep) -> WheelContact:
+        (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl) = vals.tolist()
+        if status != OK:
+            forces = (fn, fx, fy, mz, tx, ty, tz, ym, ar, pm, sl)
+            if status == NO_CONTACT or not all(map(math.isfinite, forces)):
+                return WheelContact(side=side, status=status, message=(
+                    "no contact" if status == NO_CONTACT else
+                    "the table has no value here (a node around it is not ok)"))
+            cx, cy, cz, ws, rs, ga, rr = (0.0 if not math.isfinite(a) else a
+                                          for a in (cx, cy, cz, ws, rs, ga, rr))
+        s = SIDES[side]
+        return WheelContact(
+            side=side, status=status,
+            message="ok (table)" if status == OK else "a node of the table did not converge",
+            creepages=[(creep[0], s * creep[1], s * creep[2])], normal_force=fn,
+            creep_force=(fx, fy), spin_moment=mz, track_force=(tx, ty, tz), yaw_moment=ym,
+            wheel_position=ws, rail_position=rs, lateral_position=cy, contact_angle=ga,
+            rolling_radius=rr, area=ar, max_pressure=pm, slip_area_ratio=sl,
+            contact_point=(cx, cy, cz))
+
+
+_STATE = ("lateral_displacement", "yaw", "load", "creepage_x", "creepage_y", "spin")
+"""The order of a wheel's state in :meth:`TableContact._lookup`."""
+_FIELDS = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment",
+           "force_longitudinal", "force_lateral", "force_vertical", "yaw_moment",
+           "contact_x", "contact_y", "contact_z", "wheel_position", "rail_position",
+           "contact_angle", "rolling_radius", "area", "max_pressure", "slip_area_ratio")
+_GEOMETRIC = ("contact_x", "contact_y", "contact_z", "wheel_position", "rail_position",
+              "contact_angle", "rolling_radius")
+
+__all__ = ["TableContact"]

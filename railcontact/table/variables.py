@@ -1,0 +1,78 @@
+"""The quantities a table holds per grid point and wheel, read from a
+:class:`~railcontact.timestep.WheelContact` (the time loop's and the FMU's per-wheel result)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, STATUS_NAMES
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One stored quantity (SI units): ``read(wheel)`` gives its value."""
+
+    name: str
+    unit: str
+    long_name: str
+    read: Callable[[Any], float]
+    geometric: bool = False
+    """Undefined (NaN) without contact; the forces are then zero."""
+
+
+QUANTITIES: tuple[Quantity, ...] = (
+    Quantity("normal_force", "N", "normal force on the wheel (sum over patches)",
+             lambda w: w.normal_force),
+    Quantity("creep_force_x", "N", "longitudinal creep force on the wheel, contact frame",
+             lambda w: w.creep_force[0]),
+    Quantity("creep_force_y", "N", "lateral creep force on the wheel, contact frame",
+             lambda w: w.creep_force[1]),
+    Quantity("spin_moment", "N m", "spin moment on the wheel about the contact normal",
+             lambda w: w.spin_moment),
+    Quantity("force_longitudinal", "N", "force of the rail on the wheel, track X",
+             lambda w: w.track_force[0]),
+    Quantity("force_lateral", "N", "force of the rail on the wheel, track Y",
+             lambda w: w.track_force[1]),
+    Quantity("force_vertical", "N", "force of the rail on the wheel, track Z",
+             lambda w: w.track_force[2]),
+    Quantity("yaw_moment", "N m", "moment of the rail on the wheel about the vertical "
+             "through the wheelset centre", lambda w: w.yaw_moment),
+    Quantity("contact_x", "m", "contact point of the main patch, track X",
+             lambda w: w.contact_point[0], True),
+    Quantity("contact_y", "m", "contact point of the main patch, track Y",
+             lambda w: w.contact_point[1], True),
+    Quantity("contact_z", "m", "contact point of the main patch, track Z",
+             lambda w: w.contact_point[2], True),
+    Quantity("wheel_position", "m", "wheel profile coordinate of the contact",
+             lambda w: w.wheel_position, True),
+    Quantity("rail_position", "m", "rail profile coordinate of the contact",
+             lambda w: w.rail_position, True),
+    Quantity("contact_angle", "rad", "contact angle (positive towards the flange)",
+             lambda w: w.contact_angle, True),
+    Quantity("rolling_radius", "m", "wheel radius at the contact point",
+             lambda w: w.rolling_radius, True),
+    Quantity("area", "m2", "contact area (sum over patches)", lambda w: w.area),
+    Quantity("max_pressure", "Pa", "maximum pressure", lambda w: w.max_pressure),
+    Quantity("slip_area_ratio", "1", "slip area / contact area", lambda w: w.slip_area_ratio),
+)
+"""The interpolated quantities (floats)."""
+
+COUNTS: tuple[Quantity, ...] = (
+    Quantity("n_patches", "1", "number of contact patches", lambda w: w.n_patches),
+    Quantity("normal_iterations", "1", "BEM normal iterations (all patches and passes)",
+             lambda w: w.normal_iterations),
+    Quantity("tangential_iterations", "1", "tangential BEM sweeps (all patches and passes)",
+             lambda w: w.tangential_iterations),
+    Quantity("load_passes", "1", "solves of the wheel (load loop)", lambda w: w.load_passes),
+)
+"""Work counters (integers, not interpolated)."""
+
+NOT_COMPUTED = -1
+"""``status`` of a point not computed yet (its values are NaN)."""
+STATUS_MEANINGS = {NOT_COMPUTED: "not computed", **STATUS_NAMES}
+"""The ``status`` codes: those of the time loop and the FMU, and -1."""
+
+__all__ = ["COUNTS", "NOT_COMPUTED", "NO_CONTACT", "NOT_CONVERGED", "OK", "OUT_OF_RANGE",
+           "QUANTITIES", "STATUS_MEANINGS", "Quantity"]

@@ -1,0 +1,411 @@
+"""Contact tables (issue 21): built on a 2-process Dask LocalCluster shared by the module's
+tests, on a coarse grid (2 mm elements) so that a point solves in milliseconds.
+
+The truth for the table is the exact solver itself, ``railcontact solve`` at each node:
+the table must hold what the solver gives there, whatever the batching, the warm starts,
+the workers, the resumes. The warm start changes only the solver's path, so with tight
+tolerances (1e-13) a warm-started node equals the cold ``railcontact solve`` to 1e-9; with
+the usual tolerances they differ by up to those tolerances (docs/tables.md).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed")
+pytest.importorskip("xarray")
+pytest.importorskip("zarr")
+
+from railcontact import solve  # noqa: E402
+from railcontact.cli import main  # noqa: E402
+from railcontact.errors import RailContactError  # noqa: E402
+from railcontact.table import ContactTable, load_spec  # noqa: E402
+from railcontact.table.store import open_dataset  # noqa: E402
+
+SPEC = """
+name = "table_test"
+[material]
+young = 206e9
+poisson = 0.28
+[geometry]
+type = "wheel-rail"
+wheel = "S1002"
+rail = "60E1"
+inclination = 0.024994793618920156
+[grid]
+dx = 0.002
+dy = 0.002
+[normal]
+load = 80e3
+estimate = "hertz"
+tolerance = 1e-13
+max_iterations = 2000
+[tangential]
+creepage = [0.0, 0.0, 0.0]
+friction = 0.3
+tolerance = 1e-13
+max_iterations = 5000
+[table]
+lateral_displacement = [-0.002, 0.002, 3]
+creepage_y = [0.0, 0.002, 2]
+load = [60e3, 80e3, 2]
+"""
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    from distributed import LocalCluster
+
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                           dashboard_address=":0")
+    yield cluster.scheduler_address
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory, scheduler):
+    d = tmp_path_factory.mktemp("table")
+    spec = d / "spec.toml"
+    spec.write_text(SPEC)
+    out = d / "t.zarr"
+    assert main(["table", "build", str(spec), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    return spec, out
+
+
+def _wheel(sol, side: str) -> dict[str, float]:
+    """The solver's per-wheel quantities (contact frame of the side, as the table)."""
+    ps = [p for p in sol.patches if p.geometry.side == side]
+    sgn = 1.0 if side == "left" else -1.0
+    main_p = max(ps, key=lambda p: p.normal.force)
+    return {"normal_force": sum(p.normal.force for p in ps),
+            "creep_force_x": sum(p.tangential.force[0] for p in ps),
+            "creep_force_y": sgn * sum(p.tangential.force[1] for p in ps),
+            "max_pressure": max(p.normal.max_pressure for p in ps),
+            "area": sum(p.normal.area for p in ps),
+            "contact_angle": main_p.geometry.contact_angle,
+            "rolling_radius": main_p.geometry.rolling_radius}
+
+
+def test_table_equals_solve_at_its_nodes(built):
+    spec_path, out = built
+    spec = load_spec(spec_path)
+    ds = open_dataset(out)
+    assert ds.sizes == {"lateral_displacement": 3, "creepage_y": 2, "load": 2, "side": 2,
+                        "batch": 1}
+    assert (ds["status"].values == 0).all() and ds["batch_done"].values.all()
+    assert ds.attrs["railcontact_version"] and ds.attrs["complete"] == 1
+    assert json.loads(ds.attrs["railcontact_table"])["case"] == spec.case
+    assert ds["normal_force"].attrs["units"] == "N" and ds["normal_force"].attrs["long_name"]
+    for index in np.ndindex(*spec.shape):
+        sol = solve(spec.case_at(index))  # railcontact solve: both wheels, cold
+        for side in ("left", "right"):
+            exact = _wheel(sol, side)
+            for name, value in exact.items():
+                got = float(ds[name].values[(*index, spec.sides.index(side))])
+                assert got == pytest.approx(value, rel=1e-9, abs=1e-9 * abs(value) + 1e-12), \
+                    (index, side, name)
+    # Coulomb: the creep force of a patch at most mu N (to the tangential tolerance)
+    fx, fy, n = (ds[q].values for q in ("creep_force_x", "creep_force_y", "normal_force"))
+    assert (np.hypot(fx, fy) <= 0.3 * n * (1 + 1e-9)).all()
+    # not a trivial table: the axes change the forces
+    fy = ds["creep_force_y"].sel(side="left").values
+    assert np.abs(fy[:, 1, :]).min() > 1e3 and np.abs(fy[:, 0, :]).max() < 1.0
+
+
+def test_rerun_computes_nothing(built, scheduler, capsys):
+    spec, out = built
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*") if p.is_file()
+              and not p.name.startswith(".")}
+    assert main(["table", "build", str(spec), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    assert "computed 0 " in capsys.readouterr().out
+    after = {p: p.stat().st_mtime_ns for p in before}
+    assert before == after  # no chunk rewritten
+
+
+def test_resume_completes_a_removed_batch(built, scheduler, tmp_path, capsys):
+    spec, out = built
+    cut = tmp_path / "cut.zarr"
+    shutil.copytree(out, cut)
+    # a run killed before batch (1, 0, 0) was written: its chunks and its marker are absent
+    for var in cut.iterdir():
+        for chunk in var.glob("1.0.0*"):
+            chunk.unlink()
+    ds = open_dataset(cut)
+    assert not ds["batch_done"].values[1, 0, 0]
+    assert (ds["status"].values[1, 0] == -1).all()  # a lost chunk reads "not computed"
+    assert np.isnan(ds["normal_force"].values[1, 0]).all()
+    assert main(["table", "build", str(spec), "-o", str(cut), "--scheduler", scheduler,
+                 "--quiet", "--resume"]) == 0
+    assert "computed 2 " in capsys.readouterr().out  # the batch's 2 points, nothing else
+    a, b = open_dataset(out), open_dataset(cut)
+    for name in ("normal_force", "creep_force_y", "max_pressure", "status"):
+        np.testing.assert_array_equal(a[name].values, b[name].values)
+    assert b.attrs["complete"] == 1
+
+
+def test_interpolation_at_nodes_and_between(built):
+    spec_path, out = built
+    spec = load_spec(spec_path)
+    table = ContactTable.open(out)
+    for index in np.ndindex(*spec.shape):
+        point = {n: float(spec.axes[n][i]) for n, i in zip(spec.names, index, strict=True)}
+        for side in spec.sides:
+            got, node = table(point, side), table.node(index, side)
+            assert got.status == 0
+            assert got.values == node.values  # exactly the node
+    # between nodes: between the neighbours' values (linear along load at a node elsewhere)
+    mid = table({"lateral_displacement": 0.0, "creepage_y": 0.002, "load": 70e3})
+    lo, hi = table.node((1, 1, 0)), table.node((1, 1, 1))
+    assert mid["normal_force"] == pytest.approx(0.5 * (lo["normal_force"] + hi["normal_force"]),
+                                                rel=1e-12)
+
+
+@pytest.mark.parametrize("point, match", [
+    ({"lateral_displacement": 0.0025, "creepage_y": 0.0, "load": 70e3},
+     "lateral_displacement = 0.0025 m is outside the table"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 50e3}, "load = 50000 N is outside"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0}, "missing load"),
+    ({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 7e4, "yaw": 0.0},
+     "not axes of this table: yaw"),
+    ({"lateral_displacement": float("nan"), "creepage_y": 0.0, "load": 7e4}, "outside"),
+])
+def test_outside_the_axes_is_an_error(built, point, match):
+    table = ContactTable.open(built[1])
+    with pytest.raises(RailContactError, match=match):
+        table(point)
+
+
+def test_cubic_needs_four_nodes(built):
+    table = ContactTable.open(built[1])
+    with pytest.raises(RailContactError, match="at least 4 nodes"):
+        table({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 7e4}, method="cubic")
+
+
+def test_bad_input(built, tmp_path, capsys):
+    spec, out = built
+    text = Path(spec).read_text()
+    cases = {
+        "load = [80e3, 60e3, 2]": "start 80000 > stop 60000",
+        "load = [60e3, 80e3, 0]": "count must be at least 1",
+        "speed = [1.0, 2.0, 2]": "unknown axis speed",
+    }
+    for k, (line, match) in enumerate(cases.items()):
+        bad = tmp_path / f"bad{k}.toml"
+        bad.write_text(text.replace("load = [60e3, 80e3, 2]", line))
+        assert main(["table", "build", str(bad), "-o", str(tmp_path / "b.zarr"),
+                     "--quiet"]) == 2
+        assert match in capsys.readouterr().err
+    # another case into the same store: an error, the store untouched
+    other = tmp_path / "other.toml"
+    other.write_text(text.replace("friction = 0.3", "friction = 0.25"))
+    assert main(["table", "build", str(other), "-o", str(out), "--quiet"]) == 2
+    assert "another case or grid (differs in: case tangential)" in capsys.readouterr().err
+    # an unreachable scheduler: a clear error, and no store left behind
+    new = tmp_path / "new.zarr"
+    assert main(["table", "build", str(spec), "-o", str(new), "--quiet",
+                 "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
+    assert not new.exists()
+    assert main(["table", "build", str(spec), "-o", str(new), "--resume", "--quiet"]) == 2
+    assert "no table at" in capsys.readouterr().err
+
+
+def test_show(built, tmp_path, capsys):
+    _, out = built
+    plot = tmp_path / "t.png"
+    assert main(["table", "show", str(out), "--plot", str(plot)]) == 0
+    text = capsys.readouterr().out
+    assert "batches done 6/6" in text and "left   ok 12" in text and "right  ok 12" in text
+    assert "lateral_displacement   [m]     3 from -0.002 to 0.002" in text
+    assert plot.stat().st_size > 1000
+
+
+def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
+    """The FMU's table mode (railcontact.table.step.TableContact): a wheelset step at a
+    node returns that node's values for each wheel in the FMU's result record (the right
+    wheel's lateral creepage in its contact frame is the table's with the sign changed);
+    outside the table: status out of range, zero outputs, a message naming the input."""
+    from railcontact.fmu.variables import OUTPUTS
+    from railcontact.geometry.track import Pose
+    from railcontact.table.step import TableContact
+
+    tc = TableContact.open(built[1])
+    table = tc.table
+    index = (2, 1, 0)
+    y, eta, q = (float(table.axes[n][i]) for n, i in zip(table.axes, index, strict=True))
+    res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, q), creepages=((0.0, eta, 0.0),
+                                                               (0.0, -eta, 0.0)))
+    assert res.status == 0
+    outputs = {v.name: v.value(res) for v in OUTPUTS}
+    for side in ("left", "right"):
+        node = table.node(index, side)
+        assert outputs[f"normal_force_{side}"] == node["normal_force"]
+        assert outputs[f"creep_force_y_{side}"] == node["creep_force_y"]
+        assert outputs[f"force_lateral_{side}"] == node["force_lateral"]
+        assert outputs[f"contact_angle_{side}"] == node["contact_angle"]
+        assert outputs[f"contact_lateral_position_{side}"] == node["contact_y"]
+        assert outputs[f"status_{side}"] == 0
+    # the two wheels push the wheelset opposite ways along the creepage
+    assert outputs["creep_force_y_left"] * outputs["creep_force_y_right"] < 0
+    # outside the load axis on the right wheel: that wheel out of range, the left solved
+    res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, 1.5 * q), creepages=((0.0, eta, 0.0),
+                                                                     (0.0, -eta, 0.0)))
+    assert (res.left.status, res.right.status, res.status) == (0, 3, 3)
+    assert "load = 90000 N is outside the table [60000, 80000]" in res.right.message
+    assert res.right.normal_force == 0.0
+    # a yaw the table does not have (its case's yaw is 0): out of range
+    res = tc.solve(Pose(y, 1e-3, 0.0), loads=(q, q), creepages=((0.0, eta, 0.0),) * 2)
+    assert res.status == 3 and "no yaw axis" in res.left.message
+    # kinematic creepages: the spin of a coned contact, which this table has no axis for
+    from railcontact.timestep.wheelset import Kinematics
+
+    res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, q), kinematics=Kinematics(30.0))
+    assert res.status == 3 and "no creepage_x axis" in res.left.message
+    with pytest.raises(RailContactError, match="by wheel load"):
+        tc.solve(Pose(y, 0.0, 0.0), vertical=-1e-4)
+
+
+def test_failed_points_have_their_status(scheduler, tmp_path, capsys):
+    """A BEM that stops after 2 iterations (not converged: values kept, status 1) and a
+    wheelset 30 mm off centre (the wheel has climbed its flange: out of range, status 3,
+    NaN values): recorded with their messages; no NaN without a status."""
+    text = SPEC.replace("max_iterations = 2000", "max_iterations = 2").replace(
+        'lateral_displacement = [-0.002, 0.002, 3]\ncreepage_y = [0.0, 0.002, 2]\n'
+        'load = [60e3, 80e3, 2]', "lateral_displacement = { values = [0.0, 0.03] }")
+    spec = tmp_path / "fail.toml"
+    spec.write_text(text)
+    out = tmp_path / "fail.zarr"
+    assert main(["table", "build", str(spec), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    assert "4 point-wheel(s) not ok" in capsys.readouterr().out
+    ds = open_dataset(out)
+    status = ds["status"].values
+    assert status.tolist() == [[1, 1], [3, 3]]
+    f = ds["normal_force"].values
+    assert np.isfinite(f[0]).all() and np.isnan(f[1]).all()
+    for name in ("normal_force", "creep_force_y", "contact_angle", "max_pressure"):
+        assert not (np.isnan(ds[name].values) & (status == 0)).any()
+    assert main(["table", "show", str(out)]) == 0
+    shown = capsys.readouterr().out
+    assert "left   not converged 1, out of range 1" in shown
+    assert "climbed its flange" in shown and "did not converge" in shown
+    with pytest.raises(RailContactError, match="outside the table"):
+        ContactTable.open(out)({"lateral_displacement": 0.031})
+    r = ContactTable.open(out)({"lateral_displacement": 0.01})
+    assert r.status == 3 and math.isnan(r["normal_force"])
+
+
+def test_cubic_follows_the_creep_curve_between_nodes(scheduler, tmp_path):
+    """Along the lateral creepage (5 nodes, 0 .. 4e-3: from linear creep to full slip) the
+    cubic spline stays within 1 % of mu Q of exact solves between the nodes where the creep
+    curve bends, closer than the linear interpolation; at full slip the force is mu N."""
+    text = SPEC.replace('lateral_displacement = [-0.002, 0.002, 3]\ncreepage_y = [0.0, 0.002, 2]'
+                        '\nload = [60e3, 80e3, 2]', "creepage_y = [0.0, 0.004, 5]")
+    text = text.replace("tolerance = 1e-13", "tolerance = 1e-6")
+    spec_path = tmp_path / "curve.toml"
+    spec_path.write_text(text)
+    out = tmp_path / "curve.zarr"
+    assert main(["table", "build", str(spec_path), "-o", str(out), "--scheduler", scheduler,
+                 "--quiet"]) == 0
+    from railcontact.table.solve import solve_point
+
+    spec = load_spec(spec_path)
+    table = ContactTable.open(out)
+    node = table.node((4,), "left")
+    assert abs(node["creep_force_y"]) == pytest.approx(0.3 * node["normal_force"], rel=1e-3)
+    mu_q = 0.3 * 80e3
+    for eta in (0.0005, 0.0015, 0.0025):
+        exact, _ = solve_point(spec.case_at_values({"creepage_y": eta}), "left")
+        lin = table({"creepage_y": eta}, "left")["creep_force_y"]
+        cub = table({"creepage_y": eta}, "left", method="cubic")["creep_force_y"]
+        e_lin, e_cub = abs(lin - exact.creep_force[1]), abs(cub - exact.creep_force[1])
+        assert e_cub < 0.01 * mu_q and e_cub < e_lin, (eta, e_lin, e_cub)
+
+
+@pytest.mark.parametrize("entry, match", [
+    ("[-0.002, 0.002, 2.5]", "needs an integer count, got 2.5"),
+    ("[0.002, 0.001]", "strictly increasing"),
+    ("{ values = [0.0, 0.0] }", "strictly increasing"),
+    ("[0.0, 0.0, 3]", "give count 1"),
+    ("[0.0, 0.001, 1]", "count 1 needs start = stop"),
+    ('["a", 0.001, 2]', "finite numbers"),
+    ("{ value = [0.0] }", "takes only 'values'"),
+])
+def test_bad_axes(entry, match):
+    from railcontact.errors import CaseError
+    from railcontact.table import parse_spec
+    from railcontact.table.spec import tomllib
+
+    raw = tomllib.loads(SPEC.replace("lateral_displacement = [-0.002, 0.002, 3]",
+                                     f"lateral_displacement = {entry}"))
+    with pytest.raises(CaseError, match=match):
+        parse_spec(raw)
+    ok = tomllib.loads(SPEC.replace("lateral_displacement = [-0.002, 0.002, 3]",
+                                    "lateral_displacement = [-0.002, 0.002, 3.0]"))
+    assert parse_spec(ok).shape == (3, 2, 2)
+
+
+def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, tmp_path):
+    """The FMU with contact_model = table (fmu_src/slave.py making TableContact its
+    contact, docs/tables.md) through fmpy: every node of the table, both wheels, exactly;
+    outside the table status 3. Runs once the FMU has the mode (wired with the FMU's
+    enumerations, after issue 21's merge)."""
+    from railcontact.fmu import variables as V
+
+    params = {v.name: v for v in V.PARAMETERS}
+    if "table_file" not in params or "contact_model" not in params:
+        pytest.skip("the FMU has no contact_model = table yet (the slave calls "
+                    "railcontact.table.TableContact, see docs/tables.md)")
+    fmpy = pytest.importorskip("fmpy")
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.model_description import read_model_description
+
+    from railcontact.fmu import build_fmu
+
+    fmu = build_fmu(tmp_path / "RailContact.fmu", [])
+    md = read_model_description(str(fmu))
+    unzipped = fmpy.extract(str(fmu))
+    var = {v.name: v for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="table")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    mode = var["contact_model"]
+    if mode.type == "String":
+        s.setString([mode.valueReference], ["table"])
+    else:  # an enumeration: the value of its item "table"
+        items = {i.name: int(i.value) for i in mode.declaredType.items}
+        s.setInteger([mode.valueReference], [items["table"]])
+    s.setString([var["table_file"].valueReference], [str(built[1].resolve())])
+    s.exitInitializationMode()
+    table = ContactTable.open(built[1])
+    t = 0.0
+    for index in np.ndindex(*(len(v) for v in table.axes.values())):
+        y, eta, q = (float(table.axes[n][i]) for n, i in zip(table.axes, index, strict=True))
+        inputs = {"lateral_displacement": y, "load_left": q, "load_right": q,
+                  "eta_left": eta, "eta_right": -eta}
+        s.setReal([var[k].valueReference for k in inputs], list(inputs.values()))
+        s.doStep(t, 1e-3)
+        t += 1e-3
+        for side in ("left", "right"):
+            node = table.node(index, side)
+            for name in ("normal_force", "creep_force_y", "contact_angle"):
+                got = s.getReal([var[f"{name}_{side}"].valueReference])[0]
+                assert got == node[name], (index, side, name)
+            assert s.getInteger([var[f"status_{side}"].valueReference])[0] == 0
+    s.setReal([var["lateral_displacement"].valueReference], [0.01])
+    s.doStep(t, 1e-3)  # a warning, not an exception
+    assert s.getInteger([var["status"].valueReference])[0] == 3
+    s.terminate()
+    s.freeInstance()
