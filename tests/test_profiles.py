@@ -87,10 +87,54 @@ def test_rail_arcs_and_head_width():
     flank = r.y[np.abs(r.slope(r.y) + 20.0) < 1e-6]
     # 72 mm head of 60E1 at the flank tangent points (within the sampling)
     assert 2 * flank[flank > 0].min() == pytest.approx(72.0e-3, abs=0.1e-3)
-    cn = builtin_profile("CN60")
-    flank = cn.y[np.abs(cn.slope(cn.y) + 20.0) < 1e-6]
-    assert 2 * flank[flank > 0].min() == pytest.approx(73.0e-3, abs=0.1e-3)
     assert builtin_profile("UIC60").name == "60E1"
+
+
+def _fit_circle(y, z):
+    """Least-squares circle through points (Kasa's algebraic fit): centre and radius."""
+    a = np.column_stack([2 * y, 2 * z, np.ones_like(y)])
+    (yc, zc, c), *_ = np.linalg.lstsq(a, y**2 + z**2, rcond=None)
+    return np.array([yc, zc]), math.sqrt(c + yc**2 + zc**2)
+
+
+def test_cn60_head_dimensions():
+    """CN60 (TB/T 2344): R300, R80 and R13 recovered by fitting circles to the sampled head
+    between its tangent points, each pair of arcs tangent (centres R_i - R_j apart, the
+    joint on the line of centres), the R13 tangent to a 1:20 side, the head 73 mm wide at
+    its widest point; and the derived centres against the one public description found
+    (helayht/grind_car StandardRailProfileSolver.cs: R80 centre (7.3, 95.88 - 176), R80 to
+    |y| = 25.35, R13 centre (22.42, 161.15 - 176) mm)."""
+    from railcontact.geometry.profiles import cn60_head
+
+    cn = builtin_profile("CN60")
+    h = cn60_head()
+    edges = [0.0, h.crown_end[0], h.r80_end[0], h.side_top[0]]
+    fits = []
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        y = np.linspace(lo + 0.2, hi - 0.2, 200)  # [mm], inside each arc
+        fits.append(_fit_circle(y, cn.height(y * 1e-3) * 1e3))
+    for (_c, r), r_ref in zip(fits, (300.0, 80.0, 13.0), strict=True):
+        assert r == pytest.approx(r_ref, rel=2e-4)
+    assert fits[0][0][0] == pytest.approx(0.0, abs=1e-3)  # R300 centred below the crown
+    for (ca, ra), (cb, rb), yj in zip(fits[:-1], fits[1:], edges[1:-1], strict=True):
+        assert np.linalg.norm(ca - cb) == pytest.approx(ra - rb, abs=2e-3)  # tangent
+        joint = np.array([yj, cn.height(yj * 1e-3) * 1e3])
+        u, v = (joint - ca) / ra, (joint - cb) / rb  # the joint's normal seen from each arc
+        assert np.linalg.norm(u - v) < 1e-4
+    # the side: a 1:20 line 13 mm from R13's centre, reached with the same slope
+    ys = np.linspace(h.side_top[0] + 0.05, h.side_bottom[0], 50)
+    k, b = np.polyfit(ys, cn.height(ys * 1e-3) * 1e3, 1)
+    assert k == pytest.approx(-20.0, rel=1e-6)
+    c13 = fits[2][0]
+    assert abs(k * c13[0] - c13[1] + b) / math.hypot(k, 1.0) == pytest.approx(13.0, abs=2e-3)
+    # widest point: 73 mm, at the bottom of the side, within the 48.5 mm head height
+    assert 2 * cn.bounds[1] == pytest.approx(73.0e-3, abs=1e-9)
+    assert -48.5e-3 < cn.height(cn.bounds[1]) < -30e-3
+    # against grind_car's rounded arcs (it gives 0.01-0.05 mm)
+    assert np.allclose(fits[1][0], [7.3, 95.88 - 176.0], atol=0.05)
+    assert h.r80_end[0] == pytest.approx(25.35, abs=0.05)
+    assert np.allclose(fits[2][0], [22.42, 161.15 - 176.0], atol=0.01)
+    assert builtin_profile("CHN60").name == "CN60"
 
 
 def test_left_right_symmetric_rail():

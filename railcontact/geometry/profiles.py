@@ -18,14 +18,14 @@ Built-in profiles
 ``60E1``   (alias ``UIC60``) EN 13674-1 head: R300 crown to |y| = 10.228 mm, tangent R80 to
            |y| = 26.0265 mm, tangent R13 until the 1:20 flank direction, then the flank
            (transcription of the standard in ``algorithms.md`` Sec. 7.2a).
-``CN60``   Chinese 60 kg/m rail (TB/T 2344). **Uncertain**: the drawing was not available.
-           Modelled as the 60E1 construction (R300 crown to |y| = 10.228 mm, tangent R80,
-           tangent R13, 1:20 flank) with the R80/R13 transition moved so that the head is
-           73 mm wide at the flank tangent point, the published CN60 head width (commercial
-           data sheets: head width 73 mm, head height 48.5 mm, rail height 176 mm; the
-           arcs' tangent points of the drawing were not available). Identical to 60E1 up to
-           |y| = 26 mm, 0.18 mm higher at 30 mm (``scripts/compare_rails.py``). Use a
-           profile file when the exact CN60 geometry matters. ``S1002CN`` is S1002.
+``CN60``   (aliases ``CHN60``, ``60KG``) Chinese 60 kg/m rail (TB/T 2344, GB 2585): tangent
+           arcs R300 (crown, to |y| = 10 mm) - R80 - R13, the R13 meeting a 1:20 head side
+           at |y| = 35.4 mm (70.8 mm across), the side running down until the head is
+           73 mm wide (its widest point, 36.2 mm below the crown). Cited: the radii and
+           the 73 mm head width (section data); the two extents (10 and 35.4 mm) and the
+           1:20 side are those of the only public description found, the rail-grinding
+           code ``helayht/grind_car`` (``StandardRailProfileSolver.cs``), not the
+           drawing; the tangent points are derived (``_cn60``). ``S1002CN`` is S1002.
 
 Interpolation: a C^2 cubic spline through the points (exact for the built-ins, which are
 sampled every 0.05 mm from their definitions); height, slope and curvature follow from it.
@@ -187,14 +187,12 @@ def _s1002() -> Profile:
     return Profile(s * 1e-3, s1002_radius_increment(s) * 1e-3, "wheel", "S1002")
 
 
-def _arc_rail(name: str, y1: float, y2: float | None, head_width: float | None,
-              depth: float = 20.0) -> Profile:
+def _arc_rail(name: str, y1: float, y2: float, depth: float = 20.0) -> Profile:
     """Rail head from tangent arcs R300 - R80 - R13 and a 1:20 flank [mm in, m out].
 
-    R300 centred below the crown to |y| = y1; R80 tangent to it up to |y| = y2 (or, when
-    ``head_width`` is given, up to the transition that makes the head that wide at the flank
-    tangent point); R13 tangent to R80 until the flank direction (1, -20); then the flank
-    down to ``depth`` below the crown.
+    R300 centred below the crown to |y| = y1; R80 tangent to it up to |y| = y2; R13 tangent
+    to R80 until the flank direction (1, -20); then the flank down to ``depth`` below the
+    crown.
     """
     r1, r2, r3 = 300.0, 80.0, 13.0
     c1 = np.array([0.0, -r1])
@@ -208,10 +206,6 @@ def _arc_rail(name: str, y1: float, y2: float | None, head_width: float | None,
         p3 = c3 + r3 * n
         return p2, c3, p3
 
-    if head_width is not None:
-        from scipy.optimize import brentq
-
-        y2 = brentq(lambda v: r13_part(v)[2][0] - head_width / 2, y1 + 1.0, c2[0] + r2 - 1.0)
     p2, c3, p3 = r13_part(float(y2))
     y_end = p3[0] + (depth + p3[1]) / 20.0  # flank: z = p3z - 20 (y - p3y)
     yy = np.unique(np.concatenate([
@@ -228,10 +222,74 @@ def _arc_rail(name: str, y1: float, y2: float | None, head_width: float | None,
     return Profile(y_all * 1e-3, z_of(y_all) * 1e-3, "rail", name)
 
 
+CN60_CROWN_HALF_WIDTH = 10.0
+"""|y| [mm] where the CN60 crown R300 ends (``helayht/grind_car``; drawing not found)."""
+CN60_SIDE_TANGENT_HALF_WIDTH = 35.4
+"""|y| [mm] where the CN60 R13 meets the 1:20 head side (``helayht/grind_car``)."""
+CN60_HEAD_WIDTH = 73.0
+"""Published CN60 head width [mm], its widest point (rail section data)."""
+
+
+@dataclass(frozen=True)
+class ArcHead:
+    """Tangent points and arc centres of a R300 - R80 - R13 - 1:20 rail head [mm], uncanted,
+    origin at the crown, z up; the side runs from ``side_top`` down to ``side_bottom``."""
+
+    crown_end: tuple[float, float]
+    r80_centre: tuple[float, float]
+    r80_end: tuple[float, float]
+    r13_centre: tuple[float, float]
+    side_top: tuple[float, float]
+    side_bottom: tuple[float, float]
+
+
+def cn60_head() -> ArcHead:
+    """The CN60 head's tangent points, derived from the radii R300, R80, R13, the crown
+    extent, the 1:20 side's tangent point and the 73 mm head width (see the module notes).
+
+    R80's centre lies on the line from the R300 tangent point to R300's centre, 80 mm
+    from the point; R13's centre lies 13 mm inside the 1:20 side along its normal and
+    67 mm (= 80 - 13) from R80's centre; the R80/R13 tangent point lies on the line of
+    the two centres; the side widens at 1:20 until the head is 73 mm wide.
+    """
+    r1, r2, r3 = 300.0, 80.0, 13.0
+    y1 = CN60_CROWN_HALF_WIDTH
+    c1 = np.array([0.0, -r1])
+    p1 = np.array([y1, -r1 + math.sqrt(r1**2 - y1**2)])
+    c2 = p1 + (r2 / r1) * (c1 - p1)
+    n = np.array([20.0, 1.0]) / math.sqrt(401.0)  # outward normal of the 1:20 side
+    c3y = CN60_SIDE_TANGENT_HALF_WIDTH - r3 * n[0]
+    c3 = np.array([c3y, c2[1] + math.sqrt((r2 - r3) ** 2 - (c3y - c2[0]) ** 2)])
+    p2 = c2 + r2 * (c3 - c2) / (r2 - r3)
+    p3 = c3 + r3 * n
+    y_end = CN60_HEAD_WIDTH / 2
+    p4 = np.array([y_end, p3[1] - 20.0 * (y_end - p3[0])])
+    return ArcHead(*(tuple(map(float, v)) for v in (p1, c2, p2, c3, p3, p4)))
+
+
+def _cn60() -> Profile:
+    """The CN60 head of :func:`cn60_head`, sampled every 0.05 mm on the arcs [m]."""
+    h = cn60_head()
+    c2, c3 = np.array(h.r80_centre), np.array(h.r13_centre)
+    y1, y2, y3 = h.crown_end[0], h.r80_end[0], h.side_top[0]
+    yy = np.unique(np.concatenate([np.arange(0.0, y3, 0.05), [y1, y2],
+                                   np.linspace(y3, h.side_bottom[0], 100)]))
+
+    def z_of(y):
+        y = np.abs(y)
+        return np.where(y <= y1, -300.0 + np.sqrt(300.0**2 - y**2),
+               np.where(y <= y2, c2[1] + np.sqrt(np.clip(80.0**2 - (y - c2[0]) ** 2, 0, None)),
+               np.where(y <= y3, c3[1] + np.sqrt(np.clip(13.0**2 - (y - c3[0]) ** 2, 0, None)),
+                        h.side_top[1] - 20.0 * (y - y3))))
+
+    y_all = np.concatenate([-yy[:0:-1], yy])
+    return Profile(y_all * 1e-3, z_of(y_all) * 1e-3, "rail", "CN60")
+
+
 _BUILTIN = {
     "S1002": _s1002,
-    "60E1": lambda: _arc_rail("60E1", 10.228, 26.0265, None),
-    "CN60": lambda: _arc_rail("CN60", 10.228, None, 73.0),
+    "60E1": lambda: _arc_rail("60E1", 10.228, 26.0265),
+    "CN60": _cn60,
 }
 _ALIASES = {"UIC60": "60E1", "S1002CN": "S1002", "60KG": "CN60", "CHN60": "CN60"}
 
