@@ -31,6 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+try:
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from .track import SIDES, Pose, Track, Wheelset
@@ -287,6 +292,8 @@ N_S = 1001
 """Lateral samples of a patch's tangent plane (0.05 mm apart)."""
 K0 = N_S // 2
 """The sample at the patch origin, s = 0."""
+_S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
+_S_SAMPLES.flags.writeable = False
 
 
 def _tangent_frame(track: Track, ws: Wheelset, eta: np.ndarray, u: np.ndarray,
@@ -295,25 +302,85 @@ def _tangent_frame(track: Track, ws: Wheelset, eta: np.ndarray, u: np.ndarray,
     inclined at ``gamma``: at the samples ``s`` across the plane, the distance ``f(s)`` of
     the wheel (trace points ``eta, u, z``) above the rail normal to the plane [m] (negative
     where they overlap; NaN where the profiles end), ``A(s)`` [1/m], the wheel profile
-    coordinate and the rail surface point (u, Z) [m] there."""
+    coordinate and the rail surface point (u, Z) [m] there.
+
+    Each profile is taken along its branch through the point nearest ``u_c`` on which s
+    increases (:func:`_branch`); :func:`_in_plane` rotates and interpolates in one compiled
+    pass over the samples between the ``s``."""
     rail = track.side_rail
     cg, sg = math.cos(gamma), math.sin(gamma)
-    s_w = (u - u_c) * cg + (z - z_c) * sg
-    n_w = -(u - u_c) * sg + (z - z_c) * cg
     ur, zr = rail.samples(N_RAIL)
-    s_r = (ur - u_c) * cg + (zr - z_c) * sg
-    n_r = -(ur - u_c) * sg + (zr - z_c) * cg
-    s = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
+    s = _S_SAMPLES
     kw = int(np.argmin(np.abs(u - u_c)))
     kr = int(np.argmin(np.abs(ur - u_c)))
-    f = _branch_interp(s, s_w, n_w, kw) - _branch_interp(s, s_r, n_r, kr)
+    n_w, eta_s, _ = _in_plane(s, u, z, eta, eta, u_c, z_c, cg, sg, kw)
+    n_r, ur_s, zr_s = _in_plane(s, ur, zr, ur, zr, u_c, z_c, cg, sg, kr)
+    f = n_w - n_r
     # A(s) from the wheel at the same s
-    eta_s = _branch_interp(s, s_w, eta, kw)
     S_s = ws.profile_coordinate(np.where(np.isfinite(eta_s), eta_s, eta_c))
     beta = np.arctan(ws.wheel.slope(S_s))
     a_of_s = np.cos(beta) / (2 * (ws.radius + ws.wheel.height(S_s)))
-    return (s, f, a_of_s, np.where(np.isfinite(eta_s), S_s, np.nan),
-            _branch_interp(s, s_r, ur, kr), _branch_interp(s, s_r, zr, kr))
+    return (s, f, a_of_s, np.where(np.isfinite(eta_s), S_s, np.nan), ur_s, zr_s)
+
+
+def _in_plane(s: np.ndarray, u: np.ndarray, z: np.ndarray, a: np.ndarray, b: np.ndarray,
+              u_c: float, z_c: float, cg: float, sg: float, k: int) -> np.ndarray:
+    """Along the branch through sample ``k`` of the curve (u, z) on which its coordinate
+    s' = (u - u_c) cg + (z - z_c) sg increases (:func:`_branch`), the curve's distance
+    n = -(u - u_c) sg + (z - z_c) cg from the plane and the quantities ``a`` and ``b`` at
+    its samples, linearly interpolated at the increasing ``s`` [m] (NaN off the branch) as
+    :func:`np.interp` does on the branch; only the points between the ``s`` are rotated.
+    Returns (3, len(s)): n, a, b."""
+    out = np.empty((3, s.size))
+    _interp_in_plane_numba(s, u, z, a, b, float(u_c), float(z_c), float(cg), float(sg),
+                           int(k), out)
+    return out
+
+
+def _interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
+    """:func:`_in_plane`'s loop (``out`` filled)."""
+    n = u.size
+    lo = k  # the samples of the branch that bracket s: lo ... hi
+    s_lo = (u[k] - u_c) * cg + (z[k] - z_c) * sg
+    s_k = s_lo
+    while lo > 0 and s_lo > s[0]:
+        s_prev = (u[lo - 1] - u_c) * cg + (z[lo - 1] - z_c) * sg
+        if not s_prev < s_lo:  # the branch ends: s' stops increasing towards k
+            break
+        lo -= 1
+        s_lo = s_prev
+    hi = k
+    s_hi = s_k
+    while hi < n - 1 and s_hi < s[s.size - 1]:
+        s_next = (u[hi + 1] - u_c) * cg + (z[hi + 1] - z_c) * sg
+        if not s_next > s_hi:
+            break
+        hi += 1
+        s_hi = s_next
+    j = lo
+    x0 = s_lo
+    x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg if hi > lo else s_lo
+    for i in range(s.size):
+        x = s[i]
+        if hi == lo or x < s_lo or x > s_hi:
+            out[0, i] = math.nan
+            out[1, i] = math.nan
+            out[2, i] = math.nan
+            continue
+        while j < hi - 1 and x1 <= x:  # the segment [x0, x1) that holds x
+            j += 1
+            x0 = x1
+            x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg
+        t = (x - x0) / (x1 - x0)
+        n0 = -(u[j] - u_c) * sg + (z[j] - z_c) * cg
+        n1 = -(u[j + 1] - u_c) * sg + (z[j + 1] - z_c) * cg
+        out[0, i] = n0 + t * (n1 - n0)
+        out[1, i] = a[j] + t * (a[j + 1] - a[j])
+        out[2, i] = b[j] + t * (b[j + 1] - b[j])
+
+
+_interp_in_plane_numba = (numba.njit(cache=True)(_interp_in_plane) if numba is not None
+                          else _interp_in_plane)
 
 
 WEIGHT_POWER = 2.5
