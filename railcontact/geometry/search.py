@@ -151,26 +151,35 @@ def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
     return cached
 
 
-def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """Trace points of one wheel in the side frame: eta, X, u, Z, r, dr/deta."""
-    sgn = SIDES[side]
-    psi, phi = sgn * pose.yaw, sgn * pose.roll
-    u_ws = sgn * pose.lateral
-    eta, r, dr = _wheel_samples(ws)
-    cz, sz = math.cos(psi), math.sin(psi)
-    cx, sx = math.cos(phi), math.sin(phi)
-    if psi == 0.0:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-        x = np.zeros_like(eta)
-        y, zw = eta, -r
-    else:
-        sin_t = np.clip(-math.tan(psi) * dr, -1.0, 1.0)
-        rc = r * np.sqrt(1.0 - sin_t**2)
-        rs = r * sin_t
-        x = cz * rs - sz * eta  # yaw about the vertical axis ...
-        y = sz * rs + cz * eta
-        zw = -rc
-    # ... then roll about the track axis
-    return eta, x, cx * y - sx * zw + u_ws, sx * y + cx * zw + ws.radius, r, dr
+def _trace_on_rail(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, out):
+    """Trace points of one wheel moved into the side frame (yaw about the vertical axis,
+    then roll about the track axis), those with ``lo < u < hi`` (above the rail) written
+    to ``out`` (4, n): eta, X, u, Z; returns how many."""
+    m = 0
+    for i in range(eta.size):
+        if yawed:
+            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
+            rc = r[i] * math.sqrt(1.0 - sin_t * sin_t)
+            rs = r[i] * sin_t
+            x = cz * rs - sz * eta[i]
+            y = sz * rs + cz * eta[i]
+            zw = -rc
+        else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+            x = 0.0
+            y = eta[i]
+            zw = -r[i]
+        u = cx * y - sx * zw + u_ws
+        if lo < u < hi:
+            out[0, m] = eta[i]
+            out[1, m] = x
+            out[2, m] = u
+            out[3, m] = sx * y + cx * zw + radius
+            m += 1
+    return m
+
+
+_trace_on_rail_numba = (numba.njit(cache=True)(_trace_on_rail) if numba is not None
+                        else _trace_on_rail)
 
 
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -180,14 +189,19 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
     """
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
-    eta, x, u, z, _, _ = _trace(track, ws, pose, side)
+    sgn = SIDES[side]
+    psi, phi = sgn * pose.yaw, sgn * pose.roll
+    eta, r, dr = _wheel_samples(ws)
     rail = track.side_rail
     lo, hi = rail.bounds
-    keep = (u > lo) & (u < hi)
-    if keep.sum() < 10:
+    out = np.empty((4, eta.size))
+    n = _trace_on_rail_numba(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
+                             math.sin(psi), math.cos(phi), math.sin(phi),
+                             float(sgn * pose.lateral), float(ws.radius), lo, hi, out)
+    if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    eta, x, u, z = eta[keep], x[keep], u[keep], z[keep]
+    eta, x, u, z = out[:, :n]
     return eta, x, u, z, z - rail.height(u)
 
 
@@ -231,8 +245,12 @@ def _intervals(g: np.ndarray, approach: float) -> list[tuple[int, int]]:
     ``g`` is at most ``approach``; the global minimum is always in one."""
     inside = g <= max(approach, 0.0)
     inside[int(np.argmin(g))] = True
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(int), [0]])))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+    edges = (np.flatnonzero(inside[1:] != inside[:-1]) + 1).tolist()  # where runs change
+    if inside[0]:
+        edges.insert(0, 0)
+    if inside[-1]:
+        edges.append(len(inside))
+    return list(zip(edges[::2], edges[1::2], strict=True))
 
 
 _LAST_GAP: list = [None]
