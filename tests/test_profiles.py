@@ -216,3 +216,9 @@ def test_compiled_spline_evaluation_is_the_cubic_spline():
         want = ref(t, nu)
         assert np.isnan(got[-1])
         np.testing.assert_allclose(got[:-1], want[:-1], rtol=1e-12, atol=1e-15)
+    # one point at a time (floats take the compiled scalar path): the same values
+    for ti in (*t[::97], rail.y[0] - 2e-3, rail.y[-1] + 2e-3, float(rail.y[5])):
+        for nu, got in ((0, rail.height(float(ti))), (1, rail.slope(float(ti)))):
+            assert np.ndim(got) == 0
+            np.testing.assert_allclose(float(got), float(ref(ti, nu)), rtol=1e-12, atol=1e-15)
+    assert np.isnan(rail.height(float("nan")))

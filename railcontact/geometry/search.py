@@ -31,6 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+try:
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from .track import SIDES, Pose, Track, Wheelset
@@ -146,26 +151,35 @@ def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
     return cached
 
 
-def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """Trace points of one wheel in the side frame: eta, X, u, Z, r, dr/deta."""
-    sgn = SIDES[side]
-    psi, phi = sgn * pose.yaw, sgn * pose.roll
-    u_ws = sgn * pose.lateral
-    eta, r, dr = _wheel_samples(ws)
-    cz, sz = math.cos(psi), math.sin(psi)
-    cx, sx = math.cos(phi), math.sin(phi)
-    if psi == 0.0:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-        x = np.zeros_like(eta)
-        y, zw = eta, -r
-    else:
-        sin_t = np.clip(-math.tan(psi) * dr, -1.0, 1.0)
-        rc = r * np.sqrt(1.0 - sin_t**2)
-        rs = r * sin_t
-        x = cz * rs - sz * eta  # yaw about the vertical axis ...
-        y = sz * rs + cz * eta
-        zw = -rc
-    # ... then roll about the track axis
-    return eta, x, cx * y - sx * zw + u_ws, sx * y + cx * zw + ws.radius, r, dr
+def _trace_on_rail(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, out):
+    """Trace points of one wheel moved into the side frame (yaw about the vertical axis,
+    then roll about the track axis), those with ``lo < u < hi`` (above the rail) written
+    to ``out`` (4, n): eta, X, u, Z; returns how many."""
+    m = 0
+    for i in range(eta.size):
+        if yawed:
+            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
+            rc = r[i] * math.sqrt(1.0 - sin_t * sin_t)
+            rs = r[i] * sin_t
+            x = cz * rs - sz * eta[i]
+            y = sz * rs + cz * eta[i]
+            zw = -rc
+        else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+            x = 0.0
+            y = eta[i]
+            zw = -r[i]
+        u = cx * y - sx * zw + u_ws
+        if lo < u < hi:
+            out[0, m] = eta[i]
+            out[1, m] = x
+            out[2, m] = u
+            out[3, m] = sx * y + cx * zw + radius
+            m += 1
+    return m
+
+
+_trace_on_rail_numba = (numba.njit(cache=True)(_trace_on_rail) if numba is not None
+                        else _trace_on_rail)
 
 
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -175,14 +189,19 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
     """
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
-    eta, x, u, z, _, _ = _trace(track, ws, pose, side)
+    sgn = SIDES[side]
+    psi, phi = sgn * pose.yaw, sgn * pose.roll
+    eta, r, dr = _wheel_samples(ws)
     rail = track.side_rail
     lo, hi = rail.bounds
-    keep = (u > lo) & (u < hi)
-    if keep.sum() < 10:
+    out = np.empty((4, eta.size))
+    n = _trace_on_rail_numba(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
+                             math.sin(psi), math.cos(phi), math.sin(phi),
+                             float(sgn * pose.lateral), float(ws.radius), lo, hi, out)
+    if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    eta, x, u, z = eta[keep], x[keep], u[keep], z[keep]
+    eta, x, u, z = out[:, :n]
     return eta, x, u, z, z - rail.height(u)
 
 
@@ -226,8 +245,12 @@ def _intervals(g: np.ndarray, approach: float) -> list[tuple[int, int]]:
     ``g`` is at most ``approach``; the global minimum is always in one."""
     inside = g <= max(approach, 0.0)
     inside[int(np.argmin(g))] = True
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(int), [0]])))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+    edges = (np.flatnonzero(inside[1:] != inside[:-1]) + 1).tolist()  # where runs change
+    if inside[0]:
+        edges.insert(0, 0)
+    if inside[-1]:
+        edges.append(len(inside))
+    return list(zip(edges[::2], edges[1::2], strict=True))
 
 
 _LAST_GAP: list = [None]
@@ -287,6 +310,8 @@ N_S = 1001
 """Lateral samples of a patch's tangent plane (0.05 mm apart)."""
 K0 = N_S // 2
 """The sample at the patch origin, s = 0."""
+_S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
+_S_SAMPLES.flags.writeable = False
 
 
 def _tangent_frame(track: Track, ws: Wheelset, eta: np.ndarray, u: np.ndarray,
@@ -295,25 +320,85 @@ def _tangent_frame(track: Track, ws: Wheelset, eta: np.ndarray, u: np.ndarray,
     inclined at ``gamma``: at the samples ``s`` across the plane, the distance ``f(s)`` of
     the wheel (trace points ``eta, u, z``) above the rail normal to the plane [m] (negative
     where they overlap; NaN where the profiles end), ``A(s)`` [1/m], the wheel profile
-    coordinate and the rail surface point (u, Z) [m] there."""
+    coordinate and the rail surface point (u, Z) [m] there.
+
+    Each profile is taken along its branch through the point nearest ``u_c`` on which s
+    increases (:func:`_branch`); :func:`_in_plane` rotates and interpolates in one compiled
+    pass over the samples between the ``s``."""
     rail = track.side_rail
     cg, sg = math.cos(gamma), math.sin(gamma)
-    s_w = (u - u_c) * cg + (z - z_c) * sg
-    n_w = -(u - u_c) * sg + (z - z_c) * cg
     ur, zr = rail.samples(N_RAIL)
-    s_r = (ur - u_c) * cg + (zr - z_c) * sg
-    n_r = -(ur - u_c) * sg + (zr - z_c) * cg
-    s = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
+    s = _S_SAMPLES
     kw = int(np.argmin(np.abs(u - u_c)))
     kr = int(np.argmin(np.abs(ur - u_c)))
-    f = _branch_interp(s, s_w, n_w, kw) - _branch_interp(s, s_r, n_r, kr)
+    n_w, eta_s, _ = _in_plane(s, u, z, eta, eta, u_c, z_c, cg, sg, kw)
+    n_r, ur_s, zr_s = _in_plane(s, ur, zr, ur, zr, u_c, z_c, cg, sg, kr)
+    f = n_w - n_r
     # A(s) from the wheel at the same s
-    eta_s = _branch_interp(s, s_w, eta, kw)
     S_s = ws.profile_coordinate(np.where(np.isfinite(eta_s), eta_s, eta_c))
     beta = np.arctan(ws.wheel.slope(S_s))
     a_of_s = np.cos(beta) / (2 * (ws.radius + ws.wheel.height(S_s)))
-    return (s, f, a_of_s, np.where(np.isfinite(eta_s), S_s, np.nan),
-            _branch_interp(s, s_r, ur, kr), _branch_interp(s, s_r, zr, kr))
+    return (s, f, a_of_s, np.where(np.isfinite(eta_s), S_s, np.nan), ur_s, zr_s)
+
+
+def _in_plane(s: np.ndarray, u: np.ndarray, z: np.ndarray, a: np.ndarray, b: np.ndarray,
+              u_c: float, z_c: float, cg: float, sg: float, k: int) -> np.ndarray:
+    """Along the branch through sample ``k`` of the curve (u, z) on which its coordinate
+    s' = (u - u_c) cg + (z - z_c) sg increases (:func:`_branch`), the curve's distance
+    n = -(u - u_c) sg + (z - z_c) cg from the plane and the quantities ``a`` and ``b`` at
+    its samples, linearly interpolated at the increasing ``s`` [m] (NaN off the branch) as
+    :func:`np.interp` does on the branch; only the points between the ``s`` are rotated.
+    Returns (3, len(s)): n, a, b."""
+    out = np.empty((3, s.size))
+    _interp_in_plane_numba(s, u, z, a, b, float(u_c), float(z_c), float(cg), float(sg),
+                           int(k), out)
+    return out
+
+
+def _interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
+    """:func:`_in_plane`'s loop (``out`` filled)."""
+    n = u.size
+    lo = k  # the samples of the branch that bracket s: lo ... hi
+    s_lo = (u[k] - u_c) * cg + (z[k] - z_c) * sg
+    s_k = s_lo
+    while lo > 0 and s_lo > s[0]:
+        s_prev = (u[lo - 1] - u_c) * cg + (z[lo - 1] - z_c) * sg
+        if not s_prev < s_lo:  # the branch ends: s' stops increasing towards k
+            break
+        lo -= 1
+        s_lo = s_prev
+    hi = k
+    s_hi = s_k
+    while hi < n - 1 and s_hi < s[s.size - 1]:
+        s_next = (u[hi + 1] - u_c) * cg + (z[hi + 1] - z_c) * sg
+        if not s_next > s_hi:
+            break
+        hi += 1
+        s_hi = s_next
+    j = lo
+    x0 = s_lo
+    x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg if hi > lo else s_lo
+    for i in range(s.size):
+        x = s[i]
+        if hi == lo or x < s_lo or x > s_hi:
+            out[0, i] = math.nan
+            out[1, i] = math.nan
+            out[2, i] = math.nan
+            continue
+        while j < hi - 1 and x1 <= x:  # the segment [x0, x1) that holds x
+            j += 1
+            x0 = x1
+            x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg
+        t = (x - x0) / (x1 - x0)
+        n0 = -(u[j] - u_c) * sg + (z[j] - z_c) * cg
+        n1 = -(u[j + 1] - u_c) * sg + (z[j + 1] - z_c) * cg
+        out[0, i] = n0 + t * (n1 - n0)
+        out[1, i] = a[j] + t * (a[j + 1] - a[j])
+        out[2, i] = b[j] + t * (b[j + 1] - b[j])
+
+
+_interp_in_plane_numba = (numba.njit(cache=True)(_interp_in_plane) if numba is not None
+                          else _interp_in_plane)
 
 
 WEIGHT_POWER = 2.5

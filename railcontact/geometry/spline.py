@@ -53,13 +53,36 @@ def _evaluate(x, c, t, nu, out):
             out[i] = 6.0 * c[0, j] * s + 2.0 * c[1, j]
 
 
+def _evaluate_one(x, c, ti, nu):
+    """The ``nu``-th derivative of the piecewise cubic at the one point ``ti``."""
+    if math.isnan(ti):
+        return math.nan
+    n = x.size - 1
+    if ti < x[0]:
+        j = 0
+    elif ti >= x[n]:
+        j = n - 1
+    else:
+        j = np.searchsorted(x, ti, side="right") - 1
+    s = ti - x[j]
+    if nu == 0:
+        return ((c[0, j] * s + c[1, j]) * s + c[2, j]) * s + c[3, j]
+    if nu == 1:
+        return (3.0 * c[0, j] * s + 2.0 * c[1, j]) * s + c[2, j]
+    return 6.0 * c[0, j] * s + 2.0 * c[1, j]
+
+
 _evaluate_numba = numba.njit(cache=True)(_evaluate) if numba is not None else None
+_evaluate_one_numba = numba.njit(cache=True)(_evaluate_one) if numba is not None else None
 
 
 def evaluate(x: np.ndarray, c: np.ndarray, t, nu: int = 0):
     """The spline with breakpoints ``x`` [m] and coefficients ``c`` (4, n) at ``t`` [m]
-    (derivative ``nu`` in 0, 1, 2), or None when ``t`` is not a float array of at least
-    :data:`MIN_POINTS` points (the caller then uses ``CubicSpline``)."""
+    (derivative ``nu`` in 0, 1, 2), or None when ``t`` is neither a float nor a float array
+    of at least :data:`MIN_POINTS` points (the caller then uses ``CubicSpline``). A float
+    gives a 0-d array, as ``CubicSpline`` does."""
+    if isinstance(t, float) and _evaluate_one_numba is not None and nu in (0, 1, 2):
+        return np.array(_evaluate_one_numba(x, c, t, nu))
     if (_evaluate_numba is None or not isinstance(t, np.ndarray) or t.dtype != np.float64
             or t.size < MIN_POINTS or nu not in (0, 1, 2)):
         return None

@@ -271,23 +271,25 @@ def solve_normal(
         if force_control:
             delta = float(g[c].mean())
         g -= delta
+        gc = g[c]  # (the gradient on the contact set, used three times below)
         if precondition is None:
             z = g
         else:
             z = precondition(np.where(c, g, 0.0))
             if force_control:
                 z = z - z[c].mean()
-        gg = float(np.dot(g[c], z[c]))
+        gg = float(np.dot(gc, gc if z is g else z[c]))
         t = np.where(c, z + (gg / g_old if conjugate and g_old > 0 else 0.0) * t, 0.0)
         g_old = gg
         r = operator.apply(t)
         if force_control:
             r -= r[c].mean()
-        rt = float(np.dot(r[c], t[c]))
+        tc = t[c]
+        rt = float(np.dot(r[c], tc))
         if rt <= 0.0 or gg <= 0.0:  # exact solution on the current set
             tau = 0.0
         else:
-            tau = float(np.dot(g[c], t[c])) / rt
+            tau = float(np.dot(gc, tc)) / rt
         p_old = p
         p = p - tau * t
         np.maximum(p, 0.0, out=p)
@@ -295,7 +297,7 @@ def solve_normal(
         conjugate = not overlap.any()
         if not conjugate:
             if tau > 0.0:
-                kappa = 1.0 if precondition is None else gg / max(float(np.dot(g[c], g[c])),
+                kappa = 1.0 if precondition is None else gg / max(float(np.dot(gc, gc)),
                                                                    1e-300)
                 p[overlap] -= tau * kappa * g[overlap]
             else:  # exact on the current set (e.g. a start on two symmetric elements):

@@ -186,14 +186,14 @@ def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, om
     return dif
 
 
-def _row_blocks(contact: np.ndarray) -> list[tuple[int, int]]:
-    """Split the rows that hold contact into blocks of about DIRECT_WORK^(1/2) elements."""
+def _row_blocks(contact: np.ndarray, work: int = DIRECT_WORK) -> list[tuple[int, int]]:
+    """Split the rows that hold contact into blocks of about ``work^(1/2)`` elements."""
     per_row = contact.sum(axis=1)
     rows = np.flatnonzero(per_row)
     if rows.size == 0:
         return []
     total = int(per_row.sum())
-    nblocks = max(1, min(rows.size, round(total / math.sqrt(DIRECT_WORK))))
+    nblocks = max(1, min(rows.size, round(total / math.sqrt(work))))
     target = total / nblocks
     blocks, start, acc = [], int(rows[0]), 0
     for r in rows:
