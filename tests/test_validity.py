@@ -4,7 +4,7 @@ centre and the rigid wheelset's vertical displacement and roll under load contro
 Truth: Nadal's formula by hand; the balance of a flange in full sliding (Y/Q equals
 Nadal's value at the contact angle); mirror symmetry; statics of the contact forces about
 the centre; Hertz's approach; and the penetration-controlled solve, which must give each
-wheel the approach the load-controlled one found.
+wheel back the load of the load-controlled one.
 """
 
 from __future__ import annotations
@@ -14,7 +14,6 @@ import math
 import pytest
 
 from railcontact.geometry.profiles import read_profile
-from railcontact.geometry.roll import contact_roll
 from railcontact.geometry.track import Pose, Track, Wheelset
 from railcontact.halfspace.materials import ElasticPair, Material
 from railcontact.timestep.validity import (
@@ -196,38 +195,54 @@ def test_roll_moment_of_unequal_loads():
     assert r.moment[0] > 0  # the heavier left wheel is pushed up harder
 
 
-@pytest.mark.parametrize(("lateral", "loads", "rel"), [
-    (0.0, (Q, Q), 2e-3), (0.0, (90e3, 70e3), 3e-3), (3e-3, (Q, Q), 1e-2)])
-def test_vertical_and_roll_under_load_control(lateral, loads, rel):
+@pytest.mark.parametrize(("lateral", "loads"), [
+    (0.0, (Q, Q)), (0.0, (90e3, 70e3)), (3e-3, (Q, Q)), (6.5e-3, (Q, Q)), (8e-3, (Q, Q)),
+    (10e-3, (Q, Q))])
+def test_vertical_and_roll_under_load_control(lateral, loads):
     """The rigid wheelset's vertical displacement and roll that the load-controlled step
-    reports, given to a penetration-controlled step, give each wheel the same approach
-    (to 10 nm, RIGID_TOL) and so the same loads: to the grid's accuracy at 0 mm (the two
-    controls mesh differently), to 1 % at 3 mm, where the rolled wheelset's contact moves
-    by r0 phi = 0.08 mm and with it the curvatures. Centred with equal loads the roll is zero; at
-    +3 mm the left wheel runs on the larger radius and the wheelset rolls left side up,
-    as :func:`~railcontact.geometry.roll.contact_roll` (Brent's method on the same
-    compatibility) finds, and by about ((Z_L + r_L) - (Z_R + r_R)) / (Y_L - Y_R) from the
-    contact points (the approaches and the wheels' own contact points left out: 5 %)."""
+    reports, given to a penetration-controlled step, give each wheel its load back: to
+    the grid's accuracy (the two controls mesh differently), on the tread (0, 3 mm), at
+    the flange's root (6.5 mm: two-point contact) and on the flange (8, 10 mm), where
+    rolling the wheelset moves the contacts (the approaches at the pose's roll alone gave
+    31.6/0, 748/0 and 429/0 kN back at 6.5, 8 and 10 mm). Centred with equal loads the
+    roll is zero; at +3 mm the left wheel runs on the larger radius and the wheelset rolls
+    left side up, by about ((Z_L + r_L) - (Z_R + r_R)) / (Y_L - Y_R) from the contact
+    points (the approaches and the wheels' own contact points left out: 5 %); with the
+    left wheel on its flange it rolls further."""
     wc = contact()
     r = wc.solve(Pose(lateral), loads=loads, creepages=NONE)
-    assert r.status == OK
+    assert r.status in (OK, OUTSIDE_VALIDITY)
+    rigid = r.rigid_solution
+    assert rigid.converged, rigid.message
     v, phi = r.vertical, r.roll
     p = wc.solve(Pose(lateral, 0.0, phi), vertical=v, creepages=NONE)
     assert p.vertical == v and p.roll == phi
-    for a, b, q in zip(r.wheels, p.wheels, loads, strict=True):
-        assert b.approach == pytest.approx(a.approach, abs=1e-8)
-        assert b.track_force[2] == pytest.approx(q, rel=rel)
+    for b, q in zip(p.wheels, loads, strict=True):
+        assert b.track_force[2] == pytest.approx(q, rel=3e-3)
     if lateral == 0.0 and loads[0] == loads[1]:
         assert abs(phi) < 1e-12
-    if lateral > 0:
+    if lateral == 3e-3:
         L, R = r.left, r.right
-        brent = contact_roll(wc.track, wc.wheelset, lateral, 0.0, R.approach - L.approach)
-        assert phi > 0 and phi == pytest.approx(brent, abs=1e-8)
         hand = ((L.contact_point[2] + L.rolling_radius) - (R.contact_point[2]
                 + R.rolling_radius)) / (L.contact_point[1] - R.contact_point[1])
-        assert phi == pytest.approx(hand, rel=0.05)
+        assert phi > 0 and phi == pytest.approx(hand, rel=0.05)
+    if lateral > 3e-3:
+        assert phi > 3e-4
     if loads[0] > loads[1]:
         assert phi < 0  # the heavier left wheel sinks further
+
+
+def test_vertical_and_roll_not_found_is_said(monkeypatch):
+    """On the flange the roll needs several evaluations; allowed only one, the solution
+    says it did not converge (with by how much) instead of passing its first guess as
+    ok."""
+    from railcontact.timestep import rigid
+
+    monkeypatch.setattr(rigid, "MAX_EVALUATIONS", 1)
+    r = contact().solve(Pose(8e-3), loads=(Q, Q), creepages=NONE)
+    s = r.rigid_solution
+    assert not s.converged and s.evaluations == 1
+    assert "not converged" in s.message and "um" in s.message
 
 
 def test_a_result_pickles_and_finds_its_roll_later():

@@ -16,7 +16,7 @@ from typing import ClassVar
 
 from ..errors import RailContactError
 from .case import GridSettings, NormalSettings, PatchSettings, TangentialSettings
-from .choices import CONTROLS, CREEPAGE_INPUTS, LOAD_DEFINITIONS, WARM_STARTS
+from .choices import CONTROLS, CONVENTIONS, CREEPAGE_INPUTS, LOAD_DEFINITIONS, WARM_STARTS
 from .fields import Record, document, inherit, setting
 
 MAX_ELEMENT_SIZE = 0.005
@@ -128,3 +128,8 @@ class FMUModes(Record):
     creepage_input: str = setting("direct", "choice", "", "creepages per wheel (direct) or "
                                   "from the wheelset velocities (kinematic)",
                                   choices=CREEPAGE_INPUTS)
+    convention: str = setting("railcontact", "choice", "", "creepage inputs, creep forces "
+                              "and spin moments in railcontact's frames (body 1 the wheel) "
+                              "or CONTACT's (body 1 the rail, right wheel mirrored; "
+                              "railcontact.settings.convention); the track-frame outputs "
+                              "are railcontact's in both", choices=CONVENTIONS)

@@ -1,60 +1,103 @@
-"""The wheelset's vertical displacement and roll that give each wheel its approach.
+"""The wheelset's vertical displacement and roll at which its wheels carry their loads.
 
 Under load control each wheel is pressed into its rail by the vertical approach
 ``delta_s`` [m] its load needs, at the pose's roll ``phi0``, the two wheels independently.
 A rigid wheelset has two vertical degrees of freedom; this finds the vertical displacement
 ``v`` [m] (of the centre, positive up, from the height ``r0`` above the rail tops, as the
-input ``vertical`` of penetration control) and the roll ``phi`` [rad] at which both wheels
-have those approaches::
+input ``vertical`` of penetration control) and the roll ``phi`` [rad] at which the
+penetration-controlled wheels carry the same normal loads ``Q_s`` (the vertical share of
+their normal forces, ``sum N cos(gamma)``; the creep forces' share follows from the same
+creepages)::
 
-    delta_s = -(m_s(phi) + v),      s = left, right,
+    delta_s(phi) = -(m_s(phi) + v),      s = left, right,
 
 ``m_s(phi)`` the first-contact gap of wheel ``s`` with the wheelset rolled to ``phi``
-(:func:`railcontact.geometry.roll.first_contact_gap`). The difference of the two equations,
-``F(phi) = m_L + delta_L - m_R - delta_R = 0``, is solved by Newton's method from ``phi0``
-with the slope of :mod:`railcontact.geometry.roll`: rolling by ``dphi`` raises the left
-contact by ``l dphi`` and moves it towards its field side by ``r dphi``, closing its gap by
-``r tan(gamma) dphi``, and the right one the other way round, so
-``dF/dphi = l_L - r_L tan(gamma_L) + l_R - r_R tan(gamma_R)`` (``l`` the contact's lateral
-distance from the centre, ``r`` its rolling radius); then a secant step, and ``v`` from the
-mean of the two equations. A wheel without contact counts as just touching (``delta = 0``).
+(:func:`railcontact.geometry.roll.first_contact_gap`) and ``delta_s(phi)`` the vertical
+approach at which wheel ``s``, rolled to ``phi``, carries ``Q_s`` (a load-controlled normal
+solve at that roll: on the flange, and between two contact points, rolling moves the
+contact and changes the load-approach relation, so ``delta_s(phi0)`` is not enough). The
+difference of the two equations,
+
+    G(phi) = m_L(phi) + delta_L(phi) - m_R(phi) - delta_R(phi) = 0,
+
+is a root in ``phi`` alone (``G`` grows with ``phi``, :mod:`railcontact.geometry.roll`);
+``v`` then follows from either equation (their mean). ``G(phi0)`` costs two contact
+searches (the approaches are those of the step); the first step uses the geometric slope
+``dG/dphi ~ l_L - r_L tan(gamma_L) + l_R - r_R tan(gamma_R)`` (``l`` the contact's lateral
+distance from the centre, ``r`` its rolling radius), later ones the secant, and once the
+root is bracketed a safeguarded false position (Illinois), until ``|G|`` is below
+:data:`RIGID_RTOL` of the larger approach. Each further evaluation costs a load-controlled
+normal solve of both wheels, started from the last one's patches. A wheel without load
+counts as just touching (``delta = 0``). When no root is found in
+:data:`MAX_EVALUATIONS` evaluations (or within +-:data:`MAX_ROLL`) the solution says so
+(:attr:`RigidSolution.converged`, :attr:`RigidSolution.message`) and carries the best
+iterate.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
+from ..contact.results import PatchSolution
+from ..contact.wheelrail import solve_wheel_normal, vertical_approach
 from ..errors import RailContactError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
+from ..halfspace.materials import ElasticPair
+from ..settings import Control, PatchSettings
 
-RIGID_TOL = 1e-8
-"""Residual [m] of the two wheels' vertical positions at which the iteration stops: each
-wheel's approach (about 0.1 mm) is then met to 5 nm, 5e-5 of it, a load error below the
-load loop's tolerance (1e-3)."""
-MAX_EVALUATIONS = 3
-"""At most this many evaluations of both wheels' first-contact gaps."""
+RIGID_RTOL = 1e-4
+"""Residual ``|G|`` of the two wheels' vertical positions, relative to the larger approach,
+at which the iteration stops: the loads (``Q ~ delta^1.5``) are then met to 1.5e-4."""
+RIGID_ATOL = 1e-10
+"""Absolute floor [m] of that tolerance (wheels carrying almost nothing)."""
+MAX_EVALUATIONS = 12
+"""At most this many evaluations of ``G`` (the first costs two contact searches, every
+later one also a load-controlled normal solve of both wheels)."""
+
+ApproachAt = Callable[[float], tuple[float, float]]
+"""``phi -> (delta_L, delta_R)``: the wheels' vertical approaches [m] at roll ``phi``."""
+
+
+@dataclass(frozen=True)
+class RigidSolution:
+    """The rigid wheelset's vertical displacement and roll (module docstring)."""
+
+    vertical: float
+    """Vertical displacement of the centre [m], positive up."""
+    roll: float
+    """Roll angle [rad], positive when the left side rises."""
+    converged: bool = True
+    """False when no roll met the tolerance: ``vertical`` and ``roll`` are the best
+    iterate, and :attr:`message` says by how much they miss."""
+    message: str = "ok"
+    evaluations: int = 0
+    """Evaluations of ``G`` (module docstring)."""
 
 
 def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                       approaches: Sequence[float],
-                      contacts: Sequence[tuple[float, float, float] | None]
-                      ) -> tuple[float, float]:
-    """``(v, phi)``: vertical displacement [m] and roll [rad] of the rigid wheelset at
-    which the left and right wheels have the vertical ``approaches`` [m] (module
-    docstring).
+                      contacts: Sequence[tuple[float, float, float] | None],
+                      approach_at: ApproachAt | None = None) -> RigidSolution:
+    """The vertical displacement [m] and roll [rad] of the rigid wheelset at which both
+    wheels have their loads (module docstring).
 
     Parameters
     ----------
     track, ws, pose
         Geometry and the pose the wheels were solved at (its roll is the start).
     approaches
-        Vertical approach of the left and right wheel beyond first contact [m].
+        Vertical approach of the left and right wheel beyond first contact at the pose's
+        roll [m].
     contacts
         Per wheel, (lateral position Y of the contact point [m], rolling radius [m],
-        contact angle [rad]) of its main patch, or None without contact.
+        contact angle [rad]) of its main patch, or None without contact: the first step's
+        slope.
+    approach_at
+        The wheels' approaches at another roll; None: those at the pose's roll for every
+        roll (a first-order answer, right only where rolling does not move the contacts).
     """
     slope = 0.0
     for side, c in zip(SIDES, contacts, strict=True):
@@ -64,49 +107,119 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
             lever, radius, angle = SIDES[side] * (c[0] - pose.lateral), c[1], c[2]
         slope += lever - radius * math.tan(angle)
     slope = max(slope, 0.1)  # a 73 deg flange on both wheels: keep the direction
+    tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
 
-    def gaps(phi: float) -> tuple[float, float]:
+    def evaluate(phi: float) -> tuple[float, float]:
+        """(G, v) at roll ``phi``."""
         p = Pose(pose.lateral, pose.yaw, phi)
-        return (first_contact_gap(track, ws, p, "left") + approaches[0],
-                first_contact_gap(track, ws, p, "right") + approaches[1])
+        dl, dr = (approaches if phi == pose.roll or approach_at is None
+                  else approach_at(phi))
+        hl = first_contact_gap(track, ws, p, "left") + dl
+        hr = first_contact_gap(track, ws, p, "right") + dr
+        return hl - hr, -0.5 * (hl + hr)
 
-    phi = pose.roll
-    last: tuple[float, float] | None = None
+    points: list[tuple[float, float, float]] = []  # (phi, G, v)
+    below: tuple[float, float] | None = None  # (phi, G) with G < 0: the root is above
+    above: tuple[float, float] | None = None
+    stale = 0  # Illinois: the same bracket end kept this many times in a row
+    phi, failure = pose.roll, ""
     for _ in range(MAX_EVALUATIONS):
         try:
-            hl, hr = gaps(phi)
-        except RailContactError:  # rolled beyond the profiles: keep the last one
-            if last is None:
-                raise
+            g, v = evaluate(phi)
+        except RailContactError as exc:  # beyond the profiles, or a wheel not solved
+            failure = f"at roll {phi:.6g} rad: {exc}"
+            if not points:
+                break
+            phi = 0.5 * (phi + points[-1][0])  # back towards the last good roll
+            continue
+        points.append((phi, g, v))
+        if abs(g) <= tol:
+            return RigidSolution(v, phi, evaluations=len(points))
+        if g < 0:
+            stale = stale + 1 if below is not None and above is not None and \
+                below[0] != phi and len(points) > 1 and points[-2][1] < 0 else 0
+            below = (phi, g)
+        else:
+            stale = stale + 1 if below is not None and above is not None and \
+                above[0] != phi and len(points) > 1 and points[-2][1] > 0 else 0
+            above = (phi, g)
+        if below is not None and above is not None:  # false position, Illinois-weighted
+            (a, ga), (b, gb) = below, above
+            if stale:  # halve the far end's residual that did not move
+                if g < 0:
+                    gb *= 0.5 ** stale
+                else:
+                    ga *= 0.5 ** stale
+            phi = a - ga * (b - a) / (gb - ga)
+            continue
+        if len(points) > 1:
+            (p0, g0, _), (p1, g1, _) = points[-2], points[-1]
+            if p1 != p0 and (g1 - g0) / (p1 - p0) > 0:
+                slope = (g1 - g0) / (p1 - p0)
+        step = min(max(phi - g / slope, -MAX_ROLL), MAX_ROLL)
+        if step == phi:  # at the end of the range and still not there
+            failure = (f"no roll within +-{MAX_ROLL} rad gives both wheels their loads "
+                       f"(residual {g * 1e6:.4g} um at roll {phi:.6g} rad)")
             break
-        f = hl - hr
-        if last is not None and f != last[1] and phi != last[0]:
-            secant = (f - last[1]) / (phi - last[0])
-            if secant > 0:
-                slope = secant
-        last = (phi, f)
-        v = -0.5 * (hl + hr)
-        if abs(f) <= RIGID_TOL:
-            break
-        phi = min(max(phi - f / slope, -MAX_ROLL), MAX_ROLL)
-    return v, last[0]
+        phi = step
+    if not points:
+        raise RailContactError(f"rigid wheelset: {failure}")
+    best = min(points, key=lambda q: abs(q[1]))
+    why = failure or (f"no convergence in {MAX_EVALUATIONS} evaluations")
+    return RigidSolution(best[2], best[0], converged=False, evaluations=len(points),
+                         message=(f"rigid wheelset's vertical displacement and roll not "
+                                  f"converged: {why}; the two wheels' vertical positions "
+                                  f"differ by {best[1] * 1e6:.4g} um (tolerance "
+                                  f"{tol * 1e6:.3g} um) at roll {best[0]:.6g} rad"))
 
 
 @dataclass(frozen=True)
 class RigidWheelset:
     """The data of :func:`vertical_and_roll`, kept by a load-controlled step's result
-    until its vertical displacement or roll is asked for (a picklable record)."""
+    until its vertical displacement or roll is asked for (a picklable record).
+
+    ``loads`` are the wheels' normal loads ``sum N cos(gamma)`` [N], ``patches`` their
+    solved patches (the first normal solve at another roll starts from them); the normal
+    solves use ``settings``, ``pair`` and, with ``reference``, the frame at each patch's
+    reference point, as the step did."""
 
     track: Track
     wheelset: Wheelset
     pose: Pose
     approaches: tuple[float, float]
     contacts: tuple[tuple[float, float, float] | None, ...]
+    loads: tuple[float, float] = (0.0, 0.0)
+    settings: PatchSettings | None = None
+    pair: ElasticPair | None = None
+    reference: bool = False
+    patches: tuple[list[PatchSolution], list[PatchSolution]] = field(
+        default=([], []), repr=False)
 
-    def solve(self) -> tuple[float, float]:
-        """``(v, phi)`` [m, rad] (:func:`vertical_and_roll`)."""
-        return vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
-                                 self.contacts)
+    def approach_at(self, phi: float) -> tuple[float, float]:
+        """Both wheels' vertical approaches [m] carrying :attr:`loads` at roll ``phi``."""
+        pose = Pose(self.pose.lateral, self.pose.yaw, phi)
+        out = []
+        for k, side in enumerate(SIDES):
+            if self.loads[k] <= 0:
+                out.append(0.0)
+                continue
+            ps = solve_wheel_normal(self.track, self.wheelset, pose, side,
+                                    Control(load=self.loads[k]), self.settings, self.pair,
+                                    previous=self._last[k] or None, reference=self.reference)
+            self._last[k] = ps
+            out.append(vertical_approach(ps))
+        return out[0], out[1]
+
+    def solve(self) -> RigidSolution:
+        """(:func:`vertical_and_roll`)."""
+        exact = self.settings is not None and self.pair is not None
+        object.__setattr__(self, "_last", [list(p) for p in self.patches])
+        try:
+            return vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
+                                     self.contacts, self.approach_at if exact else None)
+        finally:
+            object.__delattr__(self, "_last")
 
 
-__all__ = ["RigidWheelset", "vertical_and_roll"]
+__all__ = ["MAX_EVALUATIONS", "RIGID_RTOL", "RigidSolution", "RigidWheelset",
+           "vertical_and_roll"]

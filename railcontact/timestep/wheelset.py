@@ -79,7 +79,7 @@ from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
-from .rigid import RigidWheelset
+from .rigid import RigidSolution, RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
@@ -235,17 +235,28 @@ class WheelsetResult:
         return max((w.status for w in self.wheels), key=SEVERITY.index)
 
     @cached_property
-    def _vertical_roll(self) -> tuple[float, float]:
+    def rigid_solution(self) -> RigidSolution:
+        """:attr:`vertical` and :attr:`roll` with whether they were found
+        (:class:`~railcontact.timestep.rigid.RigidSolution`: under load control check its
+        ``converged`` and ``message``)."""
         if self.rigid is None:
-            return (0.0, 0.0)
-        return self.rigid if isinstance(self.rigid, tuple) else self.rigid.solve()
+            return RigidSolution(0.0, 0.0)
+        if isinstance(self.rigid, tuple):
+            return RigidSolution(*self.rigid)
+        return self.rigid.solve()
+
+    @property
+    def _vertical_roll(self) -> tuple[float, float]:
+        s = self.rigid_solution
+        return (s.vertical, s.roll)
 
     @property
     def vertical(self) -> float:
         """Vertical displacement of the wheelset centre [m], positive up, from one nominal
         radius above the rail tops: the input under penetration control; under load
-        control the rigid wheelset's that gives both wheels their approaches
-        (:mod:`~railcontact.timestep.rigid`); 0 when out of range."""
+        control the rigid wheelset's at which both wheels, penetration-controlled, carry
+        their loads (:mod:`~railcontact.timestep.rigid`; whether it was found:
+        :attr:`rigid_solution`); 0 when out of range."""
         return self._vertical_roll[0]
 
     @property
@@ -390,11 +401,16 @@ class WheelsetContact:
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
         if vertical is not None:
             result.rigid = (vertical, pose.roll)
-        elif not off_track:  # found when first asked for: it costs four contact searches
+        elif not off_track:  # found when first asked for (normal solves at other rolls)
             result.rigid = RigidWheelset(
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
-                      if w.patches else None for w in wheels))
+                      if w.patches else None for w in wheels),
+                loads=tuple(sum(p.normal.force * math.cos(p.geometry.contact_angle)
+                                for p in w.patches) for w in wheels),
+                settings=self.settings.patch_settings, pair=self.pair,
+                reference=self.convention == "contact",
+                patches=(wheels[0].patches, wheels[1].patches))
         return result
 
     def _check_validity(self, wheel: WheelContact) -> None:
