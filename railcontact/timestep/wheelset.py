@@ -203,7 +203,9 @@ class WheelContact:
     moment: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Moment of the rail's forces on the wheel about the point (0, y, 0) of the track
     frame (under the wheelset centre, at rail-top height), track components (X, Y, Z)
-    [N m], spin moments included."""
+    [N m]: the pressure and traction over each patch (each element's force at its place
+    in the patch's plane: the spin moment and the pressure's offsets from the contact
+    point included)."""
 
     @property
     def n_patches(self) -> int:
@@ -591,13 +593,23 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         f_u = ps * math.cos(g) - n.force * math.sin(g)
         fu += f_u
         fz += ps * math.sin(g) + n.force * math.cos(g)
-        mz += cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
-        # track frame, about (0, y, 0): r x F plus the spin couple (sgn pm) n, with
-        # n = (0, -sgn sin(g), cos(g)) the contact normal
+        # the pressure's first moments about the patch's origin (the contact point) along
+        # x and s: the normal force acts at the pressure's centroid, not at the point
+        da = n.grid.element_area
+        first_x = float((n.grid.x[:, None] * n.pressure).sum() * da)
+        first_s = float((n.grid.y[None, :] * n.pressure).sum() * da)
+        mz += (cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
+               - first_x * math.sin(g))
+        # track frame, about (0, y, 0): r x F, plus the spin couple (sgn pm) n (the
+        # traction's moment about n through the origin), plus the pressure's offsets
+        # x e_x + s e_s crossed with its normal n; e_s = (0, sgn cos(g), sin(g)),
+        # n = (0, -sgn sin(g), cos(g)): e_x x n = (0, -cos(g), -sgn sin(g)), e_s x n =
+        # (sgn, 0, 0)
         lever = np.array([cp.position[0], cp.position[1] - pose.lateral, cp.position[2]])
         force = np.array([px, sgn * f_u, ps * math.sin(g) + n.force * math.cos(g)])
-        moment += np.cross(lever, force) + np.array([0.0, -pm * math.sin(g),
-                                                     sgn * pm * math.cos(g)])
+        moment += np.cross(lever, force) + np.array([
+            sgn * first_s, -pm * math.sin(g) - first_x * math.cos(g),
+            sgn * (pm * math.cos(g) - first_x * math.sin(g))])
         converged &= n.converged and (t is None or t.converged)
         work.absorb(p.work)
         work.load_passes = max(work.load_passes, p.work.load_passes)
