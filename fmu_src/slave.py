@@ -238,6 +238,8 @@ class Slave:
             self["status"] = OUT_OF_RANGE
             return FMI_WARNING
         t0 = time.perf_counter()  # the rigid wheelset's vertical and roll are found lazily
+        if not penetration and self.modes.rigid_wheelset == "skip":  # not asked for
+            res.rigid_solution = RigidSolution(0.0, 0.0, message="skipped")
         try:
             rigid = res.rigid_solution
         except RailContactError as exc:  # e.g. a wheel not solvable at another roll

@@ -749,3 +749,21 @@ def test_rigid_wheelset_not_found_is_a_status(fmu, extracted, md, capsys, monkey
     assert s.get("status") == 1
     assert "a wheel beyond its profile at that roll" in capsys.readouterr().out
     s.free()
+
+
+def test_rigid_wheelset_can_be_skipped(fmu, extracted, md):
+    """rigid_wheelset = skip (its enumeration 2): under load control the rigid wheelset's
+    vertical displacement and roll are not solved (0), the moments are taken about the
+    nominal centre height r0, as the API's with vertical 0; the forces are the same."""
+    from railcontact.timestep.rigid import RigidSolution
+
+    s = Slave(fmu, extracted, md, "skip", warm_start="none", rigid_wheelset="skip")
+    assert s.step(lateral_displacement=3e-3, **CREEP) == 0
+    r = api("none").solve(Pose(3e-3), loads=(83.3e3, 83.3e3),
+                          creepages=((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3)))
+    assert r.vertical != 0.0 and r.roll > 0  # solved by default
+    r.rigid_solution = RigidSolution(0.0, 0.0)
+    assert s.get("wheelset_vertical_displacement", "wheelset_roll", "status") == [0, 0, 0]
+    np.testing.assert_allclose(s.get("roll_moment", "pitch_moment", "normal_force_left"),
+                               [r.moment[0], r.moment[1], r.left.normal_force], rtol=1e-9)
+    s.free()

@@ -113,10 +113,11 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("max_penetration", ContactSettings, "max_penetration"),
     ("max_wheel_load", ContactSettings, "max_wheel_load"),
     ("convention", FMUModes, "convention"),
+    ("rigid_wheelset", FMUModes, "rigid_wheelset"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
-APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention")
+APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid_wheelset")
 """Parameters added after the first published interface (commit 039db95): :func:`table`
 numbers them after every variable of it, so that its value references stay (they are
 numbered per type: appending a parameter here, and its ``_choice`` at the end of
@@ -360,10 +361,11 @@ OUTPUTS = [
              "wheelset centre's vertical displacement, positive up, from r0 above the rail "
              "tops: the input under control=penetration; under control=load the rigid "
              "wheelset's at which both wheels, penetration-controlled, carry their loads "
-             "(status 1 when not found)", lambda r: r.vertical),
+             "(status 1 when not found; 0 with rigid_wheelset=skip)", lambda r: r.vertical),
     Variable("wheelset_roll", "Real", "output", None, "rad",
              "wheelset roll angle, positive left side up: the input under "
-             "control=penetration; under control=load the rigid wheelset's",
+             "control=penetration; under control=load the rigid wheelset's (0 with "
+             "rigid_wheelset=skip)",
              lambda r: r.roll),
     Variable("roll_moment", "Real", "output", None, "N.m",
              "moment of the rails on the wheelset about the track X axis through its centre "

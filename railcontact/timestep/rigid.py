@@ -25,9 +25,10 @@ is a root in ``phi`` alone (``G`` grows with ``phi``, :mod:`railcontact.geometry
 searches (the approaches are those of the step); the first step uses the geometric slope
 ``dG/dphi ~ l_L - r_L tan(gamma_L) + l_R - r_R tan(gamma_R)`` (``l`` the contact's lateral
 distance from the centre, ``r`` its rolling radius), later ones the secant, and once the
-root is bracketed a safeguarded false position (Illinois), until ``|G|`` is below
-:data:`RIGID_RTOL` of the larger approach. Each further evaluation costs a load-controlled
-normal solve of both wheels, started from the last one's patches. A wheel without load
+root is bracketed false position (Illinois; bisection after four evaluations on one
+side), until ``|G|`` is below :data:`RIGID_RTOL` of the larger approach. Each further
+evaluation costs a load-controlled normal solve of both wheels, started from the last
+one's patches. A wheel without load
 counts as just touching (``delta = 0``). When no root is found in
 :data:`MAX_EVALUATIONS` evaluations (or within +-:data:`MAX_ROLL`) the solution says so
 (:attr:`RigidSolution.converged`, :attr:`RigidSolution.message`) and carries the best
@@ -121,7 +122,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
     points: list[tuple[float, float, float]] = []  # (phi, G, v)
     below: tuple[float, float] | None = None  # (phi, G) with G < 0: the root is above
     above: tuple[float, float] | None = None
-    stale = 0  # Illinois: the same bracket end kept this many times in a row
+    run = 0  # bracketed: evaluations in a row on the same side of the root
     phi, failure = pose.roll, ""
     for _ in range(MAX_EVALUATIONS):
         try:
@@ -132,25 +133,25 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                 break
             phi = 0.5 * (phi + points[-1][0])  # back towards the last good roll
             continue
+        same = bool(points) and (points[-1][1] < 0) == (g < 0)
         points.append((phi, g, v))
         if abs(g) <= tol:
             return RigidSolution(v, phi, evaluations=len(points))
+        bracketed = below is not None and above is not None
+        run = run + 1 if bracketed and same else 0
         if g < 0:
-            stale = stale + 1 if below is not None and above is not None and \
-                below[0] != phi and len(points) > 1 and points[-2][1] < 0 else 0
             below = (phi, g)
+            if run and above is not None:  # Illinois: the end that stays weighs half
+                above = (above[0], 0.5 * above[1])
         else:
-            stale = stale + 1 if below is not None and above is not None and \
-                above[0] != phi and len(points) > 1 and points[-2][1] > 0 else 0
             above = (phi, g)
-        if below is not None and above is not None:  # false position, Illinois-weighted
+            if run and below is not None:
+                below = (below[0], 0.5 * below[1])
+        if below is not None and above is not None:  # false position, bisection if slow
             (a, ga), (b, gb) = below, above
-            if stale:  # halve the far end's residual that did not move
-                if g < 0:
-                    gb *= 0.5 ** stale
-                else:
-                    ga *= 0.5 ** stale
             phi = a - ga * (b - a) / (gb - ga)
+            if run >= 3 or not min(a, b) < phi < max(a, b):  # a jump: halve the bracket
+                phi = 0.5 * (a + b)
             continue
         if len(points) > 1:
             (p0, g0, _), (p1, g1, _) = points[-2], points[-1]
@@ -166,6 +167,11 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         raise RailContactError(f"rigid wheelset: {failure}")
     best = min(points, key=lambda q: abs(q[1]))
     why = failure or (f"no convergence in {MAX_EVALUATIONS} evaluations")
+    if not failure and below is not None and above is not None:
+        why += (f" (between rolls {below[0]:.9g} and {above[0]:.9g} rad the residual goes "
+                f"from {below[1] * 1e6:.4g} to {above[1] * 1e6:.4g} um"
+                + (": a jump, where a wheel's contact moves (tread to flange), and no roll "
+                   "gives both loads)" if abs(above[0] - below[0]) < 1e-6 else ")"))
     return RigidSolution(best[2], best[0], converged=False, evaluations=len(points),
                          message=(f"rigid wheelset's vertical displacement and roll not "
                                   f"converged: {why}; the two wheels' vertical positions "
