@@ -351,6 +351,43 @@ def test_bare_c_host_clean_environment(extracted, md, tmp_path):
     assert "ok: 3 cycles of 100 steps" in r.stdout
 
 
+def test_threads_instantiating_at_once(extracted, md, tmp_path):
+    """Four host threads instantiate the FMU at the same moment in a C host, the first
+    instantiation of the process (it starts Python): one starts it, the others wait, and
+    all four step their instances. (Without the start-up lock two threads could both start
+    the interpreter.)"""
+    headers = Path(fmpy.__file__).parent / "c-code"
+    host = tmp_path / "threads"
+    subprocess.run(["gcc", "-O2", f"-I{headers}",
+                    str(Path(__file__).parent / "fmu" / "threads.c"), "-o", str(host),
+                    "-ldl", "-pthread"], check=True)
+    binary = extracted / "binaries" / "linux64" / "RailContact.so"
+    for _ in range(3):  # a race: more than one chance to lose it
+        r = subprocess.run(["env", "-i", "PATH=/usr/bin:/bin", str(host), str(binary),
+                            (extracted / "resources").as_uri(), md.guid, "4", "3"],
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr[-3000:]
+        assert "ok: 4 threads" in r.stdout
+
+
+def test_missing_isolation_symbols_are_a_warning(extracted):
+    """A Python whose C API lacks what the shim isolates it with (Py_SetProgramName and the
+    flags, to be removed in 3.15) starts with a warning naming them, not silently: the
+    shim passes the missing names, the FMU's bootstrap turns them into the warning that the
+    logger gets."""
+    import runpy
+
+    boot = runpy.run_path(str(extracted / "resources" / "python" / "fmu_bootstrap.py"))
+    resources = str(extracted / "resources")
+    _, _, warning = boot["start"](resources, "mode=started\nsource=test\n")
+    assert "isolated" not in warning
+    _, _, warning = boot["start"](
+        resources, "mode=started\nsource=test\n"
+        "isolation_missing=Py_SetProgramName, Py_NoUserSiteDirectory\n")
+    assert "has no Py_SetProgramName, Py_NoUserSiteDirectory" in warning
+    assert "not start it fully isolated" in warning
+
+
 def test_libcosim(fmu):
     pytest.importorskip("libcosimpy")
     from libcosimpy.CosimExecution import CosimExecution
