@@ -5,17 +5,16 @@ Under load control each wheel is pressed into its rail by the vertical approach
 A rigid wheelset has two vertical degrees of freedom; this finds the vertical displacement
 ``v`` [m] (of the centre, positive up, from the height ``r0`` above the rail tops, as the
 input ``vertical`` of penetration control) and the roll ``phi`` [rad] at which the
-penetration-controlled wheels carry the same normal loads ``Q_s`` (the vertical share of
-their normal forces, ``sum N cos(gamma)``; the creep forces' share follows from the same
-creepages)::
+penetration-controlled wheels, with the step's creepages, carry the step's loads ``Q_s``::
 
     delta_s(phi) = -(m_s(phi) + v),      s = left, right,
 
 ``m_s(phi)`` the first-contact gap of wheel ``s`` with the wheelset rolled to ``phi``
 (:func:`railcontact.geometry.roll.first_contact_gap`) and ``delta_s(phi)`` the vertical
-approach at which wheel ``s``, rolled to ``phi``, carries ``Q_s`` (a load-controlled normal
-solve at that roll: on the flange, and between two contact points, rolling moves the
-contact and changes the load-approach relation, so ``delta_s(phi0)`` is not enough). The
+approach at which wheel ``s``, rolled to ``phi``, carries ``Q_s`` (the step's
+load-controlled solve of the wheel, creep forces and all, at that roll: on the flange, and
+between two contact points, rolling moves the contact and changes the load-approach
+relation and the creep forces' share of the load, so ``delta_s(phi0)`` is not enough). The
 difference of the two equations,
 
     G(phi) = m_L(phi) + delta_L(phi) - m_R(phi) - delta_R(phi) = 0,
@@ -27,9 +26,8 @@ searches (the approaches are those of the step); the first step uses the geometr
 distance from the centre, ``r`` its rolling radius), later ones the secant, and once the
 root is bracketed false position (Illinois; bisection after four evaluations on one
 side), until ``|G|`` is below :data:`RIGID_RTOL` of the larger approach. Each further
-evaluation costs a load-controlled normal solve of both wheels, started from the last
-one's patches. A wheel without load
-counts as just touching (``delta = 0``). When no root is found in
+evaluation costs a load-controlled solve of both wheels (warm-started from the step). A
+wheel without load counts as just touching (``delta = 0``). When no root is found in
 :data:`MAX_EVALUATIONS` evaluations (or within +-:data:`MAX_ROLL`) the solution says so
 (:attr:`RigidSolution.converged`, :attr:`RigidSolution.message`) and carries the best
 iterate.
@@ -41,13 +39,9 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from ..contact.results import PatchSolution
-from ..contact.wheelrail import solve_wheel_normal, vertical_approach
 from ..errors import RailContactError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
-from ..halfspace.materials import ElasticPair
-from ..settings import Control, PatchSettings
 
 RIGID_RTOL = 1e-4
 """Residual ``|G|`` of the two wheels' vertical positions, relative to the larger approach,
@@ -183,48 +177,20 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
 class RigidWheelset:
     """The data of :func:`vertical_and_roll`, kept by a load-controlled step's result
     until its vertical displacement or roll is asked for (a picklable record).
-
-    ``loads`` are the wheels' normal loads ``sum N cos(gamma)`` [N], ``patches`` their
-    solved patches (the first normal solve at another roll starts from them); the normal
-    solves use ``settings``, ``pair`` and, with ``reference``, the frame at each patch's
-    reference point, as the step did."""
+    ``approach_at`` gives the wheels' approaches carrying their loads at another roll (the
+    step's solve of each wheel at that roll); None: the first-order answer."""
 
     track: Track
     wheelset: Wheelset
     pose: Pose
     approaches: tuple[float, float]
     contacts: tuple[tuple[float, float, float] | None, ...]
-    loads: tuple[float, float] = (0.0, 0.0)
-    settings: PatchSettings | None = None
-    pair: ElasticPair | None = None
-    reference: bool = False
-    patches: tuple[list[PatchSolution], list[PatchSolution]] = field(
-        default=([], []), repr=False)
-
-    def approach_at(self, phi: float) -> tuple[float, float]:
-        """Both wheels' vertical approaches [m] carrying :attr:`loads` at roll ``phi``."""
-        pose = Pose(self.pose.lateral, self.pose.yaw, phi)
-        out = []
-        for k, side in enumerate(SIDES):
-            if self.loads[k] <= 0:
-                out.append(0.0)
-                continue
-            ps = solve_wheel_normal(self.track, self.wheelset, pose, side,
-                                    Control(load=self.loads[k]), self.settings, self.pair,
-                                    previous=self._last[k] or None, reference=self.reference)
-            self._last[k] = ps
-            out.append(vertical_approach(ps))
-        return out[0], out[1]
+    approach_at: ApproachAt | None = field(default=None, repr=False, compare=False)
 
     def solve(self) -> RigidSolution:
         """(:func:`vertical_and_roll`)."""
-        exact = self.settings is not None and self.pair is not None
-        object.__setattr__(self, "_last", [list(p) for p in self.patches])
-        try:
-            return vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
-                                     self.contacts, self.approach_at if exact else None)
-        finally:
-            object.__delattr__(self, "_last")
+        return vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
+                                 self.contacts, self.approach_at)
 
 
 __all__ = ["MAX_EVALUATIONS", "RIGID_RTOL", "RigidSolution", "RigidWheelset",

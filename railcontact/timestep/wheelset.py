@@ -403,16 +403,12 @@ class WheelsetContact:
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
         if vertical is not None:
             result.rigid = (vertical, pose.roll)
-        elif not off_track:  # found when first asked for (normal solves at other rolls)
+        elif not off_track:  # found when first asked for (the wheels solved at other rolls)
             result.rigid = RigidWheelset(
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
-                loads=tuple(sum(p.normal.force * math.cos(p.geometry.contact_angle)
-                                for p in w.patches) for w in wheels),
-                settings=self.settings.patch_settings, pair=self.pair,
-                reference=self.convention == "contact",
-                patches=(wheels[0].patches, wheels[1].patches))
+                _RolledApproaches(self, pose, loads, creepages, kinematics, time))
         return result
 
     def _check_validity(self, wheel: WheelContact) -> None:
@@ -556,6 +552,37 @@ class WheelsetContact:
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle))))
         return patches, creepages, memory
+
+
+@dataclass(frozen=True)
+class _RolledApproaches:
+    """``phi -> (delta_L, delta_R)``: the vertical approaches [m] at which the wheels,
+    the wheelset rolled to ``phi``, carry the step's loads with its creepages (the step's
+    solve of each wheel, warm-started from the contact's memory, which it leaves as it
+    is; :mod:`.rigid`)."""
+
+    contact: WheelsetContact
+    pose: Pose
+    loads: tuple[float, float]
+    creepages: tuple | None
+    kinematics: Kinematics | None
+    time: float | None
+
+    def __call__(self, phi: float) -> tuple[float, float]:
+        pose = Pose(self.pose.lateral, self.pose.yaw, phi)
+        out = []
+        for k, side in enumerate(("left", "right")):
+            if self.loads[k] <= 0:
+                out.append(0.0)
+                continue
+            creep = None if self.creepages is None else self.creepages[k]
+            wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+                                                creep, self.kinematics, self.time)
+            if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
+                raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
+                                       + (wheel.message if wheel.patches else "no contact"))
+            out.append(wheel.approach)
+        return out[0], out[1]
 
 
 def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
