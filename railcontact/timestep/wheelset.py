@@ -233,7 +233,10 @@ class WheelsetResult:
 
     @property
     def status(self) -> int:
-        """The wheels' most severe status (:data:`SEVERITY`)."""
+        """The wheels' most severe status (:data:`SEVERITY`). Whether the rigid
+        wheelset's :attr:`vertical` and :attr:`roll` were found under load control is
+        :attr:`rigid_solution`'s (found only when asked for; the FMU's ``status`` counts
+        it)."""
         return max((w.status for w in self.wheels), key=SEVERITY.index)
 
     @cached_property
