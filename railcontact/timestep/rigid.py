@@ -52,6 +52,12 @@ MAX_EVALUATIONS = 12
 """At most this many evaluations of ``G`` (the first costs two contact searches, every
 later one also a load-controlled normal solve of both wheels)."""
 
+MIN_SLOPE = 0.5
+"""Least ``dG/dphi`` [m/rad] of the first step. With a wheel on its flange the geometric
+slope is small or negative (``r tan(gamma) > l``), but the wheel's approach falls as the
+wheelset rolls it up, and ``G`` grows at about 0.6 m/rad (S1002 on 60E1, 7-8 mm): a
+smaller slope overshoots by a multiple of the root; the secant takes over after."""
+
 ApproachAt = Callable[[float], tuple[float, float]]
 """``phi -> (delta_L, delta_R)``: the wheels' vertical approaches [m] at roll ``phi``."""
 
@@ -101,7 +107,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         else:
             lever, radius, angle = SIDES[side] * (c[0] - pose.lateral), c[1], c[2]
         slope += lever - radius * math.tan(angle)
-    slope = max(slope, 0.1)  # a 73 deg flange on both wheels: keep the direction
+    slope = max(slope, MIN_SLOPE)  # a flange: the approach falls as it rolls up
     tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
 
     def evaluate(phi: float) -> tuple[float, float]:
