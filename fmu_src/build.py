@@ -150,6 +150,7 @@ def compile_shim(out: Path, model_identifier: str = MODEL_IDENTIFIER) -> Path:
     so.parent.mkdir(parents=True, exist_ok=True)
     cmd = [cc, "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-std=gnu11",
            f"-I{fmi_headers()}", str(HERE / "railcontact_fmu.c"), "-o", str(so), "-ldl",
+           "-pthread",
            "-Wl,-z,nodelete"]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:

@@ -198,6 +198,10 @@ def start(resources, located):
         for d in loc.get("site", "").split(os.pathsep):
             if d and os.path.isdir(d) and d not in sys.path:
                 site.addsitedir(d)
+        if loc.get("isolation_missing"):  # a newer Python without the C API the shim uses
+            warnings.append(f"{here} has no {loc['isolation_missing']}: the FMU could not "
+                            "start it fully isolated (PYTHONPATH, PYTHONHOME or the user "
+                            "site-packages of the host's environment may count)")
     problem = python_problem(cfg)
     report.append(f"  sys.path: {os.pathsep.join(p for p in sys.path if p)}")
     deps, problems = check_dependencies(cfg)

@@ -27,6 +27,7 @@
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <spawn.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -461,13 +462,29 @@ static void prime_thread(void) {
     thread_primed = 1;
 }
 
-/* set an int configuration global of CPython (Py_NoUserSiteDirectory, ...) if it exists */
-static void set_flag(void *lib, const char *name, int value) {
+/* set an int configuration global of CPython (Py_NoUserSiteDirectory, ...); one that this
+ * Python no longer has (deprecated in 3.12, to be removed in 3.15) is named in *missing,
+ * which the bootstrap logs as a warning: that part of the isolation is not done */
+static void set_flag(void *lib, const char *name, int value, Str *missing) {
     int *flag = sym(lib, name);
     if (flag) *flag = value;
+    else str_add(missing, "%s%s", missing->s ? ", " : "", name);
 }
 
+static int start_python_once(const char *resources, Str *err);
+
+/* the first instantiation starts Python; two host threads instantiating at once must not
+ * both start it: one does, under this lock, the other waits and then finds it ready */
+static pthread_mutex_t start_lock = PTHREAD_MUTEX_INITIALIZER;
+
 static int start_python(const char *resources, Str *err) {
+    pthread_mutex_lock(&start_lock);
+    int ok = start_python_once(resources, err);
+    pthread_mutex_unlock(&start_lock);
+    return ok;
+}
+
+static int start_python_once(const char *resources, Str *err) {
     if (py_ready) return 1;
     py.IsInitialized = sym(NULL, "Py_IsInitialized");
     int ok = 0;
@@ -536,13 +553,15 @@ static int start_python(const char *resources, Str *err) {
          * PYTHONHOME or user site-packages from the host */
         void (*set_program_name)(const wchar_t *) = sym(self_lib, "Py_SetProgramName");
         static wchar_t *wexe = NULL, *whome = NULL; /* must outlive the interpreter */
-        if (set_program_name) {
-            set_flag(self_lib, "Py_IgnoreEnvironmentFlag", 1);
-            set_flag(self_lib, "Py_NoUserSiteDirectory", 1);
+        Str missing = {0};
+        if (set_program_name) { /* deprecated since 3.11, still there in 3.13 and 3.14 */
+            set_flag(self_lib, "Py_IgnoreEnvironmentFlag", 1, &missing);
+            set_flag(self_lib, "Py_NoUserSiteDirectory", 1, &missing);
             wexe = py.DecodeLocale(exe, NULL);
             if (wexe) set_program_name(wexe);
-        } else { /* Python >= 3.13: only the home can be given; the bootstrap adds the
-                  * environment's site-packages */
+        } else { /* a Python without it (its removal is planned for 3.15): only the home
+                  * can be given; the bootstrap adds the environment's site-packages */
+            str_add(&missing, "Py_SetProgramName");
             char *home = text_value(loc, "base_prefix");
             if (home && *home && py.SetPythonHome) {
                 whome = py.DecodeLocale(home, NULL);
@@ -550,8 +569,12 @@ static int start_python(const char *resources, Str *err) {
             } else if (home && *home) {
                 setenv("PYTHONHOME", home, 1);
             }
-            set_flag(self_lib, "Py_NoUserSiteDirectory", 1);
+            set_flag(self_lib, "Py_NoUserSiteDirectory", 1, &missing);
             free(home);
+        }
+        if (missing.s) {
+            str_add(&t, "isolation_missing=%s\n", missing.s);
+            free(missing.s);
         }
         py.InitializeEx(0);
         py.EvalSaveThread(); /* the main thread keeps its state, releases the GIL */

@@ -25,7 +25,14 @@ from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import FMUModes
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
-from .timestep.wheelset import NOT_CONVERGED, OUT_OF_RANGE, OUTSIDE_VALIDITY, STATUS_NAMES
+from .timestep.rigid import RigidSolution
+from .timestep.wheelset import (
+    NOT_CONVERGED,
+    OUT_OF_RANGE,
+    OUTSIDE_VALIDITY,
+    SEVERITY,
+    STATUS_NAMES,
+)
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
@@ -173,7 +180,8 @@ class Slave:
             ws = Wheelset(wheel, g.wheel_radius, g.back_to_back, g.flange_back)
         except RailContactError as exc:
             raise RailContactError(f"parameter error: {exc}") from None
-        self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact)
+        self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact,
+                                       convention=ps.modes.convention)
 
     def _exit_initialization(self) -> int:
         try:
@@ -230,9 +238,20 @@ class Slave:
             self["status"] = OUT_OF_RANGE
             return FMI_WARNING
         t0 = time.perf_counter()  # the rigid wheelset's vertical and roll are found lazily
-        res.vertical  # noqa: B018
+        if not penetration and self.modes.rigid_wheelset == "skip":  # not asked for
+            res.rigid_solution = RigidSolution(0.0, 0.0, message="skipped")
+        try:
+            rigid = res.rigid_solution
+        except RailContactError as exc:  # e.g. a wheel not solvable at another roll
+            rigid = res.rigid_solution = RigidSolution(
+                0.0, 0.0, converged=False,
+                message=f"rigid wheelset's vertical displacement and roll: {exc}")
         res.wall_time += time.perf_counter() - t0  # solve_time: all of the step's solving
         self._write(res)
+        if not rigid.converged:  # not found: the wheelset's status says so
+            self.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")
+            if SEVERITY.index(NOT_CONVERGED) > SEVERITY.index(int(self["status"])):
+                self["status"] = NOT_CONVERGED
         if not np.all(np.isfinite(self.real[self.real_outputs])):  # (inputs may be NaN)
             self.log.append("non-finite result; outputs set to zero")
             self._write(None)
@@ -242,7 +261,7 @@ class Slave:
                                                         OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
             self.log.append(f"{w.side} wheel: {STATUS_NAMES[w.status]}: {w.message}")
-        return FMI_WARNING if failed else FMI_OK
+        return FMI_WARNING if failed or not rigid.converged else FMI_OK
 
     def _write(self, res: WheelsetResult | None) -> None:
         """Outputs from ``res``; all zero (and no patches) for None."""

@@ -351,6 +351,43 @@ def test_bare_c_host_clean_environment(extracted, md, tmp_path):
     assert "ok: 3 cycles of 100 steps" in r.stdout
 
 
+def test_threads_instantiating_at_once(extracted, md, tmp_path):
+    """Four host threads instantiate the FMU at the same moment in a C host, the first
+    instantiation of the process (it starts Python): one starts it, the others wait, and
+    all four step their instances. (Without the start-up lock two threads could both start
+    the interpreter.)"""
+    headers = Path(fmpy.__file__).parent / "c-code"
+    host = tmp_path / "threads"
+    subprocess.run(["gcc", "-O2", f"-I{headers}",
+                    str(Path(__file__).parent / "fmu" / "threads.c"), "-o", str(host),
+                    "-ldl", "-pthread"], check=True)
+    binary = extracted / "binaries" / "linux64" / "RailContact.so"
+    for _ in range(3):  # a race: more than one chance to lose it
+        r = subprocess.run(["env", "-i", "PATH=/usr/bin:/bin", str(host), str(binary),
+                            (extracted / "resources").as_uri(), md.guid, "4", "3"],
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr[-3000:]
+        assert "ok: 4 threads" in r.stdout
+
+
+def test_missing_isolation_symbols_are_a_warning(extracted):
+    """A Python whose C API lacks what the shim isolates it with (Py_SetProgramName and the
+    flags, to be removed in 3.15) starts with a warning naming them, not silently: the
+    shim passes the missing names, the FMU's bootstrap turns them into the warning that the
+    logger gets."""
+    import runpy
+
+    boot = runpy.run_path(str(extracted / "resources" / "python" / "fmu_bootstrap.py"))
+    resources = str(extracted / "resources")
+    _, _, warning = boot["start"](resources, "mode=started\nsource=test\n")
+    assert "isolated" not in warning
+    _, _, warning = boot["start"](
+        resources, "mode=started\nsource=test\n"
+        "isolation_missing=Py_SetProgramName, Py_NoUserSiteDirectory\n")
+    assert "has no Py_SetProgramName, Py_NoUserSiteDirectory" in warning
+    assert "not start it fully isolated" in warning
+
+
 def test_libcosim(fmu):
     pytest.importorskip("libcosimpy")
     from libcosimpy.CosimExecution import CosimExecution
@@ -427,7 +464,19 @@ def _api_from(values: dict):
                   g.gauge_depth)
     ws = Wheelset(read_profile(g.wheel, "wheel", g.profile_unit), g.wheel_radius,
                   g.back_to_back, g.flange_back)
-    return ps, WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact)
+    return ps, WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact,
+                               convention=ps.modes.convention)
+
+
+def _slave_named(name: str):
+    """The Python slave of the fmpy instance ``name`` (fmpy is a Python host: the FMU's
+    slave lives in this interpreter)."""
+    import gc
+
+    found = [o for o in gc.get_objects()
+             if type(o).__name__ == "Slave" and getattr(o, "instance_name", None) == name]
+    assert len(found) == 1, name
+    return found[0]
 
 
 def test_every_mode_switch_is_an_enumeration(md):
@@ -534,10 +583,12 @@ def test_enumerations_set_before_initialization_take_effect(md, extracted):
     with that word as the setting (forces to 1e-9, iterations exactly), and the three
     FMU modes change the answer from the default's. (1 mm elements, for time; the dense
     convolution is left out, as slow; profile_unit: next test.)"""
-    from railcontact.fmu.variables import CHOICES
+    from railcontact.fmu.variables import CHOICES, PARAMETER_SOURCES
+    from railcontact.settings import ContactSettings
 
     coarse = {"element_size": 1e-3}
     default = _api_step(coarse)
+    sources = {name: (record, key) for name, record, key in PARAMETER_SOURCES}
     for c in CHOICES:
         base = c.name.removesuffix("_choice")
         for k, word in enumerate(c.items, start=1):
@@ -545,6 +596,13 @@ def test_enumerations_set_before_initialization_take_effect(md, extracted):
                 continue
             s = _instantiate(md, extracted, f"{base}-{k}", {c.name: k}, reals=coarse)
             assert not isinstance(s, int), (c.name, word)
+            # the slave's own settings took the word (pyfftw and scipy answer alike)
+            slave = _slave_named(f"{base}-{k}")
+            record, key = sources[base]
+            where = slave.contact.settings if record is ContactSettings else slave.modes
+            assert getattr(where, key) == word, (c.name, word)
+            if base == "convention":
+                assert slave.contact.convention == word
             got = _one_step(md, s, {base: word})
             s.terminate()
             s.freeInstance()
@@ -633,3 +691,116 @@ def test_enumerations_through_fmpy_start_values(fmu):
     assert list(runs[0]) == list(runs[1]) and runs[0]["status"] == 0
     assert runs[0]["eta_used_left"] != 0.0 and runs[2]["eta_used_left"] == 0.0
     assert runs[0]["normal_force_left"] != pytest.approx(runs[2]["normal_force_left"])
+
+
+def test_value_references_of_the_published_interface(md):
+    """The value references of the FMU's first published interface (commit 039db95's
+    modelDescription) are a published interface: a model built against them must keep
+    working, so variables added later come after them. These numbers are written down,
+    not computed."""
+    published = {  # name: (type, valueReference) at 039db95
+        ("wheel_profile", "String"): 0, ("tangential_solver", "String"): 10,
+        ("inclination", "Real"): 0, ("young", "Real"): 4, ("load_tolerance", "Real"): 10,
+        ("lateral_displacement", "Real"): 11, ("yaw", "Real"): 12,
+        ("load_left", "Real"): 13, ("load_right", "Real"): 14,
+        ("vertical_displacement", "Real"): 15, ("roll", "Real"): 16,
+        ("speed", "Real"): 17, ("xi_left", "Real"): 18, ("spin_speed", "Real"): 26,
+        ("normal_force_left", "Real"): 27, ("normal_force_right", "Real"): 28,
+        ("creep_force_x_left", "Real"): 29, ("force_vertical", "Real"): 65,
+        ("yaw_moment", "Real"): 66, ("solve_time", "Real"): 67,
+        ("contact_vertical_position_right", "Real"): 71,
+        ("n_patches_left", "Integer"): 0, ("status", "Integer"): 8,
+        ("status_left", "Integer"): 15, ("status_right", "Integer"): 16,
+    }
+    got = {(v.name, v.type): v.valueReference for v in md.modelVariables}
+    assert {k: got.get(k) for k in published} == published
+
+
+def test_convention_contact_through_the_fmu(fmu, extracted, md):
+    """convention = contact (the String, or convention_choice = 2): the creepage inputs
+    and the creep forces are CONTACT's, in the wheelset's frames (y to the left on both
+    wheels, railcontact.settings.convention.wheel_frame_creepage) (cksi, ceta, cphi) =
+    (-xi, eta, phi) and FX = -F_x: the same physical state in both conventions gives F_x
+    of opposite sign, equal to WheelsetContact(convention="contact")'s. (CONTACT poses
+    each patch at its reference point, railcontact at the contact point: the magnitudes
+    agree to the difference of the two frames, F_x to 0.5 % without spin, the lateral
+    force to 2.2 %.)"""
+    xi, eta, phi = 1e-3, -5e-4, 0.0
+    ours = {"xi_left": xi, "eta_left": eta, "phi_left": phi,
+            "xi_right": xi, "eta_right": eta, "phi_right": -phi}
+    theirs = {"xi_left": -xi, "eta_left": eta, "phi_left": phi,
+              "xi_right": -xi, "eta_right": eta, "phi_right": -phi}
+    out = ["creep_force_x_left", "creep_force_x_right", "force_longitudinal_left",
+           "force_lateral_right", "normal_force_left"]
+    got = {}
+    for name, start, creep in (("rc", {}, ours), ("contact", {"convention": "contact"}, theirs)):
+        s = Slave(fmu, extracted, md, f"convention-{name}", warm_start="none", **start)
+        assert s.step(lateral_displacement=3e-3, **creep) == 0
+        got[name] = dict(zip(out, s.get(*out), strict=True))
+        s.free()
+    _, wc = _api_from({"warm_start": "none", "convention": "contact"})
+    r = wc.solve(Pose(3e-3), loads=(83.3e3, 83.3e3),
+                 creepages=((-xi, eta, phi), (-xi, eta, -phi)))
+    fx = got["rc"]["creep_force_x_left"]
+    assert fx < -100.0  # railcontact: F_x = -f11 xi on the wheel
+    for side in ("left", "right"):
+        k = f"creep_force_x_{side}"
+        assert got["contact"][k] == pytest.approx(-got["rc"][k], rel=5e-3)
+        assert got["contact"][k] == pytest.approx(getattr(r, side).creep_force[0], rel=1e-9)
+    for k in ("force_longitudinal_left", "force_lateral_right", "normal_force_left"):
+        assert got["contact"][k] == pytest.approx(got["rc"][k], rel=3e-2)
+    s = _instantiate(md, extracted, "convention-enum", {"convention_choice": 2})
+    assert _slave_named("convention-enum").contact.convention == "contact"
+    s.terminate()
+    s.freeInstance()
+
+
+def _fmu_rigid_module(name: str):
+    """The FMU's own copy of railcontact.timestep.rigid, as the slave ``name`` uses it."""
+    import sys
+
+    package = type(_slave_named(name)).__module__.rsplit(".", 1)[0]
+    return sys.modules[f"{package}.timestep.rigid"]
+
+
+def test_rigid_wheelset_not_found_is_a_status(fmu, extracted, md, capsys, monkeypatch):
+    """Under load control the FMU reports the rigid wheelset's vertical displacement and
+    roll; when they are not found (one evaluation allowed, on the flange) the step says so:
+    status 1 (not converged), fmi2Warning, the message logged. An error in that solve is
+    the same status and a message, not an exception (fmi2Discard)."""
+    s = Slave(fmu, extracted, md, "rigid", warm_start="none")
+    rigid = _fmu_rigid_module("rigid")
+    assert s.step(lateral_displacement=8e-3) == 0 and s.get("status") in (0, 4)
+    monkeypatch.setattr(rigid, "MAX_EVALUATIONS", 1)
+    capsys.readouterr()
+    assert s.step(lateral_displacement=8e-3) == 0  # fmi2Warning: fmpy does not raise
+    assert s.get("status") == 1 and s.get("status_left") in (0, 4)
+    assert "rigid wheelset's vertical displacement and roll not converged" in \
+        capsys.readouterr().out
+
+    def broken(self):
+        raise rigid.RailContactError("a wheel beyond its profile at that roll")
+
+    monkeypatch.setattr(rigid.RigidWheelset, "solve", broken)
+    assert s.step(lateral_displacement=3e-3) == 0
+    assert s.get("status") == 1
+    assert "a wheel beyond its profile at that roll" in capsys.readouterr().out
+    s.free()
+
+
+def test_rigid_wheelset_can_be_skipped(fmu, extracted, md):
+    """rigid_wheelset = skip (its enumeration 2): under load control the rigid wheelset's
+    vertical displacement and roll are not solved (0), the moments are taken about the
+    nominal centre height r0, as the API's with vertical 0; the forces are the same."""
+    from railcontact.timestep.rigid import RigidSolution
+
+    s = Slave(fmu, extracted, md, "skip", warm_start="none", rigid_wheelset="skip")
+    assert s.step(lateral_displacement=3e-3, **CREEP) == 0
+    r = api("none").solve(Pose(3e-3), loads=(83.3e3, 83.3e3),
+                          creepages=((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3)))
+    assert r.vertical != 0.0 and r.roll > 0  # solved by default
+    r.rigid_solution = RigidSolution(0.0, 0.0)
+    assert s.get("wheelset_vertical_displacement", "wheelset_roll", "status") == [0, 0, 0]
+    np.testing.assert_allclose(s.get("roll_moment", "pitch_moment", "normal_force_left"),
+                               [r.moment[0], r.moment[1], r.left.normal_force], rtol=1e-9)
+    s.free()

@@ -4,17 +4,17 @@ centre and the rigid wheelset's vertical displacement and roll under load contro
 Truth: Nadal's formula by hand; the balance of a flange in full sliding (Y/Q equals
 Nadal's value at the contact angle); mirror symmetry; statics of the contact forces about
 the centre; Hertz's approach; and the penetration-controlled solve, which must give each
-wheel the approach the load-controlled one found.
+wheel back the load of the load-controlled one.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from railcontact.geometry.profiles import read_profile
-from railcontact.geometry.roll import contact_roll
 from railcontact.geometry.track import Pose, Track, Wheelset
 from railcontact.halfspace.materials import ElasticPair, Material
 from railcontact.timestep.validity import (
@@ -183,51 +183,130 @@ def test_moments_of_a_centred_wheelset():
     assert abs(r.moment[2]) < 1e-6 * abs(r.moment[1])
 
 
+def _centroid_s(wheel: WheelContact) -> float:
+    """The wheel's pressure centroid [m] along the contact plane's lateral axis s (towards
+    the field side) from the contact point, from its pressure field."""
+    p = wheel.patches[0].normal
+    return float((p.grid.y[None, :] * p.pressure).sum() / p.pressure.sum())
+
+
 def test_roll_moment_of_unequal_loads():
     """Centred, loads 90 and 70 kN, no creepage: each wheel's force is its load Q along
-    the normal, leaning by the contact angle g towards the track centre; about the centre
-    at height h that is M_X = (Q_L - Q_R) (e - h tan(g)) with e the contact's lateral
-    distance (statics by hand from the contact point)."""
+    the normal, leaning by the contact angle g towards the track centre, and acts at the
+    pressure's centroid, c along the contact plane from the contact point (field side
+    +); about the centre at height h that is M_X = (Q_L - Q_R) (e - h tan(g)) + N_L c_L
+    - N_R c_R with e the contact's lateral distance (statics by hand; the centroid's
+    share, 2.9 mm x 20 kN, is 0.4 % here)."""
     r = contact().solve(Pose(0.0), loads=(90e3, 70e3), creepages=NONE)
-    L = r.left
+    L, R = r.left, r.right
     e, g = L.contact_point[1], L.contact_angle
     h = 0.46 + r.vertical - L.contact_point[2]
-    assert r.moment[0] == pytest.approx(20e3 * (e - h * math.tan(g)), rel=2e-3)
+    cl, cr = _centroid_s(L), _centroid_s(R)
+    assert abs(cl) > 1e-3 and abs(cr) > 1e-3  # 2.9 mm towards the flange
+    hand = (20e3 * (e - h * math.tan(g)) + L.normal_force * cl - R.normal_force * cr)
+    assert r.moment[0] == pytest.approx(hand, rel=2e-4)
     assert r.moment[0] > 0  # the heavier left wheel is pushed up harder
 
 
-@pytest.mark.parametrize(("lateral", "loads", "rel"), [
-    (0.0, (Q, Q), 2e-3), (0.0, (90e3, 70e3), 3e-3), (3e-3, (Q, Q), 1e-2)])
-def test_vertical_and_roll_under_load_control(lateral, loads, rel):
+def test_moments_integrate_the_pressure_and_traction_fields():
+    """The moment of the rails' forces about the wheelset centre is the sum over every
+    element of every patch of (its place - centre) x (its force): pressure along the
+    normal n and traction along x and s, each element at x e_x + s e_s from its contact
+    point in the contact plane (e_s = (0, sgn cos(g), sin(g)), n = (0, -sgn sin(g),
+    cos(g)) in the track frame; sgn +1 left, -1 right). 5 mm lateral, yawed, with
+    creepages: the pressure's centroid shifts M_X by about 2 %, which the contact points
+    alone miss."""
+    wc = contact()
+    r = wc.solve(Pose(5e-3, 2e-3), loads=(Q, 0.9 * Q),
+                 creepages=((1e-3, 2e-3, 0.1), (-1e-3, 2e-3, -0.1)))
+    centre = np.array([0.0, 5e-3, 0.46 + r.vertical])
+    total = np.zeros(3)
+    at_points = np.zeros(3)
+    for w in r.wheels:
+        sgn = 1.0 if w.side == "left" else -1.0
+        for p in w.patches:
+            cp, n, t = p.geometry, p.normal, p.tangential
+            g = cp.contact_angle
+            ex = np.array([1.0, 0.0, 0.0])
+            es = np.array([0.0, sgn * math.cos(g), math.sin(g)])
+            en = np.array([0.0, -sgn * math.sin(g), math.cos(g)])
+            x, s = n.grid.mesh()
+            da = n.grid.element_area
+            place = (np.asarray(cp.position)[None, None, :] + x[..., None] * ex
+                     + s[..., None] * es - centre)
+            force = (t.traction[0][..., None] * ex + t.traction[1][..., None] * es
+                     + n.pressure[..., None] * en) * da
+            total += np.cross(place, force).sum(axis=(0, 1))
+            at_points += np.cross(np.asarray(cp.position) - centre, force.sum(axis=(0, 1)))
+    assert np.allclose(r.moment, total, rtol=1e-9, atol=1e-9 * Q)
+    assert abs(total[0] - at_points[0]) > 0.01 * abs(total[0])  # the centroid matters
+
+
+@pytest.mark.parametrize(("lateral", "loads"), [
+    (0.0, (Q, Q)), (0.0, (90e3, 70e3)), (3e-3, (Q, Q)), (6.5e-3, (Q, Q)), (8e-3, (Q, Q)),
+    (10e-3, (Q, Q))])
+def test_vertical_and_roll_under_load_control(lateral, loads):
     """The rigid wheelset's vertical displacement and roll that the load-controlled step
-    reports, given to a penetration-controlled step, give each wheel the same approach
-    (to 10 nm, RIGID_TOL) and so the same loads: to the grid's accuracy at 0 mm (the two
-    controls mesh differently), to 1 % at 3 mm, where the rolled wheelset's contact moves
-    by r0 phi = 0.08 mm and with it the curvatures. Centred with equal loads the roll is zero; at
-    +3 mm the left wheel runs on the larger radius and the wheelset rolls left side up,
-    as :func:`~railcontact.geometry.roll.contact_roll` (Brent's method on the same
-    compatibility) finds, and by about ((Z_L + r_L) - (Z_R + r_R)) / (Y_L - Y_R) from the
-    contact points (the approaches and the wheels' own contact points left out: 5 %)."""
+    reports, given to a penetration-controlled step, give each wheel its load back: to
+    the grid's accuracy (the two controls mesh differently), on the tread (0, 3 mm), at
+    the flange's root (6.5 mm: two-point contact) and on the flange (8, 10 mm), where
+    rolling the wheelset moves the contacts (the approaches at the pose's roll alone gave
+    31.6/0, 748/0 and 429/0 kN back at 6.5, 8 and 10 mm). Centred with equal loads the
+    roll is zero; at +3 mm the left wheel runs on the larger radius and the wheelset rolls
+    left side up, by about ((Z_L + r_L) - (Z_R + r_R)) / (Y_L - Y_R) from the contact
+    points (the approaches and the wheels' own contact points left out: 5 %); with the
+    left wheel on its flange it rolls further."""
     wc = contact()
     r = wc.solve(Pose(lateral), loads=loads, creepages=NONE)
-    assert r.status == OK
+    assert r.status in (OK, OUTSIDE_VALIDITY)
+    rigid = r.rigid_solution
+    assert rigid.converged, rigid.message
     v, phi = r.vertical, r.roll
     p = wc.solve(Pose(lateral, 0.0, phi), vertical=v, creepages=NONE)
     assert p.vertical == v and p.roll == phi
-    for a, b, q in zip(r.wheels, p.wheels, loads, strict=True):
-        assert b.approach == pytest.approx(a.approach, abs=1e-8)
-        assert b.track_force[2] == pytest.approx(q, rel=rel)
+    for b, q in zip(p.wheels, loads, strict=True):
+        assert b.track_force[2] == pytest.approx(q, rel=3e-3)
     if lateral == 0.0 and loads[0] == loads[1]:
         assert abs(phi) < 1e-12
-    if lateral > 0:
+    if lateral == 3e-3:
         L, R = r.left, r.right
-        brent = contact_roll(wc.track, wc.wheelset, lateral, 0.0, R.approach - L.approach)
-        assert phi > 0 and phi == pytest.approx(brent, abs=1e-8)
         hand = ((L.contact_point[2] + L.rolling_radius) - (R.contact_point[2]
                 + R.rolling_radius)) / (L.contact_point[1] - R.contact_point[1])
-        assert phi == pytest.approx(hand, rel=0.05)
+        assert phi > 0 and phi == pytest.approx(hand, rel=0.05)
+    if lateral > 3e-3:
+        assert phi > 3e-4
     if loads[0] > loads[1]:
         assert phi < 0  # the heavier left wheel sinks further
+
+
+@pytest.mark.parametrize("lateral", [3e-3, 8e-3, 10e-3])
+def test_vertical_and_roll_with_creepages(lateral):
+    """With creepages a wheel load counts the creep forces, whose share on the flange
+    (F_y sin(gamma), gamma ~ 70 deg) changes as the wheelset rolls: the rigid wheelset's
+    vertical displacement and roll, given to a penetration-controlled step with the same
+    creepages, give the loads (90 and 75 kN) back (matching the normal forces' share alone
+    gave 0.52 Q at 8 mm and 1.8 Q at 10 mm)."""
+    wc = contact()
+    creep = ((1e-3, 2e-3, 0.2), (1e-3, 2e-3, -0.2))
+    loads = (90e3, 75e3)
+    r = wc.solve(Pose(lateral), loads=loads, creepages=creep)
+    assert r.rigid_solution.converged, r.rigid_solution.message
+    p = wc.solve(Pose(lateral, 0.0, r.roll), vertical=r.vertical, creepages=creep)
+    for b, q in zip(p.wheels, loads, strict=True):
+        assert b.track_force[2] == pytest.approx(q, rel=3e-3)
+
+
+def test_vertical_and_roll_not_found_is_said(monkeypatch):
+    """On the flange the roll needs several evaluations; allowed only one, the solution
+    says it did not converge (with by how much) instead of passing its first guess as
+    ok."""
+    from railcontact.timestep import rigid
+
+    monkeypatch.setattr(rigid, "MAX_EVALUATIONS", 1)
+    r = contact().solve(Pose(8e-3), loads=(Q, Q), creepages=NONE)
+    s = r.rigid_solution
+    assert not s.converged and s.evaluations == 1
+    assert "not converged" in s.message and "um" in s.message
 
 
 def test_a_result_pickles_and_finds_its_roll_later():

@@ -50,10 +50,28 @@ class Variable:
         return "".join(w.capitalize() for w in base.split("_"))
 
 
+MODELICA_KEYWORDS = frozenset((
+    "algorithm", "and", "annotation", "block", "break", "class", "connect", "connector",
+    "constant", "constrainedby", "der", "discrete", "each", "else", "elseif", "elsewhen",
+    "encapsulated", "end", "enumeration", "equation", "expandable", "extends", "external",
+    "false", "final", "flow", "for", "function", "if", "import", "impure", "in", "initial",
+    "inner", "input", "loop", "model", "not", "operator", "or", "outer", "output",
+    "package", "parameter", "partial", "protected", "public", "pure", "record",
+    "redeclare", "replaceable", "return", "stream", "then", "true", "type", "when",
+    "while", "within"))
+"""Modelica's reserved words (Modelica Language Specification 3.6, section 2.3.3): not an
+identifier, so no enumeration item's name."""
+ITEM_ALIASES = {"in": "inch"}
+"""Choice words whose item name is spelled out (the profile unit ``in``)."""
+
+
 def item_name(word: str) -> str:
     """An enumeration item's name for a choice word (previous+estimate:
-    previous_estimate), a Modelica identifier as tools import them."""
-    return re.sub(r"\W", "_", word)
+    previous_estimate, in: inch), a Modelica identifier as tools import them."""
+    name = ITEM_ALIASES.get(word, re.sub(r"\W", "_", word))
+    if name in MODELICA_KEYWORDS:  # a future choice word: spell it apart
+        name += "_"
+    return name
 
 
 def _wheel(name, type_, unit, description, causality="output", start=None, value=None):
@@ -94,9 +112,19 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("max_y_q", ContactSettings, "max_y_q"),
     ("max_penetration", ContactSettings, "max_penetration"),
     ("max_wheel_load", ContactSettings, "max_wheel_load"),
+    ("convention", FMUModes, "convention"),
+    ("rigid_wheelset", FMUModes, "rigid_wheelset"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
+APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid_wheelset")
+"""Parameters added after the first published interface (commit 039db95): :func:`table`
+numbers them after every variable of it, so that its value references stay (they are
+numbered per type: appending a parameter here, and its ``_choice`` at the end of
+:data:`CHOICES`, moves nothing). A new parameter goes at the end of
+:data:`PARAMETER_SOURCES` and of this list; a new output at the end of :data:`OUTPUTS`
+only if it is no Real (a Real output would move these parameters: append it after
+them in :func:`table`)."""
 
 
 def _parameter(name: str, record: type[Record], key: str) -> Variable:
@@ -153,7 +181,8 @@ def resolve_choices(values: Mapping[str, Any]) -> dict[str, Any]:
         if not ok:
             raise RailContactError(
                 f"parameter {v.name} must be one of " + ", ".join(
-                    f"{k} ({w})" for k, w in enumerate(v.items, start=1)) + f", got {raw!r}")
+                    f"{k} ({w})" for k, w in enumerate(v.items, start=1))
+                + f", got {_plain(raw)!r}")
         base = v.name.removesuffix(CHOICE_SUFFIX)
         word, default = v.items[k - 1], v.items[v.start - 1]
         string = out.get(base, default)
@@ -163,6 +192,14 @@ def resolve_choices(values: Mapping[str, Any]) -> dict[str, Any]:
                                        f"({word!r}) disagree; set one of them")
             out[base] = word
     return out
+
+
+def _plain(raw: Any) -> Any:
+    """``raw`` as a Python number for a message (a numpy scalar shows as np.int32(5))."""
+    try:
+        return raw.item()
+    except AttributeError:
+        return raw
 
 
 @dataclass(frozen=True)
@@ -302,8 +339,9 @@ OUTPUTS = [
              "tangential BEM sweeps of the last step, both wheels",
              _total("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
-             f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0): "
-             f"{STATUS}",
+             f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0), "
+             f"1 also when control=load found no wheelset_vertical_displacement and "
+             f"wheelset_roll: {STATUS}",
              lambda r: r.status),
     *_wheel("load_passes", "Integer", "", "solves of the wheel in the last step (load loop)",
             value=lambda w: w.load_passes),
@@ -322,10 +360,12 @@ OUTPUTS = [
     Variable("wheelset_vertical_displacement", "Real", "output", None, "m",
              "wheelset centre's vertical displacement, positive up, from r0 above the rail "
              "tops: the input under control=penetration; under control=load the rigid "
-             "wheelset's that gives both wheels their approaches", lambda r: r.vertical),
+             "wheelset's at which both wheels, penetration-controlled, carry their loads "
+             "(status 1 when not found; 0 with rigid_wheelset=skip)", lambda r: r.vertical),
     Variable("wheelset_roll", "Real", "output", None, "rad",
              "wheelset roll angle, positive left side up: the input under "
-             "control=penetration; under control=load the rigid wheelset's",
+             "control=penetration; under control=load the rigid wheelset's (0 with "
+             "rigid_wheelset=skip)",
              lambda r: r.roll),
     Variable("roll_moment", "Real", "output", None, "N.m",
              "moment of the rails on the wheelset about the track X axis through its centre "
@@ -365,7 +405,9 @@ def table() -> list[Variable]:
     """All variables with their value references (numbered per type from 0)."""
     counters: dict[str, int] = {}
     out = []
-    for v in PARAMETERS + INPUTS + OUTPUTS + CHOICES:
+    first = [v for v in PARAMETERS if v.name not in APPENDED]
+    appended = [next(v for v in PARAMETERS if v.name == name) for name in APPENDED]
+    for v in first + INPUTS + OUTPUTS + appended + CHOICES:
         k = counters.get(v.type, 0)
         counters[v.type] = k + 1
         out.append(replace(v, vr=k))

@@ -27,6 +27,9 @@ CASE_SIDES = ("left", "right", "both")
 CONVENTIONS = ("railcontact", "contact")
 """How creepages are read and forces written: railcontact's own roles and frames, or
 CONTACT's (:mod:`railcontact.settings.convention`)."""
+RIGID_WHEELSET = ("solve", "skip")
+"""Under load control: find the rigid wheelset's vertical displacement and roll, or not
+(the FMU's outputs then 0)."""
 PATCH_FRAMES = ("reference", "rigid")
 """Where a wheel-rail patch's frame is placed: CONTACT's reference point, or the rigid
 contact point."""

@@ -16,7 +16,14 @@ from typing import ClassVar
 
 from ..errors import RailContactError
 from .case import GridSettings, NormalSettings, PatchSettings, TangentialSettings
-from .choices import CONTROLS, CREEPAGE_INPUTS, LOAD_DEFINITIONS, WARM_STARTS
+from .choices import (
+    CONTROLS,
+    CONVENTIONS,
+    CREEPAGE_INPUTS,
+    LOAD_DEFINITIONS,
+    RIGID_WHEELSET,
+    WARM_STARTS,
+)
 from .fields import Record, document, inherit, setting
 
 MAX_ELEMENT_SIZE = 0.005
@@ -128,3 +135,14 @@ class FMUModes(Record):
     creepage_input: str = setting("direct", "choice", "", "creepages per wheel (direct) or "
                                   "from the wheelset velocities (kinematic)",
                                   choices=CREEPAGE_INPUTS)
+    convention: str = setting("railcontact", "choice", "", "creepage inputs, creep forces "
+                              "and spin moments in railcontact's frames (body 1 the wheel) "
+                              "or CONTACT's (body 1 the rail, right wheel mirrored; "
+                              "railcontact.settings.convention); the track-frame outputs "
+                              "are railcontact's in both", choices=CONVENTIONS)
+    rigid_wheelset: str = setting("solve", "choice", "", "under control=load, solve the "
+                                  "rigid wheelset's vertical displacement and roll at which "
+                                  "both wheels carry their loads (a few more normal solves "
+                                  "per step: scripts/bench_rigid.py) or skip them (those "
+                                  "outputs 0, the moments taken about the nominal centre "
+                                  "height r0)", choices=RIGID_WHEELSET)

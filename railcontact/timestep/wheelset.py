@@ -79,7 +79,7 @@ from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
-from .rigid import RigidWheelset
+from .rigid import RigidSolution, RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
@@ -203,7 +203,9 @@ class WheelContact:
     moment: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Moment of the rail's forces on the wheel about the point (0, y, 0) of the track
     frame (under the wheelset centre, at rail-top height), track components (X, Y, Z)
-    [N m], spin moments included."""
+    [N m]: the pressure and traction over each patch (each element's force at its place
+    in the patch's plane: the spin moment and the pressure's offsets from the contact
+    point included)."""
 
     @property
     def n_patches(self) -> int:
@@ -231,21 +233,35 @@ class WheelsetResult:
 
     @property
     def status(self) -> int:
-        """The wheels' most severe status (:data:`SEVERITY`)."""
+        """The wheels' most severe status (:data:`SEVERITY`). Whether the rigid
+        wheelset's :attr:`vertical` and :attr:`roll` were found under load control is
+        :attr:`rigid_solution`'s (found only when asked for; the FMU's ``status`` counts
+        it)."""
         return max((w.status for w in self.wheels), key=SEVERITY.index)
 
     @cached_property
-    def _vertical_roll(self) -> tuple[float, float]:
+    def rigid_solution(self) -> RigidSolution:
+        """:attr:`vertical` and :attr:`roll` with whether they were found
+        (:class:`~railcontact.timestep.rigid.RigidSolution`: under load control check its
+        ``converged`` and ``message``)."""
         if self.rigid is None:
-            return (0.0, 0.0)
-        return self.rigid if isinstance(self.rigid, tuple) else self.rigid.solve()
+            return RigidSolution(0.0, 0.0)
+        if isinstance(self.rigid, tuple):
+            return RigidSolution(*self.rigid)
+        return self.rigid.solve()
+
+    @property
+    def _vertical_roll(self) -> tuple[float, float]:
+        s = self.rigid_solution
+        return (s.vertical, s.roll)
 
     @property
     def vertical(self) -> float:
         """Vertical displacement of the wheelset centre [m], positive up, from one nominal
         radius above the rail tops: the input under penetration control; under load
-        control the rigid wheelset's that gives both wheels their approaches
-        (:mod:`~railcontact.timestep.rigid`); 0 when out of range."""
+        control the rigid wheelset's at which both wheels, penetration-controlled, carry
+        their loads (:mod:`~railcontact.timestep.rigid`; whether it was found:
+        :attr:`rigid_solution`); 0 when out of range."""
         return self._vertical_roll[0]
 
     @property
@@ -390,11 +406,12 @@ class WheelsetContact:
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
         if vertical is not None:
             result.rigid = (vertical, pose.roll)
-        elif not off_track:  # found when first asked for: it costs four contact searches
+        elif not off_track:  # found when first asked for (the wheels solved at other rolls)
             result.rigid = RigidWheelset(
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
-                      if w.patches else None for w in wheels))
+                      if w.patches else None for w in wheels),
+                _RolledApproaches(self, pose, loads, creepages, kinematics, time))
         return result
 
     def _check_validity(self, wheel: WheelContact) -> None:
@@ -540,6 +557,37 @@ class WheelsetContact:
         return patches, creepages, memory
 
 
+@dataclass(frozen=True)
+class _RolledApproaches:
+    """``phi -> (delta_L, delta_R)``: the vertical approaches [m] at which the wheels,
+    the wheelset rolled to ``phi``, carry the step's loads with its creepages (the step's
+    solve of each wheel, warm-started from the contact's memory, which it leaves as it
+    is; :mod:`.rigid`)."""
+
+    contact: WheelsetContact
+    pose: Pose
+    loads: tuple[float, float]
+    creepages: tuple | None
+    kinematics: Kinematics | None
+    time: float | None
+
+    def __call__(self, phi: float) -> tuple[float, float]:
+        pose = Pose(self.pose.lateral, self.pose.yaw, phi)
+        out = []
+        for k, side in enumerate(("left", "right")):
+            if self.loads[k] <= 0:
+                out.append(0.0)
+                continue
+            creep = None if self.creepages is None else self.creepages[k]
+            wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+                                                creep, self.kinematics, self.time)
+            if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
+                raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
+                                       + (wheel.message if wheel.patches else "no contact"))
+            out.append(wheel.approach)
+        return out[0], out[1]
+
+
 def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
     """``value`` as a pair (left, right) of numbers (``size`` 1) or of ``size``-tuples."""
     try:
@@ -575,13 +623,23 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         f_u = ps * math.cos(g) - n.force * math.sin(g)
         fu += f_u
         fz += ps * math.sin(g) + n.force * math.cos(g)
-        mz += cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
-        # track frame, about (0, y, 0): r x F plus the spin couple (sgn pm) n, with
-        # n = (0, -sgn sin(g), cos(g)) the contact normal
+        # the pressure's first moments about the patch's origin (the contact point) along
+        # x and s: the normal force acts at the pressure's centroid, not at the point
+        da = n.grid.element_area
+        first_x = float((n.grid.x[:, None] * n.pressure).sum() * da)
+        first_s = float((n.grid.y[None, :] * n.pressure).sum() * da)
+        mz += (cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
+               - first_x * math.sin(g))
+        # track frame, about (0, y, 0): r x F, plus the spin couple (sgn pm) n (the
+        # traction's moment about n through the origin), plus the pressure's offsets
+        # x e_x + s e_s crossed with its normal n; e_s = (0, sgn cos(g), sin(g)),
+        # n = (0, -sgn sin(g), cos(g)): e_x x n = (0, -cos(g), -sgn sin(g)), e_s x n =
+        # (sgn, 0, 0)
         lever = np.array([cp.position[0], cp.position[1] - pose.lateral, cp.position[2]])
         force = np.array([px, sgn * f_u, ps * math.sin(g) + n.force * math.cos(g)])
-        moment += np.cross(lever, force) + np.array([0.0, -pm * math.sin(g),
-                                                     sgn * pm * math.cos(g)])
+        moment += np.cross(lever, force) + np.array([
+            sgn * first_s, -pm * math.sin(g) - first_x * math.cos(g),
+            sgn * (pm * math.cos(g) - first_x * math.sin(g))])
         converged &= n.converged and (t is None or t.converged)
         work.absorb(p.work)
         work.load_passes = max(work.load_passes, p.work.load_passes)
