@@ -24,6 +24,7 @@ from .fmu import variables as V
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import FMUModes
+from .table import TableContact  # (xarray, zarr: imported when a table is opened)
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
 from .timestep.rigid import RigidSolution
 from .timestep.wheelset import (
@@ -172,6 +173,9 @@ class Slave:
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
         ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS + V.CHOICES})
         self.modes = ps.modes
+        if ps.modes.contact_model == "table":
+            self.contact = self._table(ps.modes)
+            return
         g = ps.geometry  # profile_unit: the String or its enumeration
         wheel = self._profile("wheel_profile", "wheel", g.profile_unit)
         rail = self._profile("rail_profile", "rail", g.profile_unit)
@@ -182,6 +186,27 @@ class Slave:
             raise RailContactError(f"parameter error: {exc}") from None
         self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact,
                                        convention=ps.modes.convention)
+
+    def _table(self, modes: FMUModes):
+        """The contact table of ``table_file`` (looked up in the resources first, like a
+        profile) as the step's contact (:class:`railcontact.table.TableContact`)."""
+        if modes.control != "load" or modes.load_definition != "total":
+            raise RailContactError(
+                "contact_model = table: a contact table is built by the total vertical wheel "
+                f"load; set control = load and load_definition = total (got control = "
+                f"{modes.control}, load_definition = {modes.load_definition})")
+        value = modes.table_file
+        if not value:
+            raise RailContactError("contact_model = table needs the parameter table_file "
+                                   "(a store of railcontact table build)")
+        path = self.resources / value
+        try:
+            return TableContact.open(path if path.exists() else value)
+        except RailContactError as exc:
+            raise RailContactError(f"parameter table_file = {value!r}: {exc}") from None
+        except Exception as exc:  # a folder that is no Zarr store, a damaged store
+            raise RailContactError(f"parameter table_file = {value!r}: not a contact table "
+                                   f"({type(exc).__name__}: {exc})") from None
 
     def _exit_initialization(self) -> int:
         try:
@@ -260,7 +285,9 @@ class Slave:
         failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
                                                         OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
-            self.log.append(f"{w.side} wheel: {STATUS_NAMES[w.status]}: {w.message}")
+            name = STATUS_NAMES[w.status]  # (a message may name its status already)
+            text = w.message if w.message.startswith(name) else f"{name}: {w.message}"
+            self.log.append(f"{w.side} wheel: {text}")
         return FMI_WARNING if failed or not rigid.converged else FMI_OK
 
     def _write(self, res: WheelsetResult | None) -> None:

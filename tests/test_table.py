@@ -353,41 +353,68 @@ def test_bad_axes(entry, match):
     assert parse_spec(ok).shape == (3, 2, 2)
 
 
-def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, tmp_path):
-    """The FMU with contact_model = table (fmu_src/slave.py making TableContact its
-    contact, docs/tables.md) through fmpy: every node of the table, both wheels, exactly;
-    outside the table status 3. Runs once the FMU has the mode (wired with the FMU's
-    enumerations, after issue 21's merge)."""
-    from railcontact.fmu import variables as V
-
-    params = {v.name: v for v in V.PARAMETERS}
-    if "table_file" not in params or "contact_model" not in params:
-        pytest.skip("the FMU has no contact_model = table yet (the slave calls "
-                    "railcontact.table.TableContact, see docs/tables.md)")
+@pytest.fixture(scope="module")
+def table_fmu(tmp_path_factory):
+    """The FMU (built once for this module), its model description and unzipped folder."""
     fmpy = pytest.importorskip("fmpy")
     if shutil.which("gcc") is None:
         pytest.skip("gcc not available")
-    from fmpy.fmi2 import FMU2Slave
     from fmpy.model_description import read_model_description
 
     from railcontact.fmu import build_fmu
 
-    fmu = build_fmu(tmp_path / "RailContact.fmu", [])
-    md = read_model_description(str(fmu))
-    unzipped = fmpy.extract(str(fmu))
+    fmu = build_fmu(tmp_path_factory.mktemp("fmu") / "RailContact.fmu", [])
+    return read_model_description(str(fmu)), fmpy.extract(str(fmu))
+
+
+def _table_slave(table_fmu, model: str, table_file: str, **strings: str):
+    """An FMU instance in initialization mode with contact_model = ``model`` (set through
+    its enumeration, as FMI tools do), ``table_file`` and further String parameters."""
+    from fmpy.fmi2 import FMU2Slave
+
+    md, unzipped = table_fmu
     var = {v.name: v for v in md.modelVariables}
     s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="table")
     s.instantiate()
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
-    mode = var["contact_model"]
-    if mode.type == "String":
-        s.setString([mode.valueReference], ["table"])
-    else:  # an enumeration: the value of its item "table"
-        items = {i.name: int(i.value) for i in mode.declaredType.items}
-        s.setInteger([mode.valueReference], [items["table"]])
-    s.setString([var["table_file"].valueReference], [str(built[1].resolve())])
+    items = {i.name: int(i.value) for i in var["contact_model_choice"].declaredType.items}
+    s.setInteger([var["contact_model_choice"].valueReference], [items[model]])
+    s.setString([var["table_file"].valueReference], [table_file])
+    for name, value in strings.items():
+        s.setString([var[name].valueReference], [value])
+    return s, var
+
+
+@pytest.mark.parametrize("table_file, strings, words", [
+    ("", {}, "needs the parameter table_file"),
+    ("no/such/table.zarr", {}, "table_file = 'no/such/table.zarr'"),
+    ("BUILT", {"control": "penetration"}, "set control = load"),
+    ("BUILT", {"load_definition": "normal"}, "load_definition = total"),
+])
+def test_fmu_table_mode_bad_parameters_are_an_error_at_initialization(
+        built, table_fmu, table_file, strings, words, capsys):
+    """contact_model = table without a table, with a path that holds none, or with modes a
+    table cannot answer: fmi2Error at exitInitializationMode, the logger naming why."""
+    from fmpy.fmi1 import FMICallException
+
+    table_file = str(built[1].resolve()) if table_file == "BUILT" else table_file
+    s, _ = _table_slave(table_fmu, "table", table_file, **strings)
+    with pytest.raises(FMICallException) as err:
+        s.exitInitializationMode()
+    assert err.value.status == 3  # fmi2Error, not fmi2Fatal
+    s.freeInstance()
+    log = capsys.readouterr().out  # fmpy's logger prints "[ERROR] message"
+    assert "[ERROR]" in log and words in log, log
+
+
+def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, table_fmu):
+    """The FMU with contact_model = table (fmu_src/slave.py making TableContact its
+    contact, docs/tables.md) through fmpy: every node of the table, both wheels, exactly;
+    outside the table status 3. Runs once the FMU has the mode (wired with the FMU's
+    enumerations, after issue 21's merge)."""
+    s, var = _table_slave(table_fmu, "table", str(built[1].resolve()))
     s.exitInitializationMode()
     table = ContactTable.open(built[1])
     t = 0.0

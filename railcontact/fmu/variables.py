@@ -114,10 +114,13 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("max_wheel_load", ContactSettings, "max_wheel_load"),
     ("convention", FMUModes, "convention"),
     ("rigid_wheelset", FMUModes, "rigid_wheelset"),
+    ("contact_model", FMUModes, "contact_model"),
+    ("table_file", FMUModes, "table_file"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
-APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid_wheelset")
+APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid_wheelset",
+            "contact_model", "table_file")
 """Parameters added after the first published interface (commit 039db95): :func:`table`
 numbers them after every variable of it, so that its value references stay (they are
 numbered per type: appending a parameter here, and its ``_choice`` at the end of

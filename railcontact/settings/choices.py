@@ -30,6 +30,9 @@ CONTACT's (:mod:`railcontact.settings.convention`)."""
 RIGID_WHEELSET = ("solve", "skip")
 """Under load control: find the rigid wheelset's vertical displacement and roll, or not
 (the FMU's outputs then 0)."""
+CONTACT_MODELS = ("bem", "table")
+"""How the FMU finds a step's contact: the exact BEM, or interpolation in a contact table
+(:mod:`railcontact.table`)."""
 PATCH_FRAMES = ("reference", "rigid")
 """Where a wheel-rail patch's frame is placed: CONTACT's reference point, or the rigid
 contact point."""

@@ -25,7 +25,8 @@ class Spec:
     Attributes
     ----------
     kind
-        ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"choice"``, ``"ints2"`` (a pair of
+        ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"str?"`` (a string that may be
+        empty: not set), ``"choice"``, ``"ints2"`` (a pair of
         counts), ``"range"`` ([min, max], increasing), ``"floats3"`` (three numbers),
         ``"floats12"`` (one number, or one per body) or ``"float|choice"`` (a number or one
         of ``choices``).
@@ -139,6 +140,10 @@ class Record:
         if kind == "choice":
             if value not in spec.choices:
                 cls._fail(f"{where} must be {spec.bounds_text()}, got {value!r}")
+            return value
+        if kind == "str?":
+            if not isinstance(value, str):
+                cls._fail(f"{where} must be a string, got {value!r}")
             return value
         if kind == "str":
             if not isinstance(value, str) or not value:

@@ -17,6 +17,7 @@ from typing import ClassVar
 from ..errors import RailContactError
 from .case import GridSettings, NormalSettings, PatchSettings, TangentialSettings
 from .choices import (
+    CONTACT_MODELS,
     CONTROLS,
     CONVENTIONS,
     CREEPAGE_INPUTS,
@@ -146,3 +147,11 @@ class FMUModes(Record):
                                   "per step: scripts/bench_rigid.py) or skip them (those "
                                   "outputs 0, the moments taken about the nominal centre "
                                   "height r0)", choices=RIGID_WHEELSET)
+    contact_model: str = setting("bem", "choice", "", "each step's contact: the exact BEM "
+                                 "(bem) or interpolation in the contact table table_file "
+                                 "(table; made by railcontact table build, control = load "
+                                 "and load_definition = total only; vertical displacement "
+                                 "and roll outputs 0)", choices=CONTACT_MODELS)
+    table_file: str = setting("", "str?", "", "the contact table (a Zarr store of railcontact "
+                              "table build) for contact_model = table: a folder in the FMU's "
+                              "resources or a path")
