@@ -108,8 +108,11 @@ def test_flange_climb_at_10_mm_is_outside_validity():
     """Issue 20's case: at 10 mm the left contact is past the flange's steepest point
     (61 deg at S = -41 mm against 70 deg at -38.5 mm) and, at mu = 0.4 with no creep
     forces, Y/Q = tan(61 deg) = 1.8 is beyond Nadal's 1.12: solved, outside validity,
-    the message naming each quantity; the right wheel on its tread is ok."""
-    r = contact(friction=0.4).solve(Pose(10e-3), loads=(Q, Q), creepages=NONE)
+    the message naming each quantity; the right wheel on its tread is ok. At the rigid
+    point, where the case was reported (the frame at the reference point is at S = -40.99
+    mm, 61.3 deg: the same flags)."""
+    r = contact(friction=0.4, patch_frame="rigid").solve(Pose(10e-3), loads=(Q, Q),
+                                                         creepages=NONE)
     w = r.left
     assert w.status == OUTSIDE_VALIDITY and r.status == OUTSIDE_VALIDITY
     assert w.validity == Y_Q | NADAL | FLANGE_CLIMB
@@ -128,10 +131,11 @@ def test_load_and_penetration_limits():
     assert r.left.validity == LOAD and r.left.status == OUTSIDE_VALIDITY
     assert "wheel load Q = 500 kN above max_wheel_load = 400 kN" in r.left.message
     assert r.right.status == OK
-    r = contact(max_penetration=0.05e-3).solve(Pose(0.0), loads=(Q, Q), creepages=NONE)
+    r = contact(max_penetration=0.05e-3, patch_frame="rigid").solve(Pose(0.0), loads=(Q, Q),
+                                                                    creepages=NONE)
     for w in r.wheels:
-        # one patch at first contact: the normal penetration is the vertical approach
-        # projected on the normal
+        # one patch at first contact, its frame at the rigid point: the normal penetration
+        # is the vertical approach projected on the normal
         assert w.penetration == pytest.approx(w.approach * math.cos(w.contact_angle),
                                               rel=1e-6)
         assert w.validity == PENETRATION and "normal penetration 0.0673 mm" in w.message

@@ -94,6 +94,7 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("max_y_q", ContactSettings, "max_y_q"),
     ("max_penetration", ContactSettings, "max_penetration"),
     ("max_wheel_load", ContactSettings, "max_wheel_load"),
+    ("patch_frame", ContactSettings, "patch_frame"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
