@@ -16,7 +16,7 @@ that figures compare across machines (issue 18's targets: warm step <= 0.03, col
 <= 0.25 of the workload). The resident memory (RSS) is printed at the end.
 
 Usage: python scripts/bench_step.py [--steps 300] [--modes previous+estimate,none]
-       [--solver steadygs|convexgs]
+       [--solver steadygs|convexgs] [--patch-frame reference|rigid]
 """
 
 from __future__ import annotations
@@ -139,11 +139,14 @@ def clear_caches() -> None:
             operator_module.load_wisdom(wisdom)
 
 
-def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None) -> dict:
+def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None,
+        patch_frame: str | None = None) -> dict:
     """The hunting-like run with one warm-start mode, from empty operator caches; per-step
     times and iterations."""
     clear_caches()
     extra = {} if solver is None else {"tangential_solver": solver}
+    if patch_frame is not None:  # versions before issue 19 solve at the rigid point only
+        extra["patch_frame"] = patch_frame
     wc = rc.WheelsetContact(
         rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
         rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
@@ -179,6 +182,8 @@ def main() -> None:
     ap.add_argument("--modes", default="previous+estimate,none")
     ap.add_argument("--solver", default=None, help="tangential solver (default: the "
                     "settings' default)")
+    ap.add_argument("--patch-frame", default=None, choices=("reference", "rigid"),
+                    help="origin of the patch frames (default: the settings' default)")
     ap.add_argument("--json", type=Path, default=None, help="write the results (for "
                     "scripts/plot_performance.py)")
     args = ap.parse_args()
@@ -186,7 +191,8 @@ def main() -> None:
     ref = fixed_workload()
     print(f"fixed workload (128^2 FFT round trips x 200 + 600^2 mat-vec x 400): "
           f"{ref * 1e3:.1f} ms")
-    results = [run(m, args.steps, solver=args.solver) for m in args.modes.split(",")]
+    results = [run(m, args.steps, solver=args.solver, patch_frame=args.patch_frame)
+               for m in args.modes.split(",")]
     print(f"\n{args.steps} steps of 1 ms, S1002/60E1, 0.5 mm, 83.3 kN with creep, 30 m/s, "
           "3 mm at 1.5 Hz; medians per step (both wheels), first step left out")
     print(f"{'warm start':<18} {'median [ms]':>11} {'/ workload':>10} {'mean [ms]':>9} "

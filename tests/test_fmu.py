@@ -184,13 +184,15 @@ def test_load_definition(fmu, extracted, md):
     flange at 7 mm the two differ by a factor ~4. Near Nadal's limit (N ~ 15 Q) the
     vertical force is a small difference of large ones: eps_tau = 1e-5 makes the creep
     forces' noise small enough for the load tolerance 1e-3 (with the default 1e-2 the load
-    loop accepts up to 1 %, :data:`~railcontact.contact.loadloop.LOAD_SLACK_CAP`)."""
+    loop accepts up to 1 %, :data:`~railcontact.contact.loadloop.LOAD_SLACK_CAP`).
+    At the rigid point (patch_frame = "rigid"), whose angle is the flange's 70 deg (the
+    frame at the reference point takes the overlap's weighted angle, which moves with N)."""
     q = 83.3e3
     inputs = dict(CREEP, lateral_displacement=7e-3, eta_left=5e-3, load_left=q, load_right=q)
     total = Slave(fmu, extracted, md, "total", warm_start="none", friction=0.3,
-                  tangential_tolerance=1e-5)
+                  tangential_tolerance=1e-5, patch_frame="rigid")
     normal = Slave(fmu, extracted, md, "normal", warm_start="none", friction=0.3,
-                   load_definition="normal")
+                   load_definition="normal", patch_frame="rigid")
     for s in (total, normal):
         assert s.step(**inputs) == 0
     assert total.get("force_vertical_left") == pytest.approx(q, rel=1e-3)

@@ -107,6 +107,13 @@ REFERENCE_RTOL = 1e-4
 within this fraction of it: the point moves by far less than an element (0.5 mm elements,
 83 kN: under 0.01 mm on the tread, 0.05 mm at the flange root) and the frame's angle by
 less than 1e-3 rad."""
+WARM_REFERENCE_RTOL = 1e-3
+"""The same for a frame formed at an earlier solve's approach (``start`` of
+:func:`solve_wheel_normal`, e.g. the previous time step's, extrapolated): a relative change
+of 1e-3 in the approach moves the reference point by at most 2.3 um (under 0.005 of a
+0.5 mm element), its contact angle by at most 3.3e-5 rad and its rolling radius by at most
+0.3 um (S1002 on 60E1 at 1:40, approaches 50-120 um, lateral 0, 3, 5 and 7 mm; most at the
+flange root), so one pass serves a warm time step."""
 MAX_REFERENCE_PASSES = 6
 """Solves of a single-patch wheel at most, each with its frame formed again at the approach
 of the one before."""
@@ -308,7 +315,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
                        settings: PatchSettings, pair: ElasticPair,
                        estimate_for: EstimateFor | None = None,
                        previous: list[PatchSolution] | None = None,
-                       reference: bool = False) -> list[PatchSolution]:
+                       reference: bool = False,
+                       start: tuple[float, float] | None = None) -> list[PatchSolution]:
     """The BEM normal solutions of one wheel's patches (creep forces not counted).
 
     ``control``: the vertical approach [m] beyond first contact, or the vertical load [N]
@@ -320,6 +328,10 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     (:func:`~railcontact.geometry.search.at_reference`, formed at the approach; under load
     control a single patch is solved again until the approach it gives is the one its
     frame was formed at, :func:`_single_patch`), else at its rigid contact point.
+    ``start``: the vertical approach [m] and the vertical load [N] its normal forces carried
+    in an earlier solve of the wheel (e.g. the previous time step) when ``previous`` is
+    not given: a single patch's frame is first formed at that approach scaled to
+    ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`.
     """
     points = referenced if reference else _rigid
     if not control.by_load:
@@ -335,7 +347,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     # approach of the pass before (or Hertz's) and again until the approach holds
     first = contact_points(track, ws, pose, side, 0.0)[0]
     single, passes = _single_patch(track, ws, pose, first, q, settings, pair, estimate_for,
-                                   previous, reference)
+                                   previous, reference, start)
     approach = _approach(single)
     if count_contacts(track, ws, pose, side, approach) == 1:
         return count_passes(single, passes) if len(passes) > 1 else single
@@ -385,16 +397,19 @@ def referenced(track: Track, ws: Wheelset, pose: Pose, side: str, approach: floa
 def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q: float,
                   settings: PatchSettings, pair: ElasticPair,
                   estimate_for: EstimateFor | None,
-                  previous: list[PatchSolution] | None, reference: bool = True
+                  previous: list[PatchSolution] | None, reference: bool = True,
+                  start: tuple[float, float] | None = None
                   ) -> tuple[list[PatchSolution], list[list[PatchSolution]]]:
     """The patch of a wheel with one contact point ``first`` carrying the vertical load
     ``q`` [N] by its normal force, solved in the frame at its reference point, and the
     passes it took.
 
-    The frame is formed at an approach - the previous pass's scaled to ``q`` as Hertz's
-    (``q^(2/3)``), else Hertz's for the rigid point - and the patch solved by force
+    The frame is formed at an approach - the previous pass's (or ``start``'s: approach [m],
+    vertical load [N]) scaled to ``q`` as Hertz's (``q^(2/3)``), else Hertz's for the rigid
+    point - and the patch solved by force
     control, ``N = q / cos(gamma)``; when the approach this gives differs from the one the
-    frame was formed at by more than :data:`REFERENCE_RTOL`, the frame is formed again
+    frame was formed at by more than :data:`REFERENCE_RTOL` (:data:`WARM_REFERENCE_RTOL`
+    from ``start``), the frame is formed again
     there (at most
     :data:`MAX_REFERENCE_PASSES` passes, each started from the one before; from the third
     on, a secant step on the difference of the two approaches: on a flange the frame's
@@ -410,10 +425,13 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
         q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
         approach = _approach(previous) * (q / q_prev) ** (2 / 3) if q_prev > 0 else \
             _approach(previous)
+    elif start is not None and start[0] > 0:  # an earlier solve's, scaled the same way
+        approach = start[0] * (q / start[1]) ** (2 / 3) if start[1] > 0 else start[0]
     else:
         cosg = math.cos(first.contact_angle)
         approach = hertz(first.A, first.B, pair, load=q / cosg).penetration / cosg \
             if math.isfinite(first.B) and first.B > 0 and first.A > 0 else 0.0
+    rtol = WARM_REFERENCE_RTOL if start is not None and not previous else REFERENCE_RTOL
     passes: list[list[PatchSolution]] = []
     last = previous
     tried: list[tuple[float, float]] = []  # (approach formed at, residual)
@@ -427,7 +445,7 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
         if cp is first and (approach <= 0 or at_reference(first, track, ws, pose, new)
                             is None):
             break  # no reference point to form: the rigid point's patch is the answer
-        if abs(new - approach) <= REFERENCE_RTOL * new:
+        if abs(new - approach) <= rtol * new:
             break
         tried.append((approach, new - approach))
         last = ps

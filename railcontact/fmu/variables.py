@@ -116,11 +116,12 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("rigid_wheelset", FMUModes, "rigid_wheelset"),
     ("contact_model", FMUModes, "contact_model"),
     ("table_file", FMUModes, "table_file"),
+    ("patch_frame", ContactSettings, "patch_frame"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
 APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid_wheelset",
-            "contact_model", "table_file")
+            "contact_model", "table_file", "patch_frame")
 """Parameters added after the first published interface (commit 039db95): :func:`table`
 numbers them after every variable of it, so that its value references stay (they are
 numbered per type: appending a parameter here, and its ``_choice`` at the end of

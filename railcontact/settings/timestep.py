@@ -15,7 +15,13 @@ from functools import cached_property
 from typing import ClassVar
 
 from ..errors import RailContactError
-from .case import GridSettings, NormalSettings, PatchSettings, TangentialSettings
+from .case import (
+    GridSettings,
+    NormalSettings,
+    PatchSettings,
+    TangentialSettings,
+    WheelRailGeometry,
+)
 from .choices import (
     CONTACT_MODELS,
     CONTROLS,
@@ -45,6 +51,10 @@ class ContactSettings(Record):
     vertical force of the rail on the wheel (normal and creep forces, as CONTACT's FZ and
     :func:`railcontact.solve`; a secant iteration on the normal share), False lets the
     normal forces alone carry it (one pass).
+    ``patch_frame``: "reference" solves each patch in the frame at CONTACT's reference point
+    (the overlap's weighted centre; in a warm step formed at the previous step's approach),
+    "rigid" at the rigid contact point (CONTACT's convention always uses the reference
+    point).
     """
 
     ERROR: ClassVar[type[RailContactError]] = RailContactError
@@ -82,6 +92,7 @@ class ContactSettings(Record):
     max_wheel_load: float = setting(400e3, "float", "N", "vertical wheel force above which "
                                     "the wheel is outside validity (twice a 40 t heavy-haul "
                                     "axle's static wheel load)", minimum=0.0, open_min=True)
+    patch_frame: str = inherit(WheelRailGeometry, "patch_frame")
 
     @property
     def uses_estimate(self) -> bool:
@@ -93,9 +104,12 @@ class ContactSettings(Record):
 
     @cached_property
     def grid_settings(self) -> GridSettings:
-        """The patch grids: square elements of ``element_size`` on a shared lattice."""
+        """The patch grids: square elements of ``element_size`` on a shared lattice (in
+        the frame at the reference point, the origin an element's centre, as in CONTACT's
+        grids and :func:`railcontact.solve`)."""
         return GridSettings(dx=self.element_size, dy=self.element_size, margin=self.margin,
-                            quantum=self.quantum, snap=True)
+                            quantum=self.quantum, snap=True,
+                            centred=self.patch_frame == "reference")
 
     @cached_property
     def normal_settings(self) -> NormalSettings:

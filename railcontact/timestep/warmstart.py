@@ -63,6 +63,12 @@ class PatchMemory:
     vertical_creep
         Vertical component ``F_s sin(gamma)`` of the patch's creep force [N]: the next
         step's first guess of the share of a wheel load the creep forces carry.
+    approach
+        Vertical approach [m] of the patch's wheel in the step: the next step forms a patch
+        frame at the reference point there
+        (:func:`railcontact.contact.wheelrail.solve_wheel_normal`).
+    vertical_normal
+        Vertical component ``N cos(gamma)`` of the patch's normal force [N].
     """
 
     grid: Grid
@@ -74,6 +80,8 @@ class PatchMemory:
     time: float | None = None
     older: PatchMemory | None = None
     vertical_creep: float = 0.0
+    approach: float = 0.0
+    vertical_normal: float = 0.0
 
     def extrapolation(self, time: float | None) -> float:
         """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when

@@ -312,14 +312,26 @@ class WheelsetContact:
         and each patch is solved in the frame at its reference point, as CONTACT poses it.
         The track-frame totals (``track_force``, ``yaw_moment``) and the geometry inputs
         stay railcontact's.
+    patch_frame
+        ``"reference"`` or ``"rigid"``: the origin of each patch's frame (where its contact
+        angle, rolling radius and spin are taken) in railcontact's convention - CONTACT's
+        reference point, the overlap's weighted centre (formed at the previous step's
+        approach in a warm step), or the rigid contact point; None: ``settings``'
+        ``patch_frame`` ("reference" by default). CONTACT's convention always uses the
+        reference point.
     """
 
     def __init__(self, track: Track, wheelset: Wheelset, pair: ElasticPair,
                  settings: ContactSettings | None = None, *,
-                 convention: str = "railcontact") -> None:
+                 convention: str = "railcontact", patch_frame: str | None = None) -> None:
         self.track, self.wheelset, self.pair = track, wheelset, pair
-        self.settings = settings or ContactSettings()
+        settings = settings or ContactSettings()
         self.convention = check_convention(convention)
+        if patch_frame is not None:
+            settings = replace(settings, patch_frame=patch_frame)
+        if self.convention == "contact":  # CONTACT's: always at the reference point
+            settings = replace(settings, patch_frame="reference")
+        self.settings = settings
         self.memory: dict[str, list[PatchMemory]] = {"left": [], "right": []}
 
     def reset(self) -> None:
@@ -524,13 +536,18 @@ class WheelsetContact:
             of.bounds = previous_bounds(m)  # the potential area: where the contact was
             return labelled(of, "previous")
 
+        # the frame at the reference point formed first at the approach of the step (or
+        # pass) that starts this one, extrapolated in time: one pass in the common case
+        start = _start(source, time) if source else None
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
                                      settings.patch_settings, pair, estimate_for,
-                                     reference=self.convention == "contact")
+                                     reference=settings.patch_frame == "reference",
+                                     start=start)
         kept = [p for p in patches if p.normal.force > 0]
         charge(kept, [p for p in patches if p.normal.force <= 0])  # their work counts
         patches = kept
         creepages, memory = [], []
+        approach = vertical_approach(patches)
         for patch in patches:
             cp = patch.geometry
             m = match(source, cp.rail_u, cp.position[2])  # None without warm start
@@ -553,7 +570,8 @@ class WheelsetContact:
                 state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
                 time=time, older=None if older is None else replace(older, older=None),
                 vertical_creep=0.0 if t is None else
-                float(t.force[1] * math.sin(cp.contact_angle))))
+                float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
+                vertical_normal=patch.normal.force * math.cos(cp.contact_angle)))
         return patches, creepages, memory
 
 
@@ -586,6 +604,19 @@ class _RolledApproaches:
                                        + (wheel.message if wheel.patches else "no contact"))
             out.append(wheel.approach)
         return out[0], out[1]
+
+
+def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]:
+    """The vertical approach [m] of a wheel and the vertical load [N] of its normal forces
+    in the step ``source`` remembers, extrapolated linearly to ``time`` [s] from the step
+    before it when both are known (:meth:`PatchMemory.extrapolation`)."""
+    a, q = source[0].approach, sum(m.vertical_normal for m in source)
+    older = [m.older for m in source]
+    f = source[0].extrapolation(time)
+    if f > 0 and all(o is not None for o in older) and older[0].approach > 0:
+        a_o, q_o = older[0].approach, sum(o.vertical_normal for o in older)
+        a, q = max(a + f * (a - a_o), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
+    return a, q
 
 
 def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
