@@ -436,3 +436,56 @@ def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, table_fmu):
     assert s.getInteger([var["status"].valueReference])[0] == 3
     s.terminate()
     s.freeInstance()
+
+
+def _cubic_field_table(bad: dict[tuple[int, int], int]) -> tuple[ContactTable, object]:
+    """A 6 x 5 table (lateral displacement, lateral creepage) whose every quantity is the
+    bicubic ``f`` on both wheels, except the nodes ``bad`` (index -> status) of the left
+    wheel: NaN there, as a build records them."""
+    from railcontact.table.variables import QUANTITIES
+
+    ys = np.linspace(-0.005, 0.005, 6)
+    etas = np.array([0.0, 0.5e-3, 1.5e-3, 2.5e-3, 4e-3])  # uneven on purpose
+
+    def f(y, eta):
+        return 1.0 + 2e2 * y - 3e6 * y**3 + 1e3 * eta + 4e8 * eta**3 + 5e8 * y * eta**2
+
+    grid = f(*np.meshgrid(ys, etas, indexing="ij"))
+    values = np.repeat(grid[:, :, None, None], 2, axis=2).repeat(len(QUANTITIES), axis=3)
+    status = np.zeros((6, 5, 2), dtype=np.int8)
+    for index, st in bad.items():
+        status[(*index, 0)] = st
+        values[(*index, 0)] = np.nan
+    axes = {"lateral_displacement": ys, "creepage_y": etas}
+    return ContactTable(axes, ("left", "right"), values, status, {}), f
+
+
+def test_cubic_with_failed_nodes_is_local_or_linear_never_a_traceback():
+    """A no-contact node (status 2, NaN) and a not-computed node (-1, NaN) on the left wheel
+    only: cubic is exact for a bicubic where its 4 x 4 stencil is ok (the local cubic), the
+    multilinear value with the linear status where the stencil touches a bad node, never a
+    traceback and never NaN with status ok; not computed wins over the other statuses as in
+    the linear path; the right wheel (all ok) keeps the spline."""
+    from railcontact.table.variables import NO_CONTACT, NOT_COMPUTED, OK
+
+    table, f = _cubic_field_table({(0, 4): NO_CONTACT, (5, 0): NOT_COMPUTED})
+    for y in np.linspace(-0.005, 0.005, 23):
+        for eta in np.linspace(0.0, 4e-3, 19):
+            point = {"lateral_displacement": float(y), "creepage_y": float(eta)}
+            cub, lin = table(point, "left", "cubic"), table(point, "left", "linear")
+            got = cub["creep_force_y"]
+            assert cub.status != OK or math.isfinite(got)
+            if y < -0.001 and eta >= 1.5e-3 or y >= 0.001 and eta < 1.5e-3:
+                assert cub.status == lin.status  # the stencil touches a bad node: linear
+                np.testing.assert_equal(cub.values, lin.values)
+            else:
+                assert cub.status == OK and got == pytest.approx(f(y, eta), rel=1e-12, abs=1e-12)
+            right = table(point, "right", "cubic")
+            assert right.status == OK
+            assert math.isfinite(right["creep_force_y"])  # the spline, as before
+    # in the cell of the not-computed node: not computed
+    corner = table({"lateral_displacement": 0.0045, "creepage_y": 0.0002}, "left", "cubic")
+    assert corner.status == NOT_COMPUTED and math.isnan(corner["normal_force"])
+    only_nc, _ = _cubic_field_table({(5, 0): NOT_COMPUTED})
+    r = only_nc({"lateral_displacement": 0.0045, "creepage_y": 0.0002}, "left", "cubic")
+    assert r.status == NOT_COMPUTED  # was ok (the max over the wheel) before
