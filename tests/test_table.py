@@ -392,11 +392,12 @@ def _table_slave(table_fmu, model: str, table_file: str, **strings: str):
     ("no/such/table.zarr", {}, "table_file = 'no/such/table.zarr'"),
     ("BUILT", {"control": "penetration"}, "set control = load"),
     ("BUILT", {"load_definition": "normal"}, "load_definition = total"),
+    ("BUILT", {"convention": "contact"}, "set convention = railcontact (got convention = contact)"),
 ])
 def test_fmu_table_mode_bad_parameters_are_an_error_at_initialization(
         built, table_fmu, table_file, strings, words, capsys):
     """contact_model = table without a table, with a path that holds none, or with modes a
-    table cannot answer: fmi2Error at exitInitializationMode, the logger naming why."""
+    table cannot answer (control, load definition, CONTACT's convention): fmi2Error at exitInitializationMode, the logger naming why."""
     from fmpy.fmi1 import FMICallException
 
     table_file = str(built[1].resolve()) if table_file == "BUILT" else table_file
