@@ -397,7 +397,8 @@ def _table_slave(table_fmu, model: str, table_file: str, **strings: str):
 def test_fmu_table_mode_bad_parameters_are_an_error_at_initialization(
         built, table_fmu, table_file, strings, words, capsys):
     """contact_model = table without a table, with a path that holds none, or with modes a
-    table cannot answer (control, load definition, CONTACT's convention): fmi2Error at exitInitializationMode, the logger naming why."""
+    table cannot answer (control, load definition, CONTACT's convention): fmi2Error at
+    exitInitializationMode, the logger naming why."""
     from fmpy.fmi1 import FMICallException
 
     table_file = str(built[1].resolve()) if table_file == "BUILT" else table_file
@@ -490,3 +491,32 @@ def test_cubic_with_failed_nodes_is_local_or_linear_never_a_traceback():
     only_nc, _ = _cubic_field_table({(5, 0): NOT_COMPUTED})
     r = only_nc({"lateral_displacement": 0.0045, "creepage_y": 0.0002}, "left", "cubic")
     assert r.status == NOT_COMPUTED  # was ok (the max over the wheel) before
+
+
+def test_a_solver_exception_loses_only_its_point(tmp_path, monkeypatch):
+    """A solver that raises something other than RailContactError (here ZeroDivisionError)
+    at one point: that point is recorded out of range with the exception in its message, the
+    other points of the batch are solved as by ``railcontact solve`` (the truth at a node)."""
+    from railcontact.table import solve as table_solve
+    from railcontact.table.variables import OUT_OF_RANGE
+
+    spec_path = tmp_path / "spec.toml"
+    spec_path.write_text(SPEC)
+    spec = load_spec(spec_path)
+    real = table_solve.solve_wheel_rail
+
+    def flaky(case, starts=None):
+        if case.tangential.creepage[1] == 0.002:
+            raise ZeroDivisionError("float division by zero")
+        return real(case, starts)
+
+    monkeypatch.setattr(table_solve, "solve_wheel_rail", flaky)
+    points = [{"creepage_y": 0.0}, {"creepage_y": 0.002}]
+    out = table_solve.solve_batch(spec.case, ("left",), points)
+    assert out["status"][:, 0].tolist() == [0, OUT_OF_RANGE]
+    assert math.isnan(out["normal_force"][1, 0])
+    (i, side, st, message), = out["messages"]
+    assert (i, side, st) == (1, "left", OUT_OF_RANGE)
+    assert "ZeroDivisionError: float division by zero" in message
+    exact = _wheel(solve(spec.case_at((0, 0, 0))), "left")  # the first values: eta = 0
+    assert out["normal_force"][0, 0] == pytest.approx(exact["normal_force"], rel=1e-9)
