@@ -520,3 +520,16 @@ def test_a_solver_exception_loses_only_its_point(tmp_path, monkeypatch):
     assert "ZeroDivisionError: float division by zero" in message
     exact = _wheel(solve(spec.case_at((0, 0, 0))), "left")  # the first values: eta = 0
     assert out["normal_force"][0, 0] == pytest.approx(exact["normal_force"], rel=1e-9)
+
+
+def test_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
+    """--workers sizes a local cluster, which --scheduler replaces: giving both is an error
+    naming both (was: --workers silently ignored), before any store is made."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC)
+    out = tmp_path / "t.zarr"
+    assert main(["table", "build", str(spec), "-o", str(out), "--quiet",
+                 "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--workers 2 sizes a new local cluster" in err and "--scheduler tcp://127.0.0.1:9" in err
+    assert not out.exists()
