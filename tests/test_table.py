@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -533,3 +534,26 @@ def test_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--workers 2 sizes a new local cluster" in err and "--scheduler tcp://127.0.0.1:9" in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("pose, loads, creepages, words", [
+    ((float("nan"), 0.0), (8e4, 8e4), None, "lateral_displacement [m] must be finite"),
+    ((0.0, float("inf")), (8e4, 8e4), None, "yaw [rad] must be finite"),
+    ((0.0, 0.0), (8e4, float("nan")), None, "right wheel load [N] must be finite"),
+    ((0.0, 0.0), (8e4, 8e4), ((0.0, float("nan"), 0.0), (0.0, 0.0, 0.0)),
+     "creepages must be finite"),
+])
+def test_table_step_names_the_input_that_is_not_finite(pose, loads, creepages, words):
+    """A NaN or infinite input to TableContact.solve: an error naming that input (was:
+    "creepages must be finite" for a NaN in the pose). A Pose refuses NaN itself, so the
+    pose here is any object with its attributes (what solve reads)."""
+    from types import SimpleNamespace
+
+    from railcontact.table.step import TableContact
+
+    table, _ = _cubic_field_table({})
+    table.case = {"geometry": {"lateral_displacement": 0.0, "yaw": 0.0},
+                  "normal": {"load": 8e4}, "tangential": {"creepage": [0.0, 0.0, 0.0]}}
+    with pytest.raises(RailContactError, match=re.escape(words)):
+        TableContact(table).solve(SimpleNamespace(lateral=pose[0], yaw=pose[1], roll=0.0),
+                                  loads=loads, creepages=creepages)
