@@ -557,3 +557,29 @@ def test_table_step_names_the_input_that_is_not_finite(pose, loads, creepages, w
     with pytest.raises(RailContactError, match=re.escape(words)):
         TableContact(table).solve(SimpleNamespace(lateral=pose[0], yaw=pose[1], roll=0.0),
                                   loads=loads, creepages=creepages)
+
+
+def test_store_identity_survives_a_rename_and_a_move_not_a_changed_profile(tmp_path):
+    """An unnamed spec (its name the file's stem) with a profile file beside it: renamed
+    and moved with its profile to another folder it still names the same table (was:
+    another case, the stem and the absolute path differed); the profile file changed in
+    place (one height by 1 micrometre) names another (was: the same, only its path
+    compared)."""
+    from railcontact.table.store import check_identity
+
+    src = (Path(__file__).parent.parent / "models" / "profiles" / "S1002.txt").read_text()
+    text = SPEC.replace('name = "table_test"\n', "").replace('wheel = "S1002"',
+                                                              'wheel = "w.txt"')
+    a, b = tmp_path / "a", tmp_path / "moved" / "b"
+    for d, spec_name in ((a, "spec.toml"), (b, "renamed.toml")):
+        d.mkdir(parents=True)
+        (d / "w.txt").write_text(src)
+        (d / spec_name).write_text(text)
+    first = load_spec(a / "spec.toml").identity()
+    check_identity("t.zarr", first, load_spec(b / "renamed.toml").identity())  # no error
+    lines = src.splitlines()
+    y, z = lines[2].split()
+    lines[2] = f"{y} {float(z) + 1e-3:.6f}"
+    (b / "w.txt").write_text("\n".join(lines) + "\n")
+    with pytest.raises(RailContactError, match="differs in: case geometry"):
+        check_identity("t.zarr", first, load_spec(b / "renamed.toml").identity())
