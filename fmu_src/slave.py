@@ -195,6 +195,11 @@ class Slave:
                 "contact_model = table: a contact table is built by the total vertical wheel "
                 f"load; set control = load and load_definition = total (got control = "
                 f"{modes.control}, load_definition = {modes.load_definition})")
+        if modes.convention != "railcontact":
+            raise RailContactError(
+                "contact_model = table reads and writes railcontact's frames only (the table "
+                "has no CONTACT conversion); set convention = railcontact (got convention = "
+                f"{modes.convention})")
         value = modes.table_file
         if not value:
             raise RailContactError("contact_model = table needs the parameter table_file "

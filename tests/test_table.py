@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -392,11 +393,13 @@ def _table_slave(table_fmu, model: str, table_file: str, **strings: str):
     ("no/such/table.zarr", {}, "table_file = 'no/such/table.zarr'"),
     ("BUILT", {"control": "penetration"}, "set control = load"),
     ("BUILT", {"load_definition": "normal"}, "load_definition = total"),
+    ("BUILT", {"convention": "contact"}, "set convention = railcontact (got convention = contact)"),
 ])
 def test_fmu_table_mode_bad_parameters_are_an_error_at_initialization(
         built, table_fmu, table_file, strings, words, capsys):
     """contact_model = table without a table, with a path that holds none, or with modes a
-    table cannot answer: fmi2Error at exitInitializationMode, the logger naming why."""
+    table cannot answer (control, load definition, CONTACT's convention): fmi2Error at
+    exitInitializationMode, the logger naming why."""
     from fmpy.fmi1 import FMICallException
 
     table_file = str(built[1].resolve()) if table_file == "BUILT" else table_file
@@ -436,3 +439,147 @@ def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, table_fmu):
     assert s.getInteger([var["status"].valueReference])[0] == 3
     s.terminate()
     s.freeInstance()
+
+
+def _cubic_field_table(bad: dict[tuple[int, int], int]) -> tuple[ContactTable, object]:
+    """A 6 x 5 table (lateral displacement, lateral creepage) whose every quantity is the
+    bicubic ``f`` on both wheels, except the nodes ``bad`` (index -> status) of the left
+    wheel: NaN there, as a build records them."""
+    from railcontact.table.variables import QUANTITIES
+
+    ys = np.linspace(-0.005, 0.005, 6)
+    etas = np.array([0.0, 0.5e-3, 1.5e-3, 2.5e-3, 4e-3])  # uneven on purpose
+
+    def f(y, eta):
+        return 1.0 + 2e2 * y - 3e6 * y**3 + 1e3 * eta + 4e8 * eta**3 + 5e8 * y * eta**2
+
+    grid = f(*np.meshgrid(ys, etas, indexing="ij"))
+    values = np.repeat(grid[:, :, None, None], 2, axis=2).repeat(len(QUANTITIES), axis=3)
+    status = np.zeros((6, 5, 2), dtype=np.int8)
+    for index, st in bad.items():
+        status[(*index, 0)] = st
+        values[(*index, 0)] = np.nan
+    axes = {"lateral_displacement": ys, "creepage_y": etas}
+    return ContactTable(axes, ("left", "right"), values, status, {}), f
+
+
+def test_cubic_with_failed_nodes_is_local_or_linear_never_a_traceback():
+    """A no-contact node (status 2, NaN) and a not-computed node (-1, NaN) on the left wheel
+    only: cubic is exact for a bicubic where its 4 x 4 stencil is ok (the local cubic), the
+    multilinear value with the linear status where the stencil touches a bad node, never a
+    traceback and never NaN with status ok; not computed wins over the other statuses as in
+    the linear path; the right wheel (all ok) keeps the spline."""
+    from railcontact.table.variables import NO_CONTACT, NOT_COMPUTED, OK
+
+    table, f = _cubic_field_table({(0, 4): NO_CONTACT, (5, 0): NOT_COMPUTED})
+    for y in np.linspace(-0.005, 0.005, 23):
+        for eta in np.linspace(0.0, 4e-3, 19):
+            point = {"lateral_displacement": float(y), "creepage_y": float(eta)}
+            cub, lin = table(point, "left", "cubic"), table(point, "left", "linear")
+            got = cub["creep_force_y"]
+            assert cub.status != OK or math.isfinite(got)
+            if y < -0.001 and eta >= 1.5e-3 or y >= 0.001 and eta < 1.5e-3:
+                assert cub.status == lin.status  # the stencil touches a bad node: linear
+                np.testing.assert_equal(cub.values, lin.values)
+            else:
+                assert cub.status == OK and got == pytest.approx(f(y, eta), rel=1e-12, abs=1e-12)
+            right = table(point, "right", "cubic")
+            assert right.status == OK
+            assert math.isfinite(right["creep_force_y"])  # the spline, as before
+    # in the cell of the not-computed node: not computed
+    corner = table({"lateral_displacement": 0.0045, "creepage_y": 0.0002}, "left", "cubic")
+    assert corner.status == NOT_COMPUTED and math.isnan(corner["normal_force"])
+    only_nc, _ = _cubic_field_table({(5, 0): NOT_COMPUTED})
+    r = only_nc({"lateral_displacement": 0.0045, "creepage_y": 0.0002}, "left", "cubic")
+    assert r.status == NOT_COMPUTED  # was ok (the max over the wheel) before
+
+
+def test_a_solver_exception_loses_only_its_point(tmp_path, monkeypatch):
+    """A solver that raises something other than RailContactError (here ZeroDivisionError)
+    at one point: that point is recorded out of range with the exception in its message, the
+    other points of the batch are solved as by ``railcontact solve`` (the truth at a node)."""
+    from railcontact.table import solve as table_solve
+    from railcontact.table.variables import OUT_OF_RANGE
+
+    spec_path = tmp_path / "spec.toml"
+    spec_path.write_text(SPEC)
+    spec = load_spec(spec_path)
+    real = table_solve.solve_wheel_rail
+
+    def flaky(case, starts=None):
+        if case.tangential.creepage[1] == 0.002:
+            raise ZeroDivisionError("float division by zero")
+        return real(case, starts)
+
+    monkeypatch.setattr(table_solve, "solve_wheel_rail", flaky)
+    points = [{"creepage_y": 0.0}, {"creepage_y": 0.002}]
+    out = table_solve.solve_batch(spec.case, ("left",), points)
+    assert out["status"][:, 0].tolist() == [0, OUT_OF_RANGE]
+    assert math.isnan(out["normal_force"][1, 0])
+    (i, side, st, message), = out["messages"]
+    assert (i, side, st) == (1, "left", OUT_OF_RANGE)
+    assert "ZeroDivisionError: float division by zero" in message
+    exact = _wheel(solve(spec.case_at((0, 0, 0))), "left")  # the first values: eta = 0
+    assert out["normal_force"][0, 0] == pytest.approx(exact["normal_force"], rel=1e-9)
+
+
+def test_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
+    """--workers sizes a local cluster, which --scheduler replaces: giving both is an error
+    naming both (was: --workers silently ignored), before any store is made."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC)
+    out = tmp_path / "t.zarr"
+    assert main(["table", "build", str(spec), "-o", str(out), "--quiet",
+                 "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--workers 2 sizes a new local cluster" in err and "--scheduler tcp://127.0.0.1:9" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("pose, loads, creepages, words", [
+    ((float("nan"), 0.0), (8e4, 8e4), None, "lateral_displacement [m] must be finite"),
+    ((0.0, float("inf")), (8e4, 8e4), None, "yaw [rad] must be finite"),
+    ((0.0, 0.0), (8e4, float("nan")), None, "right wheel load [N] must be finite"),
+    ((0.0, 0.0), (8e4, 8e4), ((0.0, float("nan"), 0.0), (0.0, 0.0, 0.0)),
+     "creepages must be finite"),
+])
+def test_table_step_names_the_input_that_is_not_finite(pose, loads, creepages, words):
+    """A NaN or infinite input to TableContact.solve: an error naming that input (was:
+    "creepages must be finite" for a NaN in the pose). A Pose refuses NaN itself, so the
+    pose here is any object with its attributes (what solve reads)."""
+    from types import SimpleNamespace
+
+    from railcontact.table.step import TableContact
+
+    table, _ = _cubic_field_table({})
+    table.case = {"geometry": {"lateral_displacement": 0.0, "yaw": 0.0},
+                  "normal": {"load": 8e4}, "tangential": {"creepage": [0.0, 0.0, 0.0]}}
+    with pytest.raises(RailContactError, match=re.escape(words)):
+        TableContact(table).solve(SimpleNamespace(lateral=pose[0], yaw=pose[1], roll=0.0),
+                                  loads=loads, creepages=creepages)
+
+
+def test_store_identity_survives_a_rename_and_a_move_not_a_changed_profile(tmp_path):
+    """An unnamed spec (its name the file's stem) with a profile file beside it: renamed
+    and moved with its profile to another folder it still names the same table (was:
+    another case, the stem and the absolute path differed); the profile file changed in
+    place (one height by 1 micrometre) names another (was: the same, only its path
+    compared)."""
+    from railcontact.table.store import check_identity
+
+    src = (Path(__file__).parent.parent / "models" / "profiles" / "S1002.txt").read_text()
+    text = SPEC.replace('name = "table_test"\n', "").replace('wheel = "S1002"',
+                                                              'wheel = "w.txt"')
+    a, b = tmp_path / "a", tmp_path / "moved" / "b"
+    for d, spec_name in ((a, "spec.toml"), (b, "renamed.toml")):
+        d.mkdir(parents=True)
+        (d / "w.txt").write_text(src)
+        (d / spec_name).write_text(text)
+    first = load_spec(a / "spec.toml").identity()
+    check_identity("t.zarr", first, load_spec(b / "renamed.toml").identity())  # no error
+    lines = src.splitlines()
+    y, z = lines[2].split()
+    lines[2] = f"{y} {float(z) + 1e-3:.6f}"
+    (b / "w.txt").write_text("\n".join(lines) + "\n")
+    with pytest.raises(RailContactError, match="differs in: case geometry"):
+        check_identity("t.zarr", first, load_spec(b / "renamed.toml").identity())

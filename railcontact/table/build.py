@@ -95,7 +95,8 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
     out
         The Zarr store. An existing store must hold the same table (else an error).
     scheduler, workers
-        The Dask scheduler's address, or the number of local worker processes.
+        The Dask scheduler's address, or the number of local worker processes (not both:
+        an error).
     resume
         The store must exist (a rerun without it also computes only what is missing).
     progress
@@ -112,6 +113,10 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
     say = say or (lambda msg: print(msg, file=sys.stderr))
     if workers is not None and workers < 1:
         raise RailContactError(f"--workers must be at least 1, got {workers}")
+    if scheduler and workers is not None:
+        raise RailContactError(
+            f"--workers {workers} sizes a new local cluster; the cluster at --scheduler "
+            f"{scheduler} has its own workers: give one or the other")
     out = Path(out)
     store = None
     if out.exists():

@@ -3,11 +3,16 @@ axes.
 
 ``linear`` is multilinear over the axes (the nodes around the point, weights the products
 of the fractions along each axis; a point on a node returns the node's values exactly);
-``cubic`` is scipy's tensor-product cubic spline (``RegularGridInterpolator``, method
-``"cubic"``), which needs at least 4 nodes on every axis. A point outside an axis is a
+``cubic`` needs at least 4 nodes on every axis: on a wheel whose nodes are all ok it is
+scipy's tensor-product cubic spline (``RegularGridInterpolator``, method ``"cubic"``); when
+some node of that wheel is not ok (NaN values: no contact, out of range, not converged, not
+computed) a spline, which depends on whole grid lines, cannot be fitted, so it is the local
+tensor-product cubic through the 4 nodes around the point on each axis when all of those are
+ok, else the multilinear value with the linear status. A point outside an axis is a
 :class:`~railcontact.errors.RailContactError` naming the axis and its range. The status of
 an interpolated point is the largest status of the nodes it uses (ok only when all of them
-are); a node not ok (or not computed) makes the values NaN with that status.
+are; not computed when any is); a node not ok (or not computed) makes the values NaN with
+that status.
 """
 
 from __future__ import annotations
@@ -91,6 +96,16 @@ def _multilinear(knots, meta, x, table, out):  # pragma: no cover - jit
         for q in range(nq):
             out[q] += w * table[r, q]
     return base
+
+
+def _lagrange4(nodes: list[float], v: float) -> np.ndarray:
+    """The weights of the 4 ``nodes`` in the cubic through them, evaluated at ``v``."""
+    w = np.ones(4)
+    for a in range(4):
+        for b in range(4):
+            if b != a:
+                w[a] *= (v - nodes[b]) / (nodes[a] - nodes[b])
+    return w
 
 
 def outside(name: str, value: float, nodes: list[float]) -> str:
@@ -242,22 +257,27 @@ class ContactTable:
             raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
                                    f"{', '.join(short)}; use method='linear'")
         key = self.sides[j]
-        if key not in self._cubic:
-            from scipy.interpolate import RegularGridInterpolator
+        if bool(np.all(self._status[..., j] == OK)):  # a spline over the whole grid
+            if key not in self._cubic:
+                from scipy.interpolate import RegularGridInterpolator
 
-            self._cubic[key] = RegularGridInterpolator(
-                tuple(self.axes.values()), self._values[..., j, :], method="cubic")
-        # the nodes whose values the cubic uses: the 4 around x on each axis
-        lo = []
+                self._cubic[key] = RegularGridInterpolator(
+                    tuple(self.axes.values()), self._values[..., j, :], method="cubic")
+            return self._cubic[key](np.array([x]))[0], OK
+        # Some node of this wheel is not ok (NaN values): a spline would depend on it along
+        # whole grid lines, so use the local cubic through the 4 nodes around x on each axis
+        # when all of them are ok, else the multilinear value with its status.
+        lo, weights = [], []
         for nodes, v in zip(self._nodes, x, strict=True):
-            i = min(max(bisect.bisect_right(nodes, v) - 1, 0), len(nodes) - 2)
-            lo.append(slice(max(i - 1, 0), min(i + 3, len(nodes))))
-        st = self._status[(*lo, j)]
-        status = NOT_COMPUTED if st.min() == NOT_COMPUTED else int(st.max())
-        vals = self._cubic[key](np.array([x]))[0]
-        if status == OK and not np.all(np.isfinite(vals)):  # the splines span whole lines
-            status = int(self._status[..., j].max())
-        return vals, status
+            i = min(max(bisect.bisect_right(nodes, v) - 2, 0), len(nodes) - 4)
+            lo.append(slice(i, i + 4))
+            weights.append(_lagrange4(nodes[i:i + 4], v))
+        if not bool(np.all(self._status[(*lo, j)] == OK)):
+            return self.linear(x, j)
+        vals = self._values[(*lo, j)]
+        for w in weights:  # contract the first remaining axis each time
+            vals = np.tensordot(w, vals, axes=(0, 0))
+        return vals, OK
 
     def node(self, index: tuple[int, ...], side: str = "left") -> Interpolated:
         """The stored values of the node ``index`` (one index per axis)."""

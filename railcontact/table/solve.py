@@ -75,8 +75,9 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
 
     ``memory`` (the previous point's) starts the solve; None: a cold start, as
     ``railcontact solve``. A point that cannot be solved has status not converged
-    (a load loop that failed) or out of range (any other error of the case), no contact
-    when the wheel does not touch its rail; it is never an exception.
+    (a load loop that failed) or out of range (any other error of the case, or any other
+    exception of the solver, its message naming the exception), no contact when the wheel
+    does not touch its rail; it is never an exception.
     """
     wheel = WheelContact(side=side)
     try:
@@ -88,6 +89,11 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
     except RailContactError as exc:  # CaseError and the geometry's own errors
         wheel.status = OUT_OF_RANGE
         wheel.message = str(exc) if isinstance(exc, CaseError) else f"{side} wheel: {exc}"
+        return wheel, []
+    except Exception as exc:  # a fault of the solver: this point lost, never the batch
+        wheel.status = OUT_OF_RANGE
+        wheel.message = (f"{side} wheel: the solver failed here "
+                         f"({type(exc).__name__}: {exc})")
         return wheel, []
     if not patches:
         return wheel, []

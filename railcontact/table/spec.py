@@ -21,6 +21,7 @@ All values in SI units; see :data:`AXES`.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import sys
 from dataclasses import dataclass
@@ -123,10 +124,33 @@ class TableSpec:
         return case_with(self.case, values, side)
 
     def identity(self) -> dict[str, Any]:
-        """What makes two tables the same: the case, the axes, the sides, the batch."""
+        """What makes two tables the same: the case, the axes, the sides, the batch, and the
+        SHA-256 of each profile file the case names (``profiles``: wheel/rail -> hex; a
+        built-in profile has none). Compare identities with :func:`comparable`."""
+        geo = self.case.get("geometry", {})
+        profiles = {k: _sha256(geo[k]) for k in ("wheel", "rail")
+                    if isinstance(geo.get(k), str) and Path(geo[k]).is_file()}
         return {"case": self.case, "axes": {n: [float(x) for x in v] for n, v in
                                            self.axes.items()},
-                "sides": list(self.sides), "batch": self.batch}
+                "sides": list(self.sides), "batch": self.batch, "profiles": profiles}
+
+
+def _sha256(path: str) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def comparable(identity: dict[str, Any]) -> dict[str, Any]:
+    """The part of an identity that decides whether a store holds a spec's table: without
+    the case's ``name`` (the spec file's stem when unnamed) and with each profile file
+    that has a hash stood for by its hash (not its absolute path), so that renaming the
+    spec or moving the project keeps a table resumable, and a profile file changed in
+    place does not."""
+    case = {k: dict(v) if isinstance(v, dict) else v for k, v in identity.get("case", {}).items()
+            if k != "name"}
+    for key, digest in identity.get("profiles", {}).items():
+        if isinstance(case.get("geometry"), dict) and key in case["geometry"]:
+            case["geometry"][key] = f"sha256:{digest}"
+    return {**{k: v for k, v in identity.items() if k != "profiles"}, "case": case}
 
 
 def case_with(case: dict[str, Any], values: dict[str, float], side: str | None = None

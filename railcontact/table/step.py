@@ -104,8 +104,10 @@ class TableContact:
         else:
             xl = el = pl = xr = er = pr = 0.0
         if not math.isfinite(ql + qr + xl + el + pl + xr + er + pr + pose.lateral + pose.yaw):
-            for name, v in (("left wheel load", ql), ("right wheel load", qr)):
-                check_finite(name, v, "N")
+            for name, v, unit in (("left wheel load", ql, "N"), ("right wheel load", qr, "N"),
+                                  ("lateral_displacement", pose.lateral, "m"),
+                                  ("yaw", pose.yaw, "rad")):  # as Pose names them
+                check_finite(name, v, unit)
             raise RailContactError(f"creepages must be finite numbers, got {creepages!r}")
         kin = kinematics if creepages is None else None
         left = self._wheel("left", pose, ql, (xl, el, pl), kin)

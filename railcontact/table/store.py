@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import RailContactError
-from .spec import AXES, TableSpec
+from .spec import AXES, TableSpec, comparable
 from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS
 
 IDENTITY = "railcontact_table"
@@ -128,7 +128,10 @@ class Store:
 
 
 def check_identity(path: str | Path, found: dict[str, Any], wanted: dict[str, Any]) -> None:
-    """Raise when a store was written for another table, naming what differs."""
+    """Raise when a store was written for another table, naming what differs (compared
+    by :func:`~.spec.comparable`: not the spec's name nor the profiles' paths, but the
+    profiles' contents)."""
+    found, wanted = comparable(found), comparable(wanted)
     if found == wanted:
         return
     diffs = []
