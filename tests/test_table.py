@@ -583,3 +583,46 @@ def test_store_identity_survives_a_rename_and_a_move_not_a_changed_profile(tmp_p
     (b / "w.txt").write_text("\n".join(lines) + "\n")
     with pytest.raises(RailContactError, match="differs in: case geometry"):
         check_identity("t.zarr", first, load_spec(b / "renamed.toml").identity())
+
+
+def test_table_node_equals_the_exact_wheelset_step():
+    """A table node read through TableContact is the exact time step's answer at the same
+    state (both in the frame at the reference point): the paper's wheel pair, 2 mm
+    elements, y = 2 mm, xi = eta = 1e-3, 83.3 kN. Normal force to the load tolerance, creep
+    forces to eps_tau mu N, contact angle and point to what forming the frame at an approach
+    within 1e-3 moves them (3.3e-5 rad, 2.3 um)."""
+    import railcontact as rc
+    from railcontact.table import TableContact, parse_spec
+    from railcontact.table.solve import solve_batch
+    from railcontact.table.variables import QUANTITIES
+
+    y, xi, eta, q, mu = 2e-3, 1e-3, 1e-3, 83.3e3, 0.3
+    geo = {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+           "inclination": math.atan(1 / 40), "gauge": 1.435, "back_to_back": 1.360,
+           "wheel_radius": 0.46}
+    spec = parse_spec({"name": "node", "material": {"young": 206e9, "poisson": 0.28},
+                       "geometry": geo, "grid": {"dx": 2e-3, "dy": 2e-3},
+                       "normal": {"load": q, "estimate": "hertz"},
+                       "tangential": {"friction": mu, "creepage": [xi, 0.0, 0.0]},
+                       "table": {"lateral_displacement": [y, y, 1],
+                                 "creepage_y": [eta, eta, 1]}})
+    r = solve_batch(spec.case, spec.sides, [{"lateral_displacement": y, "creepage_y": eta}])
+    values = np.stack([r[k.name] for k in QUANTITIES], -1).reshape(1, 1, 2, len(QUANTITIES))
+    table = ContactTable(spec.axes, spec.sides, values, r["status"].reshape(1, 1, 2),
+                         spec.case)
+    creep = ((xi, eta, 0.0), (xi, -eta, 0.0))
+    got = TableContact(table).solve(rc.Pose(y), loads=(q, q), creepages=creep)
+    settings = rc.ContactSettings(friction=mu, element_size=2e-3)
+    step = rc.WheelsetContact(
+        rc.Track(rc.read_profile("60E1", "rail"), geo["inclination"], geo["gauge"]),
+        rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46, 1.360),
+        rc.ElasticPair.of(rc.STEEL, rc.STEEL), settings)
+    want = step.solve(rc.Pose(y), loads=(q, q), creepages=creep)
+    for a, b in zip(got.wheels, want.wheels, strict=True):
+        assert a.status == b.status == 0
+        assert a.normal_force == pytest.approx(b.normal_force,
+                                               rel=settings.load_tolerance)
+        bound = settings.tangential_tolerance * mu * b.normal_force
+        assert np.allclose(a.creep_force, b.creep_force, rtol=0, atol=bound)
+        assert a.contact_angle == pytest.approx(b.contact_angle, abs=1e-4)
+        assert np.allclose(a.contact_point, b.contact_point, rtol=0, atol=1e-5)
