@@ -426,6 +426,51 @@ _run_bounds_numba = (numba.njit(cache=True)(_run_bounds) if numba is not None
                      else _run_bounds)
 
 
+def _overlap_run(g, u, approach, u_c):
+    """On the trace (vertical gaps ``g`` at lateral positions ``u``) of a wheel lowered by
+    ``approach`` beyond first contact: ``(g_min, lo, hi)``, the least gap and the run
+    ``lo:hi`` of positive vertical interpenetration ``approach - (g - g_min)`` that holds
+    the sample nearest ``u_c`` (``lo == hi`` when that sample does not overlap) - the masks
+    of :func:`_around` in one pass."""
+    n = g.size
+    g_min = g[0]
+    k = 0
+    best = abs(u[0] - u_c)
+    for i in range(1, n):
+        if g[i] < g_min:
+            g_min = g[i]
+        d = abs(u[i] - u_c)
+        if d < best:
+            best = d
+            k = i
+    if not approach - (g[k] - g_min) > 0:
+        return g_min, k, k
+    lo = k
+    while lo > 0 and approach - (g[lo - 1] - g_min) > 0:
+        lo -= 1
+    hi = k + 1
+    while hi < n and approach - (g[hi] - g_min) > 0:
+        hi += 1
+    return g_min, lo, hi
+
+
+def _nearest(u, u_c):
+    """The index of the sample of ``u`` nearest ``u_c`` (the first of equals)."""
+    k = 0
+    best = abs(u[0] - u_c)
+    for i in range(1, u.size):
+        d = abs(u[i] - u_c)
+        if d < best:
+            best = d
+            k = i
+    return k
+
+
+_overlap_run_numba = (numba.njit(cache=True)(_overlap_run) if numba is not None
+                      else _overlap_run)
+_nearest_numba = numba.njit(cache=True)(_nearest) if numba is not None else _nearest
+
+
 def _around(mask: np.ndarray, k: int) -> np.ndarray:
     """The connected run of ``mask`` that holds sample ``k`` (all False when it does not):
     a patch's own interpenetration, not a neighbour's."""
@@ -468,15 +513,14 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     if not d > 0 or cp.rail_u_of_s is None:
         return None
     eta, _, u, z, g = _vertical_gap_of_pose(track, ws, pose, cp.side)
-    g_min = float(g.min())
-    e = approach - (g - g_min)  # vertical interpenetration along the trace
-    k = int(np.argmin(np.abs(u - cp.rail_u)))
-    lo, hi = _run_bounds_numba(e > 0, k)  # the patch's own run (:func:`_around`)
+    # the patch's own run of vertical interpenetration along the trace (:func:`_around`)
+    g_min, lo, hi = _overlap_run_numba(g, u, float(approach), float(cp.rail_u))
     if hi <= lo:
         return None
+    g_min = float(g_min)
     run = slice(lo, hi)
     u_run = u[run]
-    w = e[run] ** WEIGHT_POWER
+    w = (approach - (g[run] - g_min)) ** WEIGHT_POWER
     total = float(w.sum())
     rail = track.side_rail
     u_ref = float((w * u_run).sum() / total)
@@ -486,7 +530,7 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     okr = np.isfinite(cp.rail_u_of_s)
     s_ref = float(np.interp(u_ref, cp.rail_u_of_s[okr], cp.s[okr]))
     z = z - g_min - approach  # the wheel lowered by the approach beyond first contact
-    k = int(np.argmin(np.abs(u - u_ref)))
+    k = int(_nearest_numba(u, u_ref))
     s, f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _tangent_frame(
         track, ws, eta, u, z, u_ref, z_ref, gamma, float(eta[k]))
     with np.errstate(invalid="ignore"):
