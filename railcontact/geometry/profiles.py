@@ -68,6 +68,7 @@ class Profile:
     kind: str
     name: str = "profile"
     _spline: CubicSpline = field(init=False, repr=False, compare=False)
+    _pieces: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -96,7 +97,11 @@ class Profile:
                 "on itself cannot be described as z(y)")
         object.__setattr__(self, "y", y)
         object.__setattr__(self, "z", z)
-        object.__setattr__(self, "_spline", CubicSpline(y, z, bc_type="not-a-knot"))
+        spline = CubicSpline(y, z, bc_type="not-a-knot")
+        object.__setattr__(self, "_spline", spline)
+        # its breakpoints and coefficients, read once (scipy's properties convert them on
+        # every access, which costs more than evaluating a short array)
+        object.__setattr__(self, "_pieces", (spline.x, spline.c))
 
     @property
     def bounds(self) -> tuple[float, float]:
@@ -105,7 +110,7 @@ class Profile:
 
     def height(self, y: np.ndarray | float) -> np.ndarray:
         """z(y) [m] (radius increment for a wheel, height for a rail)."""
-        out = evaluate(self._spline.x, self._spline.c, y, 0)  # compiled, for long arrays
+        out = evaluate(*self._pieces, y, 0)  # compiled, for long arrays
         return self._spline(y) if out is None else out
 
     def samples(self, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -121,7 +126,7 @@ class Profile:
 
     def slope(self, y: np.ndarray | float) -> np.ndarray:
         """dz/dy [-]."""
-        out = evaluate(self._spline.x, self._spline.c, y, 1)
+        out = evaluate(*self._pieces, y, 1)
         return self._spline(y, 1) if out is None else out
 
     def curvature(self, y: np.ndarray | float) -> np.ndarray:

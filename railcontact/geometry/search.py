@@ -408,15 +408,75 @@ integrated along the track over the overlap ``e - x^2 / (2 r)`` gives ``e^(5/2)`
 matched to 0.01 mm and 0.001 rad, with 2 or 3 not)."""
 
 
+def _run_bounds(mask, k):
+    """``(lo, hi)``: the connected run ``mask[lo:hi]`` of True that holds sample ``k``
+    (``lo == hi`` when ``mask[k]`` is False)."""
+    if not mask[k]:
+        return k, k
+    lo = k
+    while lo > 0 and mask[lo - 1]:
+        lo -= 1
+    hi = k + 1
+    while hi < mask.size and mask[hi]:
+        hi += 1
+    return lo, hi
+
+
+_run_bounds_numba = (numba.njit(cache=True)(_run_bounds) if numba is not None
+                     else _run_bounds)
+
+
+def _overlap_run(g, u, approach, u_c):
+    """On the trace (vertical gaps ``g`` at lateral positions ``u``) of a wheel lowered by
+    ``approach`` beyond first contact: ``(g_min, lo, hi)``, the least gap and the run
+    ``lo:hi`` of positive vertical interpenetration ``approach - (g - g_min)`` that holds
+    the sample nearest ``u_c`` (``lo == hi`` when that sample does not overlap) - the masks
+    of :func:`_around` in one pass."""
+    n = g.size
+    g_min = g[0]
+    k = 0
+    best = abs(u[0] - u_c)
+    for i in range(1, n):
+        if g[i] < g_min:
+            g_min = g[i]
+        d = abs(u[i] - u_c)
+        if d < best:
+            best = d
+            k = i
+    if not approach - (g[k] - g_min) > 0:
+        return g_min, k, k
+    lo = k
+    while lo > 0 and approach - (g[lo - 1] - g_min) > 0:
+        lo -= 1
+    hi = k + 1
+    while hi < n and approach - (g[hi] - g_min) > 0:
+        hi += 1
+    return g_min, lo, hi
+
+
+def _nearest(u, u_c):
+    """The index of the sample of ``u`` nearest ``u_c`` (the first of equals)."""
+    k = 0
+    best = abs(u[0] - u_c)
+    for i in range(1, u.size):
+        d = abs(u[i] - u_c)
+        if d < best:
+            best = d
+            k = i
+    return k
+
+
+_overlap_run_numba = (numba.njit(cache=True)(_overlap_run) if numba is not None
+                      else _overlap_run)
+_nearest_numba = numba.njit(cache=True)(_nearest) if numba is not None else _nearest
+
+
 def _around(mask: np.ndarray, k: int) -> np.ndarray:
     """The connected run of ``mask`` that holds sample ``k`` (all False when it does not):
     a patch's own interpenetration, not a neighbour's."""
     out = np.zeros_like(mask)
-    if mask[k]:
-        edges = np.flatnonzero(~mask)
-        lo = edges[edges < k].max() + 1 if (edges < k).any() else 0
-        hi = edges[edges > k].min() if (edges > k).any() else len(mask)
-        out[lo:hi] = True
+    lo, hi = _run_bounds_numba(mask, int(k))
+    out[lo:hi] = True
     return out
 
 
@@ -453,42 +513,43 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     if not d > 0 or cp.rail_u_of_s is None:
         return None
     eta, _, u, z, g = _vertical_gap_of_pose(track, ws, pose, cp.side)
-    g_min = float(g.min())
-    e = approach - (g - g_min)  # vertical interpenetration along the trace
-    k = int(np.argmin(np.abs(u - cp.rail_u)))
-    run = _around(e > 0, k)
-    if not run.any():
+    # the patch's own run of vertical interpenetration along the trace (:func:`_around`)
+    g_min, lo, hi = _overlap_run_numba(g, u, float(approach), float(cp.rail_u))
+    if hi <= lo:
         return None
-    w = e[run] ** WEIGHT_POWER
+    g_min = float(g_min)
+    run = slice(lo, hi)
+    u_run = u[run]
+    w = (approach - (g[run] - g_min)) ** WEIGHT_POWER
     total = float(w.sum())
     rail = track.side_rail
-    u_ref = float((w * u[run]).sum() / total)
-    gamma = float((w * np.arctan(rail.slope(u[run]))).sum() / total)
+    u_ref = float((w * u_run).sum() / total)
+    gamma = float((w * np.arctan(rail.slope(u_run))).sum() / total)
     z_ref = float(rail.height(u_ref))
-    u_lo, u_hi = float(u[run].min()), float(u[run].max())
+    u_lo, u_hi = float(u_run.min()), float(u_run.max())
     okr = np.isfinite(cp.rail_u_of_s)
     s_ref = float(np.interp(u_ref, cp.rail_u_of_s[okr], cp.s[okr]))
     z = z - g_min - approach  # the wheel lowered by the approach beyond first contact
-    k = int(np.argmin(np.abs(u - u_ref)))
+    k = int(_nearest_numba(u, u_ref))
     s, f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _tangent_frame(
         track, ws, eta, u, z, u_ref, z_ref, gamma, float(eta[k]))
     with np.errstate(invalid="ignore"):
         own = (rail_u_of_s >= u_lo) & (rail_u_of_s <= u_hi)
-    inside = _around_origin(np.isfinite(f) & (f < 0) & own)
-    if not inside.any():
+    lo, hi = _run_bounds_numba(np.isfinite(f) & (f < 0) & own, K0)  # :func:`_around_origin`
+    if hi <= lo:
         return None
-    overlap = -float(f[inside].min())
+    overlap = -float(f[lo:hi].min())
     f = np.where(np.isfinite(f), f + overlap, np.inf)
     # CONTACT's wheel profile coordinate of the point: the wheel above it; its rolling
     # radius: the wheel surface's along the contact normal through it (where the rigid
     # slip of the wheel is taken)
-    order = np.argsort(u[run])
-    wheel_s = float(ws.profile_coordinate(np.interp(u_ref, u[run][order], eta[run][order])))
+    order = np.argsort(u_run)
+    wheel_s = float(ws.profile_coordinate(np.interp(u_ref, u_run[order], eta[run][order])))
     s_normal = float(wheel_s_of_s[K0])
     # B for Hertz's estimates: the parabola with the overlap's depth and width (the origin
     # is the weighted centre, not the gap's minimum, where f'' may be anything)
-    width = float(s[inside].max() - s[inside].min()) + (s[1] - s[0])
-    B = overlap / (0.5 * width) ** 2 if inside.sum() >= 5 else _lateral_curvature(s, f)
+    width = float(s[hi - 1] - s[lo]) + (s[1] - s[0])  # s increases
+    B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, f)
     sgn = SIDES[cp.side]
     return ContactPoint(side=cp.side, gap=approach - overlap / math.cos(gamma),
                         wheel_s=wheel_s, rail_u=u_ref,
