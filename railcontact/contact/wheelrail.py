@@ -348,7 +348,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     first = contact_points(track, ws, pose, side, 0.0)[0]
     single, passes = _single_patch(track, ws, pose, first, q, settings, pair, estimate_for,
                                    previous, reference, start)
-    approach = _approach(single)
+    approach = vertical_approach(single)
     if count_contacts(track, ws, pose, side, approach) == 1:
         return count_passes(single, passes) if len(passes) > 1 else single
     # several patches: secant on the vertical approach
@@ -423,8 +423,8 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
         return single, [single]
     if previous:  # the pass before, its approach scaled to this load as Hertz's
         q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
-        approach = _approach(previous) * (q / q_prev) ** (2 / 3) if q_prev > 0 else \
-            _approach(previous)
+        approach = vertical_approach(previous) * (q / q_prev) ** (2 / 3) if q_prev > 0 else \
+            vertical_approach(previous)
     elif start is not None and start[0] > 0:  # an earlier solve's, scaled the same way
         approach = start[0] * (q / start[1]) ** (2 / 3) if start[1] > 0 else start[0]
     else:
@@ -441,7 +441,7 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
         ps = _patches([cp], ws, 0.0, settings, pair, loads=[q / math.cos(cp.contact_angle)],
                       estimate_for=estimate_for, previous=last)
         passes.append(ps)
-        new = _approach(ps)
+        new = vertical_approach(ps)
         if cp is first and (approach <= 0 or at_reference(first, track, ws, pose, new)
                             is None):
             break  # no reference point to form: the rigid point's patch is the answer
@@ -463,8 +463,6 @@ def vertical_approach(patches: list[PatchSolution]) -> float:
     p = min(patches, key=lambda q: q.geometry.gap)
     return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
 
-
-_approach = vertical_approach
 
 
 def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
@@ -527,11 +525,11 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
         solved[phi] = per_side
         values[phi] = (first_contact_gap(track, ws, p, "left")
                        - first_contact_gap(track, ws, p, "right")
-                       - _approach(per_side["right"]) + _approach(per_side["left"]))
+                       - vertical_approach(per_side["right"]) + vertical_approach(per_side["left"]))
         return values[phi]
 
     def offset(phi: float) -> float:
-        return _approach(solved[phi]["right"]) - _approach(solved[phi]["left"])
+        return vertical_approach(solved[phi]["right"]) - vertical_approach(solved[phi]["left"])
 
     phi = pose.roll
     f = residual(phi)

@@ -13,58 +13,27 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
-
-try:
-    import numba
-except ImportError:  # pragma: no cover
-    numba = None
 
 MIN_POINTS = 32
 """Arrays shorter than this are left to ``CubicSpline`` (the call overhead dominates)."""
 
 
-def _evaluate(x, c, t, nu, out):
-    """``out[i]`` = the ``nu``-th derivative (0, 1 or 2) of the piecewise cubic at ``t[i]``."""
-    n = x.size - 1
-    j = 0
-    for i in range(t.size):
-        ti = t[i]
-        if math.isnan(ti):
-            out[i] = math.nan
-            continue
-        if x[j] <= ti < x[j + 1]:  # the last point's interval
-            pass
-        elif j + 2 <= n and x[j + 1] <= ti < x[j + 2]:  # the next one
-            j += 1
-        else:  # search
-            if ti < x[0]:
-                j = 0
-            elif ti >= x[n]:
-                j = n - 1
-            else:
-                j = np.searchsorted(x, ti, side="right") - 1
-        s = ti - x[j]
-        if nu == 0:
-            out[i] = ((c[0, j] * s + c[1, j]) * s + c[2, j]) * s + c[3, j]
-        elif nu == 1:
-            out[i] = (3.0 * c[0, j] * s + 2.0 * c[1, j]) * s + c[2, j]
-        else:
-            out[i] = 6.0 * c[0, j] * s + 2.0 * c[1, j]
-
-
-def _evaluate_one(x, c, ti, nu):
-    """The ``nu``-th derivative of the piecewise cubic at the one point ``ti``."""
-    if math.isnan(ti):
-        return math.nan
+@numba.njit(cache=True)
+def _interval(x, ti):
+    """The piece of breakpoints ``x`` that holds ``ti`` (the end pieces beyond them)."""
     n = x.size - 1
     if ti < x[0]:
-        j = 0
-    elif ti >= x[n]:
-        j = n - 1
-    else:
-        j = np.searchsorted(x, ti, side="right") - 1
-    s = ti - x[j]
+        return 0
+    if ti >= x[n]:
+        return n - 1
+    return np.searchsorted(x, ti, side="right") - 1
+
+
+@numba.njit(cache=True)
+def _piece(c, j, s, nu):
+    """The ``nu``-th derivative (0, 1 or 2) of piece ``j`` at ``s`` from its start."""
     if nu == 0:
         return ((c[0, j] * s + c[1, j]) * s + c[2, j]) * s + c[3, j]
     if nu == 1:
@@ -72,8 +41,32 @@ def _evaluate_one(x, c, ti, nu):
     return 6.0 * c[0, j] * s + 2.0 * c[1, j]
 
 
-_evaluate_numba = numba.njit(cache=True)(_evaluate) if numba is not None else None
-_evaluate_one_numba = numba.njit(cache=True)(_evaluate_one) if numba is not None else None
+@numba.njit(cache=True)
+def _evaluate(x, c, t, nu, out):
+    """``out[i]`` = the ``nu``-th derivative of the piecewise cubic at ``t[i]``; each
+    interval search starts from the previous point's interval."""
+    n = x.size - 1
+    j = 0
+    for i in range(t.size):
+        ti = t[i]
+        if math.isnan(ti):
+            out[i] = math.nan
+            continue
+        if not x[j] <= ti < x[j + 1]:  # not the last point's interval
+            if j + 2 <= n and x[j + 1] <= ti < x[j + 2]:  # the next one
+                j += 1
+            else:
+                j = _interval(x, ti)
+        out[i] = _piece(c, j, ti - x[j], nu)
+
+
+@numba.njit(cache=True)
+def _evaluate_one(x, c, ti, nu):
+    """The ``nu``-th derivative of the piecewise cubic at the one point ``ti``."""
+    if math.isnan(ti):
+        return math.nan
+    j = _interval(x, ti)
+    return _piece(c, j, ti - x[j], nu)
 
 
 def evaluate(x: np.ndarray, c: np.ndarray, t, nu: int = 0):
@@ -81,12 +74,13 @@ def evaluate(x: np.ndarray, c: np.ndarray, t, nu: int = 0):
     (derivative ``nu`` in 0, 1, 2), or None when ``t`` is neither a float nor a float array
     of at least :data:`MIN_POINTS` points (the caller then uses ``CubicSpline``). A float
     gives a 0-d array, as ``CubicSpline`` does."""
-    if isinstance(t, float) and _evaluate_one_numba is not None and nu in (0, 1, 2):
-        return np.array(_evaluate_one_numba(x, c, t, nu))
-    if (_evaluate_numba is None or not isinstance(t, np.ndarray) or t.dtype != np.float64
-            or t.size < MIN_POINTS or nu not in (0, 1, 2)):
+    if nu not in (0, 1, 2):
+        return None
+    if isinstance(t, float):
+        return np.array(_evaluate_one(x, c, t, nu))
+    if not isinstance(t, np.ndarray) or t.dtype != np.float64 or t.size < MIN_POINTS:
         return None
     flat = np.ascontiguousarray(t).reshape(-1)
     out = np.empty(flat.size)
-    _evaluate_numba(x, c, flat, nu, out)
+    _evaluate(x, c, flat, nu, out)
     return out.reshape(t.shape)
