@@ -159,7 +159,7 @@ def test_time_step_records_are_built_once_from_contact_settings():
     t = cs.tangential_settings
     assert (t.friction, t.tolerance, t.estimate, t.model) == (0.3, 1e-3, "none", "bem")
     g = cs.grid_settings
-    assert (g.dx, g.dy, g.quantum, g.snap) == (1e-3, 1e-3, 8, True)
+    assert (g.dx, g.dy, g.quantum, g.snap) == (1e-3, 1e-3, 4, True)
     with_estimate = ContactSettings(warm_start="previous+estimate")
     assert with_estimate.normal_settings.estimate == "infcon"
     assert with_estimate.tangential_settings.estimate == "fastrip"

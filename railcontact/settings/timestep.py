@@ -61,7 +61,7 @@ class ContactSettings(Record):
     friction: float = inherit(TangentialSettings, "friction", 0.4, open_min=True)
     element_size: float = setting(0.5e-3, "float", "m", "BEM element size dx = dy",
                                   minimum=MIN_ELEMENT_SIZE, maximum=MAX_ELEMENT_SIZE)
-    margin: float = inherit(GridSettings, "margin", 1.2)
+    margin: float = inherit(GridSettings, "margin", 1.0)
     normal_tolerance: float = inherit(NormalSettings, "tolerance")
     tangential_tolerance: float = inherit(TangentialSettings, "tolerance")
     normal_estimate: str = inherit(NormalSettings, "estimate", "infcon")
@@ -75,7 +75,7 @@ class ContactSettings(Record):
     estimate_grid: tuple[int, int] = inherit(NormalSettings, "estimate_grid")
     strips: tuple[int, int] = inherit(TangentialSettings, "strips")
     spin_offset: float = inherit(TangentialSettings, "spin_offset")
-    quantum: int = inherit(GridSettings, "quantum", 8)
+    quantum: int = inherit(GridSettings, "quantum", 4)
     load_includes_creep: bool = setting(True, "bool", "", "a wheel load is the total vertical "
                                         "force, creep forces included")
     load_tolerance: float = setting(1e-3, "float", "-", "relative tolerance on a wheel load "
