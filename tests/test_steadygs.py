@@ -238,3 +238,40 @@ def test_a_window_around_the_contact_gives_the_whole_grid_answer():
     slip = t.state == 2
     np.testing.assert_allclose(t.slip[:, slip], full.slip[:, slip], rtol=0,
                                atol=1e-6 * np.abs(full.slip).max())
+
+
+@pytest.mark.parametrize("solver", [solve_steadygs, solve_tangential])
+def test_slip_formed_when_read_obeys_coulomb(sphere, solver):
+    """The result's slip costs a product with the operator only when read, once; it is
+    ``(W + B p)/dx`` of the returned traction (a dense product here, not the solver's
+    FFT), zero outside the slip area, and in the slip area opposite to the traction
+    (Coulomb), |p| = mu p_n. A pickled result carries it."""
+    import pickle
+
+    from railcontact.tangential.rolling import rigid_slip
+
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    products = []
+    apply = op.apply
+    op.apply = lambda p: products.append(1) or apply(p)  # count the products from here on
+    try:
+        creepage = (1e-4, -5e-5, 0.2)
+        r = solver(g, op, nr.pressure, 0.3, creepage, tolerance=1e-9, max_iterations=5000)
+        n = len(products)
+        s = r.slip
+        assert len(products) == n + 1 and r.slip is s and len(products) == n + 1
+    finally:
+        del op.apply
+    assert r.converged and 0.1 < r.slip_area_ratio < 0.9
+    dense = (op.dense() @ r.traction.reshape(-1)).reshape(r.traction.shape)
+    expected = (rigid_slip(g, creepage) + dense) / g.dx
+    slipping = r.state == 2
+    np.testing.assert_allclose(s[:, slipping], expected[:, slipping], rtol=0,
+                               atol=1e-9 * np.abs(expected).max())
+    assert not s[:, ~slipping].any()
+    p = r.traction[:, slipping]
+    cos = -np.sum(p * s[:, slipping], axis=0) / (np.hypot(*p) * np.hypot(*s[:, slipping]))
+    assert cos.min() > 1 - 1e-6
+    np.testing.assert_allclose(np.hypot(*p), 0.3 * nr.pressure[slipping], rtol=1e-12)
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(r)).slip, s)

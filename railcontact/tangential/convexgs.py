@@ -226,6 +226,9 @@ class TangentialResult:
         0 exterior, 1 adhesion, 2 slip, shape (nx, ny).
     slip
         Relative slip ``S/dx`` (slip velocity divided by rolling speed) [-], (2, nx, ny).
+        It costs one more product with the operator, which a time step never reads: the
+        solvers give a function that forms it, called when ``slip`` is first read (any
+        zero-argument callable passed as ``slip`` is taken so; the value is then kept).
     force
         (F_x, F_y) [N].
     spin_moment
@@ -252,6 +255,23 @@ class TangentialResult:
     wall_time: float
     error: float
     history: np.ndarray = field(repr=False)
+
+    def __post_init__(self) -> None:
+        if callable(self.slip):  # formed when first read (see ``slip``)
+            self.__dict__["_slip_of"] = self.__dict__.pop("slip")
+
+    def __getattr__(self, name: str):
+        of = self.__dict__.get("_slip_of") if name == "slip" else None
+        if of is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self.__dict__["slip"] = slip = np.asarray(of())
+        del self.__dict__["_slip_of"]
+        return slip
+
+    def __getstate__(self) -> dict:
+        """Pickled with its slip formed (the function that forms it is a closure)."""
+        _ = self.slip
+        return self.__dict__
 
 
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
@@ -372,8 +392,6 @@ class SweepProblem:
         grid = self.grid
         traction = np.stack([px.T, py.T])
         st = np.ascontiguousarray(self.state.T)
-        slip = (self.w + self.operator.apply(traction)) / grid.dx
-        slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
         if not self.contact.any():
@@ -389,10 +407,20 @@ class SweepProblem:
                 message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
                             f"in {stall_sweeps} sweeps")
         return TangentialResult(
-            grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
-            slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
-            message=message, wall_time=time.perf_counter() - t0, error=err,
+            grid=grid, traction=traction, state=st, slip=self._slip, force=force,
+            spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
+            converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
             history=np.asarray(hist))
+
+
+    def _slip(self) -> np.ndarray:
+        """The relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny) of the traction solved
+        for, zero outside the slip area (in adhesion it is zero at convergence; exterior
+        elements are not in contact). ``px``, ``py`` and ``state`` are the solver's own
+        arrays, not changed once it returns."""
+        slip = (self.w + self.operator.apply(np.stack([self.px.T, self.py.T]))) / self.grid.dx
+        slip[:, self.state.T != SLIP] = 0.0
+        return slip
 
 
 def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[int, int]
