@@ -68,9 +68,9 @@ from .convexgs import (
     HAVE_NUMBA,
     SweepProblem,
     TangentialResult,
+    _blocks_of,
     _element_solve,
     _gs_kernels,
-    _row_blocks,
 )
 
 try:
@@ -100,9 +100,10 @@ def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
         oy = py[iy, j]
         qx = ox + ex
         qy = oy + ey
-        m = math.hypot(qx, qy)
+        m2 = qx * qx + qy * qy  # no hypot: this loop is most of a block's non-sum time
         gj = g[iy, j]
-        if m > gj:
+        if m2 > gj * gj:
+            m = math.sqrt(m2)
             qx *= gj / m
             qy *= gj / m
         ex = qx - ox
@@ -172,19 +173,27 @@ def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, 
 
 def _steady_block(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
                   r0, r1, omega_h, omega_s):
-    """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled).
+    """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled); returns the squared
+    norm of the block's traction change [Pa^2].
 
     ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
     direct sum with the reversed kernels (as ConvexGS's ``_block_sweep``), so every
     element sees the newest tractions. ``cum[:, L]`` holds the run coefficient
-    ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for a run of ``L`` elements.
+    ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for a run of ``L`` elements. On return
+    ``dpx``, ``dpy`` hold the block's changes (the runs shifted included: they lie in the
+    block's rows), whose squared sum is the sweep's measure of this block.
     """
     for iy in range(r0, r1):
         for ix in range(lo[iy], hi[iy] + 1):
             if g[iy, ix] > 0.0:
                 _visit_c(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
                          r0, r1, omega_h, omega_s, iy, ix)
+    dif = 0.0
+    for iy in range(r0, r1):
+        for ix in range(lo[iy], hi[iy] + 1):
+            dif += dpx[iy, ix] * dpx[iy, ix] + dpy[iy, ix] * dpy[iy, ix]
+    return dif
 
 
 if HAVE_NUMBA:
@@ -208,15 +217,17 @@ def _sweep_blocked(kern, cum, op, w_t, g, px, py, state, lo, hi, rows, omega_h, 
     ux, uy = np.ascontiguousarray(u[0]), np.ascontiguousarray(u[1])
     dpx = np.zeros_like(px)
     dpy = np.zeros_like(py)
+    dif = 0.0
     for b, (r0, r1) in enumerate(rows):
-        _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
-                            omega_h, omega_s)
+        dif += _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
+                                   r0, r1, omega_h, omega_s)
         if b + 1 < len(rows):
             du = op.apply(np.stack([dpx.T, dpy.T]))
             ux += du[0].T
             uy += du[1].T
             dpx[r0:r1] = 0.0
             dpy[r0:r1] = 0.0
+    return dif
 
 
 def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
@@ -311,18 +322,17 @@ def solve_steadygs(
     px, py = prob.px, prob.py
     kern = _gs_kernels(operator)
     cum = _run_coefficients(operator)
-    rows = _row_blocks(prob.contact, DIRECT_WORK)
+    rows = _blocks_of(prob.row_counts, DIRECT_WORK)
     w_t = np.stack([prob.wx, prob.wy])
     oh, os_ = float(omega_h), float(omega_s)
 
     def sweep() -> float:
+        if prob.use_numba:  # the blocks measure their changes, the shifted runs included
+            return _sweep_blocked(kern, cum, operator, w_t, prob.g, px, py, prob.state,
+                                  prob.lo, prob.hi, rows, oh, os_)
         qx, qy = px.copy(), py.copy()  # the runs move many elements: measure the whole field
-        if prob.use_numba:
-            _sweep_blocked(kern, cum, operator, w_t, prob.g, px, py, prob.state, prob.lo,
-                           prob.hi, rows, oh, os_)
-        else:
-            _sweep_numpy(kern, cum, prob.wx, prob.wy, prob.g, px, py, prob.state, prob.lo,
-                         prob.hi, oh, os_)
+        _sweep_numpy(kern, cum, prob.wx, prob.wy, prob.g, px, py, prob.state, prob.lo,
+                     prob.hi, oh, os_)
         return float(np.sum((px - qx) ** 2 + (py - qy) ** 2))
 
     return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0)
