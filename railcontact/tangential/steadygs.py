@@ -81,12 +81,14 @@ except ImportError:  # pragma: no cover
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
-DIRECT_WORK = 120_000
-"""Target size of a row block, (contact elements in the block)^2: SteadyGS's blocks are
-twice ConvexGS's (:data:`railcontact.tangential.convexgs.DIRECT_WORK`). A block's direct
-sum costs its size, a block boundary one DC-FFT product; at 0.5 mm on the wheelset step's
-patches 120,000 took 9 % less time per solve than 60,000 (90,000 and 180,000 as 120,000),
-with the same sweeps and forces."""
+BLOCK_SCALE = 18.0
+"""Target size of a row block, in contact elements: ``BLOCK_SCALE sqrt(nx ny)`` on an
+``nx`` x ``ny`` grid. A block's direct sum costs about (its elements)^2 / 2 element pairs,
+a block boundary one DC-FFT product, whose cost grows with the grid, so the best block
+grows as the square root of the grid's size. 18 was the best of 12 / 18 / 25 on the
+wheelset step's windows (32 x 24 to 40 x 32 elements, 500-700 in contact: one block, one
+product per sweep) and on 0.2 mm wheel-rail patches (56 x 104 elements, 2,400-4,300 in
+contact: two to four blocks)."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
@@ -122,35 +124,35 @@ def _run_start(state, iy, ix):
     return jx
 
 
-def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
-           omega_h, omega_s, iy, ix):
-    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`)."""
+def _row_dot(rxx, rxy, ryx, ryy, r, k0, dpx, dpy, jy, a, m):
+    """``sum_j K[r, k0 + j] dp[jy, a + j]`` over ``j < m`` for both components (xx, xy;
+    yx, yy): the reversed kernels' row ``r`` against the changes of row ``jy``, as
+    contiguous slices with local sums, a loop the compiler vectorises."""
+    kxx = rxx[r, k0:k0 + m]
+    kxy = rxy[r, k0:k0 + m]
+    kyx = ryx[r, k0:k0 + m]
+    kyy = ryy[r, k0:k0 + m]
+    qx = dpx[jy, a:a + m]
+    qy = dpy[jy, a:a + m]
+    ax = 0.0
+    ay = 0.0
+    for j in range(m):
+        ax += kxx[j] * qx[j] + kxy[j] * qy[j]
+        ay += kyx[j] * qx[j] + kyy[j] * qy[j]
+    return ax, ay
+
+
+def _visit(rxx, rxy, ryx, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix,
+           omega_h, omega_s):
+    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`);
+    ``(sx, sy)`` is its shift [m] with the changes of the block's rows before this one."""
     ny, nx = g.shape
-    gi = g[iy, ix]
-    sx = ux[iy, ix]
-    sy = uy[iy, ix]
-    bx = nx - 1 - ix
-    # the changes so far: the block's rows up to this one, and in this row the elements
-    # trailing this one (rows, and elements in a row, are visited in order; the runs shifted
-    # are trailing ones); the rest of the block is unchanged yet (zero in dpx, dpy)
-    for jy in range(r0, iy + 1):
-        r = ny - 1 - iy + jy
-        a = lo[jy]
-        m = (hi[jy] if jy < iy else ix - 1) + 1 - a
-        # contiguous slices and a local sum per row: the loop vectorises (2x the block)
-        kxx = rxx[r, bx + a:bx + a + m]
-        kxy = rxy[r, bx + a:bx + a + m]
-        kyx = ryx[r, bx + a:bx + a + m]
-        kyy = ryy[r, bx + a:bx + a + m]
-        qx = dpx[jy, a:a + m]
-        qy = dpy[jy, a:a + m]
-        ax = 0.0
-        ay = 0.0
-        for j in range(m):
-            ax += kxx[j] * qx[j] + kxy[j] * qy[j]
-            ay += kyx[j] * qx[j] + kyy[j] * qy[j]
-        sx += ax
-        sy += ay
+    # in this row the elements trailing this one have changed (elements are visited in
+    # order; the runs shifted are trailing ones), the rest not yet (zero in dpx, dpy)
+    a = lo[iy]
+    ax, ay = _row_dot_c(rxx, rxy, ryx, ryy, ny - 1, nx - 1 - ix + a, dpx, dpy, iy, a, ix - a)
+    sx += ax
+    sy += ay
     jx = _run_start_c(state, iy, ix)
     n = ix - jx
     c11 = cum[0, n]
@@ -161,7 +163,7 @@ def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, 
     oy = py[iy, ix]
     s0x = sx - c11 * ox - c12 * oy
     s0y = sy - c21 * ox - c22 * oy
-    new_x, new_y, st = _element_solve_c(ox, oy, s0x, s0y, gi, c11, c12, c21, c22,
+    new_x, new_y, st = _element_solve_c(ox, oy, s0x, s0y, g[iy, ix], c11, c12, c21, c22,
                                         omega_h, omega_s)
     px[iy, ix] = new_x
     py[iy, ix] = new_y
@@ -179,19 +181,36 @@ def _steady_block(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, l
     ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
     direct sum with the reversed kernels (as ConvexGS's ``_block_sweep``), so every
-    element sees the newest tractions. ``cum[:, L]`` holds the run coefficient
-    ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for a run of ``L`` elements. On return
-    ``dpx``, ``dpy`` hold the block's changes (the runs shifted included: they lie in the
-    block's rows), whose squared sum is the sweep's measure of this block.
+    element sees the newest tractions: at the start of a row, those of the block's rows
+    before it (final for this sweep: a row's changes stay in the row) for the whole row
+    at once, one row pair at a time; at each element, those of its own row so far.
+    ``cum[:, L]`` holds the run coefficient ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for
+    a run of ``L`` elements. On return ``dpx``, ``dpy`` hold the block's changes (the runs
+    shifted included), whose squared sum is the sweep's measure of this block.
     """
-    for iy in range(r0, r1):
-        for ix in range(lo[iy], hi[iy] + 1):
-            if g[iy, ix] > 0.0:
-                _visit_c(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
-                         r0, r1, omega_h, omega_s, iy, ix)
+    ny, nx = g.shape
+    tx = np.empty(nx)
+    ty = np.empty(nx)
     dif = 0.0
     for iy in range(r0, r1):
-        for ix in range(lo[iy], hi[iy] + 1):
+        a, b = lo[iy], hi[iy]
+        for ix in range(a, b + 1):
+            tx[ix] = ux[iy, ix]
+            ty[ix] = uy[iy, ix]
+        for jy in range(r0, iy):
+            m = hi[jy] + 1 - lo[jy]
+            if m <= 0:
+                continue
+            for ix in range(a, b + 1):
+                ax, ay = _row_dot_c(rxx, rxy, ryx, ryy, ny - 1 - iy + jy,
+                                    nx - 1 - ix + lo[jy], dpx, dpy, jy, lo[jy], m)
+                tx[ix] += ax
+                ty[ix] += ay
+        for ix in range(a, b + 1):
+            if g[iy, ix] > 0.0:
+                _visit_c(rxx, rxy, ryx, ryy, cum, tx[ix], ty[ix], g, px, py, dpx, dpy, state,
+                         lo, iy, ix, omega_h, omega_s)
+        for ix in range(a, b + 1):
             dif += dpx[iy, ix] * dpx[iy, ix] + dpy[iy, ix] * dpy[iy, ix]
     return dif
 
@@ -200,12 +219,14 @@ if HAVE_NUMBA:
     _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
     _shift_run_c = numba.njit(cache=True, inline="always")(_shift_run)
     _run_start_c = numba.njit(cache=True, inline="always")(_run_start)
+    _row_dot_c = numba.njit(cache=True, inline="always")(_row_dot)
     _visit_c = numba.njit(cache=True, inline="always")(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True)(_steady_block)
 else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
     _run_start_c = _run_start
+    _row_dot_c = _row_dot
     _visit_c = _visit
     _steady_block_numba = None
 
@@ -322,7 +343,7 @@ def solve_steadygs(
     px, py = prob.px, prob.py
     kern = _gs_kernels(operator)
     cum = _run_coefficients(operator)
-    rows = _blocks_of(prob.row_counts, DIRECT_WORK)
+    rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     w_t = np.stack([prob.wx, prob.wy])
     oh, os_ = float(omega_h), float(omega_s)
 
