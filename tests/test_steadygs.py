@@ -275,3 +275,17 @@ def test_slip_formed_when_read_obeys_coulomb(sphere, solver):
     assert cos.min() > 1 - 1e-6
     np.testing.assert_allclose(np.hypot(*p), 0.3 * nr.pressure[slipping], rtol=1e-12)
     np.testing.assert_array_equal(pickle.loads(pickle.dumps(r)).slip, s)
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_non_reciprocal_operator_is_refused(sphere):
+    """The compiled sweep takes B_yx = B_xy (reciprocity of quasi-identical materials):
+    an operator whose kernels break it is refused with a clear error, not solved wrongly."""
+    from railcontact.halfspace.operator import InfluenceOperator
+
+    hz, g, nr = sphere
+    k = rolling_operator(g, STEEL).kernels.copy()
+    k[1, 0] *= 1.01
+    op = InfluenceOperator(g, STEEL, "xy", "scipy", kernels=k)
+    with pytest.raises(rc.RailContactError, match="reciprocal"):
+        solve_steadygs(g, op, nr.pressure, 0.3, (1e-4, 0, 0), engine="numba")

@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
-from .rolling import rigid_slip
+from .rolling import rigid_slip_lines
 
 try:
     import numba
@@ -366,7 +366,7 @@ class SweepProblem:
     """A steady-rolling problem in the Gauss–Seidel solvers' layout, and their common loop.
 
     Fields are (ny, nx), x contiguous: the traction bound ``g = mu p_n`` [Pa], the rigid
-    slip ``wx``, ``wy`` [m] (``w`` in the grid's (2, nx, ny) layout), the traction ``px``,
+    slip ``wx``, ``wy`` [m] (:func:`~.rolling.rigid_slip`), the traction ``px``,
     ``py`` [Pa] being solved for, the element states, the contact mask and per row the
     first and last element in contact (``lo``, ``hi``) and their count. ConvexGS and
     SteadyGS differ only in their sweep.
@@ -374,7 +374,6 @@ class SweepProblem:
 
     grid: Grid
     operator: InfluenceOperator
-    w: np.ndarray
     g: np.ndarray
     wx: np.ndarray
     wy: np.ndarray
@@ -414,16 +413,19 @@ class SweepProblem:
             raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine == "numba" and not HAVE_NUMBA:
             raise RailContactError("engine 'numba' requested but numba is not installed")
-        w = rigid_slip(grid, creepage, spin_offset)
+        lx, ly = rigid_slip_lines(grid, creepage, spin_offset)
+        wx = np.empty_like(g)
+        wy = np.empty_like(g)
+        wx[...] = lx[:, None]
+        wy[...] = ly[None, :]
         rolling = any(c != 0.0 for c in creepage)
         if initial_traction is None or not rolling:  # no creepage: no traction, exactly
             px, py = np.zeros_like(g), np.zeros_like(g)
         else:
             px, py = _clipped_start(initial_traction, initial_state, g, shape)
         return cls(
-            grid=grid, operator=operator, w=w, g=g, wx=np.ascontiguousarray(w[0].T),
-            wy=np.ascontiguousarray(w[1].T), px=px, py=py, state=state, contact=contact,
-            lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
+            grid=grid, operator=operator, g=g, wx=wx, wy=wy, px=px, py=py, state=state,
+            contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
             max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
@@ -487,7 +489,8 @@ class SweepProblem:
         for, zero outside the slip area (in adhesion it is zero at convergence; exterior
         elements are not in contact). ``px``, ``py`` and ``state`` are the solver's own
         arrays, not changed once it returns."""
-        slip = (self.w + self.operator.apply(np.stack([self.px.T, self.py.T]))) / self.grid.dx
+        w = np.stack([self.wx.T, self.wy.T])
+        slip = (w + self.operator.apply(np.stack([self.px.T, self.py.T]))) / self.grid.dx
         slip[:, self.state.T != SLIP] = 0.0
         return slip
 
