@@ -355,10 +355,36 @@ def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
     fx = float(traction[0].sum() * da)
     fy = float(traction[1].sum() * da)
     mz = float((x * traction[1] - y * traction[0]).sum() * da)
-    ncon = int(np.count_nonzero(state != EXTERIOR))
-    ratio = float(np.count_nonzero(state == SLIP) / ncon) if ncon else 0.0
-    pmax = float(np.hypot(traction[0], traction[1]).max(initial=0.0))
-    return (fx, fy), mz, ratio, pmax
+    ncon, nslip, pmax = _counts_and_max(traction, state)
+    ratio = float(nslip / ncon) if ncon else 0.0
+    return (fx, fy), mz, ratio, float(pmax)
+
+
+def _counts_and_max(traction, state):
+    """Elements in contact and in slip, and the largest |p| [Pa] (0 without elements, NaN
+    when a traction is NaN), in one pass (the sums stay numpy's: ConvexGS's forces keep
+    their bits; a maximum is the same in any order)."""
+    ncon = 0
+    nslip = 0
+    pmax = 0.0
+    nan = False
+    for ix in range(state.shape[0]):
+        for iy in range(state.shape[1]):
+            st = state[ix, iy]
+            if st != EXTERIOR:
+                ncon += 1
+                if st == SLIP:
+                    nslip += 1
+            h = math.hypot(traction[0, ix, iy], traction[1, ix, iy])
+            if h > pmax:
+                pmax = h
+            elif h != h:
+                nan = True
+    return ncon, nslip, (math.nan if nan else pmax)
+
+
+if HAVE_NUMBA:
+    _counts_and_max = numba.njit(cache=True)(_counts_and_max)
 
 
 @dataclass
