@@ -36,8 +36,13 @@ The shift of every element is exact at every element update: as in ConvexGS the 
 grouped into blocks; the shift at the start of a block comes from one DC-FFT product
 with the steady-rolling operator ``B`` and the changes made inside the block are added by
 direct summation with ``B`` (all traction changes, including those of the shifted
-adhesion runs). The sweep is compiled with numba; a numpy version (vectorised shift per
-element, no blocks) gives the same iterates where numba is missing or on request.
+adhesion runs): at the start of a row those of the block's rows before it, for the whole
+row at once, then at each element those of its own row so far. Blocks hold about
+:data:`BLOCK_SCALE` ``sqrt(nx ny)`` contact elements: on the wheelset step's windows one
+block, so a sweep costs one DC-FFT product and one compiled call. The sweep is compiled
+with numba; a numpy version (vectorised shift per element, no blocks) gives the same
+iterates where numba is missing or on request. The result's slip field (one more
+product) is formed only when read (:class:`~.convexgs.TangentialResult`).
 
 Convergence as ConvexGS's: one iteration is one sweep over all contact elements and
 ``||p^k - p^(k-1)||_2 < tolerance ||p^k||_2`` with ``p^k`` the whole traction field after
