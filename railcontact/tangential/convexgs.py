@@ -509,7 +509,6 @@ class SweepProblem:
             converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
             history=np.asarray(hist))
 
-
     def _slip(self) -> np.ndarray:
         """The relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny) of the traction solved
         for, zero outside the slip area (in adhesion it is zero at convergence; exterior
