@@ -238,3 +238,79 @@ def test_a_window_around_the_contact_gives_the_whole_grid_answer():
     slip = t.state == 2
     np.testing.assert_allclose(t.slip[:, slip], full.slip[:, slip], rtol=0,
                                atol=1e-6 * np.abs(full.slip).max())
+
+
+@pytest.mark.parametrize("solver", [solve_steadygs, solve_tangential])
+def test_slip_formed_when_read_obeys_coulomb(sphere, solver):
+    """The result's slip costs a product with the operator only when read, once; it is
+    ``(W + B p)/dx`` of the returned traction (a dense product here, not the solver's
+    FFT), zero outside the slip area, and in the slip area opposite to the traction
+    (Coulomb), |p| = mu p_n. A pickled result carries it."""
+    import pickle
+
+    from railcontact.tangential.rolling import rigid_slip
+
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    products = []
+    apply = op.apply
+    op.apply = lambda p: products.append(1) or apply(p)  # count the products from here on
+    try:
+        creepage = (1e-4, -5e-5, 0.2)
+        r = solver(g, op, nr.pressure, 0.3, creepage, tolerance=1e-9, max_iterations=5000)
+        n = len(products)
+        s = r.slip
+        assert len(products) == n + 1 and r.slip is s and len(products) == n + 1
+    finally:
+        del op.apply
+    assert r.converged and 0.1 < r.slip_area_ratio < 0.9
+    dense = (op.dense() @ r.traction.reshape(-1)).reshape(r.traction.shape)
+    expected = (rigid_slip(g, creepage) + dense) / g.dx
+    slipping = r.state == 2
+    np.testing.assert_allclose(s[:, slipping], expected[:, slipping], rtol=0,
+                               atol=1e-9 * np.abs(expected).max())
+    assert not s[:, ~slipping].any()
+    p = r.traction[:, slipping]
+    cos = -np.sum(p * s[:, slipping], axis=0) / (np.hypot(*p) * np.hypot(*s[:, slipping]))
+    assert cos.min() > 1 - 1e-6
+    np.testing.assert_allclose(np.hypot(*p), 0.3 * nr.pressure[slipping], rtol=1e-12)
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(r)).slip, s)
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_non_reciprocal_operator_is_refused(sphere):
+    """The compiled sweep takes B_yx = B_xy (reciprocity of quasi-identical materials):
+    an operator whose kernels break it is refused with a clear error, not solved wrongly."""
+    from railcontact.halfspace.operator import InfluenceOperator
+
+    hz, g, nr = sphere
+    k = rolling_operator(g, STEEL).kernels.copy()
+    k[1, 0] *= 1.01
+    op = InfluenceOperator(g, STEEL, "xy", "scipy", kernels=k)
+    with pytest.raises(rc.RailContactError, match="reciprocal"):
+        solve_steadygs(g, op, nr.pressure, 0.3, (1e-4, 0, 0), engine="numba")
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_row_blocks_of_any_size_give_the_same_iterates(sphere, monkeypatch):
+    """The shift is exact at every element update whatever the blocks: one block (the
+    default on this patch), many blocks (a DC-FFT product at each boundary) and the numpy
+    sweep without blocks take the same sweeps to the same traction."""
+    import railcontact.tangential.steadygs as steadygs
+    from railcontact.tangential.convexgs import _blocks_of
+
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    per_row = (nr.pressure > 0).sum(axis=0)  # contact elements per row (rows along y)
+    assert len(_blocks_of(per_row, steadygs.BLOCK_SCALE**2 * g.size)) == 1
+    args = (g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2))
+    one = solve_steadygs(*args, tolerance=1e-6)
+    monkeypatch.setattr(steadygs, "BLOCK_SCALE", 2.0)
+    assert len(_blocks_of(per_row, steadygs.BLOCK_SCALE**2 * g.size)) >= 8
+    many = solve_steadygs(*args, tolerance=1e-6)
+    plain = solve_steadygs(*args, tolerance=1e-6, engine="numpy")
+    assert one.converged and one.iterations == many.iterations == plain.iterations
+    for r in (many, plain):
+        np.testing.assert_allclose(r.traction, one.traction, rtol=0,
+                                   atol=1e-11 * one.max_traction)
+        np.testing.assert_array_equal(r.state, one.state)

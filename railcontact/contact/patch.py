@@ -378,12 +378,17 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM
 def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]
              ) -> TangentialResult:
     """A tangential solution on a window of ``grid`` (:func:`contact_window`) as one on the
-    whole grid: traction, slip and states zero outside the window."""
+    whole grid: traction, slip and states zero outside the window (the slip formed when
+    first read, as the window's)."""
     sx, sy = window
     traction = np.zeros((2, *grid.shape))
     traction[:, sx, sy] = result.traction
-    slip = np.zeros((2, *grid.shape))
-    slip[:, sx, sy] = result.slip
     state = np.zeros(grid.shape, dtype=result.state.dtype)
     state[sx, sy] = result.state
+
+    def slip() -> np.ndarray:
+        out = np.zeros((2, *grid.shape))
+        out[:, sx, sy] = result.slip
+        return out
+
     return replace(result, grid=grid, traction=traction, slip=slip, state=state)

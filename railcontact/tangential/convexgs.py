@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
-from .rolling import rigid_slip
+from .rolling import rigid_slip_lines
 
 try:
     import numba
@@ -188,21 +188,94 @@ def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, om
 
 def _row_blocks(contact: np.ndarray, work: int = DIRECT_WORK) -> list[tuple[int, int]]:
     """Split the rows that hold contact into blocks of about ``work^(1/2)`` elements."""
-    per_row = contact.sum(axis=1)
+    return _blocks_of(contact.sum(axis=1), work)
+
+
+def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
+    """:func:`_row_blocks` from the contact elements per row: rows are added to a block
+    until it holds ``total / nblocks`` elements (the last block takes the rest)."""
     rows = np.flatnonzero(per_row)
     if rows.size == 0:
         return []
-    total = int(per_row.sum())
+    cum = np.cumsum(per_row)  # integers: "the block holds >= target" is exact
+    total = int(cum[-1])
     nblocks = max(1, min(rows.size, round(total / math.sqrt(work))))
     target = total / nblocks
-    blocks, start, acc = [], int(rows[0]), 0
-    for r in rows:
-        acc += int(per_row[r])
-        if acc >= target and len(blocks) < nblocks - 1:
-            blocks.append((start, int(r) + 1))
-            start, acc = int(r) + 1, 0
+    blocks, start, base = [], int(rows[0]), 0
+    for _ in range(nblocks - 1):
+        r = int(np.searchsorted(cum - base, target))  # first row where the block is full
+        if r >= cum.size:
+            break
+        blocks.append((start, r + 1))
+        start, base = r + 1, int(cum[r])
     blocks.append((start, int(rows[-1]) + 1))
     return blocks
+
+
+def _bound_layout(pn, mu):
+    """The traction bound ``g = mu p_n`` [Pa] of the pressure ``pn`` (nx, ny) in the
+    sweep layout (ny, nx), its states (adhesion where ``g > 0``, else exterior), the
+    contact mask, per row the first and last contact element (``lo`` 1 > ``hi`` 0 in a
+    row without contact) and their count; ``ok`` is False when a pressure is negative or
+    not finite. One compiled pass (numba) in place of a dozen array operations."""
+    nx, ny = pn.shape
+    g = np.empty((ny, nx))
+    state = np.zeros((ny, nx), dtype=np.int8)
+    contact = np.zeros((ny, nx), dtype=np.bool_)
+    lo = np.ones(ny, dtype=np.int64)
+    hi = np.zeros(ny, dtype=np.int64)
+    count = np.zeros(ny, dtype=np.int64)
+    ok = True
+    for iy in range(ny):
+        for ix in range(nx):
+            p = pn[ix, iy]
+            if not (0.0 <= p < math.inf):
+                ok = False
+            gi = mu * p
+            g[iy, ix] = gi
+            if gi > 0.0:
+                contact[iy, ix] = True
+                state[iy, ix] = ADHESION
+                if count[iy] == 0:
+                    lo[iy] = ix
+                hi[iy] = ix
+                count[iy] += 1
+    return g, state, contact, lo, hi, count, ok
+
+
+def _clip_start(p0, slip0, g):
+    """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout (ny, nx), scaled
+    onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty: none)
+    marks a slip element, zero outside the contact; ``ok`` is False when a value is not
+    finite."""
+    ny, nx = g.shape
+    px = np.empty((ny, nx))
+    py = np.empty((ny, nx))
+    has_state = slip0.size > 0
+    ok = True
+    for iy in range(ny):
+        for ix in range(nx):
+            x = p0[0, ix, iy]
+            y = p0[1, ix, iy]
+            if not (math.isfinite(x) and math.isfinite(y)):
+                ok = False
+            m = math.hypot(x, y)
+            gi = g[iy, ix]
+            if (has_state and slip0[ix, iy] and m > 0) or m > gi:
+                s = gi / (m if m > 0 else 1.0)
+                x *= s
+                y *= s
+            if gi <= 0:
+                x = 0.0
+                y = 0.0
+            px[iy, ix] = x
+            py[iy, ix] = y
+    return px, py, ok
+
+
+if HAVE_NUMBA:
+    _bound_layout = numba.njit(cache=True)(_bound_layout)
+    _clip_start = numba.njit(cache=True)(_clip_start)
 
 
 @lru_cache(maxsize=16)
@@ -226,6 +299,9 @@ class TangentialResult:
         0 exterior, 1 adhesion, 2 slip, shape (nx, ny).
     slip
         Relative slip ``S/dx`` (slip velocity divided by rolling speed) [-], (2, nx, ny).
+        It costs one more product with the operator, which a time step never reads: the
+        solvers give a function that forms it, called when ``slip`` is first read (any
+        zero-argument callable passed as ``slip`` is taken so; the value is then kept).
     force
         (F_x, F_y) [N].
     spin_moment
@@ -253,6 +329,23 @@ class TangentialResult:
     error: float
     history: np.ndarray = field(repr=False)
 
+    def __post_init__(self) -> None:
+        if callable(self.slip):  # formed when first read (see ``slip``)
+            self.__dict__["_slip_of"] = self.__dict__.pop("slip")
+
+    def __getattr__(self, name: str):
+        of = self.__dict__.get("_slip_of") if name == "slip" else None
+        if of is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self.__dict__["slip"] = slip = np.asarray(of())
+        del self.__dict__["_slip_of"]
+        return slip
+
+    def __getstate__(self) -> dict:
+        """Pickled with its slip formed (the function that forms it is a closure)."""
+        _ = self.slip
+        return self.__dict__
+
 
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
@@ -262,10 +355,36 @@ def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
     fx = float(traction[0].sum() * da)
     fy = float(traction[1].sum() * da)
     mz = float((x * traction[1] - y * traction[0]).sum() * da)
-    ncon = int(np.count_nonzero(state != EXTERIOR))
-    ratio = float(np.count_nonzero(state == SLIP) / ncon) if ncon else 0.0
-    pmax = float(np.hypot(traction[0], traction[1]).max(initial=0.0))
-    return (fx, fy), mz, ratio, pmax
+    ncon, nslip, pmax = _counts_and_max(traction, state)
+    ratio = float(nslip / ncon) if ncon else 0.0
+    return (fx, fy), mz, ratio, float(pmax)
+
+
+def _counts_and_max(traction, state):
+    """Elements in contact and in slip, and the largest |p| [Pa] (0 without elements, NaN
+    when a traction is NaN), in one pass (the sums stay numpy's: ConvexGS's forces keep
+    their bits; a maximum is the same in any order)."""
+    ncon = 0
+    nslip = 0
+    pmax = 0.0
+    nan = False
+    for ix in range(state.shape[0]):
+        for iy in range(state.shape[1]):
+            st = state[ix, iy]
+            if st != EXTERIOR:
+                ncon += 1
+                if st == SLIP:
+                    nslip += 1
+            h = math.hypot(traction[0, ix, iy], traction[1, ix, iy])
+            if h > pmax:
+                pmax = h
+            elif h != h:
+                nan = True
+    return ncon, nslip, (math.nan if nan else pmax)
+
+
+if HAVE_NUMBA:
+    _counts_and_max = numba.njit(cache=True)(_counts_and_max)
 
 
 @dataclass
@@ -273,15 +392,14 @@ class SweepProblem:
     """A steady-rolling problem in the Gauss–Seidel solvers' layout, and their common loop.
 
     Fields are (ny, nx), x contiguous: the traction bound ``g = mu p_n`` [Pa], the rigid
-    slip ``wx``, ``wy`` [m] (``w`` in the grid's (2, nx, ny) layout), the traction ``px``,
+    slip ``wx``, ``wy`` [m] (:func:`~.rolling.rigid_slip`), the traction ``px``,
     ``py`` [Pa] being solved for, the element states, the contact mask and per row the
-    first and last element in contact (``lo``, ``hi``). ConvexGS and SteadyGS differ only
-    in their sweep.
+    first and last element in contact (``lo``, ``hi``) and their count. ConvexGS and
+    SteadyGS differ only in their sweep.
     """
 
     grid: Grid
     operator: InfluenceOperator
-    w: np.ndarray
     g: np.ndarray
     wx: np.ndarray
     wy: np.ndarray
@@ -291,6 +409,7 @@ class SweepProblem:
     contact: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
+    row_counts: np.ndarray
     rolling: bool
     tolerance: float
     max_iterations: int
@@ -306,9 +425,11 @@ class SweepProblem:
             raise RailContactError("operator must be the 'xy' steady-rolling operator of "
                                    "this grid")
         pn = np.asarray(pressure, dtype=float)
-        if pn.shape != shape or not np.all(np.isfinite(pn)) or np.any(pn < 0):
-            raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
         mu = check_positive("friction", friction, allow_zero=True)
+        if pn.shape == shape:
+            g, state, contact, lo, hi, count, ok = _bound_layout(pn, mu)
+        if pn.shape != shape or not ok:
+            raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
         tolerance = check_positive("tolerance", tolerance)
         for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
             if not 0.0 < check_finite(name, om) <= 1.5:
@@ -318,24 +439,20 @@ class SweepProblem:
             raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine == "numba" and not HAVE_NUMBA:
             raise RailContactError("engine 'numba' requested but numba is not installed")
-        w = rigid_slip(grid, creepage, spin_offset)
-        g = np.ascontiguousarray((mu * pn).T)
+        lx, ly = rigid_slip_lines(grid, creepage, spin_offset)
+        wx = np.empty_like(g)
+        wy = np.empty_like(g)
+        wx[...] = lx[:, None]
+        wy[...] = ly[None, :]
         rolling = any(c != 0.0 for c in creepage)
         if initial_traction is None or not rolling:  # no creepage: no traction, exactly
             px, py = np.zeros_like(g), np.zeros_like(g)
         else:
             px, py = _clipped_start(initial_traction, initial_state, g, shape)
-        contact = g > 0
-        any_row = contact.any(axis=1)
         return cls(
-            grid=grid, operator=operator, w=w, g=g, wx=np.ascontiguousarray(w[0].T),
-            wy=np.ascontiguousarray(w[1].T), px=px, py=py,
-            state=np.where(contact, ADHESION, EXTERIOR).astype(np.int8), contact=contact,
-            lo=np.where(any_row, contact.argmax(axis=1), 1).astype(np.int64),
-            hi=np.where(any_row, g.shape[1] - 1 - contact[:, ::-1].argmax(axis=1),
-                        0).astype(np.int64),
-            rolling=rolling, tolerance=tolerance, max_iterations=max_iterations,
-            use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
+            grid=grid, operator=operator, g=g, wx=wx, wy=wy, px=px, py=py, state=state,
+            contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
+            max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
               t0: float) -> TangentialResult:
@@ -372,8 +489,6 @@ class SweepProblem:
         grid = self.grid
         traction = np.stack([px.T, py.T])
         st = np.ascontiguousarray(self.state.T)
-        slip = (self.w + self.operator.apply(traction)) / grid.dx
-        slip[:, st != SLIP] = 0.0  # adhesion: zero at convergence; exterior: not in contact
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
         if not self.contact.any():
@@ -389,10 +504,20 @@ class SweepProblem:
                 message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
                             f"in {stall_sweeps} sweeps")
         return TangentialResult(
-            grid=grid, traction=traction, state=st, slip=slip, force=force, spin_moment=mz,
-            slip_area_ratio=ratio, max_traction=pmax, iterations=its, converged=converged,
-            message=message, wall_time=time.perf_counter() - t0, error=err,
+            grid=grid, traction=traction, state=st, slip=self._slip, force=force,
+            spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
+            converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
             history=np.asarray(hist))
+
+    def _slip(self) -> np.ndarray:
+        """The relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny) of the traction solved
+        for, zero outside the slip area (in adhesion it is zero at convergence; exterior
+        elements are not in contact). ``px``, ``py`` and ``state`` are the solver's own
+        arrays, not changed once it returns."""
+        w = np.stack([self.wx.T, self.wy.T])
+        slip = (w + self.operator.apply(np.stack([self.px.T, self.py.T]))) / self.grid.dx
+        slip[:, self.state.T != SLIP] = 0.0
+        return slip
 
 
 def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[int, int]
@@ -400,20 +525,18 @@ def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[
     """An initial traction (2, nx, ny) [Pa] in the sweep layout, clipped to the bound ``g``
     (elements in slip in ``initial_state`` put on it), zero outside the contact."""
     p0 = np.asarray(initial_traction, dtype=float)
-    if p0.shape != (2, *shape) or not np.all(np.isfinite(p0)):
-        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-    px, py = np.ascontiguousarray(p0[0].T), np.ascontiguousarray(p0[1].T)
-    mag = np.hypot(px, py)
-    on_bound = np.zeros_like(g, dtype=bool)
+    message = f"initial_traction must be finite, shape {(2, *shape)}"
+    if p0.shape != (2, *shape):
+        raise RailContactError(message)
+    slip0 = np.zeros((0, 0), dtype=bool)
     if initial_state is not None:
         st0 = np.asarray(initial_state)
         if st0.shape != shape:
             raise RailContactError(f"initial_state must have shape {shape}")
-        on_bound = (st0.T == SLIP) & (mag > 0)
-    scale = np.where(on_bound | (mag > g), g / np.where(mag > 0, mag, 1.0), 1.0)
-    px, py = px * scale, py * scale
-    px[g <= 0] = 0.0
-    py[g <= 0] = 0.0
+        slip0 = st0 == SLIP
+    px, py, ok = _clip_start(p0, slip0, g)
+    if not ok:
+        raise RailContactError(message)
     return px, py
 
 
@@ -469,7 +592,7 @@ def solve_tangential(
     kern = _gs_kernels(operator)
     c = operator.self_coefficient
     cc = (float(c[0, 0]), float(c[0, 1]), float(c[1, 0]), float(c[1, 1]))
-    rows = _row_blocks(prob.contact)
+    rows = _blocks_of(prob.row_counts, DIRECT_WORK)
     w_t = np.stack([prob.wx, prob.wy])
     oh, os_ = float(omega_h), float(omega_s)
 

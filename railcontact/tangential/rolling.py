@@ -74,12 +74,20 @@ def rigid_slip(grid: Grid, creepage: tuple[float, float, float],
 
     ``creepage = (xi, eta, phi)``: longitudinal and lateral creepage [-] and spin [1/m].
     """
+    wx, wy = rigid_slip_lines(grid, creepage, spin_offset)
+    out = np.empty((2, grid.nx, grid.ny))
+    out[0] = wx[None, :]
+    out[1] = wy[:, None]
+    return out
+
+
+def rigid_slip_lines(grid: Grid, creepage: tuple[float, float, float],
+                     spin_offset: float = 1.0 / 6.0) -> tuple[np.ndarray, np.ndarray]:
+    """The rigid slip of :func:`rigid_slip` [m] by its lines: ``W_x`` depends on y alone
+    (shape (ny,)), ``W_y`` on x alone (shape (nx,)); the same values."""
     if len(creepage) != 3:
         raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
     xi, eta, phi = (check_finite(n, v, u) for n, v, u in
                     zip(("xi", "eta", "phi"), creepage, ("-", "-", "1/m"), strict=True))
-    x, y = grid.x[:, None], grid.y[None, :]  # the element centres, broadcast
-    out = np.empty((2, grid.nx, grid.ny))
-    out[0] = xi - phi * y
-    out[1] = eta + phi * (x + spin_offset * grid.dx)
-    return grid.dx * out
+    return (grid.dx * (xi - phi * grid.y),
+            grid.dx * (eta + phi * (grid.x + spin_offset * grid.dx)))

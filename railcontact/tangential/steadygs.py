@@ -36,8 +36,13 @@ The shift of every element is exact at every element update: as in ConvexGS the 
 grouped into blocks; the shift at the start of a block comes from one DC-FFT product
 with the steady-rolling operator ``B`` and the changes made inside the block are added by
 direct summation with ``B`` (all traction changes, including those of the shifted
-adhesion runs). The sweep is compiled with numba; a numpy version (vectorised shift per
-element, no blocks) gives the same iterates where numba is missing or on request.
+adhesion runs): at the start of a row those of the block's rows before it, for the whole
+row at once, then at each element those of its own row so far. Blocks hold about
+:data:`BLOCK_SCALE` ``sqrt(nx ny)`` contact elements: on the wheelset step's windows one
+block, so a sweep costs one DC-FFT product and one compiled call. The sweep is compiled
+with numba; a numpy version (vectorised shift per element, no blocks) gives the same
+iterates where numba is missing or on request. The result's slip field (one more
+product) is formed only when read (:class:`~.convexgs.TangentialResult`).
 
 Convergence as ConvexGS's: one iteration is one sweep over all contact elements and
 ``||p^k - p^(k-1)||_2 < tolerance ||p^k||_2`` with ``p^k`` the whole traction field after
@@ -61,6 +66,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..errors import RailContactError
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
 from .convexgs import (
@@ -68,9 +74,9 @@ from .convexgs import (
     HAVE_NUMBA,
     SweepProblem,
     TangentialResult,
+    _blocks_of,
     _element_solve,
     _gs_kernels,
-    _row_blocks,
 )
 
 try:
@@ -81,12 +87,14 @@ except ImportError:  # pragma: no cover
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
-DIRECT_WORK = 120_000
-"""Target size of a row block, (contact elements in the block)^2: SteadyGS's blocks are
-twice ConvexGS's (:data:`railcontact.tangential.convexgs.DIRECT_WORK`). A block's direct
-sum costs its size, a block boundary one DC-FFT product; at 0.5 mm on the wheelset step's
-patches 120,000 took 9 % less time per solve than 60,000 (90,000 and 180,000 as 120,000),
-with the same sweeps and forces."""
+BLOCK_SCALE = 18.0
+"""Target size of a row block, in contact elements: ``BLOCK_SCALE sqrt(nx ny)`` on an
+``nx`` x ``ny`` grid. A block's direct sum costs about (its elements)^2 / 2 element pairs,
+a block boundary one DC-FFT product, whose cost grows with the grid, so the best block
+grows as the square root of the grid's size. 18 was the best of 12 / 18 / 25 on the
+wheelset step's windows (32 x 24 to 40 x 32 elements, 500-700 in contact: one block, one
+product per sweep) and on 0.2 mm wheel-rail patches (56 x 104 elements, 2,400-4,300 in
+contact: two to four blocks)."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
@@ -100,9 +108,10 @@ def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
         oy = py[iy, j]
         qx = ox + ex
         qy = oy + ey
-        m = math.hypot(qx, qy)
+        m2 = qx * qx + qy * qy  # no hypot: this loop is most of a block's non-sum time
         gj = g[iy, j]
-        if m > gj:
+        if m2 > gj * gj:
+            m = math.sqrt(m2)
             qx *= gj / m
             qy *= gj / m
         ex = qx - ox
@@ -121,35 +130,35 @@ def _run_start(state, iy, ix):
     return jx
 
 
-def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
-           omega_h, omega_s, iy, ix):
-    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`)."""
+def _row_dot(rxx, rxy, ryy, r, k0, dpx, dpy, jy, a, m):
+    """``sum_j K[r, k0 + j] dp[jy, a + j]`` over ``j < m`` for both components (xx, xy;
+    yx = xy, yy): the reversed kernels' row ``r`` against the changes of row ``jy``, as
+    contiguous slices with local sums, a loop the compiler vectorises (three kernel
+    streams, not four: 13 % less time)."""
+    kxx = rxx[r, k0:k0 + m]
+    kxy = rxy[r, k0:k0 + m]
+    kyy = ryy[r, k0:k0 + m]
+    qx = dpx[jy, a:a + m]
+    qy = dpy[jy, a:a + m]
+    ax = 0.0
+    ay = 0.0
+    for j in range(m):
+        ax += kxx[j] * qx[j] + kxy[j] * qy[j]
+        ay += kxy[j] * qx[j] + kyy[j] * qy[j]
+    return ax, ay
+
+
+def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix,
+           omega_h, omega_s):
+    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`);
+    ``(sx, sy)`` is its shift [m] with the changes of the block's rows before this one."""
     ny, nx = g.shape
-    gi = g[iy, ix]
-    sx = ux[iy, ix]
-    sy = uy[iy, ix]
-    bx = nx - 1 - ix
-    # the changes so far: the block's rows up to this one, and in this row the elements
-    # trailing this one (rows, and elements in a row, are visited in order; the runs shifted
-    # are trailing ones); the rest of the block is unchanged yet (zero in dpx, dpy)
-    for jy in range(r0, iy + 1):
-        r = ny - 1 - iy + jy
-        a = lo[jy]
-        m = (hi[jy] if jy < iy else ix - 1) + 1 - a
-        # contiguous slices and a local sum per row: the loop vectorises (2x the block)
-        kxx = rxx[r, bx + a:bx + a + m]
-        kxy = rxy[r, bx + a:bx + a + m]
-        kyx = ryx[r, bx + a:bx + a + m]
-        kyy = ryy[r, bx + a:bx + a + m]
-        qx = dpx[jy, a:a + m]
-        qy = dpy[jy, a:a + m]
-        ax = 0.0
-        ay = 0.0
-        for j in range(m):
-            ax += kxx[j] * qx[j] + kxy[j] * qy[j]
-            ay += kyx[j] * qx[j] + kyy[j] * qy[j]
-        sx += ax
-        sy += ay
+    # in this row the elements trailing this one have changed (elements are visited in
+    # order; the runs shifted are trailing ones), the rest not yet (zero in dpx, dpy)
+    a = lo[iy]
+    ax, ay = _row_dot_c(rxx, rxy, ryy, ny - 1, nx - 1 - ix + a, dpx, dpy, iy, a, ix - a)
+    sx += ax
+    sy += ay
     jx = _run_start_c(state, iy, ix)
     n = ix - jx
     c11 = cum[0, n]
@@ -160,7 +169,7 @@ def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, 
     oy = py[iy, ix]
     s0x = sx - c11 * ox - c12 * oy
     s0y = sy - c21 * ox - c22 * oy
-    new_x, new_y, st = _element_solve_c(ox, oy, s0x, s0y, gi, c11, c12, c21, c22,
+    new_x, new_y, st = _element_solve_c(ox, oy, s0x, s0y, g[iy, ix], c11, c12, c21, c22,
                                         omega_h, omega_s)
     px[iy, ix] = new_x
     py[iy, ix] = new_y
@@ -170,53 +179,96 @@ def _visit(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, 
     _shift_run_c(px, py, g, dpx, dpy, iy, ix, jx, new_x - ox, new_y - oy)
 
 
-def _steady_block(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
+def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
                   r0, r1, omega_h, omega_s):
-    """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled).
+    """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled); returns the squared
+    norm of the block's traction change [Pa^2].
 
     ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
     direct sum with the reversed kernels (as ConvexGS's ``_block_sweep``), so every
-    element sees the newest tractions. ``cum[:, L]`` holds the run coefficient
-    ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for a run of ``L`` elements.
+    element sees the newest tractions: at the start of a row, those of the block's rows
+    before it (final for this sweep: a row's changes stay in the row) for the whole row
+    at once, one row pair at a time; at each element, those of its own row so far.
+    ``cum[:, L]`` holds the run coefficient ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for
+    a run of ``L`` elements. On return ``dpx``, ``dpy`` hold the block's changes (the runs
+    shifted included), whose squared sum is the sweep's measure of this block.
     """
+    ny, nx = g.shape
+    tx = np.empty(nx)
+    ty = np.empty(nx)
+    dif = 0.0
     for iy in range(r0, r1):
-        for ix in range(lo[iy], hi[iy] + 1):
+        a, b = lo[iy], hi[iy]
+        for ix in range(a, b + 1):
+            tx[ix] = ux[iy, ix]
+            ty[ix] = uy[iy, ix]
+        for jy in range(r0, iy):
+            m = hi[jy] + 1 - lo[jy]
+            if m <= 0:
+                continue
+            for ix in range(a, b + 1):
+                ax, ay = _row_dot_c(rxx, rxy, ryy, ny - 1 - iy + jy,
+                                    nx - 1 - ix + lo[jy], dpx, dpy, jy, lo[jy], m)
+                tx[ix] += ax
+                ty[ix] += ay
+        for ix in range(a, b + 1):
             if g[iy, ix] > 0.0:
-                _visit_c(rxx, rxy, ryx, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
-                         r0, r1, omega_h, omega_s, iy, ix)
+                _visit_c(rxx, rxy, ryy, cum, tx[ix], ty[ix], g, px, py, dpx, dpy, state,
+                         lo, iy, ix, omega_h, omega_s)
+        for ix in range(a, b + 1):
+            dif += dpx[iy, ix] * dpx[iy, ix] + dpy[iy, ix] * dpy[iy, ix]
+    return dif
 
 
 if HAVE_NUMBA:
     _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
     _shift_run_c = numba.njit(cache=True, inline="always")(_shift_run)
     _run_start_c = numba.njit(cache=True, inline="always")(_run_start)
+    _row_dot_c = numba.njit(cache=True, inline="always")(_row_dot)
     _visit_c = numba.njit(cache=True, inline="always")(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True)(_steady_block)
 else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
     _run_start_c = _run_start
+    _row_dot_c = _row_dot
     _visit_c = _visit
     _steady_block_numba = None
 
 
-def _sweep_blocked(kern, cum, op, w_t, g, px, py, state, lo, hi, rows, omega_h, omega_s):
-    """One SteadyGS sweep, row block by row block; between blocks the shift is brought up
-    to date with one DC-FFT product of the block's changes (as ConvexGS's sweep)."""
-    u = w_t + op.apply(np.stack([px.T, py.T])).transpose(0, 2, 1)
-    ux, uy = np.ascontiguousarray(u[0]), np.ascontiguousarray(u[1])
+def _add_product(ux, uy, bx, by, u, r0):
+    """``ux = bx + u[0].T``, ``uy = by + u[1].T`` [m] on the rows ``r0`` on: a product
+    ``u`` (2, nx, ny) of the operator added in the sweep layout (ny, nx)."""
+    ny, nx = ux.shape
+    for iy in range(r0, ny):
+        for ix in range(nx):
+            ux[iy, ix] = bx[iy, ix] + u[0, ix, iy]
+            uy[iy, ix] = by[iy, ix] + u[1, ix, iy]
+
+
+_add_product_c = numba.njit(cache=True)(_add_product) if HAVE_NUMBA else _add_product
+
+
+def _sweep_blocked(kern, cum, op, wx, wy, g, px, py, state, lo, hi, rows, omega_h, omega_s):
+    """One SteadyGS sweep, row block by row block (on the wheelset step's windows one
+    block); between blocks the shift of the rows still to come is brought up to date with
+    one DC-FFT product of the block's changes (as ConvexGS's sweep). Returns the squared
+    norm of the sweep's traction change [Pa^2]."""
+    ux = np.empty_like(g)
+    uy = np.empty_like(g)
+    _add_product_c(ux, uy, wx, wy, op.apply(np.stack([px.T, py.T])), 0)
     dpx = np.zeros_like(px)
     dpy = np.zeros_like(py)
+    dif = 0.0
     for b, (r0, r1) in enumerate(rows):
-        _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
-                            omega_h, omega_s)
+        dif += _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
+                                   r0, r1, omega_h, omega_s)
         if b + 1 < len(rows):
-            du = op.apply(np.stack([dpx.T, dpy.T]))
-            ux += du[0].T
-            uy += du[1].T
+            _add_product_c(ux, uy, ux, uy, op.apply(np.stack([dpx.T, dpy.T])), r1)
             dpx[r0:r1] = 0.0
             dpy[r0:r1] = 0.0
+    return dif
 
 
 def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
@@ -240,6 +292,18 @@ def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
                                               c22, omega_h, omega_s)
             px[iy, ix], py[iy, ix], state[iy, ix] = new_x, new_y, st
             _shift_run(px, py, g, *scratch, iy, ix, jx, new_x - ox, new_y - oy)
+
+
+@lru_cache(maxsize=16)
+def _steady_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The reversed kernels xx, xy, yy of :func:`_gs_kernels` for the compiled sweep, which
+    uses xy for yx: the steady-rolling operator of quasi-identical materials is reciprocal
+    (``B_xy = B_yx``, the same coefficients to the bit)."""
+    rxx, rxy, ryx, ryy = _gs_kernels(operator)
+    if not np.array_equal(rxy, ryx):
+        raise RailContactError("SteadyGS needs a reciprocal steady-rolling operator "
+                               "(equal xy and yx kernels)")
+    return rxx, rxy, ryy
 
 
 @lru_cache(maxsize=16)
@@ -309,20 +373,19 @@ def solve_steadygs(
                                initial_state, tolerance, max_iterations, omega_h, omega_s,
                                engine, spin_offset)
     px, py = prob.px, prob.py
-    kern = _gs_kernels(operator)
     cum = _run_coefficients(operator)
-    rows = _row_blocks(prob.contact, DIRECT_WORK)
-    w_t = np.stack([prob.wx, prob.wy])
+    rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     oh, os_ = float(omega_h), float(omega_s)
+    if prob.use_numba:
+        kern = _steady_kernels(operator)
 
     def sweep() -> float:
+        if prob.use_numba:  # the blocks measure their changes, the shifted runs included
+            return _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, px, py,
+                                  prob.state, prob.lo, prob.hi, rows, oh, os_)
         qx, qy = px.copy(), py.copy()  # the runs move many elements: measure the whole field
-        if prob.use_numba:
-            _sweep_blocked(kern, cum, operator, w_t, prob.g, px, py, prob.state, prob.lo,
-                           prob.hi, rows, oh, os_)
-        else:
-            _sweep_numpy(kern, cum, prob.wx, prob.wy, prob.g, px, py, prob.state, prob.lo,
-                         prob.hi, oh, os_)
+        _sweep_numpy(_gs_kernels(operator), cum, prob.wx, prob.wy, prob.g, px, py, prob.state,
+                     prob.lo, prob.hi, oh, os_)
         return float(np.sum((px - qx) ** 2 + (py - qy) ** 2))
 
     return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0)
