@@ -25,6 +25,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
+from .kernels import nearest_point
 from .profiles import Profile
 
 SIDES = {"left": 1, "right": -1}
@@ -99,7 +100,7 @@ class Track:
     def rail_coordinate(self, u: float, z: float) -> float:
         """Rail profile coordinate y [m] of the point (u, Z) of the placed rail."""
         pu, pz = self._placed_points
-        return float(self.placement[0][int(np.argmin((pu - u) ** 2 + (pz - z) ** 2))])
+        return float(self.placement[0][nearest_point(pu, pz, float(u), float(z))])
 
     @cached_property
     def _placed_points(self) -> tuple[np.ndarray, np.ndarray]:
