@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .spline import _evaluate, _interval, _piece
+from .spline import _evaluate, _interval, _interval_near, _piece
 
 F, A_OF_S, WHEEL_S, RAIL_U, RAIL_Z = range(5)
 """Rows of a frame array."""
@@ -60,16 +60,32 @@ def nearest_sorted(x, v):
 
 
 @numba.njit(cache=True)
-def nearest_point(pu, pz, u, z):
-    """The index of the point (pu, pz) nearest (u, z) (the first of equals), as
-    ``argmin((pu - u)**2 + (pz - z)**2)``."""
-    k = 0
-    best = (pu[0] - u) ** 2 + (pz[0] - z) ** 2
-    for i in range(1, pu.size):
-        d = (pu[i] - u) ** 2 + (pz[i] - z) ** 2
-        if d < best:
+def nearest_point_sorted(pu, pz, order, pu_sorted, u, z):
+    """The index of the point (pu, pz) nearest (u, z), the first of equals (as
+    ``argmin((pu - u)**2 + (pz - z)**2)``), searched outward from ``u`` in ``pu_sorted`` =
+    ``pu[order]`` (increasing) until the lateral distance alone exceeds the least found."""
+    best = math.inf
+    k = -1
+    n = pu_sorted.size
+    j = np.searchsorted(pu_sorted, u)
+    for i in range(j, n):  # at and beyond u
+        du = pu_sorted[i] - u
+        if du * du > best:
+            break
+        m = order[i]
+        d = (pu[m] - u) ** 2 + (pz[m] - z) ** 2
+        if d < best or (d == best and m < k):
             best = d
-            k = i
+            k = m
+    for i in range(j - 1, -1, -1):  # before u
+        du = pu_sorted[i] - u
+        if du * du > best:
+            break
+        m = order[i]
+        d = (pu[m] - u) ** 2 + (pz[m] - z) ** 2
+        if d < best or (d == best and m < k):
+            best = d
+            k = m
     return k
 
 
@@ -164,7 +180,7 @@ def interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
 
 @numba.njit(cache=True)
 def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
-                  gamma, eta_c, s, out):
+                  gamma, eta_c, kw, s, out):
     """Both profiles in the tangent plane through the rail point ``(u_c, z_c)`` inclined
     at ``gamma`` (:func:`~.search._tangent_frame`), written to ``out`` (5, len(s)): the
     wheel's distance above the rail normal to the plane f(s) (NaN where a profile ends),
@@ -172,11 +188,12 @@ def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, 
     and the rail point (u, Z) (the rail's samples ``ur`` increase). The wheel's
     S = eta - half_bb + flange_back, its radius ``radius`` plus the spline (``wx``,
     ``wc``) at S and its slope tan(beta) the spline's derivative there
-    (``cos(atan(t)) = 1 / sqrt(1 + t^2)``)."""
+    (``cos(atan(t)) = 1 / sqrt(1 + t^2)``). ``kw``: the wheel's trace sample nearest
+    ``u_c`` (:func:`nearest`), where its branch is taken."""
     cg, sg = math.cos(gamma), math.sin(gamma)
     ns = s.size
     wheel = np.empty((3, ns))
-    interp_in_plane(s, u, z, eta, eta, u_c, z_c, cg, sg, nearest(u, u_c), wheel)
+    interp_in_plane(s, u, z, eta, eta, u_c, z_c, cg, sg, kw, wheel)
     interp_in_plane(s, ur, zr, ur, zr, u_c, z_c, cg, sg, nearest_sorted(ur, u_c), out[2:5])
     S = np.empty(ns)
     for i in range(ns):
@@ -193,27 +210,60 @@ def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, 
 
 
 @numba.njit(cache=True)
-def least_gap(g):
-    """The smallest of ``g``."""
-    m = g[0]
-    for i in range(1, g.size):
-        if g[i] < m:
-            m = g[i]
-    return m
+def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, rx, rc, out):
+    """The trace points of one wheel (axial positions ``eta``, radii ``r``, dr/deta ``dr``)
+    moved into the side frame (yaw ``psi`` about the vertical axis, then roll ``phi``
+    about the track axis: ``tan_psi``, ``cz, sz`` = cos, sin psi, ``cx, sx`` = cos, sin
+    phi; lateral displacement ``u_ws``), those with ``lo < u < hi`` (above the rail, its
+    spline ``rx``, ``rc``) written to ``out`` (5, n): eta, X, u, Z and the vertical gap
+    g = Z - rail(u). Returns (how many, the least g, its first index)."""
+    n = eta.size
+    xs = np.empty(n)  # all points first (a loop without branches: vectorised)
+    us = np.empty(n)
+    zs = np.empty(n)
+    if yawed:
+        for i in range(n):
+            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
+            rs = r[i] * sin_t
+            xs[i] = cz * rs - sz * eta[i]
+            y = sz * rs + cz * eta[i]
+            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
+            us[i] = cx * y - sx * zw + u_ws
+            zs[i] = sx * y + cx * zw + radius
+    else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+        for i in range(n):
+            xs[i] = 0.0
+            zw = -r[i]
+            us[i] = cx * eta[i] - sx * zw + u_ws
+            zs[i] = sx * eta[i] + cx * zw + radius
+    m = 0
+    j = 0
+    g_min = math.inf
+    k = 0
+    for i in range(n):
+        u = us[i]
+        if lo < u < hi:
+            z = zs[i]
+            j = _interval_near(rx, u, j)
+            g = z - _piece(rc, j, u - rx[j], 0)
+            out[0, m] = eta[i]
+            out[1, m] = xs[i]
+            out[2, m] = u
+            out[3, m] = z
+            out[4, m] = g
+            if g < g_min:
+                g_min = g
+                k = m
+            m += 1
+    return m, g_min, k
 
 
 @numba.njit(cache=True)
-def intervals(g, g_min, approach):
+def intervals(g, g_min, k, approach):
     """Index ranges [a, b) (rows of an (m, 2) array) of the connected runs where the gap
     above first contact ``g - g_min`` is at most ``approach``; the least gap's sample
-    (the first of equals) is always in one."""
+    ``k`` is always in one."""
     n = g.size
-    k = 0
-    best = g[0] - g_min
-    for i in range(1, n):
-        if g[i] - g_min < best:
-            best = g[i] - g_min
-            k = i
     lim = max(approach, 0.0)
     out = np.empty((n // 2 + 1, 2), dtype=np.int64)
     m = 0
@@ -232,11 +282,10 @@ def intervals(g, g_min, approach):
 
 
 @numba.njit(cache=True)
-def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, pu, pz, wx, wc, half_bb, flange_back):
+def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back):
     """The rigid contact point of the run ``a:b`` of the trace: its least gap above
     ``g_min``, refined by a parabola through three samples. Returns (eta, x, u, Z, gap,
-    gamma, S, wheel radius increment, the index of the nearest point (``pu``, ``pz``) of
-    the placed rail)."""
+    gamma, S, wheel radius increment)."""
     n = g.size
     k = a
     best = g[a] - g_min
@@ -260,8 +309,7 @@ def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, pu, pz, wx, wc, half_bb, flan
     z_rail = spline_at(rx, rc, u_c, 0)
     gamma = math.atan(spline_at(rx, rc, u_c, 1))
     s_c = (eta_c - half_bb) + flange_back
-    return (eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, spline_at(wx, wc, s_c, 0),
-            nearest_point(pu, pz, u_c, z_rail))
+    return eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, spline_at(wx, wc, s_c, 0)
 
 
 @numba.njit(cache=True)
@@ -276,7 +324,7 @@ def rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, 
     for i in range(n):
         zs[i] = z[i] - g_min
     tangent_frame(eta, u, zs, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
-                  gamma, eta_c, s, out)
+                  gamma, eta_c, nearest(u, u_c), s, out)
     f = out[F]
     if math.isfinite(f[k0]):
         m = math.inf
@@ -319,20 +367,20 @@ def overlap_run(g, u, approach, u_c):
 
 
 @numba.njit(cache=True)
-def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, pu, pz, wx, wc,
-                    radius, half_bb, flange_back, s, k0, power, out):
+def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, wx, wc, radius,
+                    half_bb, flange_back, s, k0, power, out):
     """CONTACT's reference point of the patch around the rigid point at ``u_rigid``, the
     wheel lowered by ``approach`` beyond first contact, and its tangent frame
     (:func:`~.search.at_reference`), the frame written to ``out`` with ``f`` shifted so
     that its least value over the patch's own overlap is 0.
 
     Returns (ok, u, Z, gamma, overlap [m], wheel profile coordinate S above the point, lo,
-    hi (the overlap's samples of ``s``), the index of the nearest placed-rail point);
-    ``ok`` False where the wheel does not overlap the rail there."""
+    hi (the overlap's samples of ``s``)); ``ok`` False where the wheel does not overlap
+    the rail there."""
     nan = math.nan
     g_min, lo, hi = overlap_run(g, u, approach, u_rigid)
     if hi <= lo:
-        return False, nan, nan, nan, nan, nan, 0, 0, 0
+        return False, nan, nan, nan, nan, nan, 0, 0
     total = 0.0
     su = 0.0
     sgam = 0.0
@@ -342,7 +390,8 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, pu, pz, wx,
     slope = np.empty(hi - lo)
     _evaluate(rx, rc, u[lo:hi], 1, slope)
     for i in range(lo, hi):
-        w = (approach - (g[i] - g_min)) ** power
+        e = approach - (g[i] - g_min)
+        w = e * e * math.sqrt(e) if power == 2.5 else e**power
         total += w
         su += w * u[i]
         sgam += w * math.atan(slope[i - lo])
@@ -366,7 +415,7 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, pu, pz, wx,
         zs[i] = (z[i] - g_min) - approach  # the wheel lowered by the approach
     k = nearest(u, u_ref)
     tangent_frame(eta, u, zs, ur, zr, wx, wc, radius, half_bb, flange_back, u_ref, z_ref,
-                  gamma, eta[k], s, out)
+                  gamma, eta[k], k, s, out)
     f = out[F]
     ru_s = out[RAIL_U]
     # the patch's own overlap through the origin
@@ -375,15 +424,14 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, pu, pz, wx,
         own[i] = math.isfinite(f[i]) and f[i] < 0 and ru_s[i] >= u_lo and ru_s[i] <= u_hi
     lo, hi = run_bounds(own, k0)
     if hi <= lo:
-        return False, nan, nan, nan, nan, nan, 0, 0, 0
+        return False, nan, nan, nan, nan, nan, 0, 0
     least = f[lo]
     for i in range(lo + 1, hi):
         least = min(least, f[i])
     overlap = -least
     for i in range(s.size):
         f[i] = f[i] + overlap if math.isfinite(f[i]) else math.inf
-    return (True, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi,
-            nearest_point(pu, pz, u_ref, z_ref))
+    return True, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi
 
 
 @numba.njit(cache=True)

@@ -32,11 +32,6 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-try:
-    import numba
-except ImportError:  # pragma: no cover
-    numba = None
-
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from . import kernels
@@ -180,42 +175,17 @@ def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
     return cached
 
 
-def _trace_on_rail(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, out):
-    """Trace points of one wheel moved into the side frame (yaw about the vertical axis,
-    then roll about the track axis), those with ``lo < u < hi`` (above the rail) written
-    to ``out`` (4, n): eta, X, u, Z; returns how many."""
-    m = 0
-    for i in range(eta.size):
-        if yawed:
-            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
-            rc = r[i] * math.sqrt(1.0 - sin_t * sin_t)
-            rs = r[i] * sin_t
-            x = cz * rs - sz * eta[i]
-            y = sz * rs + cz * eta[i]
-            zw = -rc
-        else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-            x = 0.0
-            y = eta[i]
-            zw = -r[i]
-        u = cx * y - sx * zw + u_ws
-        if lo < u < hi:
-            out[0, m] = eta[i]
-            out[1, m] = x
-            out[2, m] = u
-            out[3, m] = sx * y + cx * zw + radius
-            m += 1
-    return m
-
-
-_trace_on_rail_numba = (numba.njit(cache=True)(_trace_on_rail) if numba is not None
-                        else _trace_on_rail)
-
-
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
     """Vertical gap g(eta) between the wheel trace and the rail [m], with the trace points.
 
     Returns ``(eta, x, u, z, g)`` restricted to trace points above the rail.
     """
+    return _trace(track, ws, pose, side)[0]
+
+
+def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) with the least
+    gap and its first sample."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
@@ -223,15 +193,15 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
     eta, r, dr = _wheel_samples(ws)
     rail = track.side_rail
     lo, hi = rail.bounds
-    out = np.empty((4, eta.size))
-    n = _trace_on_rail_numba(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
-                             math.sin(psi), math.cos(phi), math.sin(phi),
-                             float(sgn * pose.lateral), float(ws.radius), lo, hi, out)
+    out = np.empty((5, eta.size))
+    n, g_min, k = kernels.trace_gap(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
+                                    math.sin(psi), math.cos(phi), math.sin(phi),
+                                    float(sgn * pose.lateral), float(ws.radius), lo, hi,
+                                    *_rail_arrays(track)[2:], out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    eta, x, u, z = out[:, :n]
-    return eta, x, u, z, z - rail.height(u)
+    return tuple(out[:, :n]), g_min, k
 
 
 def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -246,10 +216,9 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
             and last[3] == side and last[4] == approach):
         return list(last[5])
-    eta, x, u, z, g = _vertical_gap_of_pose(track, ws, pose, side)
-    g_min = kernels.least_gap(g)
+    (eta, x, u, z, g), g_min, k = _trace_of_pose(track, ws, pose, side)
     points = [_point(track, ws, side, eta, x, u, z, g, g_min, int(a), int(b))
-              for a, b in kernels.intervals(g, g_min, float(approach))]
+              for a, b in kernels.intervals(g, g_min, k, float(approach))]
     points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
     return points
@@ -263,35 +232,34 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
                    approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    g = _vertical_gap_of_pose(track, ws, pose, side)[4]
-    return len(kernels.intervals(g, kernels.least_gap(g), float(approach)))
+    (*_, g), g_min, k = _trace_of_pose(track, ws, pose, side)
+    return len(kernels.intervals(g, g_min, k, float(approach)))
 
 
 _LAST_GAP: list = [None]
 
 
-def _vertical_gap_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """:func:`vertical_gap`, remembered for the last (track, wheelset, pose, side): a load
+def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """:func:`_trace`, remembered for the last (track, wheelset, pose, side): a load
     iteration asks for the same wheel's contact several times."""
     last = _LAST_GAP[0]
     if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
             and last[3] == side):
         return last[4]
-    out = vertical_gap(track, ws, pose, side)
-    for a in out:
+    out = _trace(track, ws, pose, side)
+    for a in out[0]:
         a.flags.writeable = False
     _LAST_GAP[0] = (track, ws, pose, side, out)
     return out
 
 
 def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
-    """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z), its spline's
-    breakpoints and coefficients, and the points :meth:`Track.rail_coordinate` searches
-    (computed once per track; read-only)."""
+    """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z) and its
+    spline's breakpoints and coefficients (computed once per track; read-only)."""
     cached = track.__dict__.get("_kernel_arrays")
     if cached is None:
         rail = track.side_rail
-        cached = (*rail.samples(N_RAIL), *rail._pieces, *track._placed_points)
+        cached = (*rail.samples(N_RAIL), *rail._pieces)
         object.__setattr__(track, "_kernel_arrays", cached)  # a cache on a frozen record
     return cached
 
@@ -307,10 +275,10 @@ def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
     """The rigid contact point of the trace's run ``a:b`` (its least gap above ``g_min``,
     refined by a parabola through three samples: :func:`~.kernels.rigid_point`), its
     tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
-    ur, zr, rx, rc, pu, pz = _rail_arrays(track)
+    ur, zr, rx, rc = _rail_arrays(track)
     wx, wc, radius, half_bb, flange_back = _wheel_arrays(ws)
-    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr, kp = kernels.rigid_point(
-        eta, x, u, g, g_min, a, b, rx, rc, pu, pz, wx, wc, half_bb, flange_back)
+    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = kernels.rigid_point(
+        eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
 
     def frame() -> dict:
         out = np.empty((5, N_S))
@@ -322,7 +290,7 @@ def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
                     rail_z_of_s=rail_z_of_s)
 
     return _formed_later(frame, side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
-                         rail_y=float(track.placement[0][kp]),
+                         rail_y=track.rail_coordinate(u_c, z_rail),
                          position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
                          rolling_radius=ws.radius + dr, approach=None, rigid=None,
                          offset=(0.0, 0.0))
@@ -372,14 +340,14 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     d = cp.normal_penetration(approach)
     if not d > 0:
         return None
-    eta, _, u, z, g = _vertical_gap_of_pose(track, ws, pose, cp.side)
+    eta, _, u, z, g = _trace_of_pose(track, ws, pose, cp.side)[0]
     # one compiled pass (:func:`~.kernels.reference_frame`): the patch's own run of
     # vertical interpenetration along the trace, its weighted point and angle, the frame
     # there with f shifted over the patch's own overlap; CONTACT's wheel profile
     # coordinate of the point: the wheel above it; its rolling radius: the wheel surface's
     # along the contact normal through it (where the rigid slip of the wheel is taken)
     frame = np.empty((5, N_S))
-    ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, kp = kernels.reference_frame(
+    ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi = kernels.reference_frame(
         eta, u, z, g, float(approach), float(cp.rail_u), *_rail_arrays(track),
         *_wheel_arrays(ws), _S_SAMPLES, K0, WEIGHT_POWER, frame)
     if not ok:
@@ -397,7 +365,7 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
         return dict(offset=(0.0, float(np.interp(u_ref, cp.rail_u_of_s[ok], cp.s[ok]))))
 
     return _formed_later(offset, side=cp.side, gap=approach - overlap / math.cos(gamma),
-                         wheel_s=wheel_s, rail_u=u_ref, rail_y=float(track.placement[0][kp]),
+                         wheel_s=wheel_s, rail_u=u_ref, rail_y=track.rail_coordinate(u_ref, z_ref),
                          position=(cp.position[0], SIDES[cp.side] * u_ref, z_ref),
                          contact_angle=gamma, rolling_radius=ws.radius + float(
                              ws.wheel.height(s_normal if math.isfinite(s_normal) else wheel_s)),
