@@ -411,9 +411,14 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, wx, wc, rad
     wheel_s = (eta_ref - half_bb) + flange_back
     n = z.size
     zs = np.empty(n)
+    k = 0  # the trace sample nearest u_ref (the first of equals), in the same pass
+    best = abs(u[0] - u_ref)
     for i in range(n):
         zs[i] = (z[i] - g_min) - approach  # the wheel lowered by the approach
-    k = nearest(u, u_ref)
+        d = abs(u[i] - u_ref)
+        if d < best:
+            best = d
+            k = i
     tangent_frame(eta, u, zs, ur, zr, wx, wc, radius, half_bb, flange_back, u_ref, z_ref,
                   gamma, eta[k], k, s, out)
     f = out[F]

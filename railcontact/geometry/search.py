@@ -139,22 +139,29 @@ class ContactPoint:
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
-        k0 = kernels.nearest(self.s, 0.0)
+        k0 = K0 if self.s is _S_SAMPLES else kernels.nearest(self.s, 0.0)
         lo, hi = kernels.lateral_extent(self.s, self.f, float(delta), k0)  # the run through k0
         ds = self.s[1] - self.s[0]
         a, b = self.s[lo] - ds, self.s[hi] + ds
         return margin * a, margin * b
 
 
-_FIELDS = tuple(f.name for f in fields(ContactPoint))
+_FIELDS = frozenset(f.name for f in fields(ContactPoint))
 
 
-def _formed_later(later: Callable[[], dict], **now) -> ContactPoint:
-    """A :class:`ContactPoint` with the fields ``now``; the others are formed by ``later()``
-    (which returns them by name) when one of them is first read."""
+_FRAME = frozenset({"A", "B", "s", "f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"})
+"""The fields of a rigid contact point formed when first read (its tangent frame)."""
+_OFFSET = frozenset({"offset"})
+"""The field of a point at the reference point formed when first read."""
+
+
+def _formed_later(later: Callable[[], dict], names: frozenset, **now) -> ContactPoint:
+    """A :class:`ContactPoint` with the fields ``now``; the others, ``names``, are formed
+    by ``later()`` (which returns them by name) when one of them is first read."""
+    assert names.isdisjoint(now) and names.union(now) == _FIELDS
     cp = object.__new__(ContactPoint)
     cp.__dict__.update(now)
-    cp.__dict__["_later"] = (frozenset(_FIELDS) - set(now), later)
+    cp.__dict__["_later"] = (names, later)
     return cp
 
 
@@ -289,7 +296,7 @@ def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
                     f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
                     rail_z_of_s=rail_z_of_s)
 
-    return _formed_later(frame, side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
+    return _formed_later(frame, _FRAME, side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
                          rail_y=track.rail_coordinate(u_c, z_rail),
                          position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
                          rolling_radius=ws.radius + dr, approach=None, rigid=None,
@@ -364,7 +371,7 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
         ok = np.isfinite(cp.rail_u_of_s)
         return dict(offset=(0.0, float(np.interp(u_ref, cp.rail_u_of_s[ok], cp.s[ok]))))
 
-    return _formed_later(offset, side=cp.side, gap=approach - overlap / math.cos(gamma),
+    return _formed_later(offset, _OFFSET, side=cp.side, gap=approach - overlap / math.cos(gamma),
                          wheel_s=wheel_s, rail_u=u_ref, rail_y=track.rail_coordinate(u_ref, z_ref),
                          position=(cp.position[0], SIDES[cp.side] * u_ref, z_ref),
                          contact_angle=gamma, rolling_radius=ws.radius + float(
