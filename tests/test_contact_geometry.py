@@ -130,3 +130,27 @@ def test_lateral_extent_is_the_run_of_gap_below_delta_through_the_contact_point(
     X, Y = g.mesh()
     want = np.interp(Y, cp.s, cp.f) + np.interp(Y, cp.s, cp.a_of_s) * X**2
     np.testing.assert_allclose(cp.gap_on_grid(g), want, rtol=1e-14, atol=0)
+
+
+def test_fields_formed_on_first_read_survive_pickling_and_equal_a_fresh_search():
+    import pickle
+
+    from railcontact.geometry import search
+
+    pose = Pose(lateral=3e-3, yaw=2e-3, roll=1e-3)
+    cp = contact_points(TRACK, WS, pose, "left")[0]
+    ref = search.at_reference(cp, TRACK, WS, pose, 8e-5)
+    copy = pickle.loads(pickle.dumps(ref))  # forms the reference point's offset, its rigid frame
+    assert copy.offset == ref.offset and abs(ref.offset[1]) < 5e-3
+    np.testing.assert_array_equal(copy.rigid.f, cp.f)
+    assert cp.f[np.argmin(np.abs(cp.s))] == 0.0 and np.isfinite(cp.B) and cp.B > 0
+    with pytest.raises(AttributeError):
+        cp.no_such_field  # noqa: B018
+
+
+@pytest.mark.parametrize("y", [-6e-3, 0.0, 4e-3, 8e-3])
+def test_rail_coordinate_is_the_nearest_placed_rail_point(y):
+    cp = first(y, "left")
+    pu, pz = TRACK._placed_points
+    nearest = int(np.argmin((pu - cp.rail_u) ** 2 + (pz - cp.position[2]) ** 2))
+    assert cp.rail_y == TRACK.placement[0][nearest]

@@ -118,3 +118,15 @@ def test_bad_material():
         Material(206e9, 0.5)
     with pytest.raises(RailContactError, match="young"):
         Material(-1.0, 0.3)
+
+
+@pytest.mark.parametrize("r", [1.0 + 1e-9, 1.0 + 1e-4, 1.37, 4.2, 27.0, 950.0, 3.1e5, 1e9])
+def test_axis_ratio_solves_the_shape_equation_to_round_off(r):
+    # within the table that starts Newton's method (g >= 1e-4) and beyond it (Brent's): the
+    # ratio of the root is r but for a few ulp of m (times the slope) or of r (evaluation)
+    g = axis_ratio(r)
+    m = 1.0 - g * g
+    h = 1e-6 * min(m, 1.0 - m)
+    slope = (curvature_ratio(math.sqrt(1.0 - m - h)) - curvature_ratio(math.sqrt(1.0 - m + h))
+             ) / (2 * h)
+    assert abs(curvature_ratio(g) - r) <= max(8 * np.spacing(m) * slope, 16 * np.spacing(r))

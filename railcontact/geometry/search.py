@@ -27,17 +27,14 @@ trace offset) but the gap is taken symmetric in x.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-try:
-    import numba
-except ImportError:  # pragma: no cover
-    numba = None
-
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
+from . import kernels
 from .track import SIDES, Pose, Track, Wheelset
 
 N_TRACE = 6001
@@ -84,6 +81,11 @@ class ContactPoint:
         approach [m] it was formed at, the rigid contact point it was formed from, and its
         offset (x, s) [m] from that point in the rigid point's tangent plane; None, None,
         (0, 0) for the rigid contact point itself.
+
+    A point may form some fields when they are first read (:func:`_formed_later`): a
+    rigid contact point of :func:`contact_points` its tangent plane's samples (``A``,
+    ``B``, ``s`` ... ``rail_z_of_s``) and a point of :func:`at_reference` its ``offset``,
+    which a time step in the frame at the reference point does not read.
     """
 
     side: str
@@ -99,12 +101,28 @@ class ContactPoint:
     s: np.ndarray
     f: np.ndarray
     a_of_s: np.ndarray
-    wheel_s_of_s: np.ndarray | None = field(default=None, repr=False)
-    rail_u_of_s: np.ndarray | None = field(default=None, repr=False)
-    rail_z_of_s: np.ndarray | None = field(default=None, repr=False)
-    approach: float | None = None
-    rigid: ContactPoint | None = field(default=None, repr=False)
-    offset: tuple[float, float] = (0.0, 0.0)
+    wheel_s_of_s: np.ndarray = field(repr=False)
+    rail_u_of_s: np.ndarray = field(repr=False)
+    rail_z_of_s: np.ndarray = field(repr=False)
+    approach: float | None
+    rigid: ContactPoint | None = field(repr=False)
+    offset: tuple[float, float]
+
+    def __getattr__(self, name: str):
+        # called only for an attribute not set: a field formed later (_formed_later)
+        later = self.__dict__.get("_later")
+        if later is None or name not in later[0]:
+            raise AttributeError(f"'ContactPoint' object has no attribute {name!r}")
+        del self.__dict__["_later"]
+        for key, value in later[1]().items():
+            object.__setattr__(self, key, value)
+        return self.__dict__[name]
+
+    def __getstate__(self) -> dict:
+        later = self.__dict__.get("_later")
+        if later is not None:  # pickled with every field formed
+            getattr(self, next(iter(later[0])))
+        return self.__dict__
 
     def normal_penetration(self, approach: float) -> float:
         """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
@@ -114,24 +132,37 @@ class ContactPoint:
         """Undeformed gap h(x, y) = f(y) + A(y) x^2 at the element centres [m], with the
         grid's y along s. Where the profiles end (or fold away from this contact) the gap
         is :data:`FAR` - such elements can never touch."""
-        y = grid.y  # f and A depend on y alone: interpolated per column
-        f = np.interp(y, self.s, self.f, left=FAR, right=FAR)
-        a = np.interp(y, self.s, np.where(np.isfinite(self.a_of_s), self.a_of_s, 0.0))
-        h = f[None, :] + a[None, :] * grid.x[:, None] ** 2
-        return np.where(np.isfinite(h), h, FAR)
+        out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
+        kernels.gap_on_grid(self.s, self.f, self.a_of_s, float(grid.x0), float(grid.dx),
+                            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+        return out
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
-        k0 = int(np.argmin(np.abs(self.s)))
-        inside = self.f <= delta
-        inside[k0] = True
-        outside = np.flatnonzero(~inside)
-        i = int(np.searchsorted(outside, k0))  # the run of samples inside through k0
-        lo = int(outside[i - 1]) + 1 if i > 0 else 0
-        hi = int(outside[i]) - 1 if i < outside.size else len(self.s) - 1
+        k0 = K0 if self.s is _S_SAMPLES else kernels.nearest(self.s, 0.0)
+        lo, hi = kernels.lateral_extent(self.s, self.f, float(delta), k0)  # the run through k0
         ds = self.s[1] - self.s[0]
         a, b = self.s[lo] - ds, self.s[hi] + ds
         return margin * a, margin * b
+
+
+_FIELDS = frozenset(f.name for f in fields(ContactPoint))
+
+
+_FRAME = frozenset({"A", "B", "s", "f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"})
+"""The fields of a rigid contact point formed when first read (its tangent frame)."""
+_OFFSET = frozenset({"offset"})
+"""The field of a point at the reference point formed when first read."""
+
+
+def _formed_later(later: Callable[[], dict], names: frozenset, **now) -> ContactPoint:
+    """A :class:`ContactPoint` with the fields ``now``; the others, ``names``, are formed
+    by ``later()`` (which returns them by name) when one of them is first read."""
+    assert names.isdisjoint(now) and names.union(now) == _FIELDS
+    cp = object.__new__(ContactPoint)
+    cp.__dict__.update(now)
+    cp.__dict__["_later"] = (names, later)
+    return cp
 
 
 def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
@@ -151,42 +182,17 @@ def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
     return cached
 
 
-def _trace_on_rail(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, out):
-    """Trace points of one wheel moved into the side frame (yaw about the vertical axis,
-    then roll about the track axis), those with ``lo < u < hi`` (above the rail) written
-    to ``out`` (4, n): eta, X, u, Z; returns how many."""
-    m = 0
-    for i in range(eta.size):
-        if yawed:
-            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
-            rc = r[i] * math.sqrt(1.0 - sin_t * sin_t)
-            rs = r[i] * sin_t
-            x = cz * rs - sz * eta[i]
-            y = sz * rs + cz * eta[i]
-            zw = -rc
-        else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-            x = 0.0
-            y = eta[i]
-            zw = -r[i]
-        u = cx * y - sx * zw + u_ws
-        if lo < u < hi:
-            out[0, m] = eta[i]
-            out[1, m] = x
-            out[2, m] = u
-            out[3, m] = sx * y + cx * zw + radius
-            m += 1
-    return m
-
-
-_trace_on_rail_numba = (numba.njit(cache=True)(_trace_on_rail) if numba is not None
-                        else _trace_on_rail)
-
-
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
     """Vertical gap g(eta) between the wheel trace and the rail [m], with the trace points.
 
     Returns ``(eta, x, u, z, g)`` restricted to trace points above the rail.
     """
+    return _trace(track, ws, pose, side)[0]
+
+
+def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) with the least
+    gap and its first sample."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
@@ -194,15 +200,15 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
     eta, r, dr = _wheel_samples(ws)
     rail = track.side_rail
     lo, hi = rail.bounds
-    out = np.empty((4, eta.size))
-    n = _trace_on_rail_numba(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
-                             math.sin(psi), math.cos(phi), math.sin(phi),
-                             float(sgn * pose.lateral), float(ws.radius), lo, hi, out)
+    out = np.empty((5, eta.size))
+    n, g_min, k = kernels.trace_gap(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
+                                    math.sin(psi), math.cos(phi), math.sin(phi),
+                                    float(sgn * pose.lateral), float(ws.radius), lo, hi,
+                                    *_rail_arrays(track)[2:], out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    eta, x, u, z = out[:, :n]
-    return eta, x, u, z, z - rail.height(u)
+    return tuple(out[:, :n]), g_min, k
 
 
 def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -217,12 +223,9 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
             and last[3] == side and last[4] == approach):
         return list(last[5])
-    eta, x, u, z, g = _vertical_gap_of_pose(track, ws, pose, side)
-    g_min = g.min()
-    g = g - g_min
-    z = z - g_min  # the wheel lowered (or lifted) into first contact
-    points = [_point(track, ws, pose, side, eta, x, u, z, g, a + int(np.argmin(g[a:b])))
-              for a, b in _intervals(g, approach)]
+    (eta, x, u, z, g), g_min, k = _trace_of_pose(track, ws, pose, side)
+    points = [_point(track, ws, side, eta, x, u, z, g, g_min, int(a), int(b))
+              for a, b in kernels.intervals(g, g_min, k, float(approach))]
     points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
     return points
@@ -236,72 +239,68 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
                    approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    g = _vertical_gap_of_pose(track, ws, pose, side)[4]
-    return len(_intervals(g - g.min(), approach))
-
-
-def _intervals(g: np.ndarray, approach: float) -> list[tuple[int, int]]:
-    """Index ranges [a, b) of the connected intervals where the gap above first contact
-    ``g`` is at most ``approach``; the global minimum is always in one."""
-    inside = g <= max(approach, 0.0)
-    inside[int(np.argmin(g))] = True
-    edges = (np.flatnonzero(inside[1:] != inside[:-1]) + 1).tolist()  # where runs change
-    if inside[0]:
-        edges.insert(0, 0)
-    if inside[-1]:
-        edges.append(len(inside))
-    return list(zip(edges[::2], edges[1::2], strict=True))
+    (*_, g), g_min, k = _trace_of_pose(track, ws, pose, side)
+    return len(kernels.intervals(g, g_min, k, float(approach)))
 
 
 _LAST_GAP: list = [None]
 
 
-def _vertical_gap_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """:func:`vertical_gap`, remembered for the last (track, wheelset, pose, side): a load
+def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
+    """:func:`_trace`, remembered for the last (track, wheelset, pose, side): a load
     iteration asks for the same wheel's contact several times."""
     last = _LAST_GAP[0]
     if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
             and last[3] == side):
         return last[4]
-    out = vertical_gap(track, ws, pose, side)
-    for a in out:
+    out = _trace(track, ws, pose, side)
+    for a in out[0]:
         a.flags.writeable = False
     _LAST_GAP[0] = (track, ws, pose, side, out)
     return out
 
 
-def _point(track, ws, pose, side, eta, x, u, z, g, k) -> ContactPoint:
-    rail = track.side_rail
-    sgn = SIDES[side]
-    # refine the minimum with a parabola through three samples
-    if 0 < k < len(g) - 1:
-        d = g[k - 1] - 2 * g[k] + g[k + 1]
-        t = 0.5 * (g[k - 1] - g[k + 1]) / d if d > 0 else 0.0
-    else:
-        t = 0.0
-    t = float(np.clip(t, -1, 1))
-    j = k + (1 if t > 0 else -1) if 0 < k < len(g) - 1 else k
-    w = abs(t)
+def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
+    """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z) and its
+    spline's breakpoints and coefficients (computed once per track; read-only)."""
+    cached = track.__dict__.get("_kernel_arrays")
+    if cached is None:
+        rail = track.side_rail
+        cached = (*rail.samples(N_RAIL), *rail._pieces)
+        object.__setattr__(track, "_kernel_arrays", cached)  # a cache on a frozen record
+    return cached
 
-    def lerp(a):
-        return float((1 - w) * a[k] + w * a[j])
 
-    eta_c, x_c, u_c, z_rail = lerp(eta), lerp(x), lerp(u), float(rail.height(lerp(u)))
-    gap_c = max(float(lerp(g)), 0.0)
-    gamma = math.atan(float(rail.slope(u_c)))
-    s_c = float(ws.profile_coordinate(eta_c))
-    r_c = ws.radius + float(ws.wheel.height(s_c))
-    s, f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _tangent_frame(
-        track, ws, eta, u, z, u_c, z_rail, gamma, eta_c)
-    f = f - np.nanmin(f[np.abs(s) < 1e-3]) if np.isfinite(f[K0]) else f
-    f = np.where(np.isfinite(f), f, np.inf)
-    return ContactPoint(side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
-                        rail_y=track.rail_coordinate(u_c, z_rail),
-                        position=(x_c, sgn * u_c, z_rail),
-                        contact_angle=gamma, rolling_radius=r_c, A=float(a_of_s[K0]),
-                        B=_lateral_curvature(s, f), s=s, f=f, a_of_s=a_of_s,
-                        wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
-                        rail_z_of_s=rail_z_of_s)
+def _wheel_arrays(ws: Wheelset) -> tuple:
+    """The wheel as the kernels read it: its spline's breakpoints and coefficients, the
+    nominal radius [m], and ``back_to_back / 2``, ``flange_back`` [m] (profile coordinate
+    S = eta - back_to_back / 2 + flange_back, :meth:`Wheelset.profile_coordinate`)."""
+    return (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2, float(ws.flange_back))
+
+
+def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
+    """The rigid contact point of the trace's run ``a:b`` (its least gap above ``g_min``,
+    refined by a parabola through three samples: :func:`~.kernels.rigid_point`), its
+    tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
+    ur, zr, rx, rc = _rail_arrays(track)
+    wx, wc, radius, half_bb, flange_back = _wheel_arrays(ws)
+    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = kernels.rigid_point(
+        eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
+
+    def frame() -> dict:
+        out = np.empty((5, N_S))
+        kernels.rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
+                            u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0, out)
+        f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = out
+        return dict(A=float(a_of_s[K0]), B=_lateral_curvature(_S_SAMPLES, f), s=_S_SAMPLES,
+                    f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
+                    rail_z_of_s=rail_z_of_s)
+
+    return _formed_later(frame, _FRAME, side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
+                         rail_y=track.rail_coordinate(u_c, z_rail),
+                         position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
+                         rolling_radius=ws.radius + dr, approach=None, rigid=None,
+                         offset=(0.0, 0.0))
 
 
 HALF_WIDTH = 0.025
@@ -314,175 +313,11 @@ _S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
 _S_SAMPLES.flags.writeable = False
 
 
-def _tangent_frame(track: Track, ws: Wheelset, eta: np.ndarray, u: np.ndarray,
-                   z: np.ndarray, u_c: float, z_c: float, gamma: float, eta_c: float):
-    """Both profiles in the tangent plane through the rail point ``(u_c, z_c)`` (side frame)
-    inclined at ``gamma``: at the samples ``s`` across the plane, the distance ``f(s)`` of
-    the wheel (trace points ``eta, u, z``) above the rail normal to the plane [m] (negative
-    where they overlap; NaN where the profiles end), ``A(s)`` [1/m], the wheel profile
-    coordinate and the rail surface point (u, Z) [m] there.
-
-    Each profile is taken along its branch through the point nearest ``u_c`` on which s
-    increases (:func:`_branch`); :func:`_in_plane` rotates and interpolates in one compiled
-    pass over the samples between the ``s``."""
-    rail = track.side_rail
-    cg, sg = math.cos(gamma), math.sin(gamma)
-    ur, zr = rail.samples(N_RAIL)
-    s = _S_SAMPLES
-    kw = int(np.argmin(np.abs(u - u_c)))
-    kr = int(np.argmin(np.abs(ur - u_c)))
-    n_w, eta_s, _ = _in_plane(s, u, z, eta, eta, u_c, z_c, cg, sg, kw)
-    n_r, ur_s, zr_s = _in_plane(s, ur, zr, ur, zr, u_c, z_c, cg, sg, kr)
-    f = n_w - n_r
-    # A(s) from the wheel at the same s
-    S_s = ws.profile_coordinate(np.where(np.isfinite(eta_s), eta_s, eta_c))
-    beta = np.arctan(ws.wheel.slope(S_s))
-    a_of_s = np.cos(beta) / (2 * (ws.radius + ws.wheel.height(S_s)))
-    return (s, f, a_of_s, np.where(np.isfinite(eta_s), S_s, np.nan), ur_s, zr_s)
-
-
-def _in_plane(s: np.ndarray, u: np.ndarray, z: np.ndarray, a: np.ndarray, b: np.ndarray,
-              u_c: float, z_c: float, cg: float, sg: float, k: int) -> np.ndarray:
-    """Along the branch through sample ``k`` of the curve (u, z) on which its coordinate
-    s' = (u - u_c) cg + (z - z_c) sg increases (:func:`_branch`), the curve's distance
-    n = -(u - u_c) sg + (z - z_c) cg from the plane and the quantities ``a`` and ``b`` at
-    its samples, linearly interpolated at the increasing ``s`` [m] (NaN off the branch) as
-    :func:`np.interp` does on the branch; only the points between the ``s`` are rotated.
-    Returns (3, len(s)): n, a, b."""
-    out = np.empty((3, s.size))
-    _interp_in_plane_numba(s, u, z, a, b, float(u_c), float(z_c), float(cg), float(sg),
-                           int(k), out)
-    return out
-
-
-def _interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
-    """:func:`_in_plane`'s loop (``out`` filled)."""
-    n = u.size
-    lo = k  # the samples of the branch that bracket s: lo ... hi
-    s_lo = (u[k] - u_c) * cg + (z[k] - z_c) * sg
-    s_k = s_lo
-    while lo > 0 and s_lo > s[0]:
-        s_prev = (u[lo - 1] - u_c) * cg + (z[lo - 1] - z_c) * sg
-        if not s_prev < s_lo:  # the branch ends: s' stops increasing towards k
-            break
-        lo -= 1
-        s_lo = s_prev
-    hi = k
-    s_hi = s_k
-    while hi < n - 1 and s_hi < s[s.size - 1]:
-        s_next = (u[hi + 1] - u_c) * cg + (z[hi + 1] - z_c) * sg
-        if not s_next > s_hi:
-            break
-        hi += 1
-        s_hi = s_next
-    j = lo
-    x0 = s_lo
-    x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg if hi > lo else s_lo
-    for i in range(s.size):
-        x = s[i]
-        if hi == lo or x < s_lo or x > s_hi:
-            out[0, i] = math.nan
-            out[1, i] = math.nan
-            out[2, i] = math.nan
-            continue
-        while j < hi - 1 and x1 <= x:  # the segment [x0, x1) that holds x
-            j += 1
-            x0 = x1
-            x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg
-        t = (x - x0) / (x1 - x0)
-        n0 = -(u[j] - u_c) * sg + (z[j] - z_c) * cg
-        n1 = -(u[j + 1] - u_c) * sg + (z[j + 1] - z_c) * cg
-        out[0, i] = n0 + t * (n1 - n0)
-        out[1, i] = a[j] + t * (a[j + 1] - a[j])
-        out[2, i] = b[j] + t * (b[j + 1] - b[j])
-
-
-_interp_in_plane_numba = (numba.njit(cache=True)(_interp_in_plane) if numba is not None
-                          else _interp_in_plane)
-
-
 WEIGHT_POWER = 2.5
 """The reference point's weight is the vertical interpenetration to this power: its square
 integrated along the track over the overlap ``e - x^2 / (2 r)`` gives ``e^(5/2)``
 (CONTACT's default gap weighting; with 2.5 the points and angles of CONTACT's 34 cases are
 matched to 0.01 mm and 0.001 rad, with 2 or 3 not)."""
-
-
-def _run_bounds(mask, k):
-    """``(lo, hi)``: the connected run ``mask[lo:hi]`` of True that holds sample ``k``
-    (``lo == hi`` when ``mask[k]`` is False)."""
-    if not mask[k]:
-        return k, k
-    lo = k
-    while lo > 0 and mask[lo - 1]:
-        lo -= 1
-    hi = k + 1
-    while hi < mask.size and mask[hi]:
-        hi += 1
-    return lo, hi
-
-
-_run_bounds_numba = (numba.njit(cache=True)(_run_bounds) if numba is not None
-                     else _run_bounds)
-
-
-def _overlap_run(g, u, approach, u_c):
-    """On the trace (vertical gaps ``g`` at lateral positions ``u``) of a wheel lowered by
-    ``approach`` beyond first contact: ``(g_min, lo, hi)``, the least gap and the run
-    ``lo:hi`` of positive vertical interpenetration ``approach - (g - g_min)`` that holds
-    the sample nearest ``u_c`` (``lo == hi`` when that sample does not overlap) - the masks
-    of :func:`_around` in one pass."""
-    n = g.size
-    g_min = g[0]
-    k = 0
-    best = abs(u[0] - u_c)
-    for i in range(1, n):
-        if g[i] < g_min:
-            g_min = g[i]
-        d = abs(u[i] - u_c)
-        if d < best:
-            best = d
-            k = i
-    if not approach - (g[k] - g_min) > 0:
-        return g_min, k, k
-    lo = k
-    while lo > 0 and approach - (g[lo - 1] - g_min) > 0:
-        lo -= 1
-    hi = k + 1
-    while hi < n and approach - (g[hi] - g_min) > 0:
-        hi += 1
-    return g_min, lo, hi
-
-
-def _nearest(u, u_c):
-    """The index of the sample of ``u`` nearest ``u_c`` (the first of equals)."""
-    k = 0
-    best = abs(u[0] - u_c)
-    for i in range(1, u.size):
-        d = abs(u[i] - u_c)
-        if d < best:
-            best = d
-            k = i
-    return k
-
-
-_overlap_run_numba = (numba.njit(cache=True)(_overlap_run) if numba is not None
-                      else _overlap_run)
-_nearest_numba = numba.njit(cache=True)(_nearest) if numba is not None else _nearest
-
-
-def _around(mask: np.ndarray, k: int) -> np.ndarray:
-    """The connected run of ``mask`` that holds sample ``k`` (all False when it does not):
-    a patch's own interpenetration, not a neighbour's."""
-    out = np.zeros_like(mask)
-    lo, hi = _run_bounds_numba(mask, int(k))
-    out[lo:hi] = True
-    return out
-
-
-def _around_origin(mask: np.ndarray) -> np.ndarray:
-    """:func:`_around` the origin sample :data:`K0`."""
-    return _around(mask, K0)
 
 
 def _lateral_curvature(s: np.ndarray, f: np.ndarray) -> float:
@@ -510,57 +345,40 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     load loops form it again as the approach changes.
     """
     d = cp.normal_penetration(approach)
-    if not d > 0 or cp.rail_u_of_s is None:
+    if not d > 0:
         return None
-    eta, _, u, z, g = _vertical_gap_of_pose(track, ws, pose, cp.side)
-    # the patch's own run of vertical interpenetration along the trace (:func:`_around`)
-    g_min, lo, hi = _overlap_run_numba(g, u, float(approach), float(cp.rail_u))
-    if hi <= lo:
+    eta, _, u, z, g = _trace_of_pose(track, ws, pose, cp.side)[0]
+    # one compiled pass (:func:`~.kernels.reference_frame`): the patch's own run of
+    # vertical interpenetration along the trace, its weighted point and angle, the frame
+    # there with f shifted over the patch's own overlap; CONTACT's wheel profile
+    # coordinate of the point: the wheel above it; its rolling radius: the wheel surface's
+    # along the contact normal through it (where the rigid slip of the wheel is taken)
+    frame = np.empty((5, N_S))
+    ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi = kernels.reference_frame(
+        eta, u, z, g, float(approach), float(cp.rail_u), *_rail_arrays(track),
+        *_wheel_arrays(ws), _S_SAMPLES, K0, WEIGHT_POWER, frame)
+    if not ok:
         return None
-    g_min = float(g_min)
-    run = slice(lo, hi)
-    u_run = u[run]
-    w = (approach - (g[run] - g_min)) ** WEIGHT_POWER
-    total = float(w.sum())
-    rail = track.side_rail
-    u_ref = float((w * u_run).sum() / total)
-    gamma = float((w * np.arctan(rail.slope(u_run))).sum() / total)
-    z_ref = float(rail.height(u_ref))
-    u_lo, u_hi = float(u_run.min()), float(u_run.max())
-    okr = np.isfinite(cp.rail_u_of_s)
-    s_ref = float(np.interp(u_ref, cp.rail_u_of_s[okr], cp.s[okr]))
-    z = z - g_min - approach  # the wheel lowered by the approach beyond first contact
-    k = int(_nearest_numba(u, u_ref))
-    s, f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _tangent_frame(
-        track, ws, eta, u, z, u_ref, z_ref, gamma, float(eta[k]))
-    with np.errstate(invalid="ignore"):
-        own = (rail_u_of_s >= u_lo) & (rail_u_of_s <= u_hi)
-    lo, hi = _run_bounds_numba(np.isfinite(f) & (f < 0) & own, K0)  # :func:`_around_origin`
-    if hi <= lo:
-        return None
-    overlap = -float(f[lo:hi].min())
-    f = np.where(np.isfinite(f), f + overlap, np.inf)
-    # CONTACT's wheel profile coordinate of the point: the wheel above it; its rolling
-    # radius: the wheel surface's along the contact normal through it (where the rigid
-    # slip of the wheel is taken)
-    order = np.argsort(u_run)
-    wheel_s = float(ws.profile_coordinate(np.interp(u_ref, u_run[order], eta[run][order])))
+    s = _S_SAMPLES
+    f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = frame
     s_normal = float(wheel_s_of_s[K0])
     # B for Hertz's estimates: the parabola with the overlap's depth and width (the origin
     # is the weighted centre, not the gap's minimum, where f'' may be anything)
     width = float(s[hi - 1] - s[lo]) + (s[1] - s[0])  # s increases
     B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, f)
-    sgn = SIDES[cp.side]
-    return ContactPoint(side=cp.side, gap=approach - overlap / math.cos(gamma),
-                        wheel_s=wheel_s, rail_u=u_ref,
-                        rail_y=track.rail_coordinate(u_ref, z_ref),
-                        position=(cp.position[0], sgn * u_ref, z_ref), contact_angle=gamma,
-                        rolling_radius=ws.radius + float(ws.wheel.height(
-                            s_normal if math.isfinite(s_normal) else wheel_s)),
-                        A=float(a_of_s[K0]), B=B if math.isfinite(B) else cp.B, s=s, f=f,
-                        a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
-                        rail_z_of_s=rail_z_of_s, approach=approach, rigid=cp,
-                        offset=(0.0, s_ref))
+
+    def offset() -> dict:  # the point in the rigid point's frame (formed when read)
+        ok = np.isfinite(cp.rail_u_of_s)
+        return dict(offset=(0.0, float(np.interp(u_ref, cp.rail_u_of_s[ok], cp.s[ok]))))
+
+    return _formed_later(offset, _OFFSET, side=cp.side, gap=approach - overlap / math.cos(gamma),
+                         wheel_s=wheel_s, rail_u=u_ref, rail_y=track.rail_coordinate(u_ref, z_ref),
+                         position=(cp.position[0], SIDES[cp.side] * u_ref, z_ref),
+                         contact_angle=gamma, rolling_radius=ws.radius + float(
+                             ws.wheel.height(s_normal if math.isfinite(s_normal) else wheel_s)),
+                         A=float(a_of_s[K0]), B=B if math.isfinite(B) else cp.B, s=s, f=f,
+                         a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
+                         rail_z_of_s=rail_z_of_s, approach=approach, rigid=cp)
 
 
 @dataclass(frozen=True)

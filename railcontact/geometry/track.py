@@ -25,6 +25,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
+from .kernels import nearest_point_sorted
 from .profiles import Profile
 
 SIDES = {"left": 1, "right": -1}
@@ -98,8 +99,17 @@ class Track:
 
     def rail_coordinate(self, u: float, z: float) -> float:
         """Rail profile coordinate y [m] of the point (u, Z) of the placed rail."""
+        pu, pz, order, pu_sorted = self._placed_search
+        return float(self.placement[0][nearest_point_sorted(pu, pz, order, pu_sorted,
+                                                            float(u), float(z))])
+
+    @cached_property
+    def _placed_search(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:attr:`_placed_points` and their order in u (stable), with the u so ordered:
+        what :meth:`rail_coordinate`'s search reads."""
         pu, pz = self._placed_points
-        return float(self.placement[0][int(np.argmin((pu - u) ** 2 + (pz - z) ** 2))])
+        order = np.argsort(pu, kind="stable")
+        return pu, pz, order, pu[order]
 
     @cached_property
     def _placed_points(self) -> tuple[np.ndarray, np.ndarray]:

@@ -21,9 +21,10 @@ An identity used by the virtual-penetration models: ``A a^2 + B b^2 = delta``.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 from scipy.optimize import brentq
@@ -46,11 +47,62 @@ def _shape_ratio(m: float) -> float:
     return (3.0 * rf / rd - 1.0) / (1.0 - m)
 
 
+TABLE_NODES = 2049
+"""Nodes of the table that starts the shape equation's Newton iteration: equally spaced
+in ``log g`` from ``g = 1`` to :data:`TABLE_SMALLEST_G`."""
+TABLE_SMALLEST_G = 1e-4
+NEWTON_RTOL = 1e-10
+"""The Newton iteration stops after a step of at most this fraction of ``m`` (its error
+is then ~1e-17: the table's cubic starts it within ~1e-12 and knows the slope to ~1e-7)."""
+
+
+@cache
+def _shape_table() -> tuple[list[float], list[float], list[float]]:
+    """``log(B_max/B_min)``, ``log g`` and ``d log(B_max/B_min) / d log g`` at the table's
+    nodes (the derivative by a complex step: :func:`_shape_ratio` is analytic in m)."""
+    w = np.linspace(0.0, math.log(TABLE_SMALLEST_G), TABLE_NODES)
+    m = -np.expm1(2.0 * w)
+    step = 1e-20
+    r = _shape_ratio(m)
+    drdm = _shape_ratio(m + 1j * step).imag / step
+    r[0], drdm[0] = 1.0, 0.75  # the circle's limits (m = 0)
+    dvdw = drdm / r * (-2.0 * (1.0 - m))  # dm/dlog g = -2 g^2
+    return np.log(r).tolist(), w.tolist(), dvdw.tolist()
+
+
+def _newton(r: float) -> float | None:
+    """The root m of ``_shape_ratio(m) = r`` by Newton's method started from the table's
+    cubic Hermite interpolant of ``log g`` in ``log r`` (whose derivative it keeps), or
+    None beyond the table or without convergence in 4 steps."""
+    v_nodes, w_nodes, slopes = _shape_table()
+    v = math.log(r)
+    k = bisect.bisect_right(v_nodes, v) - 1
+    if not 0 <= k < len(v_nodes) - 1:
+        return None
+    h = v_nodes[k + 1] - v_nodes[k]
+    t = (v - v_nodes[k]) / h
+    w0, w1, s0, s1 = w_nodes[k], w_nodes[k + 1], h / slopes[k], h / slopes[k + 1]
+    t2, t3 = t * t, t * t * t
+    w = ((2 * t3 - 3 * t2 + 1) * w0 + (t3 - 2 * t2 + t) * s0 + (3 * t2 - 2 * t3) * w1
+         + (t3 - t2) * s1)
+    dwdv = ((6 * t2 - 6 * t) * (w0 - w1) + (3 * t2 - 4 * t + 1) * s0 + (3 * t2 - 2 * t) * s1) / h
+    m = -math.expm1(2.0 * w)
+    drdm = -r / (dwdv * 2.0 * (1.0 - m))
+    for _ in range(4):
+        step = (float(_shape_ratio(m)) - r) / drdm
+        m -= step
+        if abs(step) <= NEWTON_RTOL * m + 1e-15:
+            return m if 0.0 < m < 1.0 else None
+    return None
+
+
 def axis_ratio(curvature_ratio: float) -> float:
     """Ratio ``g = b_min / a_max <= 1`` of the Hertz ellipse for ``B_max / B_min`` >= 1.
 
-    Solves the shape equation by Brent's method on the parameter ``m = e^2`` (remembered
-    for the last few ratios: a time step asks for the same patch's ellipse several times).
+    Solves the shape equation for the parameter ``m = e^2`` by Newton's method from a
+    table's interpolant (:func:`_newton`; Brent's method beyond the table), to round-off
+    (remembered for the last few ratios: a time step asks for the same patch's ellipse
+    several times).
     """
     return _axis_ratio(float(curvature_ratio))
 
@@ -61,6 +113,9 @@ def _axis_ratio(r: float) -> float:
         raise RailContactError(f"curvature ratio must be >= 1, got {r}")
     if r - 1.0 < _CIRCLE_TOL:
         return 1.0
+    m = _newton(r)
+    if m is not None:
+        return math.sqrt(1.0 - m)
     # _shape_ratio grows monotonically from 1 (m -> 0) to infinity (m -> 1).
     lo, hi = 0.0, 1.0 - 1e-16
     if _shape_ratio(hi) < r:  # more slender than double precision resolves
