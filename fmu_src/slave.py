@@ -68,6 +68,13 @@ class Slave:
         self.real_outputs = np.array([v.vr for v in reals if v.causality == "output"],
                                      dtype=int)
         self.integer_flags = bytes(_CAUSALITY[v.causality] for v in ints)
+        # each variable's buffer (a stable object: states are restored in place) and slot
+        buffer = {"Real": self.real, "Integer": self.integer, "String": self.strings}
+        self._slots = {v.name: (buffer[v.type], v.vr) for v in self.variables}
+        outputs = [v for v in self.variables if v.causality == "output"]
+        self._outputs = [(buffer[v.type], v.vr, v.value) for v in outputs]
+        self._zeroed = [(buffer[t], np.array([v.vr for v in outputs if v.type == t],
+                                             dtype=int)) for t in ("Real", "Integer")]
         self.log: list[str] = []
         self.contact: WheelsetContact | None = None
         self.modes: FMUModes | None = None
@@ -102,14 +109,12 @@ class Slave:
                 self.strings[v.vr] = "" if v.start is None else str(v.start)
 
     def __getitem__(self, name: str):
-        v = self.by_name[name]
-        return {"Real": self.real, "Integer": self.integer, "String": self.strings}[
-            v.type][v.vr]
+        buffer, vr = self._slots[name]
+        return buffer[vr]
 
     def __setitem__(self, name: str, value) -> None:
-        v = self.by_name[name]
-        {"Real": self.real, "Integer": self.integer, "String": self.strings}[
-            v.type][v.vr] = value
+        buffer, vr = self._slots[name]
+        buffer[vr] = value
 
     # -- FMI calls ------------------------------------------------------------------------
     def get_string(self, vr: int) -> str:
@@ -297,12 +302,12 @@ class Slave:
 
     def _write(self, res: WheelsetResult | None) -> None:
         """Outputs from ``res``; all zero (and no patches) for None."""
-        for v in V.OUTPUTS:
-            self[v.name] = 0
+        for buffer, vrs in self._zeroed:
+            buffer[vrs] = 0
         if res is None:
             return
-        for v in V.OUTPUTS:
-            self[v.name] = v.value(res)
+        for buffer, vr, value in self._outputs:
+            buffer[vr] = value(res)
 
 
 def make_slave(resources: str, instance_name: str) -> Slave:

@@ -88,15 +88,15 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
     of the element size, so that the grids of consecutive time steps share one lattice
     around the contact point and a warm start is not smeared by interpolation.
     """
-    bounds = tuple(float(b) for b in bounds)  # Python floats: an overflow is inf, silently
-    sx, sy = ((hi - lo) / h if h else n for lo, hi, n, h in (
-        (bounds[0], bounds[1], settings.nx, settings.dx),
-        (bounds[2], bounds[3], settings.ny, settings.dy)))
-    check_grid_size(f"the potential area {(bounds[1] - bounds[0]) * 1e3:.4g} x "
-                    f"{(bounds[3] - bounds[2]) * 1e3:.4g} mm with [grid] dx = {settings.dx}, "
-                    f"dy = {settings.dy} m", sx, sy, settings.max_elements)
-    xmin, xmax, nx = _axis(bounds[0], bounds[1], settings.nx, settings.dx, settings)
-    ymin, ymax, ny = _axis(bounds[2], bounds[3], settings.ny, settings.dy, settings)
+    x0, x1, y0, y1 = (float(b) for b in bounds)  # Python floats: an overflow is inf, silently
+    dx, dy = settings.dx, settings.dy
+    sx = (x1 - x0) / dx if dx else settings.nx
+    sy = (y1 - y0) / dy if dy else settings.ny
+    if not sx * sy <= settings.max_elements:  # (the message formed only when it is needed)
+        check_grid_size(f"the potential area {(x1 - x0) * 1e3:.4g} x {(y1 - y0) * 1e3:.4g} "
+                        f"mm with [grid] dx = {dx}, dy = {dy} m", sx, sy, settings.max_elements)
+    xmin, xmax, nx = _axis(x0, x1, settings.nx, dx, settings)
+    ymin, ymax, ny = _axis(y0, y1, settings.ny, dy, settings)
     return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)
 
 
@@ -181,7 +181,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
             res.converged = False
             res.message = f"the normal solution is not finite ({res.message})"
             break
-        if _cut_off(res.contact, gap >= UNDEFINED_GAP):
+        if _cut_off(res.contact, gap):
             res.converged = False
             res.message = ("the contact reaches where the profiles end (or turn away), so "
                            "the patch is cut off there; the pose or the load is beyond the "
@@ -208,9 +208,12 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     return res, work
 
 
-def _cut_off(contact: np.ndarray, undefined: np.ndarray) -> bool:
-    """Whether a contact element is next to (or on) an element where the gap is undefined
-    (no profile there: the geometry gives :data:`UNDEFINED_GAP`)."""
+def _cut_off(contact: np.ndarray, gap: np.ndarray) -> bool:
+    """Whether a contact element is next to (or on) an element where the ``gap`` [m] is
+    undefined (no profile there: the geometry gives :data:`UNDEFINED_GAP` or more)."""
+    if gap.max() < UNDEFINED_GAP:  # (NaN: the mask below decides)
+        return False
+    undefined = gap >= UNDEFINED_GAP
     if not undefined.any():
         return False
     near = contact.copy()
@@ -304,7 +307,8 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
     t = patch.tangential
     if t is not None:
         patch.work.tangential_iterations += t.iterations
-        if not (all(math.isfinite(f) for f in (*t.force, t.spin_moment))
+        fx, fy = t.force
+        if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
                 and np.isfinite(t.traction).all()):
             t.converged = False
             t.message = f"the tangential solution is not finite ({t.message})"
@@ -360,15 +364,16 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM
     traction bound is zero, so those elements take no part in the steady-rolling problem;
     a window a fraction of the potential area makes every sweep's transforms that much
     cheaper. None when it would be the whole grid, or there is no contact."""
-    rows = np.flatnonzero(contact.any(axis=1))
-    if rows.size == 0:
+    rows = contact.any(axis=1)
+    first = int(rows.argmax())
+    if not rows[first]:
         return None
-    cols = np.flatnonzero(contact.any(axis=0))
+    cols = contact.any(axis=0)
     out = []
-    for lo, hi, n in ((rows[0], rows[-1] + 1, contact.shape[0]),
-                      (cols[0], cols[-1] + 1, contact.shape[1])):
+    for lo, n, used in ((first, rows.size, rows), (int(cols.argmax()), cols.size, cols)):
+        hi = n - int(used[::-1].argmax())  # past the last one used
         m = min(n, quantum * math.ceil((hi - lo) / quantum))
-        start = min(max(int(lo) - (m - (hi - lo)) // 2, 0), n - m)
+        start = min(max(lo - (m - (hi - lo)) // 2, 0), n - m)
         out.append(slice(start, start + m))
     if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
         return None
@@ -381,13 +386,14 @@ def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]
     whole grid: traction, slip and states zero outside the window (the slip formed when
     first read, as the window's)."""
     sx, sy = window
-    traction = np.zeros((2, *grid.shape))
+    shape = (grid.nx, grid.ny)
+    traction = np.zeros((2, *shape))
     traction[:, sx, sy] = result.traction
-    state = np.zeros(grid.shape, dtype=result.state.dtype)
+    state = np.zeros(shape, dtype=result.state.dtype)
     state[sx, sy] = result.state
 
     def slip() -> np.ndarray:
-        out = np.zeros((2, *grid.shape))
+        out = np.zeros((2, *shape))
         out[:, sx, sy] = result.slip
         return out
 

@@ -113,8 +113,6 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
     With ``conserve=True`` the result is scaled so that its integral (sum times element
     area) equals the source's, e.g. to keep the total force of a pressure estimate.
     """
-    from scipy.interpolate import RegularGridInterpolator
-
     v = np.asarray(values, dtype=float)
     if v.shape != source.shape:
         raise RailContactError(f"values must have the source grid's shape {source.shape}")
@@ -126,6 +124,8 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
             if total > 0:
                 out *= v.sum() * source.element_area / total
         return out
+    from scipy.interpolate import RegularGridInterpolator  # (only off the lattice)
+
     # pad with a ring of zeros half an element outside, so the field falls to zero at the
     # edge of the source grid instead of stopping at its outer element centres
     x = np.concatenate([[source.x[0] - source.dx / 2], source.x, [source.x[-1] + source.dx / 2]])

@@ -636,41 +636,46 @@ def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
 
 
 def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
-    """Fill ``wheel`` with the sums over its patches (module docstring for the frames)."""
+    """Fill ``wheel`` with the sums over its patches (module docstring for the frames).
+
+    Scalars and 3-vectors in plain floats (a per-step path: numpy's calls cost more than
+    their arithmetic here), in the order of operations the array forms had."""
     sgn = SIDES[wheel.side]
     u_ws = sgn * pose.lateral
     fx = fs = mn = n_tot = 0.0
     fu = fz = mz = 0.0
-    moment = np.zeros(3)
+    m0 = m1 = m2 = 0.0
     converged = True
     work = Work()
     for p in patches:
         cp, n = p.geometry, p.normal
         g = cp.contact_angle
+        cos_g, sin_g = math.cos(g), math.sin(g)
         t = p.tangential
         px, ps, pm = (0.0, 0.0, 0.0) if t is None else (*t.force, t.spin_moment)
         n_tot += n.force
         fx, fs, mn = fx + px, fs + ps, mn + pm
-        f_u = ps * math.cos(g) - n.force * math.sin(g)
+        f_u = ps * cos_g - n.force * sin_g
         fu += f_u
-        fz += ps * math.sin(g) + n.force * math.cos(g)
+        f_z = ps * sin_g + n.force * cos_g
+        fz += f_z
         # the pressure's first moments about the patch's origin (the contact point) along
         # x and s: the normal force acts at the pressure's centroid, not at the point
         da = n.grid.element_area
         first_x = float((n.grid.x[:, None] * n.pressure).sum() * da)
         first_s = float((n.grid.y[None, :] * n.pressure).sum() * da)
-        mz += (cp.position[0] * f_u - (cp.rail_u - u_ws) * px + pm * math.cos(g)
-               - first_x * math.sin(g))
+        x, y, z = cp.position
+        mz += (x * f_u - (cp.rail_u - u_ws) * px + pm * cos_g - first_x * sin_g)
         # track frame, about (0, y, 0): r x F, plus the spin couple (sgn pm) n (the
         # traction's moment about n through the origin), plus the pressure's offsets
         # x e_x + s e_s crossed with its normal n; e_s = (0, sgn cos(g), sin(g)),
         # n = (0, -sgn sin(g), cos(g)): e_x x n = (0, -cos(g), -sgn sin(g)), e_s x n =
         # (sgn, 0, 0)
-        lever = np.array([cp.position[0], cp.position[1] - pose.lateral, cp.position[2]])
-        force = np.array([px, sgn * f_u, ps * math.sin(g) + n.force * math.cos(g)])
-        moment += np.cross(lever, force) + np.array([
-            sgn * first_s, -pm * math.sin(g) - first_x * math.cos(g),
-            sgn * (pm * math.cos(g) - first_x * math.sin(g))])
+        lx, ly, lz = float(x), float(y - pose.lateral), float(z)  # the lever r
+        gx, gy, gz = float(px), float(sgn * f_u), float(f_z)  # the force F
+        m0 += (ly * gz - lz * gy) + sgn * first_s
+        m1 += (lz * gx - lx * gz) + (-pm * sin_g - first_x * cos_g)
+        m2 += (lx * gy - ly * gx) + sgn * (pm * cos_g - first_x * sin_g)
         converged &= n.converged and (t is None or t.converged)
         work.absorb(p.work)
         work.load_passes = max(work.load_passes, p.work.load_passes)
@@ -681,7 +686,7 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.spin_moment = sgn * mn
     wheel.track_force = (fx, sgn * fu, fz)
     wheel.yaw_moment = sgn * mz
-    wheel.moment = tuple(float(m) for m in moment)
+    wheel.moment = (float(m0), float(m1), float(m2))
     wheel.derailment_quotient = derailment_quotient(sgn, wheel.track_force)
     wheel.approach = vertical_approach(patches)
     wheel.penetration = float(max(p.normal.penetration for p in patches))
@@ -703,10 +708,13 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.load_passes, wheel.remeshes, wheel.seconds = (work.load_passes, work.remeshes,
                                                         work.seconds)
     wheel.patches = patches
-    wheel.status = OK if converged else NOT_CONVERGED
-    failed = [r.message for p in patches for r in (p.normal, p.tangential)
-              if r is not None and not r.converged]
-    wheel.message = "ok" if converged else f"a BEM solve did not converge: {failed[0]}"
+    if converged:
+        wheel.status, wheel.message = OK, "ok"
+    else:
+        failed = [r.message for p in patches for r in (p.normal, p.tangential)
+                  if r is not None and not r.converged]
+        wheel.status = NOT_CONVERGED
+        wheel.message = f"a BEM solve did not converge: {failed[0]}"
 
 
 __all__ = ["ContactSettings", "Kinematics", "WheelContact", "WheelsetContact",
