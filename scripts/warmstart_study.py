@@ -90,10 +90,12 @@ def table(rows: list[dict]) -> str:
            "max dF/peak |",
            "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        ratio = cold[r["step_ms"]] / (r["normal_mean"] + r["tangential_mean"])
+        total = r["normal_mean"] + r["tangential_mean"]
+        c = cold.get(r["step_ms"])  # the ratio needs the cold run of the same step
+        ratio = "n/a" if c is None or total <= 0 else f"{c / total:.1f}x"
         out.append(f"| {r['step_ms']:g} | {r['warm_start']} | {r['normal_mean']:.2f} / "
                    f"{r['normal_max']} | {r['tangential_mean']:.2f} / {r['tangential_max']} | "
-                   f"{ratio:.1f}x | {r['solve_ms']:.1f} | {r['step_wall_ms']:.1f} | "
+                   f"{ratio} | {r['solve_ms']:.1f} | {r['step_wall_ms']:.1f} | "
                    f"{100 * r['dp_rel']:.3f} % | {100 * r['dF_muN']:.3f} % | "
                    f"{100 * r['dF_peak']:.3f} % |")
     return "\n".join(out)
