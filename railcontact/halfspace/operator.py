@@ -302,8 +302,11 @@ class InfluenceOperator:
         a, b = (self.components.index(c) for c in block)
         return self.kernels[a, b]
 
-    def apply(self, traction: np.ndarray) -> np.ndarray:
-        """Displacement differences [m] due to ``traction`` [Pa]."""
+    def apply(self, traction: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Displacement differences [m] due to ``traction`` [Pa].
+
+        ``out`` (the shape of the result, float) receives the result instead of a new
+        array (an iterative solver's buffer)."""
         p = np.asarray(traction, dtype=float)
         single = p.ndim == 2
         nc = len(self.components)
@@ -313,10 +316,14 @@ class InfluenceOperator:
             raise RailContactError(f"traction must have shape {(nc, self.nx, self.ny)} "
                                    f"(or {(self.nx, self.ny)} for one component), got "
                                    f"{np.shape(traction)}")
+        target = None if out is None else (out[None] if single else out)
         if self.backend == "dense":
             u = (self._matrix @ p.reshape(-1)).reshape(nc, self.nx, self.ny)
+            if target is not None:
+                target[...] = u
+                u = target
         else:
-            u = self._convolve(self._spectra, p)
+            u = self._convolve(self._spectra, p, target)
         return u[0] if single else u
 
     def preconditioner(self, floor: float = PRECONDITIONER_FLOOR
@@ -345,36 +352,46 @@ class InfluenceOperator:
             # _convolve folds 1/N into the spectra, so the inverse gets 1/N^2 of its own
             inverse /= (self._padded[0] * self._padded[1]) ** 2
 
-        def apply(residual: np.ndarray) -> np.ndarray:
-            return self._convolve(inverse, np.asarray(residual, dtype=float)[None])[0]
+        def apply(residual: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+            return self._convolve(inverse, np.asarray(residual, dtype=float)[None],
+                                  None if out is None else out[None])[0]
 
         return apply
 
-    def _convolve(self, spectra: np.ndarray, p: np.ndarray) -> np.ndarray:
+    def _convolve(self, spectra: np.ndarray, p: np.ndarray, out: np.ndarray | None = None
+                  ) -> np.ndarray:
         """Linear convolution of ``p`` (nc, nx, ny) with kernels given by their padded
-        spectra (nc, nc, m, n//2+1), scaled by 1/(m n)."""
+        spectra (nc, nc, m, n//2+1), scaled by 1/(m n); into ``out`` (nc, nx, ny) if given."""
         if self.backend == "pyfftw":
-            return self._convolve_fftw(spectra, p)
+            return self._convolve_fftw(spectra, p, out)
         nx, ny = self.nx, self.ny
         spec = scipy.fft.rfft2(p, s=self._padded, workers=1)  # (nc, m, n//2+1)
         prod = np.einsum("abij,bij->aij", spectra, spec)
         m, n = self._padded
-        return scipy.fft.irfft2(prod, s=self._padded, workers=1)[:, :nx, :ny] * (m * n)
+        u = scipy.fft.irfft2(prod, s=self._padded, workers=1)[:, :nx, :ny] * (m * n)
+        if out is None:
+            return u
+        out[...] = u
+        return out
 
-    def _convolve_fftw(self, spectra: np.ndarray, p: np.ndarray) -> np.ndarray:
+    def _convolve_fftw(self, spectra: np.ndarray, p: np.ndarray,
+                       out: np.ndarray | None = None) -> np.ndarray:
         nc = p.shape[0]
         plan = _fftw_plan(nc, self._padded)
         nx, ny = self.nx, self.ny
         plan.load(p)
         plan.forward.execute()
-        spec, out, tmp = plan.spec_out, plan.spec_in, plan.spec_tmp
+        spec, prod, tmp = plan.spec_out, plan.spec_in, plan.spec_tmp
         for a in range(nc):
-            np.multiply(spectra[a, 0], spec[0], out=out[a])
+            np.multiply(spectra[a, 0], spec[0], out=prod[a])
             for b in range(1, nc):
                 np.multiply(spectra[a, b], spec[b], out=tmp)
-                out[a] += tmp
+                prod[a] += tmp
         plan.backward.execute()
-        return plan.real_out[:, :nx, :ny].copy()
+        if out is None:
+            return plan.real_out[:, :nx, :ny].copy()
+        out[...] = plan.real_out[:, :nx, :ny]
+        return out
 
     def dense(self) -> np.ndarray:
         """The full influence matrix (nc*nx*ny, nc*nx*ny) [m/Pa] (for tests and tiny grids)."""
