@@ -149,6 +149,10 @@ def _overlaps(h: np.ndarray, u: np.ndarray, p: np.ndarray, force_control: bool,
                                force_control, float(delta), float(tolerance)))
 
 
+REASSOCIATE = {"reassoc", "contract"}
+"""LLVM fast-math flags of the CG's passes: sums may be reordered (vectorised); no
+assumption about NaN or infinities, which the solver must see."""
+
 # The CG's array work, compiled: each function is one or two passes over the flat element
 # arrays (row-major, as the grid's (nx, ny) arrays), in place of a dozen numpy calls with
 # their masks and temporaries. ``c`` is the contact set of the iteration (bool).
@@ -211,7 +215,7 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
     return delta, total, largest, count, edge
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=REASSOCIATE)
 def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - compiled
     """The contact set ``c`` (p > 0, or where the bodies interpenetrate if no pressure is
     left), the approach (force control: the mean of ``h + u`` on ``c``), the gradient
@@ -241,7 +245,7 @@ def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - co
     return delta
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=REASSOCIATE)
 def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - compiled
     """The search direction ``t`` (in place): the correction ``z`` on ``c`` (minus its mean
     there when ``project``) plus the conjugate share of the previous ``t``; returns
@@ -286,7 +290,7 @@ def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover
                 urow[iy] += dj * krow[iy]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=REASSOCIATE)
 def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area,
           self_compliance, kernel, nx, ny, index, change):  # pragma: no cover - compiled
     """One CG step from ``p`` into ``q``; ``r = A t`` (before its mean is taken out).
