@@ -15,7 +15,10 @@ Convergence: iteration ``k`` stops when the relative change of the pressure
     eps_k = sum_I |p_I^k - p_I^(k-1)| / sum_I p_I^k
 
 falls below the tolerance ``eps_n`` (the paper's normal tolerance). The iteration count is
-the number of CG steps taken (each costs two convolutions, three with the preconditioner).
+the number of CG steps taken. Each costs one convolution, ``A t`` of the search direction,
+and one more with the preconditioner: the displacements ``u = A p`` of the new pressure
+are ``u - tau A t`` plus the influence columns of the few elements the step clipped or let
+in (:data:`CHANGE_LIMIT`; beyond it, and at the start, ``A p`` is convolved).
 
 Preconditioning (``preconditioner="fft"``, the default): the gradient on the contact set is
 multiplied by an FFT approximate inverse of the influence matrix
