@@ -251,3 +251,77 @@ def test_convergence_also_asks_that_nothing_overlaps_outside_the_contact():
     two = np.zeros(g.shape)
     two[11:13, 11] = hz.load / (2 * g.element_area)
     assert _overlaps(h, op.apply(two), two, True, 0.0, 1e-3)
+
+
+def _counted_products(monkeypatch):
+    """Count the convolutions of every influence operator (products and preconditioner)."""
+    from railcontact.halfspace.operator import InfluenceOperator
+
+    count = [0]
+    convolve = InfluenceOperator._convolve
+
+    def counted(self, *args, **kwargs):
+        count[0] += 1
+        return convolve(self, *args, **kwargs)
+
+    monkeypatch.setattr(InfluenceOperator, "_convolve", counted)
+    return count
+
+
+@pytest.mark.parametrize("backend", ["dense"] + (["pyfftw"] if HAVE_PYFFTW else ["scipy"]))
+def test_warm_start_updates_displacements_without_convolving(monkeypatch, backend):
+    """A warm start (the Hertz pressure of a 5 % larger load, as a time step's extrapolated
+    pressure): each CG step convolves only for the preconditioner and ``A t``; ``A p`` of
+    the new pressure is ``A p - tau A t`` plus the influence columns of the elements that
+    the step clipped or let in. The displacements the solver carries (in its gap) equal a
+    fresh product to round-off, and the pressure is Hertz's and the dense reference's."""
+    A, B = curvatures(2.0)
+    hz = hertz(A, B, PAIR, load=50e3)
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 45, 45)
+    X, Y = g.mesh()
+    h = A * X**2 + B * Y**2
+    start = hertz(A, B, PAIR, load=1.05 * hz.load).pressure(X, Y)
+    op = influence_operator(g, PAIR, "z", backend)
+    ref = solve_normal(h, g, influence_operator(g, PAIR, "z", "dense"), load=hz.load,
+                       tolerance=1e-9, initial_pressure=start)
+    count = _counted_products(monkeypatch)
+    res = solve_normal(h, g, op, load=hz.load, tolerance=1e-9, initial_pressure=start)
+    assert res.converged, res.message
+    if backend != "dense":  # (the dense product is no convolution)
+        # the start's A p, then the preconditioner and A t per step, nothing else
+        assert count[0] == 1 + 2 * res.iterations
+    u = op.apply(res.pressure)
+    carried = res.gap - h + res.penetration
+    assert np.max(np.abs(carried - u)) < 1e-12 * np.max(np.abs(u))
+    errs = errors(g, res, hz)
+    for key in ("force", "max_pressure", "a", "b"):
+        assert errs[key] < 0.01, (key, errs)
+    assert np.array_equal(res.contact, ref.contact)
+    assert np.max(np.abs(res.pressure - ref.pressure)) < 1e-6 * hz.max_pressure
+
+
+def test_updated_displacements_do_not_drift_over_many_steps(monkeypatch):
+    """Plain CG from a uniform start takes dozens of steps at eps_n = 1e-10; with the
+    renewal at convergence switched off, the displacements updated step by step still
+    equal a fresh product to round-off, and the solution is Hertz's."""
+    import railcontact.normal.bem as bem
+
+    monkeypatch.setattr(bem, "REFRESH_ITERATIONS", 10**9)
+    A, B = curvatures(1.0)
+    hz = hertz(A, B, PAIR, load=50e3)
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 45, 45)
+    X, Y = g.mesh()
+    h = A * X**2 + B * Y**2
+    op = influence_operator(g, PAIR)
+    count = _counted_products(monkeypatch)
+    res = solve_normal(h, g, op, penetration=hz.penetration, tolerance=1e-10,
+                       preconditioner="none")
+    assert res.converged and res.iterations >= 30, res.message
+    updated = 2 * res.iterations + 1 - count[0]  # steps whose A p was not convolved
+    assert updated >= 0.8 * res.iterations  # (penetration control: one start product more)
+    u = op.apply(res.pressure)
+    carried = res.gap - h + res.penetration
+    assert np.max(np.abs(carried - u)) < 1e-12 * np.max(np.abs(u))
+    errs = errors(g, res, hz)
+    for key in ("force", "max_pressure", "a", "b"):
+        assert errs[key] < 0.01, (key, errs)

@@ -78,7 +78,7 @@ def test_fft_plans_are_bounded_and_a_dropped_plan_is_made_again():
     for k in range(operator_module.MAX_PLANS + 3):
         operator_module._fftw_plan(1, (4, 2 * k + 2))
     plans = operator_module._local.plans
-    assert len(plans) == operator_module.MAX_PLANS and (1, (12, 10)) not in plans
+    assert len(plans) == operator_module.MAX_PLANS and (1, (12, 10), 6) not in plans
     again = op.apply(p)  # its plan was dropped: planned anew (estimated: same bits)
     assert np.max(np.abs(again - ref)) <= 1e-13 * np.max(np.abs(ref))
     assert np.array_equal(again, first)
@@ -163,3 +163,22 @@ def test_a_bad_wisdom_file_is_a_clear_error(tmp_path):
             operator_module.load_wisdom(bad)
     with pytest.raises(RailContactError, match="max_elements"):
         operator_module.save_wisdom(tmp_path / "w.txt", max_elements=0)
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
+def test_pruned_products_of_grids_sharing_a_plan_stay_exact():
+    """Grids with the same row count and padded shape share one pruned plan (19 x 20 and
+    19 x 19 both pad to 40 x 40): the narrower grid's product after the wider one (and
+    back) still equals the dense product - the column the wider grid wrote is cleared."""
+    from railcontact.halfspace.operator import padded_shape
+
+    rng = np.random.default_rng(11)
+    products = []
+    for ny in (20, 19, 20):
+        g = Grid.from_bounds(-2e-3, 2e-3, -3e-3, 3e-3, 19, ny)
+        p = rng.uniform(0, 1e9, (19, ny))
+        fast = InfluenceOperator(g, STEEL, "z", "pyfftw").apply(p)
+        ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
+        products.append(np.max(np.abs(fast - ref)) / np.max(np.abs(ref)))
+    assert padded_shape(19, 20) == padded_shape(19, 19)
+    assert max(products) <= 1e-12

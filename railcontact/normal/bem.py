@@ -15,7 +15,10 @@ Convergence: iteration ``k`` stops when the relative change of the pressure
     eps_k = sum_I |p_I^k - p_I^(k-1)| / sum_I p_I^k
 
 falls below the tolerance ``eps_n`` (the paper's normal tolerance). The iteration count is
-the number of CG steps taken (each costs two convolutions, three with the preconditioner).
+the number of CG steps taken. Each costs one convolution, ``A t`` of the search direction,
+and one more with the preconditioner: the displacements ``u = A p`` of the new pressure
+are ``u - tau A t`` plus the influence columns of the few elements the step clipped or let
+in (:data:`CHANGE_LIMIT`; beyond it, and at the start, ``A p`` is convolved).
 
 Preconditioning (``preconditioner="fft"``, the default): the gradient on the contact set is
 multiplied by an FFT approximate inverse of the influence matrix
@@ -38,10 +41,11 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from ..errors import RailContactError, check_count, check_positive
-from ..halfspace.grid import Grid, touches_boundary
+from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
 
 PRECONDITIONERS = ("fft", "none")
@@ -50,6 +54,14 @@ STALL_ITERATIONS = 100
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
 STALL_GAIN = 0.99
 """Progress: the relative pressure change falls below this fraction of its best so far."""
+CHANGE_LIMIT = 96
+"""Most elements whose pressure a CG step may clip to zero or let enter the contact with
+``A p`` still updated from ``A t`` and their influence columns (each column costs ``nx ny``
+multiply-adds, 0.2 ns each here; a convolution on 40 x 40 or 56 x 48 elements costs as
+much as about 160 columns); beyond it ``A p`` is convolved anew."""
+REFRESH_ITERATIONS = 20
+"""Updates of ``A p`` without a convolution after which a converged step forms it anew
+before its final check (round-off of the updates, far below any tolerance)."""
 
 
 @dataclass
@@ -134,13 +146,224 @@ def _overlaps(h: np.ndarray, u: np.ndarray, p: np.ndarray, force_control: bool,
     complementarity the relative pressure change does not check; a start far from the
     answer can make that change small while elements that belong to the contact are
     still out of it)."""
-    c = p > 0.0
-    if not c.any() or c.all():
+    return bool(_overlaps_flat(np.ascontiguousarray(h, dtype=float).ravel(),
+                               np.ascontiguousarray(u, dtype=float).ravel(),
+                               np.ascontiguousarray(p, dtype=float).ravel(),
+                               force_control, float(delta), float(tolerance)))
+
+
+REASSOCIATE = {"reassoc", "contract"}
+"""LLVM fast-math flags of the CG's passes: sums may be reordered (vectorised); no
+assumption about NaN or infinities, which the solver must see."""
+
+# The CG's array work, compiled: each function is one or two passes over the flat element
+# arrays (row-major, as the grid's (nx, ny) arrays), in place of a dozen numpy calls with
+# their masks and temporaries. ``c`` is the contact set of the iteration (bool).
+
+@numba.njit(cache=True)
+def _overlaps_flat(h, u, p, force_control, delta, tolerance):  # pragma: no cover - compiled
+    n = p.size
+    count = 0
+    total = 0.0
+    hmin = np.inf
+    for i in range(n):
+        hmin = min(hmin, h[i])
+        if p[i] > 0.0:
+            count += 1
+            total += h[i] + u[i]
+    if count == 0 or count == n:
         return False
-    g = h + u
-    d = float(g[c].mean()) if force_control else delta
-    scale = max(abs(d - float(h.min())), 1e-300)
-    return bool(float((g[~c] - d).min()) < -tolerance * scale)
+    d = total / count if force_control else delta
+    scale = max(abs(d - hmin), 1e-300)
+    least = np.inf
+    for i in range(n):
+        if not p[i] > 0.0:
+            least = min(least, h[i] + u[i] - d)
+    return least < -tolerance * scale
+
+
+@numba.njit(cache=True)
+def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - compiled
+    """The result's fields on the (nx, ny) arrays: the approach (``own_delta``: the mean
+    of ``h + u`` on the contact, or the least ``h`` without contact), ``gap = h + u -
+    delta`` and ``contact = p > 0`` (in place); returns ``(delta, sum p, max(p, 0),
+    contact elements, whether the contact reaches the outer ring)``."""
+    nx, ny = p.shape
+    if own_delta:
+        total = 0.0
+        count = 0
+        least = np.inf
+        for i in range(nx):
+            for j in range(ny):
+                least = min(least, h[i, j])
+                if p[i, j] > 0.0:
+                    total += h[i, j] + u[i, j]
+                    count += 1
+        delta = total / count if count > 0 else least
+    total = 0.0
+    largest = 0.0
+    count = 0
+    edge = False
+    for i in range(nx):
+        for j in range(ny):
+            gap[i, j] = h[i, j] + u[i, j] - delta
+            c = p[i, j] > 0.0
+            contact[i, j] = c
+            total += p[i, j]
+            largest = max(largest, p[i, j])
+            if c:
+                count += 1
+                if i == 0 or j == 0 or i == nx - 1 or j == ny - 1:
+                    edge = True
+    return delta, total, largest, count, edge
+
+
+@numba.njit(cache=True, fastmath=REASSOCIATE)
+def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - compiled
+    """The contact set ``c`` (p > 0, or where the bodies interpenetrate if no pressure is
+    left), the approach (force control: the mean of ``h + u`` on ``c``), the gradient
+    ``g = h + u - delta`` and ``gm``, the gradient on ``c`` and zero elsewhere; returns
+    the approach."""
+    n = p.size
+    count = 0
+    for i in range(n):
+        c[i] = p[i] > 0.0
+        if c[i]:
+            count += 1
+    if count == 0:  # pressure vanished (possible under penetration control)
+        for i in range(n):
+            c[i] = (h[i] + u[i] - delta) < 0.0
+            if c[i]:
+                count += 1
+    if force_control and count > 0:
+        total = 0.0
+        for i in range(n):
+            if c[i]:
+                total += h[i] + u[i]
+        delta = total / count
+    for i in range(n):
+        gi = h[i] + u[i] - delta
+        g[i] = gi
+        gm[i] = gi if c[i] else 0.0
+    return delta
+
+
+@numba.njit(cache=True, fastmath=REASSOCIATE)
+def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - compiled
+    """The search direction ``t`` (in place): the correction ``z`` on ``c`` (minus its mean
+    there when ``project``) plus the conjugate share of the previous ``t``; returns
+    ``(g.z, g.g)`` on ``c``."""
+    n = g.size
+    zmean = 0.0
+    if project:
+        total = 0.0
+        count = 0
+        for i in range(n):
+            if c[i]:
+                total += z[i]
+                count += 1
+        zmean = total / max(count, 1)
+    gz = 0.0
+    gg = 0.0
+    for i in range(n):
+        if c[i]:
+            gz += g[i] * (z[i] - zmean)
+            gg += g[i] * g[i]
+    beta = gz / g_old if conjugate and g_old > 0.0 else 0.0
+    for i in range(n):
+        t[i] = (z[i] - zmean) + beta * t[i] if c[i] else 0.0
+    return gz, gg
+
+
+@numba.njit(cache=True, fastmath=True)
+def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover - compiled
+    """``u += sum_k change[k] * A[:, index[k]]``: the columns of the influence matrix are
+    the offset kernel (2nx-1, 2ny-1) shifted to each element; a row of ``u`` at a time,
+    so that it stays in cache while the columns are added."""
+    u2 = u.reshape((nx, ny))
+    for ix in range(nx):
+        urow = u2[ix]
+        for k in range(changes):
+            j = index[k]
+            jx = j // ny
+            jy = j - jx * ny
+            krow = kernel[nx - 1 + ix - jx, ny - 1 - jy:2 * ny - 1 - jy]
+            dj = change[k]
+            for iy in range(ny):
+                urow[iy] += dj * krow[iy]
+
+
+@numba.njit(cache=True, fastmath=REASSOCIATE)
+def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area,
+          self_compliance, kernel, nx, ny, index, change):  # pragma: no cover - compiled
+    """One CG step from ``p`` into ``q``; ``r = A t`` (before its mean is taken out).
+
+    The step length ``tau`` along ``t``, the update ``q = max(p - tau t, 0)``, the
+    elements that interpenetrate without pressure entering with a preconditioned step's
+    pressure, and (force control) the scaling to the load. ``u = A p`` becomes ``A q``
+    without a convolution: ``A (p - tau t) = u - tau r``, plus, for every element where
+    ``q`` is not the linear update (clipped or entering), its change times its column of
+    the influence matrix (the kernel shifted), when there are at most ``index.size`` such
+    elements. Returns ``(tau, sum |q - p|, sum q, number of changed elements, whether an
+    element entered, whether u was updated)``; ``sum q <= 0`` under force control returns
+    at once (the pressure vanished; ``q`` unscaled, ``u`` untouched).
+    """
+    n = p.size
+    rmean = 0.0
+    if force_control:
+        total = 0.0
+        count = 0
+        for i in range(n):
+            if c[i]:
+                total += r[i]
+                count += 1
+        rmean = total / max(count, 1)
+    rt = 0.0
+    gt = 0.0
+    for i in range(n):
+        if c[i]:
+            rt += (r[i] - rmean) * t[i]
+            gt += g[i] * t[i]
+    tau = 0.0 if (rt <= 0.0 or gz <= 0.0) else gt / rt  # 0: exact on the current set
+    kappa = gz / max(gg, 1e-300) if preconditioned else 1.0
+    changes = 0
+    entered = False
+    total = 0.0
+    for i in range(n):
+        linear = p[i] - tau * t[i]
+        qi = 0.0 if linear < 0.0 else linear
+        if qi == 0.0 and g[i] < 0.0:
+            entered = True
+            if tau > 0.0:
+                qi = qi - tau * kappa * g[i]
+            else:  # exact on the current set: each element closes its own gap
+                qi = -g[i] / self_compliance
+        q[i] = qi
+        total += qi
+        if qi != linear:
+            if changes < index.size:
+                index[changes] = i
+                change[changes] = qi - linear
+            changes += 1
+    if force_control and not total > 0.0:
+        return tau, np.inf, total, changes, entered, False
+    scale = load / (area * total) if force_control else 1.0
+    moved = 0.0
+    total = 0.0
+    for i in range(n):
+        qi = q[i] * scale if force_control else q[i]
+        q[i] = qi
+        total += qi
+        moved += abs(qi - p[i])
+    updated = changes <= index.size
+    if updated:
+        for i in range(n):
+            u[i] = u[i] - tau * r[i]
+        _add_columns(u, kernel, nx, ny, index, change, changes)
+        if force_control:
+            for i in range(n):
+                u[i] *= scale
+    return tau, moved, total, changes, entered, updated
 
 
 def solve_normal(
@@ -197,6 +420,7 @@ def solve_normal(
     h = _check_field("gap", gap, shape)
     if h is None:
         raise RailContactError("gap is required")
+    h = np.ascontiguousarray(h)
     if operator.components != "z" or (operator.nx, operator.ny) != shape:
         raise RailContactError("operator must be a 'z' influence operator for this grid")
     tolerance = check_positive("tolerance", tolerance)
@@ -220,15 +444,19 @@ def solve_normal(
     area_el = grid.element_area
     self_compliance = float(operator.self_coefficient[0, 0])  # [m/Pa]
 
-    def finish(p, u, delta, its, converged, message, err, hist):
-        contact = p > 0.0
+    def finish(p, u, delta, its, converged, message, err, hist, final=False):
+        # final: under force control, the approach from the solution's own u
+        gap = np.empty(shape)
+        contact = np.empty(shape, dtype=bool)
+        delta, total, largest, count, edge = _summary(h, u, p, float(delta),
+                                                     final and force_control, gap, contact)
         return NormalResult(
-            grid=grid, pressure=p, contact=contact, gap=h + u - delta,
-            force=float(p.sum() * area_el), penetration=float(delta),
-            max_pressure=float(p.max(initial=0.0)), area=float(contact.sum() * area_el),
+            grid=grid, pressure=p, contact=contact, gap=gap,
+            force=float(total * area_el), penetration=float(delta),
+            max_pressure=float(largest), area=float(count * area_el),
             iterations=its, converged=converged, message=message,
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
-            touches_boundary=touches_boundary(contact))
+            touches_boundary=bool(edge))
 
     zeros = np.zeros(shape)
     # Trivial cases: no load, or no interpenetration anywhere.
@@ -242,16 +470,30 @@ def solve_normal(
     if p is None:
         p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
     else:
-        p = np.clip(p, 0.0, None)
+        p = np.maximum(p, 0.0)
     if mask is not None:
         p = np.where(mask, p, 0.0)
-    if not np.any(p > 0):
+    total = float(p.sum())
+    if not total > 0.0:  # (p >= 0: no element has pressure)
         p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
             _uniform_start(h, operator, penetration)
+        total = float(p.sum())
     if force_control:
-        p *= load / (area_el * p.sum())
+        p *= load / (area_el * total)
 
-    t = np.zeros(shape)
+    # Work arrays (flat views ``*f`` of the (nx, ny) ones for the compiled steps).
+    p = np.ascontiguousarray(p, dtype=float)
+    hf = h.ravel()
+    u, g, gm, t, r, q = (np.empty(shape) for _ in range(6))
+    z = g if precondition is None else np.empty(shape)
+    t[...] = 0.0
+    c = np.empty(h.size, dtype=bool)
+    uf, gf, gmf, tf, rf, zf = (a.ravel() for a in (u, g, gm, t, r, z))
+    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
+    change = np.empty(CHANGE_LIMIT)
+    kernel = operator.kernel("zz")
+    operator.apply(p, out=u)  # u = A p of the current p, kept up to date below
+    fresh = 0  # iterations since u was last formed by a convolution
     g_old = 1.0
     conjugate = False
     hist: list[float] = []
@@ -260,61 +502,37 @@ def solve_normal(
     converged = stalled = False
     best, best_its = np.inf, 0
     delta = penetration if not force_control else 0.0
-    u_next = None  # u = A p of the current p when already formed
+    load_value = float(load) if force_control else 0.0
     for its in range(1, int(max_iterations) + 1):
-        u = operator.apply(p) if u_next is None else u_next
-        u_next = None
-        c = p > 0.0
-        if not c.any():  # pressure vanished (possible under penetration control)
-            c = (h + u - delta) < 0
-        g = h + u
-        if force_control:
-            delta = float(g[c].mean())
-        g -= delta
-        gc = g[c]  # (the gradient on the contact set, used three times below)
-        if precondition is None:
-            z = g
-        else:
-            z = precondition(np.where(c, g, 0.0))
-            if force_control:
-                z = z - z[c].mean()
-        gg = float(np.dot(gc, gc if z is g else z[c]))
-        t = np.where(c, z + (gg / g_old if conjugate and g_old > 0 else 0.0) * t, 0.0)
-        g_old = gg
-        r = operator.apply(t)
-        if force_control:
-            r -= r[c].mean()
-        tc = t[c]
-        rt = float(np.dot(r[c], tc))
-        if rt <= 0.0 or gg <= 0.0:  # exact solution on the current set
-            tau = 0.0
-        else:
-            tau = float(np.dot(gc, tc)) / rt
-        p_old = p
-        p = p - tau * t
-        np.maximum(p, 0.0, out=p)
-        overlap = (p == 0.0) & (g < 0.0)
-        conjugate = not overlap.any()
-        if not conjugate:
-            if tau > 0.0:
-                kappa = 1.0 if precondition is None else gg / max(float(np.dot(gc, gc)),
-                                                                   1e-300)
-                p[overlap] -= tau * kappa * g[overlap]
-            else:  # exact on the current set (e.g. a start on two symmetric elements):
-                p[overlap] = -g[overlap] / self_compliance  # each closes its own gap
-        if force_control:
-            total = p.sum()
-            if total <= 0.0:
-                return finish(p, u, delta, its, False, "pressure vanished", np.inf, hist)
-            p *= load / (area_el * total)
-        total = p.sum()
-        err = float(np.abs(p - p_old).sum() / total) if total > 0 else 0.0
+        delta = _gradient(hf, uf, p.ravel(), delta, force_control, c, gf, gmf)
+        if precondition is not None:
+            precondition(gm, out=z)
+        gz, gg = _direction(gf, zf, c, tf, force_control and precondition is not None,
+                            conjugate, g_old)
+        g_old = gz
+        operator.apply(t, out=r)
+        _, moved, total, changes, entered, updated = _step(
+            p.ravel(), q.ravel(), tf, gf, rf, c, uf, gz, gg, precondition is not None,
+            force_control, load_value, area_el, self_compliance, kernel, shape[0], shape[1],
+            index, change)
+        conjugate = not entered
+        if force_control and not total > 0.0:
+            return finish(q, u, delta, its, False, "pressure vanished", np.inf, hist)
+        p, q = q, p
+        if updated:
+            fresh += 1
+        else:  # too many elements left or entered the contact: convolve
+            operator.apply(p, out=u)
+            fresh = 0
+        err = moved / total if total > 0 else 0.0
         hist.append(err)
         if not np.isfinite(err):
             break
         if err < tolerance:
-            u_next = operator.apply(p)  # reused by the next iteration or the result
-            if not _overlaps(h, u_next, p, force_control, delta, tolerance):
+            if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
+                operator.apply(p, out=u)
+                fresh = 0
+            if not _overlaps_flat(hf, uf, p.ravel(), force_control, delta, tolerance):
                 converged = True
                 break
         if err < STALL_GAIN * best:
@@ -323,10 +541,6 @@ def solve_normal(
             stalled = True
             break
 
-    u = operator.apply(p) if u_next is None else u_next
-    c = p > 0.0
-    if force_control:
-        delta = float((h + u)[c].mean()) if c.any() else float(h.min())
     if converged:
         message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
     else:
@@ -335,7 +549,7 @@ def solve_normal(
         if stalled:
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
                         f"{STALL_ITERATIONS} iterations")
-    res = finish(p, u, delta, its, converged, message, err, hist)
+    res = finish(p, u, delta, its, converged, message, err, hist, final=True)
     if res.touches_boundary:
         res.message += "; contact reaches the edge of the potential contact area"
     return res
