@@ -156,8 +156,8 @@ def _cmd_wisdom(args: argparse.Namespace) -> int:
     from .halfspace.operator import WISDOM_ENV, save_wisdom
 
     n = save_wisdom(args.file, args.max_elements)
-    print(f"measured FFT plans for {n} padded shapes (grids up to {args.max_elements} "
-          f"elements per axis), wisdom written to {args.file}; use it with "
+    print(f"measured {n} FFT plans (padded shapes and pruned row counts of grids up to "
+          f"{args.max_elements} elements per axis), wisdom written to {args.file}; use it with "
           f"{WISDOM_ENV}={args.file}")
     return 0
 

@@ -186,6 +186,16 @@ def test_nonconvergence_is_reported():
     assert np.all(np.isfinite(r.pressure))
 
 
+def test_an_overflowing_solve_is_not_converged_and_shows_its_nan():
+    """A penetration the arithmetic cannot carry (1e300 m: the pressures overflow) must not
+    read "converged", and the result's NaN must show in every summary, never a 0."""
+    g = Grid.from_bounds(-1e-3, 1e-3, -1e-3, 1e-3, 10, 10)
+    X, Y = g.mesh()
+    r = solve_normal((X**2 + Y**2) / 0.2, g, influence_operator(g, PAIR), penetration=1e300)
+    assert not r.converged and "not converged" in r.message
+    assert np.isnan(r.force) and np.isnan(r.max_pressure)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     (dict(load=-1.0), "load"),
     (dict(load=float("nan")), "load"),

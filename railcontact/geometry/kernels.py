@@ -182,7 +182,7 @@ def interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
 def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
                   gamma, eta_c, kw, s, out):
     """Both profiles in the tangent plane through the rail point ``(u_c, z_c)`` inclined
-    at ``gamma`` (:func:`~.search._tangent_frame`), written to ``out`` (5, len(s)): the
+    at ``gamma``, written to ``out`` (5, len(s)): the
     wheel's distance above the rail normal to the plane f(s) (NaN where a profile ends),
     A(s) = cos(beta) / (2 r), the wheel profile coordinate S (NaN where the wheel ends)
     and the rail point (u, Z) (the rail's samples ``ur`` increase). The wheel's

@@ -113,9 +113,9 @@ class ContactPoint:
         later = self.__dict__.get("_later")
         if later is None or name not in later[0]:
             raise AttributeError(f"'ContactPoint' object has no attribute {name!r}")
-        del self.__dict__["_later"]
-        for key, value in later[1]().items():
+        for key, value in later[1]().items():  # (an error here leaves it to form later)
             object.__setattr__(self, key, value)
+        self.__dict__.pop("_later", None)  # (another reader may have formed it meanwhile)
         return self.__dict__[name]
 
     def __getstate__(self) -> dict:

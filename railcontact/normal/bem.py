@@ -202,6 +202,7 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
         delta = total / count if count > 0 else least
     total = 0.0
     largest = 0.0
+    nan = False
     count = 0
     edge = False
     for i in range(nx):
@@ -211,11 +212,12 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
             contact[i, j] = c
             total += p[i, j]
             largest = max(largest, p[i, j])
+            nan = nan or p[i, j] != p[i, j]  # (max ignores NaN: a NaN must show)
             if c:
                 count += 1
                 if i == 0 or j == 0 or i == nx - 1 or j == ny - 1:
                     edge = True
-    return delta, total, largest, count, edge
+    return delta, total, (np.nan if nan else largest), count, edge
 
 
 @numba.njit(cache=True, fastmath=REASSOCIATE)
@@ -275,7 +277,7 @@ def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - com
     return gz, gg
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=REASSOCIATE)
 def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover - compiled
     """``u += sum_k change[k] * A[:, index[k]]``: the columns of the influence matrix are
     the offset kernel (2nx-1, 2ny-1) shifted to each element; a row of ``u`` at a time,
@@ -524,7 +526,7 @@ def solve_normal(
         else:  # too many elements left or entered the contact: convolve
             operator.apply(p, out=u)
             fresh = 0
-        err = moved / total if total > 0 else 0.0
+        err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
         hist.append(err)
         if not np.isfinite(err):
             break
@@ -541,6 +543,8 @@ def solve_normal(
             stalled = True
             break
 
+    if not converged and fresh > 0:  # the gap from a convolution, not the updates
+        operator.apply(p, out=u)
     if converged:
         message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
     else:
