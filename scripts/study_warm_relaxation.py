@@ -31,11 +31,11 @@ import numpy as np
 
 import railcontact as rc
 import railcontact.tangential as tangential
-from railcontact.tangential.convexgs import SweepProblem, _row_blocks
+from railcontact.tangential.convexgs import SweepProblem, _blocks_of
 from railcontact.tangential.steadygs import (
-    DIRECT_WORK,
-    _gs_kernels,
+    BLOCK_SCALE,
     _run_coefficients,
+    _steady_kernels,
     _sweep_blocked,
     solve_steadygs,
 )
@@ -88,17 +88,14 @@ def sweeps(problem: dict, schedule: list[tuple[float, float]], count: int) -> li
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, problem["start"],
                                problem["state"], EPS_TAU, count, 0.65, 0.9, "auto",
                                problem["spin_offset"])
-    kern, cum = _gs_kernels(operator), _run_coefficients(operator)
-    rows = _row_blocks(prob.contact, DIRECT_WORK)
-    w_t = np.stack([prob.wx, prob.wy])
+    kern, cum = _steady_kernels(operator), _run_coefficients(operator)
+    rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     out, measure = [], []
     for k in range(count):
         oh, os_ = schedule[min(k, len(schedule) - 1)]
-        qx, qy = prob.px.copy(), prob.py.copy()
-        _sweep_blocked(kern, cum, operator, w_t, prob.g, prob.px, prob.py, prob.state,
-                       prob.lo, prob.hi, rows, oh, os_)
-        dif = math.sqrt(float(np.sum((prob.px - qx) ** 2 + (prob.py - qy) ** 2)))
-        measure.append(dif / math.sqrt(float(np.sum(prob.px ** 2 + prob.py ** 2))))
+        dif = _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.px, prob.py,
+                             prob.state, prob.lo, prob.hi, rows, oh, os_)  # squared change
+        measure.append(math.sqrt(dif) / math.sqrt(float(np.sum(prob.px ** 2 + prob.py ** 2))))
         out.append(np.stack([prob.px.T, prob.py.T]))
     return [*out, np.asarray(measure)]
 
