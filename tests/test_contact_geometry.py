@@ -132,7 +132,7 @@ def test_lateral_extent_is_the_run_of_gap_below_delta_through_the_contact_point(
     np.testing.assert_allclose(cp.gap_on_grid(g), want, rtol=1e-14, atol=0)
 
 
-def test_fields_formed_on_first_read_survive_pickling_and_equal_a_fresh_search():
+def test_fields_formed_on_first_read_survive_pickling():
     import pickle
 
     from railcontact.geometry import search
