@@ -23,9 +23,10 @@ from railcontact.contact import simplified_tangential
 from railcontact.settings import TangentialSettings
 from railcontact.tangential import rolling_operator, solve_tangential
 from railcontact.tangential.convexgs import (
+    DIRECT_WORK,
     HAVE_NUMBA,
+    _blocks_of,
     _gs_kernels,
-    _row_blocks,
     _sweep_blocked,
     _sweep_numpy,
 )
@@ -91,7 +92,7 @@ def main() -> None:
     lo = np.zeros(40, np.int64)
     hi = np.full(40, 39, np.int64)
     state = np.ones((40, 40), np.int8)
-    rows = _row_blocks(g > 0)
+    rows = _blocks_of((g > 0).sum(axis=1), DIRECT_WORK)
 
     def sweep_numba():
         return _sweep_blocked(kern, op, w, g, px, py, state, lo, hi, rows, cc, 0.5, 0.5)

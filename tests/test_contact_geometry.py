@@ -97,16 +97,23 @@ def test_beyond_the_profiles():
 
 def test_branch_interpolation_keeps_to_the_branch_through_the_sample():
     """A curve folding back over itself (x rises, falls, rises): interpolating along the
-    rising branch through sample k uses that branch only (NaN beyond it)."""
-    from railcontact.geometry.search import _branch_interp
+    rising branch through sample k uses that branch only (NaN beyond it). The compiled
+    in-plane interpolation of the tangent frames, with the plane the x axis itself."""
+    from railcontact.geometry.kernels import interp_in_plane
+
+    def branch_interp(xs, x, y, k):
+        out = np.empty((3, xs.size))
+        interp_in_plane(xs, x, y, y, y, 0.0, 0.0, 1.0, 0.0, k, out)
+        assert np.array_equal(out[0], out[1], equal_nan=True)  # n = z = y here
+        return out[0]
 
     t = np.linspace(0.0, 3.0, 301)
     x = np.where(t < 1, t, np.where(t < 2, 2 - t, t - 2))  # up 0..1, down 1..0, up 0..1
     y = t  # tells the branches apart
     xs = np.array([0.25, 0.5, 0.75])
-    np.testing.assert_allclose(_branch_interp(xs, x, y, 50), xs, atol=1e-12)  # first
-    np.testing.assert_allclose(_branch_interp(xs, x, y, 250), 2 + xs, atol=1e-12)  # third
-    assert np.isnan(_branch_interp(np.array([1.5]), x, y, 250)).all()
+    np.testing.assert_allclose(branch_interp(xs, x, y, 50), xs, atol=1e-12)  # first
+    np.testing.assert_allclose(branch_interp(xs, x, y, 250), 2 + xs, atol=1e-12)  # third
+    assert np.isnan(branch_interp(np.array([1.5]), x, y, 250)).all()
 
 
 @pytest.mark.parametrize("y", [0.0, 6e-3])

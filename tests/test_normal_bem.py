@@ -43,6 +43,17 @@ def errors(g, res, hz):
     }
 
 
+def assert_carried_and_hertz(res, h, op, g, hz):
+    """The displacements the solver carried by updates (in its gap) equal a fresh product
+    to round-off, and the solution is Hertz's to 1 %."""
+    u = op.apply(res.pressure)
+    carried = res.gap - h + res.penetration
+    assert np.max(np.abs(carried - u)) < 1e-12 * np.max(np.abs(u))
+    errs = errors(g, res, hz)
+    for key in ("force", "max_pressure", "a", "b"):
+        assert errs[key] < 0.01, (key, errs)
+
+
 @pytest.mark.parametrize("ab", [0.2, 1.0, 5.0])
 def test_bem_matches_hertz_and_converges(ab):
     """a/b = 1 is the sphere; 0.2 and 5 are slender ellipses across and along x."""
@@ -300,12 +311,7 @@ def test_warm_start_updates_displacements_without_convolving(monkeypatch, backen
     if backend != "dense":  # (the dense product is no convolution)
         # the start's A p, then the preconditioner and A t per step, nothing else
         assert count[0] == 1 + 2 * res.iterations
-    u = op.apply(res.pressure)
-    carried = res.gap - h + res.penetration
-    assert np.max(np.abs(carried - u)) < 1e-12 * np.max(np.abs(u))
-    errs = errors(g, res, hz)
-    for key in ("force", "max_pressure", "a", "b"):
-        assert errs[key] < 0.01, (key, errs)
+    assert_carried_and_hertz(res, h, op, g, hz)
     assert np.array_equal(res.contact, ref.contact)
     assert np.max(np.abs(res.pressure - ref.pressure)) < 1e-6 * hz.max_pressure
 
@@ -329,9 +335,4 @@ def test_updated_displacements_do_not_drift_over_many_steps(monkeypatch):
     assert res.converged and res.iterations >= 30, res.message
     updated = 2 * res.iterations + 1 - count[0]  # steps whose A p was not convolved
     assert updated >= 0.8 * res.iterations  # (penetration control: one start product more)
-    u = op.apply(res.pressure)
-    carried = res.gap - h + res.penetration
-    assert np.max(np.abs(carried - u)) < 1e-12 * np.max(np.abs(u))
-    errs = errors(g, res, hz)
-    for key in ("force", "max_pressure", "a", "b"):
-        assert errs[key] < 0.01, (key, errs)
+    assert_carried_and_hertz(res, h, op, g, hz)

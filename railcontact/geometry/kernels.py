@@ -68,24 +68,16 @@ def nearest_point_sorted(pu, pz, order, pu_sorted, u, z):
     k = -1
     n = pu_sorted.size
     j = np.searchsorted(pu_sorted, u)
-    for i in range(j, n):  # at and beyond u
-        du = pu_sorted[i] - u
-        if du * du > best:
-            break
-        m = order[i]
-        d = (pu[m] - u) ** 2 + (pz[m] - z) ** 2
-        if d < best or (d == best and m < k):
-            best = d
-            k = m
-    for i in range(j - 1, -1, -1):  # before u
-        du = pu_sorted[i] - u
-        if du * du > best:
-            break
-        m = order[i]
-        d = (pu[m] - u) ** 2 + (pz[m] - z) ** 2
-        if d < best or (d == best and m < k):
-            best = d
-            k = m
+    for first, stop, step in ((j, n, 1), (j - 1, -1, -1)):  # at and beyond u, then before
+        for i in range(first, stop, step):
+            du = pu_sorted[i] - u
+            if du * du > best:
+                break
+            m = order[i]
+            d = (pu[m] - u) ** 2 + (pz[m] - z) ** 2
+            if d < best or (d == best and m < k):
+                best = d
+                k = m
     return k
 
 

@@ -442,33 +442,3 @@ def reference_point(cp: ContactPoint, track: Track, ws: Wheelset, x: np.ndarray,
                           rail_y=track.rail_coordinate(u, z), wheel_s=s_w,
                           contact_angle=gamma,
                           rolling_radius=ws.radius + float(ws.wheel.height(s_w)))
-
-
-_BRANCHES: list = []
-"""The last few (samples, k, branch) of :func:`_branch_interp`: a patch interpolates
-several quantities along the same branch of the same samples."""
-
-
-def _branch(x: np.ndarray, k: int) -> slice:
-    """The samples of the branch of the curve through sample ``k`` on which x increases
-    (rotated into a steep tangent plane a profile can fold back over itself, e.g. over the
-    flange tip; the other branches are not part of this contact). Remembered for the last
-    arrays asked about (held here, so that ``is`` identifies them; read, not changed)."""
-    for xs, ks, b in _BRANCHES:
-        if xs is x and ks == k:
-            return b
-    breaks = np.flatnonzero(np.diff(x) <= 0)  # sample i where x stops increasing to i + 1
-    i = int(np.searchsorted(breaks, k))
-    lo = int(breaks[i - 1]) + 1 if i > 0 else 0
-    hi = int(breaks[i]) if i < len(breaks) else len(x) - 1
-    b = slice(lo, hi + 1)
-    _BRANCHES.insert(0, (x, k, b))
-    del _BRANCHES[2:]
-    return b
-
-
-def _branch_interp(x_new: np.ndarray, x: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
-    """Interpolate y(x) along the branch of the curve through sample ``k`` on which x
-    increases (:func:`_branch`); NaN off it."""
-    b = _branch(x, k)
-    return np.interp(x_new, x[b], y[b], left=np.nan, right=np.nan)

@@ -99,11 +99,6 @@ class Grid:
             self.dx, other.dx, rtol=1e-12) and np.isclose(self.dy, other.dy, rtol=1e-12)
 
 
-def touches_boundary(mask: np.ndarray) -> bool:
-    """True when any element on the outer ring of the grid is set in ``mask``."""
-    return bool(mask[0, :].any() or mask[-1, :].any() or mask[:, 0].any() or mask[:, -1].any())
-
-
 def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = False,
            method: str = "linear") -> np.ndarray:
     """A field on ``source`` interpolated (bilinearly, zero outside) onto ``target``.

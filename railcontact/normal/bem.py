@@ -250,21 +250,25 @@ def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - co
     return delta
 
 
+@numba.njit(cache=True, fastmath=REASSOCIATE, inline="always")
+def _mean_on(x, c):  # pragma: no cover - compiled
+    """The mean of ``x`` over the elements set in ``c`` (0 without any)."""
+    total = 0.0
+    count = 0
+    for i in range(x.size):
+        if c[i]:
+            total += x[i]
+            count += 1
+    return total / max(count, 1)
+
+
 @numba.njit(cache=True, fastmath=REASSOCIATE)
 def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - compiled
     """The search direction ``t`` (in place): the correction ``z`` on ``c`` (minus its mean
     there when ``project``) plus the conjugate share of the previous ``t``; returns
     ``(g.z, g.g)`` on ``c``."""
     n = g.size
-    zmean = 0.0
-    if project:
-        total = 0.0
-        count = 0
-        for i in range(n):
-            if c[i]:
-                total += z[i]
-                count += 1
-        zmean = total / max(count, 1)
+    zmean = _mean_on(z, c) if project else 0.0
     gz = 0.0
     gg = 0.0
     for i in range(n):
@@ -311,15 +315,7 @@ def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area
     at once (the pressure vanished; ``q`` unscaled, ``u`` untouched).
     """
     n = p.size
-    rmean = 0.0
-    if force_control:
-        total = 0.0
-        count = 0
-        for i in range(n):
-            if c[i]:
-                total += r[i]
-                count += 1
-        rmean = total / max(count, 1)
+    rmean = _mean_on(r, c) if force_control else 0.0
     rt = 0.0
     gt = 0.0
     for i in range(n):

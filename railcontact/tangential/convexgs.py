@@ -186,14 +186,10 @@ def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, om
     return dif
 
 
-def _row_blocks(contact: np.ndarray, work: int = DIRECT_WORK) -> list[tuple[int, int]]:
-    """Split the rows that hold contact into blocks of about ``work^(1/2)`` elements."""
-    return _blocks_of(contact.sum(axis=1), work)
-
-
 def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
-    """:func:`_row_blocks` from the contact elements per row: rows are added to a block
-    until it holds ``total / nblocks`` elements (the last block takes the rest)."""
+    """Split the rows that hold contact (``per_row``: contact elements per row) into blocks
+    of about ``work^(1/2)`` elements: rows are added to a block until it holds
+    ``total / nblocks`` elements (the last block takes the rest)."""
     rows = np.flatnonzero(per_row)
     if rows.size == 0:
         return []
