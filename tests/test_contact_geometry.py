@@ -161,3 +161,9 @@ def test_rail_coordinate_is_the_nearest_placed_rail_point(y):
     pu, pz = TRACK._placed_points
     nearest = int(np.argmin((pu - cp.rail_u) ** 2 + (pz - cp.position[2]) ** 2))
     assert cp.rail_y == TRACK.placement[0][nearest]
+
+
+@pytest.mark.parametrize("u, z", [(math.nan, 0.0), (0.0, math.inf), (-math.inf, math.nan)])
+def test_rail_coordinate_of_a_non_finite_point_is_an_error(u, z):
+    with pytest.raises(RailContactError, match="not finite"):
+        TRACK.rail_coordinate(u, z)

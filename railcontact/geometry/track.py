@@ -98,10 +98,19 @@ class Track:
             ) from None
 
     def rail_coordinate(self, u: float, z: float) -> float:
-        """Rail profile coordinate y [m] of the point (u, Z) of the placed rail."""
+        """Rail profile coordinate y [m] of the point (u, Z) of the placed rail.
+
+        Raises
+        ------
+        RailContactError
+            For a non-finite ``u`` or ``z`` (no nearest point: the search would give an
+            end of the profile).
+        """
+        u, z = float(u), float(z)
+        if not (math.isfinite(u) and math.isfinite(z)):
+            raise RailContactError(f"rail point (u, Z) = ({u:g}, {z:g}) m is not finite")
         pu, pz, order, pu_sorted = self._placed_search
-        return float(self.placement[0][nearest_point_sorted(pu, pz, order, pu_sorted,
-                                                            float(u), float(z))])
+        return float(self.placement[0][nearest_point_sorted(pu, pz, order, pu_sorted, u, z)])
 
     @cached_property
     def _placed_search(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
