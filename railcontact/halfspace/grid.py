@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
+
+_BOUND_NAMES = {a: (f"grid.{a} lower bound", f"grid.{a} upper bound") for a in "xy"}
+"""The names of the bounds in :meth:`Grid.from_bounds`'s messages (formed once)."""
 
 
 @dataclass(frozen=True)
@@ -36,6 +40,12 @@ class Grid:
     y0: float
 
     def __post_init__(self) -> None:
+        nx, ny, dx, dy, x0, y0 = self.nx, self.ny, self.dx, self.dy, self.x0, self.y0
+        if (type(nx) is int and type(ny) is int and nx >= 1 and ny >= 1  # the common case
+                and type(dx) is float and type(dy) is float and 0.0 < dx < math.inf
+                and 0.0 < dy < math.inf and type(x0) is float and type(y0) is float
+                and x0 - x0 == 0.0 and y0 - y0 == 0.0):  # (finite: x - x is 0, else NaN)
+            return
         for name in ("nx", "ny"):
             n = getattr(self, name)
             if isinstance(n, bool) or int(n) != n or n < 1:
@@ -51,8 +61,8 @@ class Grid:
     ) -> Grid:
         """Grid of ``nx * ny`` elements covering the rectangle [xmin, xmax] x [ymin, ymax] [m]."""
         for name, lo, hi in (("x", xmin, xmax), ("y", ymin, ymax)):
-            check_finite(f"grid.{name} lower bound", lo, "m")
-            check_finite(f"grid.{name} upper bound", hi, "m")
+            check_finite(_BOUND_NAMES[name][0], lo, "m")
+            check_finite(_BOUND_NAMES[name][1], hi, "m")
             if not hi > lo:
                 raise RailContactError(f"grid.{name} range must be increasing, got [{lo}, {hi}]")
         dx = (xmax - xmin) / nx
@@ -72,15 +82,15 @@ class Grid:
         """Area of one element dx * dy [m^2]."""
         return self.dx * self.dy
 
-    @property
+    @cached_property
     def x(self) -> np.ndarray:
-        """Element centres along x [m], shape (nx,)."""
-        return self.x0 + self.dx * np.arange(self.nx)
+        """Element centres along x [m], shape (nx,); formed once, read-only."""
+        return _read_only(self.x0 + self.dx * np.arange(self.nx))
 
-    @property
+    @cached_property
     def y(self) -> np.ndarray:
-        """Element centres along y [m], shape (ny,)."""
-        return self.y0 + self.dy * np.arange(self.ny)
+        """Element centres along y [m], shape (ny,); formed once, read-only."""
+        return _read_only(self.y0 + self.dy * np.arange(self.ny))
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres as two (nx, ny) arrays (x, y) [m]."""
@@ -99,6 +109,12 @@ class Grid:
             self.dx, other.dx, rtol=1e-12) and np.isclose(self.dy, other.dy, rtol=1e-12)
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """``a``, no longer writeable (a grid's coordinates are shared by all who read them)."""
+    a.flags.writeable = False
+    return a
+
+
 def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = False,
            method: str = "linear") -> np.ndarray:
     """A field on ``source`` interpolated (bilinearly, zero outside) onto ``target``.
@@ -111,9 +127,10 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
     v = np.asarray(values, dtype=float)
     if v.shape != source.shape:
         raise RailContactError(f"values must have the source grid's shape {source.shape}")
-    shift = _lattice_shift(source, target)
+    shift = (0, 0) if source is target else _lattice_shift(source, target)
     if shift is not None:  # the same lattice: interpolation at element centres is a copy
-        out = _shifted_copy(v, target.shape, *shift)
+        out = (v.copy() if shift == (0, 0) and v.shape == target.shape
+               else _shifted_copy(v, target.shape, *shift))
         if conserve:
             total = out.sum() * target.element_area
             if total > 0:

@@ -190,16 +190,16 @@ def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
     """Split the rows that hold contact (``per_row``: contact elements per row) into blocks
     of about ``work^(1/2)`` elements: rows are added to a block until it holds
     ``total / nblocks`` elements (the last block takes the rest)."""
-    rows = np.flatnonzero(per_row)
+    rows = per_row.nonzero()[0]  # (array methods: cheaper calls than numpy's functions)
     if rows.size == 0:
         return []
-    cum = np.cumsum(per_row)  # integers: "the block holds >= target" is exact
+    cum = per_row.cumsum()  # integers: "the block holds >= target" is exact
     total = int(cum[-1])
     nblocks = max(1, min(rows.size, round(total / math.sqrt(work))))
     target = total / nblocks
     blocks, start, base = [], int(rows[0]), 0
     for _ in range(nblocks - 1):
-        r = int(np.searchsorted(cum - base, target))  # first row where the block is full
+        r = int((cum - base).searchsorted(target))  # first row where the block is full
         if r >= cum.size:
             break
         blocks.append((start, r + 1))
@@ -456,17 +456,18 @@ class SweepProblem:
         squared norm of its change), stopping when the error is not finite or has not
         fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
         px, py = self.px, self.py
-        floor = 1e-9 * float(np.sqrt(np.sum(self.g * self.g)))
+        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
         hist: list[float] = []
         converged = stalled = False
         best, best_its = math.inf, 0
         its = 0
         err = 0.0
-        if self.contact.any() and self.rolling:
+        in_contact = bool(self.contact.any())
+        if in_contact and self.rolling:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
-                norm = math.sqrt(float(np.sum(px * px + py * py)))
+                norm = math.sqrt(float((px * px + py * py).sum()))
                 scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
                 err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
                 hist.append(err)
@@ -487,7 +488,7 @@ class SweepProblem:
         st = np.ascontiguousarray(self.state.T)
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
-        if not self.contact.any():
+        if not in_contact:
             message = "no contact: zero normal pressure"
         elif not self.rolling:
             message = "zero creepage: zero traction, no iterations"
@@ -521,9 +522,8 @@ def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[
     """An initial traction (2, nx, ny) [Pa] in the sweep layout, clipped to the bound ``g``
     (elements in slip in ``initial_state`` put on it), zero outside the contact."""
     p0 = np.asarray(initial_traction, dtype=float)
-    message = f"initial_traction must be finite, shape {(2, *shape)}"
     if p0.shape != (2, *shape):
-        raise RailContactError(message)
+        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
     slip0 = np.zeros((0, 0), dtype=bool)
     if initial_state is not None:
         st0 = np.asarray(initial_state)
@@ -532,7 +532,7 @@ def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[
         slip0 = st0 == SLIP
     px, py, ok = _clip_start(p0, slip0, g)
     if not ok:
-        raise RailContactError(message)
+        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
     return px, py
 
 
