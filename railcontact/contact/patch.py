@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 
@@ -397,4 +396,4 @@ def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]
         out[:, sx, sy] = result.slip
         return out
 
-    return replace(result, grid=grid, traction=traction, slip=slip, state=state)
+    return result.replaced(grid=grid, traction=traction, slip=slip, state=state)

@@ -8,11 +8,28 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
+
+
+class _formed_once:  # noqa: N801 (used as a decorator, like ``property``)
+    """A read-only array attribute of a frozen record formed when first read and kept in
+    the instance's ``__dict__`` (which then answers without this descriptor: lighter than
+    ``functools.cached_property``, which takes a lock; a race forms the same value)."""
+
+    def __init__(self, fn) -> None:
+        self.fn, self.name, self.__doc__ = fn, fn.__name__, fn.__doc__
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        value = self.fn(obj)
+        value.flags.writeable = False  # shared by all who read it
+        obj.__dict__[self.name] = value
+        return value
+
 
 _BOUND_NAMES = {a: (f"grid.{a} lower bound", f"grid.{a} upper bound") for a in "xy"}
 """The names of the bounds in :meth:`Grid.from_bounds`'s messages (formed once)."""
@@ -82,15 +99,15 @@ class Grid:
         """Area of one element dx * dy [m^2]."""
         return self.dx * self.dy
 
-    @cached_property
+    @_formed_once
     def x(self) -> np.ndarray:
         """Element centres along x [m], shape (nx,); formed once, read-only."""
-        return _read_only(self.x0 + self.dx * np.arange(self.nx))
+        return self.x0 + self.dx * np.arange(self.nx)
 
-    @cached_property
+    @_formed_once
     def y(self) -> np.ndarray:
         """Element centres along y [m], shape (ny,); formed once, read-only."""
-        return _read_only(self.y0 + self.dy * np.arange(self.ny))
+        return self.y0 + self.dy * np.arange(self.ny)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres as two (nx, ny) arrays (x, y) [m]."""
@@ -107,12 +124,6 @@ class Grid:
         operator applies), whatever its position."""
         return (self.nx, self.ny) == (other.nx, other.ny) and np.isclose(
             self.dx, other.dx, rtol=1e-12) and np.isclose(self.dy, other.dy, rtol=1e-12)
-
-
-def _read_only(a: np.ndarray) -> np.ndarray:
-    """``a``, no longer writeable (a grid's coordinates are shared by all who read them)."""
-    a.flags.writeable = False
-    return a
 
 
 def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = False,

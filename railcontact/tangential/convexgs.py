@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import lru_cache
 
 import numpy as np
@@ -342,6 +342,27 @@ class TangentialResult:
         _ = self.slip
         return self.__dict__
 
+    def replaced(self, **changes) -> TangentialResult:
+        """``dataclasses.replace(self, **changes)`` as a copy of the fields (a per-pass
+        path: ``replace`` reads and passes every field); a callable ``slip`` is formed
+        when first read, as in the constructor."""
+        unknown = changes.keys() - _RESULT_FIELDS
+        if unknown:
+            raise TypeError(f"TangentialResult has no fields {sorted(unknown)}")
+        out = object.__new__(type(self))
+        d = out.__dict__
+        d.update(self.__dict__)
+        if "slip" in changes:
+            d.pop("slip", None)
+            d.pop("_slip_of", None)
+            slip = changes.pop("slip")
+            d["_slip_of" if callable(slip) else "slip"] = slip
+        d.update(changes)
+        return out
+
+
+_RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
+
 
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
@@ -484,7 +505,9 @@ class SweepProblem:
         else:
             converged = True
         grid = self.grid
-        traction = np.stack([px.T, py.T])
+        traction = np.empty((2, grid.nx, grid.ny))  # (np.stack's checks cost more than this)
+        traction[0] = px.T
+        traction[1] = py.T
         st = np.ascontiguousarray(self.state.T)
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
