@@ -505,9 +505,12 @@ class SweepProblem:
         else:
             converged = True
         grid = self.grid
-        traction = np.empty((2, grid.nx, grid.ny))  # (np.stack's checks cost more than this)
-        traction[0] = px.T
-        traction[1] = py.T
+        # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it out
+        # (its sums keep their order, so their bits), without np.stack's checks
+        layout = np.empty((2, *px.shape))
+        layout[0] = px
+        layout[1] = py
+        traction = layout.transpose(0, 2, 1)
         st = np.ascontiguousarray(self.state.T)
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
