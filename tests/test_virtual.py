@@ -180,3 +180,15 @@ def test_remesh_on_a_shared_lattice_is_the_interpolation():
     # half an element off the lattice: interpolated, not copied
     dst = Grid(12, 9, 0.5e-3, 0.4e-3, src.x0 + 0.25e-3, src.y0)
     assert grid_module._lattice_shift(src, dst) is None
+    # the grid itself: a copy of the field
+    same = remesh(v, src, src)
+    assert np.array_equal(same, v) and not np.shares_memory(same, v)
+    # several fields at once (a traction's two components): each as on its own, on and
+    # off the lattice
+    v2 = rng.random((2, *src.shape))
+    for dst in (Grid(10, 15, 0.5e-3, 0.4e-3, src.x0 + 3 * src.dx, src.y0 - 2 * src.dy),
+                Grid(12, 9, 0.5e-3, 0.4e-3, src.x0 + 0.25e-3, src.y0), src):
+        both = remesh(v2, src, dst)
+        assert both.shape == (2, *dst.shape) and not np.shares_memory(both, v2)
+        for k in range(2):
+            np.testing.assert_array_equal(both[k], remesh(v2[k], src, dst))

@@ -134,8 +134,18 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
 
     With ``conserve=True`` the result is scaled so that its integral (sum times element
     area) equals the source's, e.g. to keep the total force of a pressure estimate.
+
+    ``values`` of shape ``(k, nx, ny)`` (e.g. a traction's two components) are ``k`` fields,
+    remeshed each (without ``conserve``).
     """
     v = np.asarray(values, dtype=float)
+    if v.ndim == 3 and v.shape[1:] == source.shape and not conserve:
+        shift = (0, 0) if source is target else _lattice_shift(source, target)
+        if shift is None:  # off the lattice: field by field
+            return np.stack([remesh(c, source, target, method=method) for c in v])
+        if shift == (0, 0) and source.shape == target.shape:
+            return v.copy()
+        return _shifted_copy(v, target.shape, *shift)
     if v.shape != source.shape:
         raise RailContactError(f"values must have the source grid's shape {source.shape}")
     shift = (0, 0) if source is target else _lattice_shift(source, target)
@@ -181,10 +191,10 @@ def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
 
 
 def _shifted_copy(v: np.ndarray, shape: tuple[int, int], i: int, j: int) -> np.ndarray:
-    """``out[a, b] = v[a + i, b + j]`` where that lies in ``v``, else 0."""
-    out = np.zeros(shape)
-    a0, a1 = max(0, -i), min(shape[0], v.shape[0] - i)
-    b0, b1 = max(0, -j), min(shape[1], v.shape[1] - j)
+    """``out[..., a, b] = v[..., a + i, b + j]`` where that lies in ``v``, else 0."""
+    out = np.zeros((*v.shape[:-2], *shape))
+    a0, a1 = max(0, -i), min(shape[0], v.shape[-2] - i)
+    b0, b1 = max(0, -j), min(shape[1], v.shape[-1] - j)
     if a1 > a0 and b1 > b0:
-        out[a0:a1, b0:b1] = v[a0 + i:a1 + i, b0 + j:b1 + j]
+        out[..., a0:a1, b0:b1] = v[..., a0 + i:a1 + i, b0 + j:b1 + j]
     return out
