@@ -31,6 +31,16 @@ class _formed_once:  # noqa: N801 (used as a decorator, like ``property``)
         return value
 
 
+_INDICES = np.arange(1024.0)
+_INDICES.flags.writeable = False
+
+
+def _indices(n: int) -> np.ndarray:
+    """0, 1, ..., n - 1 as floats (the same values ``np.arange(n)`` gives a product with
+    a float; a slice of one array for the usual counts)."""
+    return _INDICES[:n] if n <= _INDICES.size else np.arange(float(n))
+
+
 _BOUND_NAMES = {a: (f"grid.{a} lower bound", f"grid.{a} upper bound") for a in "xy"}
 """The names of the bounds in :meth:`Grid.from_bounds`'s messages (formed once)."""
 
@@ -102,12 +112,12 @@ class Grid:
     @_formed_once
     def x(self) -> np.ndarray:
         """Element centres along x [m], shape (nx,); formed once, read-only."""
-        return self.x0 + self.dx * np.arange(self.nx)
+        return self.x0 + self.dx * _indices(self.nx)
 
     @_formed_once
     def y(self) -> np.ndarray:
         """Element centres along y [m], shape (ny,); formed once, read-only."""
-        return self.y0 + self.dy * np.arange(self.ny)
+        return self.y0 + self.dy * _indices(self.ny)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres as two (nx, ny) arrays (x, y) [m]."""
