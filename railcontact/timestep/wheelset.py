@@ -709,7 +709,9 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.area = float(sum(p.normal.area for p in patches))
     wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
     ts = [p.tangential for p in patches if p.tangential is not None]
-    if ts:
+    if len(ts) == 1:  # one patch: its own ratio, the same count (slip over non-exterior)
+        wheel.slip_area_ratio = ts[0].slip_area_ratio
+    elif ts:
         n_el = [int(np.count_nonzero(t.state)) for t in ts]
         n_slip = [int(np.count_nonzero(t.state == 2)) for t in ts]
         wheel.slip_area_ratio = sum(n_slip) / max(sum(n_el), 1)
