@@ -239,14 +239,14 @@ def _bound_layout(pn, mu):
     return g, state, contact, lo, hi, count, ok
 
 
-def _clip_start(p0, slip0, g):
-    """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout (ny, nx), scaled
-    onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty: none)
-    marks a slip element, zero outside the contact; ``ok`` is False when a value is not
-    finite."""
+def _clip_start(p0, slip0, g, out):
+    """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout ``out`` (2, ny, nx),
+    scaled onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty:
+    none) marks a slip element, zero outside the contact; returns False when a value is
+    not finite."""
     ny, nx = g.shape
-    px = np.empty((ny, nx))
-    py = np.empty((ny, nx))
+    px = out[0]
+    py = out[1]
     has_state = slip0.size > 0
     ok = True
     for iy in range(ny):
@@ -266,7 +266,7 @@ def _clip_start(p0, slip0, g):
                 y = 0.0
             px[iy, ix] = x
             py[iy, ix] = y
-    return px, py, ok
+    return ok
 
 
 if HAVE_NUMBA:
@@ -410,9 +410,10 @@ class SweepProblem:
 
     Fields are (ny, nx), x contiguous: the traction bound ``g = mu p_n`` [Pa], the rigid
     slip ``wx``, ``wy`` [m] (:func:`~.rolling.rigid_slip`), the traction ``px``,
-    ``py`` [Pa] being solved for, the element states, the contact mask and per row the
-    first and last element in contact (``lo``, ``hi``) and their count. ConvexGS and
-    SteadyGS differ only in their sweep.
+    ``py`` [Pa] being solved for (the two rows of one array ``p`` (2, ny, nx):
+    ``p.transpose(0, 2, 1)`` is the traction (2, nx, ny) without a copy), the element
+    states, the contact mask and per row the first and last element in contact (``lo``,
+    ``hi``) and their count. ConvexGS and SteadyGS differ only in their sweep.
     """
 
     grid: Grid
@@ -420,6 +421,7 @@ class SweepProblem:
     g: np.ndarray
     wx: np.ndarray
     wy: np.ndarray
+    p: np.ndarray
     px: np.ndarray
     py: np.ndarray
     state: np.ndarray
@@ -463,11 +465,11 @@ class SweepProblem:
         wy[...] = ly[None, :]
         rolling = any(c != 0.0 for c in creepage)
         if initial_traction is None or not rolling:  # no creepage: no traction, exactly
-            px, py = np.zeros_like(g), np.zeros_like(g)
+            p = np.zeros((2, *g.shape))
         else:
-            px, py = _clipped_start(initial_traction, initial_state, g, shape)
+            p = _clipped_start(initial_traction, initial_state, g, shape)
         return cls(
-            grid=grid, operator=operator, g=g, wx=wx, wy=wy, px=px, py=py, state=state,
+            grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
             max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
 
@@ -506,11 +508,8 @@ class SweepProblem:
             converged = True
         grid = self.grid
         # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it out
-        # (its sums keep their order, so their bits), without np.stack's checks
-        layout = np.empty((2, *px.shape))
-        layout[0] = px
-        layout[1] = py
-        traction = layout.transpose(0, 2, 1)
+        # (its sums keep their order, so their bits): one copy of ``p``
+        traction = self.p.transpose(0, 2, 1).copy(order="K")
         st = np.ascontiguousarray(self.state.T)
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
@@ -544,9 +543,10 @@ class SweepProblem:
 
 
 def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[int, int]
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """An initial traction (2, nx, ny) [Pa] in the sweep layout, clipped to the bound ``g``
-    (elements in slip in ``initial_state`` put on it), zero outside the contact."""
+                   ) -> np.ndarray:
+    """An initial traction (2, nx, ny) [Pa] in the sweep layout (2, ny, nx), clipped to
+    the bound ``g`` (elements in slip in ``initial_state`` put on it), zero outside the
+    contact."""
     p0 = np.asarray(initial_traction, dtype=float)
     if p0.shape != (2, *shape):
         raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
@@ -556,10 +556,10 @@ def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[
         if st0.shape != shape:
             raise RailContactError(f"initial_state must have shape {shape}")
         slip0 = st0 == SLIP
-    px, py, ok = _clip_start(p0, slip0, g)
-    if not ok:
+    out = np.empty((2, *g.shape))
+    if not _clip_start(p0, slip0, g, out):
         raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-    return px, py
+    return out
 
 
 def solve_tangential(
