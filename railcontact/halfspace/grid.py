@@ -82,6 +82,10 @@ class Grid:
         check_finite("grid.x0", self.x0, "m")
         check_finite("grid.y0", self.y0, "m")
 
+    def __getstate__(self) -> dict:
+        """Pickled without the coordinates formed once (they are formed again, read-only)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("x", "y")}
+
     @classmethod
     def from_bounds(
         cls, xmin: float, xmax: float, ymin: float, ymax: float, nx: int, ny: int
