@@ -35,6 +35,8 @@ def check_finite(name: str, value: object, unit: str = "") -> float:
     unit
         Unit shown in the message (e.g. ``"N"``).
     """
+    if type(value) is float and value - value == 0.0:  # the common case, at once
+        return value  # (x - x is 0 for a finite float, NaN for inf and NaN)
     suffix = f" [{unit}]" if unit else ""
     if isinstance(value, (bool, str)):
         raise RailContactError(f"{name}{suffix} must be a number, got {value!r}")
@@ -59,6 +61,8 @@ def _digits(value: int) -> int:
 def check_positive(name: str, value: object, unit: str = "", allow_zero: bool = False) -> float:
     """Return ``value`` as a float, or raise if it is not finite and positive."""
     x = check_finite(name, value, unit)
+    if x > 0.0 or (x == 0.0 and allow_zero):
+        return x
     suffix = f" [{unit}]" if unit else ""
     if x < 0 or (x == 0 and not allow_zero):
         bound = "non-negative" if allow_zero else "positive"

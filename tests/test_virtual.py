@@ -158,6 +158,26 @@ def test_two_patch_estimates_land_on_their_bem_patches(root):
         assert n.force == pytest.approx(est.sum() * n.grid.element_area, rel=0.15)
 
 
+def test_grid_coordinates_are_the_element_centres_shared_read_only():
+    """x[i] = x0 + i dx, y[j] = y0 + j dy (the bounds' midpoints), formed once per grid and
+    read-only (every reader shares them); a pickled grid forms them again."""
+    import pickle
+
+    g = Grid.from_bounds(-3e-3, 2e-3, 1e-3, 4.6e-3, 10, 9)
+    lo_x, hi_x, lo_y, hi_y = g.bounds
+    edges_x = np.linspace(lo_x, hi_x, g.nx + 1)
+    edges_y = np.linspace(lo_y, hi_y, g.ny + 1)
+    np.testing.assert_allclose(g.x, 0.5 * (edges_x[:-1] + edges_x[1:]), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(g.y, 0.5 * (edges_y[:-1] + edges_y[1:]), rtol=0, atol=1e-15)
+    assert g.x is g.x and not g.x.flags.writeable and not g.y.flags.writeable
+    with pytest.raises(ValueError):
+        g.x[0] = 1.0
+    h = pickle.loads(pickle.dumps(g))
+    assert h == g and np.array_equal(h.x, g.x) and not h.x.flags.writeable
+    big = Grid(3000, 2, 1e-4, 1e-4, 0.5, 0.0)  # beyond the shared index array
+    np.testing.assert_array_equal(big.x, 0.5 + 1e-4 * np.arange(3000))
+
+
 def test_remesh_on_a_shared_lattice_is_the_interpolation():
     """Grids on one lattice (same element size, centres a whole number of elements apart):
     the fast copy equals bilinear and nearest interpolation at the element centres, zero
@@ -180,3 +200,15 @@ def test_remesh_on_a_shared_lattice_is_the_interpolation():
     # half an element off the lattice: interpolated, not copied
     dst = Grid(12, 9, 0.5e-3, 0.4e-3, src.x0 + 0.25e-3, src.y0)
     assert grid_module._lattice_shift(src, dst) is None
+    # the grid itself: a copy of the field
+    same = remesh(v, src, src)
+    assert np.array_equal(same, v) and not np.shares_memory(same, v)
+    # several fields at once (a traction's two components): each as on its own, on and
+    # off the lattice
+    v2 = rng.random((2, *src.shape))
+    for dst in (Grid(10, 15, 0.5e-3, 0.4e-3, src.x0 + 3 * src.dx, src.y0 - 2 * src.dy),
+                Grid(12, 9, 0.5e-3, 0.4e-3, src.x0 + 0.25e-3, src.y0), src):
+        both = remesh(v2, src, dst)
+        assert both.shape == (2, *dst.shape) and not np.shares_memory(both, v2)
+        for k in range(2):
+            np.testing.assert_array_equal(both[k], remesh(v2[k], src, dst))

@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 
@@ -176,8 +175,11 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, **control.kwargs())
         work.normal_iterations += res.iterations
+        # the pressure array checked by the solver's summary of it (solve_normal: the
+        # force is its sum, max_pressure its largest value or NaN when one is NaN; a
+        # NaN or an infinity anywhere makes one of them not finite)
         if not (math.isfinite(res.force) and math.isfinite(res.penetration)
-                and np.isfinite(res.pressure).all()):
+                and math.isfinite(res.max_pressure)):
             res.converged = False
             res.message = f"the normal solution is not finite ({res.message})"
             break
@@ -308,8 +310,10 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
     if t is not None:
         patch.work.tangential_iterations += t.iterations
         fx, fy = t.force
+        # the traction array checked by the solver's summary of it: max_traction is the
+        # largest |p| or NaN when one is NaN, so finite only when every traction is
         if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
-                and np.isfinite(t.traction).all()):
+                and math.isfinite(t.max_traction)):
             t.converged = False
             t.message = f"the tangential solution is not finite ({t.message})"
 
@@ -397,4 +401,4 @@ def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]
         out[:, sx, sy] = result.slip
         return out
 
-    return replace(result, grid=grid, traction=traction, slip=slip, state=state)
+    return result.replaced(grid=grid, traction=traction, slip=slip, state=state)

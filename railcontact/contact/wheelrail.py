@@ -222,11 +222,6 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                 f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more than "
                 f"{MAX_PATCH_SHARE:g} of the radius); check [material] young and the load "
                 "or penetration")
-        d0 = hz.penetration if loads is not None else dn
-        if loads is not None and cp.approach is not None:  # formed at an approach: its own
-            d0 = max(d0, cp.normal_penetration(cp.approach))
-        xl = grid.margin * math.sqrt(d0 / cp.A)
-        ylo, yhi = cp.lateral_extent(d0, grid.margin)
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
         if last is not None:
@@ -235,8 +230,16 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
-        # an estimate may know a tighter area (a time step: where the contact was)
-        bounds = getattr(est, "bounds", None) or (-xl, xl, ylo, yhi)
+        # an estimate may know a tighter area (a time step: where the contact was);
+        # else the rigid overlap's, with the margin
+        bounds = getattr(est, "bounds", None)
+        if not bounds:
+            d0 = hz.penetration if loads is not None else dn
+            if loads is not None and cp.approach is not None:  # formed at one: its own
+                d0 = max(d0, cp.normal_penetration(cp.approach))
+            xl = grid.margin * math.sqrt(d0 / cp.A)
+            ylo, yhi = cp.lateral_extent(d0, grid.margin)
+            bounds = (-xl, xl, ylo, yhi)
         keep = last is not None and _covers(last.normal.grid.bounds, bounds,
                                             grid.dx is None or grid.dy is None)
         res, work = solve_patch_normal(cp.gap_on_grid, bounds, grid, normal, pair, control,

@@ -344,7 +344,8 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     moves vertically, not along the new normal, so the frame holds for that approach; the
     load loops form it again as the approach changes.
     """
-    d = cp.normal_penetration(approach)
+    approach = float(approach)  # plain floats in the point: numpy's scalars cost more
+    d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
     if not d > 0:
         return None
     eta, _, u, z, g = _trace_of_pose(track, ws, pose, cp.side)[0]
@@ -364,7 +365,7 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     s_normal = float(wheel_s_of_s[K0])
     # B for Hertz's estimates: the parabola with the overlap's depth and width (the origin
     # is the weighted centre, not the gap's minimum, where f'' may be anything)
-    width = float(s[hi - 1] - s[lo]) + (s[1] - s[0])  # s increases
+    width = float(s[hi - 1] - s[lo]) + float(s[1] - s[0])  # s increases
     B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, f)
 
     def offset() -> dict:  # the point in the rigid point's frame (formed when read)

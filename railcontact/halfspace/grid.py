@@ -14,6 +14,37 @@ import numpy as np
 from ..errors import RailContactError, check_finite, check_positive
 
 
+class _formed_once:  # noqa: N801 (used as a decorator, like ``property``)
+    """A read-only array attribute of a frozen record formed when first read and kept in
+    the instance's ``__dict__`` (which then answers without this descriptor: lighter than
+    ``functools.cached_property``, which takes a lock; a race forms the same value)."""
+
+    def __init__(self, fn) -> None:
+        self.fn, self.name, self.__doc__ = fn, fn.__name__, fn.__doc__
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        value = self.fn(obj)
+        value.flags.writeable = False  # shared by all who read it
+        obj.__dict__[self.name] = value
+        return value
+
+
+_INDICES = np.arange(1024.0)
+_INDICES.flags.writeable = False
+
+
+def _indices(n: int) -> np.ndarray:
+    """0, 1, ..., n - 1 as floats (the same values ``np.arange(n)`` gives a product with
+    a float; a slice of one array for the usual counts)."""
+    return _INDICES[:n] if n <= _INDICES.size else np.arange(float(n))
+
+
+_BOUND_NAMES = {a: (f"grid.{a} lower bound", f"grid.{a} upper bound") for a in "xy"}
+"""The names of the bounds in :meth:`Grid.from_bounds`'s messages (formed once)."""
+
+
 @dataclass(frozen=True)
 class Grid:
     """A rectangular grid of ``nx * ny`` elements of size ``dx * dy`` [m].
@@ -36,6 +67,12 @@ class Grid:
     y0: float
 
     def __post_init__(self) -> None:
+        nx, ny, dx, dy, x0, y0 = self.nx, self.ny, self.dx, self.dy, self.x0, self.y0
+        if (type(nx) is int and type(ny) is int and nx >= 1 and ny >= 1  # the common case
+                and type(dx) is float and type(dy) is float and 0.0 < dx < math.inf
+                and 0.0 < dy < math.inf and type(x0) is float and type(y0) is float
+                and x0 - x0 == 0.0 and y0 - y0 == 0.0):  # (finite: x - x is 0, else NaN)
+            return
         for name in ("nx", "ny"):
             n = getattr(self, name)
             if isinstance(n, bool) or int(n) != n or n < 1:
@@ -45,14 +82,18 @@ class Grid:
         check_finite("grid.x0", self.x0, "m")
         check_finite("grid.y0", self.y0, "m")
 
+    def __getstate__(self) -> dict:
+        """Pickled without the coordinates formed once (they are formed again, read-only)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("x", "y")}
+
     @classmethod
     def from_bounds(
         cls, xmin: float, xmax: float, ymin: float, ymax: float, nx: int, ny: int
     ) -> Grid:
         """Grid of ``nx * ny`` elements covering the rectangle [xmin, xmax] x [ymin, ymax] [m]."""
         for name, lo, hi in (("x", xmin, xmax), ("y", ymin, ymax)):
-            check_finite(f"grid.{name} lower bound", lo, "m")
-            check_finite(f"grid.{name} upper bound", hi, "m")
+            check_finite(_BOUND_NAMES[name][0], lo, "m")
+            check_finite(_BOUND_NAMES[name][1], hi, "m")
             if not hi > lo:
                 raise RailContactError(f"grid.{name} range must be increasing, got [{lo}, {hi}]")
         dx = (xmax - xmin) / nx
@@ -72,15 +113,15 @@ class Grid:
         """Area of one element dx * dy [m^2]."""
         return self.dx * self.dy
 
-    @property
+    @_formed_once
     def x(self) -> np.ndarray:
-        """Element centres along x [m], shape (nx,)."""
-        return self.x0 + self.dx * np.arange(self.nx)
+        """Element centres along x [m], shape (nx,); formed once, read-only."""
+        return self.x0 + self.dx * _indices(self.nx)
 
-    @property
+    @_formed_once
     def y(self) -> np.ndarray:
-        """Element centres along y [m], shape (ny,)."""
-        return self.y0 + self.dy * np.arange(self.ny)
+        """Element centres along y [m], shape (ny,); formed once, read-only."""
+        return self.y0 + self.dy * _indices(self.ny)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres as two (nx, ny) arrays (x, y) [m]."""
@@ -107,13 +148,24 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
 
     With ``conserve=True`` the result is scaled so that its integral (sum times element
     area) equals the source's, e.g. to keep the total force of a pressure estimate.
+
+    ``values`` of shape ``(k, nx, ny)`` (e.g. a traction's two components) are ``k`` fields,
+    remeshed each (without ``conserve``).
     """
     v = np.asarray(values, dtype=float)
+    if v.ndim == 3 and v.shape[1:] == source.shape and not conserve:
+        shift = (0, 0) if source is target else _lattice_shift(source, target)
+        if shift is None:  # off the lattice: field by field
+            return np.stack([remesh(c, source, target, method=method) for c in v])
+        if shift == (0, 0) and source.shape == target.shape:
+            return v.copy()
+        return _shifted_copy(v, target.shape, *shift)
     if v.shape != source.shape:
         raise RailContactError(f"values must have the source grid's shape {source.shape}")
-    shift = _lattice_shift(source, target)
+    shift = (0, 0) if source is target else _lattice_shift(source, target)
     if shift is not None:  # the same lattice: interpolation at element centres is a copy
-        out = _shifted_copy(v, target.shape, *shift)
+        out = (v.copy() if shift == (0, 0) and v.shape == target.shape
+               else _shifted_copy(v, target.shape, *shift))
         if conserve:
             total = out.sum() * target.element_area
             if total > 0:
@@ -153,10 +205,10 @@ def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
 
 
 def _shifted_copy(v: np.ndarray, shape: tuple[int, int], i: int, j: int) -> np.ndarray:
-    """``out[a, b] = v[a + i, b + j]`` where that lies in ``v``, else 0."""
-    out = np.zeros(shape)
-    a0, a1 = max(0, -i), min(shape[0], v.shape[0] - i)
-    b0, b1 = max(0, -j), min(shape[1], v.shape[1] - j)
+    """``out[..., a, b] = v[..., a + i, b + j]`` where that lies in ``v``, else 0."""
+    out = np.zeros((*v.shape[:-2], *shape))
+    a0, a1 = max(0, -i), min(shape[0], v.shape[-2] - i)
+    b0, b1 = max(0, -j), min(shape[1], v.shape[-1] - j)
     if a1 > a0 and b1 > b0:
-        out[a0:a1, b0:b1] = v[a0 + i:a1 + i, b0 + j:b1 + j]
+        out[..., a0:a1, b0:b1] = v[..., a0 + i:a1 + i, b0 + j:b1 + j]
     return out

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import lru_cache
 
 import numpy as np
@@ -190,16 +190,16 @@ def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
     """Split the rows that hold contact (``per_row``: contact elements per row) into blocks
     of about ``work^(1/2)`` elements: rows are added to a block until it holds
     ``total / nblocks`` elements (the last block takes the rest)."""
-    rows = np.flatnonzero(per_row)
+    rows = per_row.nonzero()[0]  # (array methods: cheaper calls than numpy's functions)
     if rows.size == 0:
         return []
-    cum = np.cumsum(per_row)  # integers: "the block holds >= target" is exact
+    cum = per_row.cumsum()  # integers: "the block holds >= target" is exact
     total = int(cum[-1])
     nblocks = max(1, min(rows.size, round(total / math.sqrt(work))))
     target = total / nblocks
     blocks, start, base = [], int(rows[0]), 0
     for _ in range(nblocks - 1):
-        r = int(np.searchsorted(cum - base, target))  # first row where the block is full
+        r = int((cum - base).searchsorted(target))  # first row where the block is full
         if r >= cum.size:
             break
         blocks.append((start, r + 1))
@@ -239,14 +239,14 @@ def _bound_layout(pn, mu):
     return g, state, contact, lo, hi, count, ok
 
 
-def _clip_start(p0, slip0, g):
-    """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout (ny, nx), scaled
-    onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty: none)
-    marks a slip element, zero outside the contact; ``ok`` is False when a value is not
-    finite."""
+def _clip_start(p0, slip0, g, out):
+    """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout ``out`` (2, ny, nx),
+    scaled onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty:
+    none) marks a slip element, zero outside the contact; returns False when a value is
+    not finite."""
     ny, nx = g.shape
-    px = np.empty((ny, nx))
-    py = np.empty((ny, nx))
+    px = out[0]
+    py = out[1]
     has_state = slip0.size > 0
     ok = True
     for iy in range(ny):
@@ -266,7 +266,7 @@ def _clip_start(p0, slip0, g):
                 y = 0.0
             px[iy, ix] = x
             py[iy, ix] = y
-    return px, py, ok
+    return ok
 
 
 if HAVE_NUMBA:
@@ -342,6 +342,27 @@ class TangentialResult:
         _ = self.slip
         return self.__dict__
 
+    def replaced(self, **changes) -> TangentialResult:
+        """``dataclasses.replace(self, **changes)`` as a copy of the fields (a per-pass
+        path: ``replace`` reads and passes every field); a callable ``slip`` is formed
+        when first read, as in the constructor."""
+        unknown = changes.keys() - _RESULT_FIELDS
+        if unknown:
+            raise TypeError(f"TangentialResult has no fields {sorted(unknown)}")
+        out = object.__new__(type(self))
+        d = out.__dict__
+        d.update(self.__dict__)
+        if "slip" in changes:
+            d.pop("slip", None)
+            d.pop("_slip_of", None)
+            slip = changes.pop("slip")
+            d["_slip_of" if callable(slip) else "slip"] = slip
+        d.update(changes)
+        return out
+
+
+_RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
+
 
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
@@ -389,9 +410,10 @@ class SweepProblem:
 
     Fields are (ny, nx), x contiguous: the traction bound ``g = mu p_n`` [Pa], the rigid
     slip ``wx``, ``wy`` [m] (:func:`~.rolling.rigid_slip`), the traction ``px``,
-    ``py`` [Pa] being solved for, the element states, the contact mask and per row the
-    first and last element in contact (``lo``, ``hi``) and their count. ConvexGS and
-    SteadyGS differ only in their sweep.
+    ``py`` [Pa] being solved for (the two rows of one array ``p`` (2, ny, nx):
+    ``p.transpose(0, 2, 1)`` is the traction (2, nx, ny) without a copy), the element
+    states, the contact mask and per row the first and last element in contact (``lo``,
+    ``hi``) and their count. ConvexGS and SteadyGS differ only in their sweep.
     """
 
     grid: Grid
@@ -399,6 +421,7 @@ class SweepProblem:
     g: np.ndarray
     wx: np.ndarray
     wy: np.ndarray
+    p: np.ndarray
     px: np.ndarray
     py: np.ndarray
     state: np.ndarray
@@ -442,11 +465,11 @@ class SweepProblem:
         wy[...] = ly[None, :]
         rolling = any(c != 0.0 for c in creepage)
         if initial_traction is None or not rolling:  # no creepage: no traction, exactly
-            px, py = np.zeros_like(g), np.zeros_like(g)
+            p = np.zeros((2, *g.shape))
         else:
-            px, py = _clipped_start(initial_traction, initial_state, g, shape)
+            p = _clipped_start(initial_traction, initial_state, g, shape)
         return cls(
-            grid=grid, operator=operator, g=g, wx=wx, wy=wy, px=px, py=py, state=state,
+            grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
             max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
 
@@ -456,17 +479,18 @@ class SweepProblem:
         squared norm of its change), stopping when the error is not finite or has not
         fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
         px, py = self.px, self.py
-        floor = 1e-9 * float(np.sqrt(np.sum(self.g * self.g)))
+        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
         hist: list[float] = []
         converged = stalled = False
         best, best_its = math.inf, 0
         its = 0
         err = 0.0
-        if self.contact.any() and self.rolling:
+        in_contact = bool(self.contact.any())
+        if in_contact and self.rolling:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
-                norm = math.sqrt(float(np.sum(px * px + py * py)))
+                norm = math.sqrt(float((px * px + py * py).sum()))
                 scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
                 err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
                 hist.append(err)
@@ -483,11 +507,13 @@ class SweepProblem:
         else:
             converged = True
         grid = self.grid
-        traction = np.stack([px.T, py.T])
+        # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it out
+        # (its sums keep their order, so their bits): one copy of ``p``
+        traction = self.p.transpose(0, 2, 1).copy(order="K")
         st = np.ascontiguousarray(self.state.T)
         force, mz, ratio, pmax = tangential_summary(grid, traction, st)
         tol = self.tolerance
-        if not self.contact.any():
+        if not in_contact:
             message = "no contact: zero normal pressure"
         elif not self.rolling:
             message = "zero creepage: zero traction, no iterations"
@@ -517,23 +543,23 @@ class SweepProblem:
 
 
 def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[int, int]
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """An initial traction (2, nx, ny) [Pa] in the sweep layout, clipped to the bound ``g``
-    (elements in slip in ``initial_state`` put on it), zero outside the contact."""
+                   ) -> np.ndarray:
+    """An initial traction (2, nx, ny) [Pa] in the sweep layout (2, ny, nx), clipped to
+    the bound ``g`` (elements in slip in ``initial_state`` put on it), zero outside the
+    contact."""
     p0 = np.asarray(initial_traction, dtype=float)
-    message = f"initial_traction must be finite, shape {(2, *shape)}"
     if p0.shape != (2, *shape):
-        raise RailContactError(message)
+        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
     slip0 = np.zeros((0, 0), dtype=bool)
     if initial_state is not None:
         st0 = np.asarray(initial_state)
         if st0.shape != shape:
             raise RailContactError(f"initial_state must have shape {shape}")
         slip0 = st0 == SLIP
-    px, py, ok = _clip_start(p0, slip0, g)
-    if not ok:
-        raise RailContactError(message)
-    return px, py
+    out = np.empty((2, *g.shape))
+    if not _clip_start(p0, slip0, g, out):
+        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
+    return out
 
 
 def solve_tangential(

@@ -129,8 +129,7 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
     step then transforms and iterates on a grid a third of the size the Hertz estimate
     would mesh (whose area, for the wheel load, is the rigid interpenetration area with a
     margin)."""
-    boxes = [_contact_box(m.pressure, m.grid) for m in (memory, memory.older)
-             if m is not None]
+    boxes = [_box_of(m) for m in (memory, memory.older) if m is not None]
     boxes = [b for b in boxes if b is not None]
     if not boxes:
         return None
@@ -142,14 +141,26 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
     return (x0 - mx, x1 + mx, y0 - my, y1 + my)
 
 
+def _box_of(memory: PatchMemory) -> tuple[float, float, float, float] | None:
+    """:func:`_contact_box` of a memory's pressure, formed once and kept with it (the
+    step after, the memory is the older one, copied with what it keeps)."""
+    box = memory.__dict__.get("_box", False)
+    if box is False:
+        box = memory.__dict__["_box"] = _contact_box(memory.pressure, memory.grid)
+    return box
+
+
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
-    rows = np.flatnonzero(pressure.any(axis=1))
-    if rows.size == 0:
+    rows = pressure.any(axis=1)
+    i0 = int(rows.argmax())  # the first and last rows and columns with pressure
+    if not rows[i0]:
         return None
-    cols = np.flatnonzero(pressure.any(axis=0))
-    return (grid.x0 + (rows[0] - 0.5) * grid.dx, grid.x0 + (rows[-1] + 0.5) * grid.dx,
-            grid.y0 + (cols[0] - 0.5) * grid.dy, grid.y0 + (cols[-1] + 0.5) * grid.dy)
+    i1 = rows.size - 1 - int(rows[::-1].argmax())
+    cols = pressure.any(axis=0)
+    j0, j1 = int(cols.argmax()), cols.size - 1 - int(cols[::-1].argmax())
+    return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 + 0.5) * grid.dx,
+            grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 + 0.5) * grid.dy)
 
 
 def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = None
@@ -168,10 +179,10 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
     """
     if memory.traction is None or memory.state is None:
         return None, None
-    t = np.stack([remesh(memory.traction[k], memory.grid, grid) for k in range(2)])
+    t = remesh(memory.traction, memory.grid, grid)  # (both components at once)
     o = memory.older
     c = memory.extrapolation(time)
     if c > 0 and o is not None and o.traction is not None:
-        t = t + c * (t - np.stack([remesh(o.traction[k], o.grid, grid) for k in range(2)]))
+        t = t + c * (t - remesh(o.traction, o.grid, grid))
     st = np.rint(remesh(memory.state.astype(float), memory.grid, grid, method="nearest"))
     return t, st.astype(np.int8)

@@ -568,7 +568,7 @@ class WheelsetContact:
                 grid=patch.normal.grid, pressure=patch.normal.pressure,
                 traction=None if t is None else t.traction,
                 state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
-                time=time, older=None if older is None else replace(older, older=None),
+                time=time, older=None if older is None else _without_older(older),
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
                 vertical_normal=patch.normal.force * math.cos(cp.contact_angle)))
@@ -617,6 +617,16 @@ def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]
         a_o, q_o = older[0].approach, sum(o.vertical_normal for o in older)
         a, q = max(a + f * (a - a_o), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
     return a, q
+
+
+def _without_older(m: PatchMemory) -> PatchMemory:
+    """``dataclasses.replace(m, older=None)`` as a copy of its fields (a per-pass path:
+    ``replace`` reads and passes every field; the fields are the memory's own, checked
+    when it was made)."""
+    out = object.__new__(type(m))
+    out.__dict__.update(m.__dict__)
+    out.__dict__["older"] = None
+    return out
 
 
 def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
@@ -699,7 +709,9 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.area = float(sum(p.normal.area for p in patches))
     wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
     ts = [p.tangential for p in patches if p.tangential is not None]
-    if ts:
+    if len(ts) == 1:  # one patch: its own ratio, the same count (slip over non-exterior)
+        wheel.slip_area_ratio = ts[0].slip_area_ratio
+    elif ts:
         n_el = [int(np.count_nonzero(t.state)) for t in ts]
         n_slip = [int(np.count_nonzero(t.state == 2)) for t in ts]
         wheel.slip_area_ratio = sum(n_slip) / max(sum(n_el), 1)
