@@ -191,14 +191,18 @@ def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, 
     for i in range(ns):
         e = wheel[1, i]
         S[i] = ((e if math.isfinite(e) else eta_c) - half_bb) + flange_back
-    slope = np.empty(ns)
-    height = np.empty(ns)
-    _evaluate(wx, wc, S, 1, slope)
-    _evaluate(wx, wc, S, 0, height)
+    j = 0  # the wheel spline's height and slope at S: one interval search for both
     for i in range(ns):
+        si = S[i]
+        if math.isnan(si):
+            slope = height = math.nan
+        else:
+            j = _interval_near(wx, si, j)
+            slope = _piece(wc, j, si - wx[j], 1)
+            height = _piece(wc, j, si - wx[j], 0)
         out[F, i] = wheel[0, i] - out[2, i]  # the rail's distance, before row 2 is S
-        out[A_OF_S, i] = 1.0 / (math.sqrt(1.0 + slope[i] * slope[i]) * (2 * (radius + height[i])))
-        out[WHEEL_S, i] = S[i] if math.isfinite(wheel[1, i]) else math.nan
+        out[A_OF_S, i] = 1.0 / (math.sqrt(1.0 + slope * slope) * (2 * (radius + height)))
+        out[WHEEL_S, i] = si if math.isfinite(wheel[1, i]) else math.nan
 
 
 @numba.njit(cache=True)
