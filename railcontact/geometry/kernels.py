@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .spline import _evaluate, _interval, _interval_near, _piece
+from .spline import _interval, _interval_near, _piece
 
 F, A_OF_S, WHEEL_S, RAIL_U, RAIL_Z = range(5)
 """Rows of a frame array."""
@@ -383,14 +383,19 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, wx, wc, rad
     u_lo = u[lo]
     u_hi = u[lo]
     increasing = True
-    slope = np.empty(hi - lo)
-    _evaluate(rx, rc, u[lo:hi], 1, slope)
+    j = 0  # the rail's piece at u[i]
     for i in range(lo, hi):
         e = approach - (g[i] - g_min)
         w = e * e * math.sqrt(e) if power == 2.5 else e**power
         total += w
         su += w * u[i]
-        sgam += w * math.atan(slope[i - lo])
+        ui = u[i]
+        if math.isnan(ui):
+            slope = math.nan
+        else:
+            j = _interval_near(rx, ui, j)
+            slope = _piece(rc, j, ui - rx[j], 1)
+        sgam += w * math.atan(slope)
         u_lo = min(u_lo, u[i])
         u_hi = max(u_hi, u[i])
         if i > lo and not u[i] > u[i - 1]:
