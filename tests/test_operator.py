@@ -166,12 +166,12 @@ def test_a_bad_wisdom_file_is_a_clear_error(tmp_path):
 
 
 @pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
-@pytest.mark.parametrize("comps", ["z", "xy"])
+@pytest.mark.parametrize("comps", ["z", "xy", "xyz"])
 def test_pruned_products_of_grids_sharing_a_plan_stay_exact(comps):
     """Grids with the same row count and padded shape share one pruned plan (19 x 20 and
     19 x 19 both pad to 40 x 40): the narrower grid's product after the wider one (and
     back) still equals the dense product - the column the wider grid wrote is cleared;
-    for the one-component (normal) and two-component (tangential) products."""
+    for the one-component (normal), two-component (tangential) and three-component products."""
     from railcontact.halfspace.operator import padded_shape
 
     rng = np.random.default_rng(11)
