@@ -287,8 +287,8 @@ def load_wisdom(path: str | os.PathLike) -> None:
 
 
 def _fftw_plan(nc: int, shape: tuple[int, int], rows: int = 0) -> _FFTWPlan | _PrunedPlan:
-    """The cached plan of ``nc`` components on the padded ``shape``; with ``rows`` (one
-    component), the pruned plan of grids with that many rows."""
+    """The cached plan of ``nc`` components on the padded ``shape``; with ``rows``, the
+    pruned plan of grids with that many rows (what every product uses)."""
     cache = getattr(_local, "plans", None)
     if cache is None:
         cache = _local.plans = OrderedDict()
