@@ -166,19 +166,21 @@ def test_a_bad_wisdom_file_is_a_clear_error(tmp_path):
 
 
 @pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
-def test_pruned_products_of_grids_sharing_a_plan_stay_exact():
+@pytest.mark.parametrize("comps", ["z", "xy", "xyz"])
+def test_pruned_products_of_grids_sharing_a_plan_stay_exact(comps):
     """Grids with the same row count and padded shape share one pruned plan (19 x 20 and
     19 x 19 both pad to 40 x 40): the narrower grid's product after the wider one (and
-    back) still equals the dense product - the column the wider grid wrote is cleared."""
+    back) still equals the dense product - the column the wider grid wrote is cleared;
+    for the one-component (normal), two-component (tangential) and three-component products."""
     from railcontact.halfspace.operator import padded_shape
 
     rng = np.random.default_rng(11)
     products = []
     for ny in (20, 19, 20):
         g = Grid.from_bounds(-2e-3, 2e-3, -3e-3, 3e-3, 19, ny)
-        p = rng.uniform(0, 1e9, (19, ny))
-        fast = InfluenceOperator(g, STEEL, "z", "pyfftw").apply(p)
-        ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
+        p = rng.uniform(-1e9, 1e9, (len(comps), 19, ny))
+        fast = InfluenceOperator(g, STEEL, comps, "pyfftw").apply(p)
+        ref = InfluenceOperator(g, STEEL, comps, "dense").apply(p)
         products.append(np.max(np.abs(fast - ref)) / np.max(np.abs(ref)))
     assert padded_shape(19, 20) == padded_shape(19, 19)
     assert max(products) <= 1e-12

@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .spline import _evaluate, _interval, _interval_near, _piece
+from .spline import _interval, _interval_near, _piece
 
 F, A_OF_S, WHEEL_S, RAIL_U, RAIL_Z = range(5)
 """Rows of a frame array."""
@@ -191,14 +191,18 @@ def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, 
     for i in range(ns):
         e = wheel[1, i]
         S[i] = ((e if math.isfinite(e) else eta_c) - half_bb) + flange_back
-    slope = np.empty(ns)
-    height = np.empty(ns)
-    _evaluate(wx, wc, S, 1, slope)
-    _evaluate(wx, wc, S, 0, height)
+    j = 0  # the wheel spline's height and slope at S: one interval search for both
     for i in range(ns):
+        si = S[i]
+        if math.isnan(si):
+            slope = height = math.nan
+        else:
+            j = _interval_near(wx, si, j)
+            slope = _piece(wc, j, si - wx[j], 1)
+            height = _piece(wc, j, si - wx[j], 0)
         out[F, i] = wheel[0, i] - out[2, i]  # the rail's distance, before row 2 is S
-        out[A_OF_S, i] = 1.0 / (math.sqrt(1.0 + slope[i] * slope[i]) * (2 * (radius + height[i])))
-        out[WHEEL_S, i] = S[i] if math.isfinite(wheel[1, i]) else math.nan
+        out[A_OF_S, i] = 1.0 / (math.sqrt(1.0 + slope * slope) * (2 * (radius + height)))
+        out[WHEEL_S, i] = si if math.isfinite(wheel[1, i]) else math.nan
 
 
 @numba.njit(cache=True)
@@ -379,14 +383,19 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, wx, wc, rad
     u_lo = u[lo]
     u_hi = u[lo]
     increasing = True
-    slope = np.empty(hi - lo)
-    _evaluate(rx, rc, u[lo:hi], 1, slope)
+    j = 0  # the rail's piece at u[i]
     for i in range(lo, hi):
         e = approach - (g[i] - g_min)
         w = e * e * math.sqrt(e) if power == 2.5 else e**power
         total += w
         su += w * u[i]
-        sgam += w * math.atan(slope[i - lo])
+        ui = u[i]
+        if math.isnan(ui):
+            slope = math.nan
+        else:
+            j = _interval_near(rx, ui, j)
+            slope = _piece(rc, j, ui - rx[j], 1)
+        sgam += w * math.atan(slope)
         u_lo = min(u_lo, u[i])
         u_hi = max(u_hi, u[i])
         if i > lo and not u[i] > u[i - 1]:

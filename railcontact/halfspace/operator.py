@@ -7,10 +7,11 @@ out in wrap-around order on a ``2nx * 2ny`` array and the traction is zero-padde
 same size, so the circular convolution of the padded arrays equals the linear one on the
 grid. The kernel spectra are computed once per operator; FFT plans are cached per padded
 shape (and per thread, so concurrent solvers never share buffers), at most
-:data:`MAX_PLANS` of them (least recently used dropped first). One-component products
-(the normal problem) use pruned transforms (:class:`_PrunedPlan`, per padded shape and row
-count): the zero rows of the padded input and the unused rows of the output are not
-transformed along y, about 20 % less time per product.
+:data:`MAX_PLANS` of them (least recently used dropped first). The products use pruned
+transforms (:class:`_PrunedPlan`, per component count, padded shape and row count): the
+zero rows of the padded input and the unused rows of the output are not transformed along
+y (about 20 % less time per product); a two-component product's spectral 2x2
+multiply-add is one compiled pass (40 x 32 elements: 68 -> 35 us a tangential product).
 
 The padded shape is ``2nx x 2ny`` rounded up, per axis, to the next 5-smooth number
 (2^a 3^b 5^c, :func:`fft_size`): a fixed set of sizes, so that the changing patches of a
@@ -59,6 +60,11 @@ try:  # pragma: no cover - exercised through the backend tests
 except ImportError:  # pragma: no cover
     pyfftw = None
     HAVE_PYFFTW = False
+
+try:
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
 
 BACKENDS = ("auto", "pyfftw", "scipy", "dense")
 DENSE_MAX = 144
@@ -125,26 +131,33 @@ class _FFTWPlan:
 
 
 class _PrunedPlan:
-    """The one-component DC-FFT product with pruned transforms: of the padded input only
-    the ``nx`` rows that hold the traction are transformed along y (the rest are zero),
-    and of the product only those ``nx`` rows are transformed back along y; the
+    """The DC-FFT product of ``nc`` components with pruned transforms: of the padded input
+    only the ``nx`` rows that hold the traction are transformed along y (the rest are
+    zero), and of the product only those ``nx`` rows are transformed back along y; the
     transforms along x run over all rows. About 3/4 of the work of the full 2-D
-    transforms, the same result to round-off."""
+    transforms, the same result to round-off. One component has 2-D buffers (the plans
+    of the normal problem, as measured in a wisdom file), several a leading component
+    axis; their spectral 2x2 (nc x nc) multiply-add is one compiled pass."""
 
-    def __init__(self, nx: int, shape: tuple[int, int], measure: bool = False):
+    def __init__(self, nx: int, shape: tuple[int, int], measure: bool = False,
+                 nc: int = 1):
         m, n = shape
         k = n // 2 + 1
-        self.rows_in = pyfftw.zeros_aligned((nx, n), dtype="float64")
-        self.half = pyfftw.zeros_aligned((m, k), dtype="complex128")  # rows nx.. stay 0
-        self.spec = pyfftw.empty_aligned((m, k), dtype="complex128")
-        self.prod = pyfftw.empty_aligned((m, k), dtype="complex128")
-        self.rows_out = pyfftw.empty_aligned((nx, n), dtype="float64")
+        lead = () if nc == 1 else (nc,)
+        ax = len(lead)  # the x axis of the buffers
+        self.rows_in = pyfftw.zeros_aligned(lead + (nx, n), dtype="float64")
+        self.half = pyfftw.zeros_aligned(lead + (m, k), dtype="complex128")  # rows nx.. 0
+        self.spec = pyfftw.empty_aligned(lead + (m, k), dtype="complex128")
+        self.prod = pyfftw.empty_aligned(lead + (m, k), dtype="complex128")
+        self.rows_out = pyfftw.empty_aligned(lead + (nx, n), dtype="float64")
         self.steps = (
-            _plan(self.rows_in, self.half[:nx], "FFTW_FORWARD", (1,), measure),
-            _plan(self.half, self.spec, "FFTW_FORWARD", (0,), measure))
-        self.back = (
-            _plan(self.prod, self.prod, "FFTW_BACKWARD", (0,), measure),
-            _plan(self.prod[:nx], self.rows_out, "FFTW_BACKWARD", (1,), measure))
+            _plan(self.rows_in, self.half[..., :nx, :], "FFTW_FORWARD", (ax + 1,), measure),
+            _plan(self.half, self.spec, "FFTW_FORWARD", (ax,), measure))
+        self.back = (  # out of place, into ``spec`` (free after the multiply): in place,
+            # FFTW's estimated plan along x took 2.5x as long at 80 and 96 rows
+            _plan(self.prod, self.spec, "FFTW_BACKWARD", (ax,), measure),
+            _plan(self.spec[..., :nx, :], self.rows_out, "FFTW_BACKWARD", (ax + 1,),
+                  measure))
         self.rows_in[...] = 0.0  # (measuring overwrites the buffers)
         self.half[...] = 0.0
         self.ny = 0
@@ -152,21 +165,60 @@ class _PrunedPlan:
 
     def convolve(self, spectrum: np.ndarray, p: np.ndarray, out: np.ndarray | None
                  ) -> np.ndarray:
-        """``p`` (nx, ny) convolved with the kernel of the (scaled) ``spectrum``."""
-        ny = p.shape[1]
+        """``p`` (nx, ny), or (nc, nx, ny), convolved with the kernels of the (scaled)
+        ``spectrum`` (m, n//2+1), or (nc, nc, m, n//2+1)."""
+        ny = p.shape[-1]
         if ny != self.ny:
             self.rows_in[...] = 0.0
             self.ny = ny
-        self.rows_in[:, :ny] = p
+        self.rows_in[..., :ny] = p
         for step in self.steps:
             step.execute()
-        np.multiply(spectrum, self.spec, out=self.prod)
+        if self.spec.ndim == 2:
+            np.multiply(spectrum, self.spec, out=self.prod)
+        else:
+            _spectral_product(spectrum, self.spec, self.prod)
         for step in self.back:
             step.execute()
         if out is None:
-            return self.rows_out[:, :ny].copy()
-        out[...] = self.rows_out[:, :ny]
+            return self.rows_out[..., :ny].copy()
+        out[...] = self.rows_out[..., :ny]
         return out
+
+
+def _spectral_product_2(s00: np.ndarray, s01: np.ndarray, s10: np.ndarray, s11: np.ndarray,
+                        q0: np.ndarray, q1: np.ndarray, u0: np.ndarray, u1: np.ndarray
+                        ) -> None:
+    """``u0 = s00 q0 + s01 q1``, ``u1 = s10 q0 + s11 q1`` (complex, flat arrays): the 2x2
+    spectral multiply-add of a two-component product in one pass."""
+    for i in range(q0.size):
+        a = q0[i]
+        b = q1[i]
+        u0[i] = s00[i] * a + s01[i] * b
+        u1[i] = s10[i] * a + s11[i] * b
+
+
+if numba is not None:
+    _spectral_product_2c = numba.njit(cache=True)(_spectral_product_2)
+else:  # pragma: no cover
+    _spectral_product_2c = None
+
+
+def _spectral_product(spectra: np.ndarray, spec: np.ndarray, prod: np.ndarray) -> None:
+    """``prod[a] = sum_b spectra[a, b] spec[b]`` for ``spectra`` (nc, nc, m, k) and
+    ``spec``, ``prod`` (nc, m, k), complex and C-contiguous (two components: one compiled
+    pass; else a numpy multiply-add per pair)."""
+    nc = spec.shape[0]
+    if nc == 2 and _spectral_product_2c is not None:
+        f = spectra.reshape(4, -1)
+        q = spec.reshape(2, -1)
+        u = prod.reshape(2, -1)
+        _spectral_product_2c(f[0], f[1], f[2], f[3], q[0], q[1], u[0], u[1])
+        return
+    for a in range(nc):
+        np.multiply(spectra[a, 0], spec[0], out=prod[a])
+        for b in range(1, nc):
+            prod[a] += spectra[a, b] * spec[b]
 
 
 def _plan(a: np.ndarray, b: np.ndarray, direction: str, axes: tuple[int, ...] = (1, 2),
@@ -185,12 +237,14 @@ def _plan(a: np.ndarray, b: np.ndarray, direction: str, axes: tuple[int, ...] = 
 def save_wisdom(path: str | os.PathLike, max_elements: int = 100, components: Sequence[int]
                 = (1, 2)) -> int:
     """Measure the FFTW plans of every padded shape of grids up to ``max_elements`` per
-    axis (the 5-smooth sizes, for 1- and 2-component operators, and the pruned
-    one-component plans of every row count) and write FFTW's wisdom to ``path``; returns
-    the number of plans. Here 64 per axis (1,922 shapes) took about 9 minutes before the
-    pruned plans were added (they add about a third: 16 s against 12 s at 12 per axis);
-    the default, 100, has 3,042 shapes, larger ones, and takes longer. The plans
-    cached in this thread are dropped (the others are planned from the new wisdom)."""
+    axis (the 5-smooth sizes: the pruned plans of every row count, for 1- and 2-component
+    operators) and write FFTW's wisdom to ``path``; returns the number of plans. Here 64
+    per axis (1,922 shapes) took about 9 minutes with the full 2-D plans of both
+    component counts and the pruned one-component ones (those added about a third: 16 s
+    against 12 s at 12 per axis; since round 4 every product is pruned and only the
+    pruned plans are measured); the default, 100, has 3,042 shapes, larger ones, and
+    takes longer. The plans cached in this thread are dropped (the others are planned
+    from the new wisdom)."""
     if not HAVE_PYFFTW:
         raise RailContactError("FFTW wisdom needs pyfftw")
     if not isinstance(max_elements, int) or max_elements < 2:
@@ -200,17 +254,11 @@ def save_wisdom(path: str | os.PathLike, max_elements: int = 100, components: Se
     for nc in components:
         for m in sizes:
             for n in sizes:
-                a = pyfftw.empty_aligned((nc, m, n), dtype="float64")
-                b = pyfftw.empty_aligned((nc, m, n // 2 + 1), dtype="complex128")
-                for x, y, d in ((a, b, "FFTW_FORWARD"), (b, a, "FFTW_BACKWARD")):
-                    pyfftw.FFTW(x, y, axes=(1, 2), direction=d, flags=("FFTW_MEASURE",),
-                                threads=1)
-                count += 1
-                if nc == 1:  # the pruned plans of every grid with this padded shape
-                    for nx in range(2, max_elements + 1):
-                        if fft_size(2 * nx) == m:
-                            _PrunedPlan(nx, (m, n), measure=True)
-                            count += 1
+                # the products' pruned plans, of every grid with this padded shape
+                for nx in range(2, max_elements + 1):
+                    if fft_size(2 * nx) == m:
+                        _PrunedPlan(nx, (m, n), measure=True, nc=nc)
+                        count += 1
     with open(path, "wb") as f:
         f.write(repr(pyfftw.export_wisdom()).encode())
     getattr(_local, "plans", OrderedDict()).clear()
@@ -239,15 +287,16 @@ def load_wisdom(path: str | os.PathLike) -> None:
 
 
 def _fftw_plan(nc: int, shape: tuple[int, int], rows: int = 0) -> _FFTWPlan | _PrunedPlan:
-    """The cached plan of ``nc`` components on the padded ``shape``; with ``rows`` (one
-    component), the pruned plan of grids with that many rows."""
+    """The cached plan of ``nc`` components on the padded ``shape``; with ``rows``, the
+    pruned plan of grids with that many rows (what every product uses)."""
     cache = getattr(_local, "plans", None)
     if cache is None:
         cache = _local.plans = OrderedDict()
     key = (nc, shape, rows)
     plan = cache.get(key)
     if plan is None:
-        plan = cache[key] = _PrunedPlan(rows, shape) if rows else _FFTWPlan(nc, shape)
+        plan = cache[key] = (_PrunedPlan(rows, shape, nc=nc) if rows
+                             else _FFTWPlan(nc, shape))
         while len(cache) > MAX_PLANS:
             cache.popitem(last=False)
     else:
@@ -351,7 +400,7 @@ class InfluenceOperator:
         else:
             self._spectra = _scaled_spectra(self.kernels, self._padded)
             if self.backend == "pyfftw":  # plan now, not inside the first solve
-                _fftw_plan(nc, self._padded, self.nx if nc == 1 else 0)
+                _fftw_plan(nc, self._padded, self.nx)
 
     @property
     def self_coefficient(self) -> np.ndarray:
@@ -437,25 +486,10 @@ class InfluenceOperator:
 
     def _convolve_fftw(self, spectra: np.ndarray, p: np.ndarray,
                        out: np.ndarray | None = None) -> np.ndarray:
-        nc = p.shape[0]
-        if nc == 1:
-            pruned = _fftw_plan(1, self._padded, self.nx)
+        pruned = _fftw_plan(p.shape[0], self._padded, self.nx)
+        if p.shape[0] == 1:
             return pruned.convolve(spectra[0, 0], p[0], None if out is None else out[0])[None]
-        plan = _fftw_plan(nc, self._padded)
-        nx, ny = self.nx, self.ny
-        plan.load(p)
-        plan.forward.execute()
-        spec, prod, tmp = plan.spec_out, plan.spec_in, plan.spec_tmp
-        for a in range(nc):
-            np.multiply(spectra[a, 0], spec[0], out=prod[a])
-            for b in range(1, nc):
-                np.multiply(spectra[a, b], spec[b], out=tmp)
-                prod[a] += tmp
-        plan.backward.execute()
-        if out is None:
-            return plan.real_out[:, :nx, :ny].copy()
-        out[...] = plan.real_out[:, :nx, :ny]
-        return out
+        return pruned.convolve(spectra, p, out)
 
     def dense(self) -> np.ndarray:
         """The full influence matrix (nc*nx*ny, nc*nx*ny) [m/Pa] (for tests and tiny grids)."""

@@ -222,12 +222,17 @@ def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi
 
 
 if HAVE_NUMBA:
-    _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
-    _shift_run_c = numba.njit(cache=True, inline="always")(_shift_run)
-    _run_start_c = numba.njit(cache=True, inline="always")(_run_start)
-    _row_dot_c = numba.njit(cache=True, inline="always")(_row_dot)
-    _visit_c = numba.njit(cache=True, inline="always")(_visit)
-    _steady_block_numba = numba.njit(cache=True, fastmath=True)(_steady_block)
+    # numpy's error model: a division by zero gives inf/NaN (which the sweep's measure
+    # catches) instead of raising, so the compiled code carries no zero-divisor checks
+    # (the same bits, 3-5 % less time per block)
+    _jit = numba.njit(cache=True, inline="always", error_model="numpy")
+    _element_solve_c = _jit(_element_solve)
+    _shift_run_c = _jit(_shift_run)
+    _run_start_c = _jit(_run_start)
+    _row_dot_c = _jit(_row_dot)
+    _visit_c = _jit(_visit)
+    _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
+        _steady_block)
 else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
