@@ -14,8 +14,14 @@ iteration ratio to the cold start at the same step, and the largest force differ
 the reference: maximum pressure |dp| / p (the normal forces are the wheel loads, given),
 creep force |dF| / (mu N) and |dF| relative to the peak creep force of the run.
 
+With ``--per-step`` each run also writes its steps (``warmstart_steps_<mode>_<step>ms.csv``
+in ``--out``: time, wheelset lateral displacement, each wheel's rail contact position and
+iterations) and prints the iterations per step by band of lateral displacement: which
+steps cost the iterations.
+
 Usage: python scripts/warmstart_study.py [--duration 0.6] [--steps 0.5e-3 1e-3 2e-3 5e-3]
        [--out docs] [--element-size 0.5e-3] [--from-csv docs/warmstart_study.csv]
+       [--per-step]
 """
 
 from __future__ import annotations
@@ -31,6 +37,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 MODES = ("none", "estimate", "previous", "previous+estimate")
+BANDS = (0.0, 1e-3, 2e-3, np.inf)
+"""Bands of |lateral displacement| [m] for the per-step summary."""
 REFERENCE = {"warm_start": "none", "normal_tolerance": 1e-6, "tangential_tolerance": 1e-5}
 SIDES = ("left", "right")
 
@@ -55,8 +63,52 @@ def force_errors(sim, friction: float) -> dict[str, float]:
             "reference_status": int(np.max(ref["status"]))}
 
 
+def steps_of(sim) -> list[dict]:
+    """Each step of a run (the first, always cold, left out): time [s], lateral
+    displacement [m], each wheel's rail contact position [m] and iterations."""
+    o = sim.outputs
+    out = []
+    for k in range(1, len(sim.time)):
+        row = {"time": float(sim.time[k]), "lateral": float(sim.lateral[k])}
+        for s in SIDES:
+            row[f"rail_position_{s}"] = float(o[f"rail_contact_position_{s}"][k])
+            row[f"normal_{s}"] = int(o[f"normal_iterations_{s}"][k])
+            row[f"tangential_{s}"] = int(o[f"tangential_iterations_{s}"][k])
+        out.append(row)
+    return out
+
+
+def band_summary(steps: list[dict]) -> str:
+    """Iterations per step (both wheels) by band of |lateral displacement|, and each
+    wheel's rail contact position move per step against the wheelset's."""
+    y = np.array([r["lateral"] for r in steps])
+    lines = []
+    for lo, hi in zip(BANDS[:-1], BANDS[1:], strict=True):
+        s = (np.abs(y) >= lo) & (np.abs(y) < hi)
+        if not s.any():
+            continue
+        part = [r for r, k in zip(steps, s, strict=True) if k]
+        cols = []
+        for side in SIDES:
+            n = np.mean([r[f"normal_{side}"] for r in part])
+            t = np.mean([r[f"tangential_{side}"] for r in part])
+            cols.append(f"{side} {n:.2f} + {t:.2f}")
+        hi_mm = "" if not np.isfinite(hi) else f"{hi * 1e3:g}"
+        lines.append(f"  |y| {lo * 1e3:g}-{hi_mm} mm: {int(s.sum()):4d} steps, CG + sweeps "
+                     + ", ".join(cols))
+    dy = np.abs(np.diff(y))
+    for side in SIDES:
+        du = np.abs(np.diff([r[f"rail_position_{side}"] for r in steps]))
+        near = (np.abs(y[1:]) < BANDS[1]) & (dy > 0)
+        if near.any():
+            ratio = float(np.median(du[near] / dy[near]))
+            lines.append(f"  {side} contact point on the rail moves {ratio:.1f}x the "
+                         f"wheelset's lateral move (median, |y| < {BANDS[1] * 1e3:g} mm)")
+    return "\n".join(lines)
+
+
 def run_case(fmu: Path, mode: str, step: float, duration: float, element_size: float,
-             samples: int) -> dict:
+             samples: int, steps: list | None = None) -> dict:
     from railcontact.sim.cosim import Run, simulate
 
     n = int(round(duration / step))
@@ -70,6 +122,8 @@ def run_case(fmu: Path, mode: str, step: float, duration: float, element_size: f
     wall = time.perf_counter() - t0
     if not sim.completed:
         raise SystemExit(f"{mode} at {step * 1e3:g} ms: {sim.message}")
+    if steps is not None:
+        steps.extend(steps_of(sim))
     o = sim.outputs
     ni, nt = o["normal_iterations"][1:], o["tangential_iterations"][1:]
     row = {"warm_start": mode, "step_ms": step * 1e3, "steps": n,
@@ -140,6 +194,8 @@ def main() -> None:
                     help="reference solves per run (default 25)")
     ap.add_argument("--out", default=str(ROOT / "docs"),
                     help="folder for warmstart_study.csv/.png/.md")
+    ap.add_argument("--per-step", action="store_true",
+                    help="also write each run's steps and print iterations by lateral band")
     ap.add_argument("--from-csv", metavar="FILE",
                     help="no runs: table and plot from an earlier CSV")
     args = ap.parse_args()
@@ -147,6 +203,9 @@ def main() -> None:
     from railcontact.fmu import build_fmu
 
     rows = []
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    summaries = []
     if args.from_csv:
         with open(args.from_csv, newline="") as f:
             for r in csv.DictReader(f):
@@ -161,10 +220,17 @@ def main() -> None:
         for step in args.steps:
             for mode in args.modes:
                 print(f"  {mode} at {step * 1e3:g} ms ...", file=sys.stderr, flush=True)
+                steps = [] if args.per_step else None
                 rows.append(run_case(fmu, mode, step, args.duration, args.element_size,
-                                     args.samples))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+                                     args.samples, steps))
+                if steps:
+                    path = out / f"warmstart_steps_{mode.replace('+', '_')}_{step * 1e3:g}ms.csv"
+                    with path.open("w", newline="") as f:
+                        w = csv.DictWriter(f, fieldnames=list(steps[0]))
+                        w.writeheader()
+                        w.writerows(steps)
+                    summaries.append(f"{mode} at {step * 1e3:g} ms (steps in {path.name}):\n"
+                                     + band_summary(steps))
     with (out / "warmstart_study.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
@@ -176,6 +242,8 @@ def main() -> None:
           f"{args.element_size * 1e3:g} mm; reference eps_n = {REFERENCE['normal_tolerance']:g}, "
           f"eps_tau = {REFERENCE['tangential_tolerance']:g}")
     print(md)
+    for text in summaries:
+        print(text)
     bad = [r for r in rows if r["not_converged_steps"] or r["reference_status"]]
     for r in bad:
         print(f"note: {r['warm_start']} at {r['step_ms']:g} ms: {r['not_converged_steps']} "
