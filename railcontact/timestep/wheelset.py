@@ -60,11 +60,12 @@ from ..contact.loadloop import (
     creep_load_secant,
     load_met,
     load_unique,
+    vertical_creep_estimate,
     vertical_force,
 )
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
-from ..contact.wheelrail import solve_wheel_normal, vertical_approach
+from ..contact.wheelrail import contact_points, solve_wheel_normal, vertical_approach
 from ..errors import (
     CaseError,
     ConvergenceError,
@@ -72,9 +73,9 @@ from ..errors import (
     check_finite,
     check_positive,
 )
-from ..geometry.search import ContactPoint, vertical_gap
+from ..geometry.search import ContactPoint, at_reference, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
-from ..halfspace.hertz import HertzSolution
+from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
@@ -477,7 +478,19 @@ class WheelsetContact:
                                      source))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
-        start = min(max(q - sum(m.vertical_creep for m in previous), 0.05 * q), MAX_SHARE * q)
+        if previous:  # the previous step's creep share
+            share = sum(m.vertical_creep for m in previous)
+        else:  # cold: FaStrip's on the Hertz ellipse, where the normal solve forms its frame
+            cp = contact_points(self.track, self.wheelset, pose, side, 0.0)[0]
+            if self.settings.patch_frame == "reference" and cp.A > 0 and cp.B > 0:
+                cosg = math.cos(cp.contact_angle)
+                approach = hertz(cp.A, cp.B, self.pair, load=q / cosg).penetration / cosg
+                cp = at_reference(cp, self.track, self.wheelset, pose, approach) or cp
+            c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
+            sgn = SIDES[side]
+            share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
+                                            self.settings.friction)
+        start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
         (patches, creepages, memory), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
         if not patches:
