@@ -74,6 +74,8 @@ def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float
     if not (load > 0 and math.isfinite(cp.B) and cp.B > 0 and cp.A > 0):
         return 0.0
     hz = hertz(cp.A, cp.B, pair, load=load / math.cos(g))
+    if not (hz.a > 0 and hz.b > 0 and math.isfinite(hz.a * hz.b)):
+        return 0.0  # (a load too small or large for floats: no estimate, the BEM decides)
     c = creep_coefficients(hz.a, hz.b, pair.poisson)
     ab = hz.a * hz.b
     xi, eta, phi = creepage

@@ -35,7 +35,9 @@ With creepages the creep forces carry part of it (most of it on a flange near Na
 limit), so a secant iteration on the normal forces' share solves the wheel (normal, then
 tangential BEM) until the total is met to :attr:`ContactSettings.load_tolerance` (or to
 ``eps_tau`` of the creep forces' vertical share, the accuracy they have); the first
-guess is Q less the previous step's creep share (with a warm start from it), later passes
+guess is Q less the previous step's creep share (with a warm start from it; cold, less
+Kalker's saturated linear estimate of it,
+:func:`~railcontact.contact.loadloop.vertical_creep_estimate`), later passes
 start from the one before (in every warm-start mode: it is the same step), and
 :attr:`WheelContact.load_passes` counts them. ``load_includes_creep=False`` lets the normal
 forces alone carry Q (one pass).
@@ -480,9 +482,10 @@ class WheelsetContact:
 
         if previous:  # the previous step's creep share
             share = sum(m.vertical_creep for m in previous)
-        else:  # cold: FaStrip's on the Hertz ellipse, where the normal solve forms its frame
+        else:  # cold: estimated on the Hertz ellipse where the normal solve forms its frame
             cp = contact_points(self.track, self.wheelset, pose, side, 0.0)[0]
-            if self.settings.patch_frame == "reference" and cp.A > 0 and cp.B > 0:
+            if (self.settings.patch_frame == "reference" and math.isfinite(cp.B)
+                    and cp.B > 0 and cp.A > 0):
                 cosg = math.cos(cp.contact_angle)
                 approach = hertz(cp.A, cp.B, self.pair, load=q / cosg).penetration / cosg
                 cp = at_reference(cp, self.track, self.wheelset, pose, approach) or cp
