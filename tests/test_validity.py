@@ -224,8 +224,9 @@ def test_moments_integrate_the_pressure_and_traction_fields(frame):
     normal n and traction along x and s, each element at x e_x + s e_s from its contact
     point in the contact plane (e_s = (0, sgn cos(g), sin(g)), n = (0, -sgn sin(g),
     cos(g)) in the track frame; sgn +1 left, -1 right). 5 mm lateral, yawed, with
-    creepages: at the rigid point the pressure's centroid shifts M_X by about 2 %, which
-    the contact points alone miss."""
+    creepages: at the rigid point the pressure's centroid shifts M_X by 1.0 %, which the
+    contact points alone miss (0.9997-1.0004 % as the load loop meets the wheel loads to
+    its tolerance, 1e-3, from one start or another)."""
     wc = contact(patch_frame=frame)
     r = wc.solve(Pose(5e-3, 2e-3), loads=(Q, 0.9 * Q),
                  creepages=((1e-3, 2e-3, 0.1), (-1e-3, 2e-3, -0.1)))
@@ -250,7 +251,7 @@ def test_moments_integrate_the_pressure_and_traction_fields(frame):
             at_points += np.cross(np.asarray(cp.position) - centre, force.sum(axis=(0, 1)))
     assert np.allclose(r.moment, total, rtol=1e-9, atol=1e-9 * Q)
     if frame == "rigid":
-        assert abs(total[0] - at_points[0]) > 0.01 * abs(total[0])  # the centroid matters
+        assert abs(total[0] - at_points[0]) > 0.009 * abs(total[0])  # the centroid matters
 
 
 @pytest.mark.parametrize(("lateral", "loads"), [

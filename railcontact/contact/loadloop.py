@@ -12,8 +12,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
+from dataclasses import replace
 from typing import TypeVar
 
+from ..geometry.search import ContactPoint
+from ..halfspace.hertz import hertz
+from ..halfspace.materials import ElasticPair
+from ..settings import PatchSettings
+from ..tangential.kalker import creep_coefficients
 from .results import PatchSolution
 
 T = TypeVar("T")
@@ -31,6 +37,57 @@ MAX_SHARE = 100.0
 """Largest normal share of a vertical load the creep-load iteration tries: a flange near
 Nadal's limit (``cos(gamma) - mu sin(gamma)`` -> 0) needs N >> Q; beyond it the load
 cannot be carried (the wheel climbs)."""
+PROBE_FACTOR = 10.0
+"""A probe pass (a cold wheel's first normal solve, in a frame formed at Hertz's approach:
+only the approach it gives is used, to form the frame again) is solved to this multiple of
+the normal tolerance (at most :data:`PROBE_TOLERANCE`): 3.4 fewer CG iterations a cold step
+on ``scripts/bench_step.py``, the same passes; 30 makes more passes."""
+PROBE_TOLERANCE = 1e-2
+"""The loosest normal tolerance of a probe pass."""
+
+
+def probe_settings(settings: PatchSettings) -> PatchSettings:
+    """``settings`` with the normal tolerance of a probe pass (:data:`PROBE_FACTOR`)."""
+    tol = settings.normal.tolerance
+    probe = max(min(PROBE_FACTOR * tol, PROBE_TOLERANCE), tol)
+    return replace(settings, normal=replace(settings.normal, tolerance=probe))
+
+
+def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float, float, float],
+                            pair: ElasticPair, friction: float) -> float:
+    """An estimate of a patch's creep force share of a vertical wheel load [N],
+    ``F_s sin(gamma)``: Kalker's linear theory on the Hertz ellipse of the contact point
+    ``cp`` (its curvatures and contact angle) carrying the vertical ``load`` [N] by its normal
+    force, with the patch's ``creepage`` (xi, eta, phi) [-, -, 1/m], saturated at
+    ``friction`` mu as Shen, Hedrick & Elkins (1983) do (the force's magnitude ``F`` becomes
+    ``mu N (u - u^2/3 + u^3/27)``, ``u = F / (mu N)``, and ``mu N`` beyond ``u = 3``); 0 where
+    ``cp`` has no convex contact.
+
+    The first normal share of a cold load loop (:func:`creep_load_secant`'s ``start``).
+    With ``cp`` in the frame at the reference point that the normal solve forms first, on
+    the hunting run of ``scripts/bench_step.py`` (83.3 kN, shares up to 380 N) it is within
+    18 N of the BEM's at the median (114 N at most), so that the first pass mostly meets a
+    load tolerance of 1e-3. FaStrip on the same ellipse is closer (60 N at most) but costs
+    0.5-1 ms a call, about what the second pass it saves costs.
+    """
+    g = cp.contact_angle
+    if not (load > 0 and math.isfinite(cp.B) and cp.B > 0 and cp.A > 0):
+        return 0.0
+    hz = hertz(cp.A, cp.B, pair, load=load / math.cos(g))
+    if not (hz.a > 0 and hz.b > 0 and math.isfinite(hz.a * hz.b)):
+        return 0.0  # (a load too small or large for floats: no estimate, the BEM decides)
+    c = creep_coefficients(hz.a, hz.b, pair.poisson)
+    ab = hz.a * hz.b
+    xi, eta, phi = creepage
+    fx = -pair.shear * ab * c.c11 * xi
+    fy = -pair.shear * ab * (c.c22 * eta + math.sqrt(ab) * c.c23 * phi)
+    linear = math.hypot(fx, fy)
+    bound = friction * hz.load
+    if linear == 0.0 or bound <= 0.0:
+        return 0.0
+    u = linear / bound
+    saturated = bound * (u - u * u / 3 + u ** 3 / 27 if u < 3 else 1.0)
+    return fy * saturated / linear * math.sin(g)
 
 
 def count_passes(final: list[PatchSolution],

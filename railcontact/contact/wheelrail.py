@@ -64,6 +64,7 @@ from .loadloop import (
     creep_load_secant,
     load_met,
     load_unique,
+    probe_settings,
     vertical_force,
 )
 from .patch import (
@@ -417,8 +418,10 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     :data:`MAX_REFERENCE_PASSES` passes, each started from the one before; from the third
     on, a secant step on the difference of the two approaches: on a flange the frame's
     overlap can grow faster with the approach than the vertical motion's normal share, and
-    the plain iteration then swings). Without ``reference``: one force-controlled solve at
-    the rigid point."""
+    the plain iteration then swings). From Hertz's approach (a cold wheel: no ``previous``,
+    no ``start``) the first pass is a probe of the approach, solved to a looser normal
+    tolerance (:func:`~.loadloop.probe_settings`) and always followed by a pass at the full
+    one. Without ``reference``: one force-controlled solve at the rigid point."""
     if not reference:
         cosg = math.cos(first.contact_angle)
         single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
@@ -438,18 +441,26 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     passes: list[list[PatchSolution]] = []
     last = previous
     tried: list[tuple[float, float]] = []  # (approach formed at, residual)
+    # from Hertz's approach the first pass is a probe of the approach, solved to a looser
+    # tolerance (its frame is formed again at the approach it gives: 1-60 % from Hertz's)
+    probe = approach > 0 and not previous and start is None
     for _ in range(MAX_REFERENCE_PASSES):
         cp = at_reference(first, track, ws, pose, approach) if approach > 0 else None
         cp = cp or first
-        ps = _patches([cp], ws, 0.0, settings, pair, loads=[q / math.cos(cp.contact_angle)],
-                      estimate_for=estimate_for, previous=last)
+        ps = _patches([cp], ws, 0.0, probe_settings(settings) if probe else settings, pair,
+                      loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
+                      previous=last)
         passes.append(ps)
         new = vertical_approach(ps)
         if cp is first and (approach <= 0 or at_reference(first, track, ws, pose, new)
                             is None):
+            if probe:  # the rigid point's patch is the answer: solved again, in full
+                probe, last = False, ps
+                continue
             break  # no reference point to form: the rigid point's patch is the answer
-        if abs(new - approach) <= rtol * new:
+        if abs(new - approach) <= rtol * new and not probe:
             break
+        probe = False
         tried.append((approach, new - approach))
         last = ps
         if len(tried) >= 2 and tried[-1][1] != tried[-2][1]:  # secant on the residual

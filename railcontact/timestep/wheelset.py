@@ -35,7 +35,9 @@ With creepages the creep forces carry part of it (most of it on a flange near Na
 limit), so a secant iteration on the normal forces' share solves the wheel (normal, then
 tangential BEM) until the total is met to :attr:`ContactSettings.load_tolerance` (or to
 ``eps_tau`` of the creep forces' vertical share, the accuracy they have); the first
-guess is Q less the previous step's creep share (with a warm start from it), later passes
+guess is Q less the previous step's creep share (with a warm start from it; cold, less
+Kalker's saturated linear estimate of it,
+:func:`~railcontact.contact.loadloop.vertical_creep_estimate`), later passes
 start from the one before (in every warm-start mode: it is the same step), and
 :attr:`WheelContact.load_passes` counts them. ``load_includes_creep=False`` lets the normal
 forces alone carry Q (one pass).
@@ -60,11 +62,12 @@ from ..contact.loadloop import (
     creep_load_secant,
     load_met,
     load_unique,
+    vertical_creep_estimate,
     vertical_force,
 )
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
-from ..contact.wheelrail import solve_wheel_normal, vertical_approach
+from ..contact.wheelrail import contact_points, solve_wheel_normal, vertical_approach
 from ..errors import (
     CaseError,
     ConvergenceError,
@@ -72,9 +75,9 @@ from ..errors import (
     check_finite,
     check_positive,
 )
-from ..geometry.search import ContactPoint, vertical_gap
+from ..geometry.search import ContactPoint, at_reference, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
-from ..halfspace.hertz import HertzSolution
+from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
@@ -477,7 +480,20 @@ class WheelsetContact:
                                      source))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
-        start = min(max(q - sum(m.vertical_creep for m in previous), 0.05 * q), MAX_SHARE * q)
+        if previous:  # the previous step's creep share
+            share = sum(m.vertical_creep for m in previous)
+        else:  # cold: estimated on the Hertz ellipse where the normal solve forms its frame
+            cp = contact_points(self.track, self.wheelset, pose, side, 0.0)[0]
+            if (self.settings.patch_frame == "reference" and math.isfinite(cp.B)
+                    and cp.B > 0 and cp.A > 0):
+                cosg = math.cos(cp.contact_angle)
+                approach = hertz(cp.A, cp.B, self.pair, load=q / cosg).penetration / cosg
+                cp = at_reference(cp, self.track, self.wheelset, pose, approach) or cp
+            c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
+            sgn = SIDES[side]
+            share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
+                                            self.settings.friction)
+        start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
         (patches, creepages, memory), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
         if not patches:

@@ -1,0 +1,103 @@
+"""The cold load loop's shortcuts: the first normal share from an estimate of the creep
+forces' vertical share, and the first frame pass of a cold wheel solved as a probe."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import railcontact as rc
+import railcontact.contact.patch as patch_module
+from railcontact.contact.loadloop import (
+    PROBE_FACTOR,
+    probe_settings,
+    vertical_creep_estimate,
+)
+from railcontact.contact.wheelrail import contact_points
+from railcontact.halfspace.hertz import hertz
+from railcontact.tangential.fastrip import fastrip_hertz
+
+Q = 83.3e3
+MU = 0.4
+
+
+def wheelset(**settings) -> rc.WheelsetContact:
+    return rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+                              rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                              rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                              rc.ContactSettings(friction=MU, **settings))
+
+
+def test_creep_share_estimate_is_kalker_when_small_and_sliding_when_large():
+    """Small creepages: Kalker's linear theory, as FaStrip (scaled to it) gives on the same
+    Hertz ellipse (200 x 200 samples: its strip ends converge slowly, 2.7 % under Kalker's
+    C22 here); large ones: full sliding, F_s = -mu N, so F_s sin(gamma) = -mu Q tan(gamma)
+    for a vertical load Q."""
+    wc = wheelset()
+    cp = contact_points(wc.track, wc.wheelset, rc.Pose(3e-3), "left", 0.0)[0]
+    g = cp.contact_angle
+    assert abs(g) > 0.01  # a tilted contact: the share is not zero
+    hz = hertz(cp.A, cp.B, wc.pair, load=Q / math.cos(g))
+    for creepage in ((0.0, 1e-7, 0.0), (0.0, 0.0, 1e-4), (1e-7, -1e-7, 2e-4)):
+        strip = fastrip_hertz(hz.a, hz.b, hz.load, wc.pair, MU, creepage, nx=200,
+                              ny=200).force[1]
+        est = vertical_creep_estimate(cp, Q, creepage, wc.pair, MU)
+        assert est == pytest.approx(strip * math.sin(g), rel=0.04)
+    for eta in (0.05, -0.05):
+        est = vertical_creep_estimate(cp, Q, (0.0, eta, 0.0), wc.pair, MU)
+        assert est == pytest.approx(-math.copysign(MU * Q * math.tan(g), eta), rel=1e-9)
+    assert vertical_creep_estimate(cp, Q, (0.0, 0.0, 0.0), wc.pair, MU) == 0.0
+
+
+@pytest.mark.parametrize("lateral", [0.0, 2e-3])
+def test_cold_step_meets_the_load_near_the_estimated_share(lateral):
+    """A cold wheelset step with kinematic creepages: each wheel carries its load to the
+    load tolerance, creep forces included, and the estimate of their vertical share that
+    started the load loop is within 30 % of the BEM's (83.3 kN, 1 mm elements)."""
+    wc = wheelset(element_size=1e-3, warm_start="none")
+    pose = rc.Pose(lateral)
+    kin = rc.Kinematics(30.0, 0.03)
+    r = wc.solve(pose, loads=(Q, Q), kinematics=kin)
+    assert r.status == 0
+    for w in r.wheels:
+        (p,) = w.patches
+        g = p.geometry.contact_angle
+        share = p.tangential.force[1] * math.sin(g)
+        vertical = p.normal.force * math.cos(g) + share
+        assert vertical == pytest.approx(Q, rel=wc.settings.load_tolerance)
+        sgn = 1.0 if w.side == "left" else -1.0
+        c = kin.creepage(p.geometry, pose, wc.wheelset.radius)
+        est = vertical_creep_estimate(p.geometry, Q, (c[0], sgn * c[1], sgn * c[2]), wc.pair,
+                                      MU)
+        assert abs(share) > 50.0
+        assert est == pytest.approx(share, rel=0.3)
+
+
+def test_a_cold_wheel_probes_its_frame_and_ends_at_the_full_tolerance(monkeypatch):
+    """The first normal solve of a cold wheel in the reference frame is a probe at
+    PROBE_FACTOR times the normal tolerance; every later solve, the one reported among
+    them, is at the full tolerance; the result is the one without a probe to that
+    tolerance."""
+    tolerances: list[float] = []
+    normal = patch_module.solve_normal
+
+    def logged(*args, **kwargs):
+        tolerances.append(kwargs["tolerance"])
+        return normal(*args, **kwargs)
+
+    monkeypatch.setattr(patch_module, "solve_normal", logged)
+    wc = wheelset(element_size=1e-3, warm_start="none")
+    tol = wc.settings.normal_tolerance
+    assert probe_settings(wc.settings.patch_settings).normal.tolerance == PROBE_FACTOR * tol
+    r = wc.solve(rc.Pose(1e-3), loads=(Q, Q))  # normal contact only: one load pass a wheel
+    assert r.status == 0
+    assert tolerances.count(PROBE_FACTOR * tol) == 2  # one probe per wheel
+    assert tolerances[0] == PROBE_FACTOR * tol and tolerances[-1] == tol
+    assert len(tolerances) == sum(w.load_passes for w in r.wheels)
+
+    monkeypatch.setattr("railcontact.contact.loadloop.PROBE_FACTOR", 1.0)
+    ref = wheelset(element_size=1e-3, warm_start="none").solve(rc.Pose(1e-3), loads=(Q, Q))
+    for w, v in zip(r.wheels, ref.wheels, strict=True):
+        assert w.approach == pytest.approx(v.approach, rel=10 * tol)
+        assert w.max_pressure == pytest.approx(v.max_pressure, rel=10 * tol)
