@@ -127,6 +127,9 @@ def _shape(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, delta:
     else:
         lo, hi = _half_width(s, f, delta)
         w = 0.5 * (hi - lo)
+        if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
+            raise RailContactError(f"INFCON estimate: the undeformed gap has no width at "
+                                   f"penetration {delta:g} m")
         a0 = float(np.interp(0.0, s, a_of_s))
         factor = infcon_factor(a0, delta / w**2)
         stretch = (1 - factor) / factor
