@@ -25,6 +25,16 @@ def curvatures(ab: float) -> tuple[float, float]:
     return A, A * ratio if ab >= 1 else A / ratio
 
 
+def hertz_box(ab: float, nx: int, ny: int):
+    """The Hertz problem of a/b = ``ab`` at 50 kN on an nx x ny grid over 1.15 times its
+    ellipse: curvatures, Hertz solution, grid, element centres and undeformed gap [m]."""
+    A, B = curvatures(ab)
+    hz = hertz(A, B, PAIR, load=50e3)
+    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, nx, ny)
+    X, Y = g.mesh()
+    return A, B, hz, g, X, Y, A * X**2 + B * Y**2
+
+
 def solve_on_box(A, B, hz, n, **kw):
     g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, n, n)
     X, Y = g.mesh()
@@ -239,16 +249,13 @@ def test_a_start_on_two_symmetric_elements_still_reaches_hertz(preconditioner):
     (their gaps equal, so the CG step on that set is zero) used to stop at once, 'converged'
     with eps = 0 and the load on two elements. The elements that overlap outside the set
     must enter it: the result is the Hertz solution of the cold start."""
-    A, B = curvatures(1.0)
-    hz = hertz(A, B, PAIR, load=50e3)
-    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 24, 23)
-    X, Y = g.mesh()
+    A, B, hz, g, X, Y, h = hertz_box(1.0, 24, 23)
     op = influence_operator(g, PAIR)
     start = np.zeros(g.shape)
     start[11:13, 11] = 1e9  # symmetric about x = 0, on the centre line y = 0
     kw = dict(load=hz.load, tolerance=1e-9, preconditioner=preconditioner)
-    res = solve_normal(A * X**2 + B * Y**2, g, op, initial_pressure=start, **kw)
-    cold = solve_normal(A * X**2 + B * Y**2, g, op, **kw)
+    res = solve_normal(h, g, op, initial_pressure=start, **kw)
+    cold = solve_normal(h, g, op, **kw)
     assert res.converged and res.iterations > 1
     assert np.array_equal(res.contact, cold.contact)
     assert np.max(np.abs(res.pressure - cold.pressure)) < 1e-6 * cold.max_pressure
@@ -261,11 +268,7 @@ def test_convergence_also_asks_that_nothing_overlaps_outside_the_contact():
     check sees the two-element start's overlap and passes the converged Hertz solution."""
     from railcontact.normal.bem import _overlaps
 
-    A, B = curvatures(1.0)
-    hz = hertz(A, B, PAIR, load=50e3)
-    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 24, 23)
-    X, Y = g.mesh()
-    h = A * X**2 + B * Y**2
+    A, B, hz, g, X, Y, h = hertz_box(1.0, 24, 23)
     op = influence_operator(g, PAIR)
     res = solve_normal(h, g, op, load=hz.load, tolerance=1e-6)
     assert not _overlaps(h, op.apply(res.pressure), res.pressure, True, 0.0, 1e-6)
@@ -296,11 +299,7 @@ def test_warm_start_updates_displacements_without_convolving(monkeypatch, backen
     the new pressure is ``A p - tau A t`` plus the influence columns of the elements that
     the step clipped or let in. The displacements the solver carries (in its gap) equal a
     fresh product to round-off, and the pressure is Hertz's and the dense reference's."""
-    A, B = curvatures(2.0)
-    hz = hertz(A, B, PAIR, load=50e3)
-    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 45, 45)
-    X, Y = g.mesh()
-    h = A * X**2 + B * Y**2
+    A, B, hz, g, X, Y, h = hertz_box(2.0, 45, 45)
     start = hertz(A, B, PAIR, load=1.05 * hz.load).pressure(X, Y)
     op = influence_operator(g, PAIR, "z", backend)
     ref = solve_normal(h, g, influence_operator(g, PAIR, "z", "dense"), load=hz.load,
@@ -323,11 +322,7 @@ def test_updated_displacements_do_not_drift_over_many_steps(monkeypatch):
     import railcontact.normal.bem as bem
 
     monkeypatch.setattr(bem, "REFRESH_ITERATIONS", 10**9)
-    A, B = curvatures(1.0)
-    hz = hertz(A, B, PAIR, load=50e3)
-    g = Grid.from_bounds(-1.15 * hz.a, 1.15 * hz.a, -1.15 * hz.b, 1.15 * hz.b, 45, 45)
-    X, Y = g.mesh()
-    h = A * X**2 + B * Y**2
+    A, B, hz, g, X, Y, h = hertz_box(1.0, 45, 45)
     op = influence_operator(g, PAIR)
     count = _counted_products(monkeypatch)
     res = solve_normal(h, g, op, penetration=hz.penetration, tolerance=1e-10,

@@ -76,7 +76,7 @@ def test_fft_plans_are_bounded_and_a_dropped_plan_is_made_again():
     ref = InfluenceOperator(g, STEEL, "z", "dense").apply(p)
     first = op.apply(p)
     for k in range(operator_module.MAX_PLANS + 3):
-        operator_module._fftw_plan(1, (4, 2 * k + 2))
+        operator_module._fftw_plan(1, (4, 2 * k + 2), 2)
     plans = operator_module._local.plans
     assert len(plans) == operator_module.MAX_PLANS and (1, (12, 10), 6) not in plans
     again = op.apply(p)  # its plan was dropped: planned anew (estimated: same bits)

@@ -103,33 +103,6 @@ def padded_shape(nx: int, ny: int) -> tuple[int, int]:
     return fft_size(2 * nx), fft_size(2 * ny)
 
 
-class _FFTWPlan:
-    """Batched forward r2c and backward c2r FFTW plans over ``nc`` components, with their
-    own aligned buffers (the padding of ``real_in`` stays zero)."""
-
-    def __init__(self, nc: int, shape: tuple[int, int]):
-        m, n = shape
-        self.real_in = pyfftw.zeros_aligned((nc, m, n), dtype="float64")
-        self.spec_out = pyfftw.empty_aligned((nc, m, n // 2 + 1), dtype="complex128")
-        self.spec_in = pyfftw.empty_aligned((nc, m, n // 2 + 1), dtype="complex128")
-        self.spec_tmp = pyfftw.empty_aligned((m, n // 2 + 1), dtype="complex128")
-        self.real_out = pyfftw.empty_aligned((nc, m, n), dtype="float64")
-        self.forward = _plan(self.real_in, self.spec_out, "FFTW_FORWARD")
-        self.backward = _plan(self.spec_in, self.real_out, "FFTW_BACKWARD")
-        self.real_in[...] = 0.0
-        self.extent = (0, 0)
-        """The grid last written into ``real_in`` (grids of several sizes share a padded
-        shape: a smaller one first clears what a larger one left)."""
-
-    def load(self, p: np.ndarray) -> None:
-        """Put the tractions ``p`` (nc, nx, ny) into the zero-padded input."""
-        extent = p.shape[1:]
-        if extent != self.extent:
-            self.real_in[...] = 0.0
-            self.extent = extent
-        self.real_in[:, :extent[0], :extent[1]] = p
-
-
 class _PrunedPlan:
     """The DC-FFT product of ``nc`` components with pruned transforms: of the padded input
     only the ``nx`` rows that hold the traction are transformed along y (the rest are
@@ -286,17 +259,16 @@ def load_wisdom(path: str | os.PathLike) -> None:
     getattr(_local, "plans", OrderedDict()).clear()
 
 
-def _fftw_plan(nc: int, shape: tuple[int, int], rows: int = 0) -> _FFTWPlan | _PrunedPlan:
-    """The cached plan of ``nc`` components on the padded ``shape``; with ``rows``, the
-    pruned plan of grids with that many rows (what every product uses)."""
+def _fftw_plan(nc: int, shape: tuple[int, int], rows: int) -> _PrunedPlan:
+    """The cached pruned plan of ``nc`` components on the padded ``shape`` for grids of
+    ``rows`` rows."""
     cache = getattr(_local, "plans", None)
     if cache is None:
         cache = _local.plans = OrderedDict()
     key = (nc, shape, rows)
     plan = cache.get(key)
     if plan is None:
-        plan = cache[key] = (_PrunedPlan(rows, shape, nc=nc) if rows
-                             else _FFTWPlan(nc, shape))
+        plan = cache[key] = _PrunedPlan(rows, shape, nc=nc)
         while len(cache) > MAX_PLANS:
             cache.popitem(last=False)
     else:

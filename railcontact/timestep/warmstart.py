@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -83,6 +84,12 @@ class PatchMemory:
     approach: float = 0.0
     vertical_normal: float = 0.0
 
+    @cached_property
+    def contact_box(self) -> tuple[float, float, float, float] | None:
+        """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None;
+        formed once (the step after, this memory is the older one)."""
+        return _contact_box(self.pressure, self.grid)
+
     def extrapolation(self, time: float | None) -> float:
         """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when
         it cannot be formed."""
@@ -129,7 +136,7 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
     step then transforms and iterates on a grid a third of the size the Hertz estimate
     would mesh (whose area, for the wheel load, is the rigid interpenetration area with a
     margin)."""
-    boxes = [_box_of(m) for m in (memory, memory.older) if m is not None]
+    boxes = [m.contact_box for m in (memory, memory.older) if m is not None]
     boxes = [b for b in boxes if b is not None]
     if not boxes:
         return None
@@ -139,15 +146,6 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
     mx = AREA_MARGIN_ELEMENTS * g.dx + AREA_MARGIN_SHARE * (x1 - x0)
     my = AREA_MARGIN_ELEMENTS * g.dy + AREA_MARGIN_SHARE * (y1 - y0)
     return (x0 - mx, x1 + mx, y0 - my, y1 + my)
-
-
-def _box_of(memory: PatchMemory) -> tuple[float, float, float, float] | None:
-    """:func:`_contact_box` of a memory's pressure, formed once and kept with it (the
-    step after, the memory is the older one, copied with what it keeps)."""
-    box = memory.__dict__.get("_box", False)
-    if box is False:
-        box = memory.__dict__["_box"] = _contact_box(memory.pressure, memory.grid)
-    return box
 
 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
