@@ -626,3 +626,59 @@ def test_table_node_equals_the_exact_wheelset_step():
         assert np.allclose(a.creep_force, b.creep_force, rtol=0, atol=bound)
         assert a.contact_angle == pytest.approx(b.contact_angle, abs=1e-4)
         assert np.allclose(a.contact_point, b.contact_point, rtol=0, atol=1e-5)
+
+
+def test_messages_are_written_per_batch_and_gathered_when_the_build_ends(tmp_path):
+    """A batch writes only its own messages (a group per batch, not one growing document
+    rewritten per batch); a batch computed again replaces its own; a build cut off before
+    its end keeps them readable; the root attribute gathers them when the build ends; a
+    store of the earlier layout (messages only in the root attribute) keeps them."""
+    import zarr
+
+    from railcontact.table.store import Store, create_store, read_messages
+    from railcontact.table.variables import COUNTS, QUANTITIES
+
+    spec_path = tmp_path / "spec.toml"
+    spec_path.write_text(SPEC.replace("[table]", "[table]\nbatch = 2"))
+    spec = load_spec(spec_path)
+    out = tmp_path / "m.zarr"
+    create_store(out, spec)
+
+    def result(ix):
+        n = len(spec.batch_points(ix))
+        r = {q.name: np.zeros((n, len(spec.sides))) for q in QUANTITIES}
+        r.update({q.name: np.zeros((n, len(spec.sides)), dtype=np.int32) for q in COUNTS})
+        r["status"] = np.ones((n, len(spec.sides)), dtype=np.int8)
+        return r
+
+    def msg(ix, text):
+        return [{"batch": list(ix), "side": "left", "status": 1, "point": {"load": 1.0},
+                 "message": text}]
+
+    batches = list(np.ndindex(*spec.batch_shape))
+    a, b = batches[0], batches[-1]
+    store = Store(out, spec)
+    store.write(b, result(b), msg(b, "b first"))
+    store.write(a, result(a), msg(a, "a"))
+    # cut off here (no finish): the messages are there, in batch order
+    assert [m["message"] for m in read_messages(out)] == ["a", "b first"]
+    root = zarr.open_group(str(out), mode="r")
+    assert json.loads(root.attrs["messages"]) == []  # not gathered yet
+    key = ".".join(map(str, b))
+    assert root["messages"][key].attrs["messages"] == msg(b, "b first")
+    store = Store(out, spec)  # resumed: b computed again, now ok; a again, other text
+    store.write(b, result(b), [])
+    store.write(a, result(a), msg(a, "a again"))
+    store.finish(False)
+    assert [m["message"] for m in read_messages(out)] == ["a again"]
+    assert json.loads(zarr.open_group(str(out), mode="r").attrs["messages"]) == msg(a, "a again")
+
+    old = tmp_path / "old.zarr"  # the earlier layout: no message groups
+    create_store(old, spec)
+    g = zarr.open_group(str(old), mode="r+")
+    g.attrs["messages"] = json.dumps(msg(a, "old a") + msg(b, "old b"))
+    assert read_messages(old) == msg(a, "old a") + msg(b, "old b")
+    store = Store(old, spec)
+    store.write(b, result(b), msg(b, "new b"))
+    store.finish(False)
+    assert [m["message"] for m in read_messages(old)] == ["old a", "new b"]

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .spec import AXES
-from .store import IDENTITY, open_dataset
+from .store import IDENTITY, open_dataset, read_messages
 from .variables import STATUS_MEANINGS
 
 SHOWN = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment", "contact_angle",
@@ -47,7 +47,7 @@ def summary(path: str | Path) -> str:
         if x.size:
             lines.append(f"  {name:16s} [{ds[name].attrs.get('units', '')}] from "
                          f"{x.min():.6g} to {x.max():.6g}")
-    msgs = json.loads(ds.attrs.get("messages", "[]"))
+    msgs = read_messages(path)
     if msgs:
         lines.append(f"points not ok ({len(msgs)}; first {min(len(msgs), MAX_MESSAGES)}):")
         for m in msgs[:MAX_MESSAGES]:

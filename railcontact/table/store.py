@@ -13,7 +13,12 @@ Layout (``railcontact table build``)::
              not complete and is computed again
     attrs    ``railcontact_table`` (the identity: case, axes, sides, batch, as JSON),
              ``railcontact_version``, ``case_name``, ``complete`` (all batches done),
-             ``messages`` (JSON: the message of every point that is not ok)
+             ``messages`` (JSON: the message of every point that is not ok, gathered
+             when a build ends)
+    messages/<batch>   a group per batch with points that are not ok (``<batch>`` its
+             index, e.g. ``1.0.3``), their messages in its attribute ``messages``: a batch
+             writes only its own, so that a build with many such batches does not rewrite
+             one growing document per batch (:func:`read_messages` reads them)
 
 A store whose identity differs from the spec's is an error, never overwritten.
 """
@@ -33,6 +38,8 @@ from .spec import AXES, TableSpec, comparable
 from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS
 
 IDENTITY = "railcontact_table"
+MESSAGES = "messages"
+"""The group of the per-batch message groups (and the root attribute that gathers them)."""
 
 
 def _libs():
@@ -102,6 +109,15 @@ class Store:
         check_identity(path, json.loads(found), spec.identity())
         names = [q.name for q in QUANTITIES + COUNTS] + ["status", "batch_done"]
         self.arrays = {n: self.group[n] for n in names}  # opened once: metadata read once
+        self.written = False
+        if MESSAGES in self.group:
+            self.messages = self.group[MESSAGES]
+        else:  # (a store written before per-batch messages: its messages moved there once)
+            old = json.loads(self.group.attrs.get(MESSAGES, "[]"))
+            self.messages = self.group.require_group(MESSAGES)
+            for key in sorted({".".join(map(str, m["batch"])) for m in old}):
+                self.messages.require_group(key).attrs[MESSAGES] = [
+                    m for m in old if ".".join(map(str, m["batch"])) == key]
 
     def done(self) -> np.ndarray:
         """The batches already complete (bool over :attr:`TableSpec.batch_shape`)."""
@@ -116,15 +132,38 @@ class Store:
         sel = (*slow, slice(pts[0][-1], pts[-1][-1] + 1), slice(None))
         for name in [q.name for q in QUANTITIES + COUNTS] + ["status"]:
             self.arrays[name][sel] = result[name]
-        old = json.loads(self.group.attrs.get("messages", "[]"))
-        kept = [m for m in old if m.get("batch") != list(index)]  # a batch computed again
-        if messages or len(kept) != len(old):
-            self.group.attrs["messages"] = json.dumps(kept + messages)
+        key = ".".join(map(str, index))
+        if messages:
+            self.messages.require_group(key).attrs[MESSAGES] = messages
+        elif key in self.messages:  # a batch computed again, now without messages
+            del self.messages[key]
+        self.written = True
         self.arrays["batch_done"][index] = True
 
     def finish(self, complete: bool) -> None:
-        """Record whether every batch is done."""
-        self.group.attrs["complete"] = int(complete)
+        """Record whether every batch is done, and gather the batches' messages into the
+        root attribute ``messages`` when a batch was written."""
+        attrs = {"complete": int(complete)}
+        if self.written:
+            attrs[MESSAGES] = json.dumps(_gathered(self.messages))
+        self.group.attrs.update(attrs)
+
+
+def _gathered(messages) -> list[dict[str, Any]]:
+    """The messages of the per-batch groups of ``messages``, in batch order."""
+    keys = sorted(messages.group_keys(), key=lambda k: tuple(int(i) for i in k.split(".")))
+    return [m for k in keys for m in messages[k].attrs[MESSAGES]]
+
+
+def read_messages(path: str | Path) -> list[dict[str, Any]]:
+    """The message of every point of the table at ``path`` that is not ok (each a dict:
+    ``batch``, ``side``, ``status``, ``point`` {axis: value [SI]}, ``message``), in batch
+    order; read from the per-batch groups, so also from a build that was cut off."""
+    _, zarr = _libs()
+    group = zarr.open_group(str(path), mode="r")
+    if MESSAGES in group:
+        return _gathered(group[MESSAGES])
+    return json.loads(group.attrs.get(MESSAGES, "[]"))
 
 
 def check_identity(path: str | Path, found: dict[str, Any], wanted: dict[str, Any]) -> None:
