@@ -38,6 +38,7 @@ preconditioner on the gradient).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -126,7 +127,9 @@ def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) ->
     a = np.asarray(value, dtype=float)
     if a.shape != shape:
         raise RailContactError(f"{name} must have the grid shape {shape}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    # a NaN or an infinity anywhere makes the sum NaN or infinite: the elementwise test
+    # only when the sum is not finite (or overflows)
+    if not math.isfinite(a.sum()) and not np.isfinite(a).all():
         raise RailContactError(f"{name} contains NaN or infinite values")
     return a
 
@@ -440,7 +443,8 @@ def solve_normal(
         raise RailContactError(f"initial_contact must have the grid shape {shape}, "
                                f"got {mask.shape}")
     area_el = grid.element_area
-    self_compliance = float(operator.self_coefficient[0, 0])  # [m/Pa]
+    kernel = operator.kernels[0, 0]  # the "zz" kernel (2nx-1, 2ny-1) [m/Pa]
+    self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
 
     def finish(p, u, delta, its, converged, message, err, hist, final=False):
         # final: under force control, the approach from the solution's own u
@@ -456,11 +460,12 @@ def solve_normal(
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
             touches_boundary=bool(edge))
 
-    zeros = np.zeros(shape)
     # Trivial cases: no load, or no interpenetration anywhere.
     if force_control and load == 0.0:
+        zeros = np.zeros(shape)
         return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
     if not force_control and np.all(h >= penetration):
+        zeros = np.zeros(shape)
         return finish(zeros, zeros, penetration, 0, True,
                       "no contact: penetration below the smallest gap", 0.0, [])
 
@@ -479,17 +484,21 @@ def solve_normal(
     if force_control:
         p *= load / (area_el * total)
 
-    # Work arrays (flat views ``*f`` of the (nx, ny) ones for the compiled steps).
+    # Work arrays: the rows of one block, flat (``*f``, for the compiled steps) and as
+    # (nx, ny) views of the same memory; the pressures ``p``, ``q`` (one of which is the
+    # result's) on their own.
     p = np.ascontiguousarray(p, dtype=float)
-    hf = h.ravel()
-    u, g, gm, t, r, q = (np.empty(shape) for _ in range(6))
-    z = g if precondition is None else np.empty(shape)
-    t[...] = 0.0
+    q = np.empty(shape)
+    hf, pf, qf = h.ravel(), p.ravel(), q.ravel()
+    work = np.empty((6, h.size))
+    uf, gf, gmf, tf, rf, zf = work
+    u, g, gm, t, r, z = work.reshape(6, *shape)
+    if precondition is None:
+        z, zf = g, gf
+    tf[:] = 0.0
     c = np.empty(h.size, dtype=bool)
-    uf, gf, gmf, tf, rf, zf = (a.ravel() for a in (u, g, gm, t, r, z))
     index = np.empty(CHANGE_LIMIT, dtype=np.int64)
     change = np.empty(CHANGE_LIMIT)
-    kernel = operator.kernel("zz")
     operator.apply(p, out=u)  # u = A p of the current p, kept up to date below
     fresh = 0  # iterations since u was last formed by a convolution
     g_old = 1.0
@@ -502,7 +511,7 @@ def solve_normal(
     delta = penetration if not force_control else 0.0
     load_value = float(load) if force_control else 0.0
     for its in range(1, int(max_iterations) + 1):
-        delta = _gradient(hf, uf, p.ravel(), delta, force_control, c, gf, gmf)
+        delta = _gradient(hf, uf, pf, delta, force_control, c, gf, gmf)
         if precondition is not None:
             precondition(gm, out=z)
         gz, gg = _direction(gf, zf, c, tf, force_control and precondition is not None,
@@ -510,13 +519,13 @@ def solve_normal(
         g_old = gz
         operator.apply(t, out=r)
         _, moved, total, changes, entered, updated = _step(
-            p.ravel(), q.ravel(), tf, gf, rf, c, uf, gz, gg, precondition is not None,
+            pf, qf, tf, gf, rf, c, uf, gz, gg, precondition is not None,
             force_control, load_value, area_el, self_compliance, kernel, shape[0], shape[1],
             index, change)
         conjugate = not entered
         if force_control and not total > 0.0:
             return finish(q, u, delta, its, False, "pressure vanished", np.inf, hist)
-        p, q = q, p
+        p, q, pf, qf = q, p, qf, pf
         if updated:
             fresh += 1
         else:  # too many elements left or entered the contact: convolve
@@ -524,13 +533,13 @@ def solve_normal(
             fresh = 0
         err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
         hist.append(err)
-        if not np.isfinite(err):
+        if not math.isfinite(err):
             break
         if err < tolerance:
             if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
                 operator.apply(p, out=u)
                 fresh = 0
-            if not _overlaps_flat(hf, uf, p.ravel(), force_control, delta, tolerance):
+            if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
                 converged = True
                 break
         if err < STALL_GAIN * best:

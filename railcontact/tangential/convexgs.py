@@ -32,7 +32,6 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
-from .rolling import rigid_slip_lines
 
 try:
     import numba
@@ -208,12 +207,15 @@ def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
     return blocks
 
 
-def _bound_layout(pn, mu):
+def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
     """The traction bound ``g = mu p_n`` [Pa] of the pressure ``pn`` (nx, ny) in the
     sweep layout (ny, nx), its states (adhesion where ``g > 0``, else exterior), the
     contact mask, per row the first and last contact element (``lo`` 1 > ``hi`` 0 in a
     row without contact) and their count; ``ok`` is False when a pressure is negative or
-    not finite. One compiled pass (numba) in place of a dozen array operations."""
+    not finite; the rigid slip ``wx``, ``wy`` [m] of the creepage ``(xi, eta, phi)`` on
+    the grid ``(x0, dx, y0, dy)`` (:func:`~.rolling.rigid_slip_lines`' values, the same
+    operations) in that layout; the largest ``g`` and the number of contact elements.
+    One compiled pass (numba) in place of a few dozen array operations."""
     nx, ny = pn.shape
     g = np.empty((ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
@@ -221,9 +223,17 @@ def _bound_layout(pn, mu):
     lo = np.ones(ny, dtype=np.int64)
     hi = np.zeros(ny, dtype=np.int64)
     count = np.zeros(ny, dtype=np.int64)
+    wx = np.empty((ny, nx))
+    wy = np.empty((ny, nx))
+    shift = offset * dx
     ok = True
+    gmax = 0.0
+    total = 0
     for iy in range(ny):
+        lx = dx * (xi - phi * (y0 + dy * float(iy)))  # rigid_slip_lines' W_x(y)
         for ix in range(nx):
+            wx[iy, ix] = lx
+            wy[iy, ix] = dx * (eta + phi * ((x0 + dx * float(ix)) + shift))
             p = pn[ix, iy]
             if not (0.0 <= p < math.inf):
                 ok = False
@@ -236,18 +246,20 @@ def _bound_layout(pn, mu):
                     lo[iy] = ix
                 hi[iy] = ix
                 count[iy] += 1
-    return g, state, contact, lo, hi, count, ok
+                gmax = max(gmax, gi)
+        total += count[iy]
+    return g, state, contact, lo, hi, count, ok, wx, wy, gmax, total
 
 
-def _clip_start(p0, slip0, g, out):
+def _clip_start(p0, st0, g, out):
     """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout ``out`` (2, ny, nx),
-    scaled onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty:
-    none) marks a slip element, zero outside the contact; returns False when a value is
-    not finite."""
+    scaled onto the bound ``g`` where it exceeds it or where the state ``st0`` (nx, ny;
+    empty: none) marks a slip element, zero outside the contact; returns False when a
+    value is not finite."""
     ny, nx = g.shape
     px = out[0]
     py = out[1]
-    has_state = slip0.size > 0
+    has_state = st0.size > 0
     ok = True
     for iy in range(ny):
         for ix in range(nx):
@@ -257,7 +269,7 @@ def _clip_start(p0, slip0, g, out):
                 ok = False
             m = math.hypot(x, y)
             gi = g[iy, ix]
-            if (has_state and slip0[ix, iy] and m > 0) or m > gi:
+            if (has_state and st0[ix, iy] == SLIP and m > 0) or m > gi:
                 s = gi / (m if m > 0 else 1.0)
                 x *= s
                 y *= s
@@ -269,9 +281,22 @@ def _clip_start(p0, slip0, g, out):
     return ok
 
 
+def _squares(px, py, out):
+    """``out = px * px + py * py`` (the same operations as numpy's, element by element:
+    its sum by numpy is the same to the bit); returns ``out``."""
+    ny, nx = px.shape
+    for iy in range(ny):
+        for ix in range(nx):
+            out[iy, ix] = px[iy, ix] * px[iy, ix] + py[iy, ix] * py[iy, ix]
+    return out
+
+
+_NO_STATE = np.zeros((0, 0), dtype=np.int8)
+
 if HAVE_NUMBA:
     _bound_layout = numba.njit(cache=True)(_bound_layout)
     _clip_start = numba.njit(cache=True)(_clip_start)
+    _squares = numba.njit(cache=True)(_squares)
 
 
 @lru_cache(maxsize=16)
@@ -367,26 +392,34 @@ _RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
     """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
-    x, y = grid.x[:, None], grid.y[None, :]  # the element centres, broadcast
     da = grid.element_area
     fx = float(traction[0].sum() * da)
     fy = float(traction[1].sum() * da)
-    mz = float((x * traction[1] - y * traction[0]).sum() * da)
-    ncon, nslip, pmax = _counts_and_max(traction, state)
+    # the moment's integrand x p_y - y p_x in the layout numpy's broadcast gives it (that
+    # of traction[1]): its sum by numpy keeps its bits
+    arm = np.empty_like(traction[1])
+    ncon, nslip, pmax = _counts_and_max(traction, state, grid.x0, grid.dx, grid.y0, grid.dy,
+                                        arm)
+    mz = float(arm.sum() * da)
     ratio = float(nslip / ncon) if ncon else 0.0
     return (fx, fy), mz, ratio, float(pmax)
 
 
-def _counts_and_max(traction, state):
+def _counts_and_max(traction, state, x0, dx, y0, dy, arm):
     """Elements in contact and in slip, and the largest |p| [Pa] (0 without elements, NaN
-    when a traction is NaN), in one pass (the sums stay numpy's: ConvexGS's forces keep
-    their bits; a maximum is the same in any order)."""
+    when a traction is NaN), in one pass, and the moment's integrand ``arm = x p_y - y p_x``
+    (in place; ``x``, ``y`` the element centres, as :attr:`Grid.x`, :attr:`Grid.y` form
+    them). The sums stay numpy's: ConvexGS's forces keep their bits; a maximum is the
+    same in any order."""
     ncon = 0
     nslip = 0
     pmax = 0.0
     nan = False
     for ix in range(state.shape[0]):
+        x = x0 + dx * float(ix)
         for iy in range(state.shape[1]):
+            y = y0 + dy * float(iy)
+            arm[ix, iy] = x * traction[1, ix, iy] - y * traction[0, ix, iy]
             st = state[ix, iy]
             if st != EXTERIOR:
                 ncon += 1
@@ -433,6 +466,10 @@ class SweepProblem:
     tolerance: float
     max_iterations: int
     use_numba: bool
+    largest_bound: float = math.inf
+    """The largest ``g`` [Pa]."""
+    contact_count: int = -1
+    """Elements in contact (-1: count ``contact``)."""
 
     @classmethod
     def set_up(cls, grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,
@@ -445,8 +482,15 @@ class SweepProblem:
                                    "this grid")
         pn = np.asarray(pressure, dtype=float)
         mu = check_positive("friction", friction, allow_zero=True)
+        if len(creepage) != 3:
+            raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
+        xi = check_finite("xi", creepage[0], "-")  # (rigid_slip_lines' checks)
+        eta = check_finite("eta", creepage[1], "-")
+        phi = check_finite("phi", creepage[2], "1/m")
+        spin_offset = check_finite("spin_offset", spin_offset)
         if pn.shape == shape:
-            g, state, contact, lo, hi, count, ok = _bound_layout(pn, mu)
+            g, state, contact, lo, hi, count, ok, wx, wy, gmax, ncon = _bound_layout(
+                pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset)
         if pn.shape != shape or not ok:
             raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
         tolerance = check_positive("tolerance", tolerance)
@@ -458,12 +502,7 @@ class SweepProblem:
             raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine == "numba" and not HAVE_NUMBA:
             raise RailContactError("engine 'numba' requested but numba is not installed")
-        lx, ly = rigid_slip_lines(grid, creepage, spin_offset)
-        wx = np.empty_like(g)
-        wy = np.empty_like(g)
-        wx[...] = lx[:, None]
-        wy[...] = ly[None, :]
-        rolling = any(c != 0.0 for c in creepage)
+        rolling = xi != 0.0 or eta != 0.0 or phi != 0.0
         if initial_traction is None or not rolling:  # no creepage: no traction, exactly
             p = np.zeros((2, *g.shape))
         else:
@@ -471,7 +510,8 @@ class SweepProblem:
         return cls(
             grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
-            max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
+            max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA,
+            largest_bound=float(gmax), contact_count=int(ncon))
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
               t0: float) -> TangentialResult:
@@ -479,19 +519,32 @@ class SweepProblem:
         squared norm of its change), stopping when the error is not finite or has not
         fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
         px, py = self.px, self.py
-        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
+        ncon = self.contact_count
+        if ncon < 0:
+            ncon = int(np.count_nonzero(self.contact))
+        # the floor 1e-9 ||g|| of the norm is at most 1e-9 sqrt(ncon) max(g): formed only
+        # for a norm below that (it is then the same value as always)
+        floor_above = 1.01e-9 * math.sqrt(ncon) * self.largest_bound
+        floor = None
+        squares = np.empty_like(px)
         hist: list[float] = []
         converged = stalled = False
         best, best_its = math.inf, 0
         its = 0
         err = 0.0
-        in_contact = bool(self.contact.any())
+        in_contact = ncon > 0
         if in_contact and self.rolling:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
-                norm = math.sqrt(float((px * px + py * py).sum()))
-                scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+                # (px * px + py * py).sum(): numpy's sum of the same squares, one pass
+                norm = math.sqrt(float(_squares(px, py, squares).sum()))
+                if not norm > floor_above:
+                    if floor is None:
+                        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
+                    scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+                else:
+                    scale = norm
                 err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
                 hist.append(err)
                 if not math.isfinite(err):
@@ -550,14 +603,15 @@ def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[
     p0 = np.asarray(initial_traction, dtype=float)
     if p0.shape != (2, *shape):
         raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-    slip0 = np.zeros((0, 0), dtype=bool)
+    st0 = _NO_STATE
     if initial_state is not None:
         st0 = np.asarray(initial_state)
         if st0.shape != shape:
             raise RailContactError(f"initial_state must have shape {shape}")
-        slip0 = st0 == SLIP
+        if st0.dtype != np.int8:  # (the compiled clip reads the states as int8)
+            st0 = np.where(st0 == SLIP, SLIP, 0).astype(np.int8)
     out = np.empty((2, *g.shape))
-    if not _clip_start(p0, slip0, g, out):
+    if not _clip_start(p0, st0, g, out):
         raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
     return out
 
