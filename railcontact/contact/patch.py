@@ -11,6 +11,7 @@ import math
 import time
 from collections.abc import Callable
 
+import numba
 import numpy as np
 
 from ..errors import CaseError, RailContactError
@@ -368,20 +369,37 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM
     traction bound is zero, so those elements take no part in the steady-rolling problem;
     a window a fraction of the potential area makes every sweep's transforms that much
     cheaper. None when it would be the whole grid, or there is no contact."""
-    rows = contact.any(axis=1)
-    first = int(rows.argmax())
-    if not rows[first]:
+    i0, i1, j0, j1 = _box(contact)
+    if i0 < 0:
         return None
-    cols = contact.any(axis=0)
     out = []
-    for lo, n, used in ((first, rows.size, rows), (int(cols.argmax()), cols.size, cols)):
-        hi = n - int(used[::-1].argmax())  # past the last one used
+    for lo, hi, n in ((i0, i1, contact.shape[0]), (j0, j1, contact.shape[1])):
         m = min(n, quantum * math.ceil((hi - lo) / quantum))
         start = min(max(lo - (m - (hi - lo)) // 2, 0), n - m)
         out.append(slice(start, start + m))
     if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
         return None
     return out[0], out[1]
+
+
+@numba.njit(cache=True)
+def _box(contact):  # pragma: no cover - compiled
+    """The rows ``i0:i1`` and columns ``j0:j1`` that hold the set elements of ``contact``
+    (nx, ny) (bool), in one pass; ``(-1, -1, -1, -1)`` without any."""
+    nx, ny = contact.shape
+    i0 = j0 = -1
+    i1 = j1 = 0
+    for i in range(nx):
+        for j in range(ny):
+            if contact[i, j]:
+                if i0 < 0:
+                    i0 = i
+                i1 = i + 1
+                if j0 < 0 or j < j0:
+                    j0 = j
+                if j + 1 > j1:
+                    j1 = j + 1
+    return i0, i1, j0, j1
 
 
 def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]

@@ -53,6 +53,7 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from time import perf_counter
 
+import numba
 import numpy as np
 
 from ..contact.loadloop import (
@@ -77,6 +78,7 @@ from ..errors import (
 )
 from ..geometry.search import ContactPoint, at_reference, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
+from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
@@ -661,6 +663,32 @@ def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
     return pair
 
 
+def _first_moments(grid: Grid, pressure: np.ndarray) -> tuple[float, float]:
+    """The pressure's first moments ``sum x p dA``, ``sum y p dA`` [N m] about the grid's
+    origin: ``(grid.x[:, None] * pressure).sum() * dA`` and the same with ``grid.y``, the
+    products formed in one compiled pass and summed by numpy (the same bits)."""
+    if not pressure.flags.c_contiguous:  # (numpy's products would be laid out otherwise)
+        da = grid.element_area
+        return (float((grid.x[:, None] * pressure).sum() * da),
+                float((grid.y[None, :] * pressure).sum() * da))
+    terms = np.empty((2, *pressure.shape))
+    _moment_terms(grid.x0, grid.dx, grid.y0, grid.dy, pressure, terms)
+    da = grid.element_area
+    return float(terms[0].sum() * da), float(terms[1].sum() * da)
+
+
+@numba.njit(cache=True)
+def _moment_terms(x0, dx, y0, dy, p, out):  # pragma: no cover - compiled
+    """``out[0] = x p``, ``out[1] = y p`` on the grid's element centres (as
+    :attr:`Grid.x`, :attr:`Grid.y` form them: ``x0 + dx i``)."""
+    nx, ny = p.shape
+    for i in range(nx):
+        x = x0 + dx * float(i)
+        for j in range(ny):
+            out[0, i, j] = x * p[i, j]
+            out[1, i, j] = (y0 + dy * float(j)) * p[i, j]
+
+
 def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
     """Fill ``wheel`` with the sums over its patches (module docstring for the frames).
 
@@ -687,9 +715,7 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         fz += f_z
         # the pressure's first moments about the patch's origin (the contact point) along
         # x and s: the normal force acts at the pressure's centroid, not at the point
-        da = n.grid.element_area
-        first_x = float((n.grid.x[:, None] * n.pressure).sum() * da)
-        first_s = float((n.grid.y[None, :] * n.pressure).sum() * da)
+        first_x, first_s = _first_moments(n.grid, n.pressure)
         x, y, z = cp.position
         mz += (x * f_u - (cp.rail_u - u_ws) * px + pm * cos_g - first_x * sin_g)
         # track frame, about (0, y, 0): r x F, plus the spin couple (sgn pm) n (the
