@@ -32,6 +32,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
+from ..halfspace.sums import numpy_sum
 
 try:
     import numba
@@ -282,13 +283,14 @@ def _clip_start(p0, st0, g, out):
 
 
 def _squares(px, py, out):
-    """``out = px * px + py * py`` (the same operations as numpy's, element by element:
-    its sum by numpy is the same to the bit); returns ``out``."""
+    """``(px * px + py * py).sum()`` of the (ny, nx) C-contiguous ``px``, ``py``: the same
+    squares (in ``out``) added in numpy's order (:mod:`~railcontact.halfspace.sums`), so
+    the same bits."""
     ny, nx = px.shape
     for iy in range(ny):
         for ix in range(nx):
             out[iy, ix] = px[iy, ix] * px[iy, ix] + py[iy, ix] * py[iy, ix]
-    return out
+    return numpy_sum(out)
 
 
 _NO_STATE = np.zeros((0, 0), dtype=np.int8)
@@ -393,33 +395,28 @@ def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
     """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
     da = grid.element_area
-    fx = float(traction[0].sum() * da)
-    fy = float(traction[1].sum() * da)
-    # the moment's integrand x p_y - y p_x in the layout numpy's broadcast gives it (that
-    # of traction[1]): its sum by numpy keeps its bits
-    arm = np.empty_like(traction[1])
-    ncon, nslip, pmax = _counts_and_max(traction, state, grid.x0, grid.dx, grid.y0, grid.dy,
-                                        arm)
-    mz = float(arm.sum() * da)
+    swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
+    if swept.flags.c_contiguous and state.flags.c_contiguous:
+        sx, sy, sm, ncon, nslip, pmax = _summary_sums(swept, state, grid.x0, grid.dx,
+                                                      grid.y0, grid.dy)
+    else:  # the same sums by numpy (any layout)
+        x, y = grid.x[:, None], grid.y[None, :]
+        sx, sy = traction[0].sum(), traction[1].sum()
+        sm = (x * traction[1] - y * traction[0]).sum()
+        ncon, nslip, pmax = _counts_and_max(traction, state)
     ratio = float(nslip / ncon) if ncon else 0.0
-    return (fx, fy), mz, ratio, float(pmax)
+    return (float(sx * da), float(sy * da)), float(sm * da), ratio, float(pmax)
 
 
-def _counts_and_max(traction, state, x0, dx, y0, dy, arm):
+def _counts_and_max(traction, state):
     """Elements in contact and in slip, and the largest |p| [Pa] (0 without elements, NaN
-    when a traction is NaN), in one pass, and the moment's integrand ``arm = x p_y - y p_x``
-    (in place; ``x``, ``y`` the element centres, as :attr:`Grid.x`, :attr:`Grid.y` form
-    them). The sums stay numpy's: ConvexGS's forces keep their bits; a maximum is the
-    same in any order."""
+    when a traction is NaN), in one pass (a maximum is the same in any order)."""
     ncon = 0
     nslip = 0
     pmax = 0.0
     nan = False
     for ix in range(state.shape[0]):
-        x = x0 + dx * float(ix)
         for iy in range(state.shape[1]):
-            y = y0 + dy * float(iy)
-            arm[ix, iy] = x * traction[1, ix, iy] - y * traction[0, ix, iy]
             st = state[ix, iy]
             if st != EXTERIOR:
                 ncon += 1
@@ -433,8 +430,26 @@ def _counts_and_max(traction, state, x0, dx, y0, dy, arm):
     return ncon, nslip, (math.nan if nan else pmax)
 
 
+def _summary_sums(swept, state, x0, dx, y0, dy):
+    """:func:`tangential_summary`'s sums of the traction ``swept`` (2, ny, nx) (C order)
+    with the states (nx, ny): ``sum p_x``, ``sum p_y`` and ``sum (x p_y - y p_x)``
+    (``x``, ``y`` the element centres as :attr:`Grid.x`, :attr:`Grid.y` form them), each
+    added in numpy's order over the traction's memory, as ``traction[k].sum()`` and the
+    sum of numpy's broadcast product (laid out as ``traction[1]``) add them; and
+    :func:`_counts_and_max`."""
+    ny, nx = swept.shape[1], swept.shape[2]
+    arm = np.empty((ny, nx))
+    for iy in range(ny):
+        y = y0 + dy * float(iy)
+        for ix in range(nx):
+            arm[iy, ix] = (x0 + dx * float(ix)) * swept[1, iy, ix] - y * swept[0, iy, ix]
+    ncon, nslip, pmax = _counts_and_max(swept.transpose(0, 2, 1), state)
+    return (numpy_sum(swept[0]), numpy_sum(swept[1]), numpy_sum(arm), ncon, nslip, pmax)
+
+
 if HAVE_NUMBA:
     _counts_and_max = numba.njit(cache=True)(_counts_and_max)
+    _summary_sums = numba.njit(cache=True)(_summary_sums)
 
 
 @dataclass
@@ -537,8 +552,7 @@ class SweepProblem:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
-                # (px * px + py * py).sum(): numpy's sum of the same squares, one pass
-                norm = math.sqrt(float(_squares(px, py, squares).sum()))
+                norm = math.sqrt(_squares(px, py, squares))  # (px*px + py*py).sum()
                 if not norm > floor_above:
                     if floor is None:
                         floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))

@@ -81,6 +81,7 @@ from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
+from ..halfspace.sums import numpy_sum
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
@@ -666,27 +667,27 @@ def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
 def _first_moments(grid: Grid, pressure: np.ndarray) -> tuple[float, float]:
     """The pressure's first moments ``sum x p dA``, ``sum y p dA`` [N m] about the grid's
     origin: ``(grid.x[:, None] * pressure).sum() * dA`` and the same with ``grid.y``, the
-    products formed in one compiled pass and summed by numpy (the same bits)."""
+    products formed and added in numpy's order in one compiled pass (the same bits)."""
+    da = grid.element_area
     if not pressure.flags.c_contiguous:  # (numpy's products would be laid out otherwise)
-        da = grid.element_area
         return (float((grid.x[:, None] * pressure).sum() * da),
                 float((grid.y[None, :] * pressure).sum() * da))
-    terms = np.empty((2, *pressure.shape))
-    _moment_terms(grid.x0, grid.dx, grid.y0, grid.dy, pressure, terms)
-    da = grid.element_area
-    return float(terms[0].sum() * da), float(terms[1].sum() * da)
+    sx, sy = _moment_sums(grid.x0, grid.dx, grid.y0, grid.dy, pressure)
+    return float(sx * da), float(sy * da)
 
 
 @numba.njit(cache=True)
-def _moment_terms(x0, dx, y0, dy, p, out):  # pragma: no cover - compiled
-    """``out[0] = x p``, ``out[1] = y p`` on the grid's element centres (as
-    :attr:`Grid.x`, :attr:`Grid.y` form them: ``x0 + dx i``)."""
+def _moment_sums(x0, dx, y0, dy, p):  # pragma: no cover - compiled
+    """``sum x p`` and ``sum y p`` over the grid's element centres (as :attr:`Grid.x`,
+    :attr:`Grid.y` form them: ``x0 + dx i``), each product array added as numpy adds it."""
     nx, ny = p.shape
+    out = np.empty((2, nx, ny))
     for i in range(nx):
         x = x0 + dx * float(i)
         for j in range(ny):
             out[0, i, j] = x * p[i, j]
             out[1, i, j] = (y0 + dy * float(j)) * p[i, j]
+    return numpy_sum(out[0]), numpy_sum(out[1])
 
 
 def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
