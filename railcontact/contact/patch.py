@@ -342,7 +342,8 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         p0, st0 = remesh_strips(
             simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
     grid, pn = res.grid, res.pressure
-    window = None if settings.solver == "convexgs" else contact_window(res.contact)
+    window = None if settings.solver == "convexgs" else contact_window(
+        res.contact, box=res.contact_box or (-1, 0, -1, 0))
     if window is not None:  # solve on the contact's own window, return on the patch's grid
         sx, sy = window
         grid = Grid(sx.stop - sx.start, sy.stop - sy.start, grid.dx, grid.dy,
@@ -361,15 +362,17 @@ WINDOW_QUANTUM = 8
 """Element counts of a tangential window are multiples of this (few operators and plans)."""
 
 
-def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM
-                   ) -> tuple[slice, slice] | None:
+def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM,
+                   box: tuple[int, int, int, int] | None = None) -> tuple[slice, slice] | None:
     """The part of a grid (slices along x and y) on which a tangential solve gives the
     same answer as on the whole grid: the box around the ``contact`` elements, its counts
     rounded up to multiples of ``quantum`` (within the grid). Outside the contact the
     traction bound is zero, so those elements take no part in the steady-rolling problem;
     a window a fraction of the potential area makes every sweep's transforms that much
-    cheaper. None when it would be the whole grid, or there is no contact."""
-    i0, i1, j0, j1 = _box(contact)
+    cheaper. None when it would be the whole grid, or there is no contact. ``box`` (e.g.
+    the normal solution's :attr:`~railcontact.normal.NormalResult.contact_box`; ``i0 <
+    0``: no contact) is the box of ``contact``, given."""
+    i0, i1, j0, j1 = _box(contact) if box is None else box
     if i0 < 0:
         return None
     out = []

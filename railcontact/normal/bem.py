@@ -102,6 +102,9 @@ class NormalResult:
     touches_boundary
         True when the contact reaches the outer ring of the potential area (the area is
         then probably too small).
+    contact_box
+        ``(i0, i1, j0, j1)``: the contact elements lie in the rows ``i0:i1`` and columns
+        ``j0:j1``; None without contact.
     """
 
     grid: Grid
@@ -119,6 +122,7 @@ class NormalResult:
     error: float
     history: np.ndarray = field(repr=False)
     touches_boundary: bool = False
+    contact_box: tuple[int, int, int, int] | None = None
 
 
 def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
@@ -190,7 +194,8 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
     """The result's fields on the (nx, ny) arrays: the approach (``own_delta``: the mean
     of ``h + u`` on the contact, or the least ``h`` without contact), ``gap = h + u -
     delta`` and ``contact = p > 0`` (in place); returns ``(delta, sum p, max(p, 0),
-    contact elements, whether the contact reaches the outer ring)``."""
+    contact elements, whether the contact reaches the outer ring, (i0, i1, j0, j1))``:
+    the contact in the rows ``i0:i1`` and columns ``j0:j1`` (-1 without contact)."""
     nx, ny = p.shape
     if own_delta:
         total = 0.0
@@ -208,6 +213,8 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
     nan = False
     count = 0
     edge = False
+    i0 = j0 = -1
+    i1 = j1 = 0
     for i in range(nx):
         for j in range(ny):
             gap[i, j] = h[i, j] + u[i, j] - delta
@@ -220,7 +227,13 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
                 count += 1
                 if i == 0 or j == 0 or i == nx - 1 or j == ny - 1:
                     edge = True
-    return delta, total, (np.nan if nan else largest), count, edge
+                if i0 < 0:
+                    i0 = i
+                i1 = i + 1
+                if j0 < 0 or j < j0:
+                    j0 = j
+                j1 = max(j1, j + 1)
+    return delta, total, (np.nan if nan else largest), count, edge, (i0, i1, j0, j1)
 
 
 @numba.njit(cache=True, fastmath=REASSOCIATE)
@@ -450,15 +463,15 @@ def solve_normal(
         # final: under force control, the approach from the solution's own u
         gap = np.empty(shape)
         contact = np.empty(shape, dtype=bool)
-        delta, total, largest, count, edge = _summary(h, u, p, float(delta),
-                                                     final and force_control, gap, contact)
+        delta, total, largest, count, edge, box = _summary(
+            h, u, p, float(delta), final and force_control, gap, contact)
         return NormalResult(
             grid=grid, pressure=p, contact=contact, gap=gap,
             force=float(total * area_el), penetration=float(delta),
             max_pressure=float(largest), area=float(count * area_el),
             iterations=its, converged=converged, message=message,
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
-            touches_boundary=bool(edge))
+            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None)
 
     # Trivial cases: no load, or no interpenetration anywhere.
     if force_control and load == 0.0:
