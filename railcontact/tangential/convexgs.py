@@ -227,14 +227,18 @@ def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
     wx = np.empty((ny, nx))
     wy = np.empty((ny, nx))
     shift = offset * dx
-    ok = True
-    gmax = 0.0
-    total = 0
+    ly = np.empty(nx)
+    for ix in range(nx):  # rigid_slip_lines' W_y(x) and W_x(y)
+        ly[ix] = dx * (eta + phi * ((x0 + dx * float(ix)) + shift))
     for iy in range(ny):
-        lx = dx * (xi - phi * (y0 + dy * float(iy)))  # rigid_slip_lines' W_x(y)
+        lx = dx * (xi - phi * (y0 + dy * float(iy)))
         for ix in range(nx):
             wx[iy, ix] = lx
-            wy[iy, ix] = dx * (eta + phi * ((x0 + dx * float(ix)) + shift))
+            wy[iy, ix] = ly[ix]
+    ok = True
+    gmax = 0.0
+    for ix in range(nx):  # (the pressure read along its rows)
+        for iy in range(ny):
             p = pn[ix, iy]
             if not (0.0 <= p < math.inf):
                 ok = False
@@ -248,8 +252,20 @@ def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
                 hi[iy] = ix
                 count[iy] += 1
                 gmax = max(gmax, gi)
+    total = 0
+    for iy in range(ny):
         total += count[iy]
     return g, state, contact, lo, hi, count, ok, wx, wy, gmax, total
+
+
+SURELY_BELOW = 1.0 - 1e-12
+"""``x^2 + y^2 < SURELY_BELOW * c^2`` (in floating point, ``c`` > :data:`NOT_TINY`) proves
+``hypot(x, y) < c`` (both sides are within a few units of round-off of the exact ones,
+and ``math.hypot`` within one): the kernels skip ``hypot`` there, where it decides
+nothing."""
+NOT_TINY = 1e-140
+"""Bounds above this have squares far from the subnormal numbers (whose round-off is not
+relative): the test of :data:`SURELY_BELOW` holds."""
 
 
 def _clip_start(p0, st0, g, out):
@@ -262,21 +278,23 @@ def _clip_start(p0, st0, g, out):
     py = out[1]
     has_state = st0.size > 0
     ok = True
-    for iy in range(ny):
-        for ix in range(nx):
+    for ix in range(nx):  # (the start read along its rows)
+        for iy in range(ny):
             x = p0[0, ix, iy]
             y = p0[1, ix, iy]
             if not (math.isfinite(x) and math.isfinite(y)):
                 ok = False
-            m = math.hypot(x, y)
             gi = g[iy, ix]
-            if (has_state and st0[ix, iy] == SLIP and m > 0) or m > gi:
-                s = gi / (m if m > 0 else 1.0)
-                x *= s
-                y *= s
-            if gi <= 0:
+            if gi <= 0:  # outside the contact
                 x = 0.0
                 y = 0.0
+            elif (has_state and st0[ix, iy] == SLIP) or not (
+                    gi > NOT_TINY and x * x + y * y < SURELY_BELOW * (gi * gi)):
+                m = math.hypot(x, y)
+                if (has_state and st0[ix, iy] == SLIP and m > 0) or m > gi:
+                    s = gi / (m if m > 0 else 1.0)
+                    x *= s
+                    y *= s
             px[iy, ix] = x
             py[iy, ix] = y
     return ok
@@ -422,7 +440,11 @@ def _counts_and_max(traction, state):
                 ncon += 1
                 if st == SLIP:
                     nslip += 1
-            h = math.hypot(traction[0, ix, iy], traction[1, ix, iy])
+            x = traction[0, ix, iy]
+            y = traction[1, ix, iy]
+            if pmax > NOT_TINY and x * x + y * y < SURELY_BELOW * (pmax * pmax):
+                continue  # |p| < pmax, surely
+            h = math.hypot(x, y)
             if h > pmax:
                 pmax = h
             elif h != h:
