@@ -48,6 +48,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
+from ..halfspace.sums import numpy_sum
 
 PRECONDITIONERS = ("fft", "none")
 STALL_ITERATIONS = 100
@@ -133,7 +134,8 @@ def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) ->
         raise RailContactError(f"{name} must have the grid shape {shape}, got {a.shape}")
     # a NaN or an infinity anywhere makes the sum NaN or infinite: the elementwise test
     # only when the sum is not finite (or overflows)
-    if not math.isfinite(a.sum()) and not np.isfinite(a).all():
+    total = numpy_sum(a) if a.flags.c_contiguous else a.sum()
+    if not math.isfinite(total) and not np.isfinite(a).all():
         raise RailContactError(f"{name} contains NaN or infinite values")
     return a
 
@@ -234,6 +236,18 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
                     j0 = j
                 j1 = max(j1, j + 1)
     return delta, total, (np.nan if nan else largest), count, edge, (i0, i1, j0, j1)
+
+
+@numba.njit(cache=True)
+def _nonnegative(p):  # pragma: no cover - compiled
+    """``np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0 made 0, as
+    numpy's) and its sum, added as numpy adds it."""
+    q = np.empty_like(p)
+    flat, qf = p.reshape(p.size), q.reshape(q.size)
+    for i in range(flat.size):
+        x = flat[i]
+        qf[i] = x if (x > 0.0 or x != x) else 0.0
+    return q, numpy_sum(q)
 
 
 @numba.njit(cache=True, fastmath=REASSOCIATE)
@@ -485,11 +499,15 @@ def solve_normal(
     # Start.
     if p is None:
         p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
+        total = float(p.sum())
+    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0) and its sum
+        p, total = _nonnegative(p)
     else:
         p = np.maximum(p, 0.0)
+        total = float(p.sum())
     if mask is not None:
         p = np.where(mask, p, 0.0)
-    total = float(p.sum())
+        total = float(p.sum())
     if not total > 0.0:  # (p >= 0: no element has pressure)
         p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
             _uniform_start(h, operator, penetration)
