@@ -551,7 +551,8 @@ class WheelsetContact:
 
             def of(grid):
                 p = previous_pressure(m, grid, time)
-                return p if p.sum() > 0 else estimate()(grid)
+                has = (numpy_sum(p) if p.flags.c_contiguous else p.sum()) > 0
+                return p if has else estimate()(grid)
             of.bounds = previous_bounds(m)  # the potential area: where the contact was
             return labelled(of, "previous")
 
