@@ -214,17 +214,24 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
 def _cut_off(contact: np.ndarray, gap: np.ndarray) -> bool:
     """Whether a contact element is next to (or on) an element where the ``gap`` [m] is
     undefined (no profile there: the geometry gives :data:`UNDEFINED_GAP` or more)."""
-    if gap.max() < UNDEFINED_GAP:  # (NaN: the mask below decides)
-        return False
-    undefined = gap >= UNDEFINED_GAP
-    if not undefined.any():
-        return False
-    near = contact.copy()
-    near[1:] |= contact[:-1]
-    near[:-1] |= contact[1:]
-    near[:, 1:] |= contact[:, :-1]
-    near[:, :-1] |= contact[:, 1:]
-    return bool((near & undefined).any())
+    return bool(_next_to(np.asarray(contact, dtype=bool), np.asarray(gap, dtype=float),
+                         UNDEFINED_GAP))
+
+
+@numba.njit(cache=True)
+def _next_to(contact, gap, limit):  # pragma: no cover - compiled
+    """Whether an element with ``gap >= limit`` (NaN: not) is in ``contact`` or has a
+    neighbour along x or y that is, in one pass (the gap is read; the contact only
+    around such elements)."""
+    nx, ny = gap.shape
+    for i in range(nx):
+        for j in range(ny):
+            if gap[i, j] >= limit and (
+                    contact[i, j] or (i > 0 and contact[i - 1, j])
+                    or (i + 1 < nx and contact[i + 1, j]) or (j > 0 and contact[i, j - 1])
+                    or (j + 1 < ny and contact[i, j + 1])):
+                return True
+    return False
 
 
 def _grown(meshed: Bounds, asked: Bounds, automatic: tuple[bool, bool]) -> Bounds:
