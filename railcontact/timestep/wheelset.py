@@ -733,7 +733,8 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
         converged &= n.converged and (t is None or t.converged)
         work.absorb(p.work)
         work.load_passes = max(work.load_passes, p.work.load_passes)
-    main = max(patches, key=lambda p: p.normal.force)
+    single = len(patches) == 1  # (the common case: no generators)
+    main = patches[0] if single else max(patches, key=lambda p: p.normal.force)
     cp = main.geometry
     wheel.normal_force = n_tot
     wheel.creep_force = (fx, sgn * fs)
@@ -743,15 +744,19 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
     wheel.moment = (float(m0), float(m1), float(m2))
     wheel.derailment_quotient = derailment_quotient(sgn, wheel.track_force)
     wheel.approach = vertical_approach(patches)
-    wheel.penetration = float(max(p.normal.penetration for p in patches))
+    wheel.penetration = float(main.normal.penetration if single else
+                              max(p.normal.penetration for p in patches))
     wheel.wheel_position = cp.wheel_s
     wheel.rail_position = cp.rail_y
     wheel.lateral_position = cp.position[1]
     wheel.contact_point = cp.position
     wheel.contact_angle = cp.contact_angle
     wheel.rolling_radius = cp.rolling_radius
-    wheel.area = float(sum(p.normal.area for p in patches))
-    wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
+    if single:
+        wheel.area, wheel.max_pressure = float(main.normal.area), float(main.normal.max_pressure)
+    else:
+        wheel.area = float(sum(p.normal.area for p in patches))
+        wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
     ts = [p.tangential for p in patches if p.tangential is not None]
     if len(ts) == 1:  # one patch: its own ratio, the same count (slip over non-exterior)
         wheel.slip_area_ratio = ts[0].slip_area_ratio
