@@ -95,6 +95,22 @@ def test_force_and_penetration_control_agree():
     assert np.max(np.abs(by_force.pressure - by_pen.pressure)) < 1e-6 * by_pen.max_pressure
 
 
+def test_contact_box_holds_the_hertz_ellipse():
+    """The result's box of the contact elements: the bounds of the contact mask, about
+    2a x 2b wide (Hertz); None without contact."""
+    A, B = curvatures(2.0)
+    hz = hertz(A, B, PAIR, load=50e3)
+    g, res = solve_on_box(A, B, hz, 45, load=50e3)
+    rows, cols = np.nonzero(res.contact)
+    assert res.contact_box == (rows.min(), rows.max() + 1, cols.min(), cols.max() + 1)
+    i0, i1, j0, j1 = res.contact_box
+    assert abs((i1 - i0) * g.dx - 2 * hz.a) < 2 * g.dx
+    assert abs((j1 - j0) * g.dy - 2 * hz.b) < 2 * g.dy
+    none = solve_normal(np.full(g.shape, 1e-3), g, influence_operator(g, PAIR),
+                        penetration=1e-6)
+    assert none.contact_box is None and not none.contact.any()
+
+
 def test_dissimilar_materials_use_combined_modulus():
     pair = ElasticPair.of(Material(210e9, 0.3), Material(110e9, 0.34))
     hz = hertz(2.0, 2.0, pair, load=1e4)

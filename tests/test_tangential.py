@@ -249,3 +249,28 @@ def test_zero_creepage_is_zero_traction_at_once(solver):
     wc.solve(rc.Pose(1e-3), loads=(8e4, 8e4), creepages=((1e-3, 1e-3, 0.1),) * 2)
     z = wc.solve(rc.Pose(1e-3), loads=(8e4, 8e4), creepages=((0.0, 0.0, 0.0),) * 2)
     assert all(w.tangential_iterations == 0 and w.creep_force == (0.0, 0.0) for w in z.wheels)
+
+
+def test_a_start_is_clipped_onto_the_traction_bound(sphere):
+    """The start of the sweeps: inside the bound ``mu p_n`` unchanged, beyond it (or in
+    slip) scaled onto it along its direction, zero outside the contact."""
+    from railcontact.tangential.convexgs import SLIP, SweepProblem
+
+    hz, g, nr = sphere
+    mu = 0.3
+    rng = np.random.default_rng(7)
+    bound = mu * nr.pressure
+    start = rng.normal(size=(2, *g.shape)) * 0.7 * bound.max()
+    state = rng.integers(1, 3, g.shape).astype(np.int8)
+    prob = SweepProblem.set_up(g, rolling_operator(g, STEEL), nr.pressure, mu,
+                               (1e-3, 0.0, 0.0), start, state, 1e-3, 10, 0.5, 0.5, "auto",
+                               1 / 6)
+    p = prob.p.transpose(0, 2, 1)  # (2, nx, ny)
+    size = np.hypot(*start)
+    inside = (size <= bound) & (state != SLIP) & (bound > 0)
+    assert inside.sum() > 50 and (~inside & (bound > 0)).sum() > 50
+    assert np.array_equal(p[:, inside], start[:, inside])
+    onto = (bound > 0) & ~inside
+    assert np.allclose(np.hypot(*p)[onto], bound[onto], rtol=1e-14, atol=0)
+    assert np.allclose((p * size)[:, onto], (start * np.hypot(*p))[:, onto], rtol=1e-12)
+    assert not p[:, bound == 0].any()

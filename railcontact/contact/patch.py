@@ -11,6 +11,7 @@ import math
 import time
 from collections.abc import Callable
 
+import numba
 import numpy as np
 
 from ..errors import CaseError, RailContactError
@@ -213,17 +214,24 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
 def _cut_off(contact: np.ndarray, gap: np.ndarray) -> bool:
     """Whether a contact element is next to (or on) an element where the ``gap`` [m] is
     undefined (no profile there: the geometry gives :data:`UNDEFINED_GAP` or more)."""
-    if gap.max() < UNDEFINED_GAP:  # (NaN: the mask below decides)
-        return False
-    undefined = gap >= UNDEFINED_GAP
-    if not undefined.any():
-        return False
-    near = contact.copy()
-    near[1:] |= contact[:-1]
-    near[:-1] |= contact[1:]
-    near[:, 1:] |= contact[:, :-1]
-    near[:, :-1] |= contact[:, 1:]
-    return bool((near & undefined).any())
+    return bool(_next_to(np.asarray(contact, dtype=bool), np.asarray(gap, dtype=float),
+                         UNDEFINED_GAP))
+
+
+@numba.njit(cache=True)
+def _next_to(contact, gap, limit):  # pragma: no cover - compiled
+    """Whether an element with ``gap >= limit`` (NaN: not) is in ``contact`` or has a
+    neighbour along x or y that is, in one pass (the gap is read; the contact only
+    around such elements)."""
+    nx, ny = gap.shape
+    for i in range(nx):
+        for j in range(ny):
+            if gap[i, j] >= limit and (
+                    contact[i, j] or (i > 0 and contact[i - 1, j])
+                    or (i + 1 < nx and contact[i + 1, j]) or (j > 0 and contact[i, j - 1])
+                    or (j + 1 < ny and contact[i, j + 1])):
+                return True
+    return False
 
 
 def _grown(meshed: Bounds, asked: Bounds, automatic: tuple[bool, bool]) -> Bounds:
@@ -341,7 +349,8 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         p0, st0 = remesh_strips(
             simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
     grid, pn = res.grid, res.pressure
-    window = None if settings.solver == "convexgs" else contact_window(res.contact)
+    window = None if settings.solver == "convexgs" else contact_window(
+        res.contact, box=res.contact_box or (-1, 0, -1, 0))
     if window is not None:  # solve on the contact's own window, return on the patch's grid
         sx, sy = window
         grid = Grid(sx.stop - sx.start, sy.stop - sy.start, grid.dx, grid.dy,
@@ -360,28 +369,47 @@ WINDOW_QUANTUM = 8
 """Element counts of a tangential window are multiples of this (few operators and plans)."""
 
 
-def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM
-                   ) -> tuple[slice, slice] | None:
+def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM,
+                   box: tuple[int, int, int, int] | None = None) -> tuple[slice, slice] | None:
     """The part of a grid (slices along x and y) on which a tangential solve gives the
     same answer as on the whole grid: the box around the ``contact`` elements, its counts
     rounded up to multiples of ``quantum`` (within the grid). Outside the contact the
     traction bound is zero, so those elements take no part in the steady-rolling problem;
     a window a fraction of the potential area makes every sweep's transforms that much
-    cheaper. None when it would be the whole grid, or there is no contact."""
-    rows = contact.any(axis=1)
-    first = int(rows.argmax())
-    if not rows[first]:
+    cheaper. None when it would be the whole grid, or there is no contact. ``box`` (e.g.
+    the normal solution's :attr:`~railcontact.normal.NormalResult.contact_box`; ``i0 <
+    0``: no contact) is the box of ``contact``, given."""
+    i0, i1, j0, j1 = _box(contact) if box is None else box
+    if i0 < 0:
         return None
-    cols = contact.any(axis=0)
     out = []
-    for lo, n, used in ((first, rows.size, rows), (int(cols.argmax()), cols.size, cols)):
-        hi = n - int(used[::-1].argmax())  # past the last one used
+    for lo, hi, n in ((i0, i1, contact.shape[0]), (j0, j1, contact.shape[1])):
         m = min(n, quantum * math.ceil((hi - lo) / quantum))
         start = min(max(lo - (m - (hi - lo)) // 2, 0), n - m)
         out.append(slice(start, start + m))
     if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
         return None
     return out[0], out[1]
+
+
+@numba.njit(cache=True)
+def _box(contact):  # pragma: no cover - compiled
+    """The rows ``i0:i1`` and columns ``j0:j1`` that hold the set elements of ``contact``
+    (nx, ny) (bool), in one pass; ``(-1, -1, -1, -1)`` without any."""
+    nx, ny = contact.shape
+    i0 = j0 = -1
+    i1 = j1 = 0
+    for i in range(nx):
+        for j in range(ny):
+            if contact[i, j]:
+                if i0 < 0:
+                    i0 = i
+                i1 = i + 1
+                if j0 < 0 or j < j0:
+                    j0 = j
+                if j + 1 > j1:
+                    j1 = j + 1
+    return i0, i1, j0, j1
 
 
 def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]

@@ -207,7 +207,8 @@ def hertz(
     e_star = pair.e_star
     g = axis_ratio(max(A, B) / min(A, B))
     m = 1.0 - g * g
-    k, e = (ellipk(m), ellipe(m)) if m > 0 else (math.pi / 2, math.pi / 2)
+    # plain floats (the same values): numpy's scalars make every later operation slower
+    k, e = (float(ellipk(m)), float(ellipe(m))) if m > 0 else (math.pi / 2, math.pi / 2)
     rho = 2.0 / (A + B)
 
     def from_load(n: float) -> tuple[float, float, float]:

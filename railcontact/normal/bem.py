@@ -38,6 +38,7 @@ preconditioner on the gradient).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -47,6 +48,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
+from ..halfspace.sums import numpy_sum
 
 PRECONDITIONERS = ("fft", "none")
 STALL_ITERATIONS = 100
@@ -101,6 +103,9 @@ class NormalResult:
     touches_boundary
         True when the contact reaches the outer ring of the potential area (the area is
         then probably too small).
+    contact_box
+        ``(i0, i1, j0, j1)``: the contact elements lie in the rows ``i0:i1`` and columns
+        ``j0:j1``; None without contact.
     """
 
     grid: Grid
@@ -118,6 +123,7 @@ class NormalResult:
     error: float
     history: np.ndarray = field(repr=False)
     touches_boundary: bool = False
+    contact_box: tuple[int, int, int, int] | None = None
 
 
 def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
@@ -126,7 +132,10 @@ def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) ->
     a = np.asarray(value, dtype=float)
     if a.shape != shape:
         raise RailContactError(f"{name} must have the grid shape {shape}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    # a NaN or an infinity anywhere makes the sum NaN or infinite: the elementwise test
+    # only when the sum is not finite (or overflows)
+    total = numpy_sum(a) if a.flags.c_contiguous else a.sum()
+    if not math.isfinite(total) and not np.isfinite(a).all():
         raise RailContactError(f"{name} contains NaN or infinite values")
     return a
 
@@ -187,7 +196,8 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
     """The result's fields on the (nx, ny) arrays: the approach (``own_delta``: the mean
     of ``h + u`` on the contact, or the least ``h`` without contact), ``gap = h + u -
     delta`` and ``contact = p > 0`` (in place); returns ``(delta, sum p, max(p, 0),
-    contact elements, whether the contact reaches the outer ring)``."""
+    contact elements, whether the contact reaches the outer ring, (i0, i1, j0, j1))``:
+    the contact in the rows ``i0:i1`` and columns ``j0:j1`` (-1 without contact)."""
     nx, ny = p.shape
     if own_delta:
         total = 0.0
@@ -205,6 +215,8 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
     nan = False
     count = 0
     edge = False
+    i0 = j0 = -1
+    i1 = j1 = 0
     for i in range(nx):
         for j in range(ny):
             gap[i, j] = h[i, j] + u[i, j] - delta
@@ -217,7 +229,25 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
                 count += 1
                 if i == 0 or j == 0 or i == nx - 1 or j == ny - 1:
                     edge = True
-    return delta, total, (np.nan if nan else largest), count, edge
+                if i0 < 0:
+                    i0 = i
+                i1 = i + 1
+                if j0 < 0 or j < j0:
+                    j0 = j
+                j1 = max(j1, j + 1)
+    return delta, total, (np.nan if nan else largest), count, edge, (i0, i1, j0, j1)
+
+
+@numba.njit(cache=True)
+def _nonnegative(p):  # pragma: no cover - compiled
+    """``np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0 made 0, as
+    numpy's) and its sum, added as numpy adds it."""
+    q = np.empty_like(p)
+    flat, qf = p.reshape(p.size), q.reshape(q.size)
+    for i in range(flat.size):
+        x = flat[i]
+        qf[i] = x if (x > 0.0 or x != x) else 0.0
+    return q, numpy_sum(q)
 
 
 @numba.njit(cache=True, fastmath=REASSOCIATE)
@@ -440,38 +470,44 @@ def solve_normal(
         raise RailContactError(f"initial_contact must have the grid shape {shape}, "
                                f"got {mask.shape}")
     area_el = grid.element_area
-    self_compliance = float(operator.self_coefficient[0, 0])  # [m/Pa]
+    kernel = operator.kernels[0, 0]  # the "zz" kernel (2nx-1, 2ny-1) [m/Pa]
+    self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
 
     def finish(p, u, delta, its, converged, message, err, hist, final=False):
         # final: under force control, the approach from the solution's own u
         gap = np.empty(shape)
         contact = np.empty(shape, dtype=bool)
-        delta, total, largest, count, edge = _summary(h, u, p, float(delta),
-                                                     final and force_control, gap, contact)
+        delta, total, largest, count, edge, box = _summary(
+            h, u, p, float(delta), final and force_control, gap, contact)
         return NormalResult(
             grid=grid, pressure=p, contact=contact, gap=gap,
             force=float(total * area_el), penetration=float(delta),
             max_pressure=float(largest), area=float(count * area_el),
             iterations=its, converged=converged, message=message,
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
-            touches_boundary=bool(edge))
+            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None)
 
-    zeros = np.zeros(shape)
     # Trivial cases: no load, or no interpenetration anywhere.
     if force_control and load == 0.0:
+        zeros = np.zeros(shape)
         return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
     if not force_control and np.all(h >= penetration):
+        zeros = np.zeros(shape)
         return finish(zeros, zeros, penetration, 0, True,
                       "no contact: penetration below the smallest gap", 0.0, [])
 
     # Start.
     if p is None:
         p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
+        total = float(p.sum())
+    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0) and its sum
+        p, total = _nonnegative(p)
     else:
         p = np.maximum(p, 0.0)
+        total = float(p.sum())
     if mask is not None:
         p = np.where(mask, p, 0.0)
-    total = float(p.sum())
+        total = float(p.sum())
     if not total > 0.0:  # (p >= 0: no element has pressure)
         p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
             _uniform_start(h, operator, penetration)
@@ -479,17 +515,21 @@ def solve_normal(
     if force_control:
         p *= load / (area_el * total)
 
-    # Work arrays (flat views ``*f`` of the (nx, ny) ones for the compiled steps).
+    # Work arrays: the rows of one block, flat (``*f``, for the compiled steps) and as
+    # (nx, ny) views of the same memory; the pressures ``p``, ``q`` (one of which is the
+    # result's) on their own.
     p = np.ascontiguousarray(p, dtype=float)
-    hf = h.ravel()
-    u, g, gm, t, r, q = (np.empty(shape) for _ in range(6))
-    z = g if precondition is None else np.empty(shape)
-    t[...] = 0.0
+    q = np.empty(shape)
+    hf, pf, qf = h.ravel(), p.ravel(), q.ravel()
+    work = np.empty((6, h.size))
+    uf, gf, gmf, tf, rf, zf = work
+    u, g, gm, t, r, z = work.reshape(6, *shape)
+    if precondition is None:
+        z, zf = g, gf
+    tf[:] = 0.0
     c = np.empty(h.size, dtype=bool)
-    uf, gf, gmf, tf, rf, zf = (a.ravel() for a in (u, g, gm, t, r, z))
     index = np.empty(CHANGE_LIMIT, dtype=np.int64)
     change = np.empty(CHANGE_LIMIT)
-    kernel = operator.kernel("zz")
     operator.apply(p, out=u)  # u = A p of the current p, kept up to date below
     fresh = 0  # iterations since u was last formed by a convolution
     g_old = 1.0
@@ -502,7 +542,7 @@ def solve_normal(
     delta = penetration if not force_control else 0.0
     load_value = float(load) if force_control else 0.0
     for its in range(1, int(max_iterations) + 1):
-        delta = _gradient(hf, uf, p.ravel(), delta, force_control, c, gf, gmf)
+        delta = _gradient(hf, uf, pf, delta, force_control, c, gf, gmf)
         if precondition is not None:
             precondition(gm, out=z)
         gz, gg = _direction(gf, zf, c, tf, force_control and precondition is not None,
@@ -510,13 +550,13 @@ def solve_normal(
         g_old = gz
         operator.apply(t, out=r)
         _, moved, total, changes, entered, updated = _step(
-            p.ravel(), q.ravel(), tf, gf, rf, c, uf, gz, gg, precondition is not None,
+            pf, qf, tf, gf, rf, c, uf, gz, gg, precondition is not None,
             force_control, load_value, area_el, self_compliance, kernel, shape[0], shape[1],
             index, change)
         conjugate = not entered
         if force_control and not total > 0.0:
             return finish(q, u, delta, its, False, "pressure vanished", np.inf, hist)
-        p, q = q, p
+        p, q, pf, qf = q, p, qf, pf
         if updated:
             fresh += 1
         else:  # too many elements left or entered the contact: convolve
@@ -524,13 +564,13 @@ def solve_normal(
             fresh = 0
         err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
         hist.append(err)
-        if not np.isfinite(err):
+        if not math.isfinite(err):
             break
         if err < tolerance:
             if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
                 operator.apply(p, out=u)
                 fresh = 0
-            if not _overlaps_flat(hf, uf, p.ravel(), force_control, delta, tolerance):
+            if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
                 converged = True
                 break
         if err < STALL_GAIN * best:

@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
-from .rolling import rigid_slip_lines
+from ..halfspace.sums import numpy_sum
 
 try:
     import numba
@@ -208,12 +208,15 @@ def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
     return blocks
 
 
-def _bound_layout(pn, mu):
+def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
     """The traction bound ``g = mu p_n`` [Pa] of the pressure ``pn`` (nx, ny) in the
     sweep layout (ny, nx), its states (adhesion where ``g > 0``, else exterior), the
     contact mask, per row the first and last contact element (``lo`` 1 > ``hi`` 0 in a
     row without contact) and their count; ``ok`` is False when a pressure is negative or
-    not finite. One compiled pass (numba) in place of a dozen array operations."""
+    not finite; the rigid slip ``wx``, ``wy`` [m] of the creepage ``(xi, eta, phi)`` on
+    the grid ``(x0, dx, y0, dy)`` (:func:`~.rolling.rigid_slip_lines`' values, the same
+    operations) in that layout; the largest ``g`` and the number of contact elements.
+    One compiled pass (numba) in place of a few dozen array operations."""
     nx, ny = pn.shape
     g = np.empty((ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
@@ -221,9 +224,21 @@ def _bound_layout(pn, mu):
     lo = np.ones(ny, dtype=np.int64)
     hi = np.zeros(ny, dtype=np.int64)
     count = np.zeros(ny, dtype=np.int64)
-    ok = True
+    wx = np.empty((ny, nx))
+    wy = np.empty((ny, nx))
+    shift = offset * dx
+    ly = np.empty(nx)
+    for ix in range(nx):  # rigid_slip_lines' W_y(x) and W_x(y)
+        ly[ix] = dx * (eta + phi * ((x0 + dx * float(ix)) + shift))
     for iy in range(ny):
+        lx = dx * (xi - phi * (y0 + dy * float(iy)))
         for ix in range(nx):
+            wx[iy, ix] = lx
+            wy[iy, ix] = ly[ix]
+    ok = True
+    gmax = 0.0
+    for ix in range(nx):  # (the pressure read along its rows)
+        for iy in range(ny):
             p = pn[ix, iy]
             if not (0.0 <= p < math.inf):
                 ok = False
@@ -236,42 +251,72 @@ def _bound_layout(pn, mu):
                     lo[iy] = ix
                 hi[iy] = ix
                 count[iy] += 1
-    return g, state, contact, lo, hi, count, ok
+                gmax = max(gmax, gi)
+    total = 0
+    for iy in range(ny):
+        total += count[iy]
+    return g, state, contact, lo, hi, count, ok, wx, wy, gmax, total
 
 
-def _clip_start(p0, slip0, g, out):
+SURELY_BELOW = 1.0 - 1e-12
+"""``x^2 + y^2 < SURELY_BELOW * c^2`` (in floating point, ``c`` > :data:`NOT_TINY`) proves
+``hypot(x, y) < c`` (both sides are within a few units of round-off of the exact ones,
+and ``math.hypot`` within one): the kernels skip ``hypot`` there, where it decides
+nothing."""
+NOT_TINY = 1e-140
+"""Bounds above this have squares far from the subnormal numbers (whose round-off is not
+relative): the test of :data:`SURELY_BELOW` holds."""
+
+
+def _clip_start(p0, st0, g, out):
     """An initial traction ``p0`` (2, nx, ny) [Pa] in the sweep layout ``out`` (2, ny, nx),
-    scaled onto the bound ``g`` where it exceeds it or where ``slip0`` (nx, ny; empty:
-    none) marks a slip element, zero outside the contact; returns False when a value is
-    not finite."""
+    scaled onto the bound ``g`` where it exceeds it or where the state ``st0`` (nx, ny;
+    empty: none) marks a slip element, zero outside the contact; returns False when a
+    value is not finite."""
     ny, nx = g.shape
     px = out[0]
     py = out[1]
-    has_state = slip0.size > 0
+    has_state = st0.size > 0
     ok = True
-    for iy in range(ny):
-        for ix in range(nx):
+    for ix in range(nx):  # (the start read along its rows)
+        for iy in range(ny):
             x = p0[0, ix, iy]
             y = p0[1, ix, iy]
             if not (math.isfinite(x) and math.isfinite(y)):
                 ok = False
-            m = math.hypot(x, y)
             gi = g[iy, ix]
-            if (has_state and slip0[ix, iy] and m > 0) or m > gi:
-                s = gi / (m if m > 0 else 1.0)
-                x *= s
-                y *= s
-            if gi <= 0:
+            if gi <= 0:  # outside the contact
                 x = 0.0
                 y = 0.0
+            elif (has_state and st0[ix, iy] == SLIP) or not (
+                    gi > NOT_TINY and x * x + y * y < SURELY_BELOW * (gi * gi)):
+                m = math.hypot(x, y)
+                if (has_state and st0[ix, iy] == SLIP and m > 0) or m > gi:
+                    s = gi / (m if m > 0 else 1.0)
+                    x *= s
+                    y *= s
             px[iy, ix] = x
             py[iy, ix] = y
     return ok
 
 
+def _squares(px, py, out):
+    """``(px * px + py * py).sum()`` of the (ny, nx) C-contiguous ``px``, ``py``: the same
+    squares (in ``out``) added in numpy's order (:mod:`~railcontact.halfspace.sums`), so
+    the same bits."""
+    ny, nx = px.shape
+    for iy in range(ny):
+        for ix in range(nx):
+            out[iy, ix] = px[iy, ix] * px[iy, ix] + py[iy, ix] * py[iy, ix]
+    return numpy_sum(out)
+
+
+_NO_STATE = np.zeros((0, 0), dtype=np.int8)
+
 if HAVE_NUMBA:
     _bound_layout = numba.njit(cache=True)(_bound_layout)
     _clip_start = numba.njit(cache=True)(_clip_start)
+    _squares = numba.njit(cache=True)(_squares)
 
 
 @lru_cache(maxsize=16)
@@ -367,20 +412,23 @@ _RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
     """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
-    x, y = grid.x[:, None], grid.y[None, :]  # the element centres, broadcast
     da = grid.element_area
-    fx = float(traction[0].sum() * da)
-    fy = float(traction[1].sum() * da)
-    mz = float((x * traction[1] - y * traction[0]).sum() * da)
-    ncon, nslip, pmax = _counts_and_max(traction, state)
+    swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
+    if swept.flags.c_contiguous and state.flags.c_contiguous:
+        sx, sy, sm, ncon, nslip, pmax = _summary_sums(swept, state, grid.x0, grid.dx,
+                                                      grid.y0, grid.dy)
+    else:  # the same sums by numpy (any layout)
+        x, y = grid.x[:, None], grid.y[None, :]
+        sx, sy = traction[0].sum(), traction[1].sum()
+        sm = (x * traction[1] - y * traction[0]).sum()
+        ncon, nslip, pmax = _counts_and_max(traction, state)
     ratio = float(nslip / ncon) if ncon else 0.0
-    return (fx, fy), mz, ratio, float(pmax)
+    return (float(sx * da), float(sy * da)), float(sm * da), ratio, float(pmax)
 
 
 def _counts_and_max(traction, state):
     """Elements in contact and in slip, and the largest |p| [Pa] (0 without elements, NaN
-    when a traction is NaN), in one pass (the sums stay numpy's: ConvexGS's forces keep
-    their bits; a maximum is the same in any order)."""
+    when a traction is NaN), in one pass (a maximum is the same in any order)."""
     ncon = 0
     nslip = 0
     pmax = 0.0
@@ -392,7 +440,11 @@ def _counts_and_max(traction, state):
                 ncon += 1
                 if st == SLIP:
                     nslip += 1
-            h = math.hypot(traction[0, ix, iy], traction[1, ix, iy])
+            x = traction[0, ix, iy]
+            y = traction[1, ix, iy]
+            if pmax > NOT_TINY and x * x + y * y < SURELY_BELOW * (pmax * pmax):
+                continue  # |p| < pmax, surely
+            h = math.hypot(x, y)
             if h > pmax:
                 pmax = h
             elif h != h:
@@ -400,8 +452,26 @@ def _counts_and_max(traction, state):
     return ncon, nslip, (math.nan if nan else pmax)
 
 
+def _summary_sums(swept, state, x0, dx, y0, dy):
+    """:func:`tangential_summary`'s sums of the traction ``swept`` (2, ny, nx) (C order)
+    with the states (nx, ny): ``sum p_x``, ``sum p_y`` and ``sum (x p_y - y p_x)``
+    (``x``, ``y`` the element centres as :attr:`Grid.x`, :attr:`Grid.y` form them), each
+    added in numpy's order over the traction's memory, as ``traction[k].sum()`` and the
+    sum of numpy's broadcast product (laid out as ``traction[1]``) add them; and
+    :func:`_counts_and_max`."""
+    ny, nx = swept.shape[1], swept.shape[2]
+    arm = np.empty((ny, nx))
+    for iy in range(ny):
+        y = y0 + dy * float(iy)
+        for ix in range(nx):
+            arm[iy, ix] = (x0 + dx * float(ix)) * swept[1, iy, ix] - y * swept[0, iy, ix]
+    ncon, nslip, pmax = _counts_and_max(swept.transpose(0, 2, 1), state)
+    return (numpy_sum(swept[0]), numpy_sum(swept[1]), numpy_sum(arm), ncon, nslip, pmax)
+
+
 if HAVE_NUMBA:
     _counts_and_max = numba.njit(cache=True)(_counts_and_max)
+    _summary_sums = numba.njit(cache=True)(_summary_sums)
 
 
 @dataclass
@@ -433,6 +503,10 @@ class SweepProblem:
     tolerance: float
     max_iterations: int
     use_numba: bool
+    largest_bound: float = math.inf
+    """The largest ``g`` [Pa]."""
+    contact_count: int = -1
+    """Elements in contact (-1: count ``contact``)."""
 
     @classmethod
     def set_up(cls, grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,
@@ -445,8 +519,15 @@ class SweepProblem:
                                    "this grid")
         pn = np.asarray(pressure, dtype=float)
         mu = check_positive("friction", friction, allow_zero=True)
+        if len(creepage) != 3:
+            raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
+        xi = check_finite("xi", creepage[0], "-")  # (rigid_slip_lines' checks)
+        eta = check_finite("eta", creepage[1], "-")
+        phi = check_finite("phi", creepage[2], "1/m")
+        spin_offset = check_finite("spin_offset", spin_offset)
         if pn.shape == shape:
-            g, state, contact, lo, hi, count, ok = _bound_layout(pn, mu)
+            g, state, contact, lo, hi, count, ok, wx, wy, gmax, ncon = _bound_layout(
+                pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset)
         if pn.shape != shape or not ok:
             raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
         tolerance = check_positive("tolerance", tolerance)
@@ -458,12 +539,7 @@ class SweepProblem:
             raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine == "numba" and not HAVE_NUMBA:
             raise RailContactError("engine 'numba' requested but numba is not installed")
-        lx, ly = rigid_slip_lines(grid, creepage, spin_offset)
-        wx = np.empty_like(g)
-        wy = np.empty_like(g)
-        wx[...] = lx[:, None]
-        wy[...] = ly[None, :]
-        rolling = any(c != 0.0 for c in creepage)
+        rolling = xi != 0.0 or eta != 0.0 or phi != 0.0
         if initial_traction is None or not rolling:  # no creepage: no traction, exactly
             p = np.zeros((2, *g.shape))
         else:
@@ -471,7 +547,8 @@ class SweepProblem:
         return cls(
             grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
-            max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA)
+            max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA,
+            largest_bound=float(gmax), contact_count=int(ncon))
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
               t0: float) -> TangentialResult:
@@ -479,19 +556,31 @@ class SweepProblem:
         squared norm of its change), stopping when the error is not finite or has not
         fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
         px, py = self.px, self.py
-        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
+        ncon = self.contact_count
+        if ncon < 0:
+            ncon = int(np.count_nonzero(self.contact))
+        # the floor 1e-9 ||g|| of the norm is at most 1e-9 sqrt(ncon) max(g): formed only
+        # for a norm below that (it is then the same value as always)
+        floor_above = 1.01e-9 * math.sqrt(ncon) * self.largest_bound
+        floor = None
+        squares = np.empty_like(px)
         hist: list[float] = []
         converged = stalled = False
         best, best_its = math.inf, 0
         its = 0
         err = 0.0
-        in_contact = bool(self.contact.any())
+        in_contact = ncon > 0
         if in_contact and self.rolling:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
-                norm = math.sqrt(float((px * px + py * py).sum()))
-                scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+                norm = math.sqrt(_squares(px, py, squares))  # (px*px + py*py).sum()
+                if not norm > floor_above:
+                    if floor is None:
+                        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
+                    scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
+                else:
+                    scale = norm
                 err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
                 hist.append(err)
                 if not math.isfinite(err):
@@ -550,14 +639,15 @@ def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[
     p0 = np.asarray(initial_traction, dtype=float)
     if p0.shape != (2, *shape):
         raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-    slip0 = np.zeros((0, 0), dtype=bool)
+    st0 = _NO_STATE
     if initial_state is not None:
         st0 = np.asarray(initial_state)
         if st0.shape != shape:
             raise RailContactError(f"initial_state must have shape {shape}")
-        slip0 = st0 == SLIP
+        if st0.dtype != np.int8:  # (the compiled clip reads the states as int8)
+            st0 = np.where(st0 == SLIP, SLIP, 0).astype(np.int8)
     out = np.empty((2, *g.shape))
-    if not _clip_start(p0, slip0, g, out):
+    if not _clip_start(p0, st0, g, out):
         raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
     return out
 

@@ -1,0 +1,31 @@
+"""The compiled sums in numpy's order (railcontact.halfspace.sums) against numpy's own."""
+
+import numpy as np
+import pytest
+
+from railcontact.halfspace.sums import numpy_sum, pairwise_sum
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_numpy_sum_is_numpys_to_the_bit(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(300):
+        shape = tuple(int(v) for v in rng.integers(1, 120, rng.integers(1, 4)))
+        a = rng.normal(size=shape) * 10.0 ** rng.integers(-8, 9)
+        a[rng.random(shape) < rng.random()] = 0.0  # contact-like fields: many zeros
+        assert numpy_sum(a) == a.sum()
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 127, 128, 129, 130, 1000, 4097, 70_001])
+def test_pairwise_sum_of_runs(n):
+    rng = np.random.default_rng(n)
+    a = rng.normal(size=n + 5) * 1e6
+    assert pairwise_sum(a, 3, n) == a[3:3 + n].sum()
+
+
+def test_sum_sees_nan_and_infinity():
+    a = np.ones((40, 30))
+    a[7, 3] = np.nan
+    assert np.isnan(numpy_sum(a))
+    a[7, 3] = np.inf
+    assert numpy_sum(a) == np.inf
