@@ -149,10 +149,11 @@ def _row_dot(rxx, rxy, ryy, r, k0, dpx, dpy, jy, a, m):
     return ax, ay
 
 
-def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix,
+def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, jx,
            omega_h, omega_s):
-    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`);
-    ``(sx, sy)`` is its shift [m] with the changes of the block's rows before this one."""
+    """Solve element (iy, ix) with its trailing adhesion run ``jx < j < ix`` (see
+    :func:`_steady_block`); ``(sx, sy)`` is its shift [m] with the changes of the block's
+    rows before this one."""
     ny, nx = g.shape
     # in this row the elements trailing this one have changed (elements are visited in
     # order; the runs shifted are trailing ones), the rest not yet (zero in dpx, dpy)
@@ -160,7 +161,6 @@ def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix,
     ax, ay = _row_dot_c(rxx, rxy, ryy, ny - 1, nx - 1 - ix + a, dpx, dpy, iy, a, ix - a)
     sx += ax
     sy += ay
-    jx = _run_start_c(state, iy, ix)
     n = ix - jx
     c11 = cum[0, n]
     c12 = cum[1, n]
@@ -213,10 +213,13 @@ def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi
                                     nx - 1 - ix + lo[jy], dpx, dpy, jy, lo[jy], m)
                 tx[ix] += ax
                 ty[ix] += ay
+        jx = a - 1  # the run start (:func:`_run_start`), kept up to date along the row
         for ix in range(a, b + 1):
             if g[iy, ix] > 0.0:
                 _visit_c(rxx, rxy, ryy, cum, tx[ix], ty[ix], g, px, py, dpx, dpy, state,
-                         lo, iy, ix, omega_h, omega_s)
+                         lo, iy, ix, jx, omega_h, omega_s)
+            if state[iy, ix] != ADHESION:
+                jx = ix
         for ix in range(a, b + 1):
             dif += dpx[iy, ix] * dpx[iy, ix] + dpy[iy, ix] * dpy[iy, ix]
     return dif
@@ -229,7 +232,6 @@ if HAVE_NUMBA:
     _jit = numba.njit(cache=True, inline="always", error_model="numpy")
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
-    _run_start_c = _jit(_run_start)
     _row_dot_c = _jit(_row_dot)
     _visit_c = _jit(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
@@ -237,7 +239,6 @@ if HAVE_NUMBA:
 else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
-    _run_start_c = _run_start
     _row_dot_c = _row_dot
     _visit_c = _visit
     _steady_block_numba = None
