@@ -263,6 +263,7 @@ def test_element_turns_and_angles_are_the_library_ones():
         c, s = _turn_c(math.cos(a), math.sin(a), t)
         assert abs(c - math.cos(a + t)) < 4e-16 and abs(s - math.sin(a + t)) < 4e-16
         assert abs(_angle_c(math.cos(t), math.sin(t)) - t) < 4e-16 * max(1.0, abs(t))
+    assert _angle_c(-1.0, 0.0) == _angle_c(-1.0, -0.0) == -math.pi  # as (d + pi) % 2pi - pi
 
 
 def test_slip_element_is_on_the_bound_against_its_slip():

@@ -70,14 +70,16 @@ def _turn(c, s, t):
 
 
 def _angle(cd, sd):
-    """The angle [rad] of the unit vector ``(cd, sd)`` in (-pi, pi] (``atan2``; for
-    ``|sd / cd| < SMALL_TURN``, ``cd > 0``, atan's series to the x^11 term)."""
+    """The angle [rad] of the unit vector ``(cd, sd)`` in [-pi, pi) (``atan2``, with the
+    reversed direction at -pi as the angle difference's ``(d + pi) % 2 pi - pi`` has it;
+    for ``|sd / cd| < SMALL_TURN``, ``cd > 0``, atan's series to the x^11 term)."""
     if cd > 0.0 and abs(sd) < SMALL_TURN * cd:
         x = sd / cd
         x2 = x * x
         return x * (1.0 - x2 * (1.0 / 3 - x2 * (1.0 / 5 - x2 * (1.0 / 7 - x2 * (
             1.0 / 9 - x2 * (1.0 / 11))))))
-    return math.atan2(sd, cd)
+    a = math.atan2(sd, cd)
+    return -math.pi if a == math.pi else a
 
 
 def _norm(x, y):
