@@ -93,7 +93,7 @@ def sweeps(problem: dict, schedule: list[tuple[float, float]], count: int) -> li
     out, measure = [], []
     for k in range(count):
         oh, os_ = schedule[min(k, len(schedule) - 1)]
-        dif = _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.px, prob.py,
+        dif = _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.p,
                              prob.state, prob.lo, prob.hi, rows, oh, os_)  # squared change
         measure.append(math.sqrt(dif) / math.sqrt(float(np.sum(prob.px ** 2 + prob.py ** 2))))
         out.append(np.stack([prob.px.T, prob.py.T]))

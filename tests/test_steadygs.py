@@ -293,24 +293,27 @@ def test_non_reciprocal_operator_is_refused(sphere):
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 def test_row_blocks_of_any_size_give_the_same_iterates(sphere, monkeypatch):
-    """The shift is exact at every element update whatever the blocks: one block (the
-    default on this patch), many blocks (a DC-FFT product at each boundary) and the numpy
-    sweep without blocks take the same sweeps to the same traction."""
+    """The shift is exact at every element update whatever the blocks: one block, the
+    default blocks, many blocks (a DC-FFT product at each boundary) and the numpy sweep
+    without blocks take the same sweeps to the same traction."""
     import railcontact.tangential.steadygs as steadygs
     from railcontact.tangential.convexgs import _blocks_of
 
     hz, g, nr = sphere
     op = rolling_operator(g, STEEL)
     per_row = (nr.pressure > 0).sum(axis=0)  # contact elements per row (rows along y)
-    assert len(_blocks_of(per_row, steadygs.BLOCK_SCALE**2 * g.size)) == 1
     args = (g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2))
+    default = solve_steadygs(*args, tolerance=1e-6)
+    monkeypatch.setattr(steadygs, "BLOCK_SCALE", 1e3)
+    assert len(_blocks_of(per_row, steadygs.BLOCK_SCALE**2 * g.size)) == 1
     one = solve_steadygs(*args, tolerance=1e-6)
     monkeypatch.setattr(steadygs, "BLOCK_SCALE", 2.0)
     assert len(_blocks_of(per_row, steadygs.BLOCK_SCALE**2 * g.size)) >= 8
     many = solve_steadygs(*args, tolerance=1e-6)
     plain = solve_steadygs(*args, tolerance=1e-6, engine="numpy")
-    assert one.converged and one.iterations == many.iterations == plain.iterations
-    for r in (many, plain):
+    assert one.converged
+    assert one.iterations == default.iterations == many.iterations == plain.iterations
+    for r in (default, many, plain):
         np.testing.assert_allclose(r.traction, one.traction, rtol=0,
                                    atol=1e-11 * one.max_traction)
         np.testing.assert_array_equal(r.state, one.state)

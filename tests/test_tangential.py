@@ -274,3 +274,44 @@ def test_a_start_is_clipped_onto_the_traction_bound(sphere):
     assert np.allclose(np.hypot(*p)[onto], bound[onto], rtol=1e-14, atol=0)
     assert np.allclose((p * size)[:, onto], (start * np.hypot(*p))[:, onto], rtol=1e-12)
     assert not p[:, bound == 0].any()
+
+
+def test_element_turns_and_angles_are_the_library_ones():
+    """The slip element's trigonometry without library calls (series below SMALL_TURN):
+    the turned unit vector and the angle between two directions equal cos, sin and atan2
+    to round-off, on both sides of the series' bound."""
+    from railcontact.tangential.convexgs import SMALL_TURN, _angle_c, _turn_c
+
+    for t in (0.0, 1e-9, -3e-4, 0.02, -0.049, SMALL_TURN * (1 - 1e-12), SMALL_TURN,
+              -0.3, 2.0, -3.1):
+        a = 0.7
+        c, s = _turn_c(math.cos(a), math.sin(a), t)
+        assert abs(c - math.cos(a + t)) < 4e-16 and abs(s - math.sin(a + t)) < 4e-16
+        assert abs(_angle_c(math.cos(t), math.sin(t)) - t) < 4e-16 * max(1.0, abs(t))
+    assert _angle_c(-1.0, 0.0) == _angle_c(-1.0, -0.0) == -math.pi  # as (d + pi) % 2pi - pi
+
+
+def test_slip_element_is_on_the_bound_against_its_slip():
+    """A slip element (no relaxation, from zero traction): |p| = g and the slip
+    S0 + C p anti-parallel to p (Coulomb's law), for anisotropic 2x2 coefficients."""
+    from railcontact.tangential.convexgs import SLIP, _element_solve_c
+
+    rng = np.random.default_rng(3)
+    slips = 0
+    for _ in range(200):
+        a = rng.uniform(0.5, 2.0)
+        b = rng.uniform(-0.3, 0.3)
+        c11, c12, c21, c22 = 1e-11 * a, 1e-11 * b, 1e-11 * b, 1e-11 * rng.uniform(0.5, 2.0)
+        g = rng.uniform(1e6, 1e9)
+        s0 = rng.normal(size=2) * g * 1e-11 * rng.uniform(2.0, 50.0)  # beyond adhesion
+        px, py, st = _element_solve_c(0.0, 0.0, s0[0], s0[1], g, c11, c12, c21, c22,
+                                      1.0, 1.0)
+        if st != SLIP:
+            continue
+        slips += 1
+        sx = s0[0] + c11 * px + c12 * py
+        sy = s0[1] + c21 * px + c22 * py
+        assert math.hypot(px, py) == pytest.approx(g, rel=1e-14)
+        assert abs(px * sy - py * sx) <= 1e-12 * g * math.hypot(sx, sy)  # parallel
+        assert px * sx + py * sy < 0.0  # opposed
+    assert slips > 150

@@ -39,8 +39,8 @@ direct summation with ``B`` (all traction changes, including those of the shifte
 adhesion runs): at the start of a row those of the block's rows before it, for the whole
 row at once, then at each element those of its own row so far. Blocks hold about
 :data:`BLOCK_SCALE` ``sqrt(nx ny)`` contact elements: on the wheelset step's windows one
-block, so a sweep costs one DC-FFT product and one compiled call. The sweep is compiled
-with numba; a numpy version (vectorised shift per element, no blocks) gives the same
+or two blocks, so a sweep costs one or two DC-FFT products and compiled calls. The sweep
+is compiled with numba; a numpy version (vectorised shift per element, no blocks) gives the same
 iterates where numba is missing or on request. The result's slip field (one more
 product) is formed only when read (:class:`~.convexgs.TangentialResult`).
 
@@ -87,14 +87,15 @@ except ImportError:  # pragma: no cover
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
-BLOCK_SCALE = 18.0
+BLOCK_SCALE = 12.0
 """Target size of a row block, in contact elements: ``BLOCK_SCALE sqrt(nx ny)`` on an
 ``nx`` x ``ny`` grid. A block's direct sum costs about (its elements)^2 / 2 element pairs,
 a block boundary one DC-FFT product, whose cost grows with the grid, so the best block
-grows as the square root of the grid's size. 18 was the best of 12 / 18 / 25 on the
-wheelset step's windows (32 x 24 to 40 x 32 elements, 500-700 in contact: one block, one
-product per sweep) and on 0.2 mm wheel-rail patches (56 x 104 elements, 2,400-4,300 in
-contact: two to four blocks)."""
+grows as the square root of the grid's size. 12 was the best of 8 / 10 / 12 / 18 in
+round 5 (the boundary product no longer stacks a copy; each solve timed with every value
+on the same problem): on the wheelset step's windows (24 x 48 elements, 250-1,000 in
+contact) one block up to about 600 contact elements, two above; on 0.5 and 0.2 mm
+wheel-rail patches 5-10 % less time than 18, the same sweeps."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
@@ -148,10 +149,11 @@ def _row_dot(rxx, rxy, ryy, r, k0, dpx, dpy, jy, a, m):
     return ax, ay
 
 
-def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix,
+def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, jx,
            omega_h, omega_s):
-    """Solve element (iy, ix) with its trailing adhesion run (see :func:`_steady_block`);
-    ``(sx, sy)`` is its shift [m] with the changes of the block's rows before this one."""
+    """Solve element (iy, ix) with its trailing adhesion run ``jx < j < ix`` (see
+    :func:`_steady_block`); ``(sx, sy)`` is its shift [m] with the changes of the block's
+    rows before this one."""
     ny, nx = g.shape
     # in this row the elements trailing this one have changed (elements are visited in
     # order; the runs shifted are trailing ones), the rest not yet (zero in dpx, dpy)
@@ -159,7 +161,6 @@ def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix,
     ax, ay = _row_dot_c(rxx, rxy, ryy, ny - 1, nx - 1 - ix + a, dpx, dpy, iy, a, ix - a)
     sx += ax
     sy += ay
-    jx = _run_start_c(state, iy, ix)
     n = ix - jx
     c11 = cum[0, n]
     c12 = cum[1, n]
@@ -212,10 +213,13 @@ def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi
                                     nx - 1 - ix + lo[jy], dpx, dpy, jy, lo[jy], m)
                 tx[ix] += ax
                 ty[ix] += ay
+        jx = a - 1  # the run start (:func:`_run_start`), kept up to date along the row
         for ix in range(a, b + 1):
             if g[iy, ix] > 0.0:
                 _visit_c(rxx, rxy, ryy, cum, tx[ix], ty[ix], g, px, py, dpx, dpy, state,
-                         lo, iy, ix, omega_h, omega_s)
+                         lo, iy, ix, jx, omega_h, omega_s)
+            if state[iy, ix] != ADHESION:
+                jx = ix
         for ix in range(a, b + 1):
             dif += dpx[iy, ix] * dpx[iy, ix] + dpy[iy, ix] * dpy[iy, ix]
     return dif
@@ -228,7 +232,6 @@ if HAVE_NUMBA:
     _jit = numba.njit(cache=True, inline="always", error_model="numpy")
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
-    _run_start_c = _jit(_run_start)
     _row_dot_c = _jit(_row_dot)
     _visit_c = _jit(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
@@ -236,7 +239,6 @@ if HAVE_NUMBA:
 else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
-    _run_start_c = _run_start
     _row_dot_c = _row_dot
     _visit_c = _visit
     _steady_block_numba = None
@@ -255,24 +257,26 @@ def _add_product(ux, uy, bx, by, u, r0):
 _add_product_c = numba.njit(cache=True)(_add_product) if HAVE_NUMBA else _add_product
 
 
-def _sweep_blocked(kern, cum, op, wx, wy, g, px, py, state, lo, hi, rows, omega_h, omega_s):
-    """One SteadyGS sweep, row block by row block (on the wheelset step's windows one
-    block); between blocks the shift of the rows still to come is brought up to date with
-    one DC-FFT product of the block's changes (as ConvexGS's sweep). Returns the squared
-    norm of the sweep's traction change [Pa^2]."""
+def _sweep_blocked(kern, cum, op, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s):
+    """One SteadyGS sweep of the traction ``p`` (2, ny, nx) (the sweep layout), row block
+    by row block (on the wheelset step's windows one block); between blocks the shift of
+    the rows still to come is brought up to date with one DC-FFT product of the block's
+    changes (as ConvexGS's sweep). The products read ``p`` and the changes through
+    (2, nx, ny) views, with no stacked copy. Returns the squared norm of the sweep's
+    traction change [Pa^2]."""
+    px, py = p[0], p[1]
     ux = np.empty_like(g)
     uy = np.empty_like(g)
-    _add_product_c(ux, uy, wx, wy, op.apply(np.stack([px.T, py.T])), 0)
-    dpx = np.zeros_like(px)
-    dpy = np.zeros_like(py)
+    _add_product_c(ux, uy, wx, wy, op.apply(p.transpose(0, 2, 1)), 0)
+    dp = np.zeros_like(p)
+    dpx, dpy = dp[0], dp[1]
     dif = 0.0
     for b, (r0, r1) in enumerate(rows):
         dif += _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
                                    r0, r1, omega_h, omega_s)
         if b + 1 < len(rows):
-            _add_product_c(ux, uy, ux, uy, op.apply(np.stack([dpx.T, dpy.T])), r1)
-            dpx[r0:r1] = 0.0
-            dpy[r0:r1] = 0.0
+            _add_product_c(ux, uy, ux, uy, op.apply(dp.transpose(0, 2, 1)), r1)
+            dp[:, r0:r1] = 0.0
     return dif
 
 
@@ -386,7 +390,7 @@ def solve_steadygs(
 
     def sweep() -> float:
         if prob.use_numba:  # the blocks measure their changes, the shifted runs included
-            return _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, px, py,
+            return _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.p,
                                   prob.state, prob.lo, prob.hi, rows, oh, os_)
         qx, qy = px.copy(), py.copy()  # the runs move many elements: measure the whole field
         _sweep_numpy(_gs_kernels(operator), cum, prob.wx, prob.wy, prob.g, px, py, prob.state,
