@@ -26,9 +26,10 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
+import numba
 import numpy as np
 
-from ..halfspace.grid import Grid, remesh
+from ..halfspace.grid import Grid, _lattice_shift, remesh
 
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
@@ -116,12 +117,63 @@ def match(memories: list[PatchMemory], u: float, z: float) -> PatchMemory | None
 def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None
                       ) -> np.ndarray:
     """The predicted pressure [Pa] on ``grid`` at ``time`` [s] (module docstring)."""
-    p = remesh(memory.pressure, memory.grid, grid)
     c = memory.extrapolation(time)
-    if c > 0:
-        o = memory.older
+    o = memory.older if c > 0 else None
+    shift = _on_lattice(memory, grid)
+    shift_o = _on_lattice(o, grid) if o is not None else (0, 0)
+    if shift is not None and shift_o is not None:  # grids on one lattice: one pass
+        return _extrapolated(memory.pressure, *shift, o.pressure if o is not None else
+                             memory.pressure, *shift_o, float(c), o is not None, True,
+                             *grid.shape)
+    p = remesh(memory.pressure, memory.grid, grid)
+    if o is not None:
         p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
     return p
+
+
+def _on_lattice(memory: PatchMemory, grid: Grid) -> tuple[int, int] | None:
+    """The whole-element offset of ``grid`` in ``memory``'s grid (as :func:`remesh` takes
+    it), or None when the grids are not on one lattice or a field is not (nx, ny)."""
+    if memory.pressure.ndim != 2 or memory.pressure.shape != memory.grid.shape:
+        return None
+    return (0, 0) if memory.grid is grid else _lattice_shift(memory.grid, grid)
+
+
+@numba.njit(cache=True)
+def _extrapolated(v1, i1, j1, v0, i0, j0, c, extrapolate, clip, nx, ny):  # pragma: no cover
+    """``remesh`` on one lattice (``out[a, b] = v[a + i, b + j]``, zero outside ``v``) of
+    ``v1`` and, when ``extrapolate``, ``v1 + c (v1 - v0)`` (``v0`` remeshed the same way),
+    floored at zero as ``np.maximum(., 0)`` when ``clip``: the same operations, element by
+    element, as the numpy form."""
+    out = np.empty((nx, ny))
+    n1x, n1y = v1.shape
+    n0x, n0y = v0.shape
+    for a in range(nx):
+        for b in range(ny):
+            x, y = a + i1, b + j1
+            p = v1[x, y] if 0 <= x < n1x and 0 <= y < n1y else 0.0
+            if extrapolate:
+                x, y = a + i0, b + j0
+                o = v0[x, y] if 0 <= x < n0x and 0 <= y < n0y else 0.0
+                p = p + c * (p - o)
+                if clip:
+                    p = p if (p >= 0.0 or p != p) else 0.0
+            out[a, b] = p
+    return out
+
+
+@numba.njit(cache=True)
+def _shifted_state(s, i, j, nx, ny):  # pragma: no cover - compiled
+    """``np.rint(remesh(s.astype(float), ..., method="nearest")).astype(np.int8)`` on one
+    lattice: ``s[a + i, b + j]``, 0 outside ``s``."""
+    out = np.zeros((nx, ny), dtype=np.int8)
+    n1x, n1y = s.shape
+    for a in range(nx):
+        for b in range(ny):
+            x, y = a + i, b + j
+            if 0 <= x < n1x and 0 <= y < n1y:
+                out[a, b] = s[x, y]
+    return out
 
 
 def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | None:
@@ -150,15 +202,29 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
-    rows = pressure.any(axis=1)
-    i0 = int(rows.argmax())  # the first and last rows and columns with pressure
-    if not rows[i0]:
+    i0, i1, j0, j1 = _nonzero_box(np.asarray(pressure))
+    if i0 < 0:
         return None
-    i1 = rows.size - 1 - int(rows[::-1].argmax())
-    cols = pressure.any(axis=0)
-    j0, j1 = int(cols.argmax()), cols.size - 1 - int(cols[::-1].argmax())
     return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 + 0.5) * grid.dx,
             grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 + 0.5) * grid.dy)
+
+
+@numba.njit(cache=True)
+def _nonzero_box(p):  # pragma: no cover - compiled
+    """The first and last rows and columns ``(i0, i1, j0, j1)`` of ``p`` (nx, ny) holding
+    an element ``!= 0`` (NaN included, as ``ndarray.any``); -1s when there is none."""
+    nx, ny = p.shape
+    i0 = i1 = j0 = j1 = -1
+    for i in range(nx):
+        for j in range(ny):
+            if p[i, j] != 0.0:
+                if i0 < 0:
+                    i0 = i
+                i1 = i
+                if j0 < 0 or j < j0:
+                    j0 = j
+                j1 = max(j1, j)
+    return i0, i1, j0, j1
 
 
 def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = None
@@ -177,10 +243,23 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
     """
     if memory.traction is None or memory.state is None:
         return None, None
-    t = remesh(memory.traction, memory.grid, grid)  # (both components at once)
     o = memory.older
     c = memory.extrapolation(time)
-    if c > 0 and o is not None and o.traction is not None:
+    o = o if c > 0 and o is not None and o.traction is not None else None
+    shift = _on_lattice(memory, grid)
+    shift_o = _on_lattice(o, grid) if o is not None else (0, 0)
+    if (shift is not None and shift_o is not None and memory.state.shape == memory.grid.shape
+            and memory.traction.shape == (2, *memory.grid.shape)
+            and (o is None or o.traction.shape == (2, *o.grid.shape))
+            and memory.state.dtype.kind in "iub"):  # grids on one lattice: one pass each
+        t = np.empty((2, *grid.shape))
+        for k in range(2):
+            t[k] = _extrapolated(memory.traction[k], *shift,
+                                 o.traction[k] if o is not None else memory.traction[k],
+                                 *shift_o, float(c), o is not None, False, *grid.shape)
+        return t, _shifted_state(memory.state, *shift, *grid.shape)
+    t = remesh(memory.traction, memory.grid, grid)  # (both components at once)
+    if o is not None:
         t = t + c * (t - remesh(o.traction, o.grid, grid))
     st = np.rint(remesh(memory.state.astype(float), memory.grid, grid, method="nearest"))
     return t, st.astype(np.int8)

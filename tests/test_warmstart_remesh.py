@@ -1,0 +1,78 @@
+"""The warm start's one-pass re-meshing (timestep/warmstart.py) against its definition:
+the previous fields re-meshed by :func:`railcontact.halfspace.grid.remesh` and
+extrapolated linearly in time, ``p = max(p_k + c (p_k - p_{k-1}), 0)``."""
+
+import numpy as np
+import pytest
+
+from railcontact.halfspace.grid import Grid, remesh
+from railcontact.timestep.warmstart import (
+    PatchMemory,
+    _contact_box,
+    previous_pressure,
+    previous_tangential,
+)
+
+DX, DY = 0.5e-3, 0.4e-3
+
+
+def _memory(rng, i, j, nx, ny, time, older=None, dx=DX):
+    grid = Grid(nx, ny, dx, DY, i * dx, j * DY)
+    p = np.where(rng.random((nx, ny)) < 0.6, rng.random((nx, ny)) * 1e9, 0.0)
+    t = rng.normal(size=(2, nx, ny)) * 1e8
+    st = rng.integers(0, 3, (nx, ny)).astype(np.int8)
+    return PatchMemory(grid, p, t, st, 0.0, 0.0, time=time, older=older)
+
+
+def _expected(m, grid, time):
+    p = remesh(m.pressure, m.grid, grid)
+    t = remesh(m.traction, m.grid, grid)
+    c = m.extrapolation(time)
+    if c > 0:
+        p = np.maximum(p + c * (p - remesh(m.older.pressure, m.older.grid, grid)), 0.0)
+        t = t + c * (t - remesh(m.older.traction, m.older.grid, grid))
+    st = np.rint(remesh(m.state.astype(float), m.grid, grid, method="nearest"))
+    return p, t, st.astype(np.int8)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_warm_start_fields_equal_remesh_and_extrapolation(seed):
+    rng = np.random.default_rng(seed)
+    nx, ny = (int(n) for n in rng.integers(3, 20, 2))
+    older = _memory(rng, *rng.integers(-8, 9, 2), *rng.integers(3, 20, 2), time=0.0)
+    m = _memory(rng, *rng.integers(-8, 9, 2), *rng.integers(3, 20, 2), time=1e-3, older=older)
+    grid = Grid(nx, ny, DX, DY, float(rng.integers(-8, 9)) * DX, float(rng.integers(-8, 9)) * DY)
+    for time in (None, 1e-3, 1.7e-3, 2e-3, 9e-3):  # no extrapolation, c = 0, 0.7, 1, 2 (cap)
+        p, t, st = _expected(m, grid, time)
+        got_p = previous_pressure(m, grid, time)
+        got_t, got_st = previous_tangential(m, grid, time)
+        assert got_p.shape == grid.shape and got_p.dtype == float
+        assert np.array_equal(got_p, p)  # bit for bit
+        assert np.array_equal(got_t, t)
+        assert got_st.dtype == np.int8 and np.array_equal(got_st, st)
+    assert np.array_equal(previous_pressure(m, m.grid, 1.5e-3),
+                          _expected(m, m.grid, 1.5e-3)[0])
+
+
+def test_warm_start_off_the_lattice_interpolates():
+    """Grids off one lattice (another element size) still go through the interpolation."""
+    rng = np.random.default_rng(3)
+    older = _memory(rng, 0, 0, 10, 8, time=0.0, dx=0.45e-3)
+    m = _memory(rng, 1, 0, 10, 8, time=1e-3, older=older)
+    grid = Grid(12, 8, DX, DY, 0.0, 0.0)
+    p, t, st = _expected(m, grid, 1.5e-3)
+    assert np.array_equal(previous_pressure(m, grid, 1.5e-3), p)
+    got_t, got_st = previous_tangential(m, grid, 1.5e-3)
+    assert np.array_equal(got_t, t) and np.array_equal(got_st, st)
+
+
+def test_contact_box_of_the_elements_with_pressure():
+    grid = Grid(6, 5, DX, DY, 1e-3, -2e-3)
+    p = np.zeros(grid.shape)
+    assert _contact_box(p, grid) is None
+    p[2, 3] = 1.0
+    p[4, 1] = np.nan  # (counts, as ndarray.any)
+    x0, x1, y0, y1 = _contact_box(p, grid)
+    assert np.allclose([x0, x1, y0, y1], [1e-3 + 1.5 * DX, 1e-3 + 4.5 * DX,
+                                          -2e-3 + 0.5 * DY, -2e-3 + 3.5 * DY], rtol=0,
+                       atol=1e-15)
