@@ -76,3 +76,22 @@ def test_contact_box_of_the_elements_with_pressure():
     assert np.allclose([x0, x1, y0, y1], [1e-3 + 1.5 * DX, 1e-3 + 4.5 * DX,
                                           -2e-3 + 0.5 * DY, -2e-3 + 3.5 * DY], rtol=0,
                        atol=1e-15)
+
+
+def test_lattice_offset_as_remesh_takes_it():
+    """The warm start's whole-element offset agrees with remesh's (``_lattice_shift``),
+    element sizes equal, off by round-off or by 10 %, offsets on and off the lattice."""
+    from railcontact.halfspace.grid import _lattice_shift
+    from railcontact.timestep.warmstart import _on_lattice
+    rng = np.random.default_rng(0)
+    on = 0
+    for _ in range(3000):
+        dx = DX * (1 + (rng.random() < 0.2) * rng.choice([1e-13, 1e-11, 0.1]))
+        a = Grid(5, 6, DX, DY, float(rng.normal() * 1e-2), float(rng.normal() * 1e-2))
+        off = rng.integers(-20, 20, 2) * np.array([dx, DY]) + (
+            rng.random() < 0.2) * rng.normal(size=2) * 1e-9
+        b = Grid(3, 4, dx, DY, float(a.x0 + off[0]), float(a.y0 + off[1]))
+        m = PatchMemory(a, np.zeros(a.shape), None, None, 0.0, 0.0)
+        assert _on_lattice(m, b) == _lattice_shift(a, b)
+        on += _on_lattice(m, b) is not None
+    assert 0 < on < 3000

@@ -134,9 +134,19 @@ def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None
 def _on_lattice(memory: PatchMemory, grid: Grid) -> tuple[int, int] | None:
     """The whole-element offset of ``grid`` in ``memory``'s grid (as :func:`remesh` takes
     it), or None when the grids are not on one lattice or a field is not (nx, ny)."""
-    if memory.pressure.ndim != 2 or memory.pressure.shape != memory.grid.shape:
+    source = memory.grid
+    if memory.pressure.shape != source.shape:
         return None
-    return (0, 0) if memory.grid is grid else _lattice_shift(memory.grid, grid)
+    if source is grid:
+        return (0, 0)
+    if source.dx != grid.dx or source.dy != grid.dy:  # (equal sizes: isclose holds)
+        return _lattice_shift(source, grid)
+    fi = (grid.x0 - source.x0) / source.dx  # as _lattice_shift forms the offset
+    fj = (grid.y0 - source.y0) / source.dy
+    i, j = round(fi), round(fj)
+    if abs(fi - i) > 1e-9 or abs(fj - j) > 1e-9:
+        return None
+    return int(i), int(j)
 
 
 @numba.njit(cache=True)
