@@ -315,3 +315,23 @@ def test_slip_element_is_on_the_bound_against_its_slip():
         assert abs(px * sy - py * sx) <= 1e-12 * g * math.hypot(sx, sy)  # parallel
         assert px * sx + py * sy < 0.0  # opposed
     assert slips > 150
+
+
+@pytest.mark.parametrize("scale", [1e-170, 1e-300, 1e160])
+def test_element_keeps_the_bound_whose_square_under_or_overflows(scale):
+    """The element solve is homogeneous: the shift and the bound scaled by one factor
+    scale its traction so, also where ``g**2`` under- or overflows (a traction ten times
+    the bound stays in slip, on the bound; half of it stays in adhesion)."""
+    from railcontact.tangential.convexgs import ADHESION, SLIP, _element_solve, _element_solve_c
+
+    c = 1e-11
+    for solve in (_element_solve_c, _element_solve):
+        for k, want in ((10.0, SLIP), (0.5, ADHESION)):
+            one = solve(0.0, 0.0, -k * c, 0.3 * k * c, 1.0, c, 0.0, 0.0, c, 1.0, 1.0)
+            px, py, st = solve(0.0, 0.0, -k * c * scale, 0.3 * k * c * scale, scale, c,
+                               0.0, 0.0, c, 1.0, 1.0)
+            assert st == one[2] == want
+            assert math.hypot(px, py) <= scale * (1 + 1e-15)
+            rel = 1e-6 if scale < 1e-290 else 1e-14  # (1e-300 Pa: subnormal tractions)
+            assert px == pytest.approx(one[0] * scale, rel=rel)
+            assert py == pytest.approx(one[1] * scale, rel=rel)
