@@ -52,8 +52,9 @@ STALL_GAIN = 0.99
 
 
 SMALL_TURN = 0.05
-"""Turns [rad] below which :func:`_turn` takes cos and sin from their Taylor series (to
-the t^10 terms: below 1e-19 of 1, i.e. round-off) instead of the library's calls."""
+"""Turns [rad] below which :func:`_turn` takes cos and sin from their Taylor series (cos
+to the t^8 term, sin to the t^9 term: the first terms left out, t^10/10! and t^11/11!,
+are below 3e-20, i.e. round-off) instead of the library's calls."""
 
 
 NOT_TINY = 1e-140
