@@ -335,3 +335,19 @@ def test_element_keeps_the_bound_whose_square_under_or_overflows(scale):
             rel = 1e-6 if scale < 1e-290 else 1e-14  # (1e-300 Pa: subnormal tractions)
             assert px == pytest.approx(one[0] * scale, rel=rel)
             assert py == pytest.approx(one[1] * scale, rel=rel)
+
+
+def test_sweep_problem_rigid_slip_is_rigid_slip_lines(sphere):
+    """The set-up's compiled rigid slip (sweep layout (ny, nx)) is
+    :func:`~railcontact.tangential.rolling.rigid_slip_lines`' to the bit: ``W_x`` by rows
+    of y, ``W_y`` by columns of x (the spin offset included)."""
+    from railcontact.tangential.convexgs import SweepProblem
+    from railcontact.tangential.rolling import rigid_slip_lines
+
+    hz, g, nr = sphere
+    creepage = (1.3e-3, -7e-4, 0.9)
+    prob = SweepProblem.set_up(g, rolling_operator(g, STEEL), nr.pressure, 0.3, creepage,
+                               None, None, 1e-3, 10, 0.5, 0.5, "auto", 0.37)
+    lx, ly = rigid_slip_lines(g, creepage, 0.37)
+    assert np.array_equal(prob.wx, np.broadcast_to(lx[:, None], prob.wx.shape))
+    assert np.array_equal(prob.wy, np.broadcast_to(ly[None, :], prob.wy.shape))
