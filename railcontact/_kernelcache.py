@@ -7,7 +7,8 @@ After an edit of the callee's file alone (a ``git pull``, an upgrade that leaves
 caller's file as it was) numba would load the old code from ``__pycache__`` (numba's
 documented limitation, numba/numba#1833). :func:`install` adds to the source stamp of
 every kernel of this package a hash of all its files that use numba, so that an edit of
-any of them compiles the package's kernels afresh, once.
+any of them compiles the package's kernels afresh, once (a plain function that a kernel
+compiles or inlines must live in such a file, i.e. one that names numba).
 
 It relies on numba's caching internals (``numba.core.caching``); where they are not as
 expected nothing is installed, and numba's own keys apply (then delete the ``*.nbi`` and
