@@ -351,3 +351,30 @@ def test_sweep_problem_rigid_slip_is_rigid_slip_lines(sphere):
     lx, ly = rigid_slip_lines(g, creepage, 0.37)
     assert np.array_equal(prob.wx, np.broadcast_to(lx[:, None], prob.wx.shape))
     assert np.array_equal(prob.wy, np.broadcast_to(ly[None, :], prob.wy.shape))
+
+
+def test_slip_element_relaxation_turns_by_a_share_of_the_angle():
+    """The relaxation of a slip element (CONTACT's ``a_I + omega_s (a - a_I)``, the angle
+    difference wrapped to [-pi, pi)): the traction's angle against atan2's of the old and
+    the unrelaxed new tractions, on the bound, for turns small and large."""
+    from railcontact.tangential.convexgs import SLIP, _element_solve_c
+
+    rng = np.random.default_rng(11)
+    c = 1e-11
+    seen = 0
+    for _ in range(300):
+        g = rng.uniform(1e6, 1e9)
+        s0 = rng.normal(size=2) * g * c * rng.uniform(2.0, 50.0)
+        new = _element_solve_c(0.0, 0.0, s0[0], s0[1], g, c, 0.0, 0.0, c, 1.0, 1.0)
+        a_new = math.atan2(new[1], new[0])
+        a_old = a_new + rng.choice([rng.uniform(-0.04, 0.04), rng.uniform(-3.1, 3.1)])
+        old = g * math.cos(a_old), g * math.sin(a_old)
+        px, py, st = _element_solve_c(*old, s0[0], s0[1], g, c, 0.0, 0.0, c, 1.0, 0.5)
+        if new[2] != SLIP or st != SLIP:
+            continue
+        seen += 1
+        d = (a_new - a_old + math.pi) % (2 * math.pi) - math.pi
+        want = a_old + 0.5 * d
+        assert math.hypot(px, py) == pytest.approx(g, rel=1e-14)
+        assert abs(math.remainder(math.atan2(py, px) - want, 2 * math.pi)) < 1e-14
+    assert seen > 200
