@@ -24,6 +24,7 @@ solve_tangential(...)          the steady-rolling tangential BEM (ConvexGS) on p
 WheelsetContact, ContactSettings, Kinematics   the time-step solver
 """
 
+from . import _kernelcache  # noqa: F401  (first: keys the kernels' caches)
 from ._moved import install as _install_moved
 from .contact import PatchSolution, Solution, solve
 from .errors import CaseError, RailContactError

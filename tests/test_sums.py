@@ -13,7 +13,7 @@ def test_numpy_sum_is_numpys_to_the_bit(seed):
         shape = tuple(int(v) for v in rng.integers(1, 120, rng.integers(1, 4)))
         a = rng.normal(size=shape) * 10.0 ** rng.integers(-8, 9)
         a[rng.random(shape) < rng.random()] = 0.0  # contact-like fields: many zeros
-        assert numpy_sum(a) == a.sum()
+        assert np.float64(numpy_sum(a)).tobytes() == a.sum().tobytes()  # (the sign of 0 too)
 
 
 @pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 127, 128, 129, 130, 1000, 4097, 70_001])
@@ -21,6 +21,13 @@ def test_pairwise_sum_of_runs(n):
     rng = np.random.default_rng(n)
     a = rng.normal(size=n + 5) * 1e6
     assert pairwise_sum(a, 3, n) == a[3:3 + n].sum()
+
+
+@pytest.mark.parametrize("shape", [(1,), (5,), (8,), (300,), (3, 200)])
+def test_sum_of_negative_zeros_is_numpys_zero(shape):
+    """numpy's reduction adds the pairwise sum to +0.0: a field of -0.0 sums to +0.0."""
+    a = np.full(shape, -0.0)
+    assert np.float64(numpy_sum(a)).tobytes() == a.sum().tobytes() == np.float64(0.0).tobytes()
 
 
 def test_sum_sees_nan_and_infinity():

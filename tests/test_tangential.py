@@ -315,3 +315,66 @@ def test_slip_element_is_on_the_bound_against_its_slip():
         assert abs(px * sy - py * sx) <= 1e-12 * g * math.hypot(sx, sy)  # parallel
         assert px * sx + py * sy < 0.0  # opposed
     assert slips > 150
+
+
+@pytest.mark.parametrize("scale", [1e-170, 1e-300, 1e160])
+def test_element_keeps_the_bound_whose_square_under_or_overflows(scale):
+    """The element solve is homogeneous: the shift and the bound scaled by one factor
+    scale its traction so, also where ``g**2`` under- or overflows (a traction ten times
+    the bound stays in slip, on the bound; half of it stays in adhesion)."""
+    from railcontact.tangential.convexgs import ADHESION, SLIP, _element_solve, _element_solve_c
+
+    c = 1e-11
+    for solve in (_element_solve_c, _element_solve):
+        for k, want in ((10.0, SLIP), (0.5, ADHESION)):
+            one = solve(0.0, 0.0, -k * c, 0.3 * k * c, 1.0, c, 0.0, 0.0, c, 1.0, 1.0)
+            px, py, st = solve(0.0, 0.0, -k * c * scale, 0.3 * k * c * scale, scale, c,
+                               0.0, 0.0, c, 1.0, 1.0)
+            assert st == one[2] == want
+            assert math.hypot(px, py) <= scale * (1 + 1e-15)
+            rel = 1e-6 if scale < 1e-290 else 1e-14  # (1e-300 Pa: subnormal tractions)
+            assert px == pytest.approx(one[0] * scale, rel=rel)
+            assert py == pytest.approx(one[1] * scale, rel=rel)
+
+
+def test_sweep_problem_rigid_slip_is_rigid_slip_lines(sphere):
+    """The set-up's compiled rigid slip (sweep layout (ny, nx)) is
+    :func:`~railcontact.tangential.rolling.rigid_slip_lines`' to the bit: ``W_x`` by rows
+    of y, ``W_y`` by columns of x (the spin offset included)."""
+    from railcontact.tangential.convexgs import SweepProblem
+    from railcontact.tangential.rolling import rigid_slip_lines
+
+    hz, g, nr = sphere
+    creepage = (1.3e-3, -7e-4, 0.9)
+    prob = SweepProblem.set_up(g, rolling_operator(g, STEEL), nr.pressure, 0.3, creepage,
+                               None, None, 1e-3, 10, 0.5, 0.5, "auto", 0.37)
+    lx, ly = rigid_slip_lines(g, creepage, 0.37)
+    assert np.array_equal(prob.wx, np.broadcast_to(lx[:, None], prob.wx.shape))
+    assert np.array_equal(prob.wy, np.broadcast_to(ly[None, :], prob.wy.shape))
+
+
+def test_slip_element_relaxation_turns_by_a_share_of_the_angle():
+    """The relaxation of a slip element (CONTACT's ``a_I + omega_s (a - a_I)``, the angle
+    difference wrapped to [-pi, pi)): the traction's angle against atan2's of the old and
+    the unrelaxed new tractions, on the bound, for turns small and large."""
+    from railcontact.tangential.convexgs import SLIP, _element_solve_c
+
+    rng = np.random.default_rng(11)
+    c = 1e-11
+    seen = 0
+    for _ in range(300):
+        g = rng.uniform(1e6, 1e9)
+        s0 = rng.normal(size=2) * g * c * rng.uniform(2.0, 50.0)
+        new = _element_solve_c(0.0, 0.0, s0[0], s0[1], g, c, 0.0, 0.0, c, 1.0, 1.0)
+        a_new = math.atan2(new[1], new[0])
+        a_old = a_new + rng.choice([rng.uniform(-0.04, 0.04), rng.uniform(-3.1, 3.1)])
+        old = g * math.cos(a_old), g * math.sin(a_old)
+        px, py, st = _element_solve_c(*old, s0[0], s0[1], g, c, 0.0, 0.0, c, 1.0, 0.5)
+        if new[2] != SLIP or st != SLIP:
+            continue
+        seen += 1
+        d = (a_new - a_old + math.pi) % (2 * math.pi) - math.pi
+        want = a_old + 0.5 * d
+        assert math.hypot(px, py) == pytest.approx(g, rel=1e-14)
+        assert abs(math.remainder(math.atan2(py, px) - want, 2 * math.pi)) < 1e-14
+    assert seen > 200

@@ -89,6 +89,8 @@ def pairwise_sum(a, lo, n):  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def numpy_sum(a):  # pragma: no cover - compiled
-    """``a.sum()`` of a C-contiguous float array, as numpy adds it."""
+    """``a.sum()`` of a C-contiguous float64 array, as numpy adds it: the pairwise sum
+    added to the reduction's start ``+0.0`` (which turns the -0.0 of a run of -0.0 into
+    0.0, as numpy's)."""
     flat = a.reshape(a.size)
-    return pairwise_sum(flat, 0, flat.size)
+    return 0.0 + pairwise_sum(flat, 0, flat.size)

@@ -52,8 +52,18 @@ STALL_GAIN = 0.99
 
 
 SMALL_TURN = 0.05
-"""Turns [rad] below which :func:`_turn` takes cos and sin from their Taylor series (to
-the t^10 terms: below 1e-19 of 1, i.e. round-off) instead of the library's calls."""
+"""Turns [rad] below which :func:`_turn` takes cos and sin from their Taylor series (cos
+to the t^8 term, sin to the t^9 term: the first terms left out, t^10/10! and t^11/11!,
+are below 3e-20, i.e. round-off) instead of the library's calls."""
+
+
+NOT_TINY = 1e-140
+"""Bounds [Pa] above this have squares far from the subnormal numbers (whose round-off is
+not relative): the test of :data:`SURELY_BELOW` holds, and a traction's square that
+underflows is surely below the bound's."""
+NOT_HUGE = 1e140
+"""Bounds [Pa] below this have squares far from overflow: a traction's square that
+overflows is surely above the bound's."""
 
 
 def _turn(c, s, t):
@@ -106,12 +116,17 @@ def _element_solve(px, py, s0x, s0y, g, c11, c12, c21, c22, omega_h, omega_s):
     fy = (c21 * s0x - c11 * s0y) / det
     rx = px + omega_h * (fx - px)
     ry = py + omega_h * (fy - py)
-    g2 = g * g  # squares, not hypot: tractions are far from overflow
-    nr2 = rx * rx + ry * ry
-    if nr2 <= g2:
+    if NOT_TINY < g < NOT_HUGE:  # squares, not hypot: none near g under- or overflows
+        g2 = g * g
+        inside = rx * rx + ry * ry <= g2
+        free = fx * fx + fy * fy <= g2
+    else:  # (a bound whose square leaves the normal numbers: the library's hypot)
+        inside = math.hypot(rx, ry) <= g
+        free = math.hypot(fx, fy) <= g
+    if inside:
         return rx, ry, ADHESION
-    if fx * fx + fy * fy <= g2:
-        nr = math.sqrt(nr2)
+    if free:
+        nr = _norm_c(rx, ry)
         return rx * g / nr, ry * g / nr, ADHESION
     m = _norm_c(s0x, s0y)  # > 0 here: S0 = 0 is adhesion
     c0 = -s0x / m  # the isotropic estimate: p against S0
@@ -321,9 +336,6 @@ SURELY_BELOW = 1.0 - 1e-12
 ``hypot(x, y) < c`` (both sides are within a few units of round-off of the exact ones,
 and ``math.hypot`` within one): the kernels skip ``hypot`` there, where it decides
 nothing."""
-NOT_TINY = 1e-140
-"""Bounds above this have squares far from the subnormal numbers (whose round-off is not
-relative): the test of :data:`SURELY_BELOW` holds."""
 
 
 def _clip_start(p0, st0, g, out):
