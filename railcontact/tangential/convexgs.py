@@ -108,7 +108,7 @@ def _element_solve(px, py, s0x, s0y, g, c11, c12, c21, c22, omega_h, omega_s):
     it by each step (:func:`_turn`: the steps are small, their cos and sin are series),
     and the relaxation turns the old direction by ``omega_s`` times the angle between the
     old and new ones (:func:`_angle`): the iterates of the angle form, to round-off, with
-    no trigonometric call in the common case (186 -> ~60 ns a slip element)."""
+    no trigonometric call in the common case (186 -> 84 ns a slip element on warm steps)."""
     if g <= 0.0:
         return 0.0, 0.0, EXTERIOR
     det = c11 * c22 - c12 * c21
@@ -573,10 +573,10 @@ class SweepProblem:
     tolerance: float
     max_iterations: int
     use_numba: bool
-    largest_bound: float = math.inf
+    largest_bound: float
     """The largest ``g`` [Pa]."""
-    contact_count: int = -1
-    """Elements in contact (-1: count ``contact``)."""
+    contact_count: int
+    """Elements in contact."""
 
     @classmethod
     def set_up(cls, grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,
@@ -627,8 +627,6 @@ class SweepProblem:
         fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
         px, py = self.px, self.py
         ncon = self.contact_count
-        if ncon < 0:
-            ncon = int(np.count_nonzero(self.contact))
         # the floor 1e-9 ||g|| of the norm is at most 1e-9 sqrt(ncon) max(g): formed only
         # for a norm below that (it is then the same value as always)
         floor_above = 1.01e-9 * math.sqrt(ncon) * self.largest_bound
