@@ -101,3 +101,20 @@ def test_a_cold_wheel_probes_its_frame_and_ends_at_the_full_tolerance(monkeypatc
     for w, v in zip(r.wheels, ref.wheels, strict=True):
         assert w.approach == pytest.approx(v.approach, rel=10 * tol)
         assert w.max_pressure == pytest.approx(v.max_pressure, rel=10 * tol)
+
+
+def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):
+    """The cold estimate of the creep share is work of the step: its time is in the
+    wheel's ``seconds`` (the sum of its patches' work), here made to take 50 ms."""
+    import time
+
+    import railcontact.timestep.wheelset as wheelset_module
+
+    def slow(*args, **kwargs):
+        time.sleep(0.05)
+        return vertical_creep_estimate(*args, **kwargs)
+
+    monkeypatch.setattr(wheelset_module, "vertical_creep_estimate", slow)
+    r = wheelset(warm_start="none").solve(rc.Pose(1e-3), loads=(Q, Q),
+                                          creepages=((1e-3, 1e-3, 0.0),) * 2)
+    assert all(w.status == 0 and w.seconds >= 0.05 for w in r.wheels)

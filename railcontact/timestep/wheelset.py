@@ -483,9 +483,11 @@ class WheelsetContact:
                                      source))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
+        estimate_seconds = 0.0  # the cold estimate's time, charged to the wheel's work
         if previous:  # the previous step's creep share
             share = sum(m.vertical_creep for m in previous)
         else:  # cold: estimated on the Hertz ellipse where the normal solve forms its frame
+            t0 = perf_counter()
             cp = contact_points(self.track, self.wheelset, pose, side, 0.0)[0]
             if (self.settings.patch_frame == "reference" and math.isfinite(cp.B)
                     and cp.B > 0 and cp.A > 0):
@@ -496,12 +498,14 @@ class WheelsetContact:
             sgn = SIDES[side]
             share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
                                             self.settings.friction)
+            estimate_seconds = perf_counter() - t0
         start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
         (patches, creepages, memory), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
         if not patches:
             return wheel, []
         count_passes(patches, [p for p, _, _ in passes])  # the work of every pass counts
+        patches[0].work.seconds += estimate_seconds
         self._finish(wheel, patches, creepages, pose)
         wheel.load_unique = load_unique(patches, self.settings.friction)
         if failure and not load_met(patches, q, self.settings.load_tolerance,
