@@ -14,6 +14,7 @@ from railcontact.tangential import creep_coefficients, rolling_operator, solve_t
 from railcontact.tangential.convexgs import HAVE_NUMBA
 from railcontact.tangential.fastrip import fastrip_hertz
 from railcontact.tangential.fastsim import fastsim_hertz, flexibilities
+from railcontact.tangential.steadygs import solve_steadygs
 from railcontact.tangential.strips import remesh_strips
 
 STEEL = ElasticPair.of(Material(206e9, 0.28))
@@ -378,3 +379,22 @@ def test_slip_element_relaxation_turns_by_a_share_of_the_angle():
         assert math.hypot(px, py) == pytest.approx(g, rel=1e-14)
         assert abs(math.remainder(math.atan2(py, px) - want, 2 * math.pi)) < 1e-14
     assert seen > 200
+
+
+@pytest.mark.parametrize("solver", [solve_tangential, solve_steadygs])
+def test_the_convergence_measure_holds_at_any_traction_scale(sphere, solver):
+    """The problem is homogeneous: pressure and creepages times lambda give the traction
+    times lambda. Its convergence measure (squared sums of the tractions) is scaled by a
+    power of two beyond MEASURED_RANGE: at lambda = 1e-170 every square underflowed to 0
+    and ConvexGS said "converged" after one sweep with 59 % of the force; at 1e150 the
+    squares overflowed (not converged, NaN measure)."""
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL)
+    creep = (1e-3, 0.5e-3, 0.0)
+    ref = solver(g, op, nr.pressure, 0.3, creep, tolerance=1e-8)
+    assert ref.converged and ref.iterations > 5
+    for lam in (1e-170, 1e150):
+        r = solver(g, op, nr.pressure * lam, 0.3, tuple(c * lam for c in creep),
+                   tolerance=1e-8)
+        assert r.converged and abs(r.iterations - ref.iterations) <= 1
+        np.testing.assert_allclose(np.asarray(r.force) / lam, ref.force, rtol=1e-10)

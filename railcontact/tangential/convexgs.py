@@ -158,14 +158,15 @@ def _element_solve(px, py, s0x, s0y, g, c11, c12, c21, c22, omega_h, omega_s):
 
 
 def _block_sweep(rxx, rxy, ryx, ryy, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
-                 c11, c12, c21, c22, omega_h, omega_s):
+                 c11, c12, c21, c22, omega_h, omega_s, measure=1.0):
     """Gauss–Seidel over the elements of rows r0 .. r1-1 (numba-compiled).
 
     ``(ux, uy)`` is the shift ``W + B p`` for the tractions at the start of the block;
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
     direct sum, so every element sees the newest tractions of all elements. Fields are
     (ny, nx), kernels (2ny-1, 2nx-1) reversed so the inner sum runs over contiguous
-    memory. Returns the squared norm of the updates.
+    memory. Returns the squared norm of the updates, each scaled by ``measure`` (a power of
+    two, :attr:`SweepProblem.measure`).
     """
     ny, nx = g.shape
     dif = 0.0
@@ -196,12 +197,12 @@ def _block_sweep(rxx, rxy, ryx, ryy, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
             dpx[iy, ix] += new_x - ox
             dpy[iy, ix] += new_y - oy
             state[iy, ix] = st
-            dif += (new_x - ox) ** 2 + (new_y - oy) ** 2
+            dif += ((new_x - ox) * measure) ** 2 + ((new_y - oy) * measure) ** 2
     return dif
 
 
 def _sweep_numpy(rxx, rxy, ryx, ryy, wx, wy, g, px, py, state, lo, hi, c11, c12, c21, c22,
-                 omega_h, omega_s):
+                 omega_h, omega_s, measure=1.0):
     """The plain sweep: the shift of each element as a vectorised sum over all elements."""
     ny, nx = g.shape
     dif = 0.0
@@ -217,7 +218,7 @@ def _sweep_numpy(rxx, rxy, ryx, ryy, wx, wy, g, px, py, state, lo, hi, c11, c12,
                                               sy - c21 * ox - c22 * oy, g[iy, ix], c11, c12,
                                               c21, c22, omega_h, omega_s)
             px[iy, ix], py[iy, ix], state[iy, ix] = new_x, new_y, st
-            dif += (new_x - ox) ** 2 + (new_y - oy) ** 2
+            dif += ((new_x - ox) * measure) ** 2 + ((new_y - oy) * measure) ** 2
     return dif
 
 
@@ -238,7 +239,8 @@ DIRECT_WORK = 60_000
 """Target size of a row block in the blocked sweep: (contact elements in the block)^2."""
 
 
-def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, omega_s):
+def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, omega_s,
+                   measure=1.0):
     """One Gauss–Seidel sweep, row block by row block (see :func:`_block_sweep`); between
     blocks the shift is brought up to date with one DC-FFT convolution of the block's
     changes. Same iterates as the plain sweep, at a fraction of its O(k^2) cost."""
@@ -249,7 +251,7 @@ def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, om
     dif = 0.0
     for b, (r0, r1) in enumerate(rows):
         dif += _block_sweep_numba(*kern, ux, uy, g, px, py, dpx, dpy, state, lo, hi, r0, r1,
-                                  *c, omega_h, omega_s)
+                                  *c, omega_h, omega_s, measure)
         if b + 1 < len(rows):
             du = op.apply(np.stack([dpx.T, dpy.T]))
             ux += du[0].T
@@ -370,15 +372,32 @@ def _clip_start(p0, st0, g, out):
     return ok
 
 
-def _squares(px, py, out):
-    """``(px * px + py * py).sum()`` of the (ny, nx) C-contiguous ``px``, ``py``: the same
-    squares (in ``out``) added in numpy's order (:mod:`~railcontact.halfspace.sums`), so
-    the same bits."""
+def _squares(px, py, out, measure=1.0):
+    """``(px * px + py * py).sum()`` of the (ny, nx) C-contiguous ``px``, ``py``, each
+    scaled by ``measure`` (a power of two, :attr:`SweepProblem.measure`; 1: the same
+    bits): the squares (in ``out``) added in numpy's order
+    (:mod:`~railcontact.halfspace.sums`)."""
     ny, nx = px.shape
     for iy in range(ny):
         for ix in range(nx):
-            out[iy, ix] = px[iy, ix] * px[iy, ix] + py[iy, ix] * py[iy, ix]
+            x = px[iy, ix] * measure
+            y = py[iy, ix] * measure
+            out[iy, ix] = x * x + y * y
     return numpy_sum(out)
+
+
+MEASURED_RANGE = (2.0 ** -400, 2.0 ** 400)
+"""Traction bounds [Pa] (about 3.9e-121 to 2.6e120) whose squared sums the convergence
+measures form as they are; beyond it they are scaled (:attr:`SweepProblem.measure`): a
+bound of 1e-170 Pa made every change square to 0, and a sweep "converged" at once."""
+
+
+def _measure(largest_bound: float) -> float:
+    """:attr:`SweepProblem.measure` for the largest traction bound [Pa]."""
+    lo, hi = MEASURED_RANGE
+    if lo <= largest_bound <= hi or not (0.0 < largest_bound < math.inf):
+        return 1.0
+    return math.ldexp(1.0, -math.frexp(largest_bound)[1])
 
 
 _NO_STATE = np.zeros((0, 0), dtype=np.int8)
@@ -577,6 +596,11 @@ class SweepProblem:
     """The largest ``g`` [Pa]."""
     contact_count: int
     """Elements in contact."""
+    measure: float = 1.0
+    """A power of two by which the tractions are scaled in the convergence measures (their
+    squared sums): 1 for traction bounds from :data:`MEASURED_RANGE` [Pa], else the one
+    that brings the largest bound to [0.5, 1), so that the squares neither underflow nor
+    overflow (exact: the measure's ratio is the same)."""
 
     @classmethod
     def set_up(cls, grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,
@@ -618,7 +642,7 @@ class SweepProblem:
             grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
             max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA,
-            largest_bound=float(gmax), contact_count=int(ncon))
+            largest_bound=float(gmax), contact_count=int(ncon), measure=_measure(float(gmax)))
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
               t0: float) -> TangentialResult:
@@ -629,7 +653,8 @@ class SweepProblem:
         ncon = self.contact_count
         # the floor 1e-9 ||g|| of the norm is at most 1e-9 sqrt(ncon) max(g): formed only
         # for a norm below that (it is then the same value as always)
-        floor_above = 1.01e-9 * math.sqrt(ncon) * self.largest_bound
+        m = self.measure
+        floor_above = 1.01e-9 * math.sqrt(ncon) * self.largest_bound * m
         floor = None
         squares = np.empty_like(px)
         hist: list[float] = []
@@ -642,10 +667,10 @@ class SweepProblem:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
-                norm = math.sqrt(_squares(px, py, squares))  # (px*px + py*py).sum()
+                norm = math.sqrt(_squares(px, py, squares, m))  # (px*px + py*py).sum()
                 if not norm > floor_above:
                     if floor is None:
-                        floor = 1e-9 * math.sqrt(float((self.g * self.g).sum()))
+                        floor = 1e-9 * math.sqrt(float(((self.g * m) ** 2).sum()))
                     scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
                 else:
                     scale = norm
@@ -779,8 +804,8 @@ def solve_tangential(
     def sweep() -> float:
         if prob.use_numba:
             return _sweep_blocked(kern, operator, w_t, prob.g, prob.px, prob.py, prob.state,
-                                  prob.lo, prob.hi, rows, cc, oh, os_)
+                                  prob.lo, prob.hi, rows, cc, oh, os_, prob.measure)
         return _sweep_numpy(*kern, prob.wx, prob.wy, prob.g, prob.px, prob.py, prob.state,
-                            prob.lo, prob.hi, *cc, oh, os_)
+                            prob.lo, prob.hi, *cc, oh, os_, prob.measure)
 
     return prob.solve(sweep, "ConvexGS", STALL_SWEEPS, t0)

@@ -72,6 +72,8 @@ from ..halfspace.operator import InfluenceOperator
 from .convexgs import (
     ADHESION,
     HAVE_NUMBA,
+    NOT_HUGE,
+    NOT_TINY,
     SweepProblem,
     TangentialResult,
     _blocks_of,
@@ -109,10 +111,15 @@ def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
         oy = py[iy, j]
         qx = ox + ex
         qy = oy + ey
-        m2 = qx * qx + qy * qy  # no hypot: this loop is most of a block's non-sum time
         gj = g[iy, j]
-        if m2 > gj * gj:
-            m = math.sqrt(m2)
+        if NOT_TINY < gj < NOT_HUGE:  # no hypot: this loop is most of a block's non-sum time
+            m2 = qx * qx + qy * qy
+            over = m2 > gj * gj
+            m = math.sqrt(m2) if over else 0.0
+        else:  # (squares near the bound would under- or overflow)
+            m = math.hypot(qx, qy)
+            over = m > gj
+        if over:
             qx *= gj / m
             qy *= gj / m
         ex = qx - ox
@@ -181,9 +188,10 @@ def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, j
 
 
 def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
-                  r0, r1, omega_h, omega_s):
+                  r0, r1, omega_h, omega_s, measure=1.0):
     """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled); returns the squared
-    norm of the block's traction change [Pa^2].
+    norm of the block's traction change [Pa^2], scaled by ``measure`` (a power of two,
+    :attr:`~.convexgs.SweepProblem.measure`).
 
     ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
@@ -221,7 +229,9 @@ def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi
             if state[iy, ix] != ADHESION:
                 jx = ix
         for ix in range(a, b + 1):
-            dif += dpx[iy, ix] * dpx[iy, ix] + dpy[iy, ix] * dpy[iy, ix]
+            ex = dpx[iy, ix] * measure
+            ey = dpy[iy, ix] * measure
+            dif += ex * ex + ey * ey
     return dif
 
 
@@ -257,7 +267,8 @@ def _add_product(ux, uy, bx, by, u, r0):
 _add_product_c = numba.njit(cache=True)(_add_product) if HAVE_NUMBA else _add_product
 
 
-def _sweep_blocked(kern, cum, op, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s):
+def _sweep_blocked(kern, cum, op, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,
+                   measure=1.0):
     """One SteadyGS sweep of the traction ``p`` (2, ny, nx) (the sweep layout), row block
     by row block (on the wheelset step's windows one block); between blocks the shift of
     the rows still to come is brought up to date with one DC-FFT product of the block's
@@ -273,7 +284,7 @@ def _sweep_blocked(kern, cum, op, wx, wy, g, p, state, lo, hi, rows, omega_h, om
     dif = 0.0
     for b, (r0, r1) in enumerate(rows):
         dif += _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
-                                   r0, r1, omega_h, omega_s)
+                                   r0, r1, omega_h, omega_s, measure)
         if b + 1 < len(rows):
             _add_product_c(ux, uy, ux, uy, op.apply(dp.transpose(0, 2, 1)), r1)
             dp[:, r0:r1] = 0.0
@@ -391,10 +402,11 @@ def solve_steadygs(
     def sweep() -> float:
         if prob.use_numba:  # the blocks measure their changes, the shifted runs included
             return _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.p,
-                                  prob.state, prob.lo, prob.hi, rows, oh, os_)
+                                  prob.state, prob.lo, prob.hi, rows, oh, os_, prob.measure)
         qx, qy = px.copy(), py.copy()  # the runs move many elements: measure the whole field
         _sweep_numpy(_gs_kernels(operator), cum, prob.wx, prob.wy, prob.g, px, py, prob.state,
                      prob.lo, prob.hi, oh, os_)
-        return float(np.sum((px - qx) ** 2 + (py - qy) ** 2))
+        m = prob.measure
+        return float(np.sum(((px - qx) * m) ** 2 + ((py - qy) * m) ** 2))
 
     return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0)
