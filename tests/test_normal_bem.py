@@ -347,3 +347,19 @@ def test_updated_displacements_do_not_drift_over_many_steps(monkeypatch):
     updated = 2 * res.iterations + 1 - count[0]  # steps whose A p was not convolved
     assert updated >= 0.8 * res.iterations  # (penetration control: one start product more)
     assert_carried_and_hertz(res, h, op, g, hz)
+
+
+def test_a_problem_scaled_beyond_the_cg_range_is_not_converged():
+    """Scaling gap, load (and so pressure) by lambda scales the answer, but the CG's inner
+    products are sums of squares: at 1e-170 they underflowed and the solve "converged" in
+    one iteration with a tenth of Hertz's peak pressure; under penetration control at 1e150
+    with a wrong force. Such a solve now says it is not converged (SCALE_RANGE); the
+    unscaled one is Hertz's to the discretisation."""
+    A, B, hz, g, X, Y, h = hertz_box(1.0, 32, 32)
+    op = influence_operator(g, PAIR)
+    ok = solve_normal(h, g, op, load=50e3, tolerance=1e-9)
+    assert ok.converged and ok.max_pressure == pytest.approx(hz.max_pressure, rel=0.03)
+    for lam, kw in ((1e-170, {"load": 50e3 * 1e-170}),
+                    (1e150, {"penetration": hz.penetration * 1e150})):
+        r = solve_normal(h * lam, g, op, tolerance=1e-9, **kw)
+        assert not r.converged and "under- or overflow" in r.message

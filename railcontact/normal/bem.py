@@ -64,6 +64,12 @@ much as about 160 columns); beyond it ``A p`` is convolved anew."""
 REFRESH_ITERATIONS = 20
 """Updates of ``A p`` without a convolution after which a converged step forms it anew
 before its final check (round-off of the updates, far below any tolerance)."""
+SCALE_RANGE = (1e-100, 1e100)
+"""A converged solution's largest pressure [Pa] and depth of interpenetration
+``delta - min(h)`` [m] lie in this range, else it is reported not converged: the CG's inner
+products are sums of their squares, which under- or overflow beyond it (a sphere scaled to
+1e-170 - gap, load and pressure - "converged" in one iteration with a tenth of the peak
+pressure; under penetration control at 1e150 with 0.6 % of the force)."""
 
 
 @dataclass
@@ -590,6 +596,15 @@ def solve_normal(
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
                         f"{STALL_ITERATIONS} iterations")
     res = finish(p, u, delta, its, converged, message, err, hist, final=True)
+    lo, hi = SCALE_RANGE
+    depth = res.penetration - float(h.min())
+    if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
+                                                   and lo <= depth <= hi):
+        res.converged = False
+        res.message = (f"not converged: the largest pressure {res.max_pressure:.3g} Pa or "
+                       f"the depth of interpenetration {depth:.3g} m lies outside "
+                       f"{lo:g} .. {hi:g}, where the CG's inner products (squares) under- "
+                       f"or overflow ({message})")
     if res.touches_boundary:
         res.message += "; contact reaches the edge of the potential contact area"
     return res
