@@ -36,3 +36,13 @@ def test_sum_sees_nan_and_infinity():
     assert np.isnan(numpy_sum(a))
     a[7, 3] = np.inf
     assert numpy_sum(a) == np.inf
+
+
+def test_array_sum_is_numpys_sum_contiguous_or_not():
+    """``array_sum``: numpy's sum, compiled for a C-contiguous array, numpy's own for a
+    strided view (a transpose), the same bits either way."""
+    from railcontact.halfspace.sums import array_sum
+
+    a = np.random.default_rng(5).normal(size=(37, 53)) * 1e6
+    for v in (a, a.T, a[::2]):
+        assert np.float64(array_sum(v)).tobytes() == np.float64(v.sum()).tobytes()

@@ -48,7 +48,7 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
-from ..halfspace.sums import numpy_sum
+from ..halfspace.sums import array_sum, numpy_sum
 
 PRECONDITIONERS = ("fft", "none")
 STALL_ITERATIONS = 100
@@ -140,7 +140,7 @@ def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) ->
         raise RailContactError(f"{name} must have the grid shape {shape}, got {a.shape}")
     # a NaN or an infinity anywhere makes the sum NaN or infinite: the elementwise test
     # only when the sum is not finite (or overflows)
-    total = numpy_sum(a) if a.flags.c_contiguous else a.sum()
+    total = array_sum(a)
     if not math.isfinite(total) and not np.isfinite(a).all():
         raise RailContactError(f"{name} contains NaN or infinite values")
     return a

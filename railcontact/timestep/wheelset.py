@@ -81,7 +81,7 @@ from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
-from ..halfspace.sums import numpy_sum
+from ..halfspace.sums import array_sum, numpy_sum
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
@@ -555,8 +555,7 @@ class WheelsetContact:
 
             def of(grid):
                 p = previous_pressure(m, grid, time)
-                has = (numpy_sum(p) if p.flags.c_contiguous else p.sum()) > 0
-                return p if has else estimate()(grid)
+                return p if array_sum(p) > 0 else estimate()(grid)
             of.bounds = previous_bounds(m)  # the potential area: where the contact was
             return labelled(of, "previous")
 
