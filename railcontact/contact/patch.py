@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import CaseError, RailContactError
 from ..geometry.search import FAR
-from ..halfspace.grid import Grid, remesh
+from ..halfspace.grid import Grid, nonzero_box, remesh
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.operator import influence_operator
@@ -379,7 +379,7 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM,
     cheaper. None when it would be the whole grid, or there is no contact. ``box`` (e.g.
     the normal solution's :attr:`~railcontact.normal.NormalResult.contact_box`; ``i0 <
     0``: no contact) is the box of ``contact``, given."""
-    i0, i1, j0, j1 = _box(contact) if box is None else box
+    i0, i1, j0, j1 = nonzero_box(contact) if box is None else box
     if i0 < 0:
         return None
     out = []
@@ -390,26 +390,6 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM,
     if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
         return None
     return out[0], out[1]
-
-
-@numba.njit(cache=True)
-def _box(contact):  # pragma: no cover - compiled
-    """The rows ``i0:i1`` and columns ``j0:j1`` that hold the set elements of ``contact``
-    (nx, ny) (bool), in one pass; ``(-1, -1, -1, -1)`` without any."""
-    nx, ny = contact.shape
-    i0 = j0 = -1
-    i1 = j1 = 0
-    for i in range(nx):
-        for j in range(ny):
-            if contact[i, j]:
-                if i0 < 0:
-                    i0 = i
-                i1 = i + 1
-                if j0 < 0 or j < j0:
-                    j0 = j
-                if j + 1 > j1:
-                    j1 = j + 1
-    return i0, i1, j0, j1
 
 
 def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]

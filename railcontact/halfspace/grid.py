@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
@@ -193,8 +194,9 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
 def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
     """Whole-element offset (i, j) of ``target``'s element (0, 0) in ``source``, when both
     grids have the same element size and their centres lie on one lattice; else None."""
-    if not (math.isclose(source.dx, target.dx, rel_tol=1e-12)
-            and math.isclose(source.dy, target.dy, rel_tol=1e-12)):
+    if not ((source.dx == target.dx and source.dy == target.dy)  # (the common case)
+            or (math.isclose(source.dx, target.dx, rel_tol=1e-12)
+                and math.isclose(source.dy, target.dy, rel_tol=1e-12))):
         return None
     fi = (target.x0 - source.x0) / source.dx
     fj = (target.y0 - source.y0) / source.dy
@@ -205,10 +207,31 @@ def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
 
 
 def _shifted_copy(v: np.ndarray, shape: tuple[int, int], i: int, j: int) -> np.ndarray:
-    """``out[..., a, b] = v[..., a + i, b + j]`` where that lies in ``v``, else 0."""
-    out = np.zeros((*v.shape[:-2], *shape))
+    """``out[..., a, b] = v[..., a + i, b + j]`` where that lies in ``v``, else 0 (of
+    ``v``'s dtype)."""
+    out = np.zeros((*v.shape[:-2], *shape), dtype=v.dtype)
     a0, a1 = max(0, -i), min(shape[0], v.shape[-2] - i)
     b0, b1 = max(0, -j), min(shape[1], v.shape[-1] - j)
     if a1 > a0 and b1 > b0:
         out[..., a0:a1, b0:b1] = v[..., a0 + i:a1 + i, b0 + j:b1 + j]
     return out
+
+
+@numba.njit(cache=True)
+def nonzero_box(field):  # pragma: no cover - compiled
+    """The rows ``i0:i1`` and columns ``j0:j1`` (ends exclusive) of a field (nx, ny) that
+    hold its elements ``!= 0`` (a contact mask's set elements, a pressure's loaded ones;
+    NaN counts, as in ``ndarray.any``), in one pass; ``(-1, -1, -1, -1)`` without any."""
+    nx, ny = field.shape
+    i0 = i1 = j0 = j1 = -1
+    for i in range(nx):
+        for j in range(ny):
+            if field[i, j] != 0:
+                if i0 < 0:
+                    i0 = i
+                i1 = i + 1
+                if j0 < 0 or j < j0:
+                    j0 = j
+                if j + 1 > j1:
+                    j1 = j + 1
+    return i0, i1, j0, j1

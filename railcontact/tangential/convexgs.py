@@ -33,6 +33,7 @@ from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
 from ..halfspace.sums import numpy_sum
+from .rolling import slip_x, slip_y
 
 try:
     import numba
@@ -224,12 +225,16 @@ def _sweep_numpy(rxx, rxy, ryx, ryy, wx, wy, g, px, py, state, lo, hi, c11, c12,
 
 if HAVE_NUMBA:
     _turn_c = numba.njit(cache=True, inline="always")(_turn)
+    _slip_x_c = numba.njit(cache=True, inline="always")(slip_x)
+    _slip_y_c = numba.njit(cache=True, inline="always")(slip_y)
     _norm_c = numba.njit(cache=True, inline="always")(_norm)
     _angle_c = numba.njit(cache=True, inline="always")(_angle)
     _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
     _block_sweep_numba = numba.njit(cache=True, fastmath=True)(_block_sweep)
 else:  # pragma: no cover
     _turn_c = _turn
+    _slip_x_c = slip_x
+    _slip_y_c = slip_y
     _norm_c = _norm
     _angle_c = _angle
     _element_solve_c = _element_solve
@@ -304,9 +309,9 @@ def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
     shift = offset * dx
     ly = np.empty(nx)
     for ix in range(nx):  # rigid_slip_lines' W_y(x) and W_x(y)
-        ly[ix] = dx * (eta + phi * ((x0 + dx * float(ix)) + shift))
+        ly[ix] = _slip_y_c(dx, eta, phi, x0 + dx * float(ix), shift)
     for iy in range(ny):
-        lx = dx * (xi - phi * (y0 + dy * float(iy)))
+        lx = _slip_x_c(dx, xi, phi, y0 + dy * float(iy))
         for ix in range(nx):
             wx[iy, ix] = lx
             wy[iy, ix] = ly[ix]

@@ -89,5 +89,19 @@ def rigid_slip_lines(grid: Grid, creepage: tuple[float, float, float],
         raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
     xi, eta, phi = (check_finite(n, v, u) for n, v, u in
                     zip(("xi", "eta", "phi"), creepage, ("-", "-", "1/m"), strict=True))
-    return (grid.dx * (xi - phi * grid.y),
-            grid.dx * (eta + phi * (grid.x + spin_offset * grid.dx)))
+    return (slip_x(grid.dx, xi, phi, grid.y),
+            slip_y(grid.dx, eta, phi, grid.x, spin_offset * grid.dx))
+
+
+def slip_x(dx, xi, phi, y):
+    """The rigid slip per rolling step along x, ``W_x = dx (xi - phi y)`` [m], at the
+    lateral position(s) ``y`` [m] (a float or an array; also compiled by numba into the
+    solvers' set-up, :func:`~.convexgs._bound_layout`: this file names numba, so the
+    kernels' cache is keyed on it, :mod:`railcontact._kernelcache`)."""
+    return dx * (xi - phi * y)
+
+
+def slip_y(dx, eta, phi, x, shift):
+    """The rigid slip per rolling step along y, ``W_y = dx (eta + phi (x + shift))`` [m],
+    at the longitudinal position(s) ``x`` [m], the spin taken ``shift`` [m] into the step."""
+    return dx * (eta + phi * (x + shift))

@@ -29,7 +29,7 @@ from functools import cached_property
 import numba
 import numpy as np
 
-from ..halfspace.grid import Grid, _lattice_shift, remesh
+from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
 
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
@@ -137,16 +137,7 @@ def _on_lattice(memory: PatchMemory, grid: Grid) -> tuple[int, int] | None:
     source = memory.grid
     if memory.pressure.shape != source.shape:
         return None
-    if source is grid:
-        return (0, 0)
-    if source.dx != grid.dx or source.dy != grid.dy:  # (equal sizes: isclose holds)
-        return _lattice_shift(source, grid)
-    fi = (grid.x0 - source.x0) / source.dx  # as _lattice_shift forms the offset
-    fj = (grid.y0 - source.y0) / source.dy
-    i, j = round(fi), round(fj)
-    if abs(fi - i) > 1e-9 or abs(fj - j) > 1e-9:
-        return None
-    return int(i), int(j)
+    return (0, 0) if source is grid else _lattice_shift(source, grid)
 
 
 @numba.njit(cache=True)
@@ -169,20 +160,6 @@ def _extrapolated(v1, i1, j1, v0, i0, j0, c, extrapolate, clip, nx, ny):  # prag
                 if clip:
                     p = p if (p >= 0.0 or p != p) else 0.0
             out[a, b] = p
-    return out
-
-
-@numba.njit(cache=True)
-def _shifted_state(s, i, j, nx, ny):  # pragma: no cover - compiled
-    """``np.rint(remesh(s.astype(float), ..., method="nearest")).astype(np.int8)`` on one
-    lattice: ``s[a + i, b + j]``, 0 outside ``s``."""
-    out = np.zeros((nx, ny), dtype=np.int8)
-    n1x, n1y = s.shape
-    for a in range(nx):
-        for b in range(ny):
-            x, y = a + i, b + j
-            if 0 <= x < n1x and 0 <= y < n1y:
-                out[a, b] = s[x, y]
     return out
 
 
@@ -212,29 +189,11 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
-    i0, i1, j0, j1 = _nonzero_box(np.asarray(pressure))
+    i0, i1, j0, j1 = nonzero_box(np.asarray(pressure))
     if i0 < 0:
         return None
-    return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 + 0.5) * grid.dx,
-            grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 + 0.5) * grid.dy)
-
-
-@numba.njit(cache=True)
-def _nonzero_box(p):  # pragma: no cover - compiled
-    """The first and last rows and columns ``(i0, i1, j0, j1)`` of ``p`` (nx, ny) holding
-    an element ``!= 0`` (NaN included, as ``ndarray.any``); -1s when there is none."""
-    nx, ny = p.shape
-    i0 = i1 = j0 = j1 = -1
-    for i in range(nx):
-        for j in range(ny):
-            if p[i, j] != 0.0:
-                if i0 < 0:
-                    i0 = i
-                i1 = i
-                if j0 < 0 or j < j0:
-                    j0 = j
-                j1 = max(j1, j)
-    return i0, i1, j0, j1
+    return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,
+            grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 - 0.5) * grid.dy)
 
 
 def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = None
@@ -267,7 +226,7 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
             t[k] = _extrapolated(memory.traction[k], *shift,
                                  o.traction[k] if o is not None else memory.traction[k],
                                  *shift_o, float(c), o is not None, False, *grid.shape)
-        return t, _shifted_state(memory.state, *shift, *grid.shape)
+        return t, _shifted_copy(memory.state.astype(np.int8, copy=False), grid.shape, *shift)
     t = remesh(memory.traction, memory.grid, grid)  # (both components at once)
     if o is not None:
         t = t + c * (t - remesh(o.traction, o.grid, grid))
