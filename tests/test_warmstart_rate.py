@@ -146,3 +146,20 @@ def test_rate_on_one_lattice_equals_its_remeshed_definition(seed):
         want = change if rate is None else 0.5 * remesh(rate, g0, g) + 0.5 * change
         assert np.allclose(traction_rate(p, g, 2e-3, older, 0.5), want, rtol=1e-12,
                            atol=1e-12 * np.abs(want).max())
+
+
+def test_a_traction_that_is_not_finite_forms_no_rate():
+    """A solve whose traction is not finite leaves no rate (it would stay in every later
+    step's average); the next finite step forms one again from the step before it."""
+    g = _grid(0)
+    ones, st = np.ones(g.shape), np.ones(g.shape, np.int8)
+    p0, p1, p2 = (_field(g, k * DT) for k in range(3))
+    bad = p1.copy()
+    bad[1, 3, 4] = np.nan
+    m0 = PatchMemory(g, ones, p0, st, 0.0, 0.0, time=0.0)
+    assert traction_rate(bad, g, DT, m0) is None
+    m1 = PatchMemory(g, ones, p1, st, 0.0, 0.0, time=DT,
+                     traction_rate=np.full((2, *g.shape), np.inf))
+    assert traction_rate(p2, g, 2 * DT, m1) is None
+    m1 = PatchMemory(g, ones, p1, st, 0.0, 0.0, time=DT)
+    assert np.allclose(traction_rate(p2, g, 2 * DT, m1), (p2 - p1) / DT)

@@ -33,6 +33,7 @@ import numba
 import numpy as np
 
 from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
+from ..halfspace.sums import array_sum
 
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
@@ -182,15 +183,16 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
         v_k = (1 - gain) v_{k-1} + gain (p_k - p_{k-1}) / (t_k - t_{k-1})
 
     (``v_{k-1}`` the older step's rate; without one, ``v_k = (p_k - p_{k-1}) / dt``). None
-    when it cannot be formed (no older step with a traction, no times, or ``t_k <=
-    t_{k-1}``).
+    when it cannot be formed (no older step with a traction, no times, ``t_k <= t_{k-1}``,
+    or a rate that is not finite: a traction that was not would otherwise stay in every
+    later step's average).
 
     Why not ``p_k - p_{k-1}`` alone: a warm SteadyGS solve stops at ``eps_tau`` about
     0.45 ``eps_tau`` from its exact traction, an error that changes from step to step, and
     the start ``2 p_k - p_{k-1}`` carries it with a factor ``sqrt(5)`` (for independent
     errors). On ``scripts/bench_step.py``'s hunting run that made the warm start 1.3e-2 off
-    (L2, relative; 2.9e-3 of it the prediction's), and a sweep's measure is about 0.8 of
-    the start's error: half the warm solves took a second sweep for that noise. The
+    (L2, relative, median; 6.8e-3 with the steps solved tightly), and a sweep's measure is
+    about 0.8 of the start's error: half the warm solves took a second sweep. The
     average of the changes halves the noise of the rate (for ``gain`` = 0.5), is exact
     for a traction changing linearly in time, and lags for a changing rate by
     ``(1 - gain) / gain`` steps of its change (``scripts/study_warm_prediction.py`` and
@@ -201,7 +203,7 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
             or not time - o.time > 0):
         return None
     dt = float(time - o.time)
-    rate = o.traction_rate if o.traction_rate is not None else None
+    rate = o.traction_rate
     shift = _lattice_shift(o.grid, grid) if o.grid is not grid else (0, 0)
     if (shift is not None and traction.shape == (2, *grid.shape)
             and o.traction.shape == (2, *o.grid.shape)
@@ -211,11 +213,11 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
             _rate(np.ascontiguousarray(traction[k], dtype=float), o.traction[k], *shift,
                   o.traction[k] if rate is None else rate[k], rate is not None,
                   float(gain), dt, out[k])
-        return out
-    change = (np.asarray(traction, dtype=float) - remesh(o.traction, o.grid, grid)) / dt
-    if rate is None:
-        return change
-    return (1.0 - gain) * remesh(rate, o.grid, grid) + gain * change
+    else:
+        out = (np.asarray(traction, dtype=float) - remesh(o.traction, o.grid, grid)) / dt
+        if rate is not None:
+            out = (1.0 - gain) * remesh(rate, o.grid, grid) + gain * out
+    return out if math.isfinite(array_sum(out)) else None
 
 
 @numba.njit(cache=True)
