@@ -8,7 +8,10 @@ their times are known - extrapolated linearly in time to the current step::
 
     p_pred = p_k + (t - t_k) / (t_k - t_{k-1}) (p_k - p_{k-1}),   p_pred >= 0
 
-(the factor is limited to [0, 2]). That field starts the BEM alone (``"previous"``; a patch
+(the factor is limited to [0, 2]). The traction is extrapolated with a rate smoothed over
+the steps instead (:func:`traction_rate`): each solve stops a little way from its exact
+solution, and ``2 p_k - p_{k-1}`` would double that iteration error in the start. That
+field starts the BEM alone (``"previous"``; a patch
 without a previous step starts cold) or with a simplified model's estimate as the fallback
 (``"previous+estimate"``: a patch without a previous step - the first step, a flange
 contact that has just appeared - starts from the estimate).
@@ -30,10 +33,14 @@ import numba
 import numpy as np
 
 from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
+from ..halfspace.sums import array_sum
 
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
 MAX_EXTRAPOLATION = 2.0
+RATE_GAIN = 0.5
+"""Weight of the latest step's traction change in the remembered traction rate
+(:func:`traction_rate`); 1 is the plain linear extrapolation of the last two steps."""
 AREA_MARGIN_ELEMENTS = 2
 AREA_MARGIN_SHARE = 0.05
 """The potential area of a warm-started patch: the previous steps' contact, widened on each
@@ -71,6 +78,10 @@ class PatchMemory:
         (:func:`railcontact.contact.wheelrail.solve_wheel_normal`).
     vertical_normal
         Vertical component ``N cos(gamma)`` of the patch's normal force [N].
+    traction_rate
+        The traction's rate of change [Pa/s] (2, nx, ny) on ``grid``, smoothed over the
+        steps (:func:`traction_rate`), or None: the traction is then extrapolated from
+        ``older``.
     """
 
     grid: Grid
@@ -84,6 +95,7 @@ class PatchMemory:
     vertical_creep: float = 0.0
     approach: float = 0.0
     vertical_normal: float = 0.0
+    traction_rate: np.ndarray | None = None
 
     @cached_property
     def contact_box(self) -> tuple[float, float, float, float] | None:
@@ -163,6 +175,68 @@ def _extrapolated(v1, i1, j1, v0, i0, j0, c, extrapolate, clip, nx, ny):  # prag
     return out
 
 
+def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
+                  older: PatchMemory | None, gain: float = RATE_GAIN) -> np.ndarray | None:
+    """The traction's rate [Pa/s] (2, nx, ny) on ``grid`` after a step at ``time`` [s]
+    that solved ``traction`` [Pa] (2, nx, ny), ``older`` being the step before::
+
+        v_k = (1 - gain) v_{k-1} + gain (p_k - p_{k-1}) / (t_k - t_{k-1})
+
+    (``v_{k-1}`` the older step's rate; without one, ``v_k = (p_k - p_{k-1}) / dt``). None
+    when it cannot be formed (no older step with a traction, no times, ``t_k <= t_{k-1}``,
+    or a rate that is not finite: a traction that was not would otherwise stay in every
+    later step's average).
+
+    Why not ``p_k - p_{k-1}`` alone: a warm SteadyGS solve stops at ``eps_tau`` about
+    0.45 ``eps_tau`` from its exact traction, an error that changes from step to step, and
+    the start ``2 p_k - p_{k-1}`` carries it with a factor ``sqrt(5)`` (for independent
+    errors). On ``scripts/bench_step.py``'s hunting run that made the warm start 1.3e-2 off
+    (L2, relative, median; 6.8e-3 with the steps solved tightly), and a sweep's measure is
+    about 0.8 of the start's error: half the warm solves took a second sweep. The
+    average of the changes halves the noise of the rate (for ``gain`` = 0.5), is exact
+    for a traction changing linearly in time, and lags for a changing rate by
+    ``(1 - gain) / gain`` steps of its change (``scripts/study_warm_prediction.py`` and
+    docs/performance.md, "Round 6: warm start").
+    """
+    o = older
+    if (o is None or o.traction is None or time is None or o.time is None
+            or not time - o.time > 0):
+        return None
+    dt = float(time - o.time)
+    rate = o.traction_rate
+    shift = _lattice_shift(o.grid, grid) if o.grid is not grid else (0, 0)
+    if (shift is not None and traction.shape == (2, *grid.shape)
+            and o.traction.shape == (2, *o.grid.shape)
+            and (rate is None or rate.shape == o.traction.shape)):
+        out = np.empty((2, *grid.shape))
+        for k in range(2):
+            _rate(np.ascontiguousarray(traction[k], dtype=float), o.traction[k], *shift,
+                  o.traction[k] if rate is None else rate[k], rate is not None,
+                  float(gain), dt, out[k])
+    else:
+        out = (np.asarray(traction, dtype=float) - remesh(o.traction, o.grid, grid)) / dt
+        if rate is not None:
+            out = (1.0 - gain) * remesh(rate, o.grid, grid) + gain * out
+    return out if math.isfinite(array_sum(out)) else None
+
+
+@numba.njit(cache=True)
+def _rate(p, p0, i0, j0, v0, smooth, gain, dt, out):  # pragma: no cover - compiled
+    """``out = (1 - gain) v0 + gain (p - p0) / dt`` (``smooth``; else ``(p - p0) / dt``),
+    ``p0`` and ``v0`` read on ``p``'s grid at the lattice offset ``(i0, j0)`` (zero
+    outside them), as :func:`remesh` does."""
+    nx, ny = out.shape
+    n0x, n0y = p0.shape
+    for a in range(nx):
+        for b in range(ny):
+            x, y = a + i0, b + j0
+            inside = 0 <= x < n0x and 0 <= y < n0y
+            c = (p[a, b] - (p0[x, y] if inside else 0.0)) / dt
+            if smooth:
+                c = (1.0 - gain) * (v0[x, y] if inside else 0.0) + gain * c
+            out[a, b] = c
+
+
 def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | None:
     """The potential contact area (xmin, xmax, ymin, ymax) [m] of a warm-started patch:
     the box around the contact of the previous two steps (patch coordinates), widened on
@@ -199,8 +273,11 @@ def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float,
 def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = None
                         ) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
     """The previous traction [Pa] (2, nx, ny) and adhesion/slip map on ``grid``; with the
-    step's ``time`` [s] the traction extrapolated linearly as the pressure is
-    (:func:`previous_pressure`; the map is the previous step's).
+    step's ``time`` [s] the traction extrapolated (the map is the previous step's): along
+    the memory's smoothed :attr:`~PatchMemory.traction_rate`, ``p_k + (t - t_k) v_k``,
+    when it has one, else linearly from the older step as the pressure is
+    (:func:`previous_pressure`); the step ``t - t_k`` is limited as the pressure's
+    factor.
 
     Whether to extrapolate depends on the solver. On the hunting wheelset of
     ``scripts/bench_step.py`` (S1002/60E1, 1.5 Hz, 1 ms steps, 300 steps) SteadyGS took
@@ -214,8 +291,19 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
         return None, None
     o = memory.older
     c = memory.extrapolation(time)
-    o = o if c > 0 and o is not None and o.traction is not None else None
+    rate = memory.traction_rate
     shift = _on_lattice(memory, grid)
+    if c > 0 and rate is not None and rate.shape == memory.traction.shape:
+        h = c * float(memory.time - o.time)  # t - t_k, limited as c is
+        if shift is not None and memory.traction.shape == (2, *memory.grid.shape):
+            t = np.empty((2, *grid.shape))
+            for k in range(2):
+                _advanced(memory.traction[k], rate[k], *shift, h, t[k])
+        else:
+            t = remesh(memory.traction, memory.grid, grid) + h * remesh(rate, memory.grid,
+                                                                        grid)
+        return t, _state_on(memory, grid, shift)
+    o = o if c > 0 and o is not None and o.traction is not None else None
     shift_o = _on_lattice(o, grid) if o is not None else (0, 0)
     if (shift is not None and shift_o is not None and memory.state.shape == memory.grid.shape
             and memory.traction.shape == (2, *memory.grid.shape)
@@ -230,5 +318,26 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
     t = remesh(memory.traction, memory.grid, grid)  # (both components at once)
     if o is not None:
         t = t + c * (t - remesh(o.traction, o.grid, grid))
-    st = np.rint(remesh(memory.state.astype(float), memory.grid, grid, method="nearest"))
-    return t, st.astype(np.int8)
+    return t, _state_on(memory, grid, None)
+
+
+def _state_on(memory: PatchMemory, grid: Grid, shift: tuple[int, int] | None) -> np.ndarray:
+    """The memory's adhesion/slip map on ``grid`` (int8): shifted on one lattice
+    (``shift``, the offset :func:`_on_lattice` gives), else the nearest element's."""
+    st = memory.state
+    if shift is not None and st.shape == memory.grid.shape and st.dtype.kind in "iub":
+        return _shifted_copy(st.astype(np.int8, copy=False), grid.shape, *shift)
+    return np.rint(remesh(st.astype(float), memory.grid, grid, method="nearest")
+                   ).astype(np.int8)
+
+
+@numba.njit(cache=True)
+def _advanced(v, rate, i, j, h, out):  # pragma: no cover - compiled
+    """``out = v + h rate`` on one lattice (``out[a, b]`` from ``[a + i, b + j]`` of both,
+    zero outside them), as ``remesh(v) + h remesh(rate)``."""
+    nx, ny = out.shape
+    n1x, n1y = v.shape
+    for a in range(nx):
+        for b in range(ny):
+            x, y = a + i, b + j
+            out[a, b] = v[x, y] + h * rate[x, y] if 0 <= x < n1x and 0 <= y < n1y else 0.0

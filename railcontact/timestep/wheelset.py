@@ -93,6 +93,7 @@ from .warmstart import (
     previous_bounds,
     previous_pressure,
     previous_tangential,
+    traction_rate,
 )
 
 OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE, OUTSIDE_VALIDITY = 0, 1, 2, 3, 4
@@ -587,14 +588,19 @@ class WheelsetContact:
                                        creepage=side_creep, previous=prev)
             t = patch.tangential
             older = match(previous, cp.rail_u, cp.position[2])
+            older = None if older is None else _without_older(older)
+            # the traction's rate smoothed over the steps (SteadyGS's extrapolation only)
+            rate = (traction_rate(t.traction, patch.normal.grid, time, older)
+                    if t is not None and settings.tangential_solver != "convexgs" else None)
             memory.append(PatchMemory(
                 grid=patch.normal.grid, pressure=patch.normal.pressure,
                 traction=None if t is None else t.traction,
                 state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
-                time=time, older=None if older is None else _without_older(older),
+                time=time, older=older,
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
-                vertical_normal=patch.normal.force * math.cos(cp.contact_angle)))
+                vertical_normal=patch.normal.force * math.cos(cp.contact_angle),
+                traction_rate=rate))
         return patches, creepages, memory
 
 
