@@ -37,7 +37,8 @@ grouped into blocks; the shift at the start of a block comes from one DC-FFT pro
 with the steady-rolling operator ``B`` and the changes made inside the block are added by
 direct summation with ``B`` (all traction changes, including those of the shifted
 adhesion runs): at the start of a row those of the block's rows before it, for the whole
-row at once, then at each element those of its own row so far. Blocks hold about
+row at once (:data:`LANES` targets at a time, vectorised over the targets), then at each
+element those of its own row so far. Blocks hold about
 :data:`BLOCK_SCALE` ``sqrt(nx ny)`` contact elements: on the wheelset step's windows one
 or two blocks, so a sweep costs one or two DC-FFT products and compiled calls. The sweep
 is compiled with numba; a numpy version (vectorised shift per element, no blocks) gives the same
@@ -83,6 +84,8 @@ from .convexgs import (
 
 try:
     import numba
+    from numba.core import cgutils
+    from numba.extending import intrinsic
 except ImportError:  # pragma: no cover
     numba = None
 
@@ -156,6 +159,71 @@ def _row_dot(rxx, rxy, ryy, r, k0, dpx, dpy, jy, a, m):
     return ax, ay
 
 
+if HAVE_NUMBA:
+    @intrinsic
+    def _stack_floats(typingctx, n):
+        """A pointer to ``n`` (a literal int) float64 on the compiled function's stack: an
+        array there (:func:`numba.carray`) is one LLVM sees no other pointer reach, so it
+        keeps a small array of sums in vector registers across a loop (a heap array, which
+        may alias the arrays read in the loop, is loaded and stored at every step)."""
+        if not isinstance(n, numba.types.IntegerLiteral):
+            return None
+        size = n.literal_value
+
+        def codegen(context, builder, sig, args):
+            return cgutils.alloca_once(builder, context.get_value_type(numba.types.float64),
+                                       size=size)
+
+        return numba.types.CPointer(numba.types.float64)(n), codegen
+
+    _carray = numba.carray
+else:  # pragma: no cover
+    _stack_floats = _carray = None
+
+LANES = 16
+"""Target elements whose cross-row sums :func:`_cross_rows` forms at once (their sums held
+in four vector registers of eight)."""
+
+
+def _cross_rows(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty):
+    """Add to ``tx[c0 + l]``, ``ty[c0 + l]`` (``l < LANES``, up to the row's last contact
+    element ``hi[iy]``) the shift [m] of the changes ``dp`` of rows ``r0 .. iy-1``.
+
+    ``f..`` are the reversed kernels flipped along x (:func:`_cross_kernel`), so that the
+    coefficients of one source element on :data:`LANES` consecutive targets are
+    consecutive: each source element adds a vector multiple of a kernel slice to the
+    targets' sums (an outer product, vectorised over the targets, no horizontal sums)."""
+    ny, nx = dpx.shape
+    ax = _carray(_stack_floats(LANES), LANES)
+    ay = _carray(_stack_floats(LANES), LANES)
+    for k in range(LANES):
+        ax[k] = 0.0
+        ay[k] = 0.0
+    for jy in range(r0, iy):
+        a = lo[jy]
+        b = hi[jy]
+        m = b + 1 - a
+        if m <= 0:
+            continue
+        r = ny - 1 - iy + jy
+        s = nx - 1 + c0 - b  # target c0 + k, source b - p: f[r, s + p + k]
+        kxx = fxx[r, s:s + m + LANES - 1]
+        kxy = fxy[r, s:s + m + LANES - 1]
+        kyy = fyy[r, s:s + m + LANES - 1]
+        qx = dpx[jy, a:b + 1][::-1]
+        qy = dpy[jy, a:b + 1][::-1]
+        for p in range(m):
+            ex = qx[p]
+            ey = qy[p]
+            for k in range(LANES):
+                ax[k] += kxx[p + k] * ex + kxy[p + k] * ey
+                ay[k] += kxy[p + k] * ex + kyy[p + k] * ey
+    for k in range(LANES):
+        if c0 + k <= hi[iy]:
+            tx[c0 + k] += ax[k]
+            ty[c0 + k] += ay[k]
+
+
 def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, jx,
            omega_h, omega_s):
     """Solve element (iy, ix) with its trailing adhesion run ``jx < j < ix`` (see
@@ -187,18 +255,19 @@ def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, j
     _shift_run_c(px, py, g, dpx, dpy, iy, ix, jx, new_x - ox, new_y - oy)
 
 
-def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
-                  r0, r1, omega_h, omega_s, measure=1.0):
+def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy, state,
+                  lo, hi, r0, r1, omega_h, omega_s, measure=1.0):
     """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled); returns the squared
     norm of the block's traction change [Pa^2], scaled by ``measure`` (a power of two,
     :attr:`~.convexgs.SweepProblem.measure`).
 
     ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
-    direct sum with the reversed kernels (as ConvexGS's ``_block_sweep``), so every
-    element sees the newest tractions: at the start of a row, those of the block's rows
-    before it (final for this sweep: a row's changes stay in the row) for the whole row
-    at once, one row pair at a time; at each element, those of its own row so far.
+    direct sum with the reversed kernels ``r..`` (as ConvexGS's ``_block_sweep``), so
+    every element sees the newest tractions: at the start of a row, those of the block's
+    rows before it (final for this sweep: a row's changes stay in the row) for the whole
+    row at once, :data:`LANES` targets at a time with the flipped kernels ``f..``
+    (:func:`_cross_rows`); at each element, those of its own row so far.
     ``cum[:, L]`` holds the run coefficient ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for
     a run of ``L`` elements. On return ``dpx``, ``dpy`` hold the block's changes (the runs
     shifted included), whose squared sum is the sweep's measure of this block.
@@ -212,15 +281,9 @@ def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi
         for ix in range(a, b + 1):
             tx[ix] = ux[iy, ix]
             ty[ix] = uy[iy, ix]
-        for jy in range(r0, iy):
-            m = hi[jy] + 1 - lo[jy]
-            if m <= 0:
-                continue
-            for ix in range(a, b + 1):
-                ax, ay = _row_dot_c(rxx, rxy, ryy, ny - 1 - iy + jy,
-                                    nx - 1 - ix + lo[jy], dpx, dpy, jy, lo[jy], m)
-                tx[ix] += ax
-                ty[ix] += ay
+        if iy > r0:
+            for c0 in range(a, b + 1, LANES):
+                _cross_rows_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
         jx = a - 1  # the run start (:func:`_run_start`), kept up to date along the row
         for ix in range(a, b + 1):
             if g[iy, ix] > 0.0:
@@ -243,6 +306,7 @@ if HAVE_NUMBA:
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
     _row_dot_c = _jit(_row_dot)
+    _cross_rows_c = _jit(_cross_rows)
     _visit_c = _jit(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
         _steady_block)
@@ -250,6 +314,7 @@ else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
     _row_dot_c = _row_dot
+    _cross_rows_c = _cross_rows
     _visit_c = _visit
     _steady_block_numba = None
 
@@ -315,15 +380,25 @@ def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
 
 
 @lru_cache(maxsize=16)
-def _steady_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _steady_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, ...]:
     """The reversed kernels xx, xy, yy of :func:`_gs_kernels` for the compiled sweep, which
     uses xy for yx: the steady-rolling operator of quasi-identical materials is reciprocal
-    (``B_xy = B_yx``, the same coefficients to the bit)."""
+    (``B_xy = B_yx``, the same coefficients to the bit); then the same three flipped along
+    x for the cross-row sums (:func:`_cross_kernel`)."""
     rxx, rxy, ryx, ryy = _gs_kernels(operator)
     if not np.array_equal(rxy, ryx):
         raise RailContactError("SteadyGS needs a reciprocal steady-rolling operator "
                                "(equal xy and yx kernels)")
-    return rxx, rxy, ryy
+    return (rxx, rxy, ryy) + tuple(_cross_kernel(k) for k in (rxx, rxy, ryy))
+
+
+def _cross_kernel(reversed_kernel: np.ndarray) -> np.ndarray:
+    """A reversed kernel (2ny-1, 2nx-1) flipped along x, ``f[r, t] = k[r, 2nx-2-t]``, with
+    :data:`LANES` zero columns after it (read by the targets past a row's end)."""
+    n0, n1 = reversed_kernel.shape
+    out = np.zeros((n0, n1 + LANES))
+    out[:, :n1] = reversed_kernel[:, ::-1]
+    return out
 
 
 @lru_cache(maxsize=16)
