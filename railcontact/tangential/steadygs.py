@@ -37,7 +37,7 @@ grouped into blocks; the shift at the start of a block comes from one DC-FFT pro
 with the steady-rolling operator ``B`` and the changes made inside the block are added by
 direct summation with ``B`` (all traction changes, including those of the shifted
 adhesion runs): at the start of a row those of the block's rows before it, for the whole
-row at once (:data:`LANES` targets at a time, vectorised over the targets), then at each
+row at once (16 to 32 targets at a time, vectorised over the targets), then at each
 element those of its own row so far. Blocks hold about
 :data:`BLOCK_SCALE` ``sqrt(nx ny)`` contact elements: on the wheelset step's windows one
 or two blocks, so a sweep costs one or two DC-FFT products and compiled calls. The sweep
@@ -180,48 +180,56 @@ if HAVE_NUMBA:
 else:  # pragma: no cover
     _stack_floats = _carray = None
 
-LANES = 16
-"""Target elements whose cross-row sums :func:`_cross_rows` forms at once (their sums held
-in four vector registers of eight)."""
+LANES = (16, 24, 32)
+"""Target elements whose cross-row sums :func:`_cross_rows_of` forms at once: a row's
+targets are taken in chunks of 32, the last of them in the smallest of these that holds
+what is left (their sums held in four to eight vector registers of eight)."""
 
 
-def _cross_rows(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty):
-    """Add to ``tx[c0 + l]``, ``ty[c0 + l]`` (``l < LANES``, up to the row's last contact
-    element ``hi[iy]``) the shift [m] of the changes ``dp`` of rows ``r0 .. iy-1``.
+def _cross_rows_of(lanes: int):
+    """The function that adds the cross-row sums of ``lanes`` targets (a compile-time
+    constant for numba: the loop over them is vectorised, its sums kept in registers)."""
 
-    ``f..`` are the reversed kernels flipped along x (:func:`_cross_kernel`), so that the
-    coefficients of one source element on :data:`LANES` consecutive targets are
-    consecutive: each source element adds a vector multiple of a kernel slice to the
-    targets' sums (an outer product, vectorised over the targets, no horizontal sums)."""
-    ny, nx = dpx.shape
-    ax = _carray(_stack_floats(LANES), LANES)
-    ay = _carray(_stack_floats(LANES), LANES)
-    for k in range(LANES):
-        ax[k] = 0.0
-        ay[k] = 0.0
-    for jy in range(r0, iy):
-        a = lo[jy]
-        b = hi[jy]
-        m = b + 1 - a
-        if m <= 0:
-            continue
-        r = ny - 1 - iy + jy
-        s = nx - 1 + c0 - b  # target c0 + k, source b - p: f[r, s + p + k]
-        kxx = fxx[r, s:s + m + LANES - 1]
-        kxy = fxy[r, s:s + m + LANES - 1]
-        kyy = fyy[r, s:s + m + LANES - 1]
-        qx = dpx[jy, a:b + 1][::-1]
-        qy = dpy[jy, a:b + 1][::-1]
-        for p in range(m):
-            ex = qx[p]
-            ey = qy[p]
-            for k in range(LANES):
-                ax[k] += kxx[p + k] * ex + kxy[p + k] * ey
-                ay[k] += kxy[p + k] * ex + kyy[p + k] * ey
-    for k in range(LANES):
-        if c0 + k <= hi[iy]:
-            tx[c0 + k] += ax[k]
-            ty[c0 + k] += ay[k]
+    def cross_rows(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty):
+        """Add to ``tx[c0 + l]``, ``ty[c0 + l]`` (``l < lanes``, up to the row's last
+        contact element ``hi[iy]``) the shift [m] of the changes ``dp`` of rows
+        ``r0 .. iy-1``.
+
+        ``f..`` are the reversed kernels flipped along x (:func:`_cross_kernel`), so that
+        the coefficients of one source element on consecutive targets are consecutive:
+        each source element adds a vector multiple of a kernel slice to the targets' sums
+        (an outer product, vectorised over the targets, no horizontal sums)."""
+        ny, nx = dpx.shape
+        ax = _carray(_stack_floats(lanes), lanes)
+        ay = _carray(_stack_floats(lanes), lanes)
+        for k in range(lanes):
+            ax[k] = 0.0
+            ay[k] = 0.0
+        for jy in range(r0, iy):
+            a = lo[jy]
+            b = hi[jy]
+            m = b + 1 - a
+            if m <= 0:
+                continue
+            r = ny - 1 - iy + jy
+            s = nx - 1 + c0 - b  # target c0 + k, source b - p: f[r, s + p + k]
+            kxx = fxx[r, s:s + m + lanes - 1]
+            kxy = fxy[r, s:s + m + lanes - 1]
+            kyy = fyy[r, s:s + m + lanes - 1]
+            qx = dpx[jy, a:b + 1][::-1]
+            qy = dpy[jy, a:b + 1][::-1]
+            for p in range(m):
+                ex = qx[p]
+                ey = qy[p]
+                for k in range(lanes):
+                    ax[k] += kxx[p + k] * ex + kxy[p + k] * ey
+                    ay[k] += kxy[p + k] * ex + kyy[p + k] * ey
+        for k in range(lanes):  # (a fixed count: a variable one kept the sums in memory)
+            if c0 + k <= hi[iy]:
+                tx[c0 + k] += ax[k]
+                ty[c0 + k] += ay[k]
+
+    return cross_rows
 
 
 def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, jx,
@@ -266,8 +274,8 @@ def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy
     direct sum with the reversed kernels ``r..`` (as ConvexGS's ``_block_sweep``), so
     every element sees the newest tractions: at the start of a row, those of the block's
     rows before it (final for this sweep: a row's changes stay in the row) for the whole
-    row at once, :data:`LANES` targets at a time with the flipped kernels ``f..``
-    (:func:`_cross_rows`); at each element, those of its own row so far.
+    row at once, 16 to 32 targets at a time with the flipped kernels ``f..``
+    (:func:`_cross_rows_of`); at each element, those of its own row so far.
     ``cum[:, L]`` holds the run coefficient ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for
     a run of ``L`` elements. On return ``dpx``, ``dpy`` hold the block's changes (the runs
     shifted included), whose squared sum is the sweep's measure of this block.
@@ -281,9 +289,17 @@ def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy
         for ix in range(a, b + 1):
             tx[ix] = ux[iy, ix]
             ty[ix] = uy[iy, ix]
-        if iy > r0:
-            for c0 in range(a, b + 1, LANES):
-                _cross_rows_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+        c0 = a
+        while iy > r0 and c0 <= b:
+            if b - c0 >= 24:
+                _cross_rows32_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 32
+            elif b - c0 >= 16:
+                _cross_rows24_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 24
+            else:
+                _cross_rows16_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 16
         jx = a - 1  # the run start (:func:`_run_start`), kept up to date along the row
         for ix in range(a, b + 1):
             if g[iy, ix] > 0.0:
@@ -306,7 +322,11 @@ if HAVE_NUMBA:
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
     _row_dot_c = _jit(_row_dot)
-    _cross_rows_c = _jit(_cross_rows)
+    # (compiled inside the block only: the three share one name, which numba's cache
+    # would take for one function)
+    _cross_rows16_c, _cross_rows24_c, _cross_rows32_c = (
+        numba.njit(inline="always", fastmath=True, error_model="numpy")(_cross_rows_of(n))
+        for n in LANES)
     _visit_c = _jit(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
         _steady_block)
@@ -314,7 +334,7 @@ else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
     _row_dot_c = _row_dot
-    _cross_rows_c = _cross_rows
+    _cross_rows16_c, _cross_rows24_c, _cross_rows32_c = (_cross_rows_of(n) for n in LANES)
     _visit_c = _visit
     _steady_block_numba = None
 
@@ -394,9 +414,9 @@ def _steady_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, ...]:
 
 def _cross_kernel(reversed_kernel: np.ndarray) -> np.ndarray:
     """A reversed kernel (2ny-1, 2nx-1) flipped along x, ``f[r, t] = k[r, 2nx-2-t]``, with
-    :data:`LANES` zero columns after it (read by the targets past a row's end)."""
+    ``max(LANES)`` zero columns after it (read by the targets past a row's end)."""
     n0, n1 = reversed_kernel.shape
-    out = np.zeros((n0, n1 + LANES))
+    out = np.zeros((n0, n1 + max(LANES)))
     out[:, :n1] = reversed_kernel[:, ::-1]
     return out
 
