@@ -92,15 +92,16 @@ except ImportError:  # pragma: no cover
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
-BLOCK_SCALE = 12.0
+BLOCK_SCALE = 15.0
 """Target size of a row block, in contact elements: ``BLOCK_SCALE sqrt(nx ny)`` on an
 ``nx`` x ``ny`` grid. A block's direct sum costs about (its elements)^2 / 2 element pairs,
 a block boundary one DC-FFT product, whose cost grows with the grid, so the best block
 grows as the square root of the grid's size. 12 was the best of 8 / 10 / 12 / 18 in
-round 5 (the boundary product no longer stacks a copy; each solve timed with every value
-on the same problem): on the wheelset step's windows (24 x 48 elements, 250-1,000 in
-contact) one block up to about 600 contact elements, two above; on 0.5 and 0.2 mm
-wheel-rail patches 5-10 % less time than 18, the same sweeps."""
+round 5; with the cross-row sums vectorised over the targets (round 6, a third cheaper)
+15 is the best of 12 / 15 / 18 (each solve timed with every value on the same problem,
+the same sweeps): 5 % less time than 12 on the wheelset step's warm and cold solves (24 x
+48 elements, 250-1,000 in contact: one block up to about 760 contact elements), 4 % on
+the 0.5 mm wheel-rail patches, 2 % on the 0.2 mm ones; 18 within 1 % of 15."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
