@@ -286,7 +286,8 @@ def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy
     norm of the block's traction change [Pa^2], scaled by ``measure`` (a power of two,
     :attr:`~.convexgs.SweepProblem.measure`).
 
-    ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
+    ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block
+    (its rows r0 .. r1-1 are summed into in place: the sweep reads them no more);
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
     direct sum with the reversed kernels ``r..`` (as ConvexGS's ``_block_sweep``), so
     every element sees the newest tractions: at the start of a row, those of the block's
@@ -297,15 +298,11 @@ def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy
     a run of ``L`` elements. On return ``dpx``, ``dpy`` hold the block's changes (the runs
     shifted included), whose squared sum is the sweep's measure of this block.
     """
-    ny, nx = g.shape
-    tx = np.empty(nx)
-    ty = np.empty(nx)
     dif = 0.0
     for iy in range(r0, r1):
         a, b = lo[iy], hi[iy]
-        for ix in range(a, b + 1):
-            tx[ix] = ux[iy, ix]
-            ty[ix] = uy[iy, ix]
+        tx = ux[iy]  # (the block's rows of the shift are its own: summed in place)
+        ty = uy[iy]
         c0 = a
         while iy > r0 and c0 <= b:
             if b - c0 >= 24:
