@@ -37,7 +37,8 @@ grouped into blocks; the shift at the start of a block comes from one DC-FFT pro
 with the steady-rolling operator ``B`` and the changes made inside the block are added by
 direct summation with ``B`` (all traction changes, including those of the shifted
 adhesion runs): at the start of a row those of the block's rows before it, for the whole
-row at once, then at each element those of its own row so far. Blocks hold about
+row at once (16 to 32 targets at a time, vectorised over the targets), then at each
+element those of its own row so far. Blocks hold about
 :data:`BLOCK_SCALE` ``sqrt(nx ny)`` contact elements: on the wheelset step's windows one
 or two blocks, so a sweep costs one or two DC-FFT products and compiled calls. The sweep
 is compiled with numba; a numpy version (vectorised shift per element, no blocks) gives the same
@@ -83,40 +84,58 @@ from .convexgs import (
 
 try:
     import numba
+    from numba.core import cgutils
+    from numba.extending import intrinsic
 except ImportError:  # pragma: no cover
     numba = None
 
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
-BLOCK_SCALE = 12.0
+BLOCK_SCALE = 15.0
 """Target size of a row block, in contact elements: ``BLOCK_SCALE sqrt(nx ny)`` on an
 ``nx`` x ``ny`` grid. A block's direct sum costs about (its elements)^2 / 2 element pairs,
 a block boundary one DC-FFT product, whose cost grows with the grid, so the best block
 grows as the square root of the grid's size. 12 was the best of 8 / 10 / 12 / 18 in
-round 5 (the boundary product no longer stacks a copy; each solve timed with every value
-on the same problem): on the wheelset step's windows (24 x 48 elements, 250-1,000 in
-contact) one block up to about 600 contact elements, two above; on 0.5 and 0.2 mm
-wheel-rail patches 5-10 % less time than 18, the same sweeps."""
+round 5; with the cross-row sums vectorised over the targets (round 6, a third cheaper)
+15 is the best of 12 / 15 / 18 (each solve timed with every value on the same problem,
+the same sweeps): 5 % less time than 12 on the wheelset step's warm and cold solves (24 x
+48 elements, 250-1,000 in contact: one block up to about 760 contact elements), 4 % on
+the 0.5 mm wheel-rail patches, 2 % on the 0.2 mm ones; 18 within 1 % of 15."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
     """Move the tractions [Pa] of the adhesion run ``jx < j < ix`` of row ``iy`` by
     ``(ex, ey)``, each put back on its bound ``g`` when pushed over it (the shift then goes
     on with that element's actual change); the changes are added to ``dpx``, ``dpy``."""
-    for j in range(ix - 1, jx, -1):
-        if ex == 0.0 and ey == 0.0:
+    j = ix - 1
+    while j > jx and (ex != 0.0 or ey != 0.0):
+        # the elements the shift leaves within their bounds, in a loop that leaves at the
+        # first one it does not: a branch the processor predicts, where a test inside
+        # the loop made each element wait for the one before (3 ns an element)
+        while j > jx:
+            gj = g[iy, j]
+            qx = px[iy, j] + ex
+            qy = py[iy, j] + ey
+            if not NOT_TINY < gj < NOT_HUGE or qx * qx + qy * qy > gj * gj:
+                break
+            px[iy, j] = qx
+            py[iy, j] = qy
+            dpx[iy, j] += ex
+            dpy[iy, j] += ey
+            j -= 1
+        if j <= jx:
             break
-        ox = px[iy, j]
-        oy = py[iy, j]
+        ox = px[iy, j]  # pushed over its bound, or a bound whose square leaves the normal
+        oy = py[iy, j]  # numbers (squares near it would under- or overflow: hypot)
         qx = ox + ex
         qy = oy + ey
         gj = g[iy, j]
-        if NOT_TINY < gj < NOT_HUGE:  # no hypot: this loop is most of a block's non-sum time
+        if NOT_TINY < gj < NOT_HUGE:
             m2 = qx * qx + qy * qy
             over = m2 > gj * gj
             m = math.sqrt(m2) if over else 0.0
-        else:  # (squares near the bound would under- or overflow)
+        else:
             m = math.hypot(qx, qy)
             over = m > gj
         if over:
@@ -128,6 +147,7 @@ def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
         py[iy, j] = qy
         dpx[iy, j] += ex
         dpy[iy, j] += ey
+        j -= 1
 
 
 def _run_start(state, iy, ix):
@@ -154,6 +174,79 @@ def _row_dot(rxx, rxy, ryy, r, k0, dpx, dpy, jy, a, m):
         ax += kxx[j] * qx[j] + kxy[j] * qy[j]
         ay += kxy[j] * qx[j] + kyy[j] * qy[j]
     return ax, ay
+
+
+if HAVE_NUMBA:
+    @intrinsic
+    def _stack_floats(typingctx, n):
+        """A pointer to ``n`` (a literal int) float64 on the compiled function's stack: an
+        array there (:func:`numba.carray`) is one LLVM sees no other pointer reach, so it
+        keeps a small array of sums in vector registers across a loop (a heap array, which
+        may alias the arrays read in the loop, is loaded and stored at every step)."""
+        if not isinstance(n, numba.types.IntegerLiteral):
+            return None
+        size = n.literal_value
+
+        def codegen(context, builder, sig, args):
+            return cgutils.alloca_once(builder, context.get_value_type(numba.types.float64),
+                                       size=size)
+
+        return numba.types.CPointer(numba.types.float64)(n), codegen
+
+    _carray = numba.carray
+else:  # pragma: no cover
+    _stack_floats = _carray = None
+
+LANES = (16, 24, 32)
+"""Target elements whose cross-row sums :func:`_cross_rows_of` forms at once: a row's
+targets are taken in chunks of 32, the last of them in the smallest of these that holds
+what is left (their sums held in four to eight vector registers of eight)."""
+
+
+def _cross_rows_of(lanes: int):
+    """The function that adds the cross-row sums of ``lanes`` targets (a compile-time
+    constant for numba: the loop over them is vectorised, its sums kept in registers)."""
+
+    def cross_rows(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty):
+        """Add to ``tx[c0 + l]``, ``ty[c0 + l]`` (``l < lanes``, up to the row's last
+        contact element ``hi[iy]``) the shift [m] of the changes ``dp`` of rows
+        ``r0 .. iy-1``.
+
+        ``f..`` are the reversed kernels flipped along x (:func:`_cross_kernel`), so that
+        the coefficients of one source element on consecutive targets are consecutive:
+        each source element adds a vector multiple of a kernel slice to the targets' sums
+        (an outer product, vectorised over the targets, no horizontal sums)."""
+        ny, nx = dpx.shape
+        ax = _carray(_stack_floats(lanes), lanes)
+        ay = _carray(_stack_floats(lanes), lanes)
+        for k in range(lanes):
+            ax[k] = 0.0
+            ay[k] = 0.0
+        for jy in range(r0, iy):
+            a = lo[jy]
+            b = hi[jy]
+            m = b + 1 - a
+            if m <= 0:
+                continue
+            r = ny - 1 - iy + jy
+            s = nx - 1 + c0 - b  # target c0 + k, source b - p: f[r, s + p + k]
+            kxx = fxx[r, s:s + m + lanes - 1]
+            kxy = fxy[r, s:s + m + lanes - 1]
+            kyy = fyy[r, s:s + m + lanes - 1]
+            qx = dpx[jy, a:b + 1][::-1]
+            qy = dpy[jy, a:b + 1][::-1]
+            for p in range(m):
+                ex = qx[p]
+                ey = qy[p]
+                for k in range(lanes):
+                    ax[k] += kxx[p + k] * ex + kxy[p + k] * ey
+                    ay[k] += kxy[p + k] * ex + kyy[p + k] * ey
+        for k in range(lanes):  # (a fixed count: a variable one kept the sums in memory)
+            if c0 + k <= hi[iy]:
+                tx[c0 + k] += ax[k]
+                ty[c0 + k] += ay[k]
+
+    return cross_rows
 
 
 def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, jx,
@@ -187,40 +280,40 @@ def _visit(rxx, rxy, ryy, cum, sx, sy, g, px, py, dpx, dpy, state, lo, iy, ix, j
     _shift_run_c(px, py, g, dpx, dpy, iy, ix, jx, new_x - ox, new_y - oy)
 
 
-def _steady_block(rxx, rxy, ryy, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
-                  r0, r1, omega_h, omega_s, measure=1.0):
+def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy, state,
+                  lo, hi, r0, r1, omega_h, omega_s, measure=1.0):
     """SteadyGS over the elements of rows r0 .. r1-1 (numba-compiled); returns the squared
     norm of the block's traction change [Pa^2], scaled by ``measure`` (a power of two,
     :attr:`~.convexgs.SweepProblem.measure`).
 
-    ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block;
+    ``(ux, uy)`` is the shift ``W + B p`` [m] for the tractions at the start of the block
+    (its rows r0 .. r1-1 are summed into in place: the sweep reads them no more);
     the changes made inside the block (``dpx``, ``dpy``, zero on entry) are added by a
-    direct sum with the reversed kernels (as ConvexGS's ``_block_sweep``), so every
-    element sees the newest tractions: at the start of a row, those of the block's rows
-    before it (final for this sweep: a row's changes stay in the row) for the whole row
-    at once, one row pair at a time; at each element, those of its own row so far.
+    direct sum with the reversed kernels ``r..`` (as ConvexGS's ``_block_sweep``), so
+    every element sees the newest tractions: at the start of a row, those of the block's
+    rows before it (final for this sweep: a row's changes stay in the row) for the whole
+    row at once, 16 to 32 targets at a time with the flipped kernels ``f..``
+    (:func:`_cross_rows_of`); at each element, those of its own row so far.
     ``cum[:, L]`` holds the run coefficient ``sum_{m<L} B[m]`` (c11, c12, c21, c22) for
     a run of ``L`` elements. On return ``dpx``, ``dpy`` hold the block's changes (the runs
     shifted included), whose squared sum is the sweep's measure of this block.
     """
-    ny, nx = g.shape
-    tx = np.empty(nx)
-    ty = np.empty(nx)
     dif = 0.0
     for iy in range(r0, r1):
         a, b = lo[iy], hi[iy]
-        for ix in range(a, b + 1):
-            tx[ix] = ux[iy, ix]
-            ty[ix] = uy[iy, ix]
-        for jy in range(r0, iy):
-            m = hi[jy] + 1 - lo[jy]
-            if m <= 0:
-                continue
-            for ix in range(a, b + 1):
-                ax, ay = _row_dot_c(rxx, rxy, ryy, ny - 1 - iy + jy,
-                                    nx - 1 - ix + lo[jy], dpx, dpy, jy, lo[jy], m)
-                tx[ix] += ax
-                ty[ix] += ay
+        tx = ux[iy]  # (the block's rows of the shift are its own: summed in place)
+        ty = uy[iy]
+        c0 = a
+        while iy > r0 and c0 <= b:
+            if b - c0 >= 24:
+                _cross_rows32_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 32
+            elif b - c0 >= 16:
+                _cross_rows24_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 24
+            else:
+                _cross_rows16_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 16
         jx = a - 1  # the run start (:func:`_run_start`), kept up to date along the row
         for ix in range(a, b + 1):
             if g[iy, ix] > 0.0:
@@ -243,6 +336,11 @@ if HAVE_NUMBA:
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
     _row_dot_c = _jit(_row_dot)
+    # (compiled inside the block only: the three share one name, which numba's cache
+    # would take for one function)
+    _cross_rows16_c, _cross_rows24_c, _cross_rows32_c = (
+        numba.njit(inline="always", fastmath=True, error_model="numpy")(_cross_rows_of(n))
+        for n in LANES)
     _visit_c = _jit(_visit)
     _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
         _steady_block)
@@ -250,6 +348,7 @@ else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
     _row_dot_c = _row_dot
+    _cross_rows16_c, _cross_rows24_c, _cross_rows32_c = (_cross_rows_of(n) for n in LANES)
     _visit_c = _visit
     _steady_block_numba = None
 
@@ -315,15 +414,25 @@ def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
 
 
 @lru_cache(maxsize=16)
-def _steady_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _steady_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, ...]:
     """The reversed kernels xx, xy, yy of :func:`_gs_kernels` for the compiled sweep, which
     uses xy for yx: the steady-rolling operator of quasi-identical materials is reciprocal
-    (``B_xy = B_yx``, the same coefficients to the bit)."""
+    (``B_xy = B_yx``, the same coefficients to the bit); then the same three flipped along
+    x for the cross-row sums (:func:`_cross_kernel`)."""
     rxx, rxy, ryx, ryy = _gs_kernels(operator)
     if not np.array_equal(rxy, ryx):
         raise RailContactError("SteadyGS needs a reciprocal steady-rolling operator "
                                "(equal xy and yx kernels)")
-    return rxx, rxy, ryy
+    return (rxx, rxy, ryy) + tuple(_cross_kernel(k) for k in (rxx, rxy, ryy))
+
+
+def _cross_kernel(reversed_kernel: np.ndarray) -> np.ndarray:
+    """A reversed kernel (2ny-1, 2nx-1) flipped along x, ``f[r, t] = k[r, 2nx-2-t]``, with
+    ``max(LANES)`` zero columns after it (read by the targets past a row's end)."""
+    n0, n1 = reversed_kernel.shape
+    out = np.zeros((n0, n1 + max(LANES)))
+    out[:, :n1] = reversed_kernel[:, ::-1]
+    return out
 
 
 @lru_cache(maxsize=16)
