@@ -265,11 +265,12 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     g_min = math.inf
     k = 0
     increasing = True
+    u_last = -math.inf
     for i in range(n):
         u = us[i]
         if lo < u < hi:
-            if m > 0 and not u > out[2, m - 1]:
-                increasing = False
+            increasing = increasing and u > u_last
+            u_last = u
             z = zs[i]
             j = _interval_near(rx, u, j)
             g = z - _piece(rc, j, u - rx[j], 0)
@@ -352,6 +353,19 @@ def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
     gamma = math.atan(spline_at(rx, rc, u_c, 1))
     s_c = (eta_c - half_bb) + flange_back
     return eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, spline_at(wx, wc, s_c, 0)
+
+
+@numba.njit(cache=True)
+def rigid_points(eta, x, u, g, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
+    """:func:`rigid_point` of each run of :func:`intervals`, one row each (m, 8)."""
+    runs = intervals(g, g_min, k, approach)
+    out = np.empty((runs.shape[0], 8))
+    for m in range(runs.shape[0]):
+        p = rigid_point(eta, x, u, g, g_min, runs[m, 0], runs[m, 1], rx, rc, wx, wc, half_bb,
+                        flange_back)
+        for c in range(8):
+            out[m, c] = p[c]
+    return out
 
 
 @numba.njit(cache=True)

@@ -171,10 +171,6 @@ _FIELDS = frozenset(f.name for f in fields(ContactPoint))
 
 _FRAME = frozenset({"A", "B", "s", "f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"})
 """The fields of a rigid contact point formed when first read (its tangent frame)."""
-_RAIL_Y = frozenset({"rail_y"})
-"""The field of a rigid contact point formed when first read, apart from its frame."""
-_OFFSET = frozenset({"offset"})
-"""The field of a point at the reference point formed when first read."""
 _SAMPLES = frozenset({"f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"})
 """The samples of a point at the reference point formed in full when first read."""
 
@@ -183,16 +179,11 @@ def _formed_later(later: dict[str, Callable[[], dict]], **now) -> ContactPoint:
     """A :class:`ContactPoint` with the fields ``now``; each other field ``name`` is
     formed by ``later[name]()`` (which returns it and the others it forms, by name) when
     it is first read."""
-    assert set(later).isdisjoint(now) and set(later).union(now) == _FIELDS
+    assert later.keys().isdisjoint(now) and len(later) + len(now) == len(_FIELDS)
     cp = object.__new__(ContactPoint)
     cp.__dict__.update(now)
     cp.__dict__["_later"] = later
     return cp
-
-
-def _of(names: frozenset, form: Callable[[], dict]) -> dict[str, Callable[[], dict]]:
-    """``later`` of :func:`_formed_later` for the fields ``names`` formed together."""
-    return dict.fromkeys(names, form)
 
 
 def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
@@ -228,13 +219,11 @@ def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr = _wheel_samples(ws)
-    rail = track.side_rail
-    lo, hi = rail.bounds
     out = np.empty((5, eta.size))
     n, g_min, k, increasing = kernels.trace_gap(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
-        math.sin(phi), float(sgn * pose.lateral), float(ws.radius), lo, hi,
-        *_rail_arrays(track)[2:], out)
+        math.sin(phi), float(sgn * pose.lateral), float(ws.radius), *_rail_arrays(track)[4:],
+        out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
@@ -255,9 +244,12 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
         return list(last[5])
     trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
     eta, x, u, z, g = trace
-    points = [_point(track, ws, side, eta, x, u, z, g, g_min, int(a), int(b))
-              for a, b in kernels.intervals(g, g_min, k, float(approach))]
-    points.sort(key=lambda c: c.gap)
+    wheel = _wheel_arrays(ws)
+    rows = kernels.rigid_points(eta, x, u, g, g_min, k, float(approach),
+                                *_rail_arrays(track)[2:4], *wheel[:2], *wheel[3:])
+    points = [_point(track, ws, side, eta, u, z, g_min, row) for row in rows.tolist()]
+    if len(points) > 1:
+        points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
     return points
 
@@ -292,11 +284,12 @@ def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
 
 def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
     """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z) and its
-    spline's breakpoints and coefficients (computed once per track; read-only)."""
+    spline's breakpoints and coefficients, then its extent (lo, hi) [m] and the same
+    breakpoints and coefficients (computed once per track; read-only)."""
     cached = track.__dict__.get("_kernel_arrays")
     if cached is None:
         rail = track.side_rail
-        cached = (*rail.samples(N_RAIL), *rail._pieces)
+        cached = (*rail.samples(N_RAIL), *rail._pieces, *rail.bounds, *rail._pieces)
         object.__setattr__(track, "_kernel_arrays", cached)  # a cache on a frozen record
     return cached
 
@@ -304,22 +297,25 @@ def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
 def _wheel_arrays(ws: Wheelset) -> tuple:
     """The wheel as the kernels read it: its spline's breakpoints and coefficients, the
     nominal radius [m], and ``back_to_back / 2``, ``flange_back`` [m] (profile coordinate
-    S = eta - back_to_back / 2 + flange_back, :meth:`Wheelset.profile_coordinate`)."""
-    return (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2, float(ws.flange_back))
+    S = eta - back_to_back / 2 + flange_back, :meth:`Wheelset.profile_coordinate`);
+    formed once per wheelset."""
+    cached = ws.__dict__.get("_kernel_arrays")
+    if cached is None:
+        cached = (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2,
+                  float(ws.flange_back))
+        object.__setattr__(ws, "_kernel_arrays", cached)  # a cache on a frozen record
+    return cached
 
 
-def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
-    """The rigid contact point of the trace's run ``a:b`` (its least gap above ``g_min``,
-    refined by a parabola through three samples: :func:`~.kernels.rigid_point`), its
-    tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
-    ur, zr, rx, rc = _rail_arrays(track)
-    wx, wc, radius, half_bb, flange_back = _wheel_arrays(ws)
-    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = kernels.rigid_point(
-        eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
+def _point(track, ws, side, eta, u, z, g_min, row) -> ContactPoint:
+    """The rigid contact point ``row`` of :func:`~.kernels.rigid_points` (a run of the
+    trace: its least gap above ``g_min``, refined by a parabola through three samples),
+    its tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
+    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = row
 
     def frame() -> dict:
         out = np.empty((5, N_S))
-        kernels.rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
+        kernels.rigid_frame(eta, u, z, g_min, *_rail_arrays(track)[:2], *_wheel_arrays(ws),
                             u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0, out)
         f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = out
         return dict(A=float(a_of_s[K0]), B=_lateral_curvature(_S_SAMPLES, f), s=_S_SAMPLES,
@@ -329,7 +325,9 @@ def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
     def rail_y() -> dict:
         return dict(rail_y=track.rail_coordinate(u_c, z_rail))
 
-    return _formed_later(_of(_FRAME, frame) | _of(_RAIL_Y, rail_y), side=side, gap=gap_c,
+    later = dict.fromkeys(_FRAME, frame)
+    later["rail_y"] = rail_y
+    return _formed_later(later, side=side, gap=gap_c,
                          wheel_s=s_c, rail_u=u_c, position=(x_c, SIDES[side] * u_c, z_rail),
                          contact_angle=gamma, rolling_radius=ws.radius + dr, approach=None,
                          rigid=None, offset=(0.0, 0.0))
@@ -343,6 +341,7 @@ K0 = N_S // 2
 """The sample at the patch origin, s = 0."""
 _S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
 _S_SAMPLES.flags.writeable = False
+_DS = float(_S_SAMPLES[1] - _S_SAMPLES[0])
 
 
 WEIGHT_POWER = 2.5
@@ -391,16 +390,16 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     rail, wheel = _rail_arrays(track), _wheel_arrays(ws)
     (ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
      height) = kernels.reference_frame(trace, g_min, increasing, approach, float(cp.rail_u),
-                                       *rail, *wheel, _S_SAMPLES, K0, WEIGHT_POWER, frame)
+                                       *rail[:4], *wheel, _S_SAMPLES, K0, WEIGHT_POWER, frame)
     if not ok:
         return None
     s = _S_SAMPLES
     # B for Hertz's estimates: the parabola with the overlap's depth and width (the origin
     # is the weighted centre, not the gap's minimum, where f'' may be anything)
-    width = float(s[hi - 1] - s[lo]) + float(s[1] - s[0])  # s increases
+    width = float(s[hi - 1] - s[lo]) + _DS  # s increases
     B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, frame[0])
     # what forms the other samples: the trace lowered by the approach, the frame's plane
-    part = (frame, i0, i1, (trace[0], trace[2], trace[3], g_lo, approach, rail[0], rail[1],
+    part = (frame, i0, i1, (trace[0], trace[2], trace[3], g_lo, approach, *rail[:2],
                             *wheel[:5], u_ref, z_ref, gamma, eta_c, kw, kr, s, overlap))
 
     def offset() -> dict:  # the point in the rigid point's frame (formed when read)
@@ -413,8 +412,10 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
         return dict(f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
                     rail_z_of_s=rail_z_of_s)
 
+    later = dict.fromkeys(_SAMPLES, samples)
+    later["offset"] = offset
     ref = _formed_later(
-        _of(_OFFSET, offset) | _of(_SAMPLES, samples), side=cp.side,
+        later, side=cp.side,
         gap=approach - overlap / math.cos(gamma), wheel_s=wheel_s, rail_u=u_ref,
         rail_y=track.rail_coordinate(u_ref, z_ref),
         position=(cp.position[0], SIDES[cp.side] * u_ref, z_ref), contact_angle=gamma,
