@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .spline import _interval, _interval_near, _piece
+from .spline import _interval, _interval_walk, _piece
 
 F, A_OF_S, WHEEL_S, RAIL_U, RAIL_Z = range(5)
 """Rows of a frame array."""
@@ -224,7 +224,7 @@ def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_bac
         if math.isnan(si):
             slope = height = math.nan
         else:
-            j = _interval_near(wx, si, j)
+            j = _interval_walk(wx, si, j)
             slope = _piece(wc, j, si - wx[j], 1)
             height = _piece(wc, j, si - wx[j], 0)
         out[F, i] = wheel[0, i - i0] - out[2, i]  # the rail's distance, before row 2 is S
@@ -242,40 +242,33 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     g = Z - rail(u). Returns (how many, the least g, its first index, whether the kept
     u increase strictly)."""
     n = eta.size
-    xs = np.empty(n)  # all points first (a loop without branches: vectorised)
-    us = np.empty(n)
-    zs = np.empty(n)
-    if yawed:
-        for i in range(n):
-            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
-            rs = r[i] * sin_t
-            xs[i] = cz * rs - sz * eta[i]
-            y = sz * rs + cz * eta[i]
-            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
-            us[i] = cx * y - sx * zw + u_ws
-            zs[i] = sx * y + cx * zw + radius
-    else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-        for i in range(n):
-            xs[i] = 0.0
-            zw = -r[i]
-            us[i] = cx * eta[i] - sx * zw + u_ws
-            zs[i] = sx * eta[i] + cx * zw + radius
     m = 0
     j = 0
     g_min = math.inf
     k = 0
     increasing = True
     u_last = -math.inf
-    for i in range(n):
-        u = us[i]
-        if lo < u < hi:
+    for i in range(n):  # each point moved, then kept when above the rail
+        if yawed:
+            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
+            rs = r[i] * sin_t
+            x = cz * rs - sz * eta[i]
+            y = sz * rs + cz * eta[i]
+            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
+            u = cx * y - sx * zw + u_ws
+            z = sx * y + cx * zw + radius
+        else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+            x = 0.0
+            zw = -r[i]
+            u = cx * eta[i] - sx * zw + u_ws
+            z = sx * eta[i] + cx * zw + radius
+        if lo < u < hi:  # (lo, hi: the rail's first and last breakpoints)
             increasing = increasing and u > u_last
             u_last = u
-            z = zs[i]
-            j = _interval_near(rx, u, j)
+            j = _interval_walk(rx, u, j)
             g = z - _piece(rc, j, u - rx[j], 0)
             out[0, m] = eta[i]
-            out[1, m] = xs[i]
+            out[1, m] = x
             out[2, m] = u
             out[3, m] = z
             out[4, m] = g
@@ -459,7 +452,7 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
         if math.isnan(ui):
             slope = math.nan
         else:
-            j = _interval_near(rx, ui, j)
+            j = _interval_walk(rx, ui, j)
             slope = _piece(rc, j, ui - rx[j], 1)
         sgam += w * math.atan(slope)
         u_lo = min(u_lo, u[i])
