@@ -202,14 +202,14 @@ def test_frame_at_the_reference_point_formed_in_part_is_the_full_frame(pose):
     for side in ("left", "right"):
         cp = contact_points(TRACK, WS, pose, side, 0.0)[0]
         ref = search.at_reference(cp, TRACK, WS, pose, 8e-5)
-        frame, i0, i1, args = ref.__dict__["_part"]
+        frame, i0, i1, what = ref.__dict__["_part"]
         assert 0 < i0 and i1 < search.N_S  # part of the samples
         grids = [Grid.from_bounds(-4e-3, 4e-3, y0, y1, nx=9, ny=ny)
                  for y0, y1, ny in ((-3e-3, 3e-3, 13), (-14e-3, 15e-3, 59), (-3e-2, 3e-2, 99))]
         gaps = [ref.gap_on_grid(g) for g in grids]  # the last one forms all samples
         # the same frame formed over all samples in one pass
         eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c, gamma, \
-            eta_c, kw, kr, s, overlap = args
+            eta_c, kw, kr, s, overlap = search._frame_arguments(what)
         full = np.empty((5, search.N_S))
         kernels.frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back,
                               u_c, z_c, gamma, eta_c, kw, kr, s, 0, search.N_S, full)

@@ -569,10 +569,12 @@ def _samples_read(y, s):
 
 
 @numba.njit(cache=True)
-def gap_on_grid_part(s, f, a_of_s, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
-    """:func:`gap_on_grid` from a frame formed at the samples ``i0:i1`` only. Returns
-    (done, a, b): not done (``out`` not written) when the grid reads samples beyond
-    them, ``a:b`` the samples to form then (those formed included)."""
+def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
+    """:func:`gap_on_grid` from a frame (5, len(s)) formed at the samples ``i0:i1`` only.
+    Returns (done, a, b): not done (``out`` not written) when the grid reads samples
+    beyond them, ``a:b`` the samples to form then (those formed included)."""
+    f = frame[F]
+    a_of_s = frame[A_OF_S]
     ra = _samples_read(y0, s)[0]
     rb = _samples_read(y0 + dy * (ny - 1), s)[1] + 1
     if ra < i0 or rb > i1:

@@ -150,8 +150,8 @@ class ContactPoint:
         while True:  # a frame at the reference point formed over part of its samples
             frame, i0, i1, _ = part
             done, a, b = kernels.gap_on_grid_part(
-                _S_SAMPLES, frame[0], frame[1], i0, i1, float(grid.x0), float(grid.dx),
-                grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+                _S_SAMPLES, frame, i0, i1, float(grid.x0), float(grid.dx), grid.nx,
+                float(grid.y0), float(grid.dy), grid.ny, FAR, out)
             if done:
                 return out
             part = _extended(part, a, b)
@@ -398,9 +398,9 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     # is the weighted centre, not the gap's minimum, where f'' may be anything)
     width = float(s[hi - 1] - s[lo]) + _DS  # s increases
     B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, frame[0])
-    # what forms the other samples: the trace lowered by the approach, the frame's plane
-    part = (frame, i0, i1, (trace[0], trace[2], trace[3], g_lo, approach, *rail[:2],
-                            *wheel[:5], u_ref, z_ref, gamma, eta_c, kw, kr, s, overlap))
+    # what forms the other samples (:func:`_frame_arguments`)
+    part = (frame, i0, i1, (trace, rail, wheel, g_lo, approach, u_ref, z_ref, gamma, eta_c,
+                            kw, kr, overlap))
 
     def offset() -> dict:  # the point in the rigid point's frame (formed when read)
         ok = np.isfinite(cp.rail_u_of_s)
@@ -429,10 +429,19 @@ def _extended(part: tuple, a: int, b: int) -> tuple:
     """A frame at the reference point formed at the samples ``i0:i1`` (``part``: the
     frame (5, N_S), i0, i1 and what forms the others), formed also at ``a:b`` (the samples
     ``i0:i1`` as they were: a reader of the old ``part`` reads the same values)."""
-    frame, i0, i1, args = part
+    frame, i0, i1, what = part
     a, b = min(a, i0), max(b, i1)
-    kernels.extend_frame(*args, i0, i1, a, b, frame)
-    return frame, a, b, args
+    kernels.extend_frame(*_frame_arguments(what), i0, i1, a, b, frame)
+    return frame, a, b, what
+
+
+def _frame_arguments(what: tuple) -> tuple:
+    """The arguments of :func:`~.kernels.frame_samples` (before ``i0``) of a frame at the
+    reference point, and its overlap, from what :func:`at_reference` keeps: the trace
+    lowered by the approach (``(z - g_min) - approach``), the frame's point and plane."""
+    trace, rail, wheel, g_min, approach, u_ref, z_ref, gamma, eta_c, kw, kr, overlap = what
+    return (trace[0], trace[2], trace[3], g_min, approach, *rail[:2], *wheel[:5], u_ref,
+            z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
 
 
 @dataclass(frozen=True)
