@@ -242,33 +242,40 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     g = Z - rail(u). Returns (how many, the least g, its first index, whether the kept
     u increase strictly)."""
     n = eta.size
+    xs = np.empty(n)  # all points first (a loop without branches: vectorised)
+    us = np.empty(n)
+    zs = np.empty(n)
+    if yawed:
+        for i in range(n):
+            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
+            rs = r[i] * sin_t
+            xs[i] = cz * rs - sz * eta[i]
+            y = sz * rs + cz * eta[i]
+            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
+            us[i] = cx * y - sx * zw + u_ws
+            zs[i] = sx * y + cx * zw + radius
+    else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+        for i in range(n):
+            xs[i] = 0.0
+            zw = -r[i]
+            us[i] = cx * eta[i] - sx * zw + u_ws
+            zs[i] = sx * eta[i] + cx * zw + radius
     m = 0
     j = 0
     g_min = math.inf
     k = 0
     increasing = True
     u_last = -math.inf
-    for i in range(n):  # each point moved, then kept when above the rail
-        if yawed:
-            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
-            rs = r[i] * sin_t
-            x = cz * rs - sz * eta[i]
-            y = sz * rs + cz * eta[i]
-            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
-            u = cx * y - sx * zw + u_ws
-            z = sx * y + cx * zw + radius
-        else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-            x = 0.0
-            zw = -r[i]
-            u = cx * eta[i] - sx * zw + u_ws
-            z = sx * eta[i] + cx * zw + radius
-        if lo < u < hi:  # (lo, hi: the rail's first and last breakpoints)
+    for i in range(n):
+        u = us[i]
+        if lo < u < hi:
             increasing = increasing and u > u_last
             u_last = u
-            j = _interval_walk(rx, u, j)
+            z = zs[i]
+            j = _interval_walk(rx, u, j)  # (ordered points: a step or two)
             g = z - _piece(rc, j, u - rx[j], 0)
             out[0, m] = eta[i]
-            out[1, m] = x
+            out[1, m] = xs[i]
             out[2, m] = u
             out[3, m] = z
             out[4, m] = g
