@@ -86,24 +86,40 @@ def interp_sorted(x, xp, fp):
     """``np.interp(x, xp, fp)`` at one point for increasing ``xp`` (numpy's algorithm:
     the end values beyond ``xp``, the sample's value where ``x`` falls on one, the other
     end of the piece where the first gives NaN)."""
+    return _interp(x, xp, fp, False)
+
+
+@numba.njit(cache=True, inline="always")
+def _at(fp, j, finite):
+    """``fp[j]``, or 0 where it is not finite when ``finite``."""
+    v = fp[j]
+    return v if not finite or math.isfinite(v) else 0.0
+
+
+@numba.njit(cache=True, inline="always")
+def _interp(x, xp, fp, finite):
+    """:func:`interp_sorted` of ``fp``, or (``finite``) of ``fp`` with its values that
+    are not finite read as 0."""
     n = xp.size
     if math.isnan(x):
         return x
     if x < xp[0]:
-        return fp[0]
+        return _at(fp, 0, finite)
     if x > xp[n - 1]:
-        return fp[n - 1]
+        return _at(fp, n - 1, finite)
     j = np.searchsorted(xp, x, side="right") - 1
     if j >= n - 1:
-        return fp[n - 1]
+        return _at(fp, n - 1, finite)
+    f0 = _at(fp, j, finite)
     if xp[j] == x:
-        return fp[j]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    v = slope * (x - xp[j]) + fp[j]
+        return f0
+    f1 = _at(fp, j + 1, finite)
+    slope = (f1 - f0) / (xp[j + 1] - xp[j])
+    v = slope * (x - xp[j]) + f0
     if math.isnan(v):
-        v = slope * (x - xp[j + 1]) + fp[j + 1]
-        if math.isnan(v) and fp[j] == fp[j + 1]:
-            v = fp[j]
+        v = slope * (x - xp[j + 1]) + f1
+        if math.isnan(v) and f0 == f1:
+            v = f0
     return v
 
 
@@ -586,17 +602,15 @@ def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
     rb = _samples_read(y0 + dy * (ny - 1), s)[1] + 1
     if ra < i0 or rb > i1:
         return False, min(ra, i0), max(rb, i1)
-    a_fin = np.empty(s.size)  # (set at i0:i1 only: no other sample is read)
-    for i in range(i0, i1):
-        a_fin[i] = a_of_s[i] if math.isfinite(a_of_s[i]) else 0.0
-    _gap_rows(s, f, a_fin, x0, dx, nx, y0, dy, ny, far, out)
+    _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out)
     return True, i0, i1
 
 
 @numba.njit(cache=True, inline="always")
-def _gap_rows(s, f, a_fin, x0, dx, nx, y0, dy, ny, far, out):
+def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     """``out[ix, jy]`` = f(y) + A(y) x^2 interpolated from the samples (``f`` = ``far``
-    beyond them; ``far`` wherever the sum is not finite)."""
+    beyond them, ``A`` = 0 where it is not finite; ``far`` wherever the sum is not
+    finite)."""
     ns = s.size
     fy = np.empty(ny)
     ay = np.empty(ny)
@@ -606,7 +620,7 @@ def _gap_rows(s, f, a_fin, x0, dx, nx, y0, dy, ny, far, out):
             fy[jy] = far
         else:
             fy[jy] = interp_sorted(y, s, f)
-        ay[jy] = interp_sorted(y, s, a_fin)
+        ay[jy] = _interp(y, s, a_of_s, True)
     for ix in range(nx):
         xi = x0 + dx * ix
         x2 = xi * xi
@@ -621,11 +635,7 @@ def gap_on_grid(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     ``out``) with ``f`` and ``A`` interpolated at ``y`` from the samples ``s`` as
     ``np.interp`` does (``f`` beyond the samples and where ``A`` is not finite: ``far``
     for f, 0 for A); ``far`` wherever the sum is not finite."""
-    ns = s.size
-    a_fin = np.empty(ns)
-    for i in range(ns):
-        a_fin[i] = a_of_s[i] if math.isfinite(a_of_s[i]) else 0.0
-    _gap_rows(s, f, a_fin, x0, dx, nx, y0, dy, ny, far, out)
+    _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out)
 
 
 @numba.njit(cache=True)
