@@ -372,15 +372,26 @@ def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
 
 
 @numba.njit(cache=True)
-def rigid_points(eta, x, u, g, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
-    """:func:`rigid_point` of each run of :func:`intervals`, one row each (m, 8)."""
-    runs = intervals(g, g_min, k, approach)
-    out = np.empty((runs.shape[0], 8))
-    for m in range(runs.shape[0]):
-        p = rigid_point(eta, x, u, g, g_min, runs[m, 0], runs[m, 1], rx, rc, wx, wc, half_bb,
-                        flange_back)
-        for c in range(8):
-            out[m, c] = p[c]
+def rigid_points(tr, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
+    """:func:`rigid_point` of each run of :func:`intervals` of the trace ``tr`` (5, n),
+    one row each (m, 8) (the runs found by a scan, not formed)."""
+    eta, x, u, g = tr[0], tr[1], tr[2], tr[4]
+    n = g.size
+    lim = max(approach, 0.0)
+    out = np.empty((count_runs(g, g_min, k, approach), 8))
+    m = 0
+    i = 0
+    while i < n:
+        if g[i] - g_min <= lim or i == k:
+            a = i
+            while i < n and (g[i] - g_min <= lim or i == k):
+                i += 1
+            p = rigid_point(eta, x, u, g, g_min, a, i, rx, rc, wx, wc, half_bb, flange_back)
+            for c in range(8):
+                out[m, c] = p[c]
+            m += 1
+        else:
+            i += 1
     return out
 
 

@@ -243,11 +243,10 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
             and last[3] == side and last[4] == approach):
         return list(last[5])
     trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
-    eta, x, u, z, g = trace
     wheel = _wheel_arrays(ws)
-    rows = kernels.rigid_points(eta, x, u, g, g_min, k, float(approach),
-                                *_rail_arrays(track)[2:4], *wheel[:2], *wheel[3:])
-    points = [_point(track, ws, side, eta, u, z, g_min, row) for row in rows.tolist()]
+    rows = kernels.rigid_points(trace, g_min, k, float(approach), *_rail_arrays(track)[2:4],
+                                *wheel[:2], *wheel[3:])
+    points = [_point(track, ws, side, trace, g_min, row) for row in rows.tolist()]
     if len(points) > 1:
         points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
@@ -307,7 +306,7 @@ def _wheel_arrays(ws: Wheelset) -> tuple:
     return cached
 
 
-def _point(track, ws, side, eta, u, z, g_min, row) -> ContactPoint:
+def _point(track, ws, side, trace, g_min, row) -> ContactPoint:
     """The rigid contact point ``row`` of :func:`~.kernels.rigid_points` (a run of the
     trace: its least gap above ``g_min``, refined by a parabola through three samples),
     its tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
@@ -315,8 +314,9 @@ def _point(track, ws, side, eta, u, z, g_min, row) -> ContactPoint:
 
     def frame() -> dict:
         out = np.empty((5, N_S))
-        kernels.rigid_frame(eta, u, z, g_min, *_rail_arrays(track)[:2], *_wheel_arrays(ws),
-                            u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0, out)
+        kernels.rigid_frame(trace[0], trace[2], trace[3], g_min, *_rail_arrays(track)[:2],
+                            *_wheel_arrays(ws), u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0,
+                            out)
         f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = out
         return dict(A=float(a_of_s[K0]), B=_lateral_curvature(_S_SAMPLES, f), s=_S_SAMPLES,
                     f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
