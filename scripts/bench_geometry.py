@@ -61,8 +61,13 @@ def wheel(track, ws, pair, pose, side, grid) -> dict[str, float]:
     t["count_contacts"] = least(
         lambda: search.count_contacts(track, ws, pose, side, APPROACH))[0]
     t["hertz"] = least(lambda: rc.hertz(cp.A, cp.B, pair, load=83.3e3))[0]
+    fresh = [cp]  # the gap on a grid of a frame just formed, as a time step reads it
+
+    def form() -> None:
+        fresh[0] = search.at_reference(first, track, ws, pose, APPROACH) or first
+
+    t["gap_on_grid"] = least(lambda: fresh[0].gap_on_grid(grid), form)[0]
     t["lateral_extent"] = least(lambda: cp.lateral_extent(APPROACH, 1.2))[0]
-    t["gap_on_grid"] = least(lambda: cp.gap_on_grid(grid))[0]
     return t
 
 

@@ -155,6 +155,79 @@ def test_fields_formed_on_first_read_survive_pickling():
         cp.no_such_field  # noqa: B018
 
 
+def test_branch_interpolation_over_part_of_the_samples_is_the_same():
+    """The in-plane interpolation at the samples s[i0:i1] only gives the values over all
+    of s, bit for bit: on folded curves, with samples that fall exactly on points of the
+    curve (the segment a sample on a point is taken in), with NaN points."""
+    from railcontact.geometry.kernels import interp_in_plane, interp_in_plane_range
+
+    rng = np.random.default_rng(5)
+    for trial in range(400):
+        n = int(rng.integers(2, 40))
+        t = np.sort(rng.uniform(0.0, 1.0, n))
+        u = (t, np.where(t < 0.4, t, np.where(t < 0.6, 0.8 - t, t - 0.4)),
+             np.round(t * 8) / 8)[trial % 3]  # rising; folded; with plateaus
+        z = rng.uniform(-0.1, 0.1, n)
+        if trial % 7 == 0:
+            z[rng.integers(0, n)] = np.nan
+        a, b = rng.uniform(size=n), rng.uniform(size=n)
+        ang = rng.uniform(-0.3, 0.3)
+        cg, sg = math.cos(ang), math.sin(ang)
+        u_c, z_c = rng.uniform(0.0, 1.0), rng.uniform(-0.05, 0.05)
+        on_points = ((u - u_c) * cg + (z - z_c) * sg)[rng.integers(0, n, 4)]
+        s = np.unique(np.concatenate([rng.uniform(-1.2, 1.2, 20), on_points]))
+        s = s[np.isfinite(s)]
+        k = int(rng.integers(0, n))
+        full = np.empty((3, s.size))
+        interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, full)
+        for _ in range(3):
+            i0 = int(rng.integers(0, s.size))
+            i1 = int(rng.integers(i0 + 1, s.size + 1))
+            part = np.empty((3, i1 - i0))
+            interp_in_plane_range(s, i0, i1, u, z, 0.0, 0.0, a, b, True, u_c, z_c, cg, sg, k,
+                                  part, i0)
+            np.testing.assert_array_equal(part, full[:, i0:i1])
+
+
+@pytest.mark.parametrize("pose", [Pose(0.0), Pose(3e-3, 2e-3, 1e-3), Pose(7e-3),
+                                  Pose(-5e-3, -4e-3)])
+def test_frame_at_the_reference_point_formed_in_part_is_the_full_frame(pose):
+    """The frame at the reference point is formed over the overlap's samples first; a
+    grid's gap read from that part, and the samples formed in full later, equal the
+    frame formed over all samples at once (the frame at the same point, formed in one
+    pass by the rigid point's kernel at the same plane and lowered wheel)."""
+    from railcontact.geometry import kernels, search
+    from railcontact.halfspace.grid import Grid
+
+    for side in ("left", "right"):
+        cp = contact_points(TRACK, WS, pose, side, 0.0)[0]
+        ref = search.at_reference(cp, TRACK, WS, pose, 8e-5)
+        frame, i0, i1, what = ref.__dict__["_part"]
+        assert 0 < i0 and i1 < search.N_S  # part of the samples
+        grids = [Grid.from_bounds(-4e-3, 4e-3, y0, y1, nx=9, ny=ny)
+                 for y0, y1, ny in ((-3e-3, 3e-3, 13), (-14e-3, 15e-3, 59), (-3e-2, 3e-2, 99))]
+        gaps = [ref.gap_on_grid(g) for g in grids]  # the last one forms all samples
+        # the same frame formed over all samples in one pass
+        eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c, gamma, \
+            eta_c, kw, kr, s, overlap = search._frame_arguments(what)
+        full = np.empty((5, search.N_S))
+        kernels.frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back,
+                              u_c, z_c, gamma, eta_c, kw, kr, s, 0, search.N_S, full)
+        f = full[0]
+        full[0] = np.where(np.isfinite(f), f + overlap, np.inf)
+        for name, row in zip(("f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"),
+                             full, strict=True):
+            np.testing.assert_array_equal(getattr(ref, name), row)
+        assert ref.A == full[1, search.K0] and ref.f[search.K0] >= 0.0
+        for g, gap in zip(grids, gaps, strict=True):
+            want = np.empty((g.nx, g.ny))
+            kernels.gap_on_grid(s, ref.f, ref.a_of_s, float(g.x0), float(g.dx), g.nx,
+                                float(g.y0), float(g.dy), g.ny, search.FAR, want)
+            np.testing.assert_array_equal(gap, want)
+        assert search.count_contacts(TRACK, WS, pose, side, 3e-4) == len(
+            contact_points(TRACK, WS, pose, side, 3e-4))
+
+
 @pytest.mark.parametrize("y", [-6e-3, 0.0, 4e-3, 8e-3])
 def test_rail_coordinate_is_the_nearest_placed_rail_point(y):
     cp = first(y, "left")

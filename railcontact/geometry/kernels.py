@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .spline import _interval, _interval_near, _piece
+from .spline import _interval, _interval_walk, _piece
 
 F, A_OF_S, WHEEL_S, RAIL_U, RAIL_Z = range(5)
 """Rows of a frame array."""
@@ -82,44 +82,57 @@ def nearest_point_sorted(pu, pz, order, pu_sorted, u, z):
 
 
 @numba.njit(cache=True)
-def run_bounds(mask, k):
-    """``(lo, hi)``: the connected run ``mask[lo:hi]`` of True that holds sample ``k``
-    (``lo == hi`` when ``mask[k]`` is False)."""
-    if not mask[k]:
-        return k, k
-    lo = k
-    while lo > 0 and mask[lo - 1]:
-        lo -= 1
-    hi = k + 1
-    while hi < mask.size and mask[hi]:
-        hi += 1
-    return lo, hi
-
-
-@numba.njit(cache=True)
 def interp_sorted(x, xp, fp):
     """``np.interp(x, xp, fp)`` at one point for increasing ``xp`` (numpy's algorithm:
     the end values beyond ``xp``, the sample's value where ``x`` falls on one, the other
     end of the piece where the first gives NaN)."""
+    return _interp(x, xp, fp, False)
+
+
+@numba.njit(cache=True, inline="always")
+def _at(fp, j, finite):
+    """``fp[j]``, or 0 where it is not finite when ``finite``."""
+    v = fp[j]
+    return v if not finite or math.isfinite(v) else 0.0
+
+
+@numba.njit(cache=True, inline="always")
+def _interp(x, xp, fp, finite):
+    """:func:`interp_sorted` of ``fp``, or (``finite``) of ``fp`` with its values that
+    are not finite read as 0."""
     n = xp.size
     if math.isnan(x):
         return x
     if x < xp[0]:
-        return fp[0]
+        return _at(fp, 0, finite)
     if x > xp[n - 1]:
-        return fp[n - 1]
+        return _at(fp, n - 1, finite)
     j = np.searchsorted(xp, x, side="right") - 1
     if j >= n - 1:
-        return fp[n - 1]
+        return _at(fp, n - 1, finite)
+    f0 = _at(fp, j, finite)
     if xp[j] == x:
-        return fp[j]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    v = slope * (x - xp[j]) + fp[j]
+        return f0
+    f1 = _at(fp, j + 1, finite)
+    slope = (f1 - f0) / (xp[j + 1] - xp[j])
+    v = slope * (x - xp[j]) + f0
     if math.isnan(v):
-        v = slope * (x - xp[j + 1]) + fp[j + 1]
-        if math.isnan(v) and fp[j] == fp[j + 1]:
-            v = fp[j]
+        v = slope * (x - xp[j + 1]) + f1
+        if math.isnan(v) and f0 == f1:
+            v = f0
     return v
+
+
+@numba.njit(cache=True, inline="always")
+def _along(u, z, za, zb, i, u_c, z_c, cg, sg):
+    """The coordinate s' in the plane of sample ``i`` of the curve (u, (z - za) - zb)."""
+    return (u[i] - u_c) * cg + (((z[i] - za) - zb) - z_c) * sg
+
+
+@numba.njit(cache=True, inline="always")
+def _normal(u, z, za, zb, i, u_c, z_c, cg, sg):
+    """The distance n from the plane of sample ``i`` of the curve (u, (z - za) - zb)."""
+    return -(u[i] - u_c) * sg + (((z[i] - za) - zb) - z_c) * cg
 
 
 @numba.njit(cache=True)
@@ -130,44 +143,64 @@ def interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
     its samples, linearly interpolated at the increasing ``s`` [m] (NaN off the branch) as
     :func:`np.interp` does on the branch; only the points between the ``s`` are rotated.
     ``out`` (3, len(s)): n, a, b."""
+    interp_in_plane_range(s, 0, s.size, u, z, 0.0, 0.0, a, b, True, u_c, z_c, cg, sg, k,
+                          out, 0)
+
+
+@numba.njit(cache=True)
+def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out,
+                          o):
+    """:func:`interp_in_plane` of the curve (u, (z - za) - zb) at the samples
+    ``s[i0:i1]`` only, written to ``out[:, i - o]`` (``b`` only ``with_b``): the same
+    values as over all of ``s``. (The walks stop one point beyond ``s[i0]`` and
+    ``s[i1 - 1]`` where these are not the ends of ``s``, so that a sample on a point of
+    the curve is interpolated in the same segment as over all of ``s``.)"""
+    if i1 <= i0:
+        return
     n = u.size
+    first = s[i0]
+    last = s[i1 - 1]
+    inner_lo = i0 > 0
+    inner_hi = i1 < s.size
     lo = k  # the samples of the branch that bracket s: lo ... hi
-    s_lo = (u[k] - u_c) * cg + (z[k] - z_c) * sg
+    s_lo = _along(u, z, za, zb, k, u_c, z_c, cg, sg)
     s_k = s_lo
-    while lo > 0 and s_lo > s[0]:
-        s_prev = (u[lo - 1] - u_c) * cg + (z[lo - 1] - z_c) * sg
+    while lo > 0 and (s_lo >= first if inner_lo else s_lo > first):
+        s_prev = _along(u, z, za, zb, lo - 1, u_c, z_c, cg, sg)
         if not s_prev < s_lo:  # the branch ends: s' stops increasing towards k
             break
         lo -= 1
         s_lo = s_prev
     hi = k
     s_hi = s_k
-    while hi < n - 1 and s_hi < s[s.size - 1]:
-        s_next = (u[hi + 1] - u_c) * cg + (z[hi + 1] - z_c) * sg
+    while hi < n - 1 and (s_hi <= last if inner_hi else s_hi < last):
+        s_next = _along(u, z, za, zb, hi + 1, u_c, z_c, cg, sg)
         if not s_next > s_hi:
             break
         hi += 1
         s_hi = s_next
     j = lo
     x0 = s_lo
-    x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg if hi > lo else s_lo
-    for i in range(s.size):
+    x1 = _along(u, z, za, zb, j + 1, u_c, z_c, cg, sg) if hi > lo else s_lo
+    for i in range(i0, i1):
         x = s[i]
         if hi == lo or x < s_lo or x > s_hi:
-            out[0, i] = math.nan
-            out[1, i] = math.nan
-            out[2, i] = math.nan
+            out[0, i - o] = math.nan
+            out[1, i - o] = math.nan
+            if with_b:
+                out[2, i - o] = math.nan
             continue
         while j < hi - 1 and x1 <= x:  # the segment [x0, x1) that holds x
             j += 1
             x0 = x1
-            x1 = (u[j + 1] - u_c) * cg + (z[j + 1] - z_c) * sg
+            x1 = _along(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
         t = (x - x0) / (x1 - x0)
-        n0 = -(u[j] - u_c) * sg + (z[j] - z_c) * cg
-        n1 = -(u[j + 1] - u_c) * sg + (z[j + 1] - z_c) * cg
-        out[0, i] = n0 + t * (n1 - n0)
-        out[1, i] = a[j] + t * (a[j + 1] - a[j])
-        out[2, i] = b[j] + t * (b[j + 1] - b[j])
+        n0 = _normal(u, z, za, zb, j, u_c, z_c, cg, sg)
+        n1 = _normal(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+        out[0, i - o] = n0 + t * (n1 - n0)
+        out[1, i - o] = a[j] + t * (a[j + 1] - a[j])
+        if with_b:
+            out[2, i - o] = b[j] + t * (b[j + 1] - b[j])
 
 
 @numba.njit(cache=True)
@@ -182,27 +215,37 @@ def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, 
     ``wc``) at S and its slope tan(beta) the spline's derivative there
     (``cos(atan(t)) = 1 / sqrt(1 + t^2)``). ``kw``: the wheel's trace sample nearest
     ``u_c`` (:func:`nearest`), where its branch is taken."""
+    frame_samples(eta, u, z, 0.0, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
+                  z_c, gamma, eta_c, kw, nearest_sorted(ur, u_c), s, 0, s.size, out)
+
+
+@numba.njit(cache=True)
+def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
+                  z_c, gamma, eta_c, kw, kr, s, i0, i1, out):
+    """:func:`tangent_frame` of the wheel trace lowered to ``(z - za) - zb`` at the
+    samples ``s[i0:i1]`` only (``out[:, i0:i1]``; the same values as over all of ``s``);
+    ``kr``: the rail sample nearest ``u_c`` (:func:`nearest_sorted`)."""
+    if i1 <= i0:
+        return
     cg, sg = math.cos(gamma), math.sin(gamma)
-    ns = s.size
-    wheel = np.empty((3, ns))
-    interp_in_plane(s, u, z, eta, eta, u_c, z_c, cg, sg, kw, wheel)
-    interp_in_plane(s, ur, zr, ur, zr, u_c, z_c, cg, sg, nearest_sorted(ur, u_c), out[2:5])
-    S = np.empty(ns)
-    for i in range(ns):
-        e = wheel[1, i]
-        S[i] = ((e if math.isfinite(e) else eta_c) - half_bb) + flange_back
+    wheel = np.empty((2, i1 - i0))
+    interp_in_plane_range(s, i0, i1, u, z, za, zb, eta, eta, False, u_c, z_c, cg, sg, kw,
+                          wheel, i0)  # (n, eta)
+    interp_in_plane_range(s, i0, i1, ur, zr, 0.0, 0.0, ur, zr, True, u_c, z_c, cg, sg, kr,
+                          out[2:5], 0)
     j = 0  # the wheel spline's height and slope at S: one interval search for both
-    for i in range(ns):
-        si = S[i]
+    for i in range(i0, i1):
+        e = wheel[1, i - i0]
+        si = ((e if math.isfinite(e) else eta_c) - half_bb) + flange_back
         if math.isnan(si):
             slope = height = math.nan
         else:
-            j = _interval_near(wx, si, j)
+            j = _interval_walk(wx, si, j)
             slope = _piece(wc, j, si - wx[j], 1)
             height = _piece(wc, j, si - wx[j], 0)
-        out[F, i] = wheel[0, i] - out[2, i]  # the rail's distance, before row 2 is S
+        out[F, i] = wheel[0, i - i0] - out[2, i]  # the rail's distance, before row 2 is S
         out[A_OF_S, i] = 1.0 / (math.sqrt(1.0 + slope * slope) * (2 * (radius + height)))
-        out[WHEEL_S, i] = si if math.isfinite(wheel[1, i]) else math.nan
+        out[WHEEL_S, i] = si if math.isfinite(e) else math.nan
 
 
 @numba.njit(cache=True)
@@ -212,7 +255,8 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     about the track axis: ``tan_psi``, ``cz, sz`` = cos, sin psi, ``cx, sx`` = cos, sin
     phi; lateral displacement ``u_ws``), those with ``lo < u < hi`` (above the rail, its
     spline ``rx``, ``rc``) written to ``out`` (5, n): eta, X, u, Z and the vertical gap
-    g = Z - rail(u). Returns (how many, the least g, its first index)."""
+    g = Z - rail(u). Returns (how many, the least g, its first index, whether the kept
+    u increase strictly)."""
     n = eta.size
     xs = np.empty(n)  # all points first (a loop without branches: vectorised)
     us = np.empty(n)
@@ -236,11 +280,15 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     j = 0
     g_min = math.inf
     k = 0
+    increasing = True
+    u_last = -math.inf
     for i in range(n):
         u = us[i]
         if lo < u < hi:
+            increasing = increasing and u > u_last
+            u_last = u
             z = zs[i]
-            j = _interval_near(rx, u, j)
+            j = _interval_walk(rx, u, j)  # (ordered points: a step or two)
             g = z - _piece(rc, j, u - rx[j], 0)
             out[0, m] = eta[i]
             out[1, m] = xs[i]
@@ -251,7 +299,7 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
                 g_min = g
                 k = m
             m += 1
-    return m, g_min, k
+    return m, g_min, k, increasing
 
 
 @numba.njit(cache=True)
@@ -275,6 +323,21 @@ def intervals(g, g_min, k, approach):
         else:
             i += 1
     return out[:m]
+
+
+@numba.njit(cache=True)
+def count_runs(g, g_min, k, approach):
+    """How many index ranges :func:`intervals` gives (without forming them)."""
+    n = g.size
+    lim = max(approach, 0.0)
+    m = 0
+    inside = False
+    for i in range(n):
+        here = g[i] - g_min <= lim or i == k
+        if here and not inside:
+            m += 1
+        inside = here
+    return m
 
 
 @numba.njit(cache=True)
@@ -309,18 +372,39 @@ def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
 
 
 @numba.njit(cache=True)
+def rigid_points(tr, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
+    """:func:`rigid_point` of each run of :func:`intervals` of the trace ``tr`` (5, n),
+    one row each (m, 8) (the runs found by a scan, not formed)."""
+    eta, x, u, g = tr[0], tr[1], tr[2], tr[4]
+    n = g.size
+    lim = max(approach, 0.0)
+    out = np.empty((count_runs(g, g_min, k, approach), 8))
+    m = 0
+    i = 0
+    while i < n:
+        if g[i] - g_min <= lim or i == k:
+            a = i
+            while i < n and (g[i] - g_min <= lim or i == k):
+                i += 1
+            p = rigid_point(eta, x, u, g, g_min, a, i, rx, rc, wx, wc, half_bb, flange_back)
+            for c in range(8):
+                out[m, c] = p[c]
+            m += 1
+        else:
+            i += 1
+    return out
+
+
+@numba.njit(cache=True)
 def rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
                 gamma, eta_c, s, k0, out):
     """The tangent frame of a rigid contact point (:func:`rigid_point`): :func:`tangent_frame`
     of the wheel lowered into first contact (``z - g_min``), ``f`` shifted to 0 at its
     least value within 1 mm of the point (where ``f`` is finite at ``s[k0]`` = 0), NaN
     made infinite."""
-    n = z.size
-    zs = np.empty(n)
-    for i in range(n):
-        zs[i] = z[i] - g_min
-    tangent_frame(eta, u, zs, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
-                  gamma, eta_c, nearest(u, u_c), s, out)
+    frame_samples(eta, u, z, g_min, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back,
+                  u_c, z_c, gamma, eta_c, nearest(u, u_c), nearest_sorted(ur, u_c), s, 0,
+                  s.size, out)
     f = out[F]
     if math.isfinite(f[k0]):
         m = math.inf
@@ -335,54 +419,63 @@ def rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, 
 
 
 @numba.njit(cache=True)
-def overlap_run(g, u, approach, u_c):
-    """On the trace (vertical gaps ``g`` at lateral positions ``u``) of a wheel lowered by
-    ``approach`` beyond first contact: ``(g_min, lo, hi)``, the least gap and the run
-    ``lo:hi`` of positive vertical interpenetration ``approach - (g - g_min)`` that holds
-    the sample nearest ``u_c`` (``lo == hi`` when that sample does not overlap)."""
+def nearest_first(u, v, increasing):
+    """:func:`nearest` (the first of equals), by bisection when ``u`` increases strictly
+    (the distances then fall, rounded, towards ``v`` and rise after it: the first of
+    the least ones is at or before the nearer bracketing sample)."""
+    if not increasing or math.isnan(v):
+        return nearest(u, v)
+    m = nearest_sorted(u, v)
+    while m > 0 and abs(u[m - 1] - v) == abs(u[m] - v):
+        m -= 1
+    return m
+
+
+FRAME_MARGIN = 32
+"""Samples of the tangent plane (1.6 mm) formed beyond those of the overlap's rail points:
+the samples a patch's grid reads in a time step (more are formed when read)."""
+FRAME_GROW = 32
+"""Samples added at a time where the overlap's run reaches the formed samples' edge."""
+
+
+@numba.njit(cache=True)
+def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx,
+                    wc, radius, half_bb, flange_back, s, k0, power, out):
+    """CONTACT's reference point of the patch around the rigid point at ``u_rigid``, the
+    wheel lowered by ``approach`` beyond first contact, and its tangent frame
+    (:func:`~.search.at_reference`), the frame written to ``out`` with ``f`` shifted so
+    that its least value over the patch's own overlap is 0 - at the samples ``i0:i1``
+    only: those of the overlap's rail points with :data:`FRAME_MARGIN` beyond and
+    ``k0 +- 5`` (:func:`extend_frame` forms others, the same values as over all).
+
+    ``tr``: the trace (5, n) of :func:`trace_gap`, with its least gap and whether its u
+    increase. Returns (ok, u, Z, gamma, overlap [m], wheel profile coordinate S above the
+    point, lo, hi (the overlap's samples of ``s``), i0, i1, the trace's and the rail's
+    samples nearest the point, the trace's eta there, the least gap, the wheel's radius
+    increment at the S of sample ``k0`` (or above the point where that is NaN)); ``ok``
+    False where the wheel does not overlap the rail there."""
+    nan = math.nan
+    eta, u, z, g = tr[0], tr[2], tr[3], tr[4]
     n = g.size
-    g_min = g[0]
-    k = 0
-    best = abs(u[0] - u_c)
-    for i in range(1, n):
-        if g[i] < g_min:
-            g_min = g[i]
-        d = abs(u[i] - u_c)
-        if d < best:
-            best = d
-            k = i
+    ns = s.size
+    # the run of positive interpenetration through the sample nearest u_rigid (the least
+    # gap is the trace's; NaN where the first gap is, as a scan from it would give)
+    g_min = g_min_trace if not math.isnan(g[0]) else nan
+    k = nearest_first(u, u_rigid, increasing)
     if not approach - (g[k] - g_min) > 0:
-        return g_min, k, k
+        return False, nan, nan, nan, nan, nan, 0, 0, 0, 0, 0, 0, nan, g_min, nan
     lo = k
     while lo > 0 and approach - (g[lo - 1] - g_min) > 0:
         lo -= 1
     hi = k + 1
     while hi < n and approach - (g[hi] - g_min) > 0:
         hi += 1
-    return g_min, lo, hi
-
-
-@numba.njit(cache=True)
-def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, wx, wc, radius,
-                    half_bb, flange_back, s, k0, power, out):
-    """CONTACT's reference point of the patch around the rigid point at ``u_rigid``, the
-    wheel lowered by ``approach`` beyond first contact, and its tangent frame
-    (:func:`~.search.at_reference`), the frame written to ``out`` with ``f`` shifted so
-    that its least value over the patch's own overlap is 0.
-
-    Returns (ok, u, Z, gamma, overlap [m], wheel profile coordinate S above the point, lo,
-    hi (the overlap's samples of ``s``)); ``ok`` False where the wheel does not overlap
-    the rail there."""
-    nan = math.nan
-    g_min, lo, hi = overlap_run(g, u, approach, u_rigid)
-    if hi <= lo:
-        return False, nan, nan, nan, nan, nan, 0, 0
     total = 0.0
     su = 0.0
     sgam = 0.0
     u_lo = u[lo]
     u_hi = u[lo]
-    increasing = True
+    inc = True
     j = 0  # the rail's piece at u[i]
     for i in range(lo, hi):
         e = approach - (g[i] - g_min)
@@ -393,63 +486,143 @@ def reference_frame(eta, u, z, g, approach, u_rigid, ur, zr, rx, rc, wx, wc, rad
         if math.isnan(ui):
             slope = math.nan
         else:
-            j = _interval_near(rx, ui, j)
+            j = _interval_walk(rx, ui, j)
             slope = _piece(rc, j, ui - rx[j], 1)
         sgam += w * math.atan(slope)
         u_lo = min(u_lo, u[i])
         u_hi = max(u_hi, u[i])
         if i > lo and not u[i] > u[i - 1]:
-            increasing = False
+            inc = False
     u_ref = su / total
     gamma = sgam / total
     z_ref = spline_at(rx, rc, u_ref, 0)
     # the wheel above the point: the trace's eta at u_ref (ordered by u)
-    if increasing:
+    if inc:
         eta_ref = interp_sorted(u_ref, u[lo:hi], eta[lo:hi])
     else:
         order = np.argsort(u[lo:hi], kind="mergesort")
         eta_ref = interp_sorted(u_ref, u[lo:hi][order], eta[lo:hi][order])
     wheel_s = (eta_ref - half_bb) + flange_back
-    n = z.size
-    zs = np.empty(n)
-    k = 0  # the trace sample nearest u_ref (the first of equals), in the same pass
-    best = abs(u[0] - u_ref)
-    for i in range(n):
-        zs[i] = (z[i] - g_min) - approach  # the wheel lowered by the approach
-        d = abs(u[i] - u_ref)
-        if d < best:
-            best = d
-            k = i
-    tangent_frame(eta, u, zs, ur, zr, wx, wc, radius, half_bb, flange_back, u_ref, z_ref,
-                  gamma, eta[k], k, s, out)
+    kw = nearest_first(u, u_ref, increasing)  # the trace sample nearest u_ref
+    kr = nearest_sorted(ur, u_ref)
+    # the samples of s over the overlap's rail points (u_lo ... u_hi), with a margin
+    cg, sg = math.cos(gamma), math.sin(gamma)
+    sa = (u_lo - u_ref) * cg + (spline_at(rx, rc, u_lo, 0) - z_ref) * sg
+    sb = (u_hi - u_ref) * cg + (spline_at(rx, rc, u_hi, 0) - z_ref) * sg
+    ds = s[1] - s[0]
+    i0, i1 = 0, ns
+    if math.isfinite(sa) and math.isfinite(sb) and ds > 0:
+        ia = min(max((min(sa, sb) - s[0]) / ds, -1.0), ns + 1.0)
+        ib = min(max((max(sa, sb) - s[0]) / ds, -1.0), ns + 1.0)
+        i0 = max(min(int(math.floor(ia)) - FRAME_MARGIN, k0 - 5), 0)
+        i1 = min(max(int(math.ceil(ib)) + 1 + FRAME_MARGIN, k0 + 6), ns)
+    eta_c = eta[kw]
+    frame_samples(eta, u, z, g_min, approach, ur, zr, wx, wc, radius, half_bb, flange_back,
+                  u_ref, z_ref, gamma, eta_c, kw, kr, s, i0, i1, out)
     f = out[F]
     ru_s = out[RAIL_U]
-    # the patch's own overlap through the origin
-    own = np.empty(s.size, dtype=np.bool_)
-    for i in range(s.size):
-        own[i] = math.isfinite(f[i]) and f[i] < 0 and ru_s[i] >= u_lo and ru_s[i] <= u_hi
-    lo, hi = run_bounds(own, k0)
-    if hi <= lo:
-        return False, nan, nan, nan, nan, nan, 0, 0
+    # the patch's own overlap: the run through the origin, more samples formed where it
+    # reaches the edge of those formed
+    if not _own(f, ru_s, u_lo, u_hi, k0):
+        return False, nan, nan, nan, nan, nan, 0, 0, 0, 0, 0, 0, nan, g_min, nan
+    lo = k0
+    while True:
+        while lo > i0 and _own(f, ru_s, u_lo, u_hi, lo - 1):
+            lo -= 1
+        if lo > i0 or i0 == 0:
+            break
+        a = max(i0 - FRAME_GROW, 0)
+        frame_samples(eta, u, z, g_min, approach, ur, zr, wx, wc, radius, half_bb,
+                      flange_back, u_ref, z_ref, gamma, eta_c, kw, kr, s, a, i0, out)
+        i0 = a
+    hi = k0 + 1
+    while True:
+        while hi < i1 and _own(f, ru_s, u_lo, u_hi, hi):
+            hi += 1
+        if hi < i1 or i1 == ns:
+            break
+        b = min(i1 + FRAME_GROW, ns)
+        frame_samples(eta, u, z, g_min, approach, ur, zr, wx, wc, radius, half_bb,
+                      flange_back, u_ref, z_ref, gamma, eta_c, kw, kr, s, i1, b, out)
+        i1 = b
     least = f[lo]
     for i in range(lo + 1, hi):
         least = min(least, f[i])
     overlap = -least
-    for i in range(s.size):
+    _shift(f, overlap, i0, i1)
+    s_normal = out[WHEEL_S, k0]
+    height = spline_at(wx, wc, s_normal if math.isfinite(s_normal) else wheel_s, 0)
+    return (True, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c,
+            g_min, height)
+
+
+@numba.njit(cache=True, inline="always")
+def _own(f, ru_s, u_lo, u_hi, i):
+    """Whether sample ``i`` of a frame lies in the overlap whose rail points are
+    ``u_lo ... u_hi``."""
+    return math.isfinite(f[i]) and f[i] < 0 and ru_s[i] >= u_lo and ru_s[i] <= u_hi
+
+
+@numba.njit(cache=True, inline="always")
+def _shift(f, overlap, i0, i1):
+    """``f + overlap`` at the samples ``i0:i1``, infinite where ``f`` is not finite."""
+    for i in range(i0, i1):
         f[i] = f[i] + overlap if math.isfinite(f[i]) else math.inf
-    return True, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi
 
 
 @numba.njit(cache=True)
-def gap_on_grid(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
-    """``h = f(y) + A(y) x^2`` at the element centres of a grid ((nx, ny) written to
-    ``out``) with ``f`` and ``A`` interpolated at ``y`` from the samples ``s`` as
-    ``np.interp`` does (``f`` beyond the samples and where ``A`` is not finite: ``far``
-    for f, 0 for A); ``far`` wherever the sum is not finite."""
+def extend_frame(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
+                 gamma, eta_c, kw, kr, s, overlap, i0, i1, a, b, out):
+    """A frame of :func:`reference_frame` formed at the samples ``i0:i1`` of ``out``,
+    formed also at ``a:i0`` and ``i1:b`` (``a <= i0 <= i1 <= b``) and shifted by its
+    ``overlap`` as there. (Formed in a buffer first: a value written to ``out`` is final,
+    so that a reader of the samples ``i0:i1`` meanwhile, or another extension of the same
+    samples, reads the same values.)"""
+    buf = np.empty_like(out)
+    for lo, hi in ((a, i0), (i1, b)):
+        frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
+                      z_c, gamma, eta_c, kw, kr, s, lo, hi, buf)
+        _shift(buf[F], overlap, lo, hi)
+        out[:, lo:hi] = buf[:, lo:hi]
+
+
+@numba.njit(cache=True)
+def _samples_read(y, s):
+    """The first and the last sample of ``s`` that :func:`interp_sorted` reads at ``y``."""
+    n = s.size
+    if y < s[0]:
+        return 0, 0
+    if y > s[n - 1]:
+        return n - 1, n - 1
+    j = np.searchsorted(s, y, side="right") - 1
+    if j >= n - 1:
+        return n - 1, n - 1
+    if s[j] == y:
+        return j, j
+    return j, j + 1
+
+
+@numba.njit(cache=True)
+def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
+    """:func:`gap_on_grid` from a frame (5, len(s)) formed at the samples ``i0:i1`` only.
+    Returns (done, a, b): not done (``out`` not written) when the grid reads samples
+    beyond them, ``a:b`` the samples to form then (those formed included)."""
+    f = frame[F]
+    a_of_s = frame[A_OF_S]
+    ra = _samples_read(y0, s)[0]
+    rb = _samples_read(y0 + dy * (ny - 1), s)[1] + 1
+    if ra < i0 or rb > i1:
+        return False, min(ra, i0), max(rb, i1)
+    _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out)
+    return True, i0, i1
+
+
+@numba.njit(cache=True, inline="always")
+def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
+    """``out[ix, jy]`` = f(y) + A(y) x^2 interpolated from the samples (``f`` = ``far``
+    beyond them, ``A`` = 0 where it is not finite; ``far`` wherever the sum is not
+    finite)."""
     ns = s.size
-    a_fin = np.empty(ns)
-    for i in range(ns):
-        a_fin[i] = a_of_s[i] if math.isfinite(a_of_s[i]) else 0.0
     fy = np.empty(ny)
     ay = np.empty(ny)
     for jy in range(ny):
@@ -458,13 +631,22 @@ def gap_on_grid(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
             fy[jy] = far
         else:
             fy[jy] = interp_sorted(y, s, f)
-        ay[jy] = interp_sorted(y, s, a_fin)
+        ay[jy] = _interp(y, s, a_of_s, True)
     for ix in range(nx):
         xi = x0 + dx * ix
         x2 = xi * xi
         for jy in range(ny):
             h = fy[jy] + ay[jy] * x2
             out[ix, jy] = h if math.isfinite(h) else far
+
+
+@numba.njit(cache=True)
+def gap_on_grid(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
+    """``h = f(y) + A(y) x^2`` at the element centres of a grid ((nx, ny) written to
+    ``out``) with ``f`` and ``A`` interpolated at ``y`` from the samples ``s`` as
+    ``np.interp`` does (``f`` beyond the samples and where ``A`` is not finite: ``far``
+    for f, 0 for A); ``far`` wherever the sum is not finite."""
+    _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out)
 
 
 @numba.njit(cache=True)

@@ -84,8 +84,10 @@ class ContactPoint:
 
     A point may form some fields when they are first read (:func:`_formed_later`): a
     rigid contact point of :func:`contact_points` its tangent plane's samples (``A``,
-    ``B``, ``s`` ... ``rail_z_of_s``) and a point of :func:`at_reference` its ``offset``,
-    which a time step in the frame at the reference point does not read.
+    ``B``, ``s`` ... ``rail_z_of_s``) and its ``rail_y``, a point of :func:`at_reference`
+    its ``offset`` and its samples ``f`` ... ``rail_z_of_s`` (formed first over the
+    overlap only; :meth:`gap_on_grid` forms those its grid reads), which a time step in
+    the frame at the reference point does not read.
     """
 
     side: str
@@ -111,17 +113,24 @@ class ContactPoint:
     def __getattr__(self, name: str):
         # called only for an attribute not set: a field formed later (_formed_later)
         later = self.__dict__.get("_later")
-        if later is None or name not in later[0]:
+        if later is None or name not in later:
             raise AttributeError(f"'ContactPoint' object has no attribute {name!r}")
-        for key, value in later[1]().items():  # (an error here leaves it to form later)
+        values = later[name]()  # (an error here leaves it to form later)
+        for key, value in values.items():
             object.__setattr__(self, key, value)
-        self.__dict__.pop("_later", None)  # (another reader may have formed it meanwhile)
+        if "f" in values:  # the samples formed in full: no part is kept
+            self.__dict__.pop("_part", None)
+        later = self.__dict__.get("_later")  # (another reader may have formed some)
+        rest = {} if later is None else {k: v for k, v in later.items() if k not in values}
+        if rest:
+            self.__dict__["_later"] = rest
+        else:
+            self.__dict__.pop("_later", None)
         return self.__dict__[name]
 
     def __getstate__(self) -> dict:
-        later = self.__dict__.get("_later")
-        if later is not None:  # pickled with every field formed
-            getattr(self, next(iter(later[0])))
+        while "_later" in self.__dict__:  # pickled with every field formed
+            getattr(self, next(iter(self.__dict__["_later"])))
         return self.__dict__
 
     def normal_penetration(self, approach: float) -> float:
@@ -133,9 +142,20 @@ class ContactPoint:
         grid's y along s. Where the profiles end (or fold away from this contact) the gap
         is :data:`FAR` - such elements can never touch."""
         out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
-        kernels.gap_on_grid(self.s, self.f, self.a_of_s, float(grid.x0), float(grid.dx),
-                            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
-        return out
+        part = self.__dict__.get("_part")
+        if part is None:
+            kernels.gap_on_grid(self.s, self.f, self.a_of_s, float(grid.x0), float(grid.dx),
+                                grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+            return out
+        while True:  # a frame at the reference point formed over part of its samples
+            frame, i0, i1, _ = part
+            done, a, b = kernels.gap_on_grid_part(
+                _S_SAMPLES, frame, i0, i1, float(grid.x0), float(grid.dx), grid.nx,
+                float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+            if done:
+                return out
+            part = _extended(part, a, b)
+            self.__dict__["_part"] = part
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """Interval of s around 0 where f(s) <= delta (times margin) [m] (paper Sec. 2.1)."""
@@ -151,17 +171,18 @@ _FIELDS = frozenset(f.name for f in fields(ContactPoint))
 
 _FRAME = frozenset({"A", "B", "s", "f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"})
 """The fields of a rigid contact point formed when first read (its tangent frame)."""
-_OFFSET = frozenset({"offset"})
-"""The field of a point at the reference point formed when first read."""
+_SAMPLES = frozenset({"f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"})
+"""The samples of a point at the reference point formed in full when first read."""
 
 
-def _formed_later(later: Callable[[], dict], names: frozenset, **now) -> ContactPoint:
-    """A :class:`ContactPoint` with the fields ``now``; the others, ``names``, are formed
-    by ``later()`` (which returns them by name) when one of them is first read."""
-    assert names.isdisjoint(now) and names.union(now) == _FIELDS
+def _formed_later(later: dict[str, Callable[[], dict]], **now) -> ContactPoint:
+    """A :class:`ContactPoint` with the fields ``now``; each other field ``name`` is
+    formed by ``later[name]()`` (which returns it and the others it forms, by name) when
+    it is first read."""
+    assert later.keys().isdisjoint(now) and len(later) + len(now) == len(_FIELDS)
     cp = object.__new__(ContactPoint)
     cp.__dict__.update(now)
-    cp.__dict__["_later"] = (names, later)
+    cp.__dict__["_later"] = later
     return cp
 
 
@@ -187,28 +208,26 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
 
     Returns ``(eta, x, u, z, g)`` restricted to trace points above the rail.
     """
-    return _trace(track, ws, pose, side)[0]
+    return tuple(_trace(track, ws, pose, side)[0])
 
 
 def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) with the least
-    gap and its first sample."""
+    """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) as one array
+    (5, n), with the least gap, its first sample and whether the trace's u increase."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr = _wheel_samples(ws)
-    rail = track.side_rail
-    lo, hi = rail.bounds
     out = np.empty((5, eta.size))
-    n, g_min, k = kernels.trace_gap(eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi),
-                                    math.sin(psi), math.cos(phi), math.sin(phi),
-                                    float(sgn * pose.lateral), float(ws.radius), lo, hi,
-                                    *_rail_arrays(track)[2:], out)
+    n, g_min, k, increasing = kernels.trace_gap(
+        eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
+        math.sin(phi), float(sgn * pose.lateral), float(ws.radius), *_rail_arrays(track)[4:],
+        out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    return tuple(out[:, :n]), g_min, k
+    return out[:, :n], g_min, k, increasing
 
 
 def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -223,10 +242,13 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
             and last[3] == side and last[4] == approach):
         return list(last[5])
-    (eta, x, u, z, g), g_min, k = _trace_of_pose(track, ws, pose, side)
-    points = [_point(track, ws, side, eta, x, u, z, g, g_min, int(a), int(b))
-              for a, b in kernels.intervals(g, g_min, k, float(approach))]
-    points.sort(key=lambda c: c.gap)
+    trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
+    wheel = _wheel_arrays(ws)
+    rows = kernels.rigid_points(trace, g_min, k, float(approach), *_rail_arrays(track)[2:4],
+                                *wheel[:2], *wheel[3:])
+    points = [_point(track, ws, side, trace, g_min, row) for row in rows.tolist()]
+    if len(points) > 1:
+        points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
     return points
 
@@ -239,8 +261,8 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
                    approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    (*_, g), g_min, k = _trace_of_pose(track, ws, pose, side)
-    return len(kernels.intervals(g, g_min, k, float(approach)))
+    trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
+    return kernels.count_runs(trace[4], g_min, k, float(approach))
 
 
 _LAST_GAP: list = [None]
@@ -254,19 +276,19 @@ def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
             and last[3] == side):
         return last[4]
     out = _trace(track, ws, pose, side)
-    for a in out[0]:
-        a.flags.writeable = False
+    out[0].flags.writeable = False  # (its rows too)
     _LAST_GAP[0] = (track, ws, pose, side, out)
     return out
 
 
 def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
     """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z) and its
-    spline's breakpoints and coefficients (computed once per track; read-only)."""
+    spline's breakpoints and coefficients, then its extent (lo, hi) [m] and the same
+    breakpoints and coefficients (computed once per track; read-only)."""
     cached = track.__dict__.get("_kernel_arrays")
     if cached is None:
         rail = track.side_rail
-        cached = (*rail.samples(N_RAIL), *rail._pieces)
+        cached = (*rail.samples(N_RAIL), *rail._pieces, *rail.bounds, *rail._pieces)
         object.__setattr__(track, "_kernel_arrays", cached)  # a cache on a frozen record
     return cached
 
@@ -274,33 +296,41 @@ def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
 def _wheel_arrays(ws: Wheelset) -> tuple:
     """The wheel as the kernels read it: its spline's breakpoints and coefficients, the
     nominal radius [m], and ``back_to_back / 2``, ``flange_back`` [m] (profile coordinate
-    S = eta - back_to_back / 2 + flange_back, :meth:`Wheelset.profile_coordinate`)."""
-    return (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2, float(ws.flange_back))
+    S = eta - back_to_back / 2 + flange_back, :meth:`Wheelset.profile_coordinate`);
+    formed once per wheelset."""
+    cached = ws.__dict__.get("_kernel_arrays")
+    if cached is None:
+        cached = (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2,
+                  float(ws.flange_back))
+        object.__setattr__(ws, "_kernel_arrays", cached)  # a cache on a frozen record
+    return cached
 
 
-def _point(track, ws, side, eta, x, u, z, g, g_min, a, b) -> ContactPoint:
-    """The rigid contact point of the trace's run ``a:b`` (its least gap above ``g_min``,
-    refined by a parabola through three samples: :func:`~.kernels.rigid_point`), its
-    tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
-    ur, zr, rx, rc = _rail_arrays(track)
-    wx, wc, radius, half_bb, flange_back = _wheel_arrays(ws)
-    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = kernels.rigid_point(
-        eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
+def _point(track, ws, side, trace, g_min, row) -> ContactPoint:
+    """The rigid contact point ``row`` of :func:`~.kernels.rigid_points` (a run of the
+    trace: its least gap above ``g_min``, refined by a parabola through three samples),
+    its tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
+    eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = row
 
     def frame() -> dict:
         out = np.empty((5, N_S))
-        kernels.rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
-                            u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0, out)
+        kernels.rigid_frame(trace[0], trace[2], trace[3], g_min, *_rail_arrays(track)[:2],
+                            *_wheel_arrays(ws), u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0,
+                            out)
         f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = out
         return dict(A=float(a_of_s[K0]), B=_lateral_curvature(_S_SAMPLES, f), s=_S_SAMPLES,
                     f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
                     rail_z_of_s=rail_z_of_s)
 
-    return _formed_later(frame, _FRAME, side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
-                         rail_y=track.rail_coordinate(u_c, z_rail),
-                         position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
-                         rolling_radius=ws.radius + dr, approach=None, rigid=None,
-                         offset=(0.0, 0.0))
+    def rail_y() -> dict:
+        return dict(rail_y=track.rail_coordinate(u_c, z_rail))
+
+    later = dict.fromkeys(_FRAME, frame)
+    later["rail_y"] = rail_y
+    return _formed_later(later, side=side, gap=gap_c,
+                         wheel_s=s_c, rail_u=u_c, position=(x_c, SIDES[side] * u_c, z_rail),
+                         contact_angle=gamma, rolling_radius=ws.radius + dr, approach=None,
+                         rigid=None, offset=(0.0, 0.0))
 
 
 HALF_WIDTH = 0.025
@@ -311,6 +341,7 @@ K0 = N_S // 2
 """The sample at the patch origin, s = 0."""
 _S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
 _S_SAMPLES.flags.writeable = False
+_DS = float(_S_SAMPLES[1] - _S_SAMPLES[0])
 
 
 WEIGHT_POWER = 2.5
@@ -348,38 +379,69 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
     if not d > 0:
         return None
-    eta, _, u, z, g = _trace_of_pose(track, ws, pose, cp.side)[0]
+    trace, g_min, _, increasing = _trace_of_pose(track, ws, pose, cp.side)
     # one compiled pass (:func:`~.kernels.reference_frame`): the patch's own run of
     # vertical interpenetration along the trace, its weighted point and angle, the frame
-    # there with f shifted over the patch's own overlap; CONTACT's wheel profile
-    # coordinate of the point: the wheel above it; its rolling radius: the wheel surface's
-    # along the contact normal through it (where the rigid slip of the wheel is taken)
+    # there with f shifted over the patch's own overlap, at the samples of the overlap
+    # (the others formed when read); CONTACT's wheel profile coordinate of the point: the
+    # wheel above it; its rolling radius: the wheel surface's along the contact normal
+    # through it (where the rigid slip of the wheel is taken)
     frame = np.empty((5, N_S))
-    ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi = kernels.reference_frame(
-        eta, u, z, g, float(approach), float(cp.rail_u), *_rail_arrays(track),
-        *_wheel_arrays(ws), _S_SAMPLES, K0, WEIGHT_POWER, frame)
+    rail, wheel = _rail_arrays(track), _wheel_arrays(ws)
+    (ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
+     height) = kernels.reference_frame(trace, g_min, increasing, approach, float(cp.rail_u),
+                                       *rail[:4], *wheel, _S_SAMPLES, K0, WEIGHT_POWER, frame)
     if not ok:
         return None
     s = _S_SAMPLES
-    f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = frame
-    s_normal = float(wheel_s_of_s[K0])
     # B for Hertz's estimates: the parabola with the overlap's depth and width (the origin
     # is the weighted centre, not the gap's minimum, where f'' may be anything)
-    width = float(s[hi - 1] - s[lo]) + float(s[1] - s[0])  # s increases
-    B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, f)
+    width = float(s[hi - 1] - s[lo]) + _DS  # s increases
+    B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _lateral_curvature(s, frame[0])
+    # what forms the other samples (:func:`_frame_arguments`)
+    part = (frame, i0, i1, (trace, rail, wheel, g_lo, approach, u_ref, z_ref, gamma, eta_c,
+                            kw, kr, overlap))
 
     def offset() -> dict:  # the point in the rigid point's frame (formed when read)
         ok = np.isfinite(cp.rail_u_of_s)
         return dict(offset=(0.0, float(np.interp(u_ref, cp.rail_u_of_s[ok], cp.s[ok]))))
 
-    return _formed_later(offset, _OFFSET, side=cp.side, gap=approach - overlap / math.cos(gamma),
-                         wheel_s=wheel_s, rail_u=u_ref, rail_y=track.rail_coordinate(u_ref, z_ref),
-                         position=(cp.position[0], SIDES[cp.side] * u_ref, z_ref),
-                         contact_angle=gamma, rolling_radius=ws.radius + float(
-                             ws.wheel.height(s_normal if math.isfinite(s_normal) else wheel_s)),
-                         A=float(a_of_s[K0]), B=B if math.isfinite(B) else cp.B, s=s, f=f,
-                         a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
-                         rail_z_of_s=rail_z_of_s, approach=approach, rigid=cp)
+    def samples() -> dict:  # all the samples (formed when read)
+        f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _extended(
+            ref.__dict__.get("_part", part), 0, N_S)[0]
+        return dict(f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
+                    rail_z_of_s=rail_z_of_s)
+
+    later = dict.fromkeys(_SAMPLES, samples)
+    later["offset"] = offset
+    ref = _formed_later(
+        later, side=cp.side,
+        gap=approach - overlap / math.cos(gamma), wheel_s=wheel_s, rail_u=u_ref,
+        rail_y=track.rail_coordinate(u_ref, z_ref),
+        position=(cp.position[0], SIDES[cp.side] * u_ref, z_ref), contact_angle=gamma,
+        rolling_radius=ws.radius + height, A=float(frame[1, K0]),
+        B=B if math.isfinite(B) else cp.B, s=s, approach=approach, rigid=cp)
+    ref.__dict__["_part"] = part
+    return ref
+
+
+def _extended(part: tuple, a: int, b: int) -> tuple:
+    """A frame at the reference point formed at the samples ``i0:i1`` (``part``: the
+    frame (5, N_S), i0, i1 and what forms the others), formed also at ``a:b`` (the samples
+    ``i0:i1`` as they were: a reader of the old ``part`` reads the same values)."""
+    frame, i0, i1, what = part
+    a, b = min(a, i0), max(b, i1)
+    kernels.extend_frame(*_frame_arguments(what), i0, i1, a, b, frame)
+    return frame, a, b, what
+
+
+def _frame_arguments(what: tuple) -> tuple:
+    """The arguments of :func:`~.kernels.frame_samples` (before ``i0``) of a frame at the
+    reference point, and its overlap, from what :func:`at_reference` keeps: the trace
+    lowered by the approach (``(z - g_min) - approach``), the frame's point and plane."""
+    trace, rail, wheel, g_min, approach, u_ref, z_ref, gamma, eta_c, kw, kr, overlap = what
+    return (trace[0], trace[2], trace[3], g_min, approach, *rail[:2], *wheel[:5], u_ref,
+            z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
 
 
 @dataclass(frozen=True)

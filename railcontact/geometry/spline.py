@@ -66,6 +66,17 @@ def _interval_near(x, ti, j):
     return j
 
 
+@numba.njit(cache=True, inline="always")
+def _interval_walk(x, ti, j):
+    """:func:`_interval_near`, walking forward first where ``ti`` lies in one of the
+    four pieces from ``j`` on (points ordered along the breakpoints: a step or two)."""
+    if x[j] <= ti < x[min(j + 4, x.size - 1)]:
+        while ti >= x[j + 1]:
+            j += 1
+        return j
+    return _interval_near(x, ti, j)
+
+
 @numba.njit(cache=True)
 def _evaluate(x, c, t, nu, out):
     """``out[i]`` = the ``nu``-th derivative of the piecewise cubic at ``t[i]``; each
@@ -76,7 +87,7 @@ def _evaluate(x, c, t, nu, out):
         if math.isnan(ti):
             out[i] = math.nan
             continue
-        j = _interval_near(x, ti, j)
+        j = _interval_walk(x, ti, j)
         out[i] = _piece(c, j, ti - x[j], nu)
 
 
