@@ -377,7 +377,7 @@ class InfluenceOperator:
         nx, ny = self.nx, self.ny
         self._padded = padded_shape(nx, ny)
         self._shapes = ((nc, nx, ny),) + (((nx, ny),) if nc == 1 else ())  # apply's inputs
-        self._inverse: dict[float, np.ndarray] = {}
+        self._inverse: dict[tuple[float, bool], np.ndarray] = {}
         if self.backend == "dense":
             self._matrix = self.dense()
         else:
@@ -423,7 +423,7 @@ class InfluenceOperator:
         function within the solve, in the thread that formed it (plans hold buffers and
         are kept per thread). The same values as ``apply``/``preconditioner``."""
         if floor is not None:
-            spectra = self._inverse_spectra(floor)
+            spectra = self._inverse_spectra(floor, complex_=True)
         elif self.backend == "dense":
             return self.apply
         else:
@@ -447,25 +447,33 @@ class InfluenceOperator:
 
         Returns ``M(r)``: residual [m] on the grid -> pressure-like correction [Pa].
         """
-        inverse = self._inverse_spectra(floor)
+        inverse = self._inverse_spectra(floor, complex_=True)
 
         def apply(residual: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
             return self._convolve(inverse, np.asarray(residual, dtype=float), out)
 
         return apply
 
-    def _inverse_spectra(self, floor: float) -> np.ndarray:
-        """The preconditioner's spectra (1, 1, m, n//2+1) at ``floor``, formed once."""
+    def _inverse_spectra(self, floor: float, complex_: bool = False) -> np.ndarray:
+        """The preconditioner's spectra (1, 1, m, n//2+1) at ``floor``, formed once: real;
+        with ``complex_`` for the FFTW products as complex numbers with zero imaginary
+        parts (numpy's real-by-complex multiply casts the real factor so, at twice the
+        cost of a complex-by-complex one: the same values)."""
         if len(self.components) != 1:
             raise RailContactError("the FFT preconditioner is for one-component operators")
-        inverse = self._inverse.get(floor)
+        key = (floor, complex_ and self.backend == "pyfftw")
+        inverse = self._inverse.get(key)
         if inverse is None:
-            spec = (self._spectra if self.backend != "dense"
-                    else _scaled_spectra(self.kernels, self._padded))
-            spec = spec.real  # the kernel is even: its spectrum is real
-            inverse = self._inverse[floor] = 1.0 / np.maximum(spec, floor * spec.max())
-            # _convolve folds 1/N into the spectra, so the inverse gets 1/N^2 of its own
-            inverse /= (self._padded[0] * self._padded[1]) ** 2
+            if key[1]:
+                inverse = self._inverse_spectra(floor).astype(complex)
+            else:
+                spec = (self._spectra if self.backend != "dense"
+                        else _scaled_spectra(self.kernels, self._padded))
+                spec = spec.real  # the kernel is even: its spectrum is real
+                inverse = 1.0 / np.maximum(spec, floor * spec.max())
+                # _convolve folds 1/N into the spectra, so the inverse gets 1/N^2 of its own
+                inverse /= (self._padded[0] * self._padded[1]) ** 2
+            self._inverse[key] = inverse
         return inverse
 
     def _convolve(self, spectra: np.ndarray, p: np.ndarray, out: np.ndarray | None = None
