@@ -184,3 +184,26 @@ def test_pruned_products_of_grids_sharing_a_plan_stay_exact(comps):
         products.append(np.max(np.abs(fast - ref)) / np.max(np.abs(ref)))
     assert padded_shape(19, 20) == padded_shape(19, 19)
     assert max(products) <= 1e-12
+
+
+@pytest.mark.parametrize("backend", FFT_BACKENDS + ["dense"])
+def test_bound_products_are_the_operator_and_its_preconditioner(backend):
+    """A solve's products as bound functions (``InfluenceOperator.bound``) write the dense
+    influence matrix's product into the buffer given, and with a floor the FFT
+    preconditioner's (the same values as ``preconditioner()``), for repeated calls."""
+    g = Grid.from_bounds(-2e-3, 3e-3, -1e-3, 1e-3, 17, 12)
+    rng = np.random.default_rng(4)
+    op = InfluenceOperator(g, STEEL, "z", backend)
+    dense = InfluenceOperator(g, STEEL, "z", "dense").dense()
+    product, inverse = op.bound(), op.bound(1e-2)
+    apply_inverse = op.preconditioner(1e-2)
+    out = np.empty(g.shape)
+    for _ in range(3):
+        p = rng.uniform(0, 1e9, g.shape)
+        ref = (dense @ p.ravel()).reshape(g.shape)
+        assert product(p, out) is out
+        assert np.max(np.abs(out - ref)) <= 1e-13 * np.max(np.abs(ref))
+        r = rng.normal(size=g.shape) * 1e-6
+        assert np.array_equal(inverse(r, out), apply_inverse(r))
+    with pytest.raises(RailContactError, match="one-component"):
+        InfluenceOperator(g, STEEL, "xy", backend).bound(1e-2)

@@ -337,3 +337,35 @@ def test_rows_of_any_length_give_the_numpy_sweeps_iterates():
     assert a.converged and a.iterations == b.iterations
     np.testing.assert_allclose(a.traction, b.traction, rtol=0, atol=1e-11 * b.max_traction)
     np.testing.assert_array_equal(a.state, b.state)
+
+
+def test_row_blocks_hold_their_share_of_the_contact():
+    """``_blocks_of``: the blocks cover the rows from the first to the last one with
+    contact, in order and without gaps; their number is ``total / sqrt(work)`` rounded
+    (at least 1, at most the rows with contact), and every block but the last ends at the
+    first row where it holds ``total / nblocks`` elements (checked on random row counts
+    against that definition written out)."""
+    from railcontact.tangential.convexgs import _blocks_of
+
+    rng = np.random.default_rng(7)
+    assert _blocks_of(np.zeros(6, dtype=np.int64), 100.0) == []
+    for _ in range(300):
+        n = int(rng.integers(1, 60))
+        per_row = rng.integers(0, 40, n) * (rng.random(n) < 0.7)
+        work = float(rng.uniform(1.0, 2e4))
+        blocks = _blocks_of(per_row, work)
+        rows = [i for i in range(n) if per_row[i] > 0]
+        if not rows:
+            assert blocks == []
+            continue
+        total = int(per_row.sum())
+        want = max(1, min(len(rows), round(total / work**0.5)))
+        assert 1 <= len(blocks) <= want
+        assert blocks[0][0] == rows[0] and blocks[-1][1] == rows[-1] + 1
+        assert all(a[1] == b[0] for a, b in zip(blocks, blocks[1:], strict=False))
+        target = total / want
+        base = 0
+        for start, stop in blocks[:-1]:
+            assert int(per_row[:stop].sum()) - base >= target
+            assert stop - 1 == start or int(per_row[:stop - 1].sum()) - base < target
+            base = int(per_row[:stop].sum())

@@ -43,7 +43,7 @@ import os
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
-from functools import lru_cache
+from functools import lru_cache, partial
 
 import numpy as np
 import scipy.fft
@@ -135,40 +135,53 @@ class _PrunedPlan:
         self.half[...] = 0.0
         self.ny = 0
         """The grid width last written into ``rows_in`` (its padding must stay zero)."""
+        # per product: the executes as bound methods, the grid's columns of the row
+        # buffers as views (formed when the width changes), a two-component spectrum's
+        # operands as flat rows (the compiled multiply-add's arrays)
+        self._fwd = tuple(step.execute for step in self.steps)
+        self._bwd = tuple(step.execute for step in self.back)
+        self._in = self._out = None
+        self._flat = ((self.spec.reshape(nc, -1), self.prod.reshape(nc, -1))
+                      if nc == 2 and _spectral_product_2c is not None else None)
 
     def convolve(self, spectrum: np.ndarray, p: np.ndarray, out: np.ndarray | None
                  ) -> np.ndarray:
         """``p`` (nx, ny), or (nc, nx, ny), convolved with the kernels of the (scaled)
-        ``spectrum`` (m, n//2+1), or (nc, nc, m, n//2+1)."""
+        ``spectrum`` (m, n//2+1), or (nc, nc, m, n//2+1) (two components: also as its
+        flat rows (4, m (n//2+1)), :func:`_flat_spectra`)."""
         ny = p.shape[-1]
         if ny != self.ny:
             self.rows_in[...] = 0.0
             self.ny = ny
-        self.rows_in[..., :ny] = p
-        for step in self.steps:
-            step.execute()
-        if self.spec.ndim == 2:
+            self._in, self._out = self.rows_in[..., :ny], self.rows_out[..., :ny]
+        self._in[...] = p
+        f0, f1 = self._fwd
+        f0()
+        f1()
+        if self._flat is not None:
+            _spectral_product_2c(spectrum.reshape(4, -1), *self._flat)
+        elif self.spec.ndim == 2:
             np.multiply(spectrum, self.spec, out=self.prod)
         else:
             _spectral_product(spectrum, self.spec, self.prod)
-        for step in self.back:
-            step.execute()
+        b0, b1 = self._bwd
+        b0()
+        b1()
         if out is None:
-            return self.rows_out[..., :ny].copy()
-        out[...] = self.rows_out[..., :ny]
+            return self._out.copy()
+        out[...] = self._out
         return out
 
 
-def _spectral_product_2(s00: np.ndarray, s01: np.ndarray, s10: np.ndarray, s11: np.ndarray,
-                        q0: np.ndarray, q1: np.ndarray, u0: np.ndarray, u1: np.ndarray
-                        ) -> None:
-    """``u0 = s00 q0 + s01 q1``, ``u1 = s10 q0 + s11 q1`` (complex, flat arrays): the 2x2
-    spectral multiply-add of a two-component product in one pass."""
-    for i in range(q0.size):
-        a = q0[i]
-        b = q1[i]
-        u0[i] = s00[i] * a + s01[i] * b
-        u1[i] = s10[i] * a + s11[i] * b
+def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
+    """``u[0] = s[0] q[0] + s[1] q[1]``, ``u[1] = s[2] q[0] + s[3] q[1]`` (complex, rows
+    of flat arrays: ``s`` (4, N) the spectra s00, s01, s10, s11, ``q``, ``u`` (2, N)): the
+    2x2 spectral multiply-add of a two-component product in one pass."""
+    for i in range(q.shape[1]):
+        a = q[0, i]
+        b = q[1, i]
+        u[0, i] = s[0, i] * a + s[1, i] * b
+        u[1, i] = s[2, i] * a + s[3, i] * b
 
 
 if numba is not None:
@@ -183,10 +196,7 @@ def _spectral_product(spectra: np.ndarray, spec: np.ndarray, prod: np.ndarray) -
     pass; else a numpy multiply-add per pair)."""
     nc = spec.shape[0]
     if nc == 2 and _spectral_product_2c is not None:
-        f = spectra.reshape(4, -1)
-        q = spec.reshape(2, -1)
-        u = prod.reshape(2, -1)
-        _spectral_product_2c(f[0], f[1], f[2], f[3], q[0], q[1], u[0], u[1])
+        _spectral_product_2c(spectra.reshape(4, -1), spec.reshape(2, -1), prod.reshape(2, -1))
         return
     for a in range(nc):
         np.multiply(spectra[a, 0], spec[0], out=prod[a])
@@ -366,7 +376,8 @@ class InfluenceOperator:
         self.kernels = kernels  # (nc, nc, 2nx-1, 2ny-1)
         nx, ny = self.nx, self.ny
         self._padded = padded_shape(nx, ny)
-        self._inverse: dict[float, np.ndarray] = {}
+        self._shapes = ((nc, nx, ny),) + (((nx, ny),) if nc == 1 else ())  # apply's inputs
+        self._inverse: dict[tuple[float, bool], np.ndarray] = {}
         if self.backend == "dense":
             self._matrix = self.dense()
         else:
@@ -390,23 +401,36 @@ class InfluenceOperator:
         ``out`` (the shape of the result, float) receives the result instead of a new
         array (an iterative solver's buffer)."""
         p = np.asarray(traction, dtype=float)
-        single = p.ndim == 2
-        nc = len(self.components)
-        if single:
-            p = p[None]
-        if p.shape != (nc, self.nx, self.ny):
+        if p.shape not in self._shapes:
+            nc = len(self.components)
             raise RailContactError(f"traction must have shape {(nc, self.nx, self.ny)} "
                                    f"(or {(self.nx, self.ny)} for one component), got "
                                    f"{np.shape(traction)}")
-        target = None if out is None else (out[None] if single else out)
         if self.backend == "dense":
-            u = (self._matrix @ p.reshape(-1)).reshape(nc, self.nx, self.ny)
-            if target is not None:
-                target[...] = u
-                u = target
+            u = (self._matrix @ p.reshape(-1)).reshape(p.shape)
+            if out is not None:
+                out[...] = u
+                u = out
+            return u
+        return self._convolve(self._spectra, p, out)
+
+    def bound(self, floor: float | None = None) -> Callable[[np.ndarray, np.ndarray],
+                                                             np.ndarray]:
+        """The product (:meth:`apply`), or with a ``floor`` the FFT preconditioner
+        (:meth:`preconditioner`), as one function ``f(x, out) -> out`` for the repeated
+        products of one solve: ``x`` and ``out`` of the one shape ``apply`` returns, float,
+        neither checked (a solver's own work arrays). The FFT plan is fetched once: use the
+        function within the solve, in the thread that formed it (plans hold buffers and
+        are kept per thread). The same values as ``apply``/``preconditioner``."""
+        if floor is not None:
+            spectra = self._inverse_spectra(floor, complex_=True)
+        elif self.backend == "dense":
+            return self.apply
         else:
-            u = self._convolve(self._spectra, p, target)
-        return u[0] if single else u
+            spectra = self._spectra
+        if self.backend != "pyfftw" or len(self.components) != 1:
+            return partial(self._convolve, spectra)
+        return partial(_fftw_plan(1, self._padded, self.nx).convolve, spectra[0, 0])
 
     def preconditioner(self, floor: float = PRECONDITIONER_FLOOR
                        ) -> Callable[[np.ndarray], np.ndarray]:
@@ -423,45 +447,61 @@ class InfluenceOperator:
 
         Returns ``M(r)``: residual [m] on the grid -> pressure-like correction [Pa].
         """
-        if len(self.components) != 1:
-            raise RailContactError("the FFT preconditioner is for one-component operators")
-        inverse = self._inverse.get(floor)
-        if inverse is None:
-            spec = (self._spectra if self.backend != "dense"
-                    else _scaled_spectra(self.kernels, self._padded))
-            spec = spec.real  # the kernel is even: its spectrum is real
-            inverse = self._inverse[floor] = 1.0 / np.maximum(spec, floor * spec.max())
-            # _convolve folds 1/N into the spectra, so the inverse gets 1/N^2 of its own
-            inverse /= (self._padded[0] * self._padded[1]) ** 2
+        inverse = self._inverse_spectra(floor, complex_=True)
 
         def apply(residual: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-            return self._convolve(inverse, np.asarray(residual, dtype=float)[None],
-                                  None if out is None else out[None])[0]
+            return self._convolve(inverse, np.asarray(residual, dtype=float), out)
 
         return apply
 
+    def _inverse_spectra(self, floor: float, complex_: bool = False) -> np.ndarray:
+        """The preconditioner's spectra (1, 1, m, n//2+1) at ``floor``, formed once: real;
+        with ``complex_`` for the FFTW products as complex numbers with zero imaginary
+        parts (numpy's real-by-complex multiply casts the real factor so, at twice the
+        cost of a complex-by-complex one: the same values)."""
+        if len(self.components) != 1:
+            raise RailContactError("the FFT preconditioner is for one-component operators")
+        key = (floor, complex_ and self.backend == "pyfftw")
+        inverse = self._inverse.get(key)
+        if inverse is None:
+            if key[1]:
+                inverse = self._inverse_spectra(floor).astype(complex)
+            else:
+                spec = (self._spectra if self.backend != "dense"
+                        else _scaled_spectra(self.kernels, self._padded))
+                spec = spec.real  # the kernel is even: its spectrum is real
+                inverse = 1.0 / np.maximum(spec, floor * spec.max())
+                # _convolve folds 1/N into the spectra, so the inverse gets 1/N^2 of its own
+                inverse /= (self._padded[0] * self._padded[1]) ** 2
+            self._inverse[key] = inverse
+        return inverse
+
     def _convolve(self, spectra: np.ndarray, p: np.ndarray, out: np.ndarray | None = None
                   ) -> np.ndarray:
-        """Linear convolution of ``p`` (nc, nx, ny) with kernels given by their padded
-        spectra (nc, nc, m, n//2+1), scaled by 1/(m n); into ``out`` (nc, nx, ny) if given."""
+        """Linear convolution of ``p`` (nc, nx, ny), or (nx, ny) for one component, with
+        kernels given by their padded spectra (nc, nc, m, n//2+1), scaled by 1/(m n); into
+        ``out`` (the shape of ``p``) if given."""
         if self.backend == "pyfftw":
-            return self._convolve_fftw(spectra, p, out)
+            if p.ndim == 2:
+                return _fftw_plan(1, self._padded, self.nx).convolve(spectra[0, 0], p, out)
+            pruned = _fftw_plan(p.shape[0], self._padded, self.nx)
+            if p.shape[0] == 1:
+                return pruned.convolve(spectra[0, 0], p[0],
+                                       None if out is None else out[0])[None]
+            return pruned.convolve(spectra, p, out)
+        single = p.ndim == 2
+        q = p[None] if single else p
         nx, ny = self.nx, self.ny
-        spec = scipy.fft.rfft2(p, s=self._padded, workers=1)  # (nc, m, n//2+1)
+        spec = scipy.fft.rfft2(q, s=self._padded, workers=1)  # (nc, m, n//2+1)
         prod = np.einsum("abij,bij->aij", spectra, spec)
         m, n = self._padded
         u = scipy.fft.irfft2(prod, s=self._padded, workers=1)[:, :nx, :ny] * (m * n)
+        if single:
+            u = u[0]
         if out is None:
             return u
         out[...] = u
         return out
-
-    def _convolve_fftw(self, spectra: np.ndarray, p: np.ndarray,
-                       out: np.ndarray | None = None) -> np.ndarray:
-        pruned = _fftw_plan(p.shape[0], self._padded, self.nx)
-        if p.shape[0] == 1:
-            return pruned.convolve(spectra[0, 0], p[0], None if out is None else out[0])[None]
-        return pruned.convolve(spectra, p, out)
 
     def dense(self) -> np.ndarray:
         """The full influence matrix (nc*nx*ny, nc*nx*ny) [m/Pa] (for tests and tiny grids)."""

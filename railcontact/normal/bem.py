@@ -47,7 +47,7 @@ import numpy as np
 
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
-from ..halfspace.operator import InfluenceOperator
+from ..halfspace.operator import PRECONDITIONER_FLOOR, InfluenceOperator
 from ..halfspace.sums import array_sum, numpy_sum
 
 PRECONDITIONERS = ("fft", "none")
@@ -461,7 +461,7 @@ def solve_normal(
     if preconditioner not in PRECONDITIONERS:
         raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
                                f"got {preconditioner!r}")
-    precondition = operator.preconditioner() if preconditioner == "fft" else None
+    precondition = preconditioner == "fft"
     max_iterations = check_count("max_iterations", max_iterations)
     if (load is None) == (penetration is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
@@ -530,13 +530,17 @@ def solve_normal(
     work = np.empty((6, h.size))
     uf, gf, gmf, tf, rf, zf = work
     u, g, gm, t, r, z = work.reshape(6, *shape)
-    if precondition is None:
+    if not precondition:
         z, zf = g, gf
     tf[:] = 0.0
     c = np.empty(h.size, dtype=bool)
     index = np.empty(CHANGE_LIMIT, dtype=np.int64)
     change = np.empty(CHANGE_LIMIT)
-    operator.apply(p, out=u)  # u = A p of the current p, kept up to date below
+    # the products of this solve (A x, and the preconditioner's M x) as bound functions
+    # (x, out) -> out: the arrays are the solve's own, checked above
+    product = operator.bound()
+    inverse = operator.bound(PRECONDITIONER_FLOOR) if precondition else None
+    product(p, u)  # u = A p of the current p, kept up to date below
     fresh = 0  # iterations since u was last formed by a convolution
     g_old = 1.0
     conjugate = False
@@ -549,14 +553,14 @@ def solve_normal(
     load_value = float(load) if force_control else 0.0
     for its in range(1, int(max_iterations) + 1):
         delta = _gradient(hf, uf, pf, delta, force_control, c, gf, gmf)
-        if precondition is not None:
-            precondition(gm, out=z)
-        gz, gg = _direction(gf, zf, c, tf, force_control and precondition is not None,
+        if precondition:
+            inverse(gm, z)
+        gz, gg = _direction(gf, zf, c, tf, force_control and precondition,
                             conjugate, g_old)
         g_old = gz
-        operator.apply(t, out=r)
+        product(t, r)
         _, moved, total, changes, entered, updated = _step(
-            pf, qf, tf, gf, rf, c, uf, gz, gg, precondition is not None,
+            pf, qf, tf, gf, rf, c, uf, gz, gg, precondition,
             force_control, load_value, area_el, self_compliance, kernel, shape[0], shape[1],
             index, change)
         conjugate = not entered
@@ -566,7 +570,7 @@ def solve_normal(
         if updated:
             fresh += 1
         else:  # too many elements left or entered the contact: convolve
-            operator.apply(p, out=u)
+            product(p, u)
             fresh = 0
         err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
         hist.append(err)
@@ -574,7 +578,7 @@ def solve_normal(
             break
         if err < tolerance:
             if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
-                operator.apply(p, out=u)
+                product(p, u)
                 fresh = 0
             if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
                 converged = True
@@ -586,7 +590,7 @@ def solve_normal(
             break
 
     if not converged and fresh > 0:  # the gap from a convolution, not the updates
-        operator.apply(p, out=u)
+        product(p, u)
     if converged:
         message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
     else:

@@ -266,26 +266,56 @@ def _sweep_blocked(kern, op, w_t, g, px, py, state, lo, hi, rows, c, omega_h, om
     return dif
 
 
-def _blocks_of(per_row: np.ndarray, work: int) -> list[tuple[int, int]]:
+def _blocks_of(per_row: np.ndarray, work: int) -> list[list[int]]:
     """Split the rows that hold contact (``per_row``: contact elements per row) into blocks
     of about ``work^(1/2)`` elements: rows are added to a block until it holds
-    ``total / nblocks`` elements (the last block takes the rest)."""
-    rows = per_row.nonzero()[0]  # (array methods: cheaper calls than numpy's functions)
-    if rows.size == 0:
-        return []
-    cum = per_row.cumsum()  # integers: "the block holds >= target" is exact
-    total = int(cum[-1])
-    nblocks = max(1, min(rows.size, round(total / math.sqrt(work))))
+    ``total / nblocks`` elements (the last block takes the rest). Returns ``[start,
+    stop]`` pairs of rows."""
+    return _block_rows(per_row, work).tolist()
+
+
+def _block_rows(per_row, work):
+    """:func:`_blocks_of`'s blocks as an array (nblocks, 2), in one pass (compiled): the
+    same integers as ``nonzero``, ``cumsum``, ``round`` (half to even) and
+    ``searchsorted`` over the running count formed them."""
+    n = per_row.size
+    cum = np.empty(n, dtype=np.int64)
+    total = 0
+    nrows = 0
+    first = last = 0
+    for i in range(n):
+        c = per_row[i]
+        total += c
+        cum[i] = total  # integers: "the block holds >= target" is exact
+        if c != 0:
+            if nrows == 0:
+                first = i
+            last = i
+            nrows += 1
+    out = np.empty((max(nrows, 1), 2), dtype=np.int64)
+    if nrows == 0:
+        return out[:0]
+    q = total / math.sqrt(work)
+    whole = math.floor(q)
+    if q - whole > 0.5 or (q - whole == 0.5 and whole % 2 == 1):  # round(q)
+        whole += 1
+    nblocks = max(1, min(nrows, int(whole)))
     target = total / nblocks
-    blocks, start, base = [], int(rows[0]), 0
+    k = 0
+    start = r = first
+    base = 0
     for _ in range(nblocks - 1):
-        r = int((cum - base).searchsorted(target))  # first row where the block is full
-        if r >= cum.size:
+        while r < n and cum[r] - base < target:  # first row where the block is full
+            r += 1
+        if r >= n:
             break
-        blocks.append((start, r + 1))
-        start, base = r + 1, int(cum[r])
-    blocks.append((start, int(rows[-1]) + 1))
-    return blocks
+        out[k, 0] = start
+        out[k, 1] = r + 1
+        k += 1
+        start, base = r + 1, cum[r]
+    out[k, 0] = start
+    out[k, 1] = last + 1
+    return out[:k + 1]
 
 
 def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
@@ -564,6 +594,7 @@ def _summary_sums(swept, state, x0, dx, y0, dy):
 
 
 if HAVE_NUMBA:
+    _block_rows = numba.njit(cache=True)(_block_rows)
     _counts_and_max = numba.njit(cache=True)(_counts_and_max)
     _summary_sums = numba.njit(cache=True)(_summary_sums)
 
