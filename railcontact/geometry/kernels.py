@@ -204,27 +204,19 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
 
 
 @numba.njit(cache=True)
-def tangent_frame(eta, u, z, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
-                  gamma, eta_c, kw, s, out):
-    """Both profiles in the tangent plane through the rail point ``(u_c, z_c)`` inclined
-    at ``gamma``, written to ``out`` (5, len(s)): the
-    wheel's distance above the rail normal to the plane f(s) (NaN where a profile ends),
-    A(s) = cos(beta) / (2 r), the wheel profile coordinate S (NaN where the wheel ends)
-    and the rail point (u, Z) (the rail's samples ``ur`` increase). The wheel's
-    S = eta - half_bb + flange_back, its radius ``radius`` plus the spline (``wx``,
-    ``wc``) at S and its slope tan(beta) the spline's derivative there
-    (``cos(atan(t)) = 1 / sqrt(1 + t^2)``). ``kw``: the wheel's trace sample nearest
-    ``u_c`` (:func:`nearest`), where its branch is taken."""
-    frame_samples(eta, u, z, 0.0, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
-                  z_c, gamma, eta_c, kw, nearest_sorted(ur, u_c), s, 0, s.size, out)
-
-
-@numba.njit(cache=True)
 def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
                   z_c, gamma, eta_c, kw, kr, s, i0, i1, out):
-    """:func:`tangent_frame` of the wheel trace lowered to ``(z - za) - zb`` at the
-    samples ``s[i0:i1]`` only (``out[:, i0:i1]``; the same values as over all of ``s``);
-    ``kr``: the rail sample nearest ``u_c`` (:func:`nearest_sorted`)."""
+    """Both profiles in the tangent plane through the rail point ``(u_c, z_c)`` inclined
+    at ``gamma``, the wheel trace lowered to ``(z - za) - zb``, at the samples
+    ``s[i0:i1]`` only, written to ``out[:, i0:i1]`` (5, len(s)) (the same values as over
+    all of ``s``): the wheel's distance above the rail normal to the plane f(s) (NaN where
+    a profile ends), A(s) = cos(beta) / (2 r), the wheel profile coordinate S (NaN where
+    the wheel ends) and the rail point (u, Z) (the rail's samples ``ur`` increase). The
+    wheel's S = eta - half_bb + flange_back, its radius ``radius`` plus the spline
+    (``wx``, ``wc``) at S and its slope tan(beta) the spline's derivative there
+    (``cos(atan(t)) = 1 / sqrt(1 + t^2)``). ``kw``: the wheel's trace sample nearest
+    ``u_c`` (:func:`nearest`), where its branch is taken; ``kr``: the rail sample nearest
+    ``u_c`` (:func:`nearest_sorted`)."""
     if i1 <= i0:
         return
     cg, sg = math.cos(gamma), math.sin(gamma)
@@ -303,31 +295,10 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
 
 
 @numba.njit(cache=True)
-def intervals(g, g_min, k, approach):
-    """Index ranges [a, b) (rows of an (m, 2) array) of the connected runs where the gap
-    above first contact ``g - g_min`` is at most ``approach``; the least gap's sample
-    ``k`` is always in one."""
-    n = g.size
-    lim = max(approach, 0.0)
-    out = np.empty((n // 2 + 1, 2), dtype=np.int64)
-    m = 0
-    i = 0
-    while i < n:
-        if g[i] - g_min <= lim or i == k:
-            a = i
-            while i < n and (g[i] - g_min <= lim or i == k):
-                i += 1
-            out[m, 0] = a
-            out[m, 1] = i
-            m += 1
-        else:
-            i += 1
-    return out[:m]
-
-
-@numba.njit(cache=True)
 def count_runs(g, g_min, k, approach):
-    """How many index ranges :func:`intervals` gives (without forming them)."""
+    """How many connected runs of samples the gap above first contact ``g - g_min`` is
+    at most ``approach`` [m] on (the least gap's sample ``k`` always in one): the runs of
+    :func:`rigid_points`, counted without forming them."""
     n = g.size
     lim = max(approach, 0.0)
     m = 0
@@ -373,8 +344,10 @@ def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
 
 @numba.njit(cache=True)
 def rigid_points(tr, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
-    """:func:`rigid_point` of each run of :func:`intervals` of the trace ``tr`` (5, n),
-    one row each (m, 8) (the runs found by a scan, not formed)."""
+    """:func:`rigid_point` of each run of the trace ``tr`` (5, n) (the index ranges
+    ``a:b`` of the connected runs where the gap above first contact ``g - g_min`` is at
+    most ``approach`` [m], the least gap's sample ``k`` always in one; :func:`count_runs`
+    of them), one row each (m, 8) (the runs found by a scan, not formed)."""
     eta, x, u, g = tr[0], tr[1], tr[2], tr[4]
     n = g.size
     lim = max(approach, 0.0)
@@ -398,10 +371,10 @@ def rigid_points(tr, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
 @numba.njit(cache=True)
 def rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
                 gamma, eta_c, s, k0, out):
-    """The tangent frame of a rigid contact point (:func:`rigid_point`): :func:`tangent_frame`
-    of the wheel lowered into first contact (``z - g_min``), ``f`` shifted to 0 at its
-    least value within 1 mm of the point (where ``f`` is finite at ``s[k0]`` = 0), NaN
-    made infinite."""
+    """The tangent frame of a rigid contact point (:func:`rigid_point`):
+    :func:`frame_samples` over all of ``s`` of the wheel lowered into first contact
+    (``z - g_min``), ``f`` shifted to 0 at its least value within 1 mm of the point
+    (where ``f`` is finite at ``s[k0]`` = 0), NaN made infinite."""
     frame_samples(eta, u, z, g_min, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back,
                   u_c, z_c, gamma, eta_c, nearest(u, u_c), nearest_sorted(ur, u_c), s, 0,
                   s.size, out)
