@@ -166,6 +166,25 @@ class ContactPoint:
         return margin * a, margin * b
 
 
+def overlap_on_rail(cp: ContactPoint, penetration: float) -> tuple[float, float] | None:
+    """The lateral positions on the rail [m] (side frame, as :attr:`ContactPoint.rail_u`)
+    spanned by the lateral samples of ``cp`` where its gap ``f`` is below the normal
+    ``penetration`` [m] (the rigid overlap there), or None without any; of a frame at the
+    reference point not yet read in full (:func:`at_reference`), over the part it formed
+    (the patch's overlap and a margin), without forming the others."""
+    d = cp.__dict__
+    part = d.get("_part")
+    if part is None or "f" in d:
+        f, u = cp.f, cp.rail_u_of_s
+    else:
+        frame, i0, i1, _ = part
+        f, u = frame[kernels.F, i0:i1], frame[kernels.RAIL_U, i0:i1]
+    inside = (f < penetration) & np.isfinite(u)
+    if not inside.any():
+        return None
+    return float(u[inside].min()), float(u[inside].max())
+
+
 _FIELDS = frozenset(f.name for f in fields(ContactPoint))
 
 

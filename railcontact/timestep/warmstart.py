@@ -32,6 +32,7 @@ from functools import cached_property
 import numba
 import numpy as np
 
+from ..geometry.search import ContactPoint, overlap_on_rail
 from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
 from ..halfspace.sums import array_sum
 
@@ -124,6 +125,23 @@ def match(memories: list[PatchMemory], u: float, z: float) -> PatchMemory | None
         if d <= dist:
             best, dist = m, d
     return best
+
+
+def merged(cp: ContactPoint, memory: PatchMemory, memories: list[PatchMemory],
+           penetration: float) -> bool:
+    """Whether the patch of ``cp``, matched to ``memory``, took in another remembered
+    patch: the contact point of one of the other ``memories`` lies in the patch's rigid
+    overlap at the normal ``penetration`` [m]
+    (:func:`~railcontact.geometry.search.overlap_on_rail`).
+    Two patches that merge into one: the potential area of the one remembered is not the
+    merged patch's (without this, its other lobe was left out, its load lost, in that step
+    and every later one). Without other memories (a wheel with one patch) nothing is
+    formed."""
+    others = [o for o in memories if o is not memory]
+    if not others:
+        return False
+    span = overlap_on_rail(cp, penetration)
+    return span is not None and any(span[0] <= o.u <= span[1] for o in others)
 
 
 def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None

@@ -90,6 +90,7 @@ from .validity import check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
     match,
+    merged,
     previous_bounds,
     previous_pressure,
     previous_tangential,
@@ -557,7 +558,12 @@ class WheelsetContact:
             def of(grid):
                 p = previous_pressure(m, grid, time)
                 return p if array_sum(p) > 0 else estimate()(grid)
-            of.bounds = previous_bounds(m)  # the potential area: where the contact was
+            # the potential area: where the contact was - unless the patch's rigid overlap
+            # took in another remembered patch (two patches merged): then the rigid
+            # overlap's, as from cold (the other's area lies outside this one's, and the
+            # contact inside would not reach its edge)
+            of.bounds = (None if merged(cp, m, source, hz.penetration)
+                         else previous_bounds(m))
             return labelled(of, "previous")
 
         # the frame at the reference point formed first at the approach of the step (or
