@@ -595,9 +595,13 @@ class WheelsetContact:
             t = patch.tangential
             older = match(previous, cp.rail_u, cp.position[2])
             older = None if older is None else _without_older(older)
-            # the traction's rate smoothed over the steps (SteadyGS's extrapolation only)
-            rate = (traction_rate(t.traction, patch.normal.grid, time, older)
-                    if t is not None and settings.tangential_solver != "convexgs" else None)
+            # the traction's rate smoothed over the steps (SteadyGS's extrapolation only;
+            # its time is the patch's work, as the start it serves)
+            rate = None
+            if t is not None and settings.tangential_solver != "convexgs":
+                t1 = perf_counter()
+                rate = traction_rate(t.traction, patch.normal.grid, time, older)
+                patch.work.seconds += perf_counter() - t1
             memory.append(PatchMemory(
                 grid=patch.normal.grid, pressure=patch.normal.pressure,
                 traction=None if t is None else t.traction,
