@@ -593,15 +593,15 @@ class WheelsetContact:
                 solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
                                        creepage=side_creep, previous=prev)
             t = patch.tangential
-            older = match(previous, cp.rail_u, cp.position[2])
-            older = None if older is None else _without_older(older)
+            last = match(previous, cp.rail_u, cp.position[2])
             # the traction's rate smoothed over the steps (SteadyGS's extrapolation only;
             # its time is the patch's work, as the start it serves)
             rate = None
             if t is not None and settings.tangential_solver != "convexgs":
                 t1 = perf_counter()
-                rate = traction_rate(t.traction, patch.normal.grid, time, older)
+                rate = traction_rate(t.traction, patch.normal.grid, time, last)
                 patch.work.seconds += perf_counter() - t1
+            older = None if last is None else _without_older(last)
             memory.append(PatchMemory(
                 grid=patch.normal.grid, pressure=patch.normal.pressure,
                 traction=None if t is None else t.traction,
@@ -659,12 +659,16 @@ def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]
 
 
 def _without_older(m: PatchMemory) -> PatchMemory:
-    """``dataclasses.replace(m, older=None)`` as a copy of its fields (a per-pass path:
-    ``replace`` reads and passes every field; the fields are the memory's own, checked
-    when it was made)."""
+    """``dataclasses.replace(m, older=None, traction_rate=None)`` as a copy of its fields
+    (a per-pass path: ``replace`` reads and passes every field; the fields are the
+    memory's own, checked when it was made): what a newer step keeps of it - its traction
+    and time for the extrapolation, not its own older step or traction rate, which the
+    newer step's rate has taken in (the memory, and an FMU's saved state, stay two steps
+    deep)."""
     out = object.__new__(type(m))
     out.__dict__.update(m.__dict__)
     out.__dict__["older"] = None
+    out.__dict__["traction_rate"] = None
     return out
 
 
