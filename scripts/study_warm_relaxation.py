@@ -89,11 +89,12 @@ def sweeps(problem: dict, schedule: list[tuple[float, float]], count: int) -> li
                                problem["state"], EPS_TAU, count, 0.65, 0.9, "auto",
                                problem["spin_offset"])
     kern, cum = _steady_kernels(operator), _run_coefficients(operator)
+    product = operator.bound()
     rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     out, measure = [], []
     for k in range(count):
         oh, os_ = schedule[min(k, len(schedule) - 1)]
-        dif = _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.p,
+        dif = _sweep_blocked(kern, cum, product, prob.wx, prob.wy, prob.g, prob.p,
                              prob.state, prob.lo, prob.hi, rows, oh, os_)  # squared change
         measure.append(math.sqrt(dif) / math.sqrt(float(np.sum(prob.px ** 2 + prob.py ** 2))))
         out.append(np.stack([prob.px.T, prob.py.T]))

@@ -205,5 +205,11 @@ def test_bound_products_are_the_operator_and_its_preconditioner(backend):
         assert np.max(np.abs(out - ref)) <= 1e-13 * np.max(np.abs(ref))
         r = rng.normal(size=g.shape) * 1e-6
         assert np.array_equal(inverse(r, out), apply_inverse(r))
+    two = InfluenceOperator(g, STEEL, "xy", backend)  # two components, strided input
+    dense2 = InfluenceOperator(g, STEEL, "xy", "dense").dense()
+    product2 = two.bound()
+    q = rng.uniform(-1e8, 1e8, (2, g.ny, g.nx)).transpose(0, 2, 1)
+    ref2 = (dense2 @ np.ascontiguousarray(q).ravel()).reshape(2, *g.shape)
+    assert np.max(np.abs(product2(q, None) - ref2)) <= 1e-13 * np.max(np.abs(ref2))
     with pytest.raises(RailContactError, match="one-component"):
         InfluenceOperator(g, STEEL, "xy", backend).bound(1e-2)

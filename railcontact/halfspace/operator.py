@@ -428,9 +428,11 @@ class InfluenceOperator:
             return self.apply
         else:
             spectra = self._spectra
-        if self.backend != "pyfftw" or len(self.components) != 1:
+        if self.backend != "pyfftw":
             return partial(self._convolve, spectra)
-        return partial(_fftw_plan(1, self._padded, self.nx).convolve, spectra[0, 0])
+        nc = len(self.components)
+        return partial(_fftw_plan(nc, self._padded, self.nx).convolve,
+                       spectra[0, 0] if nc == 1 else spectra)
 
     def preconditioner(self, floor: float = PRECONDITIONER_FLOOR
                        ) -> Callable[[np.ndarray], np.ndarray]:

@@ -366,18 +366,20 @@ def _add_product(ux, uy, bx, by, u, r0):
 _add_product_c = numba.njit(cache=True)(_add_product) if HAVE_NUMBA else _add_product
 
 
-def _sweep_blocked(kern, cum, op, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,
+def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,
                    measure=1.0):
     """One SteadyGS sweep of the traction ``p`` (2, ny, nx) (the sweep layout), row block
     by row block (on the wheelset step's windows one block); between blocks the shift of
     the rows still to come is brought up to date with one DC-FFT product of the block's
     changes (as ConvexGS's sweep). The products read ``p`` and the changes through
     (2, nx, ny) views, with no stacked copy. Returns the squared norm of the sweep's
-    traction change [Pa^2]."""
+    traction change [Pa^2]. ``product(x, None)`` is the steady-rolling operator's product
+    of a (2, nx, ny) traction (:meth:`~railcontact.halfspace.operator.InfluenceOperator.bound`,
+    formed once per solve)."""
     px, py = p[0], p[1]
     ux = np.empty_like(g)
     uy = np.empty_like(g)
-    _add_product_c(ux, uy, wx, wy, op.apply(p.transpose(0, 2, 1)), 0)
+    _add_product_c(ux, uy, wx, wy, product(p.transpose(0, 2, 1), None), 0)
     dp = np.zeros_like(p)
     dpx, dpy = dp[0], dp[1]
     dif = 0.0
@@ -385,7 +387,7 @@ def _sweep_blocked(kern, cum, op, wx, wy, g, p, state, lo, hi, rows, omega_h, om
         dif += _steady_block_numba(*kern, cum, ux, uy, g, px, py, dpx, dpy, state, lo, hi,
                                    r0, r1, omega_h, omega_s, measure)
         if b + 1 < len(rows):
-            _add_product_c(ux, uy, ux, uy, op.apply(dp.transpose(0, 2, 1)), r1)
+            _add_product_c(ux, uy, ux, uy, product(dp.transpose(0, 2, 1), None), r1)
             dp[:, r0:r1] = 0.0
     return dif
 
@@ -507,10 +509,11 @@ def solve_steadygs(
     oh, os_ = float(omega_h), float(omega_s)
     if prob.use_numba:
         kern = _steady_kernels(operator)
+        product = operator.bound()  # the FFT plan fetched once for all the sweeps
 
     def sweep() -> float:
         if prob.use_numba:  # the blocks measure their changes, the shifted runs included
-            return _sweep_blocked(kern, cum, operator, prob.wx, prob.wy, prob.g, prob.p,
+            return _sweep_blocked(kern, cum, product, prob.wx, prob.wy, prob.g, prob.p,
                                   prob.state, prob.lo, prob.hi, rows, oh, os_, prob.measure)
         qx, qy = px.copy(), py.copy()  # the runs move many elements: measure the whole field
         _sweep_numpy(_gs_kernels(operator), cum, prob.wx, prob.wy, prob.g, px, py, prob.state,
