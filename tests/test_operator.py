@@ -213,3 +213,32 @@ def test_bound_products_are_the_operator_and_its_preconditioner(backend):
     assert np.max(np.abs(product2(q, None) - ref2)) <= 1e-13 * np.max(np.abs(ref2))
     with pytest.raises(RailContactError, match="one-component"):
         InfluenceOperator(g, STEEL, "xy", backend).bound(1e-2)
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
+@pytest.mark.parametrize("shape", [(1, 5), (7, 6), (12, 9), (13, 16), (20, 33)])
+def test_products_of_kernels_without_symmetry_equal_dense(shape):
+    """The FFTW products (complex-packed: ``p_x + i p_y``, or one component's rows in
+    pairs, which pair each wave number with its negative) for kernels that are neither
+    even nor reciprocal (random, and the steady-rolling difference kernels): the dense
+    product of the same kernels, for even and odd row counts and padded sizes (7 rows pad
+    to 15, the one-component pruned plan)."""
+    from railcontact.tangential.rolling import steady_rolling_kernels
+
+    nx, ny = shape
+    g = Grid.from_bounds(-2e-3, 2e-3, -3e-3, 3e-3, nx, ny)
+    rng = np.random.default_rng(nx * 31 + ny)
+    rolling = steady_rolling_kernels(nx, ny, g.dx, g.dy, STEEL)
+    for k in (rng.normal(size=(1, 1, 2 * nx - 1, 2 * ny - 1)),
+              rng.normal(size=(2, 2, 2 * nx - 1, 2 * ny - 1)), rolling):
+        comps = "xy"[:k.shape[0]] if k.shape[0] == 2 else "z"
+        p = rng.uniform(-1e9, 1e9, (k.shape[0], nx, ny))
+        fast = InfluenceOperator(g, STEEL, comps, "pyfftw", kernels=k)
+        ref = InfluenceOperator(g, STEEL, comps, "dense", kernels=k).apply(p)
+        scale = np.max(np.abs(ref))
+        assert np.max(np.abs(fast.apply(p) - ref)) <= 1e-13 * scale
+        out = np.empty(p.shape if k.shape[0] == 2 else p.shape[1:])
+        product = fast.bound()
+        for _ in range(2):  # the bound product, repeated (its buffers reused)
+            assert product(p if k.shape[0] == 2 else p[0], out) is out
+            assert np.max(np.abs(out - (ref if k.shape[0] == 2 else ref[0]))) <= 1e-13 * scale
