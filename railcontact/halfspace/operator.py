@@ -113,9 +113,10 @@ class _PrunedPlan:
     only the ``nx`` rows that hold the traction are transformed along y (the rest are
     zero), and of the product only those ``nx`` rows are transformed back along y; the
     transforms along x run over all rows. About 3/4 of the work of the full 2-D
-    transforms, the same result to round-off. One component has 2-D buffers (the plans
-    of the normal problem, as measured in a wisdom file), several a leading component
-    axis; their spectral 2x2 (nc x nc) multiply-add is one compiled pass."""
+    transforms, the same result to round-off. One component has 2-D buffers, several a
+    leading component axis; their spectral 2x2 (nc x nc) multiply-add is one compiled
+    pass. Used where :class:`_PackedPlan` is not (:func:`_packs`): one component on an
+    odd padded row count, three components, or without numba."""
 
     def __init__(self, nx: int, shape: tuple[int, int], measure: bool = False,
                  nc: int = 1):
@@ -407,8 +408,9 @@ def _plan(a: np.ndarray, b: np.ndarray, direction: str, axes: tuple[int, ...] = 
 def save_wisdom(path: str | os.PathLike, max_elements: int = 100, components: Sequence[int]
                 = (1, 2)) -> int:
     """Measure the FFTW plans of every padded shape of grids up to ``max_elements`` per
-    axis (the 5-smooth sizes: the pruned plans of every row count, for 1- and 2-component
-    operators) and write FFTW's wisdom to ``path``; returns the number of plans. Here 64
+    axis (the 5-smooth sizes: the products' plans of every row count, :func:`_new_plan`,
+    for 1- and 2-component operators) and write FFTW's wisdom to ``path``; returns the
+    number of plans. Here 64
     per axis (1,922 shapes) took about 9 minutes with the full 2-D plans of both
     component counts and the pruned one-component ones (those added about a third: 16 s
     against 12 s at 12 per axis; since round 4 every product is pruned and only the
