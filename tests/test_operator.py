@@ -242,3 +242,19 @@ def test_products_of_kernels_without_symmetry_equal_dense(shape):
         for _ in range(2):  # the bound product, repeated (its buffers reused)
             assert product(p if k.shape[0] == 2 else p[0], out) is out
             assert np.max(np.abs(out - (ref if k.shape[0] == 2 else ref[0]))) <= 1e-13 * scale
+
+
+def test_import_leaves_out_pyfftws_dask_interface():
+    """``import railcontact`` does not import dask.array through pyfftw's interfaces (about
+    a second at every FMU instance's start); pyfftw's dask interface still imports after."""
+    import subprocess
+    import sys
+
+    code = ("import sys, railcontact.halfspace.operator as op\n"
+            "assert op.HAVE_PYFFTW == (op.pyfftw is not None)\n"
+            "print('dask.array' in sys.modules, 'dask.array.fft' in sys.modules)\n"
+            "import pyfftw.interfaces.dask_fft\n"
+            "print(sys.modules['dask.array.fft'] is not None)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "False", "True"]

@@ -45,6 +45,7 @@ Backends
 from __future__ import annotations
 
 import os
+import sys
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
@@ -58,13 +59,35 @@ from .grid import Grid
 from .influence import influence_kernel
 from .materials import ElasticPair
 
-try:  # pragma: no cover - exercised through the backend tests
-    import pyfftw
 
-    HAVE_PYFFTW = True
-except ImportError:  # pragma: no cover
-    pyfftw = None
-    HAVE_PYFFTW = False
+def _import_pyfftw():
+    """pyfftw, imported without its dask interface (None when pyfftw is missing).
+
+    pyfftw's package imports ``pyfftw.interfaces``, which imports ``dask.array.fft``
+    whenever dask is installed (the ``table`` extra installs it): about a second of
+    dask.array and its dependencies at every import of railcontact - every FMU instance's
+    start, every ``railcontact solve`` - for an interface railcontact does not use (it
+    plans ``pyfftw.FFTW`` objects alone). While pyfftw is imported, ``dask.array.fft`` is
+    marked missing (``sys.modules[name] = None`` makes its import raise ImportError), so
+    pyfftw leaves out ``pyfftw.interfaces.dask_fft`` as it does without dask; a process
+    that imported dask.array before is left as it is, and ``import
+    pyfftw.interfaces.dask_fft`` works afterwards as usual."""
+    name = "dask.array.fft"
+    blocked = name not in sys.modules
+    if blocked:
+        sys.modules[name] = None  # type: ignore[assignment]
+    try:
+        import pyfftw as module
+    except ImportError:  # pragma: no cover
+        return None
+    finally:
+        if blocked and sys.modules.get(name, 0) is None:
+            del sys.modules[name]
+    return module
+
+
+pyfftw = _import_pyfftw()
+HAVE_PYFFTW = pyfftw is not None
 
 try:
     import numba
