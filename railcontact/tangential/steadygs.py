@@ -75,6 +75,7 @@ from .convexgs import (
     HAVE_NUMBA,
     NOT_HUGE,
     NOT_TINY,
+    Embedding,
     SweepProblem,
     TangentialResult,
     _blocks_of,
@@ -377,10 +378,10 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     of a (2, nx, ny) traction (:meth:`~railcontact.halfspace.operator.InfluenceOperator.bound`,
     formed once per solve)."""
     px, py = p[0], p[1]
-    ux = np.empty_like(g)
-    uy = np.empty_like(g)
+    ux = np.empty(g.shape)  # (np.empty, np.zeros: the *_like forms cost a microsecond)
+    uy = np.empty(g.shape)
     _add_product_c(ux, uy, wx, wy, product(p.transpose(0, 2, 1), None), 0)
-    dp = np.zeros_like(p)
+    dp = np.zeros(p.shape)
     dpx, dpy = dp[0], dp[1]
     dif = 0.0
     for b, (r0, r1) in enumerate(rows):
@@ -463,6 +464,7 @@ def solve_steadygs(
     omega_s: float = 0.9,
     engine: str = "auto",
     spin_offset: float = 1.0 / 6.0,
+    embed: Embedding | None = None,
 ) -> TangentialResult:
     """Solve steady rolling with Coulomb friction by SteadyGS.
 
@@ -498,6 +500,9 @@ def solve_steadygs(
     spin_offset
         Where in the rolling step the spin part of the rigid slip is taken, as a fraction
         of dx (see :func:`railcontact.tangential.rigid_slip`).
+    embed
+        ``(whole, (sx, sy))``: the result on the larger grid ``whole`` of which ``grid``
+        is the window ``sx``, ``sy`` (see :func:`railcontact.tangential.solve_tangential`).
     """
     t0 = time.perf_counter()
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
@@ -521,4 +526,4 @@ def solve_steadygs(
         m = prob.measure
         return float(np.sum(((px - qx) * m) ** 2 + ((py - qy) * m) ** 2))
 
-    return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0)
+    return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0, embed)
