@@ -321,15 +321,16 @@ def test_row_blocks_of_any_size_give_the_same_iterates(sphere, monkeypatch):
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 def test_rows_of_any_length_give_the_numpy_sweeps_iterates():
-    """The compiled block adds the changes of a block's earlier rows to 16, 24 or 32
-    targets of a row at a time (the row's last chunk the smallest that holds it): on a
+    """The compiled block adds the changes of a block's earlier rows to 16, 20, 24, 28 or
+    32 targets of a row at a time (the row's last chunk the smallest that holds it): on a
     circle whose rows hold from a few to 37 contact elements (every chunk size, and rows
     longer than one chunk) it takes the plain numpy sweep's sweeps to its traction."""
     hz, g, nr = hertz_patch(1.0, 41)
     per_row = (nr.pressure > 0).sum(axis=0)
     lengths = per_row[per_row > 0]
     assert lengths.max() > 32 and lengths.min() <= 16
-    assert ((lengths > 16) & (lengths <= 24)).any() and ((lengths > 24) & (lengths <= 32)).any()
+    for short, long in ((16, 20), (20, 24), (24, 28), (28, 32)):  # each chunk size
+        assert ((lengths > short) & (lengths <= long)).any()
     op = rolling_operator(g, STEEL)
     args = (g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2))
     a = solve_steadygs(*args, tolerance=1e-6, engine="numba")

@@ -333,16 +333,22 @@ def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset, p0, st0, start):
     the initial traction ``p`` (2, ny, nx): with ``start`` the start ``p0`` (2, nx, ny)
     clipped to the bound (:func:`_clip_start`, with the states ``st0``; ``start_ok``
     False when a value of it is not finite), else zero. One compiled call (numba) in
-    place of a few dozen array operations."""
+    place of a few dozen array operations; the float fields are returned as one array
+    (5, ny, nx) (``g``, ``wx``, ``wy``, ``p``), ``lo``, ``hi`` and the counts as one
+    (3, ny): each array a compiled function returns costs about 0.4 µs to box."""
     nx, ny = pn.shape
-    g = np.empty((ny, nx))
+    fields = np.empty((5, ny, nx))
+    g = fields[0]
+    wx = fields[1]
+    wy = fields[2]
+    traction = fields[3:]
+    rows = np.zeros((3, ny), dtype=np.int64)
+    lo = rows[0]
+    hi = rows[1]
+    count = rows[2]
+    lo[:] = 1
     state = np.zeros((ny, nx), dtype=np.int8)
     contact = np.zeros((ny, nx), dtype=np.bool_)
-    lo = np.ones(ny, dtype=np.int64)
-    hi = np.zeros(ny, dtype=np.int64)
-    count = np.zeros(ny, dtype=np.int64)
-    wx = np.empty((ny, nx))
-    wy = np.empty((ny, nx))
     shift = offset * dx
     ly = np.empty(nx)
     for ix in range(nx):  # rigid_slip_lines' W_y(x) and W_x(y)
@@ -372,9 +378,12 @@ def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset, p0, st0, start):
     total = 0
     for iy in range(ny):
         total += count[iy]
-    p = np.empty((2, ny, nx)) if start else np.zeros((2, ny, nx))
-    start_ok = _clip_start(p0, st0, g, p) if start else True
-    return g, state, contact, lo, hi, count, ok, wx, wy, gmax, total, p, start_ok
+    start_ok = True
+    if start:
+        start_ok = _clip_start(p0, st0, g, traction)
+    else:
+        traction[:] = 0.0
+    return fields, rows, state, contact, ok, gmax, total, start_ok
 
 
 SURELY_BELOW = 1.0 - 1e-12
@@ -548,7 +557,8 @@ def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
     """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
     swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
     if swept.flags.c_contiguous and state.flags.c_contiguous:
-        return _summary(grid, swept, state)
+        return _summarised(grid, *_summary_sums(swept, state, grid.x0, grid.dx, grid.y0,
+                                                grid.dy))
     else:  # the same sums by numpy (any layout)
         x, y = grid.x[:, None], grid.y[None, :]
         sx, sy = traction[0].sum(), traction[1].sum()
@@ -557,15 +567,9 @@ def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
     return _summarised(grid, sx, sy, sm, ncon, nslip, pmax)
 
 
-def _summary(grid: Grid, swept: np.ndarray, state: np.ndarray
-             ) -> tuple[tuple[float, float], float, float, float]:
-    """:func:`tangential_summary` of the traction ``swept`` (2, ny, nx), C-contiguous
-    (the sweep layout), with the states (nx, ny) (any layout)."""
-    sums = _summary_sums(swept, state, grid.x0, grid.dx, grid.y0, grid.dy)
-    return _summarised(grid, *sums)
-
-
-def _summarised(grid, sx, sy, sm, ncon, nslip, pmax):
+def _summarised(grid: Grid, sx, sy, sm, ncon, nslip, pmax
+                ) -> tuple[tuple[float, float], float, float, float]:
+    """:func:`tangential_summary`'s values from :func:`_summary_sums`' sums."""
     da = grid.element_area
     ratio = float(nslip / ncon) if ncon else 0.0
     return (float(sx * da), float(sy * da)), float(sm * da), ratio, float(pmax)
@@ -625,11 +629,12 @@ def _summary_sums(swept, state, x0, dx, y0, dy):
     return (numpy_sum(swept[0]), numpy_sum(swept[1]), numpy_sum(arm), ncon, nslip, pmax)
 
 
-def _embedded_fields(swept, state, nx, ny, i0, j0):
+def _embedded_fields(swept, state, nx, ny, i0, j0, x0, dx, y0, dy):
     """The traction ``swept`` (2, ny', nx') [Pa] and states ``state`` (ny', nx') of a
     solve in the sweep layout as fields (2, nx, ny) and (nx, ny) (int8) of a larger grid
-    whose elements ``i0 + ix``, ``j0 + iy`` they are, zero elsewhere: what
-    ``np.zeros`` and a slice assignment of the solver's fields give, in one pass."""
+    whose elements ``i0 + ix``, ``j0 + iy`` they are, zero elsewhere (what ``np.zeros``
+    and a slice assignment of the solver's fields give), and :func:`_summary_sums` of
+    the solve's own fields on its grid ``(x0, dx, y0, dy)``: one compiled call."""
     wy, wx = state.shape
     traction = np.zeros((2, nx, ny))
     st = np.zeros((nx, ny), dtype=np.int8)
@@ -638,7 +643,7 @@ def _embedded_fields(swept, state, nx, ny, i0, j0):
             traction[0, i0 + ix, j0 + iy] = swept[0, iy, ix]
             traction[1, i0 + ix, j0 + iy] = swept[1, iy, ix]
             st[i0 + ix, j0 + iy] = state[iy, ix]
-    return traction, st
+    return (traction, st) + _summary_sums(swept, state.T, x0, dx, y0, dy)
 
 
 if HAVE_NUMBA:
@@ -711,9 +716,10 @@ class SweepProblem:
             p0, st0, start_error = _start_arrays(initial_traction, initial_state, shape)
         start = initial_traction is not None and rolling and start_error is None
         if pn.shape == shape:
-            (g, state, contact, lo, hi, count, ok, wx, wy, gmax, ncon, p,
-             start_ok) = _bound_layout(pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta,
-                                       phi, spin_offset, p0, st0, start)
+            fields, (lo, hi, count), state, contact, ok, gmax, ncon, start_ok = _bound_layout(
+                pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset, p0,
+                st0, start)
+            g, wx, wy, p = fields[0], fields[1], fields[2], fields[3:]
         if pn.shape != shape or not ok:
             raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
         tolerance = check_positive("tolerance", tolerance)
@@ -790,9 +796,10 @@ class SweepProblem:
             slip = self._slip
         else:  # the fields on the larger grid; the sums over the problem's, as above
             big, (sx, sy) = embed
-            traction, st = _embedded_fields(self.p, self.state, big.nx, big.ny, sx.start,
-                                            sy.start)
-            force, mz, ratio, pmax = _summary(grid, self.p, self.state.T)
+            traction, st, *sums = _embedded_fields(self.p, self.state, big.nx, big.ny,
+                                                   sx.start, sy.start, grid.x0, grid.dx,
+                                                   grid.y0, grid.dy)
+            force, mz, ratio, pmax = _summarised(grid, *sums)
             slip = _embedded_slip(self._slip, big.shape, sx, sy)
             grid = big
         tol = self.tolerance
