@@ -388,10 +388,9 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     of a (2, nx, ny) traction (:meth:`~railcontact.halfspace.operator.InfluenceOperator.bound`,
     formed once per solve)."""
     px, py = p[0], p[1]
-    ux = np.empty(g.shape)  # (np.empty, np.zeros: the *_like forms cost a microsecond)
-    uy = np.empty(g.shape)
+    work = np.zeros((4, *g.shape))  # the shift and the changes: one allocation
+    ux, uy, dp = work[0], work[1], work[2:]
     _add_product_c(ux, uy, wx, wy, product(p.transpose(0, 2, 1), None), 0)
-    dp = np.zeros(p.shape)
     dpx, dpy = dp[0], dp[1]
     dif = 0.0
     for b, (r0, r1) in enumerate(rows):
