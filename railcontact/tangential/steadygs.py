@@ -201,9 +201,9 @@ else:  # pragma: no cover
 LANES = (16, 20, 24, 28, 32)
 """Target elements whose cross-row sums :func:`_cross_rows_of` forms at once: a row's
 targets are taken in chunks of 32, the last of them in the smallest of these that holds
-what is left (their sums held in four to eight vector registers of eight, or of four for
-20 and 28: on the step's warm blocks 7 % fewer target lanes than with 16/24/32 alone,
-2.5 of 80 µs a block, the same bits)."""
+what is left (their sums held in vector registers, of four lanes for the last four of 20
+and 28). 20 and 28 (round 7): on the step's warm blocks 7 % fewer target lanes than with
+16/24/32 alone, 80.0 -> 77.5 µs a block, the same bits."""
 
 
 def _cross_rows_of(lanes: int):
