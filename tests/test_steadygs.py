@@ -321,15 +321,16 @@ def test_row_blocks_of_any_size_give_the_same_iterates(sphere, monkeypatch):
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
 def test_rows_of_any_length_give_the_numpy_sweeps_iterates():
-    """The compiled block adds the changes of a block's earlier rows to 16, 24 or 32
-    targets of a row at a time (the row's last chunk the smallest that holds it): on a
+    """The compiled block adds the changes of a block's earlier rows to 16, 20, 24, 28 or
+    32 targets of a row at a time (the row's last chunk the smallest that holds it): on a
     circle whose rows hold from a few to 37 contact elements (every chunk size, and rows
     longer than one chunk) it takes the plain numpy sweep's sweeps to its traction."""
     hz, g, nr = hertz_patch(1.0, 41)
     per_row = (nr.pressure > 0).sum(axis=0)
     lengths = per_row[per_row > 0]
     assert lengths.max() > 32 and lengths.min() <= 16
-    assert ((lengths > 16) & (lengths <= 24)).any() and ((lengths > 24) & (lengths <= 32)).any()
+    for short, long in ((16, 20), (20, 24), (24, 28), (28, 32)):  # each chunk size
+        assert ((lengths > short) & (lengths <= long)).any()
     op = rolling_operator(g, STEEL)
     args = (g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2))
     a = solve_steadygs(*args, tolerance=1e-6, engine="numba")
@@ -369,3 +370,34 @@ def test_row_blocks_hold_their_share_of_the_contact():
             assert int(per_row[:stop].sum()) - base >= target
             assert stop - 1 == start or int(per_row[:stop - 1].sum()) - base < target
             base = int(per_row[:stop].sum())
+
+
+@pytest.mark.parametrize("solver", [solve_steadygs, solve_tangential])
+def test_embed_gives_the_whole_grid_answer(solver):
+    """``embed=(grid, window)``: a solve on the contact's window, returned on the whole
+    grid, is the whole grid's solve (the problem lives on the contact elements alone):
+    the same sweeps, traction, states, forces and slip, all zero outside the window."""
+    from railcontact.contact.patch import contact_window
+
+    hz, g, nr = hertz_patch(1.0, 33, margin=2.0)
+    sx, sy = contact_window(nr.contact)
+    assert sx.stop - sx.start < g.nx and sy.stop - sy.start < g.ny
+    w = Grid(sx.stop - sx.start, sy.stop - sy.start, g.dx, g.dy, g.x0 + sx.start * g.dx,
+             g.y0 + sy.start * g.dy)
+    args = (0.3, (1e-4, -5e-5, 0.2))
+    whole = solver(g, rolling_operator(g, STEEL), nr.pressure, *args, tolerance=1e-6)
+    part = solver(w, rolling_operator(w, STEEL), nr.pressure[sx, sy], *args, tolerance=1e-6,
+                  embed=(g, (sx, sy)))
+    assert part.grid is g and part.converged and part.iterations == whole.iterations
+    np.testing.assert_allclose(part.traction, whole.traction, rtol=0,
+                               atol=1e-9 * whole.max_traction)
+    np.testing.assert_array_equal(part.state, whole.state)
+    outside = np.ones(g.shape, dtype=bool)
+    outside[sx, sy] = False
+    assert not part.traction[:, outside].any() and not part.state[outside].any()
+    np.testing.assert_allclose(part.force, whole.force, rtol=1e-9)
+    assert part.spin_moment == pytest.approx(whole.spin_moment, rel=1e-9)
+    slip = whole.state == 2
+    assert slip.any() and not part.slip[:, outside].any()
+    np.testing.assert_allclose(part.slip[:, slip], whole.slip[:, slip], rtol=0,
+                               atol=1e-7 * np.abs(whole.slip).max())

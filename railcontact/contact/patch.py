@@ -358,11 +358,12 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         pn = pn[sx, sy]
         p0 = None if p0 is None else np.asarray(p0)[:, sx, sy]
         st0 = None if st0 is None else np.asarray(st0)[sx, sy]
-    t = SOLVERS[settings.solver](
+    # (on a window: the result on the patch's grid, zero outside the window)
+    patch.tangential = SOLVERS[settings.solver](
         grid, rolling_operator(grid, pair, fft), pn, settings.friction,
         creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,
-        max_iterations=settings.max_iterations, spin_offset=settings.spin_offset)
-    patch.tangential = t if window is None else embedded(t, res.grid, window)
+        max_iterations=settings.max_iterations, spin_offset=settings.spin_offset,
+        embed=None if window is None else (res.grid, window))
 
 
 WINDOW_QUANTUM = 8
@@ -390,23 +391,3 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM,
     if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
         return None
     return out[0], out[1]
-
-
-def embedded(result: TangentialResult, grid: Grid, window: tuple[slice, slice]
-             ) -> TangentialResult:
-    """A tangential solution on a window of ``grid`` (:func:`contact_window`) as one on the
-    whole grid: traction, slip and states zero outside the window (the slip formed when
-    first read, as the window's)."""
-    sx, sy = window
-    shape = (grid.nx, grid.ny)
-    traction = np.zeros((2, *shape))
-    traction[:, sx, sy] = result.traction
-    state = np.zeros(shape, dtype=result.state.dtype)
-    state[sx, sy] = result.state
-
-    def slip() -> np.ndarray:
-        out = np.zeros((2, *shape))
-        out[:, sx, sy] = result.slip
-        return out
-
-    return result.replaced(grid=grid, traction=traction, slip=slip, state=state)

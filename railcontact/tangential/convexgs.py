@@ -240,6 +240,10 @@ else:  # pragma: no cover
     _element_solve_c = _element_solve
     _block_sweep_numba = None
 
+Embedding = tuple[Grid, tuple[slice, slice]]
+"""A larger grid and the window ``(sx, sy)`` of it that a solve's grid is: the solvers'
+``embed``."""
+
 DIRECT_WORK = 60_000
 """Target size of a row block in the blocked sweep: (contact elements in the block)^2."""
 
@@ -318,24 +322,33 @@ def _block_rows(per_row, work):
     return out[:k + 1]
 
 
-def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
+def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset, p0, st0, start):
     """The traction bound ``g = mu p_n`` [Pa] of the pressure ``pn`` (nx, ny) in the
     sweep layout (ny, nx), its states (adhesion where ``g > 0``, else exterior), the
     contact mask, per row the first and last contact element (``lo`` 1 > ``hi`` 0 in a
     row without contact) and their count; ``ok`` is False when a pressure is negative or
     not finite; the rigid slip ``wx``, ``wy`` [m] of the creepage ``(xi, eta, phi)`` on
     the grid ``(x0, dx, y0, dy)`` (:func:`~.rolling.rigid_slip_lines`' values, the same
-    operations) in that layout; the largest ``g`` and the number of contact elements.
-    One compiled pass (numba) in place of a few dozen array operations."""
+    operations) in that layout; the largest ``g`` and the number of contact elements;
+    the initial traction ``p`` (2, ny, nx): with ``start`` the start ``p0`` (2, nx, ny)
+    clipped to the bound (:func:`_clip_start`, with the states ``st0``; ``start_ok``
+    False when a value of it is not finite), else zero. One compiled call (numba) in
+    place of a few dozen array operations; the float fields are returned as one array
+    (5, ny, nx) (``g``, ``wx``, ``wy``, ``p``), ``lo``, ``hi`` and the counts as one
+    (3, ny): each array a compiled function returns costs about 0.4 µs to box."""
     nx, ny = pn.shape
-    g = np.empty((ny, nx))
+    fields = np.empty((5, ny, nx))
+    g = fields[0]
+    wx = fields[1]
+    wy = fields[2]
+    traction = fields[3:]
+    rows = np.zeros((3, ny), dtype=np.int64)
+    lo = rows[0]
+    hi = rows[1]
+    count = rows[2]
+    lo[:] = 1
     state = np.zeros((ny, nx), dtype=np.int8)
     contact = np.zeros((ny, nx), dtype=np.bool_)
-    lo = np.ones(ny, dtype=np.int64)
-    hi = np.zeros(ny, dtype=np.int64)
-    count = np.zeros(ny, dtype=np.int64)
-    wx = np.empty((ny, nx))
-    wy = np.empty((ny, nx))
     shift = offset * dx
     ly = np.empty(nx)
     for ix in range(nx):  # rigid_slip_lines' W_y(x) and W_x(y)
@@ -365,7 +378,12 @@ def _bound_layout(pn, mu, x0, dx, y0, dy, xi, eta, phi, offset):
     total = 0
     for iy in range(ny):
         total += count[iy]
-    return g, state, contact, lo, hi, count, ok, wx, wy, gmax, total
+    start_ok = True
+    if start:
+        start_ok = _clip_start(p0, st0, g, traction)
+    else:
+        traction[:] = 0.0
+    return fields, rows, state, contact, ok, gmax, total, start_ok
 
 
 SURELY_BELOW = 1.0 - 1e-12
@@ -436,10 +454,11 @@ def _measure(largest_bound: float) -> float:
 
 
 _NO_STATE = np.zeros((0, 0), dtype=np.int8)
+_NO_START = np.zeros((2, 0, 0))
 
 if HAVE_NUMBA:
-    _bound_layout = numba.njit(cache=True)(_bound_layout)
     _clip_start = numba.njit(cache=True)(_clip_start)
+    _bound_layout = numba.njit(cache=True)(_bound_layout)
     _squares = numba.njit(cache=True)(_squares)
 
 
@@ -536,18 +555,35 @@ _RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
     """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
-    da = grid.element_area
     swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
     if swept.flags.c_contiguous and state.flags.c_contiguous:
-        sx, sy, sm, ncon, nslip, pmax = _summary_sums(swept, state, grid.x0, grid.dx,
-                                                      grid.y0, grid.dy)
+        return _summarised(grid, *_summary_sums(swept, state, grid.x0, grid.dx, grid.y0,
+                                                grid.dy))
     else:  # the same sums by numpy (any layout)
         x, y = grid.x[:, None], grid.y[None, :]
         sx, sy = traction[0].sum(), traction[1].sum()
         sm = (x * traction[1] - y * traction[0]).sum()
         ncon, nslip, pmax = _counts_and_max(traction, state)
+    return _summarised(grid, sx, sy, sm, ncon, nslip, pmax)
+
+
+def _summarised(grid: Grid, sx, sy, sm, ncon, nslip, pmax
+                ) -> tuple[tuple[float, float], float, float, float]:
+    """:func:`tangential_summary`'s values from :func:`_summary_sums`' sums."""
+    da = grid.element_area
     ratio = float(nslip / ncon) if ncon else 0.0
     return (float(sx * da), float(sy * da)), float(sm * da), ratio, float(pmax)
+
+
+def _embedded_slip(slip_of: Callable[[], np.ndarray], shape: tuple[int, int], sx: slice,
+                   sy: slice) -> Callable[[], np.ndarray]:
+    """The slip (2, nx, ny) on a larger grid of shape ``shape`` of a solve on its window
+    ``(sx, sy)`` (``slip_of``: the window's), zero outside it: formed when first read."""
+    def slip() -> np.ndarray:
+        out = np.zeros((2, *shape))
+        out[:, sx, sy] = slip_of()
+        return out
+    return slip
 
 
 def _counts_and_max(traction, state):
@@ -593,10 +629,28 @@ def _summary_sums(swept, state, x0, dx, y0, dy):
     return (numpy_sum(swept[0]), numpy_sum(swept[1]), numpy_sum(arm), ncon, nslip, pmax)
 
 
+def _embedded_fields(swept, state, nx, ny, i0, j0, x0, dx, y0, dy):
+    """The traction ``swept`` (2, ny', nx') [Pa] and states ``state`` (ny', nx') of a
+    solve in the sweep layout as fields (2, nx, ny) and (nx, ny) (int8) of a larger grid
+    whose elements ``i0 + ix``, ``j0 + iy`` they are, zero elsewhere (what ``np.zeros``
+    and a slice assignment of the solver's fields give), and :func:`_summary_sums` of
+    the solve's own fields on its grid ``(x0, dx, y0, dy)``: one compiled call."""
+    wy, wx = state.shape
+    traction = np.zeros((2, nx, ny))
+    st = np.zeros((nx, ny), dtype=np.int8)
+    for ix in range(wx):
+        for iy in range(wy):
+            traction[0, i0 + ix, j0 + iy] = swept[0, iy, ix]
+            traction[1, i0 + ix, j0 + iy] = swept[1, iy, ix]
+            st[i0 + ix, j0 + iy] = state[iy, ix]
+    return (traction, st) + _summary_sums(swept, state.T, x0, dx, y0, dy)
+
+
 if HAVE_NUMBA:
     _block_rows = numba.njit(cache=True)(_block_rows)
     _counts_and_max = numba.njit(cache=True)(_counts_and_max)
     _summary_sums = numba.njit(cache=True)(_summary_sums)
+    _embedded_fields = numba.njit(cache=True)(_embedded_fields)
 
 
 @dataclass
@@ -655,9 +709,17 @@ class SweepProblem:
         eta = check_finite("eta", creepage[1], "-")
         phi = check_finite("phi", creepage[2], "1/m")
         spin_offset = check_finite("spin_offset", spin_offset)
+        rolling = xi != 0.0 or eta != 0.0 or phi != 0.0
+        start_error = None  # (raised after the other checks, as before)
+        p0, st0 = _NO_START, _NO_STATE
+        if initial_traction is not None and rolling:  # no creepage: no traction, exactly
+            p0, st0, start_error = _start_arrays(initial_traction, initial_state, shape)
+        start = initial_traction is not None and rolling and start_error is None
         if pn.shape == shape:
-            g, state, contact, lo, hi, count, ok, wx, wy, gmax, ncon = _bound_layout(
-                pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset)
+            fields, (lo, hi, count), state, contact, ok, gmax, ncon, start_ok = _bound_layout(
+                pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset, p0,
+                st0, start)
+            g, wx, wy, p = fields[0], fields[1], fields[2], fields[3:]
         if pn.shape != shape or not ok:
             raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
         tolerance = check_positive("tolerance", tolerance)
@@ -669,11 +731,9 @@ class SweepProblem:
             raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
         if engine == "numba" and not HAVE_NUMBA:
             raise RailContactError("engine 'numba' requested but numba is not installed")
-        rolling = xi != 0.0 or eta != 0.0 or phi != 0.0
-        if initial_traction is None or not rolling:  # no creepage: no traction, exactly
-            p = np.zeros((2, *g.shape))
-        else:
-            p = _clipped_start(initial_traction, initial_state, g, shape)
+        if start_error is not None or not start_ok:
+            raise RailContactError(start_error or "initial_traction must be finite, "
+                                   f"shape {(2, *shape)}")
         return cls(
             grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
@@ -681,10 +741,12 @@ class SweepProblem:
             largest_bound=float(gmax), contact_count=int(ncon), measure=_measure(float(gmax)))
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
-              t0: float) -> TangentialResult:
+              t0: float, embed: Embedding | None = None) -> TangentialResult:
         """Sweep until ``||p^k - p^(k-1)|| < tolerance ||p^k||`` (``sweep()`` returns the
         squared norm of its change), stopping when the error is not finite or has not
-        fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps."""
+        fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps; the result
+        on the problem's grid, or with ``embed`` on that larger grid (see
+        :func:`solve_tangential`)."""
         px, py = self.px, self.py
         ncon = self.contact_count
         # the floor 1e-9 ||g|| of the norm is at most 1e-9 sqrt(ncon) max(g): formed only
@@ -725,11 +787,21 @@ class SweepProblem:
         else:
             converged = True
         grid = self.grid
-        # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it out
-        # (its sums keep their order, so their bits): one copy of ``p``
-        traction = self.p.transpose(0, 2, 1).copy(order="K")
-        st = np.ascontiguousarray(self.state.T)
-        force, mz, ratio, pmax = tangential_summary(grid, traction, st)
+        if embed is None:
+            # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it
+            # out (its sums keep their order, so their bits): one copy of ``p``
+            traction = self.p.transpose(0, 2, 1).copy(order="K")
+            st = np.ascontiguousarray(self.state.T)
+            force, mz, ratio, pmax = tangential_summary(grid, traction, st)
+            slip = self._slip
+        else:  # the fields on the larger grid; the sums over the problem's, as above
+            big, (sx, sy) = embed
+            traction, st, *sums = _embedded_fields(self.p, self.state, big.nx, big.ny,
+                                                   sx.start, sy.start, grid.x0, grid.dx,
+                                                   grid.y0, grid.dy)
+            force, mz, ratio, pmax = _summarised(grid, *sums)
+            slip = _embedded_slip(self._slip, big.shape, sx, sy)
+            grid = big
         tol = self.tolerance
         if not in_contact:
             message = "no contact: zero normal pressure"
@@ -744,7 +816,7 @@ class SweepProblem:
                 message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
                             f"in {stall_sweeps} sweeps")
         return TangentialResult(
-            grid=grid, traction=traction, state=st, slip=self._slip, force=force,
+            grid=grid, traction=traction, state=st, slip=slip, force=force,
             spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
             converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
             history=np.asarray(hist))
@@ -760,25 +832,22 @@ class SweepProblem:
         return slip
 
 
-def _clipped_start(initial_traction, initial_state, g: np.ndarray, shape: tuple[int, int]
-                   ) -> np.ndarray:
-    """An initial traction (2, nx, ny) [Pa] in the sweep layout (2, ny, nx), clipped to
-    the bound ``g`` (elements in slip in ``initial_state`` put on it), zero outside the
-    contact."""
+def _start_arrays(initial_traction, initial_state, shape: tuple[int, int]
+                  ) -> tuple[np.ndarray, np.ndarray, str | None]:
+    """An initial traction (2, nx, ny) [Pa] and adhesion/slip map (nx, ny) as the arrays
+    the compiled clip (:func:`_clip_start`, in :func:`_bound_layout`) reads (float; int8,
+    empty without a map), and the error of a wrong shape (None: none)."""
     p0 = np.asarray(initial_traction, dtype=float)
     if p0.shape != (2, *shape):
-        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
+        return _NO_START, _NO_STATE, f"initial_traction must be finite, shape {(2, *shape)}"
     st0 = _NO_STATE
     if initial_state is not None:
         st0 = np.asarray(initial_state)
         if st0.shape != shape:
-            raise RailContactError(f"initial_state must have shape {shape}")
+            return _NO_START, _NO_STATE, f"initial_state must have shape {shape}"
         if st0.dtype != np.int8:  # (the compiled clip reads the states as int8)
             st0 = np.where(st0 == SLIP, SLIP, 0).astype(np.int8)
-    out = np.empty((2, *g.shape))
-    if not _clip_start(p0, st0, g, out):
-        raise RailContactError(f"initial_traction must be finite, shape {(2, *shape)}")
-    return out
+    return p0, st0, None
 
 
 def solve_tangential(
@@ -796,6 +865,7 @@ def solve_tangential(
     omega_s: float = 0.5,
     engine: str = "auto",
     spin_offset: float = 1.0 / 6.0,
+    embed: Embedding | None = None,
 ) -> TangentialResult:
     """Solve steady rolling with Coulomb friction by ConvexGS.
 
@@ -825,6 +895,15 @@ def solve_tangential(
         Relaxation in adhesion and slip (0 < omega <= 1.5).
     engine
         "auto" (numba when installed), "numba" or "numpy".
+    spin_offset
+        Where in the rolling step the spin part of the rigid slip is taken, as a fraction
+        of dx (see :func:`railcontact.tangential.rigid_slip`).
+    embed
+        ``(whole, (sx, sy))``: ``grid`` is the window ``sx``, ``sy`` (element slices) of
+        the grid ``whole`` (as :func:`railcontact.contact.patch.contact_window` gives
+        it), and the result is given on ``whole``: traction, slip and states zero
+        outside the window (forces and moments are the window's, which holds every
+        element in contact). Default: on ``grid``.
     """
     t0 = time.perf_counter()
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
@@ -844,4 +923,4 @@ def solve_tangential(
         return _sweep_numpy(*kern, prob.wx, prob.wy, prob.g, prob.px, prob.py, prob.state,
                             prob.lo, prob.hi, *cc, oh, os_, prob.measure)
 
-    return prob.solve(sweep, "ConvexGS", STALL_SWEEPS, t0)
+    return prob.solve(sweep, "ConvexGS", STALL_SWEEPS, t0, embed)

@@ -75,6 +75,7 @@ from .convexgs import (
     HAVE_NUMBA,
     NOT_HUGE,
     NOT_TINY,
+    Embedding,
     SweepProblem,
     TangentialResult,
     _blocks_of,
@@ -197,10 +198,12 @@ if HAVE_NUMBA:
 else:  # pragma: no cover
     _stack_floats = _carray = None
 
-LANES = (16, 24, 32)
+LANES = (16, 20, 24, 28, 32)
 """Target elements whose cross-row sums :func:`_cross_rows_of` forms at once: a row's
 targets are taken in chunks of 32, the last of them in the smallest of these that holds
-what is left (their sums held in four to eight vector registers of eight)."""
+what is left (their sums held in vector registers, of four lanes for the last four of 20
+and 28). 20 and 28 (round 7): on the step's warm blocks 7 % fewer target lanes than with
+16/24/32 alone, 80.0 -> 77.5 µs a block, the same bits."""
 
 
 def _cross_rows_of(lanes: int):
@@ -305,12 +308,19 @@ def _steady_block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy
         ty = uy[iy]
         c0 = a
         while iy > r0 and c0 <= b:
-            if b - c0 >= 24:
+            rest = b - c0  # (targets left, less one)
+            if rest >= 28:
                 _cross_rows32_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
                 c0 += 32
-            elif b - c0 >= 16:
+            elif rest >= 24:
+                _cross_rows28_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 28
+            elif rest >= 20:
                 _cross_rows24_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
                 c0 += 24
+            elif rest >= 16:
+                _cross_rows20_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
+                c0 += 20
             else:
                 _cross_rows16_c(fxx, fxy, fyy, dpx, dpy, lo, hi, r0, iy, c0, tx, ty)
                 c0 += 16
@@ -336,9 +346,9 @@ if HAVE_NUMBA:
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
     _row_dot_c = _jit(_row_dot)
-    # (compiled inside the block only: the three share one name, which numba's cache
+    # (compiled inside the block only: the five share one name, which numba's cache
     # would take for one function)
-    _cross_rows16_c, _cross_rows24_c, _cross_rows32_c = (
+    _cross_rows16_c, _cross_rows20_c, _cross_rows24_c, _cross_rows28_c, _cross_rows32_c = (
         numba.njit(inline="always", fastmath=True, error_model="numpy")(_cross_rows_of(n))
         for n in LANES)
     _visit_c = _jit(_visit)
@@ -348,7 +358,8 @@ else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
     _row_dot_c = _row_dot
-    _cross_rows16_c, _cross_rows24_c, _cross_rows32_c = (_cross_rows_of(n) for n in LANES)
+    _cross_rows16_c, _cross_rows20_c, _cross_rows24_c, _cross_rows28_c, _cross_rows32_c = (
+        _cross_rows_of(n) for n in LANES)
     _visit_c = _visit
     _steady_block_numba = None
 
@@ -377,10 +388,9 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     of a (2, nx, ny) traction (:meth:`~railcontact.halfspace.operator.InfluenceOperator.bound`,
     formed once per solve)."""
     px, py = p[0], p[1]
-    ux = np.empty_like(g)
-    uy = np.empty_like(g)
+    work = np.zeros((4, *g.shape))  # the shift and the changes: one allocation
+    ux, uy, dp = work[0], work[1], work[2:]
     _add_product_c(ux, uy, wx, wy, product(p.transpose(0, 2, 1), None), 0)
-    dp = np.zeros_like(p)
     dpx, dpy = dp[0], dp[1]
     dif = 0.0
     for b, (r0, r1) in enumerate(rows):
@@ -463,6 +473,7 @@ def solve_steadygs(
     omega_s: float = 0.9,
     engine: str = "auto",
     spin_offset: float = 1.0 / 6.0,
+    embed: Embedding | None = None,
 ) -> TangentialResult:
     """Solve steady rolling with Coulomb friction by SteadyGS.
 
@@ -498,6 +509,9 @@ def solve_steadygs(
     spin_offset
         Where in the rolling step the spin part of the rigid slip is taken, as a fraction
         of dx (see :func:`railcontact.tangential.rigid_slip`).
+    embed
+        ``(whole, (sx, sy))``: the result on the larger grid ``whole`` of which ``grid``
+        is the window ``sx``, ``sy`` (see :func:`railcontact.tangential.solve_tangential`).
     """
     t0 = time.perf_counter()
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
@@ -521,4 +535,4 @@ def solve_steadygs(
         m = prob.measure
         return float(np.sum(((px - qx) * m) ** 2 + ((py - qy) * m) ** 2))
 
-    return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0)
+    return prob.solve(sweep, "SteadyGS", STALL_SWEEPS, t0, embed)

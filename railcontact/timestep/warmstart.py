@@ -34,7 +34,7 @@ import numpy as np
 
 from ..geometry.search import ContactPoint, overlap_on_rail
 from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
-from ..halfspace.sums import array_sum
+from ..halfspace.sums import array_sum, numpy_sum
 
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
@@ -226,33 +226,36 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
     if (shift is not None and traction.shape == (2, *grid.shape)
             and o.traction.shape == (2, *o.grid.shape)
             and (rate is None or rate.shape == o.traction.shape)):
-        out = np.empty((2, *grid.shape))
-        for k in range(2):
-            _rate(np.ascontiguousarray(traction[k], dtype=float), o.traction[k], *shift,
-                  o.traction[k] if rate is None else rate[k], rate is not None,
-                  float(gain), dt, out[k])
+        out, total = _rate(np.ascontiguousarray(traction, dtype=float), o.traction, *shift,
+                           o.traction if rate is None else rate, rate is not None,
+                           float(gain), dt)
     else:
         out = (np.asarray(traction, dtype=float) - remesh(o.traction, o.grid, grid)) / dt
         if rate is not None:
             out = (1.0 - gain) * remesh(rate, o.grid, grid) + gain * out
-    return out if math.isfinite(array_sum(out)) else None
+        total = array_sum(out)
+    return out if math.isfinite(total) else None
 
 
 @numba.njit(cache=True)
-def _rate(p, p0, i0, j0, v0, smooth, gain, dt, out):  # pragma: no cover - compiled
-    """``out = (1 - gain) v0 + gain (p - p0) / dt`` (``smooth``; else ``(p - p0) / dt``),
-    ``p0`` and ``v0`` read on ``p``'s grid at the lattice offset ``(i0, j0)`` (zero
-    outside them), as :func:`remesh` does."""
-    nx, ny = out.shape
-    n0x, n0y = p0.shape
-    for a in range(nx):
-        for b in range(ny):
-            x, y = a + i0, b + j0
-            inside = 0 <= x < n0x and 0 <= y < n0y
-            c = (p[a, b] - (p0[x, y] if inside else 0.0)) / dt
-            if smooth:
-                c = (1.0 - gain) * (v0[x, y] if inside else 0.0) + gain * c
-            out[a, b] = c
+def _rate(p, p0, i0, j0, v0, smooth, gain, dt):  # pragma: no cover - compiled
+    """``(1 - gain) v0 + gain (p - p0) / dt`` (``smooth``; else ``(p - p0) / dt``) of
+    the fields (2, nx, ny) ``p``, ``p0``, ``v0``, the last two read on ``p``'s grid at
+    the lattice offset ``(i0, j0)`` (zero outside them), as :func:`remesh` does; and its
+    sum as :func:`~railcontact.halfspace.sums.array_sum` gives it."""
+    out = np.empty(p.shape)
+    nx, ny = p.shape[1], p.shape[2]
+    n0x, n0y = p0.shape[1], p0.shape[2]
+    for k in range(2):
+        for a in range(nx):
+            for b in range(ny):
+                x, y = a + i0, b + j0
+                inside = 0 <= x < n0x and 0 <= y < n0y
+                c = (p[k, a, b] - (p0[k, x, y] if inside else 0.0)) / dt
+                if smooth:
+                    c = (1.0 - gain) * (v0[k, x, y] if inside else 0.0) + gain * c
+                out[k, a, b] = c
+    return out, numpy_sum(out)
 
 
 def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | None:
@@ -314,9 +317,11 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
     if c > 0 and rate is not None and rate.shape == memory.traction.shape:
         h = c * float(memory.time - o.time)  # t - t_k, limited as c is
         if shift is not None and memory.traction.shape == (2, *memory.grid.shape):
-            t = np.empty((2, *grid.shape))
-            for k in range(2):
-                _advanced(memory.traction[k], rate[k], *shift, h, t[k])
+            st = memory.state  # (one pass: the traction advanced, the map shifted as
+            if st.shape == memory.grid.shape and st.dtype.kind in "iub":  # _state_on does)
+                return _advanced(memory.traction, rate, st.astype(np.int8, copy=False),
+                                 *shift, h, *grid.shape)
+            t = _advanced(memory.traction, rate, _NO_MAP, *shift, h, *grid.shape)[0]
         else:
             t = remesh(memory.traction, memory.grid, grid) + h * remesh(rate, memory.grid,
                                                                         grid)
@@ -349,13 +354,27 @@ def _state_on(memory: PatchMemory, grid: Grid, shift: tuple[int, int] | None) ->
                    ).astype(np.int8)
 
 
+_NO_MAP = np.zeros((0, 0), dtype=np.int8)
+
+
 @numba.njit(cache=True)
-def _advanced(v, rate, i, j, h, out):  # pragma: no cover - compiled
-    """``out = v + h rate`` on one lattice (``out[a, b]`` from ``[a + i, b + j]`` of both,
-    zero outside them), as ``remesh(v) + h remesh(rate)``."""
-    nx, ny = out.shape
-    n1x, n1y = v.shape
-    for a in range(nx):
-        for b in range(ny):
-            x, y = a + i, b + j
-            out[a, b] = v[x, y] + h * rate[x, y] if 0 <= x < n1x and 0 <= y < n1y else 0.0
+def _advanced(v, rate, state, i, j, h, nx, ny):  # pragma: no cover - compiled
+    """``v + h rate`` (fields (k, nx', ny')) on the grid (nx, ny) of one lattice
+    (``out[:, a, b]`` from ``[:, a + i, b + j]`` of both, zero outside them), as
+    ``remesh(v) + h remesh(rate)``; and the map ``state`` (nx', ny') shifted so (zero
+    outside it), as :func:`_state_on` gives it (an empty map: an empty one)."""
+    nc = v.shape[0]
+    n1x, n1y = v.shape[1], v.shape[2]
+    out = np.empty((nc, nx, ny))
+    shifted = np.zeros((nx, ny) if state.size > 0 else (0, 0), dtype=np.int8)
+    for k in range(nc):
+        for a in range(nx):
+            for b in range(ny):
+                x, y = a + i, b + j
+                out[k, a, b] = (v[k, x, y] + h * rate[k, x, y]
+                                if 0 <= x < n1x and 0 <= y < n1y else 0.0)
+    if state.size > 0:
+        for a in range(max(0, -i), min(nx, n1x - i)):
+            for b in range(max(0, -j), min(ny, n1y - j)):
+                shifted[a, b] = state[a + i, b + j]
+    return out, shifted
