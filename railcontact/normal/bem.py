@@ -64,12 +64,37 @@ much as about 160 columns); beyond it ``A p`` is convolved anew."""
 REFRESH_ITERATIONS = 20
 """Updates of ``A p`` without a convolution after which a converged step forms it anew
 before its final check (round-off of the updates, far below any tolerance)."""
+REUSE_GENERATIONS = 16
+"""Solves in a row whose start's ``A p`` may come from the remembered displacements of
+earlier solves (:class:`Displacement`) before one is convolved again: the round-off of
+the updates is carried from solve to solve, and an extrapolated start adds up to
+``1 + 2c`` times the remembered ones' (:func:`railcontact.timestep.warmstart.previous_start`)."""
 SCALE_RANGE = (1e-100, 1e100)
 """A converged solution's largest pressure [Pa] and depth of interpenetration
 ``delta - min(h)`` [m] lie in this range, else it is reported not converged: the CG's inner
 products are sums of their squares, which under- or overflow beyond it (a sphere scaled to
 1e-170 - gap, load and pressure - "converged" in one iteration with a tenth of the peak
 pressure; under penetration control at 1e150 with 0.6 % of the force)."""
+
+
+@dataclass(frozen=True)
+class Displacement:
+    """The elastic displacement ``u = A p`` [m] of a pressure ``p`` on a grid, as a solve
+    formed it (by a convolution, or carried by the CG's updates from one).
+
+    Attributes
+    ----------
+    values
+        ``u`` [m], (nx, ny): ``A p`` to round-off.
+    generations
+        Solves since ``values`` was last formed by a convolution: 0 when the solve that
+        returned it convolved ``A p`` at its start or later; a start's displacement formed
+        from remembered ones (a time step's extrapolation) counts one more than the
+        largest of theirs. A start older than :data:`REUSE_GENERATIONS` is convolved.
+    """
+
+    values: np.ndarray
+    generations: int = 0
 
 
 @dataclass
@@ -112,6 +137,10 @@ class NormalResult:
     contact_box
         ``(i0, i1, j0, j1)``: the contact elements lie in the rows ``i0:i1`` and columns
         ``j0:j1``; None without contact.
+    displacement
+        ``A p`` of the pressure [m] as the solve carried it (its gap is ``h + u - delta``),
+        for a later solve's start (:func:`solve_normal`'s ``initial_displacement``); None
+        when the solve did not form it (no contact, a pressure that vanished).
     """
 
     grid: Grid
@@ -130,6 +159,7 @@ class NormalResult:
     history: np.ndarray = field(repr=False)
     touches_boundary: bool = False
     contact_box: tuple[int, int, int, int] | None = None
+    displacement: Displacement | None = field(default=None, repr=False)
 
 
 def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
@@ -256,6 +286,28 @@ def _nonnegative(p):  # pragma: no cover - compiled
     return q, numpy_sum(q)
 
 
+@numba.njit(cache=True)
+def _floored(p, index, change):  # pragma: no cover - compiled
+    """:func:`_nonnegative` of ``p`` and the elements it sets to zero: the first
+    ``index.size`` of them (flat index, and the change ``0 - p``) in ``index`` and
+    ``change``; returns ``(max(p, 0), its sum, how many were negative)``."""
+    q = np.empty_like(p)
+    flat, qf = p.reshape(p.size), q.reshape(q.size)
+    changes = 0
+    for i in range(flat.size):
+        x = flat[i]
+        if x > 0.0 or x != x:
+            qf[i] = x
+        else:
+            qf[i] = 0.0
+            if x < 0.0:
+                if changes < index.size:
+                    index[changes] = i
+                    change[changes] = -x
+                changes += 1
+    return q, numpy_sum(q), changes
+
+
 @numba.njit(cache=True, fastmath=REASSOCIATE)
 def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - compiled
     """The contact set ``c`` (p > 0, or where the bodies interpenetrate if no pressure is
@@ -335,6 +387,27 @@ def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover
                 urow[iy] += dj * krow[iy]
 
 
+@numba.njit(cache=True)
+def _shown_start(values, u, scale, kernel, index, change, changes):  # pragma: no cover
+    """``u = scale (values + sum_k change[k] A[:, index[k]])`` (:func:`_add_columns`):
+    ``A p`` of a start from ``A`` of the pressure before it was floored (``values``,
+    (nx, ny)) and scaled; returns whether ``values`` are finite (else ``u`` is not
+    formed)."""
+    nx, ny = u.shape
+    for i in range(nx):
+        for j in range(ny):
+            v = values[i, j]
+            if not v - v == 0.0:
+                return False
+            u[i, j] = v
+    uf = u.reshape(u.size)
+    _add_columns(uf, kernel, nx, ny, index, change, changes)
+    if scale != 1.0:
+        for i in range(uf.size):
+            uf[i] *= scale
+    return True
+
+
 @numba.njit(cache=True, fastmath=REASSOCIATE)
 def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area,
           self_compliance, kernel, nx, ny, index, change):  # pragma: no cover - compiled
@@ -412,6 +485,7 @@ def solve_normal(
     tolerance: float = 1e-3,
     max_iterations: int = 500,
     preconditioner: str = "fft",
+    initial_displacement: Displacement | None = None,
 ) -> NormalResult:
     """Solve the frictionless normal contact problem by Polonsky–Keer's CG method.
 
@@ -444,6 +518,15 @@ def solve_normal(
     preconditioner
         "fft" (default) or "none" (the plain Polonsky–Keer CG of the paper); see the
         module doc.
+    initial_displacement
+        ``A p`` [m] of ``initial_pressure`` as given (its negative values included), when
+        the caller has it at hand (a time step: from the previous steps' displacements,
+        :func:`railcontact.timestep.warmstart.previous_start`): the solve's first product
+        is then not formed. The elements the start sets to zero (negative) are taken out
+        by their influence columns (beyond :data:`CHANGE_LIMIT` of them ``A p`` is
+        convolved). Ignored (``A p`` convolved) with ``initial_contact``, when not finite,
+        not of the grid's shape, or older than :data:`REUSE_GENERATIONS`
+        (:class:`Displacement`).
 
     Returns
     -------
@@ -479,8 +562,9 @@ def solve_normal(
     kernel = operator.kernels[0, 0]  # the "zz" kernel (2nx-1, 2ny-1) [m/Pa]
     self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
 
-    def finish(p, u, delta, its, converged, message, err, hist, final=False):
-        # final: under force control, the approach from the solution's own u
+    def finish(p, u, delta, its, converged, message, err, hist, final=False, shown=None):
+        # final: under force control, the approach from the solution's own u; shown: its
+        # Displacement (u = A p of the result's p)
         gap = np.empty(shape)
         contact = np.empty(shape, dtype=bool)
         delta, total, largest, count, edge, box = _summary(
@@ -491,7 +575,8 @@ def solve_normal(
             max_pressure=float(largest), area=float(count * area_el),
             iterations=its, converged=converged, message=message,
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
-            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None)
+            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
+            displacement=shown)
 
     # Trivial cases: no load, or no interpenetration anywhere.
     if force_control and load == 0.0:
@@ -503,11 +588,22 @@ def solve_normal(
                       "no contact: penetration below the smallest gap", 0.0, [])
 
     # Start.
+    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
+    change = np.empty(CHANGE_LIMIT)
+    shown = initial_displacement  # A p of the start, if the caller knows it
+    if shown is not None and not (p is not None and mask is None and p.flags.c_contiguous
+                                  and shown.generations <= REUSE_GENERATIONS
+                                  and shown.values.shape == shape):
+        shown = None
+    floored = 0  # elements the start set to zero (their columns leave A p)
     if p is None:
         p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
         total = float(p.sum())
     elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0) and its sum
-        p, total = _nonnegative(p)
+        if shown is None:
+            p, total = _nonnegative(p)
+        else:
+            p, total, floored = _floored(p, index, change)
     else:
         p = np.maximum(p, 0.0)
         total = float(p.sum())
@@ -518,8 +614,11 @@ def solve_normal(
         p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
             _uniform_start(h, operator, penetration)
         total = float(p.sum())
+        shown = None
+    scale = 1.0
     if force_control:
-        p *= load / (area_el * total)
+        scale = load / (area_el * total)
+        p *= scale
 
     # Work arrays: the rows of one block, flat (``*f``, for the compiled steps) and as
     # (nx, ny) views of the same memory; the pressures ``p``, ``q`` (one of which is the
@@ -527,20 +626,28 @@ def solve_normal(
     p = np.ascontiguousarray(p, dtype=float)
     q = np.empty(shape)
     hf, pf, qf = h.ravel(), p.ravel(), q.ravel()
-    work = np.empty((6, h.size))
-    uf, gf, gmf, tf, rf, zf = work
-    u, g, gm, t, r, z = work.reshape(6, *shape)
+    # (u on its own: the result's displacement keeps it)
+    work = np.empty((5, h.size))
+    gf, gmf, tf, rf, zf = work
+    g, gm, t, r, z = work.reshape(5, *shape)
     if not precondition:
         z, zf = g, gf
     tf[:] = 0.0
     c = np.empty(h.size, dtype=bool)
-    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
-    change = np.empty(CHANGE_LIMIT)
     # the products of this solve (A x, and the preconditioner's M x) as bound functions
     # (x, out) -> out: the arrays are the solve's own, checked above
     product = operator.bound()
     inverse = operator.bound(PRECONDITIONER_FLOOR) if precondition else None
-    product(p, u)  # u = A p of the current p, kept up to date below
+    # u = A p of the current p, kept up to date below: convolved, or the start's shown
+    # displacement less the columns of the elements the start set to zero
+    u = np.empty(shape)
+    if shown is not None and floored <= CHANGE_LIMIT and _shown_start(
+            np.asarray(shown.values, dtype=float), u, scale, kernel, index, change, floored):
+        generations = shown.generations  # solves since u was last convolved
+    else:
+        product(p, u)
+        generations = 0
+    uf = u.ravel()
     fresh = 0  # iterations since u was last formed by a convolution
     g_old = 1.0
     conjugate = False
@@ -571,7 +678,7 @@ def solve_normal(
             fresh += 1
         else:  # too many elements left or entered the contact: convolve
             product(p, u)
-            fresh = 0
+            fresh = generations = 0
         err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
         hist.append(err)
         if not math.isfinite(err):
@@ -579,7 +686,7 @@ def solve_normal(
         if err < tolerance:
             if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
                 product(p, u)
-                fresh = 0
+                fresh = generations = 0
             if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
                 converged = True
                 break
@@ -589,8 +696,9 @@ def solve_normal(
             stalled = True
             break
 
-    if not converged and fresh > 0:  # the gap from a convolution, not the updates
+    if not converged and (fresh > 0 or generations > 0):  # the gap from a convolution
         product(p, u)
+        generations = 0
     if converged:
         message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
     else:
@@ -599,7 +707,8 @@ def solve_normal(
         if stalled:
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
                         f"{STALL_ITERATIONS} iterations")
-    res = finish(p, u, delta, its, converged, message, err, hist, final=True)
+    res = finish(p, u, delta, its, converged, message, err, hist, final=True,
+                 shown=Displacement(u, generations))
     lo, hi = SCALE_RANGE
     depth = res.penetration - float(h.min())
     if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
