@@ -100,6 +100,11 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
                         f"mm with [grid] dx = {dx}, dy = {dy} m", sx, sy, settings.max_elements)
     xmin, xmax, nx = _axis(x0, x1, settings.nx, dx, settings)
     ymin, ymax, ny = _axis(y0, y1, settings.ny, dy, settings)
+    if (xmin < xmax and ymin < ymax and xmin - xmin == 0.0 and xmax - xmax == 0.0
+            and ymin - ymin == 0.0 and ymax - ymax == 0.0):  # (finite: Grid.from_bounds'
+        ex = (xmax - xmin) / nx  # checks passed; its element sizes and centres)
+        ey = (ymax - ymin) / ny
+        return Grid(int(nx), int(ny), ex, ey, xmin + ex / 2, ymin + ey / 2)
     return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)
 
 

@@ -275,22 +275,27 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
 
 
 @numba.njit(cache=True)
-def _nonnegative(p):  # pragma: no cover - compiled
-    """``np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0 made 0, as
-    numpy's) and its sum, added as numpy adds it."""
-    q = np.empty_like(p)
-    flat, qf = p.reshape(p.size), q.reshape(q.size)
+def _least(h):  # pragma: no cover - compiled
+    """The smallest value of ``h`` (any shape, C-ordered; +inf when empty) and whether
+    all its values are finite, in one pass."""
+    flat = h.reshape(h.size)
+    least = np.inf
+    finite = True
     for i in range(flat.size):
         x = flat[i]
-        qf[i] = x if (x > 0.0 or x != x) else 0.0
-    return q, numpy_sum(q)
+        finite = finite and x - x == 0.0
+        least = min(least, x)
+    return float(least), finite
 
 
 @numba.njit(cache=True)
-def _floored(p, index, change):  # pragma: no cover - compiled
-    """:func:`_nonnegative` of ``p`` and the elements it sets to zero: the first
-    ``index.size`` of them (flat index, and the change ``0 - p``) in ``index`` and
-    ``change``; returns ``(max(p, 0), its sum, how many were negative)``."""
+def _floored(p, index, change, load, area):  # pragma: no cover - compiled
+    """The start ``q = np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0
+    made 0, as numpy's) and its sum, added as numpy adds it; with a ``load`` > 0 [N] and a
+    positive sum, ``q`` scaled to it: ``q *= load / (area * sum)`` (``area`` of an element
+    [m^2]). The elements set to zero (negative): the first ``index.size`` of them (flat
+    index, and the change ``0 - p``) in ``index`` and ``change``. Returns ``(q, sum, how
+    many were negative, the scale)`` (scale 1 when not scaled)."""
     q = np.empty_like(p)
     flat, qf = p.reshape(p.size), q.reshape(q.size)
     changes = 0
@@ -305,7 +310,13 @@ def _floored(p, index, change):  # pragma: no cover - compiled
                     index[changes] = i
                     change[changes] = -x
                 changes += 1
-    return q, numpy_sum(q), changes
+    total = numpy_sum(q)
+    scale = 1.0
+    if load > 0.0 and total > 0.0:
+        scale = load / (area * total)
+        for i in range(qf.size):
+            qf[i] *= scale
+    return q, total, changes, scale
 
 
 @numba.njit(cache=True, fastmath=REASSOCIATE)
@@ -534,10 +545,14 @@ def solve_normal(
     """
     t0 = time.perf_counter()
     shape = grid.shape
-    h = _check_field("gap", gap, shape)
-    if h is None:
+    if gap is None:
         raise RailContactError("gap is required")
-    h = np.ascontiguousarray(h)
+    h = np.ascontiguousarray(gap, dtype=float)
+    if h.shape != shape:
+        raise RailContactError(f"gap must have the grid shape {shape}, got {h.shape}")
+    hmin, finite = _least(h)  # (its smallest value, and whether all are finite)
+    if not finite:
+        raise RailContactError("gap contains NaN or infinite values")
     if operator.components != "z" or (operator.nx, operator.ny) != shape:
         raise RailContactError("operator must be a 'z' influence operator for this grid")
     tolerance = check_positive("tolerance", tolerance)
@@ -582,7 +597,7 @@ def solve_normal(
     if force_control and load == 0.0:
         zeros = np.zeros(shape)
         return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
-    if not force_control and np.all(h >= penetration):
+    if not force_control and hmin >= penetration:  # (np.all(h >= penetration))
         zeros = np.zeros(shape)
         return finish(zeros, zeros, penetration, 0, True,
                       "no contact: penetration below the smallest gap", 0.0, [])
@@ -596,14 +611,13 @@ def solve_normal(
                                   and shown.values.shape == shape):
         shown = None
     floored = 0  # elements the start set to zero (their columns leave A p)
+    scale = 0.0  # the start's scale to the load (0: not scaled yet)
     if p is None:
         p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
         total = float(p.sum())
-    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0) and its sum
-        if shown is None:
-            p, total = _nonnegative(p)
-        else:
-            p, total, floored = _floored(p, index, change)
+    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0), its sum, scaled
+        p, total, floored, scale = _floored(p, index if shown is not None else index[:0],
+                                            change, load if force_control else 0.0, area_el)
     else:
         p = np.maximum(p, 0.0)
         total = float(p.sum())
@@ -615,8 +629,10 @@ def solve_normal(
             _uniform_start(h, operator, penetration)
         total = float(p.sum())
         shown = None
-    scale = 1.0
-    if force_control:
+        scale = 0.0
+    if not force_control:
+        scale = 1.0
+    elif scale == 0.0:
         scale = load / (area_el * total)
         p *= scale
 
@@ -710,7 +726,7 @@ def solve_normal(
     res = finish(p, u, delta, its, converged, message, err, hist, final=True,
                  shown=Displacement(u, generations))
     lo, hi = SCALE_RANGE
-    depth = res.penetration - float(h.min())
+    depth = res.penetration - hmin
     if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
                                                    and lo <= depth <= hi):
         res.converged = False
