@@ -18,7 +18,9 @@ falls below the tolerance ``eps_n`` (the paper's normal tolerance). The iteratio
 the number of CG steps taken. Each costs one convolution, ``A t`` of the search direction,
 and one more with the preconditioner: the displacements ``u = A p`` of the new pressure
 are ``u - tau A t`` plus the influence columns of the few elements the step clipped or let
-in (:data:`CHANGE_LIMIT`; beyond it, and at the start, ``A p`` is convolved).
+in (:data:`CHANGE_LIMIT`; beyond it, and at the start, ``A p`` is convolved - unless the
+caller gives the start's ``A p``, as a time step does from the previous steps'
+displacements: ``initial_displacement``, :class:`Displacement`).
 
 Preconditioning (``preconditioner="fft"``, the default): the gradient on the contact set is
 multiplied by an FFT approximate inverse of the influence matrix
