@@ -21,6 +21,7 @@ from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.operator import influence_operator
 from ..normal import NormalResult, solve_normal
+from ..normal.bem import Displacement
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
 from ..settings.case import check_grid_size
@@ -46,8 +47,10 @@ MAX_GROW = 4
 
 Bounds = tuple[float, float, float, float]
 """A potential contact area (xmin, xmax, ymin, ymax) [m]."""
-PressureEstimate = Callable[[Grid], "np.ndarray | None"]
-"""An initial pressure [Pa] as a function of the BEM grid (None: no estimate)."""
+PressureEstimate = Callable[[Grid], "np.ndarray | tuple[np.ndarray, Displacement] | None"]
+"""An initial pressure [Pa] as a function of the BEM grid (None: no estimate), or the
+pressure and its displacement ``A p`` (:class:`~railcontact.normal.bem.Displacement`; a
+time step's, :func:`railcontact.timestep.warmstart.previous_start`)."""
 
 
 def potential_area(A: float, B: float, delta0: float, margin: float = 1.0) -> Bounds:
@@ -97,6 +100,11 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
                         f"mm with [grid] dx = {dx}, dy = {dy} m", sx, sy, settings.max_elements)
     xmin, xmax, nx = _axis(x0, x1, settings.nx, dx, settings)
     ymin, ymax, ny = _axis(y0, y1, settings.ny, dy, settings)
+    if (xmin < xmax and ymin < ymax and xmin - xmin == 0.0 and xmax - xmax == 0.0
+            and ymin - ymin == 0.0 and ymax - ymax == 0.0):  # (finite: Grid.from_bounds'
+        ex = (xmax - xmin) / nx  # checks passed; its element sizes and centres)
+        ey = (ymax - ymin) / ny
+        return Grid(int(nx), int(ny), ex, ey, xmin + ex / 2, ymin + ey / 2)
     return Grid.from_bounds(xmin, xmax, ymin, ymax, nx, ny)
 
 
@@ -172,9 +180,13 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         # a grown area starts from the estimate again, not from the truncated solution:
         # that start (its pressure piled up at the old edge) let the CG stop early, with the
         # relative change small but the pressure wrong (a fuzzed two-patch wheel)
-        res = solve_normal(gap, grid, op, initial_pressure=estimate_of(grid),
+        start, shown = estimate_of(grid), None
+        if type(start) is tuple:  # the pressure and its A p
+            start, shown = start
+        res = solve_normal(gap, grid, op, initial_pressure=start,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
-                           preconditioner=settings.preconditioner, **control.kwargs())
+                           preconditioner=settings.preconditioner, initial_displacement=shown,
+                           **control.kwargs())
         work.normal_iterations += res.iterations
         # the pressure array checked by the solver's summary of it (solve_normal: the
         # force is its sum, max_pressure its largest value or NaN when one is NaN; a

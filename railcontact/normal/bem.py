@@ -18,7 +18,9 @@ falls below the tolerance ``eps_n`` (the paper's normal tolerance). The iteratio
 the number of CG steps taken. Each costs one convolution, ``A t`` of the search direction,
 and one more with the preconditioner: the displacements ``u = A p`` of the new pressure
 are ``u - tau A t`` plus the influence columns of the few elements the step clipped or let
-in (:data:`CHANGE_LIMIT`; beyond it, and at the start, ``A p`` is convolved).
+in (:data:`CHANGE_LIMIT`; beyond it, and at the start, ``A p`` is convolved - unless the
+caller gives the start's ``A p``, as a time step does from the previous steps'
+displacements: ``initial_displacement``, :class:`Displacement`).
 
 Preconditioning (``preconditioner="fft"``, the default): the gradient on the contact set is
 multiplied by an FFT approximate inverse of the influence matrix
@@ -64,12 +66,37 @@ much as about 160 columns); beyond it ``A p`` is convolved anew."""
 REFRESH_ITERATIONS = 20
 """Updates of ``A p`` without a convolution after which a converged step forms it anew
 before its final check (round-off of the updates, far below any tolerance)."""
+REUSE_GENERATIONS = 16
+"""Solves in a row whose start's ``A p`` may come from the remembered displacements of
+earlier solves (:class:`Displacement`) before one is convolved again: the round-off of
+the updates is carried from solve to solve, and an extrapolated start adds up to
+``1 + 2c`` times the remembered ones' (:func:`railcontact.timestep.warmstart.previous_start`)."""
 SCALE_RANGE = (1e-100, 1e100)
 """A converged solution's largest pressure [Pa] and depth of interpenetration
 ``delta - min(h)`` [m] lie in this range, else it is reported not converged: the CG's inner
 products are sums of their squares, which under- or overflow beyond it (a sphere scaled to
 1e-170 - gap, load and pressure - "converged" in one iteration with a tenth of the peak
 pressure; under penetration control at 1e150 with 0.6 % of the force)."""
+
+
+@dataclass(frozen=True)
+class Displacement:
+    """The elastic displacement ``u = A p`` [m] of a pressure ``p`` on a grid, as a solve
+    formed it (by a convolution, or carried by the CG's updates from one).
+
+    Attributes
+    ----------
+    values
+        ``u`` [m], (nx, ny): ``A p`` to round-off.
+    generations
+        Solves since ``values`` was last formed by a convolution: 0 when the solve that
+        returned it convolved ``A p`` at its start or later; a start's displacement formed
+        from remembered ones (a time step's extrapolation) counts one more than the
+        largest of theirs. A start older than :data:`REUSE_GENERATIONS` is convolved.
+    """
+
+    values: np.ndarray
+    generations: int = 0
 
 
 @dataclass
@@ -112,6 +139,10 @@ class NormalResult:
     contact_box
         ``(i0, i1, j0, j1)``: the contact elements lie in the rows ``i0:i1`` and columns
         ``j0:j1``; None without contact.
+    displacement
+        ``A p`` of the pressure [m] as the solve carried it (its gap is ``h + u - delta``),
+        for a later solve's start (:func:`solve_normal`'s ``initial_displacement``); None
+        when the solve did not form it (no contact, a pressure that vanished).
     """
 
     grid: Grid
@@ -130,6 +161,7 @@ class NormalResult:
     history: np.ndarray = field(repr=False)
     touches_boundary: bool = False
     contact_box: tuple[int, int, int, int] | None = None
+    displacement: Displacement | None = field(default=None, repr=False)
 
 
 def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
@@ -245,15 +277,48 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
 
 
 @numba.njit(cache=True)
-def _nonnegative(p):  # pragma: no cover - compiled
-    """``np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0 made 0, as
-    numpy's) and its sum, added as numpy adds it."""
-    q = np.empty_like(p)
-    flat, qf = p.reshape(p.size), q.reshape(q.size)
+def _least(h):  # pragma: no cover - compiled
+    """The smallest value of ``h`` (any shape, C-ordered; +inf when empty) and whether
+    all its values are finite, in one pass."""
+    flat = h.reshape(h.size)
+    least = np.inf
+    finite = True
     for i in range(flat.size):
         x = flat[i]
-        qf[i] = x if (x > 0.0 or x != x) else 0.0
-    return q, numpy_sum(q)
+        finite = finite and x - x == 0.0
+        least = min(least, x)
+    return float(least), finite
+
+
+@numba.njit(cache=True)
+def _floored(p, index, change, load, area):  # pragma: no cover - compiled
+    """The start ``q = np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0
+    made 0, as numpy's) and its sum, added as numpy adds it; with a ``load`` > 0 [N] and a
+    positive sum, ``q`` scaled to it: ``q *= load / (area * sum)`` (``area`` of an element
+    [m^2]). The elements set to zero (negative): the first ``index.size`` of them (flat
+    index, and the change ``0 - p``) in ``index`` and ``change``. Returns ``(q, sum, how
+    many were negative, the scale)`` (scale 1 when not scaled)."""
+    q = np.empty_like(p)
+    flat, qf = p.reshape(p.size), q.reshape(q.size)
+    changes = 0
+    for i in range(flat.size):
+        x = flat[i]
+        if x > 0.0 or x != x:
+            qf[i] = x
+        else:
+            qf[i] = 0.0
+            if x < 0.0:
+                if changes < index.size:
+                    index[changes] = i
+                    change[changes] = -x
+                changes += 1
+    total = numpy_sum(q)
+    scale = 1.0
+    if load > 0.0 and total > 0.0:
+        scale = load / (area * total)
+        for i in range(qf.size):
+            qf[i] *= scale
+    return q, total, changes, scale
 
 
 @numba.njit(cache=True, fastmath=REASSOCIATE)
@@ -335,6 +400,27 @@ def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover
                 urow[iy] += dj * krow[iy]
 
 
+@numba.njit(cache=True)
+def _shown_start(values, u, scale, kernel, index, change, changes):  # pragma: no cover
+    """``u = scale (values + sum_k change[k] A[:, index[k]])`` (:func:`_add_columns`):
+    ``A p`` of a start from ``A`` of the pressure before it was floored (``values``,
+    (nx, ny)) and scaled; returns whether ``values`` are finite (else ``u`` is not
+    formed)."""
+    nx, ny = u.shape
+    for i in range(nx):
+        for j in range(ny):
+            v = values[i, j]
+            if not v - v == 0.0:
+                return False
+            u[i, j] = v
+    uf = u.reshape(u.size)
+    _add_columns(uf, kernel, nx, ny, index, change, changes)
+    if scale != 1.0:
+        for i in range(uf.size):
+            uf[i] *= scale
+    return True
+
+
 @numba.njit(cache=True, fastmath=REASSOCIATE)
 def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area,
           self_compliance, kernel, nx, ny, index, change):  # pragma: no cover - compiled
@@ -412,6 +498,7 @@ def solve_normal(
     tolerance: float = 1e-3,
     max_iterations: int = 500,
     preconditioner: str = "fft",
+    initial_displacement: Displacement | None = None,
 ) -> NormalResult:
     """Solve the frictionless normal contact problem by Polonsky–Keer's CG method.
 
@@ -444,6 +531,15 @@ def solve_normal(
     preconditioner
         "fft" (default) or "none" (the plain Polonsky–Keer CG of the paper); see the
         module doc.
+    initial_displacement
+        ``A p`` [m] of ``initial_pressure`` as given (its negative values included), when
+        the caller has it at hand (a time step: from the previous steps' displacements,
+        :func:`railcontact.timestep.warmstart.previous_start`): the solve's first product
+        is then not formed. The elements the start sets to zero (negative) are taken out
+        by their influence columns (beyond :data:`CHANGE_LIMIT` of them ``A p`` is
+        convolved). Ignored (``A p`` convolved) with ``initial_contact``, when not finite,
+        not of the grid's shape, or older than :data:`REUSE_GENERATIONS`
+        (:class:`Displacement`).
 
     Returns
     -------
@@ -451,10 +547,14 @@ def solve_normal(
     """
     t0 = time.perf_counter()
     shape = grid.shape
-    h = _check_field("gap", gap, shape)
-    if h is None:
+    if gap is None:
         raise RailContactError("gap is required")
-    h = np.ascontiguousarray(h)
+    h = np.ascontiguousarray(gap, dtype=float)
+    if h.shape != shape:
+        raise RailContactError(f"gap must have the grid shape {shape}, got {h.shape}")
+    hmin, finite = _least(h)  # (its smallest value, and whether all are finite)
+    if not finite:
+        raise RailContactError("gap contains NaN or infinite values")
     if operator.components != "z" or (operator.nx, operator.ny) != shape:
         raise RailContactError("operator must be a 'z' influence operator for this grid")
     tolerance = check_positive("tolerance", tolerance)
@@ -479,8 +579,9 @@ def solve_normal(
     kernel = operator.kernels[0, 0]  # the "zz" kernel (2nx-1, 2ny-1) [m/Pa]
     self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
 
-    def finish(p, u, delta, its, converged, message, err, hist, final=False):
-        # final: under force control, the approach from the solution's own u
+    def finish(p, u, delta, its, converged, message, err, hist, final=False, shown=None):
+        # final: under force control, the approach from the solution's own u; shown: its
+        # Displacement (u = A p of the result's p)
         gap = np.empty(shape)
         contact = np.empty(shape, dtype=bool)
         delta, total, largest, count, edge, box = _summary(
@@ -491,23 +592,34 @@ def solve_normal(
             max_pressure=float(largest), area=float(count * area_el),
             iterations=its, converged=converged, message=message,
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
-            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None)
+            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
+            displacement=shown)
 
     # Trivial cases: no load, or no interpenetration anywhere.
     if force_control and load == 0.0:
         zeros = np.zeros(shape)
         return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
-    if not force_control and np.all(h >= penetration):
+    if not force_control and hmin >= penetration:  # (np.all(h >= penetration))
         zeros = np.zeros(shape)
         return finish(zeros, zeros, penetration, 0, True,
                       "no contact: penetration below the smallest gap", 0.0, [])
 
     # Start.
+    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
+    change = np.empty(CHANGE_LIMIT)
+    shown = initial_displacement  # A p of the start, if the caller knows it
+    if shown is not None and not (p is not None and mask is None and p.flags.c_contiguous
+                                  and shown.generations <= REUSE_GENERATIONS
+                                  and shown.values.shape == shape):
+        shown = None
+    floored = 0  # elements the start set to zero (their columns leave A p)
+    scale = 0.0  # the start's scale to the load (0: not scaled yet)
     if p is None:
         p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
         total = float(p.sum())
-    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0) and its sum
-        p, total = _nonnegative(p)
+    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0), its sum, scaled
+        p, total, floored, scale = _floored(p, index if shown is not None else index[:0],
+                                            change, load if force_control else 0.0, area_el)
     else:
         p = np.maximum(p, 0.0)
         total = float(p.sum())
@@ -518,8 +630,13 @@ def solve_normal(
         p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
             _uniform_start(h, operator, penetration)
         total = float(p.sum())
-    if force_control:
-        p *= load / (area_el * total)
+        shown = None
+        scale = 0.0
+    if not force_control:
+        scale = 1.0
+    elif scale == 0.0:
+        scale = load / (area_el * total)
+        p *= scale
 
     # Work arrays: the rows of one block, flat (``*f``, for the compiled steps) and as
     # (nx, ny) views of the same memory; the pressures ``p``, ``q`` (one of which is the
@@ -527,20 +644,28 @@ def solve_normal(
     p = np.ascontiguousarray(p, dtype=float)
     q = np.empty(shape)
     hf, pf, qf = h.ravel(), p.ravel(), q.ravel()
-    work = np.empty((6, h.size))
-    uf, gf, gmf, tf, rf, zf = work
-    u, g, gm, t, r, z = work.reshape(6, *shape)
+    # (u on its own: the result's displacement keeps it)
+    work = np.empty((5, h.size))
+    gf, gmf, tf, rf, zf = work
+    g, gm, t, r, z = work.reshape(5, *shape)
     if not precondition:
         z, zf = g, gf
     tf[:] = 0.0
     c = np.empty(h.size, dtype=bool)
-    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
-    change = np.empty(CHANGE_LIMIT)
     # the products of this solve (A x, and the preconditioner's M x) as bound functions
     # (x, out) -> out: the arrays are the solve's own, checked above
     product = operator.bound()
     inverse = operator.bound(PRECONDITIONER_FLOOR) if precondition else None
-    product(p, u)  # u = A p of the current p, kept up to date below
+    # u = A p of the current p, kept up to date below: convolved, or the start's shown
+    # displacement less the columns of the elements the start set to zero
+    u = np.empty(shape)
+    if shown is not None and floored <= CHANGE_LIMIT and _shown_start(
+            np.asarray(shown.values, dtype=float), u, scale, kernel, index, change, floored):
+        generations = shown.generations  # solves since u was last convolved
+    else:
+        product(p, u)
+        generations = 0
+    uf = u.ravel()
     fresh = 0  # iterations since u was last formed by a convolution
     g_old = 1.0
     conjugate = False
@@ -571,7 +696,7 @@ def solve_normal(
             fresh += 1
         else:  # too many elements left or entered the contact: convolve
             product(p, u)
-            fresh = 0
+            fresh = generations = 0
         err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
         hist.append(err)
         if not math.isfinite(err):
@@ -579,7 +704,7 @@ def solve_normal(
         if err < tolerance:
             if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
                 product(p, u)
-                fresh = 0
+                fresh = generations = 0
             if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
                 converged = True
                 break
@@ -589,8 +714,9 @@ def solve_normal(
             stalled = True
             break
 
-    if not converged and fresh > 0:  # the gap from a convolution, not the updates
+    if not converged and (fresh > 0 or generations > 0):  # the gap from a convolution
         product(p, u)
+        generations = 0
     if converged:
         message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
     else:
@@ -599,9 +725,10 @@ def solve_normal(
         if stalled:
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
                         f"{STALL_ITERATIONS} iterations")
-    res = finish(p, u, delta, its, converged, message, err, hist, final=True)
+    res = finish(p, u, delta, its, converged, message, err, hist, final=True,
+                 shown=Displacement(u, generations))
     lo, hi = SCALE_RANGE
-    depth = res.penetration - float(h.min())
+    depth = res.penetration - hmin
     if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
                                                    and lo <= depth <= hi):
         res.converged = False

@@ -35,6 +35,7 @@ import numpy as np
 from ..geometry.search import ContactPoint, overlap_on_rail
 from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
 from ..halfspace.sums import array_sum, numpy_sum
+from ..normal.bem import REUSE_GENERATIONS, Displacement
 
 MATCH_DISTANCE = 0.005
 """Largest move [m] of a contact point between steps for which the previous patch is used."""
@@ -83,6 +84,10 @@ class PatchMemory:
         The traction's rate of change [Pa/s] (2, nx, ny) on ``grid``, smoothed over the
         steps (:func:`traction_rate`), or None: the traction is then extrapolated from
         ``older``.
+    displacement
+        The normal solve's ``A p`` of ``pressure`` [m] (:class:`~railcontact.normal.bem.
+        Displacement`), or None: the next step's start's ``A p`` is then convolved
+        (:func:`previous_start`).
     """
 
     grid: Grid
@@ -97,12 +102,19 @@ class PatchMemory:
     approach: float = 0.0
     vertical_normal: float = 0.0
     traction_rate: np.ndarray | None = None
+    displacement: Displacement | None = None
 
     @cached_property
     def contact_box(self) -> tuple[float, float, float, float] | None:
         """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None;
         formed once (the step after, this memory is the older one)."""
-        return _contact_box(self.pressure, self.grid)
+        return _edges(self.element_box, self.grid)
+
+    @cached_property
+    def element_box(self) -> tuple[int, int, int, int]:
+        """The rows ``i0:i1`` and columns ``j0:j1`` of ``grid`` that hold the elements with
+        pressure (:func:`~railcontact.halfspace.grid.nonzero_box`; ``i0 < 0``: none)."""
+        return nonzero_box(np.asarray(self.pressure))
 
     def extrapolation(self, time: float | None) -> float:
         """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when
@@ -159,6 +171,99 @@ def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None
     if o is not None:
         p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
     return p
+
+
+MAX_REUSE_EXTRAPOLATION = 1.0 + 1e-9
+"""Largest extrapolation factor ``c`` with which :func:`previous_start` forms the start's
+``A p`` from the remembered displacements: their round-off enters it with the factors
+``1 + c`` and ``c``, which let it grow geometrically from step to step for ``c > 1``
+(1, and the round-off of step times such as ``k * 1e-3``: ``c = 1.0000000000000009``)."""
+
+
+def previous_start(memory: PatchMemory, grid: Grid, time: float | None = None
+                   ) -> tuple[np.ndarray, Displacement | None]:
+    """The predicted pressure [Pa] on ``grid`` at ``time`` [s] and, when the memory lets
+    it be formed without a convolution, its displacement ``A p`` [m].
+
+    The prediction is ``p = p_k + c (p_k - p_{k-1})`` (:func:`previous_pressure`), and
+    the influence operator is translation invariant, so on one lattice::
+
+        A p = u_k + c (u_k - u_{k-1}),   u = A p of each remembered pressure,
+
+    each shifted onto ``grid`` by whole elements, wherever ``grid`` lies inside both
+    remembered grids and holds all their pressure (else some of ``A p`` would be missing).
+    Then the pressure is returned before its floor at zero (the normal solve floors it,
+    :func:`~railcontact.normal.bem.solve_normal`, and takes the floored elements'
+    influence columns out of ``A p``). Otherwise - no remembered displacement, another
+    lattice, a grid reaching beyond a remembered one or cutting its pressure, ``c >``
+    :data:`MAX_REUSE_EXTRAPOLATION`, a displacement :data:`~railcontact.normal.bem.
+    REUSE_GENERATIONS` old, no pressure left or a NaN in it - the displacement is None and
+    the pressure is :func:`previous_pressure`'s (floored)."""
+    c = memory.extrapolation(time)
+    o = memory.older if c > 0 else None
+    u1 = memory.displacement
+    u0 = o.displacement if o is not None else None
+    nx, ny = grid.shape
+    if (u1 is not None and c <= MAX_REUSE_EXTRAPOLATION
+            and (o is None or u0 is not None)
+            and max(u1.generations, u0.generations if u0 is not None else 0)
+            < REUSE_GENERATIONS):
+        s1 = _inside(memory, u1, grid)
+        s0 = _inside(o, u0, grid) if o is not None else (0, 0)
+        if s1 is not None and s0 is not None:
+            p, u, ok = _extrapolated_pair(
+                memory.pressure, u1.values, *s1,
+                o.pressure if o is not None else memory.pressure,
+                u0.values if u0 is not None else u1.values, *s0, float(c), o is not None,
+                nx, ny)
+            if ok:
+                return p, Displacement(u, 1 + max(u1.generations, u0.generations
+                                                  if u0 is not None else 0))
+    return previous_pressure(memory, grid, time), None
+
+
+def _inside(memory: PatchMemory, shown: Displacement, grid: Grid) -> tuple[int, int] | None:
+    """The whole-element offset of ``grid`` in ``memory``'s grid when ``grid`` lies inside
+    it and holds all of the memory's pressure, and the memory's pressure and displacement
+    are of its shape; else None."""
+    source = memory.grid
+    if not (memory.pressure.shape == source.shape == shown.values.shape):
+        return None
+    i, j = (0, 0) if source is grid else (_lattice_shift(source, grid) or (-1, -1))
+    nx, ny = grid.nx, grid.ny
+    if i < 0 or j < 0 or i + nx > source.nx or j + ny > source.ny:
+        return None
+    i0, i1, j0, j1 = memory.element_box
+    if i0 >= 0 and not (i <= i0 and i1 <= i + nx and j <= j0 and j1 <= j + ny):
+        return None
+    return i, j
+
+
+@numba.njit(cache=True)
+def _extrapolated_pair(p1, u1, i1, j1, p0, u0, i0, j0, c, extrapolate, nx,
+                       ny):  # pragma: no cover - compiled
+    """``p = p1 + c (p1 - p0)`` and ``u = u1 + c (u1 - u0)`` on the (nx, ny) grid at the
+    offsets ``(i1, j1)``, ``(i0, j0)`` inside the remembered ones (``p1``, ``u1`` alone
+    without ``extrapolate``), ``p`` with the same operations as :func:`_extrapolated`
+    (not floored); returns ``(p, u, ok)``, ``ok`` when ``p`` has a positive element and
+    ``p`` and ``u`` are finite."""
+    p = np.empty((nx, ny))
+    u = np.empty((nx, ny))
+    bad = positive = 0  # (integer flags: the loop vectorises)
+    if not extrapolate:  # (p1 + 0 (p1 - p1) = p1)
+        c, p0, u0, i0, j0 = 0.0, p1, u1, i1, j1
+    for a in range(nx):
+        pa, ua = p[a], u[a]
+        q1, w1 = p1[a + i1, j1:j1 + ny], u1[a + i1, j1:j1 + ny]
+        q0, w0 = p0[a + i0, j0:j0 + ny], u0[a + i0, j0:j0 + ny]
+        for b in range(ny):
+            x = q1[b] + c * (q1[b] - q0[b])
+            v = w1[b] + c * (w1[b] - w0[b])
+            pa[b] = x
+            ua[b] = v
+            bad |= not (abs(x) < np.inf and abs(v) < np.inf)
+            positive |= x > 0.0
+    return p, u, bad == 0 and positive != 0
 
 
 def _on_lattice(memory: PatchMemory, grid: Grid) -> tuple[int, int] | None:
@@ -284,7 +389,15 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
-    i0, i1, j0, j1 = nonzero_box(np.asarray(pressure))
+    return _edges(nonzero_box(np.asarray(pressure)), grid)
+
+
+def _edges(box: tuple[int, int, int, int], grid: Grid
+           ) -> tuple[float, float, float, float] | None:
+    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements ``box`` of ``grid`` (rows
+    ``i0:i1``, columns ``j0:j1``, as :func:`~railcontact.halfspace.grid.nonzero_box`
+    gives them), or None when it is empty (``i0 < 0``)."""
+    i0, i1, j0, j1 = box
     if i0 < 0:
         return None
     return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,

@@ -92,7 +92,7 @@ from .warmstart import (
     match,
     merged,
     previous_bounds,
-    previous_pressure,
+    previous_start,
     previous_tangential,
     traction_rate,
 )
@@ -555,8 +555,10 @@ class WheelsetContact:
             if m is None:
                 return estimate()
 
-            def of(grid):
-                p = previous_pressure(m, grid, time)
+            def of(grid):  # (with A p of the pressure, when the memory gives it)
+                p, shown = previous_start(m, grid, time)
+                if shown is not None:  # (then p has pressure)
+                    return p, shown
                 return p if array_sum(p) > 0 else estimate()(grid)
             # the potential area: where the contact was - unless the patch's rigid overlap
             # took in another remembered patch (two patches merged): then the rigid
@@ -610,7 +612,7 @@ class WheelsetContact:
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
                 vertical_normal=patch.normal.force * math.cos(cp.contact_angle),
-                traction_rate=rate))
+                traction_rate=rate, displacement=patch.normal.displacement))
         return patches, creepages, memory
 
 
