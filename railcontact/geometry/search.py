@@ -115,7 +115,7 @@ class ContactPoint:
         later = self.__dict__.get("_later")
         if later is None or name not in later:
             raise AttributeError(f"'ContactPoint' object has no attribute {name!r}")
-        values = later[name]()  # (an error here leaves it to form later)
+        values = later[name](self)  # (an error here leaves it to form later)
         for key, value in values.items():
             object.__setattr__(self, key, value)
         if "f" in values:  # the samples formed in full: no part is kept
@@ -194,10 +194,12 @@ _SAMPLES = frozenset({"f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s
 """The samples of a point at the reference point formed in full when first read."""
 
 
-def _formed_later(later: dict[str, Callable[[], dict]], **now) -> ContactPoint:
+def _formed_later(later: dict[str, Callable[[ContactPoint], dict]], **now) -> ContactPoint:
     """A :class:`ContactPoint` with the fields ``now``; each other field ``name`` is
-    formed by ``later[name]()`` (which returns it and the others it forms, by name) when
-    it is first read."""
+    formed by ``later[name](point)`` (which returns it and the others it forms, by name)
+    when it is first read. (The point is passed, not held by the functions: a point that
+    its own functions held would be a reference cycle, freed - with its arrays - only by
+    the garbage collector.)"""
     assert later.keys().isdisjoint(now) and len(later) + len(now) == len(_FIELDS)
     cp = object.__new__(ContactPoint)
     cp.__dict__.update(now)
@@ -331,7 +333,7 @@ def _point(track, ws, side, trace, g_min, row) -> ContactPoint:
     its tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
     eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = row
 
-    def frame() -> dict:
+    def frame(_: ContactPoint) -> dict:
         out = np.empty((5, N_S))
         kernels.rigid_frame(trace[0], trace[2], trace[3], g_min, *_rail_arrays(track)[:2],
                             *_wheel_arrays(ws), u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0,
@@ -341,7 +343,7 @@ def _point(track, ws, side, trace, g_min, row) -> ContactPoint:
                     f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
                     rail_z_of_s=rail_z_of_s)
 
-    def rail_y() -> dict:
+    def rail_y(_: ContactPoint) -> dict:
         return dict(rail_y=track.rail_coordinate(u_c, z_rail))
 
     later = dict.fromkeys(_FRAME, frame)
@@ -421,11 +423,11 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     part = (frame, i0, i1, (trace, rail, wheel, g_lo, approach, u_ref, z_ref, gamma, eta_c,
                             kw, kr, overlap))
 
-    def offset() -> dict:  # the point in the rigid point's frame (formed when read)
+    def offset(_: ContactPoint) -> dict:  # the point in the rigid point's frame (when read)
         ok = np.isfinite(cp.rail_u_of_s)
         return dict(offset=(0.0, float(np.interp(u_ref, cp.rail_u_of_s[ok], cp.s[ok]))))
 
-    def samples() -> dict:  # all the samples (formed when read)
+    def samples(ref: ContactPoint) -> dict:  # all the samples (formed when read)
         f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _extended(
             ref.__dict__.get("_part", part), 0, N_S)[0]
         return dict(f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,

@@ -561,8 +561,8 @@ class WheelsetContact:
             # the potential area: where the contact was - unless the patch's rigid overlap
             # took in another remembered patch (two patches merged): then the rigid
             # overlap's, as from cold (the other's area lies outside this one's, and the
-            # contact inside would not reach its edge)
-            of.bounds = (None if merged(cp, m, source, hz.penetration)
+            # contact inside would not reach its edge); Hertz's penetration read only then
+            of.bounds = (None if len(source) > 1 and merged(cp, m, source, hz.penetration)
                          else previous_bounds(m))
             return labelled(of, "previous")
 
