@@ -481,7 +481,7 @@ def vertical_approach(patches: list[PatchSolution]) -> float:
     """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
     if not patches:
         return 0.0
-    p = min(patches, key=lambda q: q.geometry.gap)
+    p = patches[0] if len(patches) == 1 else min(patches, key=lambda q: q.geometry.gap)
     return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
 
 

@@ -260,8 +260,9 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     """
     approach = check_positive("approach", approach, "m", allow_zero=True)
     last = _LAST_POINTS[0]  # a load iteration asks again for the same wheel's first contact
-    if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
-            and last[3] == side and last[4] == approach):
+    if (last is not None and last[0] is track and last[1] is ws
+            and (last[2] is pose or last[2] == pose) and last[3] == side
+            and last[4] == approach):
         return list(last[5])
     trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
     wheel = _wheel_arrays(ws)
@@ -292,9 +293,9 @@ _LAST_GAP: list = [None]
 def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
     """:func:`_trace`, remembered for the last (track, wheelset, pose, side): a load
     iteration asks for the same wheel's contact several times."""
-    last = _LAST_GAP[0]
-    if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
-            and last[3] == side):
+    last = _LAST_GAP[0]  # (a step passes one pose to every call: identity first)
+    if (last is not None and last[0] is track and last[1] is ws
+            and (last[2] is pose or last[2] == pose) and last[3] == side):
         return last[4]
     out = _trace(track, ws, pose, side)
     out[0].flags.writeable = False  # (its rows too)

@@ -282,8 +282,16 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
     i0, i1, j0, j1 = nonzero_box(np.asarray(pressure))
-    if i0 < 0:
-        return None
+    return None if i0 < 0 else box_edges((i0, i1, j0, j1), grid)
+
+
+def box_edges(box: tuple[int, int, int, int], grid: Grid) -> tuple[float, float, float, float]:
+    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements in the rows ``i0:i1`` and
+    columns ``j0:j1`` of ``grid`` (``box``): :attr:`PatchMemory.contact_box` from a
+    normal solution's :attr:`~railcontact.normal.NormalResult.contact_box` (its pressure's
+    elements ``> 0``: the same as ``!= 0`` for a solved pressure, which is not negative and
+    finite)."""
+    i0, i1, j0, j1 = box
     return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,
             grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 - 0.5) * grid.dy)
 
