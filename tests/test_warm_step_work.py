@@ -89,3 +89,29 @@ def test_a_steps_contact_points_are_freed_without_the_garbage_collector():
             assert [r() for r in alive] == [None, None]
     finally:
         gc.enable()
+
+
+def test_first_contact_of_one_least_sample_is_the_scans_point():
+    """``contact_points`` at approach 0 takes the least gap's sample as its run when no
+    other sample has that gap (``trace_gap`` counts them): the same rows, to the bit, as
+    the scans of :func:`~railcontact.geometry.kernels.rigid_points`, over random poses
+    of both wheels; and the count of least samples is numpy's."""
+    from railcontact.geometry import kernels, search
+
+    track, ws = Track(builtin_profile("60E1")), Wheelset(builtin_profile("S1002"))
+    rng = np.random.default_rng(7)
+    wheel, rail = search._wheel_arrays(ws), search._rail_arrays(track)[2:4]
+    for _ in range(100):
+        pose = Pose(lateral=rng.uniform(-9e-3, 9e-3), yaw=rng.uniform(-8e-3, 8e-3),
+                    roll=rng.uniform(-3e-3, 3e-3) if rng.random() < 0.7 else 0.0)
+        for side in ("left", "right"):
+            trace, g_min, k, _, ties = search._trace(track, ws, pose, side)
+            assert ties == np.count_nonzero(trace[4] == trace[4].min())
+            rows = kernels.rigid_points(trace, g_min, k, 0.0, *rail, *wheel[:2], *wheel[3:])
+            search._LAST_POINTS[0] = None
+            points = contact_points(track, ws, pose, side, 0.0)
+            assert len(points) == len(rows) == 1
+            cp, row = points[0], rows[0]
+            assert (cp.rail_u, cp.position[0], cp.position[2], cp.gap, cp.contact_angle,
+                    cp.wheel_s, cp.rolling_radius) == (
+                row[2], row[1], row[3], row[4], row[5], row[6], ws.radius + row[7])

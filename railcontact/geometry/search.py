@@ -234,21 +234,22 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
 
 def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
     """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) as one array
-    (5, n), with the least gap, its first sample and whether the trace's u increase."""
+    (5, n), with the least gap, its first sample, whether the trace's u increase and how
+    many samples have the least gap."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr = _wheel_samples(ws)
     out = np.empty((5, eta.size))
-    n, g_min, k, increasing = kernels.trace_gap(
+    n, g_min, k, increasing, ties = kernels.trace_gap(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
         math.sin(phi), float(sgn * pose.lateral), float(ws.radius), *_rail_arrays(track)[4:],
         out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    return out[:, :n], g_min, k, increasing
+    return out[:, :n], g_min, k, increasing, ties
 
 
 def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -264,11 +265,18 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
             and (last[2] is pose or last[2] == pose) and last[3] == side
             and last[4] == approach):
         return list(last[5])
-    trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
+    trace, g_min, k, _, ties = _trace_of_pose(track, ws, pose, side)
     wheel = _wheel_arrays(ws)
-    rows = kernels.rigid_points(trace, g_min, k, float(approach), *_rail_arrays(track)[2:4],
-                                *wheel[:2], *wheel[3:])
-    points = [_point(track, ws, side, trace, g_min, row) for row in rows.tolist()]
+    rail = _rail_arrays(track)[2:4]
+    if approach == 0.0 and ties == 1 and math.isfinite(g_min):
+        # first contact: the least gap's sample is the only one at most 0 above it, so
+        # its run is that sample alone (rigid_points' scans of the trace find the same)
+        rows = [kernels.rigid_point(trace[0], trace[1], trace[2], trace[4], g_min, k, k + 1,
+                                    *rail, *wheel[:2], *wheel[3:])]
+    else:
+        rows = kernels.rigid_points(trace, g_min, k, float(approach), *rail, *wheel[:2],
+                                    *wheel[3:]).tolist()
+    points = [_point(track, ws, side, trace, g_min, row) for row in rows]
     if len(points) > 1:
         points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
@@ -283,7 +291,7 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
                    approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
+    trace, g_min, k, _, _ = _trace_of_pose(track, ws, pose, side)
     return kernels.count_runs(trace[4], g_min, k, float(approach))
 
 
@@ -401,7 +409,7 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
     if not d > 0:
         return None
-    trace, g_min, _, increasing = _trace_of_pose(track, ws, pose, cp.side)
+    trace, g_min, _, increasing, _ = _trace_of_pose(track, ws, pose, cp.side)
     # one compiled pass (:func:`~.kernels.reference_frame`): the patch's own run of
     # vertical interpenetration along the trace, its weighted point and angle, the frame
     # there with f shifted over the patch's own overlap, at the samples of the overlap

@@ -173,10 +173,12 @@ class HertzSolution:
         return self.__dict__[name]
 
     def _form(self) -> None:
-        """Solve a solution made by :func:`hertz_when_read` (its fields set)."""
-        args = self.__dict__["_deferred"]
-        self.__dict__.update(hertz(*args[0], **args[1]).__dict__)
-        del self.__dict__["_deferred"]
+        """Solve a solution made by :func:`hertz_when_read` (its fields set; another
+        reader may have solved it meanwhile: the same values)."""
+        args = self.__dict__.get("_deferred")
+        if args is not None:
+            self.__dict__.update(hertz(*args[0], **args[1]).__dict__)
+            self.__dict__.pop("_deferred", None)
 
     def __getstate__(self) -> dict:
         if "_deferred" in self.__dict__:  # pickled with its fields formed
