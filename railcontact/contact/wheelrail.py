@@ -53,7 +53,7 @@ from ..geometry.search import (
 )
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
-from ..halfspace.hertz import HertzSolution, hertz
+from ..halfspace.hertz import HertzSolution, hertz, hertz_when_read, semi_axis_bound
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
@@ -215,14 +215,21 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             raise CaseError(f"{cp.side} wheel: no convex contact at S = {cp.wheel_s:.4g} m "
                             "(conformal or concave gap); cannot set up the patch")
         control = Control(load=loads[k]) if loads is not None else Control(penetration=dn)
-        hz = hertz(cp.A, cp.B, pair, **control.kwargs())
-        if max(hz.a, hz.b) > MAX_PATCH_SHARE * cp.rolling_radius:
-            raise CaseError(
-                f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
-                f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
-                f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more than "
-                f"{MAX_PATCH_SHARE:g} of the radius); check [material] young and the load "
-                "or penetration")
+        kwargs = control.kwargs()
+        limit = MAX_PATCH_SHARE * cp.rolling_radius
+        # Hertz's solution formed when first read (a warm step reads none of it) where a
+        # bound of its semi-axes shows the patch within the limit; else solved here
+        if semi_axis_bound(cp.A, cp.B, pair, **kwargs) < limit:
+            hz = hertz_when_read(cp.A, cp.B, pair, **kwargs)
+        else:
+            hz = hertz(cp.A, cp.B, pair, **kwargs)
+            if max(hz.a, hz.b) > limit:
+                raise CaseError(
+                    f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
+                    f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
+                    f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more "
+                    f"than {MAX_PATCH_SHARE:g} of the radius); check [material] young and "
+                    "the load or penetration")
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
         if last is not None:
@@ -474,7 +481,7 @@ def vertical_approach(patches: list[PatchSolution]) -> float:
     """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
     if not patches:
         return 0.0
-    p = min(patches, key=lambda q: q.geometry.gap)
+    p = patches[0] if len(patches) == 1 else min(patches, key=lambda q: q.geometry.gap)
     return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
 
 

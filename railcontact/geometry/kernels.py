@@ -248,7 +248,7 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     phi; lateral displacement ``u_ws``), those with ``lo < u < hi`` (above the rail, its
     spline ``rx``, ``rc``) written to ``out`` (5, n): eta, X, u, Z and the vertical gap
     g = Z - rail(u). Returns (how many, the least g, its first index, whether the kept
-    u increase strictly)."""
+    u increase strictly, how many samples have the least g)."""
     n = eta.size
     xs = np.empty(n)  # all points first (a loop without branches: vectorised)
     us = np.empty(n)
@@ -272,6 +272,7 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     j = 0
     g_min = math.inf
     k = 0
+    ties = 0
     increasing = True
     u_last = -math.inf
     for i in range(n):
@@ -290,8 +291,11 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
             if g < g_min:
                 g_min = g
                 k = m
+                ties = 1
+            elif g == g_min:
+                ties += 1
             m += 1
-    return m, g_min, k, increasing
+    return m, g_min, k, increasing, ties
 
 
 @numba.njit(cache=True)

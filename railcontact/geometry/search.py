@@ -115,7 +115,7 @@ class ContactPoint:
         later = self.__dict__.get("_later")
         if later is None or name not in later:
             raise AttributeError(f"'ContactPoint' object has no attribute {name!r}")
-        values = later[name]()  # (an error here leaves it to form later)
+        values = later[name](self)  # (an error here leaves it to form later)
         for key, value in values.items():
             object.__setattr__(self, key, value)
         if "f" in values:  # the samples formed in full: no part is kept
@@ -194,10 +194,12 @@ _SAMPLES = frozenset({"f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s
 """The samples of a point at the reference point formed in full when first read."""
 
 
-def _formed_later(later: dict[str, Callable[[], dict]], **now) -> ContactPoint:
+def _formed_later(later: dict[str, Callable[[ContactPoint], dict]], **now) -> ContactPoint:
     """A :class:`ContactPoint` with the fields ``now``; each other field ``name`` is
-    formed by ``later[name]()`` (which returns it and the others it forms, by name) when
-    it is first read."""
+    formed by ``later[name](point)`` (which returns it and the others it forms, by name)
+    when it is first read. (The point is passed, not held by the functions: a point that
+    its own functions held would be a reference cycle, freed - with its arrays - only by
+    the garbage collector.)"""
     assert later.keys().isdisjoint(now) and len(later) + len(now) == len(_FIELDS)
     cp = object.__new__(ContactPoint)
     cp.__dict__.update(now)
@@ -232,21 +234,22 @@ def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
 
 def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
     """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) as one array
-    (5, n), with the least gap, its first sample and whether the trace's u increase."""
+    (5, n), with the least gap, its first sample, whether the trace's u increase and how
+    many samples have the least gap."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr = _wheel_samples(ws)
     out = np.empty((5, eta.size))
-    n, g_min, k, increasing = kernels.trace_gap(
+    n, g_min, k, increasing, ties = kernels.trace_gap(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
         math.sin(phi), float(sgn * pose.lateral), float(ws.radius), *_rail_arrays(track)[4:],
         out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    return out[:, :n], g_min, k, increasing
+    return out[:, :n], g_min, k, increasing, ties
 
 
 def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -258,14 +261,22 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     """
     approach = check_positive("approach", approach, "m", allow_zero=True)
     last = _LAST_POINTS[0]  # a load iteration asks again for the same wheel's first contact
-    if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
-            and last[3] == side and last[4] == approach):
+    if (last is not None and last[0] is track and last[1] is ws
+            and (last[2] is pose or last[2] == pose) and last[3] == side
+            and last[4] == approach):
         return list(last[5])
-    trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
+    trace, g_min, k, _, ties = _trace_of_pose(track, ws, pose, side)
     wheel = _wheel_arrays(ws)
-    rows = kernels.rigid_points(trace, g_min, k, float(approach), *_rail_arrays(track)[2:4],
-                                *wheel[:2], *wheel[3:])
-    points = [_point(track, ws, side, trace, g_min, row) for row in rows.tolist()]
+    rail = _rail_arrays(track)[2:4]
+    if approach == 0.0 and ties == 1 and math.isfinite(g_min):
+        # first contact: the least gap's sample is the only one at most 0 above it, so
+        # its run is that sample alone (rigid_points' scans of the trace find the same)
+        rows = [kernels.rigid_point(trace[0], trace[1], trace[2], trace[4], g_min, k, k + 1,
+                                    *rail, *wheel[:2], *wheel[3:])]
+    else:
+        rows = kernels.rigid_points(trace, g_min, k, float(approach), *rail, *wheel[:2],
+                                    *wheel[3:]).tolist()
+    points = [_point(track, ws, side, trace, g_min, row) for row in rows]
     if len(points) > 1:
         points.sort(key=lambda c: c.gap)
     _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
@@ -280,7 +291,7 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
                    approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    trace, g_min, k, _ = _trace_of_pose(track, ws, pose, side)
+    trace, g_min, k, _, _ = _trace_of_pose(track, ws, pose, side)
     return kernels.count_runs(trace[4], g_min, k, float(approach))
 
 
@@ -290,9 +301,9 @@ _LAST_GAP: list = [None]
 def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
     """:func:`_trace`, remembered for the last (track, wheelset, pose, side): a load
     iteration asks for the same wheel's contact several times."""
-    last = _LAST_GAP[0]
-    if (last is not None and last[0] is track and last[1] is ws and last[2] == pose
-            and last[3] == side):
+    last = _LAST_GAP[0]  # (a step passes one pose to every call: identity first)
+    if (last is not None and last[0] is track and last[1] is ws
+            and (last[2] is pose or last[2] == pose) and last[3] == side):
         return last[4]
     out = _trace(track, ws, pose, side)
     out[0].flags.writeable = False  # (its rows too)
@@ -331,7 +342,7 @@ def _point(track, ws, side, trace, g_min, row) -> ContactPoint:
     its tangent frame formed when first read (:func:`~.kernels.rigid_frame`)."""
     eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = row
 
-    def frame() -> dict:
+    def frame(_: ContactPoint) -> dict:
         out = np.empty((5, N_S))
         kernels.rigid_frame(trace[0], trace[2], trace[3], g_min, *_rail_arrays(track)[:2],
                             *_wheel_arrays(ws), u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0,
@@ -341,7 +352,7 @@ def _point(track, ws, side, trace, g_min, row) -> ContactPoint:
                     f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,
                     rail_z_of_s=rail_z_of_s)
 
-    def rail_y() -> dict:
+    def rail_y(_: ContactPoint) -> dict:
         return dict(rail_y=track.rail_coordinate(u_c, z_rail))
 
     later = dict.fromkeys(_FRAME, frame)
@@ -398,7 +409,7 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
     if not d > 0:
         return None
-    trace, g_min, _, increasing = _trace_of_pose(track, ws, pose, cp.side)
+    trace, g_min, _, increasing, _ = _trace_of_pose(track, ws, pose, cp.side)
     # one compiled pass (:func:`~.kernels.reference_frame`): the patch's own run of
     # vertical interpenetration along the trace, its weighted point and angle, the frame
     # there with f shifted over the patch's own overlap, at the samples of the overlap
@@ -421,11 +432,11 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     part = (frame, i0, i1, (trace, rail, wheel, g_lo, approach, u_ref, z_ref, gamma, eta_c,
                             kw, kr, overlap))
 
-    def offset() -> dict:  # the point in the rigid point's frame (formed when read)
+    def offset(_: ContactPoint) -> dict:  # the point in the rigid point's frame (when read)
         ok = np.isfinite(cp.rail_u_of_s)
         return dict(offset=(0.0, float(np.interp(u_ref, cp.rail_u_of_s[ok], cp.s[ok]))))
 
-    def samples() -> dict:  # all the samples (formed when read)
+    def samples(ref: ContactPoint) -> dict:  # all the samples (formed when read)
         f, a_of_s, wheel_s_of_s, rail_u_of_s, rail_z_of_s = _extended(
             ref.__dict__.get("_part", part), 0, N_S)[0]
         return dict(f=f, a_of_s=a_of_s, wheel_s_of_s=wheel_s_of_s, rail_u_of_s=rail_u_of_s,

@@ -397,9 +397,16 @@ def _edges(box: tuple[int, int, int, int], grid: Grid
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements ``box`` of ``grid`` (rows
     ``i0:i1``, columns ``j0:j1``, as :func:`~railcontact.halfspace.grid.nonzero_box`
     gives them), or None when it is empty (``i0 < 0``)."""
+    return None if box[0] < 0 else box_edges(box, grid)
+
+
+def box_edges(box: tuple[int, int, int, int], grid: Grid) -> tuple[float, float, float, float]:
+    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements in the rows ``i0:i1`` and
+    columns ``j0:j1`` of ``grid`` (``box``): :attr:`PatchMemory.contact_box` from a
+    normal solution's :attr:`~railcontact.normal.NormalResult.contact_box` (its pressure's
+    elements ``> 0``: the same as ``!= 0`` for a solved pressure, which is not negative and
+    finite)."""
     i0, i1, j0, j1 = box
-    if i0 < 0:
-        return None
     return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,
             grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 - 0.5) * grid.dy)
 

@@ -49,7 +49,7 @@ right wheel is mirrored; lateral components and the spin change sign there.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 from time import perf_counter
 
@@ -89,6 +89,7 @@ from .rigid import RigidSolution, RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
+    box_edges,
     match,
     merged,
     previous_bounds,
@@ -563,8 +564,8 @@ class WheelsetContact:
             # the potential area: where the contact was - unless the patch's rigid overlap
             # took in another remembered patch (two patches merged): then the rigid
             # overlap's, as from cold (the other's area lies outside this one's, and the
-            # contact inside would not reach its edge)
-            of.bounds = (None if merged(cp, m, source, hz.penetration)
+            # contact inside would not reach its edge); Hertz's penetration read only then
+            of.bounds = (None if len(source) > 1 and merged(cp, m, source, hz.penetration)
                          else previous_bounds(m))
             return labelled(of, "previous")
 
@@ -582,7 +583,8 @@ class WheelsetContact:
         approach = vertical_approach(patches)
         for patch in patches:
             cp = patch.geometry
-            m = match(source, cp.rail_u, cp.position[2])  # None without warm start
+            u, z = cp.rail_u, cp.position[2]
+            m = match(source, u, z)  # None without warm start
             if creep is not None or kin is not None:
                 c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
                 creepages.append(c)
@@ -595,7 +597,7 @@ class WheelsetContact:
                 solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
                                        creepage=side_creep, previous=prev)
             t = patch.tangential
-            last = match(previous, cp.rail_u, cp.position[2])
+            last = m if previous is source else match(previous, u, z)
             # the traction's rate smoothed over the steps (SteadyGS's extrapolation only;
             # its time is the patch's work, as the start it serves)
             rate = None
@@ -604,15 +606,15 @@ class WheelsetContact:
                 rate = traction_rate(t.traction, patch.normal.grid, time, last)
                 patch.work.seconds += perf_counter() - t1
             older = None if last is None else _without_older(last)
-            memory.append(PatchMemory(
-                grid=patch.normal.grid, pressure=patch.normal.pressure,
+            n = patch.normal
+            memory.append(_memory(
+                n.contact_box, grid=n.grid, pressure=n.pressure,
                 traction=None if t is None else t.traction,
-                state=None if t is None else t.state, u=cp.rail_u, z=cp.position[2],
-                time=time, older=older,
+                state=None if t is None else t.state, u=u, z=z, time=time, older=older,
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
-                vertical_normal=patch.normal.force * math.cos(cp.contact_angle),
-                traction_rate=rate, displacement=patch.normal.displacement))
+                vertical_normal=n.force * math.cos(cp.contact_angle), traction_rate=rate,
+                displacement=n.displacement))
         return patches, creepages, memory
 
 
@@ -651,13 +653,32 @@ def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]
     """The vertical approach [m] of a wheel and the vertical load [N] of its normal forces
     in the step ``source`` remembers, extrapolated linearly to ``time`` [s] from the step
     before it when both are known (:meth:`PatchMemory.extrapolation`)."""
-    a, q = source[0].approach, sum(m.vertical_normal for m in source)
+    a, q = source[0].approach, sum([m.vertical_normal for m in source])
     older = [m.older for m in source]
     f = source[0].extrapolation(time)
-    if f > 0 and all(o is not None for o in older) and older[0].approach > 0:
-        a_o, q_o = older[0].approach, sum(o.vertical_normal for o in older)
+    if f > 0 and None not in older and older[0].approach > 0:
+        a_o, q_o = older[0].approach, sum([o.vertical_normal for o in older])
         a, q = max(a + f * (a - a_o), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
     return a, q
+
+
+_MEMORY_FIELDS = frozenset(f.name for f in fields(PatchMemory))
+
+
+def _memory(box: tuple[int, int, int, int] | None, **values) -> PatchMemory:
+    """``PatchMemory(**values)`` (every field given) with its fields set as a copy (a
+    per-pass path: the frozen dataclass's ``__init__`` sets each through
+    ``object.__setattr__``; the values are the step's own), and its
+    :attr:`~PatchMemory.element_box` and :attr:`~PatchMemory.contact_box` formed from the
+    normal solution's ``box`` of its pressure (:func:`~.warmstart.box_edges`) instead of
+    by a pass over the pressure."""
+    assert values.keys() == _MEMORY_FIELDS
+    out = object.__new__(PatchMemory)
+    out.__dict__.update(values)
+    if box is not None:
+        out.__dict__["element_box"] = box
+        out.__dict__["contact_box"] = box_edges(box, values["grid"])
+    return out
 
 
 def _without_older(m: PatchMemory) -> PatchMemory:
