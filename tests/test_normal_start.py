@@ -249,3 +249,53 @@ def test_time_steps_reuse_the_displacements_and_solve_as_from_a_convolution():
         ref = solve(gap, grid, op, **{**kw, "initial_displacement": None})
         assert res.iterations == ref.iterations
         assert np.max(np.abs(res.pressure - ref.pressure)) < 1e-11 * ref.max_pressure
+
+
+def test_two_patch_and_penetration_control_steps_start_from_exact_displacements():
+    """Review (round 7): warm steps the hunting test does not reach - a wheel with two
+    patches (flange root and tread, S1002/60E1 at 5.1 mm, 12 kN), then penetration control
+    with the time restarted (the memory's step lies ahead: no extrapolation). Every start
+    given with a displacement has ``A p`` of its pressure as the operator convolves it, and
+    its solve takes the iterations of the one from a convolved start, to its pressure."""
+    import railcontact.contact.patch as patch_module
+    from railcontact.geometry.profiles import read_profile
+    from railcontact.geometry.track import Pose, Track, Wheelset
+    from railcontact.timestep.wheelset import ContactSettings, Kinematics, WheelsetContact
+
+    calls = []
+    solve = patch_module.solve_normal
+
+    def recorded(gap, grid, op, **kw):
+        res = solve(gap, grid, op, **kw)
+        calls.append((gap, grid, op, kw, res))
+        return res
+
+    wc = WheelsetContact(Track(read_profile("60E1", "rail"), math.atan(1 / 40)),
+                         Wheelset(read_profile("S1002", "wheel"), 0.46),
+                         ElasticPair.of(Material(206e9, 0.28), Material(206e9, 0.28)),
+                         ContactSettings(friction=0.4, element_size=0.5e-3))
+    mp = pytest.MonkeyPatch()
+    mp.setattr(patch_module, "solve_normal", recorded)
+    try:
+        for k in range(6):
+            t = k * 1e-3
+            wc.solve(Pose(5.1e-3 + 0.1e-3 * math.sin(2 * math.pi * 20 * t)),
+                     loads=(12e3, 12e3), kinematics=Kinematics(30.0, 0.0), time=t)
+            assert len(wc.memory["left"]) == 2
+        loaded = len(calls)
+        for k in range(4):
+            wc.solve(Pose(2e-3 + 0.1e-4 * k), vertical=-3e-4,
+                     kinematics=Kinematics(30.0, 0.0), time=k * 1e-3)
+    finally:
+        mp.undo()
+    shown = [(i, c) for i, c in enumerate(calls)
+             if c[3].get("initial_displacement") is not None]
+    assert sum(i < loaded for i, _ in shown) >= 8 and sum(i >= loaded for i, _ in shown) >= 4
+    for _, (gap, grid, op, kw, res) in shown:
+        start = np.ascontiguousarray(kw["initial_pressure"])
+        u = op.apply(start)
+        assert np.max(np.abs(kw["initial_displacement"].values - u)) < 1e-12 * np.max(
+            np.abs(u))
+        ref = solve(gap, grid, op, **{**kw, "initial_displacement": None})
+        assert res.iterations == ref.iterations
+        assert np.max(np.abs(res.pressure - ref.pressure)) < 1e-11 * ref.max_pressure
