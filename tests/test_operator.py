@@ -258,3 +258,40 @@ def test_import_leaves_out_pyfftws_dask_interface():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "False", "True"]
+
+
+def test_import_of_pyfftw_leaves_other_threads_imports_of_dask_array_alone():
+    """Review (round 7): while railcontact imports pyfftw without its dask interface,
+    another thread's ``import dask.array`` (a dask worker's) is not refused. The other
+    thread imports dask.array exactly while pyfftw is imported (a hook on that import
+    waits for it)."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    if importlib.util.find_spec("dask") is None:
+        pytest.skip("dask not installed")
+    code = (
+        "import builtins, threading\n"
+        "import dask\n"
+        "errors = []\n"
+        "def other():\n"
+        "    try:\n"
+        "        import dask.array\n"
+        "    except Exception as exc:\n"
+        "        errors.append(repr(exc))\n"
+        "thread = threading.Thread(target=other)\n"
+        "real = builtins.__import__\n"
+        "def hooked(name, *args, **kwargs):\n"
+        "    if name == 'pyfftw' and not thread.is_alive() and thread.ident is None:\n"
+        "        thread.start()\n"
+        "        thread.join()\n"
+        "    return real(name, *args, **kwargs)\n"
+        "builtins.__import__ = hooked\n"
+        "import railcontact.halfspace.operator as op\n"
+        "builtins.__import__ = real\n"
+        "assert thread.ident is not None and op.HAVE_PYFFTW\n"
+        "print(errors or 'ok')\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "ok"

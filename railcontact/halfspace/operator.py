@@ -60,6 +60,19 @@ from .influence import influence_kernel
 from .materials import ElasticPair
 
 
+class _LeftOut:
+    """A meta path finder that makes the import of one module fail in one thread (others
+    import it as usual)."""
+
+    def __init__(self, name: str, thread: int):
+        self.name, self.thread = name, thread
+
+    def find_spec(self, name, path=None, target=None):
+        if name == self.name and threading.get_ident() == self.thread:
+            raise ModuleNotFoundError(f"{name} left out while pyfftw is imported", name=name)
+        return None
+
+
 def _import_pyfftw():
     """pyfftw, imported without its dask interface (None when pyfftw is missing).
 
@@ -67,22 +80,25 @@ def _import_pyfftw():
     whenever dask is installed (the ``table`` extra installs it): about a second of
     dask.array and its dependencies at every import of railcontact - every FMU instance's
     start, every ``railcontact solve`` - for an interface railcontact does not use (it
-    plans ``pyfftw.FFTW`` objects alone). While pyfftw is imported, ``dask.array.fft`` is
-    marked missing (``sys.modules[name] = None`` makes its import raise ImportError), so
-    pyfftw leaves out ``pyfftw.interfaces.dask_fft`` as it does without dask; a process
-    that imported dask.array before is left as it is, and ``import
-    pyfftw.interfaces.dask_fft`` works afterwards as usual."""
-    name = "dask.array.fft"
-    blocked = name not in sys.modules
-    if blocked:
-        sys.modules[name] = None  # type: ignore[assignment]
+    plans ``pyfftw.FFTW`` objects alone). While pyfftw is imported, the first of
+    ``dask``, ``dask.array``, ``dask.array.fft`` not imported yet fails to import in this
+    thread (:class:`_LeftOut`, first on ``sys.meta_path``), so pyfftw leaves out
+    ``pyfftw.interfaces.dask_fft`` as it does without dask; other threads import dask as
+    usual meanwhile (a ``sys.modules[name] = None`` marker, used before, refused their
+    ``import dask.array``), a process that imported dask.array before is left as it is,
+    and ``import pyfftw.interfaces.dask_fft`` works afterwards as usual."""
+    name = next((n for n in ("dask", "dask.array", "dask.array.fft")
+                 if n not in sys.modules), None)
+    finder = None if name is None else _LeftOut(name, threading.get_ident())
+    if finder is not None:
+        sys.meta_path.insert(0, finder)
     try:
         import pyfftw as module
     except ImportError:  # pragma: no cover
         return None
     finally:
-        if blocked and sys.modules.get(name, 0) is None:
-            del sys.modules[name]
+        if finder is not None:
+            sys.meta_path.remove(finder)
     return module
 
 
