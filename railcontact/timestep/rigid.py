@@ -31,6 +31,14 @@ wheel without load counts as just touching (``delta = 0``). When no root is foun
 :data:`MAX_EVALUATIONS` evaluations (or within +-:data:`MAX_ROLL`) the solution says so
 (:attr:`RigidSolution.converged`, :attr:`RigidSolution.message`) and carries the best
 iterate.
+
+In a time loop (:class:`RigidWheelset` with the previous steps' roots, kept in the
+wheelset's memory under ``"rigid"``, :class:`RigidMemory`) the search starts in time
+instead: at the roll extrapolated from the last three steps' roots (quadratic in time;
+linear from two, the last root from one) with the last step's slope ``dG/dphi``, so that
+the first evaluation usually meets the tolerance (one load-controlled solve of both
+wheels, and no ``G(phi0)``), else one secant step does; the same stopping test and the
+same bracketing safety follow, so the root found meets the same tolerance.
 """
 
 from __future__ import annotations
@@ -42,6 +50,7 @@ from dataclasses import dataclass, field
 from ..errors import RailContactError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
+from .warmstart import MAX_EXTRAPOLATION
 
 RIGID_RTOL = 1e-4
 """Residual ``|G|`` of the two wheels' vertical positions, relative to the larger approach,
@@ -76,12 +85,60 @@ class RigidSolution:
     message: str = "ok"
     evaluations: int = 0
     """Evaluations of ``G`` (module docstring)."""
+    slope: float = 0.0
+    """``dG/dphi`` [m/rad] the search last used (its last secant): the next step's."""
+
+
+MAX_HISTORY = 3
+"""Roots of this many previous steps kept for the start in time (quadratic in time)."""
+
+
+@dataclass(frozen=True)
+class RigidMemory:
+    """A time step's root: what starts the next step's search (module docstring)."""
+
+    time: float | None
+    """Simulation time of the step [s]; None: not given (the root is the next start)."""
+    roll: float
+    """The roll found [rad]."""
+    slope: float
+    """``dG/dphi`` [m/rad] at it (:attr:`RigidSolution.slope`)."""
+
+
+def predicted_roll(history: Sequence[RigidMemory], time: float | None) -> float | None:
+    """The roll [rad] extrapolated to ``time`` [s] from the previous steps' roots
+    (newest first): through the last three (quadratic in time), two (linear) or the last
+    one; the last root when the times do not allow it (not given, not increasing, or a
+    step more than :data:`~.warmstart.MAX_EXTRAPOLATION` times the last one). None without
+    a history."""
+    if not history:
+        return None
+    last = history[0]
+    if time is None or last.time is None or not time > last.time:
+        return last.roll
+    points = [(last.time, last.roll)]
+    for m in history[1:MAX_HISTORY]:
+        if m.time is None or not m.time < points[-1][0]:
+            break
+        points.append((m.time, m.roll))
+    if len(points) > 1 and time - last.time > MAX_EXTRAPOLATION * (last.time - points[1][0]):
+        return last.roll
+    phi = 0.0  # Lagrange's polynomial through the points, at time
+    for i, (ti, pi) in enumerate(points):
+        w = 1.0
+        for j, (tj, _) in enumerate(points):
+            if j != i:
+                w *= (time - tj) / (ti - tj)
+        phi += w * pi
+    return phi if abs(phi) < MAX_ROLL else last.roll
 
 
 def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                       approaches: Sequence[float],
                       contacts: Sequence[tuple[float, float, float] | None],
-                      approach_at: ApproachAt | None = None) -> RigidSolution:
+                      approach_at: ApproachAt | None = None, *,
+                      start: float | None = None, start_slope: float = 0.0
+                      ) -> RigidSolution:
     """The vertical displacement [m] and roll [rad] of the rigid wheelset at which both
     wheels have their loads (module docstring).
 
@@ -99,6 +156,10 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
     approach_at
         The wheels' approaches at another roll; None: those at the pose's roll for every
         roll (a first-order answer, right only where rolling does not move the contacts).
+    start, start_slope
+        The first roll [rad] to evaluate and the slope ``dG/dphi`` [m/rad] of the first
+        step from it (a positive one: the previous step's, :func:`predicted_roll`); None
+        and 0: the pose's roll and the geometric slope.
     """
     slope = 0.0
     for side, c in zip(SIDES, contacts, strict=True):
@@ -108,6 +169,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
             lever, radius, angle = SIDES[side] * (c[0] - pose.lateral), c[1], c[2]
         slope += lever - radius * math.tan(angle)
     slope = max(slope, MIN_SLOPE)  # a flange: the approach falls as it rolls up
+    if start_slope > 0:
+        slope = start_slope
     tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
 
     def evaluate(phi: float) -> tuple[float, float]:
@@ -123,7 +186,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
     below: tuple[float, float] | None = None  # (phi, G) with G < 0: the root is above
     above: tuple[float, float] | None = None
     run = 0  # bracketed: evaluations in a row on the same side of the root
-    phi, failure = pose.roll, ""
+    phi, failure = (pose.roll if start is None else start), ""
     for _ in range(MAX_EVALUATIONS):
         try:
             g, v = evaluate(phi)
@@ -136,7 +199,11 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         same = bool(points) and (points[-1][1] < 0) == (g < 0)
         points.append((phi, g, v))
         if abs(g) <= tol:
-            return RigidSolution(v, phi, evaluations=len(points))
+            if len(points) > 1:  # the last secant, the next step's slope
+                (p0, g0, _), (p1, g1, _) = points[-2], points[-1]
+                if p1 != p0 and (g1 - g0) / (p1 - p0) > 0:
+                    slope = (g1 - g0) / (p1 - p0)
+            return RigidSolution(v, phi, evaluations=len(points), slope=slope)
         bracketed = below is not None and above is not None
         run = run + 1 if bracketed and same else 0
         if g < 0:
@@ -173,6 +240,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                 + (": a jump, where a wheel's contact moves (tread to flange), and no roll "
                    "gives both loads)" if abs(above[0] - below[0]) < 1e-6 else ")"))
     return RigidSolution(best[2], best[0], converged=False, evaluations=len(points),
+                         slope=slope,
                          message=(f"rigid wheelset's vertical displacement and roll not "
                                   f"converged: {why}; the two wheels' vertical positions "
                                   f"differ by {best[1] * 1e6:.4g} um (tolerance "
@@ -192,12 +260,26 @@ class RigidWheelset:
     approaches: tuple[float, float]
     contacts: tuple[tuple[float, float, float] | None, ...]
     approach_at: ApproachAt | None = field(default=None, repr=False, compare=False)
+    history: tuple[RigidMemory, ...] = ()
+    """The previous steps' roots, newest first (:class:`RigidMemory`): the start in time."""
+    time: float | None = None
+    """Simulation time of the step [s]."""
+    memory: dict | None = field(default=None, repr=False, compare=False)
+    """The wheelset's memory of this step, where the root found is kept (under
+    ``"rigid"``, with the history: the next step's start); None: not kept."""
 
     def solve(self) -> RigidSolution:
-        """(:func:`vertical_and_roll`)."""
-        return vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
-                                 self.contacts, self.approach_at)
+        """(:func:`vertical_and_roll`, started in time from :attr:`history`; the root
+        found, when converged, kept in :attr:`memory`)."""
+        start = predicted_roll(self.history, self.time)
+        s = vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
+                              self.contacts, self.approach_at, start=start,
+                              start_slope=self.history[0].slope if self.history else 0.0)
+        if self.memory is not None and s.converged:
+            self.memory["rigid"] = [RigidMemory(self.time, s.roll, s.slope),
+                                    *self.history[:MAX_HISTORY - 1]]
+        return s
 
 
-__all__ = ["MAX_EVALUATIONS", "RIGID_RTOL", "RigidSolution", "RigidWheelset",
-           "vertical_and_roll"]
+__all__ = ["MAX_EVALUATIONS", "RIGID_RTOL", "RigidMemory", "RigidSolution", "RigidWheelset",
+           "predicted_roll", "vertical_and_roll"]

@@ -85,7 +85,7 @@ from ..halfspace.sums import array_sum, numpy_sum
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
-from .rigid import RigidSolution, RigidWheelset
+from .rigid import RigidMemory, RigidSolution, RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
@@ -422,6 +422,7 @@ class WheelsetContact:
         else:
             for wheel in wheels:
                 self._check_validity(wheel)
+        history = tuple(self._rigid_history()) if loads is not None else ()
         if remember:
             self.memory = new_memory
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
@@ -432,8 +433,15 @@ class WheelsetContact:
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
-                _RolledApproaches(self, pose, loads, creepages, kinematics, time))
+                _RolledApproaches(self, pose, loads, creepages, kinematics, time),
+                history=history, time=time,
+                memory=new_memory if remember and self.settings.uses_previous else None)
         return result
+
+    def _rigid_history(self) -> list[RigidMemory]:
+        """The previous steps' rigid wheelset roots (newest first) that start this step's
+        search (:mod:`.rigid`): kept in the memory under ``"rigid"`` with a warm start."""
+        return self.memory.get("rigid", []) if self.settings.uses_previous else []
 
     def _check_validity(self, wheel: WheelContact) -> None:
         """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
