@@ -67,8 +67,10 @@ slope is small or negative (``r tan(gamma) > l``), but the wheel's approach fall
 wheelset rolls it up, and ``G`` grows at about 0.6 m/rad (S1002 on 60E1, 7-8 mm): a
 smaller slope overshoots by a multiple of the root; the secant takes over after."""
 
-ApproachAt = Callable[[float], tuple[float, float]]
-"""``phi -> (delta_L, delta_R)``: the wheels' vertical approaches [m] at roll ``phi``."""
+ApproachAt = Callable[..., tuple[float, float]]
+"""``(phi[, guess]) -> (delta_L, delta_R)``: the wheels' vertical approaches [m] at roll
+``phi``; ``guess``, when given, the approaches [m] expected there (the wheels' solves
+form their frames at them first)."""
 
 
 @dataclass(frozen=True)
@@ -87,6 +89,13 @@ class RigidSolution:
     """Evaluations of ``G`` (module docstring)."""
     slope: float = 0.0
     """``dG/dphi`` [m/rad] the search last used (its last secant): the next step's."""
+    estimate: float | None = None
+    """The root estimated from the last evaluation, ``roll - G / slope`` [rad] (within the
+    tolerance, a closer one than :attr:`roll`: what the next step's start is formed from);
+    None when not converged."""
+    approach_slopes: tuple[float, float] | None = None
+    """``d delta_s / d phi`` [m/rad] (left, right) from the last evaluation at a roll other
+    than the pose's: how the next step guesses the approaches at a roll; None if none."""
 
 
 MAX_HISTORY = 3
@@ -100,9 +109,11 @@ class RigidMemory:
     time: float | None
     """Simulation time of the step [s]; None: not given (the root is the next start)."""
     roll: float
-    """The roll found [rad]."""
+    """The root found [rad] (:attr:`RigidSolution.estimate`)."""
     slope: float
     """``dG/dphi`` [m/rad] at it (:attr:`RigidSolution.slope`)."""
+    approach_slopes: tuple[float, float] | None = None
+    """(:attr:`RigidSolution.approach_slopes`)."""
 
 
 def predicted_roll(history: Sequence[RigidMemory], time: float | None) -> float | None:
@@ -137,7 +148,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                       approaches: Sequence[float],
                       contacts: Sequence[tuple[float, float, float] | None],
                       approach_at: ApproachAt | None = None, *,
-                      start: float | None = None, start_slope: float = 0.0
+                      start: float | None = None, start_slope: float = 0.0,
+                      approach_slopes: tuple[float, float] | None = None
                       ) -> RigidSolution:
     """The vertical displacement [m] and roll [rad] of the rigid wheelset at which both
     wheels have their loads (module docstring).
@@ -160,6 +172,9 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         The first roll [rad] to evaluate and the slope ``dG/dphi`` [m/rad] of the first
         step from it (a positive one: the previous step's, :func:`predicted_roll`); None
         and 0: the pose's roll and the geometric slope.
+    approach_slopes
+        ``d delta_s / d phi`` [m/rad] (left, right) that guess the approaches at a roll for
+        ``approach_at`` (the previous step's, then this one's); None: no guess.
     """
     slope = 0.0
     for side, c in zip(SIDES, contacts, strict=True):
@@ -173,11 +188,20 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         slope = start_slope
     tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
 
+    rates = approach_slopes
+
     def evaluate(phi: float) -> tuple[float, float]:
         """(G, v) at roll ``phi``."""
+        nonlocal rates
         p = Pose(pose.lateral, pose.yaw, phi)
-        dl, dr = (approaches if phi == pose.roll or approach_at is None
-                  else approach_at(phi))
+        if phi == pose.roll or approach_at is None:
+            dl, dr = approaches
+        else:
+            dl, dr = (approach_at(phi) if rates is None else approach_at(
+                phi, tuple(a + k * (phi - pose.roll)
+                           for a, k in zip(approaches, rates, strict=True))))
+            rates = tuple((d - a) / (phi - pose.roll)
+                          for d, a in zip((dl, dr), approaches, strict=True))
         hl = first_contact_gap(track, ws, p, "left") + dl
         hr = first_contact_gap(track, ws, p, "right") + dr
         return hl - hr, -0.5 * (hl + hr)
@@ -203,7 +227,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                 (p0, g0, _), (p1, g1, _) = points[-2], points[-1]
                 if p1 != p0 and (g1 - g0) / (p1 - p0) > 0:
                     slope = (g1 - g0) / (p1 - p0)
-            return RigidSolution(v, phi, evaluations=len(points), slope=slope)
+            return RigidSolution(v, phi, evaluations=len(points), slope=slope,
+                                 estimate=phi - g / slope, approach_slopes=rates)
         bracketed = below is not None and above is not None
         run = run + 1 if bracketed and same else 0
         if g < 0:
@@ -274,9 +299,12 @@ class RigidWheelset:
         start = predicted_roll(self.history, self.time)
         s = vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
                               self.contacts, self.approach_at, start=start,
-                              start_slope=self.history[0].slope if self.history else 0.0)
+                              start_slope=self.history[0].slope if self.history else 0.0,
+                              approach_slopes=(self.history[0].approach_slopes
+                                               if self.history else None))
         if self.memory is not None and s.converged:
-            self.memory["rigid"] = [RigidMemory(self.time, s.roll, s.slope),
+            self.memory["rigid"] = [RigidMemory(self.time, s.estimate, s.slope,
+                                                s.approach_slopes),
                                     *self.history[:MAX_HISTORY - 1]]
         return s
 

@@ -473,7 +473,11 @@ class WheelsetContact:
 
     def _solve_side(self, side: str, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
-                    time: float | None) -> tuple[WheelContact, list[PatchMemory]]:
+                    time: float | None, approach: float | None = None
+                    ) -> tuple[WheelContact, list[PatchMemory]]:
+        """``approach``: the vertical approach [m] expected, at which the first pass forms
+        its frame (instead of the remembered step's, extrapolated: the rolled wheelset's
+        solves, :class:`_RolledApproaches`)."""
         keep = self.settings.uses_previous  # remember this step for the next one
         previous = self.memory[side] if keep else []
         wheel = WheelContact(side=side)
@@ -482,7 +486,7 @@ class WheelsetContact:
         tangential = creep is not None or kin is not None
         if not (control.by_load and tangential and self.settings.load_includes_creep):
             patches, creepages, memory = self._pass(side, pose, control, creep, kin, time,
-                                                    previous, previous)
+                                                    previous, previous, approach)
             return self._finish(wheel, patches, creepages, pose), memory if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
         q = control.load
@@ -491,7 +495,7 @@ class WheelsetContact:
         def residual(qn: float) -> tuple[float, tuple]:
             source = passes[-1][2] if passes else previous  # later passes: the one before
             passes.append(self._pass(side, pose, Control(load=qn), creep, kin, time, previous,
-                                     source))
+                                     source, None if passes else approach))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
         estimate_seconds = 0.0  # the cold estimate's time, charged to the wheel's work
@@ -545,7 +549,8 @@ class WheelsetContact:
 
     def _pass(self, side: str, pose: Pose, control: Control,
               creep: tuple[float, float, float] | None, kin: Kinematics | None,
-              time: float | None, previous: list[PatchMemory], source: list[PatchMemory]
+              time: float | None, previous: list[PatchMemory], source: list[PatchMemory],
+              approach: float | None = None
               ) -> tuple[list[PatchSolution], list[tuple[float, float, float]],
                          list[PatchMemory]]:
         """One solve of a wheel's patches: the normal BEM under ``control``, then the
@@ -580,6 +585,8 @@ class WheelsetContact:
         # the frame at the reference point formed first at the approach of the step (or
         # pass) that starts this one, extrapolated in time: one pass in the common case
         start = _start(source, time) if source else None
+        if start is not None and approach is not None and approach > 0:  # expected there
+            start = (approach, start[1])
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
                                      settings.patch_settings, pair, estimate_for,
                                      reference=settings.patch_frame == "reference",
@@ -640,7 +647,9 @@ class _RolledApproaches:
     kinematics: Kinematics | None
     time: float | None
 
-    def __call__(self, phi: float) -> tuple[float, float]:
+    def __call__(self, phi: float, guess: tuple[float, float] | None = None
+                 ) -> tuple[float, float]:
+        """``guess``: the approaches [m] expected (each wheel's frame formed there first)."""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         for k, side in enumerate(("left", "right")):
@@ -649,7 +658,8 @@ class _RolledApproaches:
                 continue
             creep = None if self.creepages is None else self.creepages[k]
             wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
-                                                creep, self.kinematics, self.time)
+                                                creep, self.kinematics, self.time,
+                                                None if guess is None else guess[k])
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
