@@ -188,11 +188,13 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         slope = start_slope
     tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
 
-    rates = approach_slopes
+    # the guesses' rates: the previous step's, else the first evaluation's, kept through
+    # the search (G stays one smooth function of phi); the last evaluation's: the next's
+    rates, last_rates = approach_slopes, None
 
     def evaluate(phi: float) -> tuple[float, float]:
         """(G, v) at roll ``phi``."""
-        nonlocal rates
+        nonlocal rates, last_rates
         p = Pose(pose.lateral, pose.yaw, phi)
         if phi == pose.roll or approach_at is None:
             dl, dr = approaches
@@ -200,8 +202,9 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
             dl, dr = (approach_at(phi) if rates is None else approach_at(
                 phi, tuple(a + k * (phi - pose.roll)
                            for a, k in zip(approaches, rates, strict=True))))
-            rates = tuple((d - a) / (phi - pose.roll)
-                          for d, a in zip((dl, dr), approaches, strict=True))
+            last_rates = tuple((d - a) / (phi - pose.roll)
+                               for d, a in zip((dl, dr), approaches, strict=True))
+            rates = rates or last_rates
         hl = first_contact_gap(track, ws, p, "left") + dl
         hr = first_contact_gap(track, ws, p, "right") + dr
         return hl - hr, -0.5 * (hl + hr)
@@ -228,7 +231,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                 if p1 != p0 and (g1 - g0) / (p1 - p0) > 0:
                     slope = (g1 - g0) / (p1 - p0)
             return RigidSolution(v, phi, evaluations=len(points), slope=slope,
-                                 estimate=phi - g / slope, approach_slopes=rates)
+                                 estimate=phi - g / slope,
+                                 approach_slopes=last_rates or approach_slopes)
         bracketed = below is not None and above is not None
         run = run + 1 if bracketed and same else 0
         if g < 0:

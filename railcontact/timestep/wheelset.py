@@ -68,7 +68,12 @@ from ..contact.loadloop import (
 )
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
-from ..contact.wheelrail import contact_points, solve_wheel_normal, vertical_approach
+from ..contact.wheelrail import (
+    REFERENCE_RTOL,
+    contact_points,
+    solve_wheel_normal,
+    vertical_approach,
+)
 from ..errors import (
     CaseError,
     ConvergenceError,
@@ -649,7 +654,11 @@ class _RolledApproaches:
 
     def __call__(self, phi: float, guess: tuple[float, float] | None = None
                  ) -> tuple[float, float]:
-        """``guess``: the approaches [m] expected (each wheel's frame formed there first)."""
+        """``guess``: the approaches [m] expected, where each wheel's frame is formed
+        first; a wheel whose approach differs from it by more than
+        :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL` is solved again with its frame
+        formed at the approach found (as a pass from the step's approach is followed by
+        one: the frame's accuracy of a solve without the guess)."""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         for k, side in enumerate(("left", "right")):
@@ -660,6 +669,11 @@ class _RolledApproaches:
             wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
                                                 creep, self.kinematics, self.time,
                                                 None if guess is None else guess[k])
+            if (guess is not None and wheel.patches
+                    and abs(wheel.approach - guess[k]) > REFERENCE_RTOL * wheel.approach):
+                wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+                                                    creep, self.kinematics, self.time,
+                                                    wheel.approach)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
