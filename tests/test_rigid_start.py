@@ -9,7 +9,7 @@ tolerance (:data:`~railcontact.timestep.rigid.RIGID_RTOL` of the larger approach
 here).
 
 Measured over the 8 mm run at every step from 95 to 105 (the tread-to-flange
-transition) the residual reaches 1.3 tol (main's search, which ends further below its
+transition) the residual reaches 1.2 tol (main's search, which ends further below its
 tolerance after 5-8 evaluations: 0.7 tol); there two memory-free solves that differ only
 in their start (``warm_start`` = none against the default, patch frames to 1e-7) already
 differ by up to 11 tol, the contact solves' own reproducibility at that level. The check
@@ -28,7 +28,7 @@ from railcontact.geometry.roll import first_contact_gap
 from railcontact.geometry.track import Pose, Track, Wheelset
 from railcontact.halfspace.materials import ElasticPair, Material
 from railcontact.timestep import rigid
-from railcontact.timestep.rigid import RigidMemory, predicted_roll
+from railcontact.timestep.rigid import RigidMemory, predicted_approaches, predicted_roll
 from railcontact.timestep.wheelset import ContactSettings, WheelsetContact
 
 Q = 83.3e3
@@ -146,3 +146,14 @@ def test_predicted_roll_is_the_polynomial_in_time():
     assert predicted_roll(h, 0.003) == roll(0.003)  # not later than the last root
     assert predicted_roll(h, 0.01) == roll(0.003)  # a step 7 times the last one
     assert predicted_roll([], 0.004) is None
+
+
+def test_predicted_approaches_follow_the_roll():
+    """The approaches at the root are extrapolated with the roll's weights; a step that
+    kept none (not converged, or a root at the pose's roll without a solve) gives none."""
+    h = [RigidMemory(t, 0.0, 1.0, None, (7e-5 + t * 1e-3, 7.5e-5 - t * 1e-3))
+         for t in (0.003, 0.002, 0.001)]
+    a = predicted_approaches(h, 0.004)
+    assert a == pytest.approx((7e-5 + 4e-6, 7.5e-5 - 4e-6), rel=1e-12)
+    assert predicted_approaches([RigidMemory(0.003, 0.0, 1.0), *h[1:]], 0.004) is None
+    assert predicted_approaches(h, None) == h[0].approaches

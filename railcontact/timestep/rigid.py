@@ -96,6 +96,9 @@ class RigidSolution:
     approach_slopes: tuple[float, float] | None = None
     """``d delta_s / d phi`` [m/rad] (left, right) from the last evaluation at a roll other
     than the pose's: how the next step guesses the approaches at a roll; None if none."""
+    approaches: tuple[float, float] | None = None
+    """The wheels' approaches [m] at :attr:`roll` (the next step's guess); None if not
+    converged."""
 
 
 MAX_HISTORY = 3
@@ -114,6 +117,31 @@ class RigidMemory:
     """``dG/dphi`` [m/rad] at it (:attr:`RigidSolution.slope`)."""
     approach_slopes: tuple[float, float] | None = None
     """(:attr:`RigidSolution.approach_slopes`)."""
+    approaches: tuple[float, float] | None = None
+    """(:attr:`RigidSolution.approaches`)."""
+
+
+def _weights(history: Sequence[RigidMemory], time: float | None) -> list[float]:
+    """Lagrange's weights at ``time`` [s] of the previous steps (newest first) that
+    :func:`predicted_roll` extrapolates from: ``[1.0]`` for the last one alone."""
+    last = history[0]
+    if time is None or last.time is None or not time > last.time:
+        return [1.0]
+    times = [last.time]
+    for m in history[1:MAX_HISTORY]:
+        if m.time is None or not m.time < times[-1]:
+            break
+        times.append(m.time)
+    if len(times) > 1 and time - last.time > MAX_EXTRAPOLATION * (last.time - times[1]):
+        return [1.0]
+    weights = []
+    for i, ti in enumerate(times):
+        w = 1.0
+        for j, tj in enumerate(times):
+            if j != i:
+                w *= (time - tj) / (ti - tj)
+        weights.append(w)
+    return weights
 
 
 def predicted_roll(history: Sequence[RigidMemory], time: float | None) -> float | None:
@@ -124,24 +152,22 @@ def predicted_roll(history: Sequence[RigidMemory], time: float | None) -> float 
     a history."""
     if not history:
         return None
-    last = history[0]
-    if time is None or last.time is None or not time > last.time:
-        return last.roll
-    points = [(last.time, last.roll)]
-    for m in history[1:MAX_HISTORY]:
-        if m.time is None or not m.time < points[-1][0]:
-            break
-        points.append((m.time, m.roll))
-    if len(points) > 1 and time - last.time > MAX_EXTRAPOLATION * (last.time - points[1][0]):
-        return last.roll
-    phi = 0.0  # Lagrange's polynomial through the points, at time
-    for i, (ti, pi) in enumerate(points):
-        w = 1.0
-        for j, (tj, _) in enumerate(points):
-            if j != i:
-                w *= (time - tj) / (ti - tj)
-        phi += w * pi
-    return phi if abs(phi) < MAX_ROLL else last.roll
+    phi = sum(w * m.roll for w, m in zip(_weights(history, time), history, strict=False))
+    return phi if abs(phi) < MAX_ROLL else history[0].roll
+
+
+def predicted_approaches(history: Sequence[RigidMemory], time: float | None
+                         ) -> tuple[float, float] | None:
+    """The wheels' approaches [m] at the root extrapolated to ``time`` [s] as
+    :func:`predicted_roll` extrapolates the roll; None when a step did not keep them."""
+    if not history:
+        return None
+    weights = _weights(history, time)
+    used = history[:len(weights)]
+    if any(m.approaches is None for m in used):
+        return None
+    return tuple(sum(w * m.approaches[k] for w, m in zip(weights, used, strict=True))
+                 for k in range(2))
 
 
 def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
@@ -149,7 +175,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                       contacts: Sequence[tuple[float, float, float] | None],
                       approach_at: ApproachAt | None = None, *,
                       start: float | None = None, start_slope: float = 0.0,
-                      approach_slopes: tuple[float, float] | None = None
+                      approach_slopes: tuple[float, float] | None = None,
+                      anchor: tuple[float, tuple[float, float]] | None = None
                       ) -> RigidSolution:
     """The vertical displacement [m] and roll [rad] of the rigid wheelset at which both
     wheels have their loads (module docstring).
@@ -174,7 +201,11 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         and 0: the pose's roll and the geometric slope.
     approach_slopes
         ``d delta_s / d phi`` [m/rad] (left, right) that guess the approaches at a roll for
-        ``approach_at`` (the previous step's, then this one's); None: no guess.
+        ``approach_at`` (the previous step's, then this search's); None: no guess.
+    anchor
+        A roll [rad] and the approaches [m] expected there, from which the first guess
+        is formed (the previous steps' at their roots, extrapolated); None: the pose's
+        roll and ``approaches``. Later guesses start from the last evaluation.
     """
     slope = 0.0
     for side, c in zip(SIDES, contacts, strict=True):
@@ -188,23 +219,27 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         slope = start_slope
     tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
 
-    # the guesses' rates: the previous step's, else the first evaluation's, kept through
-    # the search (G stays one smooth function of phi); the last evaluation's: the next's
-    rates, last_rates = approach_slopes, None
+    # the guesses: from the anchor (then the last evaluation) along the rates (the
+    # previous step's, else the secant from the pose's roll, then the last two
+    # evaluations'); a wheel's solve checks its guess (:class:`_RolledApproaches`)
+    rates, base = approach_slopes, anchor or (pose.roll, tuple(approaches))
+    last: tuple[float, tuple[float, float]] | None = None  # the last full evaluation
 
     def evaluate(phi: float) -> tuple[float, float]:
         """(G, v) at roll ``phi``."""
-        nonlocal rates, last_rates
+        nonlocal rates, base, last
         p = Pose(pose.lateral, pose.yaw, phi)
         if phi == pose.roll or approach_at is None:
             dl, dr = approaches
         else:
             dl, dr = (approach_at(phi) if rates is None else approach_at(
-                phi, tuple(a + k * (phi - pose.roll)
-                           for a, k in zip(approaches, rates, strict=True))))
-            last_rates = tuple((d - a) / (phi - pose.roll)
-                               for d, a in zip((dl, dr), approaches, strict=True))
-            rates = rates or last_rates
+                phi, tuple(a + k * (phi - base[0])
+                           for a, k in zip(base[1], rates, strict=True))))
+            ref = last or (pose.roll, approaches)
+            if phi != ref[0]:
+                rates = tuple((d - a) / (phi - ref[0])
+                              for d, a in zip((dl, dr), ref[1], strict=True))
+            last = base = (phi, (dl, dr))
         hl = first_contact_gap(track, ws, p, "left") + dl
         hr = first_contact_gap(track, ws, p, "right") + dr
         return hl - hr, -0.5 * (hl + hr)
@@ -232,7 +267,9 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                     slope = (g1 - g0) / (p1 - p0)
             return RigidSolution(v, phi, evaluations=len(points), slope=slope,
                                  estimate=phi - g / slope,
-                                 approach_slopes=last_rates or approach_slopes)
+                                 approach_slopes=rates, approaches=(
+                                     last[1] if last and last[0] == phi
+                                     else tuple(approaches) if phi == pose.roll else None))
         bracketed = below is not None and above is not None
         run = run + 1 if bracketed and same else 0
         if g < 0:
@@ -301,17 +338,20 @@ class RigidWheelset:
         """(:func:`vertical_and_roll`, started in time from :attr:`history`; the root
         found, when converged, kept in :attr:`memory`)."""
         start = predicted_roll(self.history, self.time)
+        approaches = predicted_approaches(self.history, self.time)
         s = vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
                               self.contacts, self.approach_at, start=start,
                               start_slope=self.history[0].slope if self.history else 0.0,
                               approach_slopes=(self.history[0].approach_slopes
-                                               if self.history else None))
+                                               if self.history else None),
+                              anchor=(None if start is None or approaches is None
+                                      else (start, approaches)))
         if self.memory is not None and s.converged:
             self.memory["rigid"] = [RigidMemory(self.time, s.estimate, s.slope,
-                                                s.approach_slopes),
+                                                s.approach_slopes, s.approaches),
                                     *self.history[:MAX_HISTORY - 1]]
         return s
 
 
 __all__ = ["MAX_EVALUATIONS", "RIGID_RTOL", "RigidMemory", "RigidSolution", "RigidWheelset",
-           "predicted_roll", "vertical_and_roll"]
+           "predicted_approaches", "predicted_roll", "vertical_and_roll"]
