@@ -157,3 +157,20 @@ def test_predicted_approaches_follow_the_roll():
     assert a == pytest.approx((7e-5 + 4e-6, 7.5e-5 - 4e-6), rel=1e-12)
     assert predicted_approaches([RigidMemory(0.003, 0.0, 1.0), *h[1:]], 0.004) is None
     assert predicted_approaches(h, None) == h[0].approaches
+
+
+def test_a_start_out_of_range_falls_back_to_the_pose_roll():
+    """A remembered root that puts the wheels out of range at this step (a pose far from
+    the previous one) is not an error: the search starts again from the pose's roll and
+    finds the root a memory-free step finds, to the tolerance."""
+    wc = contact()
+    pose, t = hunting(3e-3, 5)
+    wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t)
+    wc.memory["rigid"] = [RigidMemory(t, 0.045, 1.0, (0.0, 0.0), (1e-4, 1e-4))]  # climbed
+    r = wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t + 1e-3)
+    s = r.rigid_solution
+    assert s.converged, s.message
+    cold = contact(warm_start="none").solve(pose, loads=(Q, Q), creepages=CREEP,
+                                            time=t + 1e-3).rigid_solution
+    tol = rigid.RIGID_RTOL * max(r.left.approach, r.right.approach)
+    assert abs(s.roll - cold.roll) * s.slope <= 2 * tol

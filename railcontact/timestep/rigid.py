@@ -222,7 +222,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         else:
             lever, radius, angle = SIDES[side] * (c[0] - pose.lateral), c[1], c[2]
         slope += lever - radius * math.tan(angle)
-    slope = max(slope, MIN_SLOPE)  # a flange: the approach falls as it rolls up
+    geometric = slope = max(slope, MIN_SLOPE)  # a flange: the approach falls as it rolls up
     if start_slope > 0:
         slope = start_slope
     tol = max(RIGID_RTOL * max(approaches), RIGID_ATOL)
@@ -262,6 +262,9 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
             g, v = evaluate(phi)
         except RailContactError as exc:  # beyond the profiles, or a wheel not solved
             failure = f"at roll {phi:.6g} rad: {exc}"
+            if not points and phi != pose.roll:  # the start in time: from the pose's roll
+                phi, slope, rates, base = pose.roll, geometric, None, (pose.roll, approaches)
+                continue
             if not points:
                 break
             phi = 0.5 * (phi + points[-1][0])  # back towards the last good roll
