@@ -68,7 +68,12 @@ from ..contact.loadloop import (
 )
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
-from ..contact.wheelrail import contact_points, solve_wheel_normal, vertical_approach
+from ..contact.wheelrail import (
+    REFERENCE_RTOL,
+    contact_points,
+    solve_wheel_normal,
+    vertical_approach,
+)
 from ..errors import (
     CaseError,
     ConvergenceError,
@@ -85,7 +90,7 @@ from ..halfspace.sums import array_sum, numpy_sum
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
-from .rigid import RigidSolution, RigidWheelset
+from .rigid import RigidMemory, RigidSolution, RigidWheelset
 from .validity import check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
@@ -422,6 +427,7 @@ class WheelsetContact:
         else:
             for wheel in wheels:
                 self._check_validity(wheel)
+        history = tuple(self._rigid_history()) if loads is not None else ()
         if remember:
             self.memory = new_memory
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
@@ -432,8 +438,15 @@ class WheelsetContact:
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
-                _RolledApproaches(self, pose, loads, creepages, kinematics, time))
+                _RolledApproaches(self, pose, loads, creepages, kinematics, time),
+                history=history, time=time,
+                memory=new_memory if remember and self.settings.uses_previous else None)
         return result
+
+    def _rigid_history(self) -> list[RigidMemory]:
+        """The previous steps' rigid wheelset roots (newest first) that start this step's
+        search (:mod:`.rigid`): kept in the memory under ``"rigid"`` with a warm start."""
+        return self.memory.get("rigid", []) if self.settings.uses_previous else []
 
     def _check_validity(self, wheel: WheelContact) -> None:
         """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
@@ -465,7 +478,11 @@ class WheelsetContact:
 
     def _solve_side(self, side: str, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
-                    time: float | None) -> tuple[WheelContact, list[PatchMemory]]:
+                    time: float | None, approach: float | None = None
+                    ) -> tuple[WheelContact, list[PatchMemory]]:
+        """``approach``: the vertical approach [m] expected, at which the first pass forms
+        its frame (instead of the remembered step's, extrapolated: the rolled wheelset's
+        solves, :class:`_RolledApproaches`)."""
         keep = self.settings.uses_previous  # remember this step for the next one
         previous = self.memory[side] if keep else []
         wheel = WheelContact(side=side)
@@ -474,7 +491,7 @@ class WheelsetContact:
         tangential = creep is not None or kin is not None
         if not (control.by_load and tangential and self.settings.load_includes_creep):
             patches, creepages, memory = self._pass(side, pose, control, creep, kin, time,
-                                                    previous, previous)
+                                                    previous, previous, approach)
             return self._finish(wheel, patches, creepages, pose), memory if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
         q = control.load
@@ -483,7 +500,7 @@ class WheelsetContact:
         def residual(qn: float) -> tuple[float, tuple]:
             source = passes[-1][2] if passes else previous  # later passes: the one before
             passes.append(self._pass(side, pose, Control(load=qn), creep, kin, time, previous,
-                                     source))
+                                     source, None if passes else approach))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
         estimate_seconds = 0.0  # the cold estimate's time, charged to the wheel's work
@@ -537,7 +554,8 @@ class WheelsetContact:
 
     def _pass(self, side: str, pose: Pose, control: Control,
               creep: tuple[float, float, float] | None, kin: Kinematics | None,
-              time: float | None, previous: list[PatchMemory], source: list[PatchMemory]
+              time: float | None, previous: list[PatchMemory], source: list[PatchMemory],
+              approach: float | None = None
               ) -> tuple[list[PatchSolution], list[tuple[float, float, float]],
                          list[PatchMemory]]:
         """One solve of a wheel's patches: the normal BEM under ``control``, then the
@@ -572,6 +590,8 @@ class WheelsetContact:
         # the frame at the reference point formed first at the approach of the step (or
         # pass) that starts this one, extrapolated in time: one pass in the common case
         start = _start(source, time) if source else None
+        if start is not None and approach is not None and approach > 0:  # expected there
+            start = (approach, start[1])
         patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
                                      settings.patch_settings, pair, estimate_for,
                                      reference=settings.patch_frame == "reference",
@@ -632,7 +652,13 @@ class _RolledApproaches:
     kinematics: Kinematics | None
     time: float | None
 
-    def __call__(self, phi: float) -> tuple[float, float]:
+    def __call__(self, phi: float, guess: tuple[float, float] | None = None
+                 ) -> tuple[float, float]:
+        """``guess``: the approaches [m] expected, where each wheel's frame is formed
+        first; a wheel whose approach differs from it by more than
+        :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL` is solved again with its frame
+        formed at the approach found (as a pass from the step's approach is followed by
+        one: the frame's accuracy of a solve without the guess)."""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         for k, side in enumerate(("left", "right")):
@@ -641,7 +667,13 @@ class _RolledApproaches:
                 continue
             creep = None if self.creepages is None else self.creepages[k]
             wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
-                                                creep, self.kinematics, self.time)
+                                                creep, self.kinematics, self.time,
+                                                None if guess is None else guess[k])
+            if (guess is not None and wheel.patches
+                    and abs(wheel.approach - guess[k]) > REFERENCE_RTOL * wheel.approach):
+                wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+                                                    creep, self.kinematics, self.time,
+                                                    wheel.approach)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
