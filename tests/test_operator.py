@@ -244,20 +244,24 @@ def test_products_of_kernels_without_symmetry_equal_dense(shape):
             assert np.max(np.abs(out - (ref if k.shape[0] == 2 else ref[0]))) <= 1e-13 * scale
 
 
-def test_import_leaves_out_pyfftws_dask_interface():
-    """``import railcontact`` does not import dask.array through pyfftw's interfaces (about
-    a second at every FMU instance's start); pyfftw's dask interface still imports after."""
+def _fresh_python(code: str) -> str:
+    """What ``code`` prints, run in a fresh interpreter (imports as at a process's start)."""
     import subprocess
     import sys
 
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout
+
+
+def test_import_leaves_out_pyfftws_dask_interface():
+    """``import railcontact`` does not import dask.array through pyfftw's interfaces (about
+    a second at every FMU instance's start); pyfftw's dask interface still imports after."""
     code = ("import sys, railcontact.halfspace.operator as op\n"
             "assert op.HAVE_PYFFTW == (op.pyfftw is not None)\n"
             "print('dask.array' in sys.modules, 'dask.array.fft' in sys.modules)\n"
             "import pyfftw.interfaces.dask_fft\n"
             "print(sys.modules['dask.array.fft'] is not None)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout.split()
-    assert out == ["False", "False", "True"]
+    assert _fresh_python(code).split() == ["False", "False", "True"]
 
 
 def test_import_of_pyfftw_leaves_other_threads_imports_of_dask_array_alone():
@@ -266,8 +270,6 @@ def test_import_of_pyfftw_leaves_other_threads_imports_of_dask_array_alone():
     thread imports dask.array exactly while pyfftw is imported (a hook on that import
     waits for it)."""
     import importlib.util
-    import subprocess
-    import sys
 
     if importlib.util.find_spec("dask") is None:
         pytest.skip("dask not installed")
@@ -292,6 +294,4 @@ def test_import_of_pyfftw_leaves_other_threads_imports_of_dask_array_alone():
         "builtins.__import__ = real\n"
         "assert thread.ident is not None and op.HAVE_PYFFTW\n"
         "print(errors or 'ok')\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout.strip()
-    assert out == "ok"
+    assert _fresh_python(code).strip() == "ok"

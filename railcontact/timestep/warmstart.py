@@ -108,7 +108,7 @@ class PatchMemory:
     def contact_box(self) -> tuple[float, float, float, float] | None:
         """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None;
         formed once (the step after, this memory is the older one)."""
-        return _edges(self.element_box, self.grid)
+        return box_edges(self.element_box, self.grid)
 
     @cached_property
     def element_box(self) -> tuple[int, int, int, int]:
@@ -389,23 +389,19 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
-    return _edges(nonzero_box(np.asarray(pressure)), grid)
+    return box_edges(nonzero_box(np.asarray(pressure)), grid)
 
 
-def _edges(box: tuple[int, int, int, int], grid: Grid
-           ) -> tuple[float, float, float, float] | None:
-    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements ``box`` of ``grid`` (rows
-    ``i0:i1``, columns ``j0:j1``, as :func:`~railcontact.halfspace.grid.nonzero_box`
-    gives them), or None when it is empty (``i0 < 0``)."""
-    return None if box[0] < 0 else box_edges(box, grid)
-
-
-def box_edges(box: tuple[int, int, int, int], grid: Grid) -> tuple[float, float, float, float]:
+def box_edges(box: tuple[int, int, int, int], grid: Grid
+              ) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements in the rows ``i0:i1`` and
-    columns ``j0:j1`` of ``grid`` (``box``): :attr:`PatchMemory.contact_box` from a
-    normal solution's :attr:`~railcontact.normal.NormalResult.contact_box` (its pressure's
-    elements ``> 0``: the same as ``!= 0`` for a solved pressure, which is not negative and
-    finite)."""
+    columns ``j0:j1`` of ``grid`` (``box``, as :func:`~railcontact.halfspace.grid.
+    nonzero_box` gives it: None when empty, ``i0 < 0``): :attr:`PatchMemory.contact_box`,
+    also from a normal solution's :attr:`~railcontact.normal.NormalResult.contact_box`
+    (its pressure's elements ``> 0``: the same as ``!= 0`` for a solved pressure, which is
+    not negative and finite)."""
+    if box[0] < 0:
+        return None
     i0, i1, j0, j1 = box
     return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,
             grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 - 0.5) * grid.dy)
