@@ -128,7 +128,7 @@ def normal_estimate(settings: NormalSettings, hz: HertzSolution | None, s: np.nd
                                       **control.kwargs())
         except RailContactError as exc:  # the BEM does not need it: start without
             return _no_estimate(f"{method} failed ({exc}); no estimate")
-        return lambda grid: est.pressure_at(*grid.mesh())
+        return lambda grid: est.pressure_on(grid)
     return lambda grid: None
 
 

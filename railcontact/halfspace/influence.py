@@ -32,6 +32,9 @@ in units of m/Pa (displacement per unit traction).
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from .materials import ElasticPair
@@ -111,3 +114,42 @@ def influence_kernel(
     """
     X, Y = offsets(nx, ny, dx, dy)
     return coefficients_at(block, X, Y, dx, dy, pair)
+
+
+@numba.njit(cache=True, inline="always")
+def _zz_antiderivative(a, b):  # pragma: no cover - compiled
+    """``a asinh(b/|a|) + b asinh(a/|b|)`` (each term 0 where its factor is 0): the zz
+    block's ``F`` without ``(1-nu)/(pi G)``; ``F(-a, -b) = F(a, b)``."""
+    out = 0.0
+    if a != 0.0:
+        out += a * math.asinh(b / abs(a))
+    if b != 0.0:
+        out += b * math.asinh(a / abs(b))
+    return out
+
+
+@numba.njit(cache=True)
+def zz_displacement_at(x, y, xmin, dx, ymin, dy, traction):  # pragma: no cover - compiled
+    """The normal displacement difference [m] at the point (x, y) [m] of a normal traction
+    [Pa] given on a grid of ``traction.shape`` elements of size ``dx * dy`` whose outer
+    edges start at (xmin, ymin) [m], without the factor ``(1-nu)/(pi G)`` [m/Pa / m]:
+    ``sum_ij [[F]](x - x_i, y - y_j) traction_ij`` (the zz block of
+    :func:`coefficients_at`), with ``F`` formed once at each of the ``(nx+1)(ny+1)``
+    element corners that neighbouring elements share (a quarter of the corner operator's
+    evaluations; the same sum within round-off)."""
+    nx, ny = traction.shape
+    prev = np.empty(ny + 1)  # F at the corners of edge i (an x edge), then of edge i + 1
+    here = np.empty(ny + 1)
+    for j in range(ny + 1):
+        prev[j] = _zz_antiderivative(x - xmin, y - (ymin + j * dy))
+    total = 0.0
+    for i in range(nx):
+        xe = x - (xmin + (i + 1) * dx)
+        for j in range(ny + 1):
+            here[j] = _zz_antiderivative(xe, y - (ymin + j * dy))
+        for j in range(ny):
+            w = traction[i, j]
+            if w != 0.0:
+                total += (prev[j] - prev[j + 1] - here[j] + here[j + 1]) * w
+        prev, here = here, prev
+    return total

@@ -38,16 +38,22 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz
-from ..halfspace.influence import coefficients_at
+from ..halfspace.influence import zz_displacement_at
+from ..halfspace.interp import interp_walk
 from ..halfspace.materials import ElasticPair
+from ..halfspace.sums import numpy_sum
 
 KP_FACTOR = 0.55
 METHODS = ("kp", "infcon")
+SEARCH_SAMPLES = 801
+"""Points from one end of the virtual patch to the other at which its largest half
+length is sought (the estimate grid's extent along x)."""
 
 
 @dataclass
@@ -82,6 +88,8 @@ class NormalEstimate:
     wall_time: float
     half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
     amplitude: float = 0.0
+    shape_data: tuple | None = field(repr=False, default=None, compare=False)
+    """(s, f, a_of_s, d0, stretch) of :func:`_shape`, for the compiled evaluations."""
 
     def pressure_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The model's pressure [Pa] at any points (x, y) [m]: this is how the estimate is
@@ -90,6 +98,16 @@ class NormalEstimate:
         inside = (np.asarray(y) >= self.grid.bounds[2]) & (np.asarray(y) <= self.grid.bounds[3])
         return np.where(inside, self.amplitude * np.sqrt(np.clip(xl**2 - np.asarray(x) ** 2,
                                                                  0, None)), 0.0)
+
+    def pressure_on(self, grid: Grid) -> np.ndarray:
+        """:meth:`pressure_at` the element centres of ``grid`` [Pa], (nx, ny): the same
+        values, in one compiled pass (each row's half length formed once)."""
+        if self.shape_data is None:
+            return self.pressure_at(*grid.mesh())
+        s, f, a_of_s, d0, stretch = self.shape_data
+        _, _, ylo, yhi = self.grid.bounds
+        return _pressure_on(grid.x, grid.y, s, f, a_of_s, d0, stretch, ylo, yhi,
+                            self.amplitude)
 
 
 def infcon_factor(A: float, B_e: float) -> float:
@@ -102,22 +120,125 @@ def infcon_factor(A: float, B_e: float) -> float:
 
 def _half_width(s: np.ndarray, f: np.ndarray, level: float) -> tuple[float, float]:
     """Ends (lo, hi) of the connected region around s = 0 where f <= level (interpolated)."""
-    k0 = int(np.argmin(np.abs(s)))
-    inside = f <= level
+    return _half_width_at(s, f, float(level))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _half_width_at(s, f, level):  # pragma: no cover - compiled
+    """:func:`_half_width`: the run of samples ``f <= level`` (NaN: not) through the
+    sample nearest s = 0 (``np.argmin(abs(s))``: the first such, or the first NaN),
+    widened at each end to where the gap crosses ``level`` on the piece beyond (the end
+    sample itself where that is outside the arrays or its gap is not finite)."""
+    n = s.size
+    k0 = 0
+    best = abs(s[0])
+    if not math.isnan(best):
+        for k in range(1, n):
+            v = abs(s[k])
+            if math.isnan(v):
+                k0 = k
+                break
+            if v < best:
+                best, k0 = v, k
     lo = k0
-    while lo > 0 and inside[lo - 1]:
+    while lo > 0 and f[lo - 1] <= level:
         lo -= 1
     hi = k0
-    while hi < len(s) - 1 and inside[hi + 1]:
+    while hi < n - 1 and f[hi + 1] <= level:
         hi += 1
+    return _cross(s, f, level, lo, lo - 1), _cross(s, f, level, hi, hi + 1)
 
-    def cross(i_in, i_out):
-        if i_out < 0 or i_out >= len(s) or not np.isfinite(f[i_out]):
-            return s[i_in]
-        t = (level - f[i_in]) / (f[i_out] - f[i_in])
-        return s[i_in] + t * (s[i_out] - s[i_in])
 
-    return cross(lo, lo - 1), cross(hi, hi + 1)
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _cross(s, f, level, i_in, i_out):  # pragma: no cover - compiled
+    """Where ``f`` crosses ``level`` between the samples ``i_in`` and ``i_out``
+    (linearly), or ``s[i_in]`` when ``i_out`` is outside or its ``f`` not finite."""
+    if i_out < 0 or i_out >= s.size or not math.isfinite(f[i_out]):
+        return s[i_in]
+    t = (level - f[i_in]) / (f[i_out] - f[i_in])
+    return s[i_in] + t * (s[i_out] - s[i_in])
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _half_length_at(y, s, f, a_of_s, d0, stretch, j):  # pragma: no cover - compiled
+    """The virtual patch's half length [m] at ``y`` (:func:`_shape`'s ``x_half``:
+    ``sqrt(max(stretch (d0 - f(y)) / A(y), 0))``, NaN kept) and the piece of ``s``."""
+    fy, j = interp_walk(y, s, f, j)
+    ay, _ = interp_walk(y, s, a_of_s, j)
+    v = stretch * (d0 - fy) / ay
+    if not v > 0.0 and not math.isnan(v):
+        v = 0.0
+    return math.sqrt(v), j
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pressure_on(x, y, s, f, a_of_s, d0, stretch, ylo, yhi, amplitude
+                 ):  # pragma: no cover - compiled
+    """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny)."""
+    out = np.zeros((x.size, y.size))
+    j_s = -1
+    for j in range(y.size):
+        xl, j_s = _half_length_at(y[j], s, f, a_of_s, d0, stretch, j_s)
+        if not (y[j] >= ylo and y[j] <= yhi):
+            continue
+        xl2 = xl * xl
+        for i in range(x.size):
+            v = xl2 - x[i] * x[i]
+            if not v > 0.0 and not math.isnan(v):
+                v = 0.0
+            out[i, j] = amplitude * math.sqrt(v)
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny):  # pragma: no cover - compiled
+    """The virtual patch between ``lo`` and ``hi`` [m]: its largest half length ``xmax``
+    [m] at :data:`SEARCH_SAMPLES` points ``np.linspace(lo, hi)`` (NaN if one is NaN) and,
+    when ``xmax > 0``, the semi-elliptic shape ``sqrt(x_l(y)^2 - x^2)`` [m] on the estimate
+    grid ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)`` with the displacement it makes
+    at (0, 0) (:func:`zz_displacement_at`, without ``(1-nu)/(pi G)``), its sum
+    (``numpy.sum``'s) and largest value, and its count of elements in contact."""
+    num = SEARCH_SAMPLES
+    div = num - 1
+    step = (hi - lo) / div
+    xmax = -math.inf
+    j_s = -1
+    for k in range(num):  # np.linspace's points
+        if k == div:
+            yk = hi
+        elif step == 0.0:
+            yk = (k / div) * (hi - lo) + lo
+        else:
+            yk = k * step + lo
+        v, j_s = _half_length_at(yk, s, f, a_of_s, d0, stretch, j_s)
+        if math.isnan(v):
+            xmax = v
+            break
+        xmax = max(xmax, v)
+    shape = np.zeros((nx, ny))
+    if not (xmax > 0.0 and hi > lo and xmax < math.inf and math.isfinite(lo)
+            and math.isfinite(hi)):
+        return xmax, shape, 0.0, 0.0, 0.0, 0
+    xmin = -xmax
+    dx = (xmax - xmin) / nx
+    dy = (hi - lo) / ny
+    x0 = xmin + dx / 2
+    y0 = lo + dy / 2
+    j_s = -1
+    count = 0
+    for j in range(ny):
+        xl, j_s = _half_length_at(y0 + dy * float(j), s, f, a_of_s, d0, stretch, j_s)
+        xl2 = xl * xl
+        for i in range(nx):
+            xi = x0 + dx * float(i)
+            v = xl2 - xi * xi
+            if not v > 0.0 and not math.isnan(v):
+                v = 0.0
+            shape[i, j] = math.sqrt(v)
+            if shape[i, j] > 0.0:
+                count += 1
+    u = zz_displacement_at(0.0, 0.0, xmin, dx, lo, dy, shape)
+    return xmax, shape, u, numpy_sum(shape), shape.max(), count
 
 
 def _shape(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, delta: float):
@@ -140,31 +261,28 @@ def _shape(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, delta:
         g = d0 - np.interp(sv, s, f)
         return np.sqrt(np.clip(stretch * g / np.interp(sv, s, a_of_s), 0, None))
 
-    return factor, x_half, lo, hi
+    return factor, x_half, lo, hi, d0, stretch
 
 
 def _estimate_at(method, s, f, a_of_s, delta, pair, nx, ny, t0) -> NormalEstimate:
-    factor, x_half, lo, hi = _shape(method, s, f, a_of_s, delta)
-    ys = np.linspace(lo, hi, 801)
-    xmax = float(x_half(ys).max())
+    factor, x_half, lo, hi, d0, stretch = _shape(method, s, f, a_of_s, delta)
+    lo, hi = float(lo), float(hi)
+    xmax, shape, u, _, _, count = _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny)
     if not xmax > 0 or hi <= lo:
         raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
     grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
-    X, Y = grid.mesh()
-    xl = x_half(Y)
-    shape = np.sqrt(np.clip(xl**2 - X**2, 0, None))
-    contact = shape > 0
     # displacement at the point of maximum penetration (0, s0 = 0) for unit amplitude
-    u = float(np.sum(coefficients_at("zz", -X, -Y, grid.dx, grid.dy, pair) * shape))
-    p = shape * (delta / u)
+    u *= (1 - pair.poisson) / (math.pi * pair.shear)
+    amplitude = delta / u
+    p = shape * amplitude
     area_el = grid.element_area
-    force = float(p.sum() * area_el)
-    return NormalEstimate(grid=grid, pressure=p, contact=contact, force=force,
+    force = float(numpy_sum(p) * area_el)
+    return NormalEstimate(grid=grid, pressure=p, contact=shape > 0, force=force,
                           penetration=delta, max_pressure=float(p.max()),
-                          area=float(contact.sum() * area_el), factor=factor, method=method,
+                          area=float(count * area_el), factor=factor, method=method,
                           message=f"{method}: factor {factor:.4f}",
                           wall_time=time.perf_counter() - t0, half_length=x_half,
-                          amplitude=delta / u)
+                          amplitude=amplitude, shape_data=(s, f, a_of_s, d0, stretch))
 
 
 def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray,
@@ -190,7 +308,10 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     t0 = time.perf_counter()
     if method not in METHODS:
         raise RailContactError(f"method must be one of {METHODS}, got {method!r}")
-    s, f, a_of_s = (np.asarray(v, dtype=float) for v in (s, f, a_of_s))
+    s, f, a_of_s = (np.ascontiguousarray(v, dtype=float) for v in (s, f, a_of_s))
+    if s.ndim != 1 or s.size < 2 or f.shape != s.shape or a_of_s.shape != s.shape:
+        raise RailContactError(f"s, f and a_of_s must be 1-D samples of one length (2 or "
+                               f"more), got shapes {s.shape}, {f.shape}, {a_of_s.shape}")
     if (penetration is None) == (load is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
     if penetration is not None:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import time
 
+import numba
 import numpy as np
 
 from ..errors import check_finite, check_positive
@@ -79,7 +80,7 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     mu = check_positive("friction", friction, allow_zero=True)
     xi, eta, phi = (check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage,
                                                           strict=True))
-    pn = np.asarray(pressure, dtype=float)
+    pn = np.ascontiguousarray(pressure, dtype=float)
     flex = flexibilities(a, b, pair)
     fs_traction, _ = _march(strips, mu * pn, (xi, eta, phi), flex)
     if mu == 0.0 or load <= 0.0:
@@ -95,31 +96,58 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     eta_ = -g_mod * 4 * (1 - nu) * c.c22 * eta / scale
     phi_ = -g_mod * 3 * math.sqrt(a * b) * c.c23 * phi / (2 * mu * p0 * math.pi)
 
-    x = strips.x
-    y = strips.y[:, None]
-    ay = 0.5 * (strips.x_hi - strips.x_lo)[:, None]
-    xs = x - 0.5 * (strips.x_hi + strips.x_lo)[:, None]
-    bound = mu * pn
-    ex = xi_ - phi_ * y / a
-    with np.errstate(invalid="ignore", divide="ignore"):
-        disc = eta_**2 + (1 - phi_**2) * ex**2
-        d = a / (1 - nu) * (np.sqrt(np.clip(disc, 0, None)) + eta_ * phi_) / (1 - phi_**2)
-        sliding = (abs(phi_) >= 1.0) | (disc < 0) | ~(d >= 0) | ~(d < ay)
-        d = np.where(sliding, 0.0, d)
-        ey = eta_ + phi_ * d / a
-        den = np.hypot(ex, ey)
-        kappa = np.where(den > 0, ex / den, 0.0)
-        lam = np.where(den > 0, ey / den, 0.0)
-    r1 = np.sqrt(np.clip(ay**2 - xs**2, 0, None))
-    r2 = np.sqrt(np.clip((ay - d) ** 2 - (xs - d) ** 2, 0, None))
-    qx = mu * p0 / a * (kappa * r1 - kappa * r2)
-    qy = mu * p0 / a * (lam * r1 - (lam - phi_) * r2)
-    adhesion = (~sliding & (den > 0) & (xs >= -ay + 2 * d) & (pn > 0)
-                & (np.hypot(qx, qy) <= bound * (1 + 1e-12)))
-    state = np.where(pn > 0, np.where(adhesion, ADHESION, SLIP), EXTERIOR).astype(np.int8)
-    # slip: magnitude mu p_n in the direction of the FASTSIM traction at the same point
-    fs_mag = np.hypot(fs_traction[0], fs_traction[1])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        direction = np.where(fs_mag > 0, fs_traction / fs_mag, 0.0)
-    traction = np.where(adhesion, np.stack([qx, qy]), bound * direction)
+    traction, state = _fastrip_strips(strips.x, strips.y, strips.x_lo, strips.x_hi, pn, mu,
+                                      fs_traction, xi_, eta_, phi_, eta_**2, 1 - phi_**2,
+                                      a / (1 - nu), eta_ * phi_, mu * p0 / a, a)
     return summarise(strips, traction, state, pn, "FaStrip", t0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _fastrip_strips(x, y, x_lo, x_hi, pn, mu, fs_traction, xi_, eta_, phi_, eta2, one_phi2,
+                    d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
+    """FaStrip's traction (2, ny, nx) [Pa] and state (ny, nx) at the strip samples ``x``
+    (ny, nx) [m] of the strips at ``y`` [m] from ``x_lo`` to ``x_hi`` [m], pressure ``pn``
+    [Pa], friction ``mu`` and the FASTSIM traction ``fs_traction`` (its direction in the
+    slip zone); the scaled creepages and the factors of :func:`fastrip` (``eta2 = eta'^2``,
+    ``one_phi2 = 1 - phi'^2``, ``d_scale = a/(1-nu)``, ``eta_phi = eta' phi'``,
+    ``q_scale = mu p0 / a``): numpy's operations of the formulas, element by element."""
+    ny, nx = x.shape
+    traction = np.zeros((2, ny, nx))
+    state = np.zeros((ny, nx), dtype=np.int8)
+    spinning = abs(phi_) >= 1.0
+    for j in range(ny):
+        ay = 0.5 * (x_hi[j] - x_lo[j])
+        centre = 0.5 * (x_hi[j] + x_lo[j])
+        ex = xi_ - phi_ * y[j] / a
+        disc = eta2 + one_phi2 * (ex * ex)
+        root = disc if disc > 0.0 or math.isnan(disc) else 0.0
+        d = d_scale * (math.sqrt(root) + eta_phi) / one_phi2
+        sliding = spinning or disc < 0 or not d >= 0 or not d < ay
+        if sliding:
+            d = 0.0
+        ey = eta_ + phi_ * d / a
+        den = math.hypot(ex, ey)
+        kappa = ex / den if den > 0 else 0.0
+        lam = ey / den if den > 0 else 0.0
+        for k in range(nx):
+            xs = x[j, k] - centre
+            r1 = ay * ay - xs * xs
+            r1 = math.sqrt(r1 if r1 > 0.0 or math.isnan(r1) else 0.0)
+            r2 = (ay - d) * (ay - d) - (xs - d) * (xs - d)
+            r2 = math.sqrt(r2 if r2 > 0.0 or math.isnan(r2) else 0.0)
+            qx = q_scale * (kappa * r1 - kappa * r2)
+            qy = q_scale * (lam * r1 - (lam - phi_) * r2)
+            p = pn[j, k]
+            bound = mu * p
+            adhesion = (not sliding and den > 0 and xs >= -ay + 2 * d and p > 0
+                        and math.hypot(qx, qy) <= bound * (1 + 1e-12))
+            state[j, k] = (ADHESION if adhesion else SLIP) if p > 0 else EXTERIOR
+            if adhesion:
+                traction[0, j, k] = qx
+                traction[1, j, k] = qy
+            else:  # slip: mu p_n in the direction of the FASTSIM traction
+                fx, fy = fs_traction[0, j, k], fs_traction[1, j, k]
+                fs_mag = math.hypot(fx, fy)
+                traction[0, j, k] = bound * (fx / fs_mag if fs_mag > 0 else 0.0)
+                traction[1, j, k] = bound * (fy / fs_mag if fs_mag > 0 else 0.0)
+    return traction, state

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import time
 
+import numba
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
@@ -54,29 +55,40 @@ def _march(strips: Strips, bound: np.ndarray, creepage, flex, spin_scale=(1.0, 1
     """FASTSIM marching on all strips at once. Returns traction (2, ny, nx) and state."""
     xi, eta, phi = creepage
     l1, l2, l3 = flex
-    x = strips.x
+    return _march_strips(strips.x, strips.x_hi, strips.y, np.ascontiguousarray(bound, float),
+                         xi / l1, eta / l2, spin_scale[0] * phi, spin_scale[1] * phi, l3)
+
+
+@numba.njit(cache=True)
+def _march_strips(x, x_hi, y, bound, cx, cy, spin_x, spin_y, l3):  # pragma: no cover - compiled
+    """:func:`_march` on the samples ``x`` (ny, nx) [m] of the strips at ``y`` (ny,) [m]
+    with leading ends ``x_hi`` [m], the bound ``bound`` (ny, nx) [Pa]: each strip from its
+    leading to its trailing sample, ``dp = -h (cx - spin_x y / l3, cy + spin_y x_m / l3)``
+    (``cx = xi/L1``, ``cy = eta/L2``, ``spin_* = phi`` times the spin scale), clipped to the
+    bound (the same operations, in the same order, as numpy's column by column)."""
     ny, nx = x.shape
-    y = strips.y
-    px = np.zeros(ny)
-    py = np.zeros(ny)
-    x_up = strips.x_hi.copy()
     traction = np.zeros((2, ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
-    for k in range(nx - 1, -1, -1):  # leading edge (large x) to trailing edge
-        xk = x[:, k]
-        h = x_up - xk
-        xm = 0.5 * (x_up + xk)
-        hx = px - h * (xi / l1 - spin_scale[0] * phi * y / l3)
-        hy = py - h * (eta / l2 + spin_scale[1] * phi * xm / l3)
-        g = bound[:, k]
-        mag = np.hypot(hx, hy)
-        slip = mag > g
-        scale = np.where(slip, g / np.where(mag > 0, mag, 1.0), 1.0)
-        px, py = hx * scale, hy * scale
-        traction[0, :, k] = px
-        traction[1, :, k] = py
-        state[:, k] = np.where(g > 0, np.where(slip, SLIP, ADHESION), EXTERIOR)
-        x_up = xk
+    for j in range(ny):
+        px = 0.0
+        py = 0.0
+        x_up = x_hi[j]
+        tx = cx - spin_x * y[j] / l3
+        for k in range(nx - 1, -1, -1):  # leading edge (large x) to trailing edge
+            xk = x[j, k]
+            h = x_up - xk
+            xm = 0.5 * (x_up + xk)
+            hx = px - h * tx
+            hy = py - h * (cy + spin_y * xm / l3)
+            g = bound[j, k]
+            mag = math.hypot(hx, hy)
+            slip = mag > g
+            scale = g / (mag if mag > 0 else 1.0) if slip else 1.0
+            px, py = hx * scale, hy * scale
+            traction[0, j, k] = px
+            traction[1, j, k] = py
+            state[j, k] = (SLIP if slip else ADHESION) if g > 0 else EXTERIOR
+            x_up = xk
     return traction, state
 
 

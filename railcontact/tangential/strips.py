@@ -10,14 +10,18 @@ linear in x, as FASTSIM gives in full adhesion for xi and eta), or Gauss–Legen
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from ..errors import RailContactError
 from ..halfspace.grid import Grid
+from ..halfspace.interp import interp_walk
+from ..halfspace.sums import numpy_sum
 
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
 
@@ -74,22 +78,51 @@ def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips
     """Strips along the rows of a contact mask on a grid (non-elliptic patches): each row
     with contact is one strip of width dy, from the trailing to the leading edge of its
     contact elements (element edges); gaps inside a row are bridged."""
-    rows = np.flatnonzero(contact.any(axis=0))
+    rows, first, last = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
     if rows.size == 0:
         raise RailContactError("no contact elements to build strips from")
-    lo = np.array([grid.x[np.flatnonzero(contact[:, j])[0]] for j in rows]) - grid.dx / 2
-    hi = np.array([grid.x[np.flatnonzero(contact[:, j])[-1]] for j in rows]) + grid.dx / 2
+    lo = grid.x[first] - grid.dx / 2
+    hi = grid.x[last] + grid.dx / 2
     t, w = _rule(nx, "uniform")
     return Strips(y=grid.y[rows], width=np.full(rows.size, grid.dy), x_lo=lo, x_hi=hi, t=t,
                   w=w)
+
+
+@numba.njit(cache=True)
+def _row_ends(contact):  # pragma: no cover - compiled
+    """The grid rows ``j`` (along x) with contact in ``contact`` (nx, ny), and the first
+    and last element ``i`` in contact on each."""
+    nx, ny = contact.shape
+    first = np.full(ny, -1)
+    last = np.full(ny, -1)
+    for i in range(nx):
+        for j in range(ny):
+            if contact[i, j]:
+                if first[j] < 0:
+                    first[j] = i
+                last[j] = i
+    rows = np.flatnonzero(first >= 0)
+    return rows, first[rows], last[rows]
 
 
 def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarray:
     """A field on the grid (nx, ny) at the strip samples (ny_s, nx_s), linearly along x on
     the strip's grid row (strips made by :func:`strips_from_contact`)."""
     rows = np.searchsorted(grid.y, strips.y - 1e-12 * grid.dy)
-    x = strips.x
-    return np.stack([np.interp(x[k], grid.x, values[:, j]) for k, j in enumerate(rows)])
+    return _sample_rows(np.ascontiguousarray(values, dtype=float), grid.x, rows, strips.x)
+
+
+@numba.njit(cache=True)
+def _sample_rows(values, gx, rows, x):  # pragma: no cover - compiled
+    """``np.interp(x[k], gx, values[:, rows[k]])`` for every strip ``k`` (ny_s, nx_s)."""
+    ns, nt = x.shape
+    out = np.empty((ns, nt))
+    for k in range(ns):
+        column = values[:, rows[k]]
+        j = -1
+        for m in range(nt):
+            out[k, m], j = interp_walk(x[k, m], gx, column, j)
+    return out
 
 
 def equivalent_ellipse(grid: Grid, contact: np.ndarray) -> tuple[float, float]:
@@ -149,18 +182,48 @@ class StripResult:
 def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure: np.ndarray,
               message: str, t0: float) -> StripResult:
     """Integrate a strip traction field into a :class:`StripResult`."""
-    da = strips.area
-    x = strips.x
-    y = strips.y[:, None]
-    fx = float((traction[0] * da).sum())
-    fy = float((traction[1] * da).sum())
-    mz = float(((x * traction[1] - y * traction[0]) * da).sum())
-    ncon = np.count_nonzero(state != EXTERIOR)
-    ratio = float(np.count_nonzero(state == SLIP) / ncon) if ncon else 0.0
+    traction = np.ascontiguousarray(traction, dtype=float)
+    fx, fy, mz, ncon, nslip, tmax = _summary(strips.x_lo, strips.x_hi, strips.width,
+                                             strips.y, strips.t, strips.w, traction,
+                                             np.ascontiguousarray(state))
+    ratio = float(nslip / ncon) if ncon else 0.0
     return StripResult(strips=strips, traction=traction, state=state, pressure=pressure,
                        force=(fx, fy), spin_moment=mz, slip_area_ratio=ratio,
-                       max_traction=float(np.hypot(*traction).max(initial=0.0)),
-                       message=message, wall_time=time.perf_counter() - t0)
+                       max_traction=tmax, message=message,
+                       wall_time=time.perf_counter() - t0)
+
+
+@numba.njit(cache=True)
+def _summary(x_lo, x_hi, width, y, t, w, traction, state):  # pragma: no cover - compiled
+    """The sums of :func:`summarise` as numpy forms them: the forces ``sum(p_c da)`` [N],
+    the spin moment ``sum((x p_y - y p_x) da)`` [N m] (``da`` and ``x`` as
+    :attr:`Strips.area` and :attr:`Strips.x` form them), the counts of samples in contact
+    and in slip, and the largest ``|p|`` [Pa] (0 for none, NaN if one is NaN)."""
+    ny, nx = state.shape
+    terms = np.empty((3, ny, nx))
+    ncon = 0
+    nslip = 0
+    tmax = 0.0
+    for j in range(ny):
+        half = 0.5 * (x_hi[j] - x_lo[j])
+        mid = 0.5 * (x_hi[j] + x_lo[j])
+        wh = width[j] * half
+        for k in range(nx):
+            da = wh * w[k]
+            xk = mid + half * t[k]
+            px, py = traction[0, j, k], traction[1, j, k]
+            terms[0, j, k] = px * da
+            terms[1, j, k] = py * da
+            terms[2, j, k] = (xk * py - y[j] * px) * da
+            if state[j, k] != EXTERIOR:
+                ncon += 1
+                if state[j, k] == SLIP:
+                    nslip += 1
+            m = math.hypot(px, py)
+            if not m <= tmax:  # (NaN kept)
+                tmax = m
+    return (numpy_sum(terms[0]), numpy_sum(terms[1]), numpy_sum(terms[2]), ncon, nslip,
+            tmax)
 
 
 def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
