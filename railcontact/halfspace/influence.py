@@ -118,14 +118,17 @@ def influence_kernel(
 
 @numba.njit(cache=True, inline="always")
 def _zz_antiderivative(a, b):  # pragma: no cover - compiled
-    """``a asinh(b/|a|) + b asinh(a/|b|)`` (each term 0 where its factor is 0): the zz
-    block's ``F`` without ``(1-nu)/(pi G)``; ``F(-a, -b) = F(a, b)``."""
-    out = 0.0
-    if a != 0.0:
-        out += a * math.asinh(b / abs(a))
-    if b != 0.0:
-        out += b * math.asinh(a / abs(b))
-    return out
+    """``a asinh(b/|a|) + b asinh(a/|b|)`` (0 where ``a`` or ``b`` is 0): the zz block's
+    ``F`` without ``(1-nu)/(pi G)``, as ``sign(a b) (|a| ln((|b| + r)/|a|) + |b| ln((|a| +
+    r)/|b|))`` with ``r = hypot(a, b)`` (``asinh(t) = ln(t + sqrt(1 + t^2))``: the same
+    within round-off, two logarithms and a root for two inverse sines)."""
+    if a == 0.0 or b == 0.0:
+        return 0.0
+    aa = abs(a)
+    ab = abs(b)
+    r = math.sqrt(aa * aa + ab * ab)
+    out = aa * math.log((ab + r) / aa) + ab * math.log((aa + r) / ab)
+    return out if (a > 0.0) == (b > 0.0) else -out
 
 
 @numba.njit(cache=True)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 
 @numba.njit(cache=True, inline="always")
@@ -45,3 +46,41 @@ def interp_walk(x, xp, fp, j):  # pragma: no cover - compiled
         if math.isnan(v) and f0 == f1:
             v = f0
     return v, j
+
+
+@numba.njit(cache=True, inline="always")
+def interp_walk_sloped(x, xp, fp, slopes, j):  # pragma: no cover - compiled
+    """:func:`interp_walk` with the pieces' slopes ``slopes[j] = (fp[j+1] - fp[j]) /
+    (xp[j+1] - xp[j])`` given (:func:`slopes_of`; numpy forms them so too, once, when
+    there are more points than samples): the same values."""
+    n = xp.size
+    if n == 1:
+        return fp[0], j
+    if math.isnan(x):
+        return x, j
+    if x < xp[0]:
+        return fp[0], -1
+    if j < 0 or xp[j] > x:
+        j = 0
+    while j + 1 < n and xp[j + 1] <= x:
+        j += 1
+    if x > xp[n - 1] or j >= n - 1:
+        return fp[n - 1], j
+    f0 = fp[j]
+    if xp[j] == x:
+        return f0, j
+    slope = slopes[j]
+    v = slope * (x - xp[j]) + f0
+    if math.isnan(v):
+        f1 = fp[j + 1]
+        v = slope * (x - xp[j + 1]) + f1
+        if math.isnan(v) and f0 == f1:
+            v = f0
+    return v, j
+
+
+def slopes_of(xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """The slopes ``(fp[j+1] - fp[j]) / (xp[j+1] - xp[j])`` of the pieces of a sampled
+    function [fp's unit / xp's unit] (NaN or infinite where numpy's division gives it)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.ascontiguousarray((fp[1:] - fp[:-1]) / (xp[1:] - xp[:-1]))

@@ -45,7 +45,7 @@ from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz
 from ..halfspace.influence import zz_displacement_at
-from ..halfspace.interp import interp_walk
+from ..halfspace.interp import interp_walk_sloped, slopes_of
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import numpy_sum
 
@@ -89,7 +89,8 @@ class NormalEstimate:
     half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
     amplitude: float = 0.0
     shape_data: tuple | None = field(repr=False, default=None, compare=False)
-    """(s, f, a_of_s, d0, stretch) of :func:`_shape`, for the compiled evaluations."""
+    """(s, f, a_of_s, the slopes of f and a_of_s, d0, stretch) of :func:`_shape`, for the
+    compiled evaluations."""
 
     def pressure_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The model's pressure [Pa] at any points (x, y) [m]: this is how the estimate is
@@ -104,10 +105,8 @@ class NormalEstimate:
         values, in one compiled pass (each row's half length formed once)."""
         if self.shape_data is None:
             return self.pressure_at(*grid.mesh())
-        s, f, a_of_s, d0, stretch = self.shape_data
         _, _, ylo, yhi = self.grid.bounds
-        return _pressure_on(grid.x, grid.y, s, f, a_of_s, d0, stretch, ylo, yhi,
-                            self.amplitude)
+        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.amplitude)
 
 
 def infcon_factor(A: float, B_e: float) -> float:
@@ -160,25 +159,28 @@ def _cross(s, f, level, i_in, i_out):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def _half_length_at(y, s, f, a_of_s, d0, stretch, j):  # pragma: no cover - compiled
-    """The virtual patch's half length [m] at ``y`` (:func:`_shape`'s ``x_half``:
-    ``sqrt(max(stretch (d0 - f(y)) / A(y), 0))``, NaN kept) and the piece of ``s``."""
-    fy, j = interp_walk(y, s, f, j)
-    ay, _ = interp_walk(y, s, a_of_s, j)
+def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
+                         ):  # pragma: no cover - compiled
+    """The square of the virtual patch's half length [m^2] at ``y`` (of :func:`_shape`'s
+    ``x_half``: ``max(stretch (d0 - f(y)) / A(y), 0)``, NaN kept; ``sf``, ``sa`` the
+    slopes of ``f`` and ``A``) and the piece of ``s`` it is on."""
+    fy, j = interp_walk_sloped(y, s, f, sf, j)
+    ay, _ = interp_walk_sloped(y, s, a_of_s, sa, j)
     v = stretch * (d0 - fy) / ay
     if not v > 0.0 and not math.isnan(v):
         v = 0.0
-    return math.sqrt(v), j
+    return v, j
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _pressure_on(x, y, s, f, a_of_s, d0, stretch, ylo, yhi, amplitude
+def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
                  ):  # pragma: no cover - compiled
     """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny)."""
     out = np.zeros((x.size, y.size))
     j_s = -1
     for j in range(y.size):
-        xl, j_s = _half_length_at(y[j], s, f, a_of_s, d0, stretch, j_s)
+        xl, j_s = _squared_half_length(y[j], s, f, a_of_s, sf, sa, d0, stretch, j_s)
+        xl = math.sqrt(xl)
         if not (y[j] >= ylo and y[j] <= yhi):
             continue
         xl2 = xl * xl
@@ -191,7 +193,8 @@ def _pressure_on(x, y, s, f, a_of_s, d0, stretch, ylo, yhi, amplitude
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny):  # pragma: no cover - compiled
+def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, lo, hi, nx, ny
+                   ):  # pragma: no cover - compiled
     """The virtual patch between ``lo`` and ``hi`` [m]: its largest half length ``xmax``
     [m] at :data:`SEARCH_SAMPLES` points ``np.linspace(lo, hi)`` (NaN if one is NaN) and,
     when ``xmax > 0``, the semi-elliptic shape ``sqrt(x_l(y)^2 - x^2)`` [m] on the estimate
@@ -201,7 +204,7 @@ def _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny):  # pragma: no cov
     num = SEARCH_SAMPLES
     div = num - 1
     step = (hi - lo) / div
-    xmax = -math.inf
+    xmax = -math.inf  # (the largest square: the root of the largest is the largest root)
     j_s = -1
     for k in range(num):  # np.linspace's points
         if k == div:
@@ -210,11 +213,12 @@ def _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny):  # pragma: no cov
             yk = (k / div) * (hi - lo) + lo
         else:
             yk = k * step + lo
-        v, j_s = _half_length_at(yk, s, f, a_of_s, d0, stretch, j_s)
+        v, j_s = _squared_half_length(yk, s, f, a_of_s, sf, sa, d0, stretch, j_s)
         if math.isnan(v):
             xmax = v
             break
         xmax = max(xmax, v)
+    xmax = math.sqrt(xmax)
     shape = np.zeros((nx, ny))
     if not (xmax > 0.0 and hi > lo and xmax < math.inf and math.isfinite(lo)
             and math.isfinite(hi)):
@@ -227,7 +231,9 @@ def _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny):  # pragma: no cov
     j_s = -1
     count = 0
     for j in range(ny):
-        xl, j_s = _half_length_at(y0 + dy * float(j), s, f, a_of_s, d0, stretch, j_s)
+        xl, j_s = _squared_half_length(y0 + dy * float(j), s, f, a_of_s, sf, sa, d0,
+                                       stretch, j_s)
+        xl = math.sqrt(xl)
         xl2 = xl * xl
         for i in range(nx):
             xi = x0 + dx * float(i)
@@ -264,10 +270,13 @@ def _shape(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, delta:
     return factor, x_half, lo, hi, d0, stretch
 
 
-def _estimate_at(method, s, f, a_of_s, delta, pair, nx, ny, t0) -> NormalEstimate:
+def _estimate_at(method, samples, delta, pair, nx, ny, t0) -> NormalEstimate:
+    """The estimate at the penetration ``delta`` [m]; ``samples`` = (s, f, a_of_s and the
+    slopes of f and a_of_s)."""
+    s, f, a_of_s = samples[:3]
     factor, x_half, lo, hi, d0, stretch = _shape(method, s, f, a_of_s, delta)
     lo, hi = float(lo), float(hi)
-    xmax, shape, u, _, _, count = _virtual_patch(s, f, a_of_s, d0, stretch, lo, hi, nx, ny)
+    xmax, shape, u, _, _, count = _virtual_patch(*samples, d0, stretch, lo, hi, nx, ny)
     if not xmax > 0 or hi <= lo:
         raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
     grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
@@ -282,7 +291,7 @@ def _estimate_at(method, s, f, a_of_s, delta, pair, nx, ny, t0) -> NormalEstimat
                           area=float(count * area_el), factor=factor, method=method,
                           message=f"{method}: factor {factor:.4f}",
                           wall_time=time.perf_counter() - t0, half_length=x_half,
-                          amplitude=amplitude, shape_data=(s, f, a_of_s, d0, stretch))
+                          amplitude=amplitude, shape_data=(*samples, d0, stretch))
 
 
 def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray,
@@ -314,8 +323,9 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
                                f"more), got shapes {s.shape}, {f.shape}, {a_of_s.shape}")
     if (penetration is None) == (load is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
+    samples = (s, f, a_of_s, slopes_of(s, f), slopes_of(s, a_of_s))
     if penetration is not None:
-        return _estimate_at(method, s, f, a_of_s,
+        return _estimate_at(method, samples,
                             check_positive("penetration", penetration, "m"), pair, nx, ny, t0)
     load = check_positive("load", load, "N")
     # secant on delta, started from Hertz with the curvatures at s = 0
@@ -324,10 +334,10 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     b0 = max(float(f[k] / s[k] ** 2), 1e-9) if s[k] != 0 else 1.0
     a0 = float(np.interp(0.0, s, a_of_s))
     d1 = hertz(a0, b0, pair, load=load).penetration
-    e1 = _estimate_at(method, s, f, a_of_s, d1, pair, nx, ny, t0)
+    e1 = _estimate_at(method, samples, d1, pair, nx, ny, t0)
     d2 = d1 * (load / e1.force) ** (2 / 3)
     for _ in range(30):
-        e2 = _estimate_at(method, s, f, a_of_s, d2, pair, nx, ny, t0)
+        e2 = _estimate_at(method, samples, d2, pair, nx, ny, t0)
         if abs(e2.force - load) < 1e-6 * load:
             break
         # secant in log-log (force ~ delta^(3/2))

@@ -69,26 +69,28 @@ def _march_strips(x, x_hi, y, bound, cx, cy, spin_x, spin_y, l3):  # pragma: no 
     ny, nx = x.shape
     traction = np.zeros((2, ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
+    px = np.zeros(ny)
+    py = np.zeros(ny)
+    x_up = x_hi.copy()
+    tx = np.empty(ny)
     for j in range(ny):
-        px = 0.0
-        py = 0.0
-        x_up = x_hi[j]
-        tx = cx - spin_x * y[j] / l3
-        for k in range(nx - 1, -1, -1):  # leading edge (large x) to trailing edge
+        tx[j] = cx - spin_x * y[j] / l3
+    for k in range(nx - 1, -1, -1):  # leading edge (large x) to trailing edge; the strips
+        for j in range(ny):  # side by side (independent: their chains overlap)
             xk = x[j, k]
-            h = x_up - xk
-            xm = 0.5 * (x_up + xk)
-            hx = px - h * tx
-            hy = py - h * (cy + spin_y * xm / l3)
+            h = x_up[j] - xk
+            xm = 0.5 * (x_up[j] + xk)
+            hx = px[j] - h * tx[j]
+            hy = py[j] - h * (cy + spin_y * xm / l3)
             g = bound[j, k]
             mag = math.hypot(hx, hy)
             slip = mag > g
             scale = g / (mag if mag > 0 else 1.0) if slip else 1.0
-            px, py = hx * scale, hy * scale
-            traction[0, j, k] = px
-            traction[1, j, k] = py
+            px[j], py[j] = hx * scale, hy * scale
+            traction[0, j, k] = px[j]
+            traction[1, j, k] = py[j]
             state[j, k] = (SLIP if slip else ADHESION) if g > 0 else EXTERIOR
-            x_up = xk
+            x_up[j] = xk
     return traction, state
 
 

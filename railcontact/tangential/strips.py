@@ -236,41 +236,71 @@ def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarr
     nearest sample of the nearest strip.
     """
     s = result.strips
-    ns, nt = len(s.y), s.nx
-    half = 0.5 * (s.x_hi - s.x_lo)
-    mid = 0.5 * (s.x_hi + s.x_lo)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tg = (grid.x[None, :] - mid[:, None]) / half[:, None]  # (ns, grid nx)
-    inside = np.abs(tg) <= 1.0
-    tg = np.where(inside, tg, 0.0)
-    knots = np.concatenate(([-1.0], s.t, [1.0]))
-    k = np.clip(np.searchsorted(knots, tg), 1, nt + 1)
-    w = (tg - knots[k - 1]) / (knots[k] - knots[k - 1])
-    rows = np.arange(ns)[:, None]
-    along = np.empty((2, ns, grid.nx))
-    for c in range(2):
-        v = np.concatenate([result.traction[c, :, :1], result.traction[c],
-                            np.zeros((ns, 1))], axis=1)
-        along[c] = np.where(inside, v[rows, k - 1] * (1 - w) + v[rows, k] * w, 0.0)
-    near_sample = np.clip(np.where(w < 0.5, k - 2, k - 1), 0, nt - 1)
-    state_along = np.where(inside, result.state[rows, near_sample], EXTERIOR)
-
-    # across strips: weights (grid ny, ns), two neighbours per grid row
     order = np.argsort(s.y)
-    ys = s.y[order]
-    edge_lo = ys[0] - 0.5 * s.width[order[0]]
-    edge_hi = ys[-1] + 0.5 * s.width[order[-1]]
-    gy = grid.y
-    j = np.clip(np.searchsorted(ys, gy), 1, max(ns - 1, 1))
-    if ns == 1:
-        t = np.zeros_like(gy)
-        lo_idx = hi_idx = np.zeros(gy.shape, dtype=int)
-    else:
-        t = np.clip((gy - ys[j - 1]) / (ys[j] - ys[j - 1]), 0.0, 1.0)
-        lo_idx, hi_idx = order[j - 1], order[j]
-    valid = (gy >= edge_lo) & (gy <= edge_hi)
-    traction = ((1 - t) * along[:, lo_idx, :].transpose(0, 2, 1)
-                + t * along[:, hi_idx, :].transpose(0, 2, 1)) * valid
-    nearest = np.where(t < 0.5, lo_idx, hi_idx)
-    state = np.where(valid[None, :], state_along[nearest].T, EXTERIOR).astype(np.int8)
-    return traction, state
+    return _remesh(s.y, s.width, s.x_lo, s.x_hi, s.t, order,
+                   np.ascontiguousarray(result.traction, dtype=float),
+                   np.ascontiguousarray(result.state, dtype=np.int8), grid.x, grid.y)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _remesh(y, width, x_lo, x_hi, t, order, traction, state, gx, gy
+            ):  # pragma: no cover - compiled
+    """:func:`remesh_strips` on the grid with element centres ``gx``, ``gy`` [m] (the
+    strips in the increasing order ``order`` of ``y``): numpy's operations of the
+    interpolation, element by element."""
+    ns, nt = y.size, t.size
+    gnx, gny = gx.size, gy.size
+    # along each strip: the grid's x at the strip's normalised coordinate
+    along = np.zeros((2, ns, gnx))
+    state_along = np.zeros((ns, gnx), dtype=np.int8)
+    for m in range(ns):
+        half = 0.5 * (x_hi[m] - x_lo[m])
+        mid = 0.5 * (x_hi[m] + x_lo[m])
+        for i in range(gnx):
+            tg = (gx[i] - mid) / half
+            if not abs(tg) <= 1.0:
+                continue  # (outside: zero traction, exterior)
+            k = 0  # np.searchsorted of the knots -1, t, 1 (the first at or after tg)
+            while k < nt + 1 and (-1.0 if k == 0 else t[k - 1]) < tg:
+                k += 1
+            k = min(max(k, 1), nt + 1)
+            lo = -1.0 if k == 1 else t[k - 2]
+            hi = 1.0 if k == nt + 1 else t[k - 1]
+            w = (tg - lo) / (hi - lo)
+            for c in range(2):
+                v0 = traction[c, m, max(k - 2, 0)]
+                v1 = traction[c, m, k - 1] if k <= nt else 0.0
+                along[c, m, i] = v0 * (1 - w) + v1 * w
+            near = k - 2 if w < 0.5 else k - 1
+            state_along[m, i] = state[m, min(max(near, 0), nt - 1)]
+    # across the strips: between the two nearest strip centres
+    out = np.zeros((2, gnx, gny))
+    out_state = np.zeros((gnx, gny), dtype=np.int8)
+    edge_lo = y[order[0]] - 0.5 * width[order[0]]
+    edge_hi = y[order[ns - 1]] + 0.5 * width[order[ns - 1]]
+    top = max(ns - 1, 1)
+    for jj in range(gny):
+        g = gy[jj]
+        if ns == 1:
+            tt = 0.0
+            lo_idx = hi_idx = 0
+        else:
+            j = 0  # np.searchsorted(ys, g): the first strip centre at or after g
+            while j < ns and y[order[j]] < g:
+                j += 1
+            j = min(max(j, 1), top)
+            y0, y1 = y[order[j - 1]], y[order[j]]
+            tt = (g - y0) / (y1 - y0)
+            if tt < 0.0:
+                tt = 0.0
+            elif tt > 1.0:
+                tt = 1.0
+            lo_idx, hi_idx = order[j - 1], order[j]
+        valid = 1.0 if g >= edge_lo and g <= edge_hi else 0.0
+        nearest = lo_idx if tt < 0.5 else hi_idx
+        for i in range(gnx):
+            for c in range(2):
+                out[c, i, jj] = ((1 - tt) * along[c, lo_idx, i]
+                                 + tt * along[c, hi_idx, i]) * valid
+            out_state[i, jj] = state_along[nearest, i] if valid > 0.0 else EXTERIOR
+    return out, out_state
