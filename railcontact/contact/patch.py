@@ -28,13 +28,7 @@ from ..settings.case import check_grid_size
 from ..tangential import SOLVERS, TangentialResult, rolling_operator
 from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
-from ..tangential.strips import (
-    StripResult,
-    equivalent_ellipse,
-    remesh_strips,
-    sample_on_strips,
-    strips_from_contact,
-)
+from ..tangential.strips import StripResult, remesh_strips, strips_on_contact
 from .results import PatchSolution, Work
 
 UNDEFINED_GAP = 0.5 * FAR
@@ -278,12 +272,10 @@ def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
         if model == "fastsim":
             return fastsim_hertz(*args, nx=nx, ny=ny, bound=settings.bound)
         return fastrip_hertz(*args, nx=nx, ny=ny)
-    strips = strips_from_contact(normal.grid, normal.contact, nx)
-    pn = sample_on_strips(normal.pressure, normal.grid, strips)
-    carried = float((pn * strips.area).sum())
-    if carried > 0:  # the samples carry the BEM's force (so |F| <= mu N holds in total)
-        pn = pn * (normal.force / carried)
-    a_eq, b_eq = equivalent_ellipse(normal.grid, normal.contact)
+    # the samples carry the BEM's force (so |F| <= mu N holds in total); the coefficients
+    # from the patch's equivalent ellipse
+    strips, pn, (a_eq, b_eq) = strips_on_contact(normal.grid, normal.contact,
+                                                 normal.pressure, normal.force, nx)
     if model == "fastsim":
         return fastsim(strips, pn, mu, creepage, flexibilities(a_eq, b_eq, pair))
     return fastrip(strips, pn, normal.force, a_eq, b_eq, pair, mu, creepage)

@@ -156,3 +156,29 @@ def zz_displacement_at(x, y, xmin, dx, ymin, dy, traction):  # pragma: no cover 
                 total += (prev[j] - prev[j + 1] - here[j] + here[j + 1]) * w
         prev, here = here, prev
     return total
+
+
+@numba.njit(cache=True)
+def zz_displacement_centred(y, dx, ymin, dy, traction):  # pragma: no cover - compiled
+    """:func:`zz_displacement_at` the point (0, y) [m] for a grid centred on x = 0 (its x
+    edges ``(k - nx/2) dx``, k = 0 .. nx): the coefficients of the columns ``i`` and
+    ``nx - 1 - i`` are the same (the zz block is even in x), so each pair's tractions are
+    added and its corners formed once (half the evaluations of ``F``)."""
+    nx, ny = traction.shape
+    half = 0.5 * nx
+    prev = np.empty(ny + 1)
+    here = np.empty(ny + 1)
+    for j in range(ny + 1):
+        prev[j] = _zz_antiderivative(half * dx, y - (ymin + j * dy))  # 0 - (0 - nx/2) dx
+    total = 0.0
+    for i in range((nx + 1) // 2):
+        xe = (half - (i + 1)) * dx
+        for j in range(ny + 1):
+            here[j] = _zz_antiderivative(xe, y - (ymin + j * dy))
+        mirror = nx - 1 - i
+        for j in range(ny):
+            w = traction[i, j] + traction[mirror, j] if mirror != i else traction[i, j]
+            if w != 0.0:
+                total += (prev[j] - prev[j + 1] - here[j] + here[j + 1]) * w
+        prev, here = here, prev
+    return total

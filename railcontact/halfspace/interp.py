@@ -84,3 +84,50 @@ def slopes_of(xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
     function [fp's unit / xp's unit] (NaN or infinite where numpy's division gives it)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.ascontiguousarray((fp[1:] - fp[:-1]) / (xp[1:] - xp[:-1]))
+
+
+@numba.njit(cache=True, inline="always")
+def interp_on_piece(x, xp, fp, j):  # pragma: no cover - compiled
+    """``np.interp(x, xp, fp)`` for increasing ``xp`` when ``j`` is the last sample at or
+    before ``x`` (any ``j`` when ``x`` is NaN or outside ``xp``; :func:`uniform_piece`
+    finds it on equally spaced samples)."""
+    n = xp.size
+    if n == 1:
+        return fp[0]
+    if math.isnan(x):
+        return x
+    if x < xp[0]:
+        return fp[0]
+    if x > xp[n - 1] or j >= n - 1:
+        return fp[n - 1]
+    f0 = fp[j]
+    if xp[j] == x:
+        return f0
+    f1 = fp[j + 1]
+    slope = (f1 - f0) / (xp[j + 1] - xp[j])
+    v = slope * (x - xp[j]) + f0
+    if math.isnan(v):
+        v = slope * (x - xp[j + 1]) + f1
+        if math.isnan(v) and f0 == f1:
+            v = f0
+    return v
+
+
+@numba.njit(cache=True, inline="always")
+def uniform_piece(x, xp, x0, h):  # pragma: no cover - compiled
+    """The last sample ``j`` of increasing ``xp`` at or before ``x`` (0 before the first,
+    ``xp.size - 1`` from the last on; NaN: 0), for samples spaced about ``h`` from ``x0``:
+    guessed from the spacing, then checked against ``xp`` (so exact for any samples)."""
+    n = xp.size
+    t = (x - x0) / h
+    if not t > 0.0:
+        j = 0
+    elif t >= n - 1:
+        j = n - 1
+    else:
+        j = int(t)
+    while j > 0 and xp[j] > x:
+        j -= 1
+    while j + 1 < n and xp[j + 1] <= x:
+        j += 1
+    return j

@@ -44,7 +44,7 @@ import numpy as np
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz
-from ..halfspace.influence import zz_displacement_at
+from ..halfspace.influence import zz_displacement_centred
 from ..halfspace.interp import interp_walk_sloped, slopes_of
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import numpy_sum
@@ -193,19 +193,26 @@ def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, lo, hi, nx, ny
+def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
                    ):  # pragma: no cover - compiled
-    """The virtual patch between ``lo`` and ``hi`` [m]: its largest half length ``xmax``
+    """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (at the penetration
+    ``delta`` [m]; ``sf``, ``sa`` the slopes of ``f`` and ``a_of_s``): its lateral ends
+    ``lo``, ``hi`` [m] (:func:`_half_width` at ``d0``), its largest half length ``xmax``
     [m] at :data:`SEARCH_SAMPLES` points ``np.linspace(lo, hi)`` (NaN if one is NaN) and,
-    when ``xmax > 0``, the semi-elliptic shape ``sqrt(x_l(y)^2 - x^2)`` [m] on the estimate
-    grid ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)`` with the displacement it makes
-    at (0, 0) (:func:`zz_displacement_at`, without ``(1-nu)/(pi G)``), its sum
-    (``numpy.sum``'s) and largest value, and its count of elements in contact."""
+    when ``xmax > 0`` (and the ends are finite), on the estimate grid
+    ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)``: the pressure [Pa] whose
+    displacement at (0, 0) is ``delta`` (the semi-elliptic shape ``sqrt(x_l(y)^2 - x^2)``
+    times ``amplitude = delta / u``, ``u`` its displacement, :func:`zz_displacement_centred`
+    times ``scale = (1-nu)/(pi G)``), the amplitude [Pa/m], the force [N] (numpy's sum
+    times the element area), the largest pressure [Pa] and the count of elements in
+    contact."""
+    lo, hi = _half_width_at(s, f, d0)
     num = SEARCH_SAMPLES
     div = num - 1
     step = (hi - lo) / div
     xmax = -math.inf  # (the largest square: the root of the largest is the largest root)
-    j_s = -1
+    n = s.size
+    j = 0
     for k in range(num):  # np.linspace's points
         if k == div:
             yk = hi
@@ -213,7 +220,23 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, lo, hi, nx, ny
             yk = (k / div) * (hi - lo) + lo
         else:
             yk = k * step + lo
-        v, j_s = _squared_half_length(yk, s, f, a_of_s, sf, sa, d0, stretch, j_s)
+        # the common case written out (the points increase: the piece found by walking
+        # on); a point on a sample, beyond the samples or a NaN as np.interp has it
+        v = math.nan
+        inner = yk >= s[0] and yk <= s[n - 1]
+        if inner:
+            while j + 1 < n and s[j + 1] <= yk:
+                j += 1
+            inner = j < n - 1 and s[j] != yk
+        if inner:
+            fy = sf[j] * (yk - s[j]) + f[j]
+            ay = sa[j] * (yk - s[j]) + a_of_s[j]
+            inner = not (math.isnan(fy) or math.isnan(ay))
+            v = stretch * (d0 - fy) / ay
+            if not v > 0.0 and not math.isnan(v):
+                v = 0.0
+        if not inner:
+            v, _ = _squared_half_length(yk, s, f, a_of_s, sf, sa, d0, stretch, -1)
         if math.isnan(v):
             xmax = v
             break
@@ -222,7 +245,7 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, lo, hi, nx, ny
     shape = np.zeros((nx, ny))
     if not (xmax > 0.0 and hi > lo and xmax < math.inf and math.isfinite(lo)
             and math.isfinite(hi)):
-        return xmax, shape, 0.0, 0.0, 0.0, 0
+        return lo, hi, xmax, shape, 0.0, 0.0, 0.0, 0
     xmin = -xmax
     dx = (xmax - xmin) / nx
     dy = (hi - lo) / ny
@@ -243,53 +266,61 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, lo, hi, nx, ny
             shape[i, j] = math.sqrt(v)
             if shape[i, j] > 0.0:
                 count += 1
-    u = zz_displacement_at(0.0, 0.0, xmin, dx, lo, dy, shape)
-    return xmax, shape, u, numpy_sum(shape), shape.max(), count
+    u = zz_displacement_centred(0.0, dx, lo, dy, shape) * scale
+    amplitude = delta / u
+    p = shape  # (in place: the pressure)
+    for i in range(nx):
+        for j in range(ny):
+            p[i, j] = shape[i, j] * amplitude
+    return lo, hi, xmax, p, amplitude, numpy_sum(p) * (dx * dy), p.max(), count
 
 
-def _shape(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, delta: float):
-    """Virtual patch: factor, half-length function on s, lateral extent."""
+def _shape(method: str, samples: tuple, a0: float, delta: float) -> tuple[float, float]:
+    """The virtual-penetration factor and the stretch of the half lengths at the
+    penetration ``delta`` [m] (KP: 0.55 and 1; INFCON: chi from the rigid overlap's width
+    and ``a0 = A(0)`` [1/m], and ``(1 - chi) / chi``)."""
     if method == "kp":
-        factor, stretch = KP_FACTOR, 1.0
-    else:
-        lo, hi = _half_width(s, f, delta)
-        w = 0.5 * (hi - lo)
-        if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
-            raise RailContactError(f"INFCON estimate: the undeformed gap has no width at "
-                                   f"penetration {delta:g} m")
-        a0 = float(np.interp(0.0, s, a_of_s))
-        factor = infcon_factor(a0, delta / w**2)
-        stretch = (1 - factor) / factor
+        return KP_FACTOR, 1.0
+    lo, hi = _half_width_at(samples[0], samples[1], delta)
+    w = 0.5 * (hi - lo)
+    if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
+        raise RailContactError(f"INFCON estimate: the undeformed gap has no width at "
+                               f"penetration {delta:g} m")
+    factor = infcon_factor(a0, delta / w**2)
+    return factor, (1 - factor) / factor
+
+
+def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float, nx: int,
+              ny: int) -> tuple:
+    """The virtual patch at the penetration ``delta`` [m] (``samples`` = (s, f, a_of_s and
+    the slopes of f and a_of_s), ``a0 = A(0)`` [1/m], ``scale = (1-nu)/(pi G)`` [m/Pa /
+    m]): factor, d0, stretch and :func:`_virtual_patch`'s values, checked."""
+    factor, stretch = _shape(method, samples, a0, delta)
     d0 = factor * delta
-    lo, hi = _half_width(s, f, d0)
+    out = _virtual_patch(*samples, d0, stretch, delta, scale, nx, ny)
+    lo, hi, xmax = out[:3]
+    if not xmax > 0 or hi <= lo:
+        raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
+    if not (xmax < math.inf and math.isfinite(lo) and math.isfinite(hi)):
+        Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)  # (raises: not finite)
+    return (factor, d0, stretch, *out)
+
+
+def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: int, ny: int,
+              t0: float) -> NormalEstimate:
+    """The :class:`NormalEstimate` of an :func:`_evaluate` at ``delta`` [m]."""
+    factor, d0, stretch, lo, hi, xmax, p, amplitude, force, pmax, count = evaluation
+    s, f, a_of_s = samples[:3]
 
     def x_half(sv):
         g = d0 - np.interp(sv, s, f)
         return np.sqrt(np.clip(stretch * g / np.interp(sv, s, a_of_s), 0, None))
 
-    return factor, x_half, lo, hi, d0, stretch
-
-
-def _estimate_at(method, samples, delta, pair, nx, ny, t0) -> NormalEstimate:
-    """The estimate at the penetration ``delta`` [m]; ``samples`` = (s, f, a_of_s and the
-    slopes of f and a_of_s)."""
-    s, f, a_of_s = samples[:3]
-    factor, x_half, lo, hi, d0, stretch = _shape(method, s, f, a_of_s, delta)
-    lo, hi = float(lo), float(hi)
-    xmax, shape, u, _, _, count = _virtual_patch(*samples, d0, stretch, lo, hi, nx, ny)
-    if not xmax > 0 or hi <= lo:
-        raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
     grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
-    # displacement at the point of maximum penetration (0, s0 = 0) for unit amplitude
-    u *= (1 - pair.poisson) / (math.pi * pair.shear)
-    amplitude = delta / u
-    p = shape * amplitude
-    area_el = grid.element_area
-    force = float(numpy_sum(p) * area_el)
-    return NormalEstimate(grid=grid, pressure=p, contact=shape > 0, force=force,
-                          penetration=delta, max_pressure=float(p.max()),
-                          area=float(count * area_el), factor=factor, method=method,
-                          message=f"{method}: factor {factor:.4f}",
+    return NormalEstimate(grid=grid, pressure=p, contact=p > 0, force=float(force),
+                          penetration=delta, max_pressure=float(pmax),
+                          area=float(count * grid.element_area), factor=factor,
+                          method=method, message=f"{method}: factor {factor:.4f}",
                           wall_time=time.perf_counter() - t0, half_length=x_half,
                           amplitude=amplitude, shape_data=(*samples, d0, stretch))
 
@@ -324,25 +355,29 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     if (penetration is None) == (load is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
     samples = (s, f, a_of_s, slopes_of(s, f), slopes_of(s, a_of_s))
+    a0 = float(np.interp(0.0, s, a_of_s))
+    scale = (1 - pair.poisson) / (math.pi * pair.shear)
     if penetration is not None:
-        return _estimate_at(method, samples,
-                            check_positive("penetration", penetration, "m"), pair, nx, ny, t0)
+        delta = check_positive("penetration", penetration, "m")
+        return _estimate(method, samples, delta,
+                         _evaluate(method, samples, a0, delta, scale, nx, ny), nx, ny, t0)
     load = check_positive("load", load, "N")
-    # secant on delta, started from Hertz with the curvatures at s = 0
+    # secant on delta, started from Hertz with the curvatures at s = 0 (each step's
+    # patch evaluated; the estimate formed of the last)
+    force = 8  # (the place of the force in an evaluation)
     k0 = int(np.argmin(np.abs(s)))
     k = min(k0 + 5, len(s) - 1) if k0 + 1 < len(s) else max(k0 - 5, 0)
     b0 = max(float(f[k] / s[k] ** 2), 1e-9) if s[k] != 0 else 1.0
-    a0 = float(np.interp(0.0, s, a_of_s))
     d1 = hertz(a0, b0, pair, load=load).penetration
-    e1 = _estimate_at(method, samples, d1, pair, nx, ny, t0)
-    d2 = d1 * (load / e1.force) ** (2 / 3)
+    e1 = _evaluate(method, samples, a0, d1, scale, nx, ny)
+    d2 = d1 * (load / e1[force]) ** (2 / 3)
     for _ in range(30):
-        e2 = _estimate_at(method, samples, d2, pair, nx, ny, t0)
-        if abs(e2.force - load) < 1e-6 * load:
+        e2 = _evaluate(method, samples, a0, d2, scale, nx, ny)
+        if abs(e2[force] - load) < 1e-6 * load:
             break
         # secant in log-log (force ~ delta^(3/2))
-        slope = (math.log(e2.force) - math.log(e1.force)) / (math.log(d2) - math.log(d1)) \
-            if e2.force != e1.force and d2 != d1 else 1.5
+        slope = (math.log(e2[force]) - math.log(e1[force])) / (math.log(d2) - math.log(d1)) \
+            if e2[force] != e1[force] and d2 != d1 else 1.5
         d1, e1 = d2, e2
-        d2 = d2 * (load / e2.force) ** (1 / max(slope, 0.5))
-    return e2
+        d2 = d2 * (load / e2[force]) ** (1 / max(slope, 0.5))
+    return _estimate(method, samples, d2, e2, nx, ny, t0)

@@ -36,9 +36,18 @@ import numpy as np
 
 from ..errors import check_finite, check_positive
 from ..halfspace.materials import ElasticPair
-from .fastsim import _march, flexibilities, hertz_bound
+from .fastsim import _march_strips, flexibilities, hertz_bound
 from .kalker import creep_coefficients
-from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, summarise
+from .strips import (
+    ADHESION,
+    EXTERIOR,
+    SLIP,
+    StripResult,
+    Strips,
+    strip_result,
+    summarise,
+    summary,
+)
 
 
 def fastrip_hertz(a: float, b: float, load: float, pair: ElasticPair, friction: float,
@@ -81,37 +90,52 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     xi, eta, phi = (check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage,
                                                           strict=True))
     pn = np.ascontiguousarray(pressure, dtype=float)
-    flex = flexibilities(a, b, pair)
-    fs_traction, _ = _march(strips, mu * pn, (xi, eta, phi), flex)
+    c = creep_coefficients(a, b, pair.poisson)
+    l1, l2, l3 = flexibilities(a, b, pair, c)
     if mu == 0.0 or load <= 0.0:
-        return summarise(strips, np.zeros_like(fs_traction),
+        return summarise(strips, np.zeros((2, *pn.shape)),
                          np.where(pn > 0, SLIP, EXTERIOR).astype(np.int8), pn,
                          "FaStrip: no friction or no load", t0)
 
     nu, g_mod = pair.poisson, pair.shear
-    c = creep_coefficients(a, b, nu)
     p0 = 3 * load / (2 * math.pi * a * b)
     scale = 2 * mu * p0 * math.pi**2
     xi_ = -g_mod * 4 * (1 - nu) * c.c11 * xi / scale
     eta_ = -g_mod * 4 * (1 - nu) * c.c22 * eta / scale
     phi_ = -g_mod * 3 * math.sqrt(a * b) * c.c23 * phi / (2 * mu * p0 * math.pi)
 
-    traction, state = _fastrip_strips(strips.x, strips.y, strips.x_lo, strips.x_hi, pn, mu,
-                                      fs_traction, xi_, eta_, phi_, eta_**2, 1 - phi_**2,
-                                      a / (1 - nu), eta_ * phi_, mu * p0 / a, a)
-    return summarise(strips, traction, state, pn, "FaStrip", t0)
+    traction, state, sums = _fastrip_all(
+        strips.x_lo, strips.x_hi, strips.t, strips.w, strips.y, strips.width, pn, mu,
+        xi / l1, eta / l2, phi, l3, xi_, eta_, phi_, eta_**2, 1 - phi_**2, a / (1 - nu),
+        eta_ * phi_, mu * p0 / a, a)
+    return strip_result(strips, traction, state, pn, sums, "FaStrip", t0)
+
+
+@numba.njit(cache=True)
+def _fastrip_all(x_lo, x_hi, t, w, y, width, pn, mu, cx, cy, phi, l3, xi_, eta_, phi_, eta2,
+                 one_phi2, d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
+    """FASTSIM's march (the slip directions), :func:`_fastrip_strips` and the sums of
+    :func:`~.strips.summarise` in one call."""
+    bound = np.empty(pn.shape)
+    for j in range(pn.shape[0]):
+        for k in range(pn.shape[1]):
+            bound[j, k] = mu * pn[j, k]
+    fs_traction, _ = _march_strips(x_lo, x_hi, t, y, bound, cx, cy, phi, phi, l3)
+    traction, state = _fastrip_strips(x_lo, x_hi, t, y, pn, mu, fs_traction, xi_, eta_,
+                                      phi_, eta2, one_phi2, d_scale, eta_phi, q_scale, a)
+    return traction, state, summary(x_lo, x_hi, width, y, t, w, traction, state)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fastrip_strips(x, y, x_lo, x_hi, pn, mu, fs_traction, xi_, eta_, phi_, eta2, one_phi2,
+def _fastrip_strips(x_lo, x_hi, t, y, pn, mu, fs_traction, xi_, eta_, phi_, eta2, one_phi2,
                     d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
-    """FaStrip's traction (2, ny, nx) [Pa] and state (ny, nx) at the strip samples ``x``
-    (ny, nx) [m] of the strips at ``y`` [m] from ``x_lo`` to ``x_hi`` [m], pressure ``pn``
+    """FaStrip's traction (2, ny, nx) [Pa] and state (ny, nx) at the samples ``t`` of the
+    strips at ``y`` [m] from ``x_lo`` to ``x_hi`` [m] (:attr:`Strips.x`), pressure ``pn``
     [Pa], friction ``mu`` and the FASTSIM traction ``fs_traction`` (its direction in the
     slip zone); the scaled creepages and the factors of :func:`fastrip` (``eta2 = eta'^2``,
     ``one_phi2 = 1 - phi'^2``, ``d_scale = a/(1-nu)``, ``eta_phi = eta' phi'``,
     ``q_scale = mu p0 / a``): numpy's operations of the formulas, element by element."""
-    ny, nx = x.shape
+    ny, nx = pn.shape
     traction = np.zeros((2, ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
     spinning = abs(phi_) >= 1.0
@@ -130,7 +154,7 @@ def _fastrip_strips(x, y, x_lo, x_hi, pn, mu, fs_traction, xi_, eta_, phi_, eta2
         kappa = ex / den if den > 0 else 0.0
         lam = ey / den if den > 0 else 0.0
         for k in range(nx):
-            xs = x[j, k] - centre
+            xs = (centre + ay * t[k]) - centre  # (Strips.x: mid + half t)
             r1 = ay * ay - xs * xs
             r1 = math.sqrt(r1 if r1 > 0.0 or math.isnan(r1) else 0.0)
             r2 = (ay - d) * (ay - d) - (xs - d) * (xs - d)

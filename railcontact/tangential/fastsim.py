@@ -23,13 +23,15 @@ import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
 from ..halfspace.materials import ElasticPair
-from .kalker import creep_coefficients
+from .kalker import CreepCoefficients, creep_coefficients
 from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, summarise
 
 
-def flexibilities(a: float, b: float, pair: ElasticPair) -> tuple[float, float, float]:
-    """Kalker's flexibilities (L1, L2, L3) [m/Pa] for semi-axes a, b [m]."""
-    c = creep_coefficients(a, b, pair.poisson)
+def flexibilities(a: float, b: float, pair: ElasticPair,
+                  coefficients: CreepCoefficients | None = None) -> tuple[float, float, float]:
+    """Kalker's flexibilities (L1, L2, L3) [m/Pa] for semi-axes a, b [m] (``coefficients``:
+    Kalker's coefficients of that ellipse, when they are at hand)."""
+    c = creep_coefficients(a, b, pair.poisson) if coefficients is None else coefficients
     g = pair.shear
     return (8 * a / (3 * c.c11 * g), 8 * a / (3 * c.c22 * g),
             math.pi * a * math.sqrt(a / b) / (4 * c.c23 * g))
@@ -55,18 +57,26 @@ def _march(strips: Strips, bound: np.ndarray, creepage, flex, spin_scale=(1.0, 1
     """FASTSIM marching on all strips at once. Returns traction (2, ny, nx) and state."""
     xi, eta, phi = creepage
     l1, l2, l3 = flex
-    return _march_strips(strips.x, strips.x_hi, strips.y, np.ascontiguousarray(bound, float),
-                         xi / l1, eta / l2, spin_scale[0] * phi, spin_scale[1] * phi, l3)
+    return _march_strips(strips.x_lo, strips.x_hi, strips.t, strips.y,
+                         np.ascontiguousarray(bound, float), xi / l1, eta / l2,
+                         spin_scale[0] * phi, spin_scale[1] * phi, l3)
 
 
 @numba.njit(cache=True)
-def _march_strips(x, x_hi, y, bound, cx, cy, spin_x, spin_y, l3):  # pragma: no cover - compiled
-    """:func:`_march` on the samples ``x`` (ny, nx) [m] of the strips at ``y`` (ny,) [m]
-    with leading ends ``x_hi`` [m], the bound ``bound`` (ny, nx) [Pa]: each strip from its
-    leading to its trailing sample, ``dp = -h (cx - spin_x y / l3, cy + spin_y x_m / l3)``
+def _march_strips(x_lo, x_hi, t, y, bound, cx, cy, spin_x, spin_y, l3
+                  ):  # pragma: no cover - compiled
+    """:func:`_march` on the strips at ``y`` (ny,) [m] from ``x_lo`` to ``x_hi`` [m]
+    sampled at ``t`` (:attr:`Strips.x`), the bound ``bound`` (ny, nx) [Pa]: each strip
+    from its leading to its trailing sample, ``dp = -h (cx - spin_x y / l3, cy + spin_y x_m / l3)``
     (``cx = xi/L1``, ``cy = eta/L2``, ``spin_* = phi`` times the spin scale), clipped to the
     bound (the same operations, in the same order, as numpy's column by column)."""
-    ny, nx = x.shape
+    ny, nx = bound.shape
+    x = np.empty((ny, nx))
+    for j in range(ny):
+        half = 0.5 * (x_hi[j] - x_lo[j])
+        mid = 0.5 * (x_hi[j] + x_lo[j])
+        for k in range(nx):
+            x[j, k] = mid + half * t[k]
     traction = np.zeros((2, ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
     px = np.zeros(ny)

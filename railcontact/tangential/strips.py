@@ -20,7 +20,7 @@ from numpy.polynomial.legendre import leggauss
 
 from ..errors import RailContactError
 from ..halfspace.grid import Grid
-from ..halfspace.interp import interp_walk
+from ..halfspace.interp import interp_on_piece, uniform_piece
 from ..halfspace.sums import numpy_sum
 
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
@@ -78,7 +78,7 @@ def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips
     """Strips along the rows of a contact mask on a grid (non-elliptic patches): each row
     with contact is one strip of width dy, from the trailing to the leading edge of its
     contact elements (element edges); gaps inside a row are bridged."""
-    rows, first, last = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
+    rows, first, last, _, _, _ = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
     if rows.size == 0:
         raise RailContactError("no contact elements to build strips from")
     lo = grid.x[first] - grid.dx / 2
@@ -90,39 +90,95 @@ def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips
 
 @numba.njit(cache=True)
 def _row_ends(contact):  # pragma: no cover - compiled
-    """The grid rows ``j`` (along x) with contact in ``contact`` (nx, ny), and the first
-    and last element ``i`` in contact on each."""
+    """The grid rows ``j`` (along x) with contact in ``contact`` (nx, ny), the first and
+    last element ``i`` in contact on each, the first and last ``i`` with contact on any
+    row, and the count of elements in contact."""
     nx, ny = contact.shape
     first = np.full(ny, -1)
     last = np.full(ny, -1)
+    i0 = -1
+    i1 = -1
+    count = 0
     for i in range(nx):
         for j in range(ny):
             if contact[i, j]:
                 if first[j] < 0:
                     first[j] = i
                 last[j] = i
+                if i0 < 0:
+                    i0 = i
+                i1 = i
+                count += 1
     rows = np.flatnonzero(first >= 0)
-    return rows, first[rows], last[rows]
+    return rows, first[rows], last[rows], i0, i1, count
 
 
 def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarray:
     """A field on the grid (nx, ny) at the strip samples (ny_s, nx_s), linearly along x on
     the strip's grid row (strips made by :func:`strips_from_contact`)."""
     rows = np.searchsorted(grid.y, strips.y - 1e-12 * grid.dy)
-    return _sample_rows(np.ascontiguousarray(values, dtype=float), grid.x, rows, strips.x)
+    return _sample_rows(np.ascontiguousarray(values, dtype=float), grid.x, rows,
+                        strips.x_lo, strips.x_hi, strips.t)
 
 
 @numba.njit(cache=True)
-def _sample_rows(values, gx, rows, x):  # pragma: no cover - compiled
-    """``np.interp(x[k], gx, values[:, rows[k]])`` for every strip ``k`` (ny_s, nx_s)."""
-    ns, nt = x.shape
+def _sample_rows(values, gx, rows, x_lo, x_hi, t):  # pragma: no cover - compiled
+    """``np.interp(x[k], gx, values[:, rows[k]])`` at every strip's samples ``x[k]``
+    (:attr:`Strips.x`'s), (ny_s, nx_s)."""
+    ns, nt = rows.size, t.size
     out = np.empty((ns, nt))
+    h = gx[1] - gx[0] if gx.size > 1 else 1.0
     for k in range(ns):
+        half = 0.5 * (x_hi[k] - x_lo[k])
+        mid = 0.5 * (x_hi[k] + x_lo[k])
         column = values[:, rows[k]]
-        j = -1
         for m in range(nt):
-            out[k, m], j = interp_walk(x[k, m], gx, column, j)
+            x = mid + half * t[m]
+            out[k, m] = interp_on_piece(x, gx, column, uniform_piece(x, gx, gx[0], h))
     return out
+
+
+def strips_on_contact(grid: Grid, contact: np.ndarray, pressure: np.ndarray, force: float,
+                      nx: int = 40) -> tuple[Strips, np.ndarray, tuple[float, float]]:
+    """:func:`strips_from_contact`, the ``pressure`` [Pa] on the grid sampled on them
+    (:func:`sample_on_strips`) and scaled so that the samples carry ``force`` [N] (when
+    they carry any), and :func:`equivalent_ellipse` of the contact [m]: the same values,
+    in one compiled pass over the contact."""
+    rows, first, last, i0, i1, count = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
+    if rows.size == 0:
+        raise RailContactError("no contact elements to build strips from")
+    lo = grid.x[first] - grid.dx / 2
+    hi = grid.x[last] + grid.dx / 2
+    t, w = _rule(nx, "uniform")
+    width = np.full(rows.size, grid.dy)
+    strips = Strips(y=grid.y[rows], width=width, x_lo=lo, x_hi=hi, t=t, w=w)
+    pn = _sample_rows(np.ascontiguousarray(pressure, dtype=float), grid.x, rows, lo, hi, t)
+    _carry(pn, width, lo, hi, w, float(force))
+    area = count * grid.element_area
+    length = (i1 - i0 + 1) * grid.dx
+    across = (rows[-1] - rows[0] + 1) * grid.dy
+    r = math.sqrt(area / math.pi)
+    return strips, pn, (float(r * math.sqrt(length / across)),
+                        float(r * math.sqrt(across / length)))
+
+
+@numba.njit(cache=True)
+def _carry(pn, width, x_lo, x_hi, w, force):  # pragma: no cover - compiled
+    """Scale the samples ``pn`` (ny_s, nx_s) [Pa] in place so that they carry ``force``
+    [N] (``pn * (force / sum(pn da))``, ``da`` as :attr:`Strips.area` forms it; unscaled
+    when they carry nothing)."""
+    ns, nt = pn.shape
+    terms = np.empty((ns, nt))
+    for k in range(ns):
+        wh = width[k] * (0.5 * (x_hi[k] - x_lo[k]))
+        for m in range(nt):
+            terms[k, m] = pn[k, m] * (wh * w[m])
+    carried = numpy_sum(terms)
+    if carried > 0:
+        scale = force / carried
+        for k in range(ns):
+            for m in range(nt):
+                pn[k, m] = pn[k, m] * scale
 
 
 def equivalent_ellipse(grid: Grid, contact: np.ndarray) -> tuple[float, float]:
@@ -183,9 +239,15 @@ def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure:
               message: str, t0: float) -> StripResult:
     """Integrate a strip traction field into a :class:`StripResult`."""
     traction = np.ascontiguousarray(traction, dtype=float)
-    fx, fy, mz, ncon, nslip, tmax = _summary(strips.x_lo, strips.x_hi, strips.width,
-                                             strips.y, strips.t, strips.w, traction,
-                                             np.ascontiguousarray(state))
+    sums = summary(strips.x_lo, strips.x_hi, strips.width, strips.y, strips.t, strips.w,
+                   traction, np.ascontiguousarray(state))
+    return strip_result(strips, traction, state, pressure, sums, message, t0)
+
+
+def strip_result(strips: Strips, traction: np.ndarray, state: np.ndarray,
+                 pressure: np.ndarray, sums: tuple, message: str, t0: float) -> StripResult:
+    """The :class:`StripResult` of a traction field and its :func:`summary`."""
+    fx, fy, mz, ncon, nslip, tmax = sums
     ratio = float(nslip / ncon) if ncon else 0.0
     return StripResult(strips=strips, traction=traction, state=state, pressure=pressure,
                        force=(fx, fy), spin_moment=mz, slip_area_ratio=ratio,
@@ -194,7 +256,7 @@ def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure:
 
 
 @numba.njit(cache=True)
-def _summary(x_lo, x_hi, width, y, t, w, traction, state):  # pragma: no cover - compiled
+def summary(x_lo, x_hi, width, y, t, w, traction, state):  # pragma: no cover - compiled
     """The sums of :func:`summarise` as numpy forms them: the forces ``sum(p_c da)`` [N],
     the spin moment ``sum((x p_y - y p_x) da)`` [N m] (``da`` and ``x`` as
     :attr:`Strips.area` and :attr:`Strips.x` form them), the counts of samples in contact
