@@ -126,15 +126,26 @@ def _sample_rows(values, gx, rows, x_lo, x_hi, t):  # pragma: no cover - compile
     """``np.interp(x[k], gx, values[:, rows[k]])`` at every strip's samples ``x[k]``
     (:attr:`Strips.x`'s), (ny_s, nx_s)."""
     ns, nt = rows.size, t.size
+    n = gx.size
     out = np.empty((ns, nt))
-    h = gx[1] - gx[0] if gx.size > 1 else 1.0
+    h = gx[1] - gx[0] if n > 1 else 1.0
     for k in range(ns):
         half = 0.5 * (x_hi[k] - x_lo[k])
         mid = 0.5 * (x_hi[k] + x_lo[k])
         column = values[:, rows[k]]
         for m in range(nt):
             x = mid + half * t[m]
-            out[k, m] = interp_on_piece(x, gx, column, uniform_piece(x, gx, gx[0], h))
+            j = uniform_piece(x, gx, gx[0], h)
+            # the common case written out (a point between two samples), else numpy's
+            # rules (on a sample, beyond the samples, NaN)
+            if x > gx[0] and j < n - 1 and gx[j] < x:
+                f0 = column[j]
+                f1 = column[j + 1]
+                v = (f1 - f0) / (gx[j + 1] - gx[j]) * (x - gx[j]) + f0
+                if not math.isnan(v):
+                    out[k, m] = v
+                    continue
+            out[k, m] = interp_on_piece(x, gx, column, j)
     return out
 
 

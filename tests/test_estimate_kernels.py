@@ -1,0 +1,175 @@
+"""The compiled pieces of the simplified models (INFCON/KP, FASTSIM/FaStrip) against their
+definitions: numpy's interpolation, the rigid overlap's ends, Love's coefficients, the
+strips of a contact mask."""
+
+import math
+
+import numpy as np
+import pytest
+
+from railcontact import ElasticPair, Grid, Material, hertz
+from railcontact.halfspace.influence import (
+    coefficients_at,
+    zz_displacement_at,
+    zz_displacement_centred,
+)
+from railcontact.halfspace.interp import (
+    interp_on_piece,
+    interp_walk_sloped,
+    slopes_of,
+    uniform_piece,
+)
+from railcontact.normal.virtual import _half_width, virtual_penetration
+from railcontact.tangential.strips import (
+    equivalent_ellipse,
+    sample_on_strips,
+    strips_from_contact,
+    strips_on_contact,
+)
+
+PAIR = ElasticPair.of(Material(206e9, 0.28))
+
+
+def overlap_ends(s, f, level):
+    """The definition of :func:`_half_width`: the run of samples with ``f <= level``
+    through the sample nearest 0, each end moved to where ``f`` crosses ``level`` on the
+    piece beyond it (linearly), or kept where that piece is outside or not finite."""
+    k0 = int(np.argmin(np.abs(s)))
+    lo = hi = k0
+    while lo > 0 and f[lo - 1] <= level:
+        lo -= 1
+    while hi < len(s) - 1 and f[hi + 1] <= level:
+        hi += 1
+
+    def cross(i_in, i_out):
+        if i_out < 0 or i_out >= len(s) or not np.isfinite(f[i_out]):
+            return s[i_in]
+        return s[i_in] + (level - f[i_in]) / (f[i_out] - f[i_in]) * (s[i_out] - s[i_in])
+
+    return cross(lo, lo - 1), cross(hi, hi + 1)
+
+
+def test_half_width_of_a_parabola_and_at_the_edges():
+    """The rigid overlap of ``f = B s^2`` ends at ``+-sqrt(level/B)`` (within the chord's
+    error), and the ends follow the definition where the run meets the arrays' ends,
+    a gap that is not finite, or is one sample long."""
+    s = np.linspace(-0.01, 0.012, 221)
+    f = 3.0 * s**2
+    lo, hi = _half_width(s, f, 3e-5)
+    assert lo == pytest.approx(-math.sqrt(1e-5), rel=1e-3)
+    assert hi == pytest.approx(math.sqrt(1e-5), rel=1e-3)
+    cases = [
+        (s, f, 1.0),  # the whole array: both ends are samples
+        (s, np.where(s > 0.005, np.inf, f), 1e-4),  # infinite gap beyond the right end
+        (s, np.where(s < -0.003, np.nan, f), 1e-4),  # NaN beyond the left end
+        (s, f, 0.0),  # a single sample (s = 0) at the level
+        (s, f + 1e-6, 0.0),  # no sample at or below the level: the nearest one alone
+        (s, f, math.nan),
+        (s[110:], f[110:], 1e-5),  # the nearest sample is the first
+        (s[:101], f[:101], 1e-5),  # the nearest sample is the last
+        (np.array([-1e-3, 1e-3]), np.array([0.0, 0.0]), 1e-6),
+    ]
+    for ss, ff, level in cases:
+        got = _half_width(ss, ff, level)
+        want = overlap_ends(ss, ff, level)
+        assert np.array_equal(np.array(got), np.array(want, dtype=float), equal_nan=True), (
+            level, got, want)
+
+
+def test_interpolation_kernels_are_numpys():
+    """The compiled ``np.interp`` (walking on, with given slopes, or from an equally
+    spaced guess) gives numpy's values to the bit: between samples, on samples, beyond
+    both ends, at NaN, with infinite and NaN samples, and for one sample."""
+    rng = np.random.default_rng(7)
+    xp = np.cumsum(rng.uniform(0.5, 1.5, 40))
+    fp = rng.normal(size=40)
+    fp[[5, 6, 20]] = [np.inf, np.inf, np.nan]
+    x = np.sort(np.concatenate([rng.uniform(xp[0] - 3, xp[-1] + 3, 300), xp[::3],
+                                [xp[0], xp[-1]]]))
+    want = np.interp(x, xp, fp)
+    sl = slopes_of(xp, fp)
+    j = -1
+    walked = []
+    for v in x:
+        value, j = interp_walk_sloped(v, xp, fp, sl, j)
+        walked.append(value)
+    guessed = [interp_on_piece(v, xp, fp, uniform_piece(v, xp, xp[0], 1.0)) for v in x]
+    assert np.array_equal(walked, want, equal_nan=True)
+    assert np.array_equal(guessed, want, equal_nan=True)
+    assert math.isnan(interp_on_piece(math.nan, xp, fp, 0))
+    one = np.array([2.0])
+    assert interp_on_piece(5.0, one, np.array([3.0]), 0) == np.interp(5.0, one, [3.0])
+
+
+@pytest.mark.parametrize("nx, ny", [(8, 6), (7, 5), (1, 1)])
+def test_shared_corner_sums_are_loves_coefficients(nx, ny):
+    """The displacement of a traction summed from the corners once each equals the sum of
+    the zz coefficients (:func:`coefficients_at`) to round-off; on a uniform square of
+    side 2c the corners telescope to Love's centre displacement 8 c asinh(1) [per
+    (1-nu)/(pi G)], whatever the subdivision."""
+    rng = np.random.default_rng(nx)
+    dx, dy = 0.3e-3, 0.2e-3
+    xmin, ymin = -0.5 * nx * dx, -1.1e-3
+    g = Grid.from_bounds(xmin, xmin + nx * dx, ymin, ymin + ny * dy, nx, ny)
+    w = rng.uniform(0.0, 2.0, (nx, ny))
+    w[0, 0] = 0.0
+    X, Y = g.mesh()
+    for y in (0.0, 0.37e-3):
+        dense = float(np.sum(coefficients_at("zz", -X, y - Y, dx, dy, ElasticPair(1.0, 0.0))
+                             * w)) * math.pi
+        assert zz_displacement_at(0.0, y, xmin, dx, ymin, dy, w) == pytest.approx(dense,
+                                                                                 rel=1e-12)
+        assert zz_displacement_centred(y, dx, ymin, dy, w) == pytest.approx(dense, rel=1e-12)
+    c = 1.5e-3
+    for n in (1, 4, 5):
+        ones = np.ones((n, n))
+        assert zz_displacement_centred(0.0, 2 * c / n, -c, 2 * c / n, ones) == pytest.approx(
+            8 * c * math.asinh(1.0), rel=1e-13)
+
+
+def test_infcon_on_a_grid_is_its_pressure_anywhere():
+    """The estimate re-meshed onto a grid in one pass (:meth:`pressure_on`) is the model's
+    pressure at the grid's element centres (:meth:`pressure_at`), to the bit, also where
+    the grid reaches beyond the virtual patch; and it carries the load asked for."""
+    s = np.linspace(-0.02, 0.02, 801)
+    f = np.where(s < 0, 4.0 * s**2, 2.5 * s**2 + 30.0 * s**3)
+    a = 1.1 + 5.0 * s
+    est = virtual_penetration("infcon", s, f, a, PAIR, load=6e4)
+    assert est.force == pytest.approx(6e4, rel=1e-6)
+    for grid in (Grid.from_bounds(-8e-3, 8e-3, -9e-3, 7e-3, 33, 41),
+                 Grid.from_bounds(-2e-3, 5e-3, 1e-3, 3e-3, 10, 4)):
+        assert np.array_equal(est.pressure_on(grid), est.pressure_at(*grid.mesh()))
+
+
+def test_strips_on_contact_carry_the_force_of_a_hertz_patch():
+    """The strips of a Hertz contact mask: one a grid row, from the first to the last
+    element edge in contact; the pressure sampled on them is numpy's interpolation along
+    the row, scaled to carry the normal force exactly; the equivalent ellipse is
+    :func:`equivalent_ellipse` (within 3 % of Hertz's semi-axes)."""
+    hz = hertz(1.0, 5.0, PAIR, load=7e4)
+    g = Grid.from_bounds(-1.2 * hz.a, 1.2 * hz.a, -1.2 * hz.b, 1.2 * hz.b, 41, 37)
+    p = hz.pressure(*g.mesh())
+    contact = p > 0
+    strips, pn, (a, b) = strips_on_contact(g, contact, p, hz.load, 40)
+    plain = strips_from_contact(g, contact, 40)
+    for name in ("y", "width", "x_lo", "x_hi", "t", "w"):
+        assert np.array_equal(getattr(strips, name), getattr(plain, name))
+    rows = np.flatnonzero(contact.any(axis=0))
+    assert np.array_equal(strips.y, g.y[rows])
+    sampled = np.stack([np.interp(strips.x[k], g.x, p[:, j]) for k, j in enumerate(rows)])
+    assert np.array_equal(sample_on_strips(p, g, strips), sampled)
+    assert float((pn * strips.area).sum()) == pytest.approx(hz.load, rel=1e-12)
+    assert np.array_equal(pn, sampled * (hz.load / float((sampled * strips.area).sum())))
+    assert (a, b) == equivalent_ellipse(g, contact)
+    assert a == pytest.approx(hz.a, rel=0.03) and b == pytest.approx(hz.b, rel=0.03)
+
+
+def test_infcon_factor_is_hertzs_lateral_factor():
+    """chi = B_e b^2 / delta of Hertz's solution for the curvatures (A, B_e) (at a unit
+    penetration, any material), to the bit: wider and narrower than long, and a circle."""
+    from railcontact.normal.virtual import infcon_factor
+
+    unit = ElasticPair(shear=1.0, poisson=0.0)
+    for A, B in ((1.0, 2.0), (2.0, 1.0), (0.7, 0.7), (1.0, 1e3), (3e2, 1.0), (5.0, 5.0001)):
+        h = hertz(A, B, unit, penetration=1.0)
+        assert infcon_factor(A, B) == B * h.b**2 / h.penetration
