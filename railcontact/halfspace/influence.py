@@ -163,22 +163,36 @@ def zz_displacement_centred(y, dx, ymin, dy, traction):  # pragma: no cover - co
     """:func:`zz_displacement_at` the point (0, y) [m] for a grid centred on x = 0 (its x
     edges ``(k - nx/2) dx``, k = 0 .. nx): the coefficients of the columns ``i`` and
     ``nx - 1 - i`` are the same (the zz block is even in x), so each pair's tractions are
-    added and its corners formed once (half the evaluations of ``F``)."""
+    added and its corners formed once (half the evaluations of ``F``), and only at the
+    corners of elements with traction."""
     nx, ny = traction.shape
-    half = 0.5 * nx
-    prev = np.empty(ny + 1)
-    here = np.empty(ny + 1)
-    for j in range(ny + 1):
-        prev[j] = _zz_antiderivative(half * dx, y - (ymin + j * dy))  # 0 - (0 - nx/2) dx
-    total = 0.0
-    for i in range((nx + 1) // 2):
-        xe = (half - (i + 1)) * dx
-        for j in range(ny + 1):
-            here[j] = _zz_antiderivative(xe, y - (ymin + j * dy))
+    ncols = (nx + 1) // 2
+    pair = np.zeros((ncols, ny))  # the columns' tractions, each with its mirror's
+    first = np.full(ncols + 2, ny)  # the rows with traction (first, last) a column pair,
+    last = np.full(ncols + 2, -1)  # with empty columns at both ends (index i + 1)
+    for i in range(ncols):
         mirror = nx - 1 - i
         for j in range(ny):
             w = traction[i, j] + traction[mirror, j] if mirror != i else traction[i, j]
+            pair[i, j] = w
             if w != 0.0:
-                total += (prev[j] - prev[j + 1] - here[j] + here[j + 1]) * w
+                first[i + 1] = min(first[i + 1], j)
+                last[i + 1] = max(last[i + 1], j)
+    half = 0.5 * nx
+    prev = np.zeros(ny + 1)
+    here = np.zeros(ny + 1)
+    total = 0.0
+    for e in range(ncols + 1):  # the edge at (half - e) dx, between the columns e-1, e
+        lo = min(first[e], first[e + 1]) if e < ncols else first[e]
+        hi = max(last[e], last[e + 1]) if e < ncols else last[e]
+        xe = (half - e) * dx
+        for j in range(lo, hi + 2):
+            here[j] = _zz_antiderivative(xe, y - (ymin + j * dy))
+        if e > 0:
+            i = e - 1
+            for j in range(first[e], last[e] + 1):
+                w = pair[i, j]
+                if w != 0.0:
+                    total += (prev[j] - prev[j + 1] - here[j] + here[j + 1]) * w
         prev, here = here, prev
     return total
