@@ -116,7 +116,7 @@ def influence_kernel(
     return coefficients_at(block, X, Y, dx, dy, pair)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _zz_antiderivative(a, b):  # pragma: no cover - compiled
     """``a asinh(b/|a|) + b asinh(a/|b|)`` (0 where ``a`` or ``b`` is 0): the zz block's
     ``F`` without ``(1-nu)/(pi G)``, as ``sign(a b) (|a| ln((|b| + r)/|a|) + |b| ln((|a| +

@@ -166,20 +166,17 @@ def _half_width_at(s, f, level):  # pragma: no cover - compiled
     hi = k0
     while hi < n - 1 and f[hi + 1] <= level:
         hi += 1
-    return _cross(s, f, level, lo, lo - 1), _cross(s, f, level, hi, hi + 1)
+    ends = np.empty(2)
+    for e, (i_in, i_out) in enumerate(((lo, lo - 1), (hi, hi + 1))):
+        if i_out < 0 or i_out >= n or not math.isfinite(f[i_out]):
+            ends[e] = s[i_in]
+        else:
+            t = (level - f[i_in]) / (f[i_out] - f[i_in])
+            ends[e] = s[i_in] + t * (s[i_out] - s[i_in])
+    return ends[0], ends[1]
 
 
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def _cross(s, f, level, i_in, i_out):  # pragma: no cover - compiled
-    """Where ``f`` crosses ``level`` between the samples ``i_in`` and ``i_out``
-    (linearly), or ``s[i_in]`` when ``i_out`` is outside or its ``f`` not finite."""
-    if i_out < 0 or i_out >= s.size or not math.isfinite(f[i_out]):
-        return s[i_in]
-    t = (level - f[i_in]) / (f[i_out] - f[i_in])
-    return s[i_in] + t * (s[i_out] - s[i_in])
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, error_model="numpy")
 def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
                          ):  # pragma: no cover - compiled
     """The square of the virtual patch's half length [m^2] at ``y`` (of :func:`_shape`'s
