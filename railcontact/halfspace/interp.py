@@ -1,9 +1,11 @@
 """``np.interp`` at one point, for compiled kernels (numpy's values to the bit).
 
 The simplified models (INFCON's half lengths, the strips' samples of a pressure) read
-sampled functions at many increasing points; a kernel that reads them one point at a time
-walks along the samples instead of searching them anew (the same piece: the last sample at
-or before the point), and forms numpy's value there.
+sampled functions at many points; a kernel that reads them one point at a time finds the
+piece (the last sample at or before the point) by walking on from the previous point's or
+from a guess on equally spaced samples, and forms numpy's value there. (Written out in a
+hot loop, the common case - a point between two samples - is several times faster than a
+call of these helpers, which such loops keep for numpy's special cases.)
 """
 
 from __future__ import annotations
@@ -15,44 +17,15 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def interp_walk(x, xp, fp, j):  # pragma: no cover - compiled
-    """``(np.interp(x, xp, fp), j)`` for increasing ``xp`` (numpy's algorithm: the end
-    values beyond ``xp``, the sample's value where ``x`` falls on one, the other end of the
-    piece where the first gives NaN; one sample: its value), and the piece ``j`` (the last
-    sample at or before ``x``; ``-1`` before the first), found by walking on from the
-    piece ``j`` of an earlier point (``-1``: from the start; a walk, so fast for
-    increasing points)."""
-    n = xp.size
-    if n == 1:
-        return fp[0], j
-    if math.isnan(x):
-        return x, j
-    if x < xp[0]:
-        return fp[0], -1
-    if j < 0 or xp[j] > x:  # (a point before the earlier one: from the start)
-        j = 0
-    while j + 1 < n and xp[j + 1] <= x:
-        j += 1
-    if x > xp[n - 1] or j >= n - 1:
-        return fp[n - 1], j
-    f0 = fp[j]
-    if xp[j] == x:
-        return f0, j
-    f1 = fp[j + 1]
-    slope = (f1 - f0) / (xp[j + 1] - xp[j])
-    v = slope * (x - xp[j]) + f0
-    if math.isnan(v):
-        v = slope * (x - xp[j + 1]) + f1
-        if math.isnan(v) and f0 == f1:
-            v = f0
-    return v, j
-
-
-@numba.njit(cache=True)
 def interp_walk_sloped(x, xp, fp, slopes, j):  # pragma: no cover - compiled
-    """:func:`interp_walk` with the pieces' slopes ``slopes[j] = (fp[j+1] - fp[j]) /
-    (xp[j+1] - xp[j])`` given (:func:`slopes_of`; numpy forms them so too, once, when
-    there are more points than samples): the same values."""
+    """``(np.interp(x, xp, fp), j)`` for increasing ``xp``, with the pieces' slopes
+    ``slopes[j] = (fp[j+1] - fp[j]) / (xp[j+1] - xp[j])`` given (:func:`slopes_of`;
+    numpy forms them so too, once, when there are more points than samples): numpy's
+    algorithm (the end values beyond ``xp``, the sample's value where ``x`` falls on
+    one, the other end of the piece where the first gives NaN; one sample: its value),
+    and the piece ``j`` (the last sample at or before ``x``; ``-1`` before the first),
+    found by walking on from the piece ``j`` of an earlier point (``-1``: from the
+    start; fast for increasing points)."""
     n = xp.size
     if n == 1:
         return fp[0], j
