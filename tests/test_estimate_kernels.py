@@ -173,3 +173,28 @@ def test_infcon_factor_is_hertzs_lateral_factor():
     for A, B in ((1.0, 2.0), (2.0, 1.0), (0.7, 0.7), (1.0, 1e3), (3e2, 1.0), (5.0, 5.0001)):
         h = hertz(A, B, unit, penetration=1.0)
         assert infcon_factor(A, B) == B * h.b**2 / h.penetration
+
+
+def test_compiled_strip_passes_refuse_fields_of_another_shape():
+    """The compiled passes read their fields by the strips' and the grid's counts: a field
+    of another shape is a clear error, not a read past its end."""
+    from railcontact.errors import RailContactError
+    from railcontact.tangential.fastrip import fastrip
+    from railcontact.tangential.strips import Strips, remesh_strips, summarise
+
+    hz = hertz(1.0, 5.0, PAIR, load=7e4)
+    strips = Strips.ellipse(hz.a, hz.b, 12, 10)
+    g = Grid.from_bounds(-1.2 * hz.a, 1.2 * hz.a, -1.2 * hz.b, 1.2 * hz.b, 16, 14)
+    p = hz.pressure(*g.mesh())
+    with pytest.raises(RailContactError, match="strip shape"):
+        fastrip(strips, np.ones((10, 13)), 7e4, hz.a, hz.b, PAIR, 0.3, (1e-3, 0, 0))
+    with pytest.raises(RailContactError, match="strip shape"):
+        summarise(strips, np.zeros((2, 12, 10)), np.zeros((10, 12), np.int8), None, "", 0.0)
+    with pytest.raises(RailContactError, match="grid's shape"):
+        sample_on_strips(p[:, :-1], g, strips_from_contact(g, p > 0, 12))
+    with pytest.raises(RailContactError, match="grid's shape"):
+        strips_on_contact(g, (p > 0)[:-1], p, 7e4, 12)
+    good = fastrip(strips, np.ones((10, 12)), 7e4, hz.a, hz.b, PAIR, 0.3, (1e-3, 0, 0))
+    good.traction = good.traction[:, :, :-1]
+    with pytest.raises(RailContactError, match="strip shape"):
+        remesh_strips(good, g)

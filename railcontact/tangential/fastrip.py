@@ -44,6 +44,7 @@ from .strips import (
     SLIP,
     StripResult,
     Strips,
+    check_samples,
     strip_result,
     summarise,
     summary,
@@ -89,6 +90,7 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     mu = check_positive("friction", friction, allow_zero=True)
     xi, eta, phi = (check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage,
                                                           strict=True))
+    check_samples(strips, "pressure", pressure)
     pn = np.ascontiguousarray(pressure, dtype=float)
     c = creep_coefficients(a, b, pair.poisson)
     l1, l2, l3 = flexibilities(a, b, pair, c)

@@ -74,6 +74,21 @@ class Strips:
         return cls(y=y, width=width, x_lo=-half, x_hi=half, t=t, w=w)
 
 
+def check_samples(strips: Strips, name: str, values: np.ndarray, leading: tuple = ()) -> None:
+    """Raise a :class:`RailContactError` unless ``values`` has the shape of the strips'
+    samples ``(*leading, ny, nx)`` (the compiled passes read them by these counts)."""
+    want = (*leading, strips.y.size, strips.nx)
+    if np.shape(values) != want:
+        raise RailContactError(f"{name} must have the strip shape {want}, got "
+                               f"{np.shape(values)}")
+
+
+def _check_grid_field(grid: Grid, name: str, values: np.ndarray) -> None:
+    if np.shape(values) != grid.shape:
+        raise RailContactError(f"{name} must have the grid's shape {grid.shape}, got "
+                               f"{np.shape(values)}")
+
+
 def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips:
     """Strips along the rows of a contact mask on a grid (non-elliptic patches): each row
     with contact is one strip of width dy, from the trailing to the leading edge of its
@@ -116,6 +131,7 @@ def _row_ends(contact):  # pragma: no cover - compiled
 def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarray:
     """A field on the grid (nx, ny) at the strip samples (ny_s, nx_s), linearly along x on
     the strip's grid row (strips made by :func:`strips_from_contact`)."""
+    _check_grid_field(grid, "the sampled field", values)
     rows = np.searchsorted(grid.y, strips.y - 1e-12 * grid.dy)
     return _sample_rows(np.ascontiguousarray(values, dtype=float), grid.x, rows,
                         strips.x_lo, strips.x_hi, strips.t)
@@ -155,6 +171,8 @@ def strips_on_contact(grid: Grid, contact: np.ndarray, pressure: np.ndarray, for
     (:func:`sample_on_strips`) and scaled so that the samples carry ``force`` [N] (when
     they carry any), and :func:`equivalent_ellipse` of the contact [m]: the same values,
     in one compiled pass over the contact."""
+    _check_grid_field(grid, "the contact", contact)
+    _check_grid_field(grid, "the pressure", pressure)
     rows, first, last, i0, i1, count = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
     if rows.size == 0:
         raise RailContactError("no contact elements to build strips from")
@@ -249,6 +267,8 @@ class StripResult:
 def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure: np.ndarray,
               message: str, t0: float) -> StripResult:
     """Integrate a strip traction field into a :class:`StripResult`."""
+    check_samples(strips, "the traction", traction, (2,))
+    check_samples(strips, "the state", state)
     traction = np.ascontiguousarray(traction, dtype=float)
     sums = summary(strips.x_lo, strips.x_hi, strips.width, strips.y, strips.t, strips.w,
                    traction, np.ascontiguousarray(state))
@@ -309,6 +329,8 @@ def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarr
     nearest sample of the nearest strip.
     """
     s = result.strips
+    check_samples(s, "the traction", result.traction, (2,))
+    check_samples(s, "the state", result.state)
     order = np.argsort(s.y)
     return _remesh(s.y, s.width, s.x_lo, s.x_hi, s.t, order,
                    np.ascontiguousarray(result.traction, dtype=float),
