@@ -245,6 +245,36 @@ def semi_axis_bound(A: float, B: float, pair: ElasticPair, *, load: float | None
     return 2.0 * r ** (2.0 / 3.0) * math.sqrt(penetration / (A + B))
 
 
+def semi_axes(A: float, B: float, e_star: float, *, load: float | None = None,
+              penetration: float | None = None) -> tuple[float, float, float, float]:
+    """Hertz's semi-axes ``a`` (along x) and ``b`` [m], load [N] and penetration [m] for
+    curvatures ``A``, ``B`` [1/m] (both > 0), the contact modulus ``e_star`` [Pa] and
+    either the load or the penetration (given, not checked: :func:`hertz` checks them).
+    """
+    g = axis_ratio(max(A, B) / min(A, B))
+    m = 1.0 - g * g
+    # plain floats (the same values): numpy's scalars make every later operation slower
+    k, e = (float(ellipk(m)), float(ellipe(m))) if m > 0 else (math.pi / 2, math.pi / 2)
+    rho = 2.0 / (A + B)
+
+    def from_load(n: float) -> tuple[float, float, float]:
+        c = (3.0 * n * rho * e / (4.0 * math.pi * e_star * math.sqrt(g))) ** (1.0 / 3.0)
+        major, minor = c / math.sqrt(g), c * math.sqrt(g)
+        delta = minor**2 * (A + B) * k / e
+        return major, minor, delta
+
+    if load is not None:
+        n = load
+    else:
+        _, _, delta1 = from_load(1.0)
+        n = (penetration / delta1) ** 1.5
+    major, minor, delta = from_load(n)
+    if penetration is not None:
+        delta = float(penetration)
+    a, b = (major, minor) if A <= B else (minor, major)
+    return a, b, n, delta
+
+
 def hertz(
     A: float,
     B: float,
@@ -275,28 +305,11 @@ def hertz(
     if (load is None) == (penetration is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
     e_star = pair.e_star
-    g = axis_ratio(max(A, B) / min(A, B))
-    m = 1.0 - g * g
-    # plain floats (the same values): numpy's scalars make every later operation slower
-    k, e = (float(ellipk(m)), float(ellipe(m))) if m > 0 else (math.pi / 2, math.pi / 2)
-    rho = 2.0 / (A + B)
-
-    def from_load(n: float) -> tuple[float, float, float]:
-        c = (3.0 * n * rho * e / (4.0 * math.pi * e_star * math.sqrt(g))) ** (1.0 / 3.0)
-        major, minor = c / math.sqrt(g), c * math.sqrt(g)
-        delta = minor**2 * (A + B) * k / e
-        return major, minor, delta
-
     if load is not None:
-        n = check_positive("load", load, "N", allow_zero=True)
+        load = check_positive("load", load, "N", allow_zero=True)
     else:
-        delta_target = check_positive("penetration", penetration, "m", allow_zero=True)
-        _, _, delta1 = from_load(1.0)
-        n = (delta_target / delta1) ** 1.5
-    major, minor, delta = from_load(n)
-    if penetration is not None:
-        delta = float(penetration)
-    a, b = (major, minor) if A <= B else (minor, major)
+        penetration = check_positive("penetration", penetration, "m", allow_zero=True)
+    a, b, n, delta = semi_axes(A, B, e_star, load=load, penetration=penetration)
     p0 = 3.0 * n / (2.0 * math.pi * a * b) if n > 0 else 0.0
     return HertzSolution(A=A, B=B, a=a, b=b, load=n, penetration=delta, max_pressure=p0,
                          e_star=e_star)

@@ -40,11 +40,10 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
-from scipy.special import ellipe, ellipk
 
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
-from ..halfspace.hertz import axis_ratio, hertz
+from ..halfspace.hertz import hertz, semi_axes
 from ..halfspace.influence import zz_displacement_centred
 from ..halfspace.interp import interp_walk_sloped, slopes_of
 from ..halfspace.materials import ElasticPair
@@ -116,25 +115,13 @@ _UNIT_PAIR = ElasticPair(shear=1.0, poisson=0.0)
 def infcon_factor(A: float, B_e: float) -> float:
     """chi = n^2 B_e / (r (A + B_e)) = B_e b^2 / delta from Hertz for curvatures (A, B_e).
 
-    :func:`~railcontact.halfspace.hertz.hertz` at a unit penetration (G = 1, nu = 0), its
-    operations for the lateral semi-axis ``b`` alone (the same value, without forming the
-    whole solution: the load secant asks for it at every step)."""
+    Hertz's semi-axes at a unit penetration (G = 1, nu = 0;
+    :func:`~railcontact.halfspace.hertz.semi_axes`, the same value as
+    :func:`~railcontact.halfspace.hertz.hertz` without forming its solution record: the
+    load secant asks for it at every step)."""
     A = check_positive("A", A, "1/m")
     B_e = check_positive("B_e", B_e, "1/m")
-    e_star = _UNIT_PAIR.e_star
-    g = axis_ratio(max(A, B_e) / min(A, B_e))
-    m = 1.0 - g * g
-    k, e = (float(ellipk(m)), float(ellipe(m))) if m > 0 else (math.pi / 2, math.pi / 2)
-    rho = 2.0 / (A + B_e)
-
-    def from_load(n: float) -> tuple[float, float, float]:  # (hertz's, as it forms them)
-        c = (3.0 * n * rho * e / (4.0 * math.pi * e_star * math.sqrt(g))) ** (1.0 / 3.0)
-        major, minor = c / math.sqrt(g), c * math.sqrt(g)
-        return major, minor, minor**2 * (A + B_e) * k / e
-
-    n = (1.0 / from_load(1.0)[2]) ** 1.5
-    major, minor, _ = from_load(n)
-    b = minor if A <= B_e else major
+    _, b, _, _ = semi_axes(A, B_e, _UNIT_PAIR.e_star, penetration=1.0)
     return B_e * b**2 / 1.0
 
 
