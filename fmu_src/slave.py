@@ -72,9 +72,12 @@ class Slave:
         buffer = {"Real": self.real, "Integer": self.integer, "String": self.strings}
         self._slots = {v.name: (buffer[v.type], v.vr) for v in self.variables}
         outputs = [v for v in self.variables if v.causality == "output"]
-        self._outputs = [(buffer[v.type], v.vr, v.value) for v in outputs]
         self._zeroed = [(buffer[t], np.array([v.vr for v in outputs if v.type == t],
                                              dtype=int)) for t in ("Real", "Integer")]
+        # the Real and the Integer outputs each written by one assignment of their values
+        self._outputs = [(buffer[t], vrs, [v.value for v in outputs if v.type == t])
+                         for t, (_, vrs) in zip(("Real", "Integer"), self._zeroed, strict=True)]
+        assert all(v.type in ("Real", "Integer") for v in outputs)
         self.log: list[str] = []
         self.contact: WheelsetContact | None = None
         self.modes: FMUModes | None = None
@@ -302,12 +305,12 @@ class Slave:
 
     def _write(self, res: WheelsetResult | None) -> None:
         """Outputs from ``res``; all zero (and no patches) for None."""
-        for buffer, vrs in self._zeroed:
-            buffer[vrs] = 0
         if res is None:
+            for buffer, vrs in self._zeroed:
+                buffer[vrs] = 0
             return
-        for buffer, vr, value in self._outputs:
-            buffer[vr] = value(res)
+        for buffer, vrs, values in self._outputs:
+            buffer[vrs] = [value(res) for value in values]
 
 
 def make_slave(resources: str, instance_name: str) -> Slave:

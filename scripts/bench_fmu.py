@@ -6,8 +6,10 @@ steps: lateral displacement 4 mm sin(2 pi 1.5 Hz t), yaw 1 mrad cos(2 pi 1.5 Hz 
 speed 30 m/s, kinematic creepages (lateral velocity and yaw rate from the motion), wheel
 loads 83.3 kN, S1002 on 60E1 at 1:40, element size 0.5 mm. For warm_start = none /
 estimate (INFCON + FaStrip) / previous / previous+estimate it prints the median and mean
-wall time per step, the mean normal and tangential iterations per step (both wheels) and
-their ratio to the cold start. The first step (always cold) is left out of the means.
+wall time per step (the median also as a ratio to the fixed numpy workload of
+``scripts/bench_step.py``, measured before and after the runs: quote the ratios), the mean
+normal and tangential iterations per step (both wheels) and their ratio to the cold start.
+The first step (always cold) is left out of the means.
 
 Then a bare C host (tests/fmu/host.c) measures the shim's own overhead: set + get of the
 Real variables (no Python involved) and a Python round trip through the shim (a
@@ -30,6 +32,9 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_step import fixed_workload  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 MODES = ("none", "estimate", "previous", "previous+estimate")
@@ -110,18 +115,23 @@ def main() -> None:
         with zipfile.ZipFile(fmu) as z:
             z.extractall(d)
         md = read_model_description(str(fmu))
+        ref = fixed_workload()
         results = [run_mode(d, md, m, args.duration, args.step) for m in MODES]
+        ref = 0.5 * (ref + fixed_workload())  # (before and after the runs)
         overhead = shim_overhead(d, md)
 
     cold = results[0]
     print(f"FMU, {args.duration:g} s of hunting-like motion at {1 / args.step:g} Hz "
           f"communication steps ({len(cold['rows'])} steps), S1002/60E1, both wheels")
-    print(f"{'warm_start':18s} {'median ms':>9s} {'mean ms':>8s} {'normal':>7s} "
+    print(f"fixed workload (scripts/bench_step.py, mean of before and after the runs): "
+          f"{ref * 1e3:.1f} ms")
+    print(f"{'warm_start':18s} {'median ms':>9s} {'/ wl':>6s} {'mean ms':>8s} {'normal':>7s} "
           f"{'tang.':>7s} {'max n/t':>8s} {'iter. ratio':>11s} {'time ratio':>10s}")
     for r in results:
         tot = r["normal"] + r["tangential"]
         ratio = (cold["normal"] + cold["tangential"]) / tot
-        print(f"{r['mode']:18s} {r['median_ms']:9.2f} {r['mean_ms']:8.2f} "
+        print(f"{r['mode']:18s} {r['median_ms']:9.2f} {r['median_ms'] * 1e-3 / ref:6.3f} "
+              f"{r['mean_ms']:8.2f} "
               f"{r['normal']:7.2f} {r['tangential']:7.2f} "
               f"{r['max_normal']:>3d}/{r['max_tangential']:<4d} {ratio:10.2f}x "
               f"{cold['mean_ms'] / r['mean_ms']:9.2f}x")

@@ -145,3 +145,22 @@ def test_roll_modes_in_case_and_json(tmp_path):
     bad["geometry"]["roll"] = "level"
     with pytest.raises(CaseError, match="roll must be one of"):
         rc.solve(bad)
+
+
+def test_first_contact_gap_is_the_least_sampled_gap(s1002_60e1):
+    """The first-contact gap (from the trace the search remembers for each side) is the
+    least of the trace's gaps ``vertical_gap`` forms afresh, to the bit, over random poses
+    of both wheels, whichever side was searched last."""
+    import numpy as np
+
+    from railcontact.geometry.search import vertical_gap
+
+    track, ws = s1002_60e1
+    rng = np.random.default_rng(18)
+    for _ in range(60):
+        pose = Pose(rng.uniform(-9e-3, 9e-3), rng.uniform(-8e-3, 8e-3),
+                    rng.uniform(-3e-3, 3e-3))
+        gaps = {side: first_contact_gap(track, ws, pose, side) for side in ("left", "right")}
+        for side in ("right", "left", "right"):  # (each side's trace remembered)
+            g = vertical_gap(track, ws, pose, side)[4]
+            assert first_contact_gap(track, ws, pose, side) == gaps[side] == float(g.min())

@@ -29,7 +29,7 @@ from __future__ import annotations
 from scipy.optimize import brentq
 
 from ..errors import RailContactError, check_finite
-from .search import vertical_gap
+from .search import least_gap
 from .track import Pose, Track, Wheelset
 
 MAX_ROLL = 0.05
@@ -44,7 +44,7 @@ def first_contact_gap(track: Track, ws: Wheelset, pose: Pose, side: str) -> floa
     Measured with the wheelset axle at the nominal height (axle ``wheel_radius`` above the
     top of rail); negative when the wheel penetrates the rail.
     """
-    return float(vertical_gap(track, ws, pose, side)[4].min())
+    return least_gap(track, ws, pose, side)  # (vertical_gap's least g, the trace remembered)
 
 
 def contact_roll(track: Track, ws: Wheelset, lateral: float, yaw: float = 0.0,

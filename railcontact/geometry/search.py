@@ -295,20 +295,28 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
     return kernels.count_runs(trace[4], g_min, k, float(approach))
 
 
-_LAST_GAP: list = [None]
+_LAST_GAP: dict = {}
+"""The last trace of :func:`_trace_of_pose` of each side: (track, wheelset, pose, trace)."""
 
 
 def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """:func:`_trace`, remembered for the last (track, wheelset, pose, side): a load
-    iteration asks for the same wheel's contact several times."""
-    last = _LAST_GAP[0]  # (a step passes one pose to every call: identity first)
+    """:func:`_trace`, remembered for the last (track, wheelset, pose) of each side: a load
+    iteration asks for the same wheel's contact several times, and the rigid wheelset's
+    search for both wheels' least gaps after solving them (:func:`least_gap`)."""
+    last = _LAST_GAP.get(side)  # (a step passes one pose to every call: identity first)
     if (last is not None and last[0] is track and last[1] is ws
-            and (last[2] is pose or last[2] == pose) and last[3] == side):
-        return last[4]
+            and (last[2] is pose or last[2] == pose)):
+        return last[3]
     out = _trace(track, ws, pose, side)
     out[0].flags.writeable = False  # (its rows too)
-    _LAST_GAP[0] = (track, ws, pose, side, out)
+    _LAST_GAP[side] = (track, ws, pose, out)
     return out
+
+
+def least_gap(track: Track, ws: Wheelset, pose: Pose, side: str) -> float:
+    """The least vertical gap [m] of the wheel's trace above its rail (the least of
+    :func:`vertical_gap`'s ``g``), from the trace the search remembers for the pose."""
+    return float(_trace_of_pose(track, ws, pose, side)[1])
 
 
 def _rail_arrays(track: Track) -> tuple[np.ndarray, ...]:

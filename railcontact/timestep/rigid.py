@@ -47,6 +47,9 @@ evaluation's along the last secant), instead of at the step's approach at ``phi0
 (0.4-0.8 % away at 3 mm: a second frame pass every time); a wheel whose approach misses
 its guess by more than the frames' :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL`
 is solved again from the approach found, so ``G`` is as accurate as without the guess.
+The wheels' solves at the root are kept as well (``"rolled"``, when ``approach_at`` gives
+them, ``memory_at(phi)``): the next step's rolled solves start from them (its pose and
+roll close to this root's) instead of from that step's solve at the pose's roll.
 """
 
 from __future__ import annotations
@@ -343,7 +346,8 @@ class RigidWheelset:
     """Simulation time of the step [s]."""
     memory: dict | None = field(default=None, repr=False, compare=False)
     """The wheelset's memory of this step, where the root found is kept (under
-    ``"rigid"``, with the history: the next step's start); None: not kept."""
+    ``"rigid"``, with the history: the next step's start; and under ``"rolled"`` the
+    wheels' solves there, when ``approach_at`` has ``memory_at``); None: not kept."""
 
     def solve(self) -> RigidSolution:
         """(:func:`vertical_and_roll`, started in time from :attr:`history`; the root
@@ -361,6 +365,11 @@ class RigidWheelset:
             self.memory["rigid"] = [RigidMemory(self.time, s.estimate, s.slope,
                                                 s.approach_slopes, s.approaches),
                                     *self.history[:MAX_HISTORY - 1]]
+            # the wheels' solves at the root: where the next step's rolled solves start
+            rolled = getattr(self.approach_at, "memory_at", None)
+            rolled = None if rolled is None else rolled(s.roll)
+            if rolled is not None:
+                self.memory["rolled"] = rolled
         return s
 
 

@@ -428,6 +428,8 @@ class WheelsetContact:
             for wheel in wheels:
                 self._check_validity(wheel)
         history = tuple(self._rigid_history()) if loads is not None else ()
+        rolled = (self.memory.get("rolled") if loads is not None and self.settings.uses_previous
+                  else None)  # the previous step's wheels at its root: the rolled starts
         if remember:
             self.memory = new_memory
         result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
@@ -438,7 +440,7 @@ class WheelsetContact:
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
-                _RolledApproaches(self, pose, loads, creepages, kinematics, time),
+                _RolledApproaches(self, pose, loads, creepages, kinematics, time, rolled),
                 history=history, time=time,
                 memory=new_memory if remember and self.settings.uses_previous else None)
         return result
@@ -478,34 +480,39 @@ class WheelsetContact:
 
     def _solve_side(self, side: str, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
-                    time: float | None, approach: float | None = None
+                    time: float | None, approach: float | None = None,
+                    memory: tuple[list[PatchMemory], list[PatchMemory]] | None = None
                     ) -> tuple[WheelContact, list[PatchMemory]]:
         """``approach``: the vertical approach [m] expected, at which the first pass forms
         its frame (instead of the remembered step's, extrapolated: the rolled wheelset's
-        solves, :class:`_RolledApproaches`)."""
+        solves, :class:`_RolledApproaches`). ``memory``: (the older step remembered, the
+        solution the first pass starts from), the rolled wheelset's (with a warm start);
+        None: this contact's memory of the previous step for both."""
         keep = self.settings.uses_previous  # remember this step for the next one
-        previous = self.memory[side] if keep else []
+        own = previous = first = self.memory[side] if keep else []
+        if memory is not None and keep:
+            previous, first = memory
         wheel = WheelContact(side=side)
         if control.value == 0.0:
             return wheel, []
         tangential = creep is not None or kin is not None
         if not (control.by_load and tangential and self.settings.load_includes_creep):
-            patches, creepages, memory = self._pass(side, pose, control, creep, kin, time,
-                                                    previous, previous, approach)
-            return self._finish(wheel, patches, creepages, pose), memory if keep else []
+            patches, creepages, mem = self._pass(side, pose, control, creep, kin, time,
+                                                 previous, first, approach)
+            return self._finish(wheel, patches, creepages, pose), mem if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
         q = control.load
         passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
 
         def residual(qn: float) -> tuple[float, tuple]:
-            source = passes[-1][2] if passes else previous  # later passes: the one before
+            source = passes[-1][2] if passes else first  # later passes: the one before
             passes.append(self._pass(side, pose, Control(load=qn), creep, kin, time, previous,
                                      source, None if passes else approach))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
         estimate_seconds = 0.0  # the cold estimate's time, charged to the wheel's work
-        if previous:  # the previous step's creep share
-            share = sum(m.vertical_creep for m in previous)
+        if own:  # the previous step's creep share (the rolled solves: this step's)
+            share = sum(m.vertical_creep for m in own)
         else:  # cold: estimated on the Hertz ellipse where the normal solve forms its frame
             t0 = perf_counter()
             cp = contact_points(self.track, self.wheelset, pose, side, 0.0)[0]
@@ -520,7 +527,7 @@ class WheelsetContact:
                                             self.settings.friction)
             estimate_seconds = perf_counter() - t0
         start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
-        (patches, creepages, memory), failure = creep_load_secant(
+        (patches, creepages, mem), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
         if not patches:
             return wheel, []
@@ -537,7 +544,7 @@ class WheelsetContact:
                      "the one reached from the normal share Q (cold start)")
             wheel.message = ("ok; the load may have several solutions (several patches, "
                              f"mu tan(gamma) >= 1 on one): {which}")
-        return wheel, memory if keep else []
+        return wheel, mem if keep else []
 
     def _finish(self, wheel: WheelContact, patches: list[PatchSolution], creepages: list,
                 pose: Pose) -> WheelContact:
@@ -642,8 +649,14 @@ class WheelsetContact:
 class _RolledApproaches:
     """``phi -> (delta_L, delta_R)``: the vertical approaches [m] at which the wheels,
     the wheelset rolled to ``phi``, carry the step's loads with its creepages (the step's
-    solve of each wheel, warm-started from the contact's memory, which it leaves as it
-    is; :mod:`.rigid`)."""
+    solve of each wheel, which leaves the contact's memory as it is; :mod:`.rigid`).
+
+    With a warm start each wheel's solve starts from the solution nearest in pose: this
+    step's last rolled solve of the wheel, else the previous step's at its root
+    (``rolled``: its memory, kept under ``"rolled"`` with the step's), else this step's
+    own at the pose's roll; the older step it remembers is the previous step's at its root
+    (else this step's). The solves at the root found are what the next step keeps
+    (:meth:`memory_at`)."""
 
     contact: WheelsetContact
     pose: Pose
@@ -651,6 +664,11 @@ class _RolledApproaches:
     creepages: tuple | None
     kinematics: Kinematics | None
     time: float | None
+    rolled: dict[str, list[PatchMemory]] | None = None
+    """The previous step's memory of its wheels at its root (``{"left": ..., "right":
+    ...}``); None: none kept."""
+    solved: dict = field(default_factory=dict, repr=False, compare=False)
+    """The last call's roll [rad] and memory of its solves (``"roll"``, ``"memory"``)."""
 
     def __call__(self, phi: float, guess: tuple[float, float] | None = None
                  ) -> tuple[float, float]:
@@ -658,27 +676,43 @@ class _RolledApproaches:
         first; a wheel whose approach differs from it by more than
         :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL` is solved again with its frame
         formed at the approach found (as a pass from the step's approach is followed by
-        one: the frame's accuracy of a solve without the guess)."""
+        one: the frame's accuracy of a solve without the guess), from the solution of the
+        first solve."""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
+        last = self.solved.get("memory")
+        memory: dict[str, list[PatchMemory]] = {}
+        self.solved.clear()  # (a call that raises leaves none)
         for k, side in enumerate(("left", "right")):
             if self.loads[k] <= 0:
                 out.append(0.0)
+                memory[side] = []
                 continue
+            step = self.contact.memory[side]
+            older = (self.rolled or {}).get(side) or step
+            start = (last or {}).get(side) or older
             creep = None if self.creepages is None else self.creepages[k]
-            wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
-                                                creep, self.kinematics, self.time,
-                                                None if guess is None else guess[k])
+            wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+                                                  creep, self.kinematics, self.time,
+                                                  None if guess is None else guess[k],
+                                                  (older, start))
             if (guess is not None and wheel.patches
                     and abs(wheel.approach - guess[k]) > REFERENCE_RTOL * wheel.approach):
-                wheel, _ = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
-                                                    creep, self.kinematics, self.time,
-                                                    wheel.approach)
+                wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+                                                      creep, self.kinematics, self.time,
+                                                      wheel.approach, (older, mem or start))
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
             out.append(wheel.approach)
+            memory[side] = mem
+        self.solved.update(roll=phi, memory=memory)
         return out[0], out[1]
+
+    def memory_at(self, phi: float) -> dict[str, list[PatchMemory]] | None:
+        """The memory of the wheels' solves at roll ``phi`` [rad] when the last call was
+        there (what the next step starts from), else None."""
+        return self.solved["memory"] if self.solved.get("roll") == phi else None
 
 
 def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]:
