@@ -48,6 +48,7 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                 (warmstart_module, "remesh")],
     "estimate": [(patch_module, "virtual_penetration"), (patch_module, "remesh_strips"),
                  (patch_module, "fastrip"), (patch_module, "fastsim"),
+                 (patch_module, "strips_on_contact"),
                  (patch_module, "strips_from_contact"), (patch_module, "sample_on_strips")],
     "normal BEM": [(patch_module, "solve_normal")],
     "tangential BEM": ([(tangential.SOLVERS, name) for name in tangential.SOLVERS]
@@ -55,6 +56,9 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                        else [(patch_module, "solve_tangential")]),
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
+LEGACY = frozenset({"strips_from_contact", "sample_on_strips"})
+"""Targets of older versions of the package (before issue 18's eighth round), timed when
+present: the script also runs against an older package (bench_step_ab.py)."""
 
 
 class Breakdown:
@@ -84,6 +88,8 @@ class Breakdown:
         saved = []
         for stage, targets in STAGES.items():
             for owner, name in targets:
+                if name in LEGACY and not _has(owner, name):
+                    continue
                 fn = _get(owner, name)
                 saved.append((owner, name, fn))
                 _set(owner, name, self.wrap(stage, fn))
@@ -92,6 +98,10 @@ class Breakdown:
         finally:
             for owner, name, fn in reversed(saved):
                 _set(owner, name, fn)
+
+
+def _has(owner, name) -> bool:
+    return name in owner if isinstance(owner, dict) else hasattr(owner, name)
 
 
 def _get(owner, name):
