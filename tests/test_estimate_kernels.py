@@ -198,3 +198,47 @@ def test_compiled_strip_passes_refuse_fields_of_another_shape():
     good.traction = good.traction[:, :, :-1]
     with pytest.raises(RailContactError, match="strip shape"):
         remesh_strips(good, g)
+
+
+def test_compiled_estimate_and_strip_passes_refuse_counts_they_would_read_past():
+    """The estimate grid's counts, strips beyond the grid sampled, inconsistent strips and
+    strips with nothing to re-mesh: clear errors (the compiled passes read unchecked, so
+    these were a numba ValueError or TypingError, a silent read past the grid's last row,
+    a read past the strips' arrays and a segmentation fault)."""
+    from railcontact.errors import RailContactError
+    from railcontact.tangential.fastsim import fastsim
+    from railcontact.tangential.strips import StripResult, Strips, remesh_strips
+
+    s = np.linspace(-0.01, 0.01, 41)
+    for nx, ny in ((0, 5), (5, 0), (-3, 5), (5.5, 5), (True, 5)):
+        with pytest.raises(RailContactError, match="positive integer"):
+            virtual_penetration("kp", s, 5 * s**2, np.full_like(s, 2.0), PAIR,
+                                penetration=1e-5, nx=nx, ny=ny)
+    # an integral float count is the integer's grid (as Grid.from_bounds takes it)
+    for method in ("kp", "infcon"):
+        a = virtual_penetration(method, s, 5 * s**2, np.full_like(s, 2.0), PAIR,
+                                penetration=1e-5, nx=5.0, ny=4)
+        b = virtual_penetration(method, s, 5 * s**2, np.full_like(s, 2.0), PAIR,
+                                penetration=1e-5, nx=5, ny=4)
+        assert a.grid == b.grid and np.array_equal(a.pressure, b.pressure)
+
+    g = Grid.from_bounds(-0.01, 0.01, -0.005, 0.005, 20, 9)
+    p = np.ones(g.shape)
+    beyond = Strips(y=np.array([0.0, 0.02]), width=np.full(2, 1e-3),
+                    x_lo=np.full(2, -5e-3), x_hi=np.full(2, 5e-3), t=np.array([-0.5, 0.5]),
+                    w=np.ones(2))
+    with pytest.raises(RailContactError, match="beyond the grid"):
+        sample_on_strips(p, g, beyond)
+    uneven = Strips(y=np.array([0.0]), width=np.full(3, 1e-3), x_lo=np.full(3, -1e-3),
+                    x_hi=np.full(3, 1e-3), t=np.array([-0.5, 0.5]), w=np.ones(2))
+    with pytest.raises(RailContactError, match="one length"):
+        fastsim(uneven, np.ones((3, 2)), 0.3, (1e-3, 0.0, 0.0), (1e-9, 1e-9, 1e-9))
+    for ns, nt in ((0, 1), (1, 0)):
+        empty = Strips(y=np.zeros(ns), width=np.ones(ns), x_lo=-np.ones(ns), x_hi=np.ones(ns),
+                       t=np.zeros(nt), w=np.ones(nt))
+        result = StripResult(strips=empty, traction=np.zeros((2, ns, nt)),
+                             state=np.zeros((ns, nt), np.int8), pressure=np.zeros((ns, nt)),
+                             force=(0.0, 0.0), spin_moment=0.0, slip_area_ratio=0.0,
+                             max_traction=0.0, message="", wall_time=0.0)
+        with pytest.raises(RailContactError, match="no strips"):
+            remesh_strips(result, g)

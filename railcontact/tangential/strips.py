@@ -76,8 +76,14 @@ class Strips:
 
 def check_samples(strips: Strips, name: str, values: np.ndarray, leading: tuple = ()) -> None:
     """Raise a :class:`RailContactError` unless ``values`` has the shape of the strips'
-    samples ``(*leading, ny, nx)`` (the compiled passes read them by these counts)."""
-    want = (*leading, strips.y.size, strips.nx)
+    samples ``(*leading, ny, nx)`` (the compiled passes read them by these counts, and
+    the strips' arrays by them: each of one length ny, and nx weights)."""
+    ny = strips.y.size
+    if (strips.width.shape, strips.x_lo.shape, strips.x_hi.shape, strips.w.shape) != (
+            (ny,), (ny,), (ny,), strips.t.shape) or strips.y.ndim != 1 or strips.t.ndim != 1:
+        raise RailContactError("strips: y, width, x_lo and x_hi must be 1-D of one length, "
+                               "and t and w too")
+    want = (*leading, ny, strips.nx)
     if np.shape(values) != want:
         raise RailContactError(f"{name} must have the strip shape {want}, got "
                                f"{np.shape(values)}")
@@ -133,6 +139,9 @@ def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarr
     the strip's grid row (strips made by :func:`strips_from_contact`)."""
     _check_grid_field(grid, "the sampled field", values)
     rows = np.searchsorted(grid.y, strips.y - 1e-12 * grid.dy)
+    if rows.size and rows.max() >= grid.ny:  # (the compiled pass reads the row unchecked)
+        raise RailContactError(f"strips beyond the grid's last row (y up to "
+                               f"{strips.y.max():g} m, the grid's to {grid.y[-1]:g} m)")
     return _sample_rows(np.ascontiguousarray(values, dtype=float), grid.x, rows,
                         strips.x_lo, strips.x_hi, strips.t)
 
@@ -331,6 +340,8 @@ def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarr
     s = result.strips
     check_samples(s, "the traction", result.traction, (2,))
     check_samples(s, "the state", result.state)
+    if s.y.size == 0 or s.nx == 0:  # (the compiled pass reads the first strip and sample)
+        raise RailContactError("no strips or no samples on them to re-mesh")
     order = np.argsort(s.y)
     return _remesh(s.y, s.width, s.x_lo, s.x_hi, s.t, order,
                    np.ascontiguousarray(result.traction, dtype=float),
