@@ -99,14 +99,21 @@ def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips
     """Strips along the rows of a contact mask on a grid (non-elliptic patches): each row
     with contact is one strip of width dy, from the trailing to the leading edge of its
     contact elements (element edges); gaps inside a row are bridged."""
-    rows, first, last, _, _, _ = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
+    return _strips_of_rows(grid, contact, nx)[0]
+
+
+def _strips_of_rows(grid: Grid, contact: np.ndarray, nx: int) -> tuple:
+    """:func:`strips_from_contact`, with the grid rows ``j`` of the strips, the first and
+    last ``i`` with contact on any row and the count of elements in contact."""
+    rows, first, last, i0, i1, count = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
     if rows.size == 0:
         raise RailContactError("no contact elements to build strips from")
     lo = grid.x[first] - grid.dx / 2
     hi = grid.x[last] + grid.dx / 2
     t, w = _rule(nx, "uniform")
-    return Strips(y=grid.y[rows], width=np.full(rows.size, grid.dy), x_lo=lo, x_hi=hi, t=t,
-                  w=w)
+    strips = Strips(y=grid.y[rows], width=np.full(rows.size, grid.dy), x_lo=lo, x_hi=hi, t=t,
+                    w=w)
+    return strips, rows, i0, i1, count
 
 
 @numba.njit(cache=True)
@@ -182,16 +189,10 @@ def strips_on_contact(grid: Grid, contact: np.ndarray, pressure: np.ndarray, for
     in one compiled pass over the contact."""
     _check_grid_field(grid, "the contact", contact)
     _check_grid_field(grid, "the pressure", pressure)
-    rows, first, last, i0, i1, count = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
-    if rows.size == 0:
-        raise RailContactError("no contact elements to build strips from")
-    lo = grid.x[first] - grid.dx / 2
-    hi = grid.x[last] + grid.dx / 2
-    t, w = _rule(nx, "uniform")
-    width = np.full(rows.size, grid.dy)
-    strips = Strips(y=grid.y[rows], width=width, x_lo=lo, x_hi=hi, t=t, w=w)
-    pn = _sample_rows(np.ascontiguousarray(pressure, dtype=float), grid.x, rows, lo, hi, t)
-    _carry(pn, width, lo, hi, w, float(force))
+    strips, rows, i0, i1, count = _strips_of_rows(grid, contact, nx)
+    pn = _sample_rows(np.ascontiguousarray(pressure, dtype=float), grid.x, rows, strips.x_lo,
+                      strips.x_hi, strips.t)
+    _carry(pn, strips.width, strips.x_lo, strips.x_hi, strips.w, float(force))
     area = count * grid.element_area
     length = (i1 - i0 + 1) * grid.dx
     across = (rows[-1] - rows[0] + 1) * grid.dy
