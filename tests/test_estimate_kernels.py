@@ -242,3 +242,23 @@ def test_compiled_estimate_and_strip_passes_refuse_counts_they_would_read_past()
                              max_traction=0.0, message="", wall_time=0.0)
         with pytest.raises(RailContactError, match="no strips"):
             remesh_strips(result, g)
+
+
+def test_strip_sums_are_numpys_with_a_nan_traction():
+    """The compiled sums of a strip result: the largest ``|p|`` is numpy's
+    ``max(hypot(p_x, p_y), initial=0)``, NaN wherever the NaN sample is (it was lost when
+    a finite sample followed it), and the forces numpy's sums."""
+    from railcontact.tangential.strips import Strips, summarise
+
+    strips = Strips.ellipse(6e-3, 4e-3, 4, 3)
+    rng = np.random.default_rng(18)
+    for where in (None, (0, 0, 0), (1, 1, 2), (0, 2, 3)):
+        traction = rng.normal(size=(2, 3, 4)) * 1e8
+        if where is not None:
+            traction[where] = np.nan
+        r = summarise(strips, traction, np.ones((3, 4), np.int8), np.ones((3, 4)), "", 0.0)
+        want = float(np.hypot(*traction).max(initial=0.0))
+        assert np.array_equal(r.max_traction, want, equal_nan=True), (where, r.max_traction)
+        da = strips.area
+        assert np.array_equal(r.force, (float((traction[0] * da).sum()),
+                                        float((traction[1] * da).sum())), equal_nan=True)

@@ -323,7 +323,7 @@ def summary(x_lo, x_hi, width, y, t, w, traction, state):  # pragma: no cover - 
                 if state[j, k] == SLIP:
                     nslip += 1
             m = math.hypot(px, py)
-            if not m <= tmax:  # (NaN kept)
+            if not m <= tmax and tmax == tmax:  # (a NaN kept: numpy's max)
                 tmax = m
     return (numpy_sum(terms[0]), numpy_sum(terms[1]), numpy_sum(terms[2]), ncon, nslip,
             tmax)
