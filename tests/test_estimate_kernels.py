@@ -173,6 +173,10 @@ def test_infcon_factor_is_hertzs_lateral_factor():
     for A, B in ((1.0, 2.0), (2.0, 1.0), (0.7, 0.7), (1.0, 1e3), (3e2, 1.0), (5.0, 5.0001)):
         h = hertz(A, B, unit, penetration=1.0)
         assert infcon_factor(A, B) == B * h.b**2 / h.penetration
+    # independent of hertz() (which shares semi_axes with infcon_factor): a circle's
+    # penetration is a^2 (A + B), so chi = A a^2 / (2 A a^2) = 1/2
+    for A in (0.7, 5.0, 1e3):
+        assert infcon_factor(A, A) == pytest.approx(0.5, rel=1e-14)
 
 
 def test_compiled_strip_passes_refuse_fields_of_another_shape():
