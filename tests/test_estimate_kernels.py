@@ -266,3 +266,25 @@ def test_strip_sums_are_numpys_with_a_nan_traction():
         da = strips.area
         assert np.array_equal(r.force, (float((traction[0] * da).sum()),
                                         float((traction[1] * da).sum())), equal_nan=True)
+
+
+def test_an_unconverged_load_secant_gives_its_last_evaluation_whole(monkeypatch):
+    """When the load secant stops without meeting the load (its 30 steps), the estimate is
+    its last evaluation: the penetration the pressure was formed for (it was the next
+    step's, never evaluated)."""
+    from railcontact.normal import virtual
+
+    calls = []
+    evaluate = virtual._evaluate
+
+    def off(method, samples, a0, delta, *args):  # a force always 0.1 % off the model's
+        out = list(evaluate(method, samples, a0, delta, *args))
+        out[8] *= 1.001 if len(calls) % 2 else 0.999
+        calls.append((delta, out[8]))
+        return tuple(out)
+
+    monkeypatch.setattr(virtual, "_evaluate", off)
+    s = np.linspace(-0.01, 0.01, 201)
+    est = virtual_penetration("infcon", s, 5 * s**2, np.full_like(s, 2.0), PAIR, load=5e4)
+    assert len(calls) == 31  # the first and 30 secant steps, none converged
+    assert (est.penetration, est.force) == calls[-1], (est.penetration, calls[-1][0])

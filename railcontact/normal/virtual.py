@@ -389,4 +389,6 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
             if e2[force] != e1[force] and d2 != d1 else 1.5
         d1, e1 = d2, e2
         d2 = d2 * (load / e2[force]) ** (1 / max(slope, 0.5))
+    else:  # not met in 30 steps: the last evaluation (the step after it not evaluated)
+        d2 = d1
     return _estimate(method, samples, d2, e2, nx, ny, t0)
