@@ -173,6 +173,10 @@ def test_infcon_factor_is_hertzs_lateral_factor():
     for A, B in ((1.0, 2.0), (2.0, 1.0), (0.7, 0.7), (1.0, 1e3), (3e2, 1.0), (5.0, 5.0001)):
         h = hertz(A, B, unit, penetration=1.0)
         assert infcon_factor(A, B) == B * h.b**2 / h.penetration
+    # independent of hertz() (which shares semi_axes with infcon_factor): a circle's
+    # penetration is a^2 (A + B), so chi = A a^2 / (2 A a^2) = 1/2
+    for A in (0.7, 5.0, 1e3):
+        assert infcon_factor(A, A) == pytest.approx(0.5, rel=1e-14)
 
 
 def test_compiled_strip_passes_refuse_fields_of_another_shape():
@@ -198,3 +202,89 @@ def test_compiled_strip_passes_refuse_fields_of_another_shape():
     good.traction = good.traction[:, :, :-1]
     with pytest.raises(RailContactError, match="strip shape"):
         remesh_strips(good, g)
+
+
+def test_compiled_estimate_and_strip_passes_refuse_counts_they_would_read_past():
+    """The estimate grid's counts, strips beyond the grid sampled, inconsistent strips and
+    strips with nothing to re-mesh: clear errors (the compiled passes read unchecked, so
+    these were a numba ValueError or TypingError, a silent read past the grid's last row,
+    a read past the strips' arrays and a segmentation fault)."""
+    from railcontact.errors import RailContactError
+    from railcontact.tangential.fastsim import fastsim
+    from railcontact.tangential.strips import StripResult, Strips, remesh_strips
+
+    s = np.linspace(-0.01, 0.01, 41)
+    for nx, ny in ((0, 5), (5, 0), (-3, 5), (5.5, 5), (True, 5)):
+        with pytest.raises(RailContactError, match="positive integer"):
+            virtual_penetration("kp", s, 5 * s**2, np.full_like(s, 2.0), PAIR,
+                                penetration=1e-5, nx=nx, ny=ny)
+    # an integral float count is the integer's grid (as Grid.from_bounds takes it)
+    for method in ("kp", "infcon"):
+        a = virtual_penetration(method, s, 5 * s**2, np.full_like(s, 2.0), PAIR,
+                                penetration=1e-5, nx=5.0, ny=4)
+        b = virtual_penetration(method, s, 5 * s**2, np.full_like(s, 2.0), PAIR,
+                                penetration=1e-5, nx=5, ny=4)
+        assert a.grid == b.grid and np.array_equal(a.pressure, b.pressure)
+
+    g = Grid.from_bounds(-0.01, 0.01, -0.005, 0.005, 20, 9)
+    p = np.ones(g.shape)
+    beyond = Strips(y=np.array([0.0, 0.02]), width=np.full(2, 1e-3),
+                    x_lo=np.full(2, -5e-3), x_hi=np.full(2, 5e-3), t=np.array([-0.5, 0.5]),
+                    w=np.ones(2))
+    with pytest.raises(RailContactError, match="beyond the grid"):
+        sample_on_strips(p, g, beyond)
+    uneven = Strips(y=np.array([0.0]), width=np.full(3, 1e-3), x_lo=np.full(3, -1e-3),
+                    x_hi=np.full(3, 1e-3), t=np.array([-0.5, 0.5]), w=np.ones(2))
+    with pytest.raises(RailContactError, match="one length"):
+        fastsim(uneven, np.ones((3, 2)), 0.3, (1e-3, 0.0, 0.0), (1e-9, 1e-9, 1e-9))
+    for ns, nt in ((0, 1), (1, 0)):
+        empty = Strips(y=np.zeros(ns), width=np.ones(ns), x_lo=-np.ones(ns), x_hi=np.ones(ns),
+                       t=np.zeros(nt), w=np.ones(nt))
+        result = StripResult(strips=empty, traction=np.zeros((2, ns, nt)),
+                             state=np.zeros((ns, nt), np.int8), pressure=np.zeros((ns, nt)),
+                             force=(0.0, 0.0), spin_moment=0.0, slip_area_ratio=0.0,
+                             max_traction=0.0, message="", wall_time=0.0)
+        with pytest.raises(RailContactError, match="no strips"):
+            remesh_strips(result, g)
+
+
+def test_strip_sums_are_numpys_with_a_nan_traction():
+    """The compiled sums of a strip result: the largest ``|p|`` is numpy's
+    ``max(hypot(p_x, p_y), initial=0)``, NaN wherever the NaN sample is (it was lost when
+    a finite sample followed it), and the forces numpy's sums."""
+    from railcontact.tangential.strips import Strips, summarise
+
+    strips = Strips.ellipse(6e-3, 4e-3, 4, 3)
+    rng = np.random.default_rng(18)
+    for where in (None, (0, 0, 0), (1, 1, 2), (0, 2, 3)):
+        traction = rng.normal(size=(2, 3, 4)) * 1e8
+        if where is not None:
+            traction[where] = np.nan
+        r = summarise(strips, traction, np.ones((3, 4), np.int8), np.ones((3, 4)), "", 0.0)
+        want = float(np.hypot(*traction).max(initial=0.0))
+        assert np.array_equal(r.max_traction, want, equal_nan=True), (where, r.max_traction)
+        da = strips.area
+        assert np.array_equal(r.force, (float((traction[0] * da).sum()),
+                                        float((traction[1] * da).sum())), equal_nan=True)
+
+
+def test_an_unconverged_load_secant_gives_its_last_evaluation_whole(monkeypatch):
+    """When the load secant stops without meeting the load (its 30 steps), the estimate is
+    its last evaluation: the penetration the pressure was formed for (it was the next
+    step's, never evaluated)."""
+    from railcontact.normal import virtual
+
+    calls = []
+    evaluate = virtual._evaluate
+
+    def off(method, samples, a0, delta, *args):  # a force always 0.1 % off the model's
+        out = list(evaluate(method, samples, a0, delta, *args))
+        out[8] *= 1.001 if len(calls) % 2 else 0.999
+        calls.append((delta, out[8]))
+        return tuple(out)
+
+    monkeypatch.setattr(virtual, "_evaluate", off)
+    s = np.linspace(-0.01, 0.01, 201)
+    est = virtual_penetration("infcon", s, 5 * s**2, np.full_like(s, 2.0), PAIR, load=5e4)
+    assert len(calls) == 31  # the first and 30 secant steps, none converged
+    assert (est.penetration, est.force) == calls[-1], (est.penetration, calls[-1][0])

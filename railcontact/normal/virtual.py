@@ -359,6 +359,10 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
                                f"more), got shapes {s.shape}, {f.shape}, {a_of_s.shape}")
     if (penetration is None) == (load is None):
         raise RailContactError("give exactly one of load [N] and penetration [m]")
+    for name, n in (("nx", nx), ("ny", ny)):  # (the compiled patch is formed before its grid)
+        if isinstance(n, bool) or not (float(n).is_integer() and n >= 1):
+            raise RailContactError(f"estimate grid {name} must be a positive integer, got {n!r}")
+    nx, ny = int(nx), int(ny)
     samples = (s, f, a_of_s, slopes_of(s, f), slopes_of(s, a_of_s))
     a0 = float(np.interp(0.0, s, a_of_s))
     scale = (1 - pair.poisson) / (math.pi * pair.shear)
@@ -385,4 +389,6 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
             if e2[force] != e1[force] and d2 != d1 else 1.5
         d1, e1 = d2, e2
         d2 = d2 * (load / e2[force]) ** (1 / max(slope, 0.5))
+    else:  # not met in 30 steps: the last evaluation (the step after it not evaluated)
+        d2 = d1
     return _estimate(method, samples, d2, e2, nx, ny, t0)

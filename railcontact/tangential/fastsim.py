@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import RailContactError, check_finite, check_positive
 from ..halfspace.materials import ElasticPair
 from .kalker import CreepCoefficients, creep_coefficients
-from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, summarise
+from .strips import ADHESION, EXTERIOR, SLIP, StripResult, Strips, check_samples, summarise
 
 
 def flexibilities(a: float, b: float, pair: ElasticPair,
@@ -130,9 +130,8 @@ def fastsim(
     mu = check_positive("friction", friction, allow_zero=True)
     cr = tuple(check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage, strict=True))
     flex = tuple(check_positive(f"L{i + 1}", v, "m/Pa") for i, v in enumerate(flexibility))
+    check_samples(strips, "pressure", pressure)
     pn = np.asarray(pressure, dtype=float)
-    if pn.shape != strips.x.shape:
-        raise RailContactError(f"pressure must have the strip shape {strips.x.shape}")
     traction, state = _march(strips, mu * pn, cr, flex)
     return summarise(strips, traction, state, pn, "FASTSIM", t0)
 

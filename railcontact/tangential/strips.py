@@ -76,8 +76,14 @@ class Strips:
 
 def check_samples(strips: Strips, name: str, values: np.ndarray, leading: tuple = ()) -> None:
     """Raise a :class:`RailContactError` unless ``values`` has the shape of the strips'
-    samples ``(*leading, ny, nx)`` (the compiled passes read them by these counts)."""
-    want = (*leading, strips.y.size, strips.nx)
+    samples ``(*leading, ny, nx)`` (the compiled passes read them by these counts, and
+    the strips' arrays by them: each of one length ny, and nx weights)."""
+    ny = strips.y.size
+    if (strips.width.shape, strips.x_lo.shape, strips.x_hi.shape, strips.w.shape) != (
+            (ny,), (ny,), (ny,), strips.t.shape) or strips.y.ndim != 1 or strips.t.ndim != 1:
+        raise RailContactError("strips: y, width, x_lo and x_hi must be 1-D of one length, "
+                               "and t and w too")
+    want = (*leading, ny, strips.nx)
     if np.shape(values) != want:
         raise RailContactError(f"{name} must have the strip shape {want}, got "
                                f"{np.shape(values)}")
@@ -93,14 +99,21 @@ def strips_from_contact(grid: Grid, contact: np.ndarray, nx: int = 40) -> Strips
     """Strips along the rows of a contact mask on a grid (non-elliptic patches): each row
     with contact is one strip of width dy, from the trailing to the leading edge of its
     contact elements (element edges); gaps inside a row are bridged."""
-    rows, first, last, _, _, _ = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
+    return _strips_of_rows(grid, contact, nx)[0]
+
+
+def _strips_of_rows(grid: Grid, contact: np.ndarray, nx: int) -> tuple:
+    """:func:`strips_from_contact`, with the grid rows ``j`` of the strips, the first and
+    last ``i`` with contact on any row and the count of elements in contact."""
+    rows, first, last, i0, i1, count = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
     if rows.size == 0:
         raise RailContactError("no contact elements to build strips from")
     lo = grid.x[first] - grid.dx / 2
     hi = grid.x[last] + grid.dx / 2
     t, w = _rule(nx, "uniform")
-    return Strips(y=grid.y[rows], width=np.full(rows.size, grid.dy), x_lo=lo, x_hi=hi, t=t,
-                  w=w)
+    strips = Strips(y=grid.y[rows], width=np.full(rows.size, grid.dy), x_lo=lo, x_hi=hi, t=t,
+                    w=w)
+    return strips, rows, i0, i1, count
 
 
 @numba.njit(cache=True)
@@ -133,6 +146,9 @@ def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarr
     the strip's grid row (strips made by :func:`strips_from_contact`)."""
     _check_grid_field(grid, "the sampled field", values)
     rows = np.searchsorted(grid.y, strips.y - 1e-12 * grid.dy)
+    if rows.size and rows.max() >= grid.ny:  # (the compiled pass reads the row unchecked)
+        raise RailContactError(f"strips beyond the grid's last row (y up to "
+                               f"{strips.y.max():g} m, the grid's to {grid.y[-1]:g} m)")
     return _sample_rows(np.ascontiguousarray(values, dtype=float), grid.x, rows,
                         strips.x_lo, strips.x_hi, strips.t)
 
@@ -173,16 +189,10 @@ def strips_on_contact(grid: Grid, contact: np.ndarray, pressure: np.ndarray, for
     in one compiled pass over the contact."""
     _check_grid_field(grid, "the contact", contact)
     _check_grid_field(grid, "the pressure", pressure)
-    rows, first, last, i0, i1, count = _row_ends(np.ascontiguousarray(contact, dtype=np.bool_))
-    if rows.size == 0:
-        raise RailContactError("no contact elements to build strips from")
-    lo = grid.x[first] - grid.dx / 2
-    hi = grid.x[last] + grid.dx / 2
-    t, w = _rule(nx, "uniform")
-    width = np.full(rows.size, grid.dy)
-    strips = Strips(y=grid.y[rows], width=width, x_lo=lo, x_hi=hi, t=t, w=w)
-    pn = _sample_rows(np.ascontiguousarray(pressure, dtype=float), grid.x, rows, lo, hi, t)
-    _carry(pn, width, lo, hi, w, float(force))
+    strips, rows, i0, i1, count = _strips_of_rows(grid, contact, nx)
+    pn = _sample_rows(np.ascontiguousarray(pressure, dtype=float), grid.x, rows, strips.x_lo,
+                      strips.x_hi, strips.t)
+    _carry(pn, strips.width, strips.x_lo, strips.x_hi, strips.w, float(force))
     area = count * grid.element_area
     length = (i1 - i0 + 1) * grid.dx
     across = (rows[-1] - rows[0] + 1) * grid.dy
@@ -313,7 +323,7 @@ def summary(x_lo, x_hi, width, y, t, w, traction, state):  # pragma: no cover - 
                 if state[j, k] == SLIP:
                     nslip += 1
             m = math.hypot(px, py)
-            if not m <= tmax:  # (NaN kept)
+            if not m <= tmax and tmax == tmax:  # (a NaN kept: numpy's max)
                 tmax = m
     return (numpy_sum(terms[0]), numpy_sum(terms[1]), numpy_sum(terms[2]), ncon, nslip,
             tmax)
@@ -331,6 +341,8 @@ def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarr
     s = result.strips
     check_samples(s, "the traction", result.traction, (2,))
     check_samples(s, "the state", result.state)
+    if s.y.size == 0 or s.nx == 0:  # (the compiled pass reads the first strip and sample)
+        raise RailContactError("no strips or no samples on them to re-mesh")
     order = np.argsort(s.y)
     return _remesh(s.y, s.width, s.x_lo, s.x_hi, s.t, order,
                    np.ascontiguousarray(result.traction, dtype=float),
