@@ -122,7 +122,7 @@ def infcon_factor(A: float, B_e: float) -> float:
     A = check_positive("A", A, "1/m")
     B_e = check_positive("B_e", B_e, "1/m")
     _, b, _, _ = semi_axes(A, B_e, _UNIT_PAIR.e_star, penetration=1.0)
-    return B_e * b**2 / 1.0
+    return B_e * b**2  # (over the unit penetration)
 
 
 def _half_width(s: np.ndarray, f: np.ndarray, level: float) -> tuple[float, float]:
