@@ -208,7 +208,7 @@ def test_load_definition(fmu, extracted, md):
 def test_state_round_trip_is_bit_identical(fmu, extracted, md):
     s = Slave(fmu, extracted, md, "state", warm_start="previous")
     outs = ["normal_force_left", "creep_force_x_left", "creep_force_y_right",
-            "normal_iterations", "tangential_iterations"]
+            "normal_iterations", "tangential_iterations", "rigid_normal_iterations"]
     ys = [1e-3, 1.05e-3, 1.1e-3, 1.15e-3, 1.2e-3]
     for y in ys[:2]:
         s.step(lateral_displacement=y, **CREEP)
@@ -230,8 +230,9 @@ def test_state_round_trip_is_bit_identical(fmu, extracted, md):
             s.step(lateral_displacement=y, **CREEP)
             again.append(s.get(*outs))
         assert again == first  # bit-identical, iterations included
-    # the warm start is part of the state: the repeated steps were warm (few iterations)
-    assert first[0][3] <= 6
+    # the warm start is part of the state: the repeated steps were warm (few iterations
+    # in the contact step, the rigid wheelset's solves at other rolls apart)
+    assert first[0][3] - first[0][5] <= 6
     s.s.freeFMUstate(state)
     s.free()
 
@@ -565,17 +566,24 @@ def _api_step(words: dict) -> dict:
         else:
             kw["creepages"] = tuple(tuple(creep[f"{c}_{s}"] for c in ("xi", "eta", "phi"))
                                     for s in ("left", "right"))
-        return wc.solve(Pose(lateral), **kw)
+        r = wc.solve(Pose(lateral), **kw)
+        if ps.modes.control == "load" and ps.modes.rigid_wheelset == "solve":
+            _ = r.rigid_solution  # the FMU finds it every step (its memory, its work)
+        return r
 
     solve(0.0, 0.0, 0.0, dict.fromkeys(CREEP, 0.0))
     r = solve(2e-3, -2.2e-4, 0.01, CREEP)
+
+    def work(name):  # the contact step's and the rigid wheelset's solves, both wheels
+        return sum(getattr(w, name) + getattr(x, name)
+                   for w, x in zip(r.wheels, r.rigid_work, strict=True))
+
     return {"normal_force_left": r.left.normal_force,
             "creep_force_x_left": r.left.creep_force[0],
             "creep_force_y_right": r.right.creep_force[1],
             "force_vertical_left": r.left.track_force[2],
-            "normal_iterations": r.left.normal_iterations + r.right.normal_iterations,
-            "tangential_iterations": (r.left.tangential_iterations
-                                      + r.right.tangential_iterations),
+            "normal_iterations": work("normal_iterations"),
+            "tangential_iterations": work("tangential_iterations"),
             "status": r.status}
 
 

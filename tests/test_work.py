@@ -131,6 +131,39 @@ def test_wheelset_step_counts_every_solve(calls):
     assert all(w.seconds > 0 for w in r.wheels)
 
 
+@pytest.mark.parametrize("warm", [False, True])
+def test_rigid_wheelset_solves_count(calls, warm):
+    """Under load control the rigid wheelset's search solves the wheels again at other
+    rolls; those solves are the step's work too (the FMU's iteration outputs): the
+    wheels' counts plus :attr:`WheelsetResult.rigid_work` are every solve the step made,
+    cold and from the previous step (whose own solves are left out of the count)."""
+    wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 1 / 40),
+                            rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                            rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                            rc.ContactSettings(element_size=1e-3,
+                                               warm_start="previous" if warm else "none"))
+    creep = ((2e-4, 2e-4, 0.2), (2e-4, 2e-4, 0.2))
+    t = 0.0
+    if warm:
+        first = wc.solve(rc.Pose(2.9e-3), loads=(83.3e3, 83.3e3), creepages=creep, time=0.0)
+        assert first.rigid_solution.converged  # its root starts this step's search
+        t = 1e-3
+        for log in calls.values():
+            log.clear()
+    r = wc.solve(rc.Pose(3e-3), loads=(83.3e3, 83.3e3), creepages=creep, time=t)
+    assert r.rigid_work[0].normal_iterations == 0  # not solved yet: asking does not solve
+    step = (sum(calls["normal"]), sum(calls["tangential"]))
+    assert step == (sum(w.normal_iterations for w in r.wheels),
+                    sum(w.tangential_iterations for w in r.wheels))
+    s = r.rigid_solution
+    assert s.converged and s.evaluations >= 1
+    rigid = [sum(calls["normal"]) - step[0], sum(calls["tangential"]) - step[1]]
+    assert rigid[0] > 0  # the root is not the pose's roll: the wheels were solved again
+    assert [sum(w.normal_iterations for w in r.rigid_work),
+            sum(w.tangential_iterations for w in r.rigid_work)] == rigid
+    assert all(w.load_passes >= 1 and w.seconds > 0 for w in r.rigid_work)
+
+
 def test_a_grown_area_keeps_the_fixed_extent_of_a_snapped_grid():
     """Review finding: with element sizes and snap, a grid is a little wider than the area
     asked for; growing the automatic y from the grid's bounds also widened the user's x,

@@ -286,6 +286,30 @@ def _total(attribute: str):
     return lambda r: sum(getattr(w, attribute) for w in r.wheels)
 
 
+def _step_work(attribute: str, side: int | None = None):
+    """A work count of the step (a :class:`~railcontact.contact.results.Work` field) of
+    wheel ``side`` (0 left, 1 right; None: both): its contact solve's plus its solves at
+    the rolls the rigid wheelset's search evaluated."""
+    sides = (0, 1) if side is None else (side,)
+    return lambda r: sum(getattr(r.wheels[k], attribute) + getattr(r.rigid_work[k], attribute)
+                         for k in sides)
+
+
+def _rigid_work(attribute: str):
+    """A work count of the rigid wheelset's solves alone, both wheels."""
+    return lambda r: sum(getattr(w, attribute) for w in r.rigid_work)
+
+
+def _wheel_work(name: str, description: str) -> list[Variable]:
+    """The ``_left`` and ``_right`` Integer outputs of a work count of the step."""
+    return [Variable(f"{name}_{s}", "Integer", "output", None, "", f"{description}, {s} wheel",
+                     _step_work(name, k)) for k, s in enumerate(SIDES)]
+
+
+WORK_NOTE = ("; with control=load and rigid_wheelset=solve also the rigid wheelset's "
+             "solves at other rolls")
+
+
 OUTPUTS = [
     *_wheel("normal_force", "Real", "N", "normal force on the wheel (sum over patches)",
             value=lambda w: w.normal_force),
@@ -332,25 +356,25 @@ OUTPUTS = [
              lambda r: r.wall_time),
     *_wheel("n_patches", "Integer", "", "number of contact patches",
             value=lambda w: w.n_patches),
-    *_wheel("normal_iterations", "Integer", "", "BEM normal iterations (all patches, load "
-            "passes and re-meshes)", value=lambda w: w.normal_iterations),
-    *_wheel("tangential_iterations", "Integer", "", "tangential BEM sweeps (all patches, load "
-            "passes and re-meshes)", value=lambda w: w.tangential_iterations),
+    *_wheel_work("normal_iterations", "BEM normal iterations of the last step: all "
+                 "patches, load passes and re-meshes" + WORK_NOTE),
+    *_wheel_work("tangential_iterations", "tangential BEM sweeps of the last step: all "
+                 "patches, load passes and re-meshes" + WORK_NOTE),
     Variable("normal_iterations", "Integer", "output", None, "",
-             "BEM normal iterations of the last step, both wheels",
-             _total("normal_iterations")),
+             "BEM normal iterations of the last step, both wheels" + WORK_NOTE,
+             _step_work("normal_iterations")),
     Variable("tangential_iterations", "Integer", "output", None, "",
-             "tangential BEM sweeps of the last step, both wheels",
-             _total("tangential_iterations")),
+             "tangential BEM sweeps of the last step, both wheels" + WORK_NOTE,
+             _step_work("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
              f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0), "
              f"1 also when control=load found no wheelset_vertical_displacement and "
              f"wheelset_roll: {STATUS}",
              lambda r: r.status),
-    *_wheel("load_passes", "Integer", "", "solves of the wheel in the last step (load loop)",
-            value=lambda w: w.load_passes),
-    *_wheel("remeshes", "Integer", "", "normal solves repeated on a grown potential area",
-            value=lambda w: w.remeshes),
+    *_wheel_work("load_passes", "solves of the wheel in the last step (load loop)"
+                 + WORK_NOTE),
+    *_wheel_work("remeshes", "normal solves repeated on a grown potential area in the last "
+                 "step" + WORK_NOTE),
     *_wheel("load_unique", "Integer", "", "1 when the wheel load has one solution, 0 when "
             "it may have several (several patches, mu tan(gamma) >= 1 on one; the one "
             "continuous with the previous step is returned); meaningful with status 0 or 1",
@@ -387,6 +411,18 @@ OUTPUTS = [
             "Y/Q above max_y_q, 2 beyond Nadal's limit, 4 flange climb, 8 penetration above "
             "max_penetration, 16 load above max_wheel_load (0: within all)",
             value=lambda w: w.validity),
+    Variable("rigid_evaluations", "Integer", "output", None, "",
+             "evaluations of the rigid wheelset's search in the last step (control=load, "
+             "rigid_wheelset=solve; each at a roll other than the pose's solves both "
+             "wheels again; 0 when not solved)", lambda r: r.rigid_solution.evaluations),
+    Variable("rigid_normal_iterations", "Integer", "output", None, "",
+             "BEM normal iterations of the rigid wheelset's solves at other rolls in the "
+             "last step, both wheels (part of normal_iterations)",
+             _rigid_work("normal_iterations")),
+    Variable("rigid_tangential_iterations", "Integer", "output", None, "",
+             "tangential BEM sweeps of the rigid wheelset's solves at other rolls in the "
+             "last step, both wheels (part of tangential_iterations)",
+             _rigid_work("tangential_iterations")),
 ]
 """The outputs; ``value(result)`` reads each from a
 :class:`~railcontact.timestep.WheelsetResult`."""

@@ -56,8 +56,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
+from ..contact.results import Work
 from ..errors import RailContactError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
@@ -110,6 +111,12 @@ class RigidSolution:
     approaches: tuple[float, float] | None = None
     """The wheels' approaches [m] at :attr:`roll` (the next step's guess); None if not
     converged."""
+    work: tuple[Work, Work] = field(default_factory=lambda: (Work(load_passes=0),
+                                                             Work(load_passes=0)))
+    """The work of the wheels' solves at the rolls evaluated (left, right): iterations,
+    load passes, re-meshes and wall time [s] over every evaluation, none of them counted
+    in the step's :class:`~railcontact.timestep.WheelContact` (zero when no evaluation
+    solved a wheel: the pose's roll was the root, or the search was skipped)."""
 
 
 MAX_HISTORY = 3
@@ -361,6 +368,9 @@ class RigidWheelset:
                                                if self.history else None),
                               anchor=(None if start is None or approaches is None
                                       else (start, approaches)))
+        work = getattr(self.approach_at, "work", None)
+        if work is not None:  # the wheels' solves at other rolls: the step's work too
+            s = replace(s, work=(work["left"], work["right"]))
         if self.memory is not None and s.converged:
             self.memory["rigid"] = [RigidMemory(self.time, s.estimate, s.slope,
                                                 s.approach_slopes, s.approaches),

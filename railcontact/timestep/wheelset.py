@@ -265,6 +265,17 @@ class WheelsetResult:
         return self.rigid.solve()
 
     @property
+    def rigid_work(self) -> tuple[Work, Work]:
+        """The work (:class:`~railcontact.contact.results.Work`: iterations, load passes,
+        re-meshes, wall time [s]) of the wheels' solves at the rolls the rigid wheelset's
+        search evaluated, left and right (:attr:`RigidSolution.work`), once
+        :attr:`rigid_solution` has been found; zero before (asking does not solve it),
+        under penetration control and out of range. Not in the wheels' own counts:
+        the step's whole work is the wheel's plus this."""
+        found = self.__dict__.get("rigid_solution")  # (cached_property's value, if any)
+        return found.work if found is not None else RigidSolution(0.0, 0.0).work
+
+    @property
     def _vertical_roll(self) -> tuple[float, float]:
         s = self.rigid_solution
         return (s.vertical, s.roll)
@@ -669,6 +680,11 @@ class _RolledApproaches:
     ...}``); None: none kept."""
     solved: dict = field(default_factory=dict, repr=False, compare=False)
     """The last call's roll [rad] and memory of its solves (``"roll"``, ``"memory"``)."""
+    work: dict[str, Work] = field(
+        default_factory=lambda: {"left": Work(load_passes=0), "right": Work(load_passes=0)},
+        repr=False, compare=False)
+    """The work of every wheel solve of the calls so far, per wheel (iterations, load
+    passes, re-meshes, wall time [s]): :attr:`RigidSolution.work`."""
 
     def __call__(self, phi: float, guess: tuple[float, float] | None = None
                  ) -> tuple[float, float]:
@@ -696,11 +712,13 @@ class _RolledApproaches:
                                                   creep, self.kinematics, self.time,
                                                   None if guess is None else guess[k],
                                                   (older, start))
+            _count(self.work[side], wheel)
             if (guess is not None and wheel.patches
                     and abs(wheel.approach - guess[k]) > REFERENCE_RTOL * wheel.approach):
                 wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
                                                       creep, self.kinematics, self.time,
                                                       wheel.approach, (older, mem or start))
+                _count(self.work[side], wheel)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
@@ -713,6 +731,15 @@ class _RolledApproaches:
         """The memory of the wheels' solves at roll ``phi`` [rad] when the last call was
         there (what the next step starts from), else None."""
         return self.solved["memory"] if self.solved.get("roll") == phi else None
+
+
+def _count(work: Work, wheel: WheelContact) -> None:
+    """Add a wheel solve's iterations, load passes, re-meshes and time to ``work``."""
+    work.normal_iterations += wheel.normal_iterations
+    work.tangential_iterations += wheel.tangential_iterations
+    work.load_passes += wheel.load_passes
+    work.remeshes += wheel.remeshes
+    work.seconds += wheel.seconds
 
 
 def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]:
