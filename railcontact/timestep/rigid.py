@@ -45,8 +45,9 @@ tolerance: a smoother series to extrapolate), the slope, the wheels' approaches 
 approach guessed from them (the previous roots' approaches extrapolated, then the last
 evaluation's along the last secant), instead of at the step's approach at ``phi0``
 (0.4-0.8 % away at 3 mm: a second frame pass every time); a wheel whose approach misses
-its guess by more than the frames' :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL`
-is solved again from the approach found, so ``G`` is as accurate as without the guess.
+its guess by more than the frames' tolerance for a solve started from an earlier one
+(:data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL`) is solved again from the
+approach found, so ``G`` is as accurate as without the guess.
 The wheels' solves at the root are kept as well (``"rolled"``, when ``approach_at`` gives
 them, ``memory_at(phi)``): the next step's rolled solves start from them (its pose and
 roll close to this root's) instead of from that step's solve at the pose's roll.

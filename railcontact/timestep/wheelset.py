@@ -69,7 +69,7 @@ from ..contact.loadloop import (
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
 from ..contact.wheelrail import (
-    REFERENCE_RTOL,
+    WARM_REFERENCE_RTOL,
     contact_points,
     solve_wheel_normal,
     vertical_approach,
@@ -690,10 +690,16 @@ class _RolledApproaches:
                  ) -> tuple[float, float]:
         """``guess``: the approaches [m] expected, where each wheel's frame is formed
         first; a wheel whose approach differs from it by more than
-        :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL` is solved again with its frame
-        formed at the approach found (as a pass from the step's approach is followed by
-        one: the frame's accuracy of a solve without the guess), from the solution of the
-        first solve."""
+        :data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL` is solved again with its
+        frame formed at the approach found, from the solution of the first solve: the
+        frame's tolerance of any solve started from an earlier one's approach (the step's
+        own solves, and these without a guess). Within it the frame moves the approach by
+        at most 0.16 of the rigid search's tolerance (:data:`~.rigid.RIGID_RTOL` of the
+        approach; solved tightly, on the flange; 0.005 on the tread), far below the
+        solves' own scatter at the step's tolerances; with
+        :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL` (before issue 18's ninth
+        round) such solves were repeated in every second warm step (docs/performance.md,
+        "Round 9")."""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         last = self.solved.get("memory")
@@ -714,7 +720,7 @@ class _RolledApproaches:
                                                   (older, start))
             _count(self.work[side], wheel)
             if (guess is not None and wheel.patches
-                    and abs(wheel.approach - guess[k]) > REFERENCE_RTOL * wheel.approach):
+                    and abs(wheel.approach - guess[k]) > WARM_REFERENCE_RTOL * wheel.approach):
                 wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
                                                       creep, self.kinematics, self.time,
                                                       wheel.approach, (older, mem or start))
