@@ -163,6 +163,8 @@ def plot(rows: list[dict], path: Path) -> None:
     fig, ax = plt.subplots(1, 3, figsize=(14, 4.2), constrained_layout=True)
     for j, mode in enumerate(MODES):
         rs = [r for r in rows if r["warm_start"] == mode]
+        if not rs:  # a mode not run: not in the legend either
+            continue
         h = [r["step_ms"] for r in rs]
         ax[0].plot(h, [r["normal_mean"] for r in rs], f"C{j}o-", label=mode)
         ax[1].plot(h, [r["tangential_mean"] for r in rs], f"C{j}o-", label=mode)
