@@ -15,6 +15,7 @@ import math
 import pickle
 import time
 import traceback
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -281,9 +282,12 @@ class Slave:
         try:
             rigid = res.rigid_solution
         except RailContactError as exc:  # e.g. a wheel not solvable at another roll
+            done = getattr(getattr(res.rigid, "approach_at", None), "work", None)
             rigid = res.rigid_solution = RigidSolution(
                 0.0, 0.0, converged=False,
-                message=f"rigid wheelset's vertical displacement and roll: {exc}")
+                message=f"rigid wheelset's vertical displacement and roll: {exc}",
+                **({} if done is None else {"work": (replace(done["left"]),
+                                                     replace(done["right"]))}))
         res.wall_time += time.perf_counter() - t0  # solve_time: all of the step's solving
         self._write(res)
         if not rigid.converged:  # not found: the wheelset's status says so

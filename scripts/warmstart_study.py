@@ -19,9 +19,14 @@ in ``--out``: time, wheelset lateral displacement, each wheel's rail contact pos
 iterations) and prints the iterations per step by band of lateral displacement: which
 steps cost the iterations.
 
+The iterations are the FMU's whole-step totals (``normal_iterations``,
+``tangential_iterations``: the wheels' contact solves and the rigid wheelset's solves at
+other rolls); ``--per-step``'s bands are the wheels' contact solves
+(``normal_iterations_left`` ...).
+
 Usage: python scripts/warmstart_study.py [--duration 0.6] [--steps 0.5e-3 1e-3 2e-3 5e-3]
-       [--out docs] [--element-size 0.5e-3] [--from-csv docs/warmstart_study.csv]
-       [--per-step]
+       [--modes none estimate previous previous+estimate] [--out docs]
+       [--element-size 0.5e-3] [--from-csv docs/warmstart_study.csv] [--per-step]
 """
 
 from __future__ import annotations

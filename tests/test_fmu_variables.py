@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from railcontact.errors import RailContactError
+from railcontact.fmu import variables as V
 from railcontact.fmu.variables import CHOICES, item_name, resolve_choices
 
 # Modelica's reserved words that a short choice word could hit (Modelica Language
@@ -36,3 +37,22 @@ def test_a_bad_enumeration_value_is_shown_as_a_plain_number():
     with pytest.raises(RailContactError) as err:
         resolve_choices({"control_choice": np.int32(5)})
     assert "got 5" in str(err.value) and "np." not in str(err.value)
+
+
+def test_choice_enumerations_keep_their_value_references():
+    """The Integer ``_choice`` enumerations (issue 20, 9aea8f3) are a published interface
+    as well: outputs added after them (``APPENDED_OUTPUTS``: the rigid wheelset's work)
+    are numbered after them, not before (the review of issue 18's ninth round found them
+    moved by 3). These numbers are written down, not computed."""
+    published = {"profile_unit_choice": 19, "control_choice": 20,
+                 "load_definition_choice": 21, "creepage_input_choice": 22,
+                 "normal_estimate_choice": 23, "tangential_estimate_choice": 24,
+                 "warm_start_choice": 25, "fft_choice": 26, "tangential_solver_choice": 27,
+                 "convention_choice": 28, "rigid_wheelset_choice": 29,
+                 "contact_model_choice": 30, "patch_frame_choice": 31}
+    table = {v.name: v for v in V.table()}
+    assert {k: (table[k].type, table[k].vr) for k in published} == {
+        k: ("Integer", vr) for k, vr in published.items()}
+    last = max(published.values())
+    assert [table[v.name].vr for v in V.APPENDED_OUTPUTS] == list(
+        range(last + 1, last + 1 + len(V.APPENDED_OUTPUTS)))

@@ -234,7 +234,7 @@ def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
     node returns that node's values for each wheel in the FMU's result record (the right
     wheel's lateral creepage in its contact frame is the table's with the sign changed);
     outside the table: status out of range, zero outputs, a message naming the input."""
-    from railcontact.fmu.variables import OUTPUTS
+    from railcontact.fmu.variables import APPENDED_OUTPUTS, OUTPUTS
     from railcontact.geometry.track import Pose
     from railcontact.table.step import TableContact
 
@@ -245,7 +245,7 @@ def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
     res = tc.solve(Pose(y, 0.0, 0.0), loads=(q, q), creepages=((0.0, eta, 0.0),
                                                                (0.0, -eta, 0.0)))
     assert res.status == 0
-    outputs = {v.name: v.value(res) for v in OUTPUTS}
+    outputs = {v.name: v.value(res) for v in OUTPUTS + APPENDED_OUTPUTS}
     for side in ("left", "right"):
         node = table.node(index, side)
         assert outputs[f"normal_force_{side}"] == node["normal_force"]

@@ -126,9 +126,9 @@ APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid
 numbers them after every variable of it, so that its value references stay (they are
 numbered per type: appending a parameter here, and its ``_choice`` at the end of
 :data:`CHOICES`, moves nothing). A new parameter goes at the end of
-:data:`PARAMETER_SOURCES` and of this list; a new output at the end of :data:`OUTPUTS`
-only if it is no Real (a Real output would move these parameters: append it after
-them in :func:`table`)."""
+:data:`PARAMETER_SOURCES` and of this list; a new output at the end of
+:data:`APPENDED_OUTPUTS` (numbered after everything else: an output of any type at the end
+of :data:`OUTPUTS` would move the parameters or the Integer ``_choice`` enumerations)."""
 
 
 def _parameter(name: str, record: type[Record], key: str) -> Variable:
@@ -286,13 +286,12 @@ def _total(attribute: str):
     return lambda r: sum(getattr(w, attribute) for w in r.wheels)
 
 
-def _step_work(attribute: str, side: int | None = None):
-    """A work count of the step (a :class:`~railcontact.contact.results.Work` field) of
-    wheel ``side`` (0 left, 1 right; None: both): its contact solve's plus its solves at
-    the rolls the rigid wheelset's search evaluated."""
-    sides = (0, 1) if side is None else (side,)
-    return lambda r: sum(getattr(r.wheels[k], attribute) + getattr(r.rigid_work[k], attribute)
-                         for k in sides)
+def _step_work(attribute: str):
+    """A work count of the whole step (a :class:`~railcontact.contact.results.Work`
+    field), both wheels: their contact solves' plus their solves at the rolls the rigid
+    wheelset's search evaluated."""
+    return lambda r: sum(getattr(w, attribute) + getattr(x, attribute)
+                         for w, x in zip(r.wheels, r.rigid_work, strict=True))
 
 
 def _rigid_work(attribute: str):
@@ -300,14 +299,11 @@ def _rigid_work(attribute: str):
     return lambda r: sum(getattr(w, attribute) for w in r.rigid_work)
 
 
-def _wheel_work(name: str, description: str) -> list[Variable]:
-    """The ``_left`` and ``_right`` Integer outputs of a work count of the step."""
-    return [Variable(f"{name}_{s}", "Integer", "output", None, "", f"{description}, {s} wheel",
-                     _step_work(name, k)) for k, s in enumerate(SIDES)]
-
-
-WORK_NOTE = ("; with control=load and rigid_wheelset=solve also the rigid wheelset's "
-             "solves at other rolls")
+def _work_note(name: str) -> str:
+    """How a whole-step total ``name`` is made up (its description's end)."""
+    return (f": the contact solves of both wheels ({name}_left + {name}_right) and, with "
+            f"control=load and rigid_wheelset=solve, the rigid wheelset's solves at other "
+            f"rolls (rigid_{name})")
 
 
 OUTPUTS = [
@@ -356,25 +352,29 @@ OUTPUTS = [
              lambda r: r.wall_time),
     *_wheel("n_patches", "Integer", "", "number of contact patches",
             value=lambda w: w.n_patches),
-    *_wheel_work("normal_iterations", "BEM normal iterations of the last step: all "
-                 "patches, load passes and re-meshes" + WORK_NOTE),
-    *_wheel_work("tangential_iterations", "tangential BEM sweeps of the last step: all "
-                 "patches, load passes and re-meshes" + WORK_NOTE),
+    *_wheel("normal_iterations", "Integer", "", "BEM normal iterations of the wheel's "
+            "contact solve in the last step (all patches, load passes and re-meshes)",
+            value=lambda w: w.normal_iterations),
+    *_wheel("tangential_iterations", "Integer", "", "tangential BEM sweeps of the wheel's "
+            "contact solve in the last step (all patches, load passes and re-meshes)",
+            value=lambda w: w.tangential_iterations),
     Variable("normal_iterations", "Integer", "output", None, "",
-             "BEM normal iterations of the last step, both wheels" + WORK_NOTE,
+             "BEM normal iterations of the last step, all of its solves"
+             + _work_note("normal_iterations"),
              _step_work("normal_iterations")),
     Variable("tangential_iterations", "Integer", "output", None, "",
-             "tangential BEM sweeps of the last step, both wheels" + WORK_NOTE,
+             "tangential BEM sweeps of the last step, all of its solves"
+             + _work_note("tangential_iterations"),
              _step_work("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
              f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0), "
              f"1 also when control=load found no wheelset_vertical_displacement and "
              f"wheelset_roll: {STATUS}",
              lambda r: r.status),
-    *_wheel_work("load_passes", "solves of the wheel in the last step (load loop)"
-                 + WORK_NOTE),
-    *_wheel_work("remeshes", "normal solves repeated on a grown potential area in the last "
-                 "step" + WORK_NOTE),
+    *_wheel("load_passes", "Integer", "", "solves of the wheel in the last step's contact "
+            "solve (load loop)", value=lambda w: w.load_passes),
+    *_wheel("remeshes", "Integer", "", "normal solves of the wheel's contact solve repeated "
+            "on a grown potential area in the last step", value=lambda w: w.remeshes),
     *_wheel("load_unique", "Integer", "", "1 when the wheel load has one solution, 0 when "
             "it may have several (several patches, mu tan(gamma) >= 1 on one; the one "
             "continuous with the previous step is returned); meaningful with status 0 or 1",
@@ -411,6 +411,11 @@ OUTPUTS = [
             "Y/Q above max_y_q, 2 beyond Nadal's limit, 4 flange climb, 8 penetration above "
             "max_penetration, 16 load above max_wheel_load (0: within all)",
             value=lambda w: w.validity),
+]
+"""The outputs; ``value(result)`` reads each from a
+:class:`~railcontact.timestep.WheelsetResult`."""
+
+APPENDED_OUTPUTS = [
     Variable("rigid_evaluations", "Integer", "output", None, "",
              "evaluations of the rigid wheelset's search in the last step (control=load, "
              "rigid_wheelset=solve; each at a roll other than the pose's solves both "
@@ -423,9 +428,16 @@ OUTPUTS = [
              "tangential BEM sweeps of the rigid wheelset's solves at other rolls in the "
              "last step, both wheels (part of tangential_iterations)",
              _rigid_work("tangential_iterations")),
+    Variable("rigid_load_passes", "Integer", "output", None, "",
+             "load passes of the rigid wheelset's solves at other rolls in the last step, "
+             "both wheels", _rigid_work("load_passes")),
+    Variable("rigid_remeshes", "Integer", "output", None, "",
+             "normal solves of the rigid wheelset's solves at other rolls repeated on a "
+             "grown potential area in the last step, both wheels", _rigid_work("remeshes")),
 ]
-"""The outputs; ``value(result)`` reads each from a
-:class:`~railcontact.timestep.WheelsetResult`."""
+"""Outputs added after the ``_choice`` enumerations (issue 18's ninth round):
+:func:`table` numbers them after every other variable, so that no value reference of
+the interface before them moves (:data:`APPENDED`)."""
 
 
 def parameters_markdown() -> str:
@@ -447,7 +459,7 @@ def table() -> list[Variable]:
     out = []
     first = [v for v in PARAMETERS if v.name not in APPENDED]
     appended = [next(v for v in PARAMETERS if v.name == name) for name in APPENDED]
-    for v in first + INPUTS + OUTPUTS + appended + CHOICES:
+    for v in first + INPUTS + OUTPUTS + appended + CHOICES + APPENDED_OUTPUTS:
         k = counters.get(v.type, 0)
         counters[v.type] = k + 1
         out.append(replace(v, vr=k))
@@ -473,7 +485,7 @@ def variables_markdown() -> str:
     meaning, in the order parameters, enumerations, inputs, outputs; a ``_left``/``_right``
     pair is one row. The README's table is this (``scripts/fmu_variables_table.py``
     writes it; ``tests/test_readme_fmu.py`` checks it)."""
-    everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS
+    everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS + APPENDED_OUTPUTS
     names = {v.name for v in everything}
     out = ["| name | causality | type | unit | default | meaning |",
            "|---|---|---|---|---|---|"]

@@ -157,8 +157,10 @@ class FMUModes(Record):
                               "are railcontact's in both", choices=CONVENTIONS)
     rigid_wheelset: str = setting("solve", "choice", "", "under control=load, solve the "
                                   "rigid wheelset's vertical displacement and roll at which "
-                                  "both wheels carry their loads (a few more normal solves "
-                                  "per step: scripts/bench_rigid.py) or skip them (those "
+                                  "both wheels carry their loads (load-controlled solves "
+                                  "of both wheels with creep at other rolls: 1-2 a step "
+                                  "warm, about 2 cold, counted in rigid_normal_iterations "
+                                  "...; scripts/bench_rigid.py) or skip them (those "
                                   "outputs 0, the moments taken about the nominal centre "
                                   "height r0)", choices=RIGID_WHEELSET)
     contact_model: str = setting("bem", "choice", "", "each step's contact: the exact BEM "

@@ -201,7 +201,8 @@ def describe(sim: CoSimResult, s: dict[str, float], opts: DemoOptions, built: bo
                  f"{s['peak_creep_force_y'] * KN:.2f} kN")
     lines.append(f"solver ({opts.warm_start}): {s['normal_iterations']:.2f} normal + "
                  f"{s['tangential_iterations']:.2f} tangential iterations per step (both "
-                 f"wheels), {s['solve_time'] * 1e3:.1f} ms solve, "
+                 f"wheels, the rigid wheelset's solves included), "
+                 f"{s['solve_time'] * 1e3:.1f} ms solve, "
                  f"{s['time_per_step'] * 1e3:.1f} ms per step through fmpy (medians)")
     if "cold_normal_iterations" in s:
         cold = s["cold_normal_iterations"] + s["cold_tangential_iterations"]

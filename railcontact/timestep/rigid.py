@@ -44,10 +44,10 @@ tolerance: a smoother series to extrapolate), the slope, the wheels' approaches 
 ``d delta_s/d phi``: each rolled wheel's solve forms its patch frame first at the
 approach guessed from them (the previous roots' approaches extrapolated, then the last
 evaluation's along the last secant), instead of at the step's approach at ``phi0``
-(0.4-0.8 % away at 3 mm: a second frame pass every time); a wheel whose approach misses
-its guess by more than the frames' tolerance for a solve started from an earlier one
-(:data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL`) is solved again from the
-approach found, so ``G`` is as accurate as without the guess.
+(0.4-0.8 % away at 3 mm: a second frame pass every time); the solve forms the frame
+again when its approach misses the guess by more than the frames' tolerance for a solve
+started from an earlier one (:data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL`),
+so ``G`` is as accurate as without the guess.
 The wheels' solves at the root are kept as well (``"rolled"``, when ``approach_at`` gives
 them, ``memory_at(phi)``): the next step's rolled solves start from them (its pose and
 roll close to this root's) instead of from that step's solve at the pose's roll.
@@ -118,6 +118,15 @@ class RigidSolution:
     load passes, re-meshes and wall time [s] over every evaluation, none of them counted
     in the step's :class:`~railcontact.timestep.WheelContact` (zero when no evaluation
     solved a wheel: the pose's roll was the root, or the search was skipped)."""
+
+
+def work_since(now: Work, then: Work) -> Work:
+    """The work counted in ``now`` since it read ``then``: a record of its own (a counter
+    that goes on counting does not change a solution that took it)."""
+    return Work(now.normal_iterations - then.normal_iterations,
+                now.tangential_iterations - then.tangential_iterations,
+                now.load_passes - then.load_passes, now.remeshes - then.remeshes,
+                now.seconds - then.seconds)
 
 
 MAX_HISTORY = 3
@@ -362,6 +371,8 @@ class RigidWheelset:
         found, when converged, kept in :attr:`memory`)."""
         start = predicted_roll(self.history, self.time)
         approaches = predicted_approaches(self.history, self.time)
+        work = getattr(self.approach_at, "work", None)  # its count over all its calls
+        before = None if work is None else {k: replace(w) for k, w in work.items()}
         s = vertical_and_roll(self.track, self.wheelset, self.pose, self.approaches,
                               self.contacts, self.approach_at, start=start,
                               start_slope=self.history[0].slope if self.history else 0.0,
@@ -369,9 +380,8 @@ class RigidWheelset:
                                                if self.history else None),
                               anchor=(None if start is None or approaches is None
                                       else (start, approaches)))
-        work = getattr(self.approach_at, "work", None)
         if work is not None:  # the wheels' solves at other rolls: the step's work too
-            s = replace(s, work=(work["left"], work["right"]))
+            s = replace(s, work=tuple(work_since(work[k], before[k]) for k in ("left", "right")))
         if self.memory is not None and s.converged:
             self.memory["rigid"] = [RigidMemory(self.time, s.estimate, s.slope,
                                                 s.approach_slopes, s.approaches),

@@ -69,7 +69,6 @@ from ..contact.loadloop import (
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
 from ..contact.wheelrail import (
-    WARM_REFERENCE_RTOL,
     contact_points,
     solve_wheel_normal,
     vertical_approach,
@@ -688,18 +687,20 @@ class _RolledApproaches:
 
     def __call__(self, phi: float, guess: tuple[float, float] | None = None
                  ) -> tuple[float, float]:
-        """``guess``: the approaches [m] expected, where each wheel's frame is formed
-        first; a wheel whose approach differs from it by more than
-        :data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL` is solved again with its
-        frame formed at the approach found, from the solution of the first solve: the
-        frame's tolerance of any solve started from an earlier one's approach (the step's
-        own solves, and these without a guess). Within it the frame moves the approach by
-        at most 0.16 of the rigid search's tolerance (:data:`~.rigid.RIGID_RTOL` of the
-        approach; solved tightly, on the flange; 0.005 on the tread), far below the
-        solves' own scatter at the step's tolerances; with
-        :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL` (before issue 18's ninth
-        round) such solves were repeated in every second warm step (docs/performance.md,
-        "Round 9")."""
+        """``guess``: the approaches [m] expected, at which each wheel's first pass forms
+        its frame (scaled to the pass's load as Hertz's: the ``start`` of
+        :func:`~railcontact.contact.wheelrail.solve_wheel_normal`). The solve forms the
+        frame again while its approach misses the one the frame was formed at by more than
+        :data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL`, as every solve started
+        from an earlier one's approach does; within that the frame moves the approach by
+        at most about a fifth of the rigid search's tolerance (:data:`~.rigid.RIGID_RTOL`
+        of the approach; 0.16 for a frame 0.9e-3 off, solved tightly on the flange; 0.005
+        on the tread), far below the solves' own scatter at the step's tolerances. (Until
+        issue 18's ninth round a wheel was solved once more whenever its approach missed
+        the guess by more than :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL`: in
+        every second warm step, and in cold ones, where a solve without memory forms its
+        frame from Hertz's approach and the guess changes nothing; docs/performance.md,
+        "Round 9".)"""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         last = self.solved.get("memory")
@@ -719,12 +720,6 @@ class _RolledApproaches:
                                                   None if guess is None else guess[k],
                                                   (older, start))
             _count(self.work[side], wheel)
-            if (guess is not None and wheel.patches
-                    and abs(wheel.approach - guess[k]) > WARM_REFERENCE_RTOL * wheel.approach):
-                wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
-                                                      creep, self.kinematics, self.time,
-                                                      wheel.approach, (older, mem or start))
-                _count(self.work[side], wheel)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
