@@ -282,6 +282,9 @@ class Slave:
         try:
             rigid = res.rigid_solution
         except RailContactError as exc:  # e.g. a wheel not solvable at another roll
+            # the work before the error: the step's rolled solves are counted by an
+            # approach_at made for this step (WheelsetContact.solve), so all of it is this
+            # search's
             done = getattr(getattr(res.rigid, "approach_at", None), "work", None)
             rigid = res.rigid_solution = RigidSolution(
                 0.0, 0.0, converged=False,

@@ -246,3 +246,22 @@ def test_a_frame_within_the_warm_tolerance_keeps_the_approach(lateral):
         assert [at.work[s].load_passes for s in ("left", "right")] == [n + 1 for n in passes]
         for a, b in zip(moved, found, strict=True):
             assert abs(a - b) <= 0.25 * rigid.RIGID_RTOL * b, (factor, (a - b) / b)
+
+
+@pytest.mark.parametrize("lateral", [0.0, 8e-3])
+def test_a_missed_guess_forms_the_frame_again_inside_the_one_solve(lateral):
+    """A rolled wheel whose approach misses its guess by far more than
+    :data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL` (2 %) is solved once: its
+    solve forms the frame again at the approach it found (two passes a wheel, where a
+    second solve after it, as before issue 18's ninth round, made three), and gives the
+    approach of the frame formed at it to within a quarter of the rigid search's
+    tolerance (solved tightly, the normal problem: only the frame differs)."""
+    wc = contact(normal_tolerance=1e-9)
+    at = wc.solve(Pose(lateral), loads=(Q, Q), time=0.0).rigid.approach_at
+    phi = 2e-4  # [rad]
+    found = at(phi, at(phi))  # the frame formed at the approach it gives
+    passes = [at.work[s].load_passes for s in ("left", "right")]
+    moved = at(phi, tuple(a * 1.02 for a in found))
+    assert [at.work[s].load_passes for s in ("left", "right")] == [n + 2 for n in passes]
+    for a, b in zip(moved, found, strict=True):
+        assert abs(a - b) <= 0.25 * rigid.RIGID_RTOL * b, (a - b) / b

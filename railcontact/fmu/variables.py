@@ -124,11 +124,12 @@ APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid
             "contact_model", "table_file", "patch_frame")
 """Parameters added after the first published interface (commit 039db95): :func:`table`
 numbers them after every variable of it, so that its value references stay (they are
-numbered per type: appending a parameter here, and its ``_choice`` at the end of
-:data:`CHOICES`, moves nothing). A new parameter goes at the end of
-:data:`PARAMETER_SOURCES` and of this list; a new output at the end of
-:data:`APPENDED_OUTPUTS` (numbered after everything else: an output of any type at the end
-of :data:`OUTPUTS` would move the parameters or the Integer ``_choice`` enumerations)."""
+numbered per type). A new parameter goes at the end of :data:`PARAMETER_SOURCES` and of
+this list, a new output at the end of :data:`APPENDED_OUTPUTS`: :func:`table` numbers
+those after every earlier variable. The Integer ``_choice`` enumerations (:data:`CHOICES`)
+come before :data:`APPENDED_OUTPUTS`, so a new choice parameter's ``_choice`` must be
+numbered after the appended outputs, not at the end of :data:`CHOICES` (it would move
+them; ``tests/test_fmu_variables.py`` pins both)."""
 
 
 def _parameter(name: str, record: type[Record], key: str) -> Variable:

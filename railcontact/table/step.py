@@ -4,8 +4,9 @@ exact solve replaced by interpolation in a :class:`ContactTable` (the FMU's
 
 ``TableContact.open(path).solve(pose, loads=..., creepages=... | kinematics=...)`` returns
 the same :class:`~railcontact.timestep.WheelsetResult` as ``WheelsetContact.solve``, so
-whatever reads one (the FMU's outputs, ``fmu.variables.OUTPUTS``) reads the other. Each
-wheel is looked up at its own state: the lateral displacement and yaw of the pose, its own
+whatever reads one (the FMU's outputs, ``fmu.variables.OUTPUTS`` and ``APPENDED_OUTPUTS``)
+reads the other. Each wheel is looked up at its own state: the lateral displacement and
+yaw of the pose, its own
 load, its creepages in its side frame (the right wheel's lateral and spin creepages change
 sign, as in :mod:`railcontact.timestep.wheelset`; the table holds both wheels in their side
 frames, as ``railcontact solve`` does). With ``kinematics`` the creepages are those of the

@@ -683,7 +683,8 @@ class _RolledApproaches:
         default_factory=lambda: {"left": Work(load_passes=0), "right": Work(load_passes=0)},
         repr=False, compare=False)
     """The work of every wheel solve of the calls so far, per wheel (iterations, load
-    passes, re-meshes, wall time [s]): :attr:`RigidSolution.work`."""
+    passes, re-meshes, wall time [s]): a running count over this step's searches
+    (:attr:`RigidSolution.work` is the part one search added)."""
 
     def __call__(self, phi: float, guess: tuple[float, float] | None = None
                  ) -> tuple[float, float]:
