@@ -1,7 +1,8 @@
 /*
  * railcontact FMU: a thin FMI 2.0 Co-Simulation shim around an embedded CPython.
  *
- * Design (see ../shared/reference/fmu.md):
+ * Design (a shim of our own rather than pythonfmu or unifmu: one binary that loads in C and
+ * in Python hosts alike, at a few microseconds per call; see also the FMU documentation):
  *  - which Python: the environment variable RAILCONTACT_PYTHON (a python executable or a
  *    venv/prefix folder), else resources/python.txt (`railcontact fmu build --python`),
  *    else the Python the FMU was built with (resources/python.cfg); the first that is set

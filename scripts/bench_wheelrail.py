@@ -1,6 +1,6 @@
 """Benchmark of the full wheel-rail case beside CONTACT: time and iterations per wheel case.
 
-The cases of ``../shared/reference/contact/`` (issue 18): S1002 on UIC60 (the Manchester
+The cases of ``models/reference/contact/`` (issue 18): S1002 on UIC60 (the Manchester
 benchmark files, the rail canted in the file), G = 82 GPa, nu = 0.28, mu = 0.4, a vertical
 wheel load of 83.3 kN (load control, creep forces counted), steady rolling with the
 creepages CONTACT used (xi = eta = 2e-4, its kinematic spin), roll = yaw = 0, both wheels,
@@ -36,7 +36,10 @@ import railcontact as rc
 from railcontact.settings.convention import side_creepage
 
 HERE = Path(__file__).resolve().parent
-SHARED = HERE.parents[1] / "shared"
+CONTACT_REFERENCE = HERE.parent / "models" / "reference" / "contact"
+"""CONTACT's results (``wheelrail_dx0.5.csv``; its README gives their provenance)."""
+PROFILES = HERE.parent / "models" / "profiles"
+"""The Manchester benchmark's profile files (``MBench_S1002_v3.prw``, ``MBench_UIC60_v3.prr``)."""
 CONTACT_RATIO = {0.5: 1.5, 0.2: 64.0}
 """CONTACT's time per wheel case as a ratio to the fixed workload (its README)."""
 CONTACT_FINE = {"cg": 31.8, "sweeps": 124.8}
@@ -124,8 +127,8 @@ def main() -> None:
     ap.add_argument("--solver", default=None, help="[tangential] solver (default: the "
                     "case default)")
     ap.add_argument("--csv", type=Path, default=None, help="write the per-case rows")
-    ap.add_argument("--contact", type=Path, default=SHARED / "reference" / "contact")
-    ap.add_argument("--profiles", type=Path, default=SHARED / "profiles")
+    ap.add_argument("--contact", type=Path, default=CONTACT_REFERENCE)
+    ap.add_argument("--profiles", type=Path, default=PROFILES)
     args = ap.parse_args()
 
     sizes = [0.5] + ([0.2] if args.fine else [])

@@ -1,7 +1,7 @@
 """Manchester contact benchmark, case A-2.2 (S1002 / UIC60 at 1:40, 10 kN per wheel).
 
 Lateral shift 0 .. 10 mm in steps of 0.5 mm with yaw 2.4 y mrad (y in mm), the
-benchmark's profile files (``../shared/profiles``; the rail file is canted already, so
+benchmark's profile files (``models/profiles``; the rail file is canted already, so
 inclination 0), gauge 1435 mm, flange-back distance 1360 mm, r0 = 460 mm. As in the
 benchmark the roll is solved for equal wheel loads of 10 kN (``roll = "equal-loads"``; BEM,
 load control); ``--roll rigid`` takes the rigid-contact roll, ``--roll 0`` none. Prints,
@@ -57,7 +57,7 @@ def case_for(shift: float, profiles: Path, roll: str | float = "equal-loads") ->
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--profiles", type=Path, default=HERE.parents[1] / "shared" / "profiles")
+    ap.add_argument("--profiles", type=Path, default=HERE.parent / "models" / "profiles")
     ap.add_argument("--csv", type=Path, default=Path("manchester_a22.csv"))
     ap.add_argument("--roll", default="equal-loads",
                     help="'equal-loads' (default, as the benchmark), 'rigid' or an angle [rad]")

@@ -1,6 +1,6 @@
 """railcontact beside CONTACT on CONTACT's own wheel-rail cases, in CONTACT's convention.
 
-The cases of ``../shared/reference/contact/`` (issue 19, point 4): S1002 on UIC60 (the
+The cases of ``models/reference/contact/`` (issue 19, point 4): S1002 on UIC60 (the
 Manchester benchmark files, the rail canted in the file), G = 82 GPa, nu = 0.28, mu = 0.4,
 a vertical wheel load of 83.3 kN (load control, creep forces counted), steady rolling with
 CONTACT's creepages (xi = eta = 2e-4 and its kinematic spin), roll = yaw = 0, both wheels,
@@ -39,7 +39,10 @@ from bench_wheelrail import contact_rows, wheel_case
 import railcontact as rc
 
 HERE = Path(__file__).resolve().parent
-SHARED = HERE.parents[1] / "shared"
+CONTACT_REFERENCE = HERE.parent / "models" / "reference" / "contact"
+"""CONTACT's results (``wheelrail_dx0.5.csv``; its README gives their provenance)."""
+PROFILES = HERE.parent / "models" / "profiles"
+"""The Manchester benchmark's profile files (``MBench_S1002_v3.prw``, ``MBench_UIC60_v3.prr``)."""
 DOCS = HERE.parent / "docs"
 MU = 0.4
 TOLERANCE = (1e-5, 1e-5)
@@ -198,8 +201,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--csv", type=Path, default=DOCS / "validate_contact.csv")
     ap.add_argument("--plot", type=Path, default=DOCS / "validate_contact.png")
-    ap.add_argument("--contact", type=Path, default=SHARED / "reference" / "contact")
-    ap.add_argument("--profiles", type=Path, default=SHARED / "profiles")
+    ap.add_argument("--contact", type=Path, default=CONTACT_REFERENCE)
+    ap.add_argument("--profiles", type=Path, default=PROFILES)
     args = ap.parse_args()
     rows = run(args.contact, args.profiles)
     print_table(rows)

@@ -3,6 +3,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+PROFILES = ROOT / "models" / "profiles"
+"""The profile files, among them the Manchester benchmark's ``MBench_S1002_v3.prw`` and
+``MBench_UIC60_v3.prr`` (provenance and licence: its README.md)."""
+CONTACT_REFERENCE = ROOT / "models" / "reference" / "contact"
+"""CONTACT's results for its 34 wheel-rail cases, ``wheelrail_dx0.5.csv`` (its README.md)."""
+RELIABILITY = ROOT / "tests" / "data" / "reliability"
+"""The project's fuzzing reproducers (its README.md)."""
 
 
 @pytest.fixture

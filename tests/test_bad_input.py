@@ -1,4 +1,4 @@
-"""Bad input from the fuzzing reproducers in ../shared/reliability: a clear one-line error
+"""Bad input from the fuzzing reproducers in tests/data/reliability: a clear one-line error
 (exit 2) where there was a traceback, a hang, unbounded memory or a wrong answer."""
 
 from __future__ import annotations
@@ -9,18 +9,14 @@ import re
 from pathlib import Path
 
 import pytest
+from conftest import RELIABILITY
 
 import railcontact as rc
 from railcontact.cli import main
 from railcontact.timestep.validity import FLANGE_CLIMB, NADAL, Y_Q
 from railcontact.timestep.wheelset import OUTSIDE_VALIDITY
 
-RELIABILITY = Path(__file__).resolve().parents[2] / "shared" / "reliability"
-needs_shared = pytest.mark.skipif(not RELIABILITY.is_dir(),
-                                  reason="../shared/reliability not present")
 
-
-@needs_shared
 @pytest.mark.parametrize("name, match", [
     ("F01_nan_success_young_tiny", r"young \[Pa\] must be >= 1e\+06"),
     ("F01b_nan_success_wr_load_1e300", r"load \[N\] must be"),
@@ -75,7 +71,6 @@ def test_the_grid_budget_is_checked_before_allocating_and_settable():
         rc.solve(case)  # ~2000 x 900 elements for the automatic area
 
 
-@needs_shared
 @pytest.mark.parametrize("name", ["F02_edge_truncated_margin", "F02c_nx2_truncated"])
 def test_a_contact_cut_by_the_potential_area_is_not_converged(name, monkeypatch, capsys):
     """After every enlargement the contact still reaches the edge (margin 0.1; 2 x 2
@@ -88,7 +83,6 @@ def test_a_contact_cut_by_the_potential_area_is_not_converged(name, monkeypatch,
     assert d["patches"][0]["work"]["remeshes"] == 4
 
 
-@needs_shared
 def test_a_user_given_extent_is_never_grown(monkeypatch, capsys):
     """F02b: [grid] x given, y automatic; the contact reaches the given x: an error, not
     a silently larger x."""
@@ -324,10 +318,11 @@ def test_a_tolerance_out_of_reach_stalls_instead_of_hanging():
 
 
 def _random_step(number: int) -> tuple[rc.Pose, dict, float]:
-    """Step ``number`` of ../shared/reliability/random_steps_1.jsonl: pose, inputs, time."""
+    """Step ``number`` of the random run ``random_steps_1.jsonl`` (its steps 6518-6520 are
+    kept in tests/data/reliability/random_steps_1_f04.jsonl): pose, inputs, time."""
     import json
 
-    with (RELIABILITY / "random_steps_1.jsonl").open() as f:
+    with (RELIABILITY / "random_steps_1_f04.jsonl").open() as f:
         for line in f:
             r = json.loads(line)
             if r["step"] == number:
@@ -337,7 +332,6 @@ def _random_step(number: int) -> tuple[rc.Pose, dict, float]:
     raise LookupError(number)
 
 
-@needs_shared
 @pytest.mark.parametrize("element_size", [2e-3, 1e-3])
 def test_f04_warm_and_cold_agree_on_the_same_inputs(element_size):
     """F04: the random run's steps 6518-6520 (flange at 64 deg with lateral creep and spin),

@@ -3,7 +3,7 @@
 ``convention = "contact"`` reads a wheel-rail case's creepages and reports its forces as
 CONTACT's wheel-rail module does (the rail is body 1, its contact normal points into the
 rail, the right wheel is mirrored): checked against CONTACT's own results for two of its
-cases (``../shared/reference/contact/``), one per wheel, where the signs decide the
+cases (``models/reference/contact/``), one per wheel, where the signs decide the
 answer - on a flange the lateral creep force carries part of the wheel load, so a wrong
 sign gives a wrong normal force, not only a wrong sign.
 """
@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import CONTACT_REFERENCE, PROFILES
 
 import railcontact as rc
 from railcontact import CaseError, RailContactError
@@ -24,13 +25,10 @@ from railcontact.io.jsonout import solution_json
 from railcontact.settings.convention import side_creepage
 
 ROOT = Path(__file__).resolve().parents[1]
-CONTACT = ROOT.parent / "shared" / "reference" / "contact"
-PROFILES = ROOT.parent / "shared" / "profiles"
-needs_contact = pytest.mark.skipif(not CONTACT.is_dir(), reason="../shared not present")
 
 
 def _row(side: str, y_mm: str) -> dict:
-    with (CONTACT / "wheelrail_dx0.5.csv").open() as f:
+    with (CONTACT_REFERENCE / "wheelrail_dx0.5.csv").open() as f:
         return next(r for r in csv.DictReader(f) if r["tol"] == "default"
                     and r["side"] == side and r["y_mm"] == y_mm)
 
@@ -45,7 +43,6 @@ def _contact_case(row: dict, convention: str = "contact") -> dict:
                       convention=convention)
 
 
-@needs_contact
 @pytest.mark.parametrize("side, y_mm", [("left", "-7.0"), ("right", "5.0")])
 def test_contact_convention_gives_contacts_forces(side, y_mm):
     """The left wheel on its flange (CONTACT's y = -7 mm, 1.21 rad) and the right wheel at
@@ -65,7 +62,6 @@ def test_contact_convention_gives_contacts_forces(side, y_mm):
     assert d["patches"][0]["tangential"]["force"] == pytest.approx([fx, fs])
 
 
-@needs_contact
 @pytest.mark.parametrize("side", ["left", "right"])
 def test_both_conventions_pose_the_same_problem(side):
     """CONTACT's creepages in "contact" and the same creepages turned into railcontact's
@@ -81,7 +77,6 @@ def test_both_conventions_pose_the_same_problem(side):
         1, 2, 3)
 
 
-@needs_contact
 def test_wheelset_contact_in_contacts_convention():
     """WheelsetContact(convention="contact") takes CONTACT's creepages for both wheels (the
     same numbers on the left and the right, as CONTACT's input has them) and returns

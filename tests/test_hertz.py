@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from railcontact import ElasticPair, Material, RailContactError, hertz
 from railcontact.halfspace.hertz import axis_ratio, curvature_ratio
 
-# Hertz/Timoshenko m, n, r table (algorithms.md Sec. 1.2; classical values at 30 and 45 deg).
+# Hertz/Timoshenko m, n, r table (docs/algorithms.md Sec. 1.2; classical values at 30 and 45 deg).
 TABLE = [  # theta [deg], m, n, r
     (5, 11.2381, 0.2381, 0.2969), (10, 6.6115, 0.3110, 0.4280), (30, 2.7306, 0.4931, 0.7263),
     (45, 1.9265, 0.6038, 0.8547), (60, 1.4858, 0.7171, 0.9376), (90, 1.0, 1.0, 1.0),

@@ -11,7 +11,7 @@ from railcontact.halfspace.influence import coefficients_at
 
 PAIR = ElasticPair(shear=1.0, poisson=0.28)
 
-# dblquad values of algorithms.md Sec. 5.1 (nu = 0.28, G = 1, unit squares).
+# dblquad values of docs/algorithms.md Sec. 5.1 (nu = 0.28, G = 1, unit squares).
 @pytest.mark.parametrize("x, y, zz, xx, yx", [
     (1.0, 0.0, 0.237903, 0.321422, 0.0),
     (2.0, 1.0, 0.103382, 0.135168, 0.015527),

@@ -1,10 +1,10 @@
 """Profiles against their standards and the Manchester benchmark files."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import PROFILES
 from scipy.optimize import brentq
 
 from railcontact import RailContactError
@@ -16,15 +16,11 @@ from railcontact.geometry.profiles import (
     read_xy,
 )
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "profiles"
-needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/profiles not present")
 
-
-@needs_shared
 def test_s1002_against_manchester_file():
     """EN 13715 formulas vs MBench_S1002_v3.prw: within 0.01 mm everywhere on the profile."""
     ours = builtin_profile("S1002")
-    bench = read_simpack(SHARED / "MBench_S1002_v3.prw")
+    bench = read_simpack(PROFILES / "MBench_S1002_v3.prw")
     assert bench.kind == "wheel"
     y = bench.y[(bench.y > -0.0699) & (bench.y < 0.0599)]
     assert y.size > 300
@@ -56,16 +52,15 @@ def canted(profile: Profile, inclination: float, n: int = 40001):
     return yc - yc[k], zc - zc[k]
 
 
-@needs_shared
 def test_60e1_canted_against_manchester_file():
     """EN 13674-1 arcs canted 1:40 vs MBench_UIC60_v3.prr. The benchmark file is a
     digitised UIC60 whose arc transitions sit at |y| = 10.5 and 26.0 mm instead of the
-    standard's 10.228 and 26.0265 mm (algorithms.md 7.2 vs 7.2a); that moves the surface
+    standard's 10.228 and 26.0265 mm (docs/algorithms.md 7.2 vs 7.2a); that moves the surface
     by a few hundredths of a millimetre. Tolerances: 0.05 mm on the running band (crown
     and gauge corner), 0.1 mm over the head down to 15 mm below the top, 0.04 mm rms."""
     from scipy.spatial import cKDTree
 
-    bench = read_simpack(SHARED / "MBench_UIC60_v3.prr")
+    bench = read_simpack(PROFILES / "MBench_UIC60_v3.prr")
     yc, zc = canted(builtin_profile("60E1"), math.atan(1 / 40))
     sel = (bench.z > -0.015) & (bench.y > yc.min()) & (bench.y < yc.max())
     d, _ = cKDTree(np.column_stack([yc, zc])).query(np.column_stack([bench.y[sel],

@@ -1,6 +1,6 @@
 """CONTACT's contact reference point against CONTACT's own results (issue 19, point 2).
 
-The cases of ``../shared/reference/contact/`` (S1002/UIC60 Manchester files, 83.3 kN,
+The cases of ``models/reference/contact/`` (S1002/UIC60 Manchester files, 83.3 kN,
 0.5 mm, both wheels, -8 .. 8 mm): CONTACT reports the centre of the interpenetration area
 weighted by the squared interpenetration, with the contact angle weighted the same way.
 railcontact's ``reference_point`` must be the same point: the rail and wheel profile
@@ -18,18 +18,16 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import CONTACT_REFERENCE, PROFILES
 
 import railcontact as rc
 from railcontact.io.jsonout import solution_json
 
 ROOT = Path(__file__).resolve().parents[1]
-CONTACT = ROOT.parent / "shared" / "reference" / "contact"
-PROFILES = ROOT.parent / "shared" / "profiles"
-pytestmark = pytest.mark.skipif(not CONTACT.is_dir(), reason="../shared not present")
 
 
 def _rows() -> list[dict]:
-    with (CONTACT / "wheelrail_dx0.5.csv").open() as f:
+    with (CONTACT_REFERENCE / "wheelrail_dx0.5.csv").open() as f:
         return [r for r in csv.DictReader(f) if r["tol"] == "default"]
 
 

@@ -1,9 +1,9 @@
 """Wheelset roll: rigid contact on both rails and the Manchester benchmark's equal loads."""
 
 import math
-from pathlib import Path
 
 import pytest
+from conftest import PROFILES
 
 import railcontact as rc
 from railcontact import CaseError
@@ -11,9 +11,6 @@ from railcontact.geometry.profiles import builtin_profile, read_profile
 from railcontact.geometry.roll import contact_roll, first_contact_gap
 from railcontact.geometry.search import contact_points
 from railcontact.geometry.track import Pose, Track, Wheelset
-
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "profiles"
-needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/profiles not present")
 
 # Roll angles [rad] of the Manchester benchmark case A-2.2 (10 kN per wheel, yaw 2.4 y mrad),
 # solved by CONTACT for equal wheel loads: CONTACT examples/mbench_a22_left.inp, lateral
@@ -62,8 +59,8 @@ def test_rigid_roll_closes_the_loop_through_both_contact_points(s1002_60e1):
 def _a22(shift_mm: float, roll) -> dict:
     return {
         "material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
-        "geometry": {"type": "wheel-rail", "wheel": str(SHARED / "MBench_S1002_v3.prw"),
-                     "rail": str(SHARED / "MBench_UIC60_v3.prr"), "inclination": 0.0,
+        "geometry": {"type": "wheel-rail", "wheel": str(PROFILES / "MBench_S1002_v3.prw"),
+                     "rail": str(PROFILES / "MBench_UIC60_v3.prr"), "inclination": 0.0,
                      "lateral_displacement": shift_mm * 1e-3, "yaw": 2.4e-3 * shift_mm,
                      "side": "both", "roll": roll},
         "grid": {"nx": 40, "ny": 40},
@@ -71,7 +68,6 @@ def _a22(shift_mm: float, roll) -> dict:
     }
 
 
-@needs_shared
 @pytest.mark.parametrize("shift_mm", sorted(CONTACT_A22_ROLL))
 def test_equal_loads_roll_against_contact_manchester_a22(shift_mm):
     """Tread (2, 4.5 mm) and flange (8, 10 mm) contact: CONTACT's roll within 0.5 %.
@@ -104,7 +100,6 @@ def _one_body_mismatch(case: dict) -> tuple[float, rc.Solution]:
     return lowered[0] - lowered[1], sol
 
 
-@needs_shared
 def test_equal_loads_wheelset_is_one_rigid_body():
     """Lowered by one vertical distance, the wheels reach their approaches together (to
     50 nm, 0.1 % of the approaches: the roll is converged to 1e-8 rad)."""

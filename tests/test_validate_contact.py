@@ -13,13 +13,11 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import CONTACT_REFERENCE, PROFILES
 
 import railcontact as rc
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
-pytestmark = pytest.mark.skipif(not (SHARED / "reference" / "contact").is_dir(),
-                                reason="../shared not present")
 
 
 def _script():
@@ -35,9 +33,9 @@ def _script():
                                         ("right", 8.0)])
 def test_case_meets_the_targets(side, y_mm):
     v = _script()
-    row = next(r for r in v.contact_rows(SHARED / "reference" / "contact", 0.5)
+    row = next(r for r in v.contact_rows(CONTACT_REFERENCE, 0.5)
                if r["side"] == side and float(r["y_mm"]) == y_mm)
-    case = v.wheel_case(row, 0.5, v.TOLERANCE, ("infcon", "fastrip"), SHARED / "profiles",
+    case = v.wheel_case(row, 0.5, v.TOLERANCE, ("infcon", "fastrip"), PROFILES,
                         None, convention="contact")
     sol = rc.solve(case)
     assert sol.converged

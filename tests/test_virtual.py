@@ -20,7 +20,7 @@ def quadratic(A, B, half=0.02, n=4001):
 
 def test_infcon_factor_circle_and_table():
     """chi = 1/2 for a circle; chi = n^2 B/(r (A+B)) against the m, n, r table (theta =
-    30 deg: 0.3123, 60 deg: 0.4113, algorithms.md 4.3)."""
+    30 deg: 0.3123, 60 deg: 0.4113, docs/algorithms.md 4.3)."""
     assert infcon_factor(2.0, 2.0) == pytest.approx(0.5, abs=1e-12)
     for theta, chi in ((30, 0.3123), (60, 0.4113)):
         c = np.cos(np.radians(theta))

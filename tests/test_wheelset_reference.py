@@ -4,7 +4,7 @@ convention (issue 19, point 3).
 ``WheelsetContact`` (the time loop and the FMU) solves each patch in the frame at the
 weighted centre of the interpenetration, as ``solve()`` does: at the flange root and on the
 flange its contact angle, rolling radius and normal force are CONTACT's (its own results in
-``../shared/reference/contact``, S1002/UIC60 Manchester files, 83.3 kN, mu 0.4) within the
+``models/reference/contact``, S1002/UIC60 Manchester files, 83.3 kN, mu 0.4) within the
 targets of ``scripts/validate_contact.py`` and the reference-point tolerances of
 ``tests/test_reference_point.py``; ``patch_frame="rigid"`` keeps the rigid contact point.
 CONTACT's y is our lateral displacement negated; its creepages are turned into
@@ -19,15 +19,13 @@ import math
 from pathlib import Path
 
 import pytest
+from conftest import CONTACT_REFERENCE, PROFILES
 
 import railcontact as rc
 from railcontact.settings.convention import wheel_frame_creepage
 from railcontact.timestep.wheelset import OK, OUTSIDE_VALIDITY
 
 ROOT = Path(__file__).resolve().parents[1]
-CONTACT = ROOT.parent / "shared" / "reference" / "contact"
-PROFILES = ROOT.parent / "shared" / "profiles"
-pytestmark = pytest.mark.skipif(not CONTACT.is_dir(), reason="../shared not present")
 FLANGE_TARGET = 0.05  # scripts/validate_contact.py TARGETS["flange"]["force"]
 TREAD_TARGET = 0.02   # ... ["tread"]["force"]
 RADIUS = 0.02e-3      # ... RADIUS_MM [m]
@@ -35,7 +33,7 @@ ANGLE = {"tread": 2e-4, "flange": 1e-3}  # tests/test_reference_point.py [rad]
 
 
 def _rows(y_mm: str) -> list[dict]:
-    with (CONTACT / "wheelrail_dx0.5.csv").open() as f:
+    with (CONTACT_REFERENCE / "wheelrail_dx0.5.csv").open() as f:
         rows = {r["side"]: r for r in csv.DictReader(f)
                 if r["tol"] == "default" and r["y_mm"] == y_mm}
     return [rows["left"], rows["right"]]

@@ -14,10 +14,10 @@ Conventions (SI, each profile in its own frame; the track frame is made in ``tra
 Built-in profiles
 -----------------
 ``S1002``  EN 13715 / UIC 510-2 section formulas (coefficients as DLR's ``s1002`` function,
-           ``algorithms.md`` Sec. 7.1), S from -70 (flange back) to +60 mm.
+           ``docs/algorithms.md`` Sec. 7.1), S from -70 (flange back) to +60 mm.
 ``60E1``   (alias ``UIC60``) EN 13674-1 head: R300 crown to |y| = 10.228 mm, tangent R80 to
            |y| = 26.0265 mm, tangent R13 until the 1:20 flank direction, then the flank
-           (transcription of the standard in ``algorithms.md`` Sec. 7.2a).
+           (transcription of the standard in ``docs/algorithms.md`` Sec. 7.2a).
 ``CN60``   (aliases ``CHN60``, ``60KG``) Chinese 60 kg/m rail (TB/T 2344, GB 2585): tangent
            arcs R300 (crown, to |y| = 10 mm) - R80 - R13, the R13 meeting a 1:20 head side
            at |y| = 35.4 mm (70.8 mm across), the side running down until the head is

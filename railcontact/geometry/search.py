@@ -3,7 +3,7 @@
 For a wheel with yaw ``psi`` the contact points lie on the *trace line*: the points of the
 wheel surface whose normal has no component along the track (the rail is prismatic).
 With the wheel surface ``(r sin t, eta, -r cos t)`` in the wheelset frame and
-``r = r0 + F(S(eta))``, this gives ``sin t = -tan(psi) r'(eta)`` (``algorithms.md`` 7.4;
+``r = r0 + F(S(eta))``, this gives ``sin t = -tan(psi) r'(eta)`` (``docs/algorithms.md`` 7.4;
 Wang Kaiyun's trace method). The trace points are moved with the wheelset pose (roll after
 yaw) into the side frame and compared with the placed rail: ``g(eta)`` is the vertical
 distance from the rail to the wheel. For a rigid approach ``delta`` (vertical) every

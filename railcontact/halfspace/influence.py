@@ -23,7 +23,7 @@ yz     -K/(pi G) [[X ln r + Y atan(X/Y)]]                   -K Y / (pi G r^2)
 and ``yx = xy``, ``zx = -xz``, ``zy = -yz``. (``X ln(Y + r)`` is written as
 ``X asinh(Y/|X|)``: the two differ by ``X ln|X|``, which the corner operator cancels, and
 the asinh form has no 0 * log(0).) Source: Kalker (1990) and CONTACT
-``m_visc.f90:elascf_pcwcns``; see ``algorithms.md`` Sec. 5.1.
+``m_visc.f90:elascf_pcwcns``; see ``docs/algorithms.md`` Sec. 5.1.
 
 All functions return arrays over the element offsets ``(i dx, j dy)`` with
 ``i = -(nx-1) .. nx-1`` and ``j = -(ny-1) .. ny-1``, shape ``(2 nx - 1, 2 ny - 1)``,

@@ -16,11 +16,11 @@ A(s)`` with the virtual penetration factor ``eps = 0.55``.
 
 INFCON (An & Wang; the paper's Sec. 2.2.3, ``chi = n_e^2 B_e / (r_e (A + B_e))``). The
 original definition of the "equivalent" quantities was not available; railcontact resolves
-it as follows (``algorithms.md`` 4.3 marks this as uncertain):
+it as follows (``docs/algorithms.md`` 4.3 marks this as uncertain):
 
 * ``B_e`` is the curvature of the parabola through the ends of the rigid interpenetration
   region ``{f(s) <= delta}`` (``B_e = delta / w^2``, ``w`` its half width);
-* ``n_e, r_e`` are Hertz's coefficients (``algorithms.md`` 1.2) for the curvatures
+* ``n_e, r_e`` are Hertz's coefficients (``docs/algorithms.md`` 1.2) for the curvatures
   ``(A, B_e)``, so ``chi = B_e b^2 / delta`` is Hertz's lateral virtual-penetration factor
   (chi = 1/2 for a circle, and ``A a^2 / delta = 1 - chi`` along x);
 * the patch is KP's construction with ``delta_0 = chi delta`` across the track and the

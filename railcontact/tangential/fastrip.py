@@ -1,6 +1,6 @@
 """FaStrip (Sichani, Enblom & Berg, VSD 54(6):748-764, 2016): strip theory scaled to Kalker.
 
-Formulas as implemented in CONTACT's ``original_fastrip`` (``algorithms.md`` Sec. 3), for a
+Formulas as implemented in CONTACT's ``original_fastrip`` (``docs/algorithms.md`` Sec. 3), for a
 Hertzian patch with semi-axes a, b and maximum pressure p0 = 3N/(2 pi a b). Creepages are
 made dimensionless so that the strip theory reproduces Kalker's linear theory::
 
@@ -22,7 +22,7 @@ this is Carter's solution on every strip. In the slip zone (and where an adhesio
 would exceed the bound) the traction has magnitude mu p_n and the direction of the FASTSIM
 traction at the same point (CONTACT does the same, with a FASTSIM pass).
 
-Uncertain (see ``algorithms.md`` Sec. 10): Sichani's kappa' (CONTACT uses kappa) and the
+Uncertain (see ``docs/algorithms.md`` Sec. 10): Sichani's kappa' (CONTACT uses kappa) and the
 placement of nu in d; these formulas are CONTACT's.
 """
 
@@ -83,7 +83,7 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     """FaStrip on any strips: the actual pressure bounds the traction, while Kalker's
     coefficients, the flexibilities and p0 = 3N/(2 pi a b) come from the (equivalent)
     ellipse with semi-axes a, b [m]; each strip uses its own half length and centre
-    (the local-ellipse adaptation for non-elliptic patches, ``algorithms.md`` Sec. 3)."""
+    (the local-ellipse adaptation for non-elliptic patches, ``docs/algorithms.md`` Sec. 3)."""
     t0 = time.perf_counter()
     a = check_positive("a", a, "m")
     b = check_positive("b", b, "m")

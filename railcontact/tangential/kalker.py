@@ -10,7 +10,7 @@ Table E.3 of Kalker (1990), App. E, as tabulated in CONTACT (``m_hertz.f90:linro
 CONTACT's interpolation: linear in the axis ratio ``g`` between rows, quadratic Lagrange
 in Poisson's ratio of ``1/C`` through nu = 0, 0.25, 0.5; for ``g < 0.1`` Kalker's
 slender-ellipse asymptotes. The C33 column is from the literature, not from CONTACT, and is
-marked unverified in ``algorithms.md`` Sec. 2.2.
+marked unverified in ``docs/algorithms.md`` Sec. 2.2.
 """
 
 from __future__ import annotations

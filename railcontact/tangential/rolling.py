@@ -1,6 +1,6 @@
 """Steady-rolling discretisation of the tangential problem (rolling in +x).
 
-For element ``I`` the slip per rolling step ``dq = dx`` is (Kalker; ``algorithms.md`` 6.1)::
+For element ``I`` the slip per rolling step ``dq = dx`` is (Kalker; ``docs/algorithms.md`` 6.1)::
 
     S_I = W_I + u_I - u'_I,     W_I = dx (xi - phi y_I, eta + phi (x_I + dx/2))
 
