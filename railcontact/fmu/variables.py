@@ -484,7 +484,7 @@ def _default(v: Variable) -> str:
 def variables_markdown() -> str:
     """Every FMU variable as a Markdown table: name, causality, type, unit, default and
     meaning, in the order parameters, enumerations, inputs, outputs; a ``_left``/``_right``
-    pair is one row. The README's table is this (``scripts/fmu_variables_table.py``
+    pair is one row. The table of docs/fmu.md is this (``scripts/fmu_variables_table.py``
     writes it; ``tests/test_readme_fmu.py`` checks it)."""
     everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS + APPENDED_OUTPUTS
     names = {v.name for v in everything}

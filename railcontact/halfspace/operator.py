@@ -38,8 +38,7 @@ Backends
 ``"pyfftw"``  planned FFTW transforms (FFTW_MEASURE, one thread) — the fast path;
 ``"scipy"``   ``scipy.fft`` (one worker) — the fallback when pyfftw is missing;
 ``"dense"``   the full influence matrix — exact reference, and fastest on tiny grids;
-``"auto"``    dense for at most :data:`DENSE_MAX` elements, else pyfftw if importable,
-              else scipy.
+``"auto"``    dense up to :data:`DENSE_MAX` elements, else pyfftw if importable, else scipy.
 """
 
 from __future__ import annotations
@@ -679,7 +678,7 @@ class InfluenceOperator:
         the inverse of that periodic problem, an approximate inverse of the influence
         matrix (the role of CONTACT's FFT preconditioner, Vollebregt, JCP 257A, 2014). The
         half-space kernel falls off as 1/r, so its spectrum grows towards low wave numbers
-        as 1/|k|; its inverse multiplies pressure errors by |k|, which is what the
+        as ``1/|k|``; its inverse multiplies pressure errors by ``|k|``, which is what the
         conjugate gradients lack for element-scale errors. The circulant embedding of the
         (positive definite) Toeplitz matrix can have a few tiny or slightly negative
         eigenvalues; they are floored at ``floor`` times the largest one.
