@@ -436,9 +436,9 @@ APPENDED_OUTPUTS = [
              "normal solves of the rigid wheelset's solves at other rolls repeated on a "
              "grown potential area in the last step, both wheels", _rigid_work("remeshes")),
 ]
-"""Outputs added after the ``_choice`` enumerations (issue 18's ninth round):
-:func:`table` numbers them after every other variable, so that no value reference of
-the interface before them moves (:data:`APPENDED`)."""
+"""Outputs numbered after the ``_choice`` enumerations: :func:`table` numbers them after
+every other variable, so that the value references of the variables before them stay
+those that hosts already use (:data:`APPENDED`)."""
 
 
 def parameters_markdown() -> str:

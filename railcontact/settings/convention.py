@@ -5,7 +5,7 @@ the right wheel is mirrored): x forward, y in the contact plane towards the fiel
 out of the rail; body 1 is the wheel, so the creepages ``(xi, eta, phi)`` are the wheel's
 velocity relative to the rail over V and the forces ``(F_x, F_s, M_n)`` act on the wheel.
 
-CONTACT's wheel-rail module (its user guide; ``../shared/reference/contact/README.md``)
+CONTACT's wheel-rail module (its user guide; ``models/reference/contact/``)
 has the rail as body 1: its creepages ``(cksi, ceta, cphi)`` are the rail's velocity
 relative to the wheel, its forces ``(FX, FS, MN)`` act on the rail, in a contact frame
 whose normal points into the rail (z down), so that its y points the other way; and it
