@@ -12,17 +12,13 @@ and xarray use.
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-# numba compiles lazily: importing the package for autodoc compiles nothing, but keep any
-# cache the import touches out of the source tree.
-os.environ.setdefault("NUMBA_CACHE_DIR", str(ROOT / "docs" / "_build" / "numba_cache"))
 
-import railcontact  # noqa: E402
+import railcontact  # noqa: E402  (autodoc imports it; numba compiles nothing on import)
 
 project = "railcontact"
 author = "the railcontact authors"
