@@ -62,6 +62,8 @@ html_theme_options = {
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
+# The guide's pages have no sub-pages: no empty "Section Navigation" beside them.
+html_sidebars = {"*": [], "api/**": ["sidebar-nav-bs"]}
 html_static_path: list[str] = []
 html_show_sourcelink = False
 
