@@ -1,5 +1,5 @@
-"""The README's FMU section cannot drift from the FMU: its variable table is the one the
-variables module generates, and it names every variable."""
+"""The FMU page of the docs (docs/fmu.md) cannot drift from the FMU: its variable table is
+the one the variables module generates, and it names every variable."""
 
 from __future__ import annotations
 
@@ -8,15 +8,15 @@ import re
 from railcontact.fmu import variables as V
 
 
-def _block(readme: str) -> str:
-    return readme.split("<!-- fmu-variables")[1].split("-->", 1)[1].split(
+def _block(page: str) -> str:
+    return page.split("<!-- fmu-variables")[1].split("-->", 1)[1].split(
         "<!-- /fmu-variables -->")[0]
 
 
-def test_readme_variable_table_is_current(root):
+def test_docs_variable_table_is_current(root):
     """Regenerate with ``python scripts/fmu_variables_table.py``."""
-    readme = (root / "README.md").read_text(encoding="utf-8")
-    assert _block(readme).strip() == V.variables_markdown().strip()
+    page = (root / "docs" / "fmu.md").read_text(encoding="utf-8")
+    assert _block(page).strip() == V.variables_markdown().strip()
 
 
 def test_variable_table_names_every_variable_with_its_unit_and_default():

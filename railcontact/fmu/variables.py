@@ -436,9 +436,9 @@ APPENDED_OUTPUTS = [
              "normal solves of the rigid wheelset's solves at other rolls repeated on a "
              "grown potential area in the last step, both wheels", _rigid_work("remeshes")),
 ]
-"""Outputs added after the ``_choice`` enumerations (issue 18's ninth round):
-:func:`table` numbers them after every other variable, so that no value reference of
-the interface before them moves (:data:`APPENDED`)."""
+"""Outputs numbered after the ``_choice`` enumerations: :func:`table` numbers them after
+every other variable, so that the value references of the variables before them stay
+those that hosts already use (:data:`APPENDED`)."""
 
 
 def parameters_markdown() -> str:
@@ -484,7 +484,7 @@ def _default(v: Variable) -> str:
 def variables_markdown() -> str:
     """Every FMU variable as a Markdown table: name, causality, type, unit, default and
     meaning, in the order parameters, enumerations, inputs, outputs; a ``_left``/``_right``
-    pair is one row. The README's table is this (``scripts/fmu_variables_table.py``
+    pair is one row. The table of docs/fmu.md is this (``scripts/fmu_variables_table.py``
     writes it; ``tests/test_readme_fmu.py`` checks it)."""
     everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS + APPENDED_OUTPUTS
     names = {v.name for v in everything}

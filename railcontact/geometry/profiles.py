@@ -15,12 +15,12 @@ Built-in profiles
 -----------------
 ``S1002``  EN 13715 / UIC 510-2 section formulas (coefficients as DLR's ``s1002`` function,
            ``docs/algorithms.md`` Sec. 7.1), S from -70 (flange back) to +60 mm.
-``60E1``   (alias ``UIC60``) EN 13674-1 head: R300 crown to |y| = 10.228 mm, tangent R80 to
-           |y| = 26.0265 mm, tangent R13 until the 1:20 flank direction, then the flank
+``60E1``   (alias ``UIC60``) EN 13674-1 head: R300 crown to ``|y|`` = 10.228 mm, tangent R80 to
+           ``|y|`` = 26.0265 mm, tangent R13 until the 1:20 flank direction, then the flank
            (transcription of the standard in ``docs/algorithms.md`` Sec. 7.2a).
 ``CN60``   (aliases ``CHN60``, ``60KG``) Chinese 60 kg/m rail (TB/T 2344, GB 2585): tangent
-           arcs R300 (crown, to |y| = 10 mm) - R80 - R13, the R13 meeting a 1:20 head side
-           at |y| = 35.4 mm (70.8 mm across), the side running down until the head is
+           arcs R300 (crown, to ``|y|`` = 10 mm) - R80 - R13, the R13 meeting a 1:20 head side
+           at ``|y|`` = 35.4 mm (70.8 mm across), the side running down until the head is
            73 mm wide (its widest point, 36.2 mm below the crown). Cited: the radii and
            the 73 mm head width (section data); the two extents (10 and 35.4 mm) and the
            1:20 side are those of the only public description found, the rail-grinding
@@ -228,9 +228,9 @@ def _arc_rail(name: str, y1: float, y2: float, depth: float = 20.0) -> Profile:
 
 
 CN60_CROWN_HALF_WIDTH = 10.0
-"""|y| [mm] where the CN60 crown R300 ends (``helayht/grind_car``; drawing not found)."""
+"""``|y|`` [mm] where the CN60 crown R300 ends (``helayht/grind_car``; drawing not found)."""
 CN60_SIDE_TANGENT_HALF_WIDTH = 35.4
-"""|y| [mm] where the CN60 R13 meets the 1:20 head side (``helayht/grind_car``)."""
+"""``|y|`` [mm] where the CN60 R13 meets the 1:20 head side (``helayht/grind_car``)."""
 CN60_HEAD_WIDTH = 73.0
 """Published CN60 head width [mm], its widest point (rail section data)."""
 

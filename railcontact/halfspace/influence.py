@@ -3,22 +3,22 @@
 A unit traction on the element centred at the origin, of size ``dx * dy``, displaces the
 surface point (X, Y). The coefficients are the combined displacement *differences* of the
 two bodies (Kalker's convention) with the combined parameters G, nu, K of
-:class:`railcontact.halfspace.materials.ElasticPair`. With the corner operator
+:class:`railcontact.halfspace.materials.ElasticPair`. With the corner operator::
 
     [[F]] = F(X+dx/2, Y+dy/2) - F(X+dx/2, Y-dy/2) - F(X-dx/2, Y+dy/2) + F(X-dx/2, Y-dy/2)
 
 (``F`` an antiderivative with ``d2F/dXdY`` equal to the point-load kernel):
 
-=====  ===================================================  ========================
-block  value                                                point-load kernel
-=====  ===================================================  ========================
-zz     (1-nu)/(pi G) [[X asinh(Y/|X|) + Y asinh(X/|Y|)]]    (1-nu)/(pi G r)
-xx     1/(pi G) [[(1-nu) X asinh(Y/|X|) + Y asinh(X/|Y|)]]  ((1-nu)/r + nu X^2/r^3)/(pi G)
-yy     1/(pi G) [[(1-nu) Y asinh(X/|Y|) + X asinh(Y/|X|)]]  ((1-nu)/r + nu Y^2/r^3)/(pi G)
-xy     nu/(pi G) [[-r]]                                     nu X Y / (pi G r^3)
-xz     -K/(pi G) [[Y ln r + X atan(Y/X)]]                   -K X / (pi G r^2)
-yz     -K/(pi G) [[X ln r + Y atan(X/Y)]]                   -K Y / (pi G r^2)
-=====  ===================================================  ========================
+=====  =======================================================  ==================================
+block  value                                                    point-load kernel
+=====  =======================================================  ==================================
+zz     ``(1-nu)/(pi G) [[X asinh(Y/|X|) + Y asinh(X/|Y|)]]``    ``(1-nu)/(pi G r)``
+xx     ``1/(pi G) [[(1-nu) X asinh(Y/|X|) + Y asinh(X/|Y|)]]``  ``((1-nu)/r + nu X^2/r^3)/(pi G)``
+yy     ``1/(pi G) [[(1-nu) Y asinh(X/|Y|) + X asinh(Y/|X|)]]``  ``((1-nu)/r + nu Y^2/r^3)/(pi G)``
+xy     ``nu/(pi G) [[-r]]``                                     ``nu X Y / (pi G r^3)``
+xz     ``-K/(pi G) [[Y ln r + X atan(Y/X)]]``                   ``-K X / (pi G r^2)``
+yz     ``-K/(pi G) [[X ln r + Y atan(X/Y)]]``                   ``-K Y / (pi G r^2)``
+=====  =======================================================  ==================================
 
 and ``yx = xy``, ``zx = -xz``, ``zy = -yz``. (``X ln(Y + r)`` is written as
 ``X asinh(Y/|X|)``: the two differ by ``X ln|X|``, which the corner operator cancels, and

@@ -38,8 +38,7 @@ Backends
 ``"pyfftw"``  planned FFTW transforms (FFTW_MEASURE, one thread) — the fast path;
 ``"scipy"``   ``scipy.fft`` (one worker) — the fallback when pyfftw is missing;
 ``"dense"``   the full influence matrix — exact reference, and fastest on tiny grids;
-``"auto"``    dense for at most :data:`DENSE_MAX` elements, else pyfftw if importable,
-              else scipy.
+``"auto"``    dense up to :data:`DENSE_MAX` elements, else pyfftw if importable, else scipy.
 """
 
 from __future__ import annotations
@@ -449,13 +448,10 @@ def save_wisdom(path: str | os.PathLike, max_elements: int = 100, components: Se
     """Measure the FFTW plans of every padded shape of grids up to ``max_elements`` per
     axis (the 5-smooth sizes: the products' plans of every row count, :func:`_new_plan`,
     for 1- and 2-component operators) and write FFTW's wisdom to ``path``; returns the
-    number of plans. Here 64
-    per axis (1,922 shapes) took about 9 minutes with the full 2-D plans of both
-    component counts and the pruned one-component ones (those added about a third: 16 s
-    against 12 s at 12 per axis; since round 4 every product is pruned and only the
-    pruned plans are measured); the default, 100, has 3,042 shapes, larger ones, and
-    takes longer. The plans cached in this thread are dropped (the others are planned
-    from the new wisdom)."""
+    number of plans. Every product is pruned, so only the pruned plans are measured; 64
+    per axis (1,922 shapes) takes minutes on a 2-core machine, and the default, 100
+    (3,042 shapes, larger ones), takes longer. The plans cached in this thread are
+    dropped (the others are planned from the new wisdom)."""
     if not HAVE_PYFFTW:
         raise RailContactError("FFTW wisdom needs pyfftw")
     if not isinstance(max_elements, int) or max_elements < 2:
@@ -679,7 +675,7 @@ class InfluenceOperator:
         the inverse of that periodic problem, an approximate inverse of the influence
         matrix (the role of CONTACT's FFT preconditioner, Vollebregt, JCP 257A, 2014). The
         half-space kernel falls off as 1/r, so its spectrum grows towards low wave numbers
-        as 1/|k|; its inverse multiplies pressure errors by |k|, which is what the
+        as ``1/|k|``; its inverse multiplies pressure errors by ``|k|``, which is what the
         conjugate gradients lack for element-scale errors. The circulant embedding of the
         (positive definite) Toeplitz matrix can have a few tiny or slightly negative
         eigenvalues; they are floored at ``floor`` times the largest one.

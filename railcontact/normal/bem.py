@@ -10,7 +10,7 @@ influence operator, the rigid approach (penetration) ``delta`` [m] and the press
 ``F = dx dy sum p`` [N] (force control; ``delta`` is then the mean of ``h + u`` over the
 contact set, Polonsky & Keer, Wear 231 (1999) 206–219).
 
-Convergence: iteration ``k`` stops when the relative change of the pressure
+Convergence: iteration ``k`` stops when the relative change of the pressure::
 
     eps_k = sum_I |p_I^k - p_I^(k-1)| / sum_I p_I^k
 

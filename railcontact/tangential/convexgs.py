@@ -493,7 +493,7 @@ class TangentialResult:
     slip_area_ratio
         Slip elements / contact elements [-].
     max_traction
-        Largest |p| [Pa].
+        Largest ``|p|`` [Pa].
     iterations, converged, message, wall_time, error, history
         As for the normal solver; ``error`` is ``||dp|| / ||p||`` of the last sweep.
     """
@@ -554,7 +554,8 @@ _RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
 
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
                        ) -> tuple[tuple[float, float], float, float, float]:
-    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and max |p| [Pa] of a traction field."""
+    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and largest ``|p|`` [Pa] of a
+    traction field."""
     swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
     if swept.flags.c_contiguous and state.flags.c_contiguous:
         return _summarised(grid, *_summary_sums(swept, state, grid.x0, grid.dx, grid.y0,
@@ -587,7 +588,7 @@ def _embedded_slip(slip_of: Callable[[], np.ndarray], shape: tuple[int, int], sx
 
 
 def _counts_and_max(traction, state):
-    """Elements in contact and in slip, and the largest |p| [Pa] (0 without elements, NaN
+    """Elements in contact and in slip, and the largest ``|p|`` [Pa] (0 without elements, NaN
     when a traction is NaN), in one pass (a maximum is the same in any order)."""
     ncon = 0
     nslip = 0

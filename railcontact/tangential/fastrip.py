@@ -12,7 +12,7 @@ On strip y (half length a_y) the slip zone is ``[-a_y, -a_y + 2d]`` at the trail
 
     d = a/(1-nu) [sqrt(eta'^2 + (1-phi'^2)(xi' - phi' y/a)^2) + eta' phi'] / (1 - phi'^2)
 
-(full sliding when d >= a_y, d < 0, or |phi'| >= 1), and the adhesion zone carries
+(full sliding when d >= a_y, d < 0, or ``|phi'| >= 1``), and the adhesion zone carries
 
     p_x = (mu p0/a) [kappa sqrt(a_y^2 - x^2) - kappa sqrt((a_y-d)^2 - (x-d)^2)]
     p_y = (mu p0/a) [lambda sqrt(a_y^2 - x^2) - (lambda - phi') sqrt((a_y-d)^2 - (x-d)^2)]

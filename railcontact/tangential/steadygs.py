@@ -97,12 +97,12 @@ BLOCK_SCALE = 15.0
 """Target size of a row block, in contact elements: ``BLOCK_SCALE sqrt(nx ny)`` on an
 ``nx`` x ``ny`` grid. A block's direct sum costs about (its elements)^2 / 2 element pairs,
 a block boundary one DC-FFT product, whose cost grows with the grid, so the best block
-grows as the square root of the grid's size. 12 was the best of 8 / 10 / 12 / 18 in
-round 5; with the cross-row sums vectorised over the targets (round 6, a third cheaper)
-15 is the best of 12 / 15 / 18 (each solve timed with every value on the same problem,
-the same sweeps): 5 % less time than 12 on the wheelset step's warm and cold solves (24 x
-48 elements, 250-1,000 in contact: one block up to about 760 contact elements), 4 % on
-the 0.5 mm wheel-rail patches, 2 % on the 0.2 mm ones; 18 within 1 % of 15."""
+grows as the square root of the grid's size. With the cross-row sums vectorised over the
+targets, 15 is the best of 8 / 10 / 12 / 15 / 18 (each solve timed with every value on
+the same problem, the same sweeps): 5 % less time than 12 on the wheelset step's warm and
+cold solves (24 x 48 elements, 250-1,000 in contact: one block up to about 760 contact
+elements), 4 % on the 0.5 mm wheel-rail patches, 2 % on the 0.2 mm ones; 18 within 1 %
+of 15."""
 
 
 def _shift_run(px, py, g, dpx, dpy, iy, ix, jx, ex, ey):
@@ -202,8 +202,8 @@ LANES = (16, 20, 24, 28, 32)
 """Target elements whose cross-row sums :func:`_cross_rows_of` forms at once: a row's
 targets are taken in chunks of 32, the last of them in the smallest of these that holds
 what is left (their sums held in vector registers, of four lanes for the last four of 20
-and 28). 20 and 28 (round 7): on the step's warm blocks 7 % fewer target lanes than with
-16/24/32 alone, 80.0 -> 77.5 µs a block, the same bits."""
+and 28). 20 and 28 give the step's warm blocks 7 % fewer target lanes than 16/24/32
+alone would (77.5 against 80.0 µs a block, the same bits)."""
 
 
 def _cross_rows_of(lanes: int):

@@ -318,8 +318,8 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
     about 0.8 of the start's error: half the warm solves took a second sweep. The
     average of the changes halves the noise of the rate (for ``gain`` = 0.5), is exact
     for a traction changing linearly in time, and lags for a changing rate by
-    ``(1 - gain) / gain`` steps of its change (``scripts/study_warm_prediction.py`` and
-    docs/performance.md, "Round 6: warm start").
+    ``(1 - gain) / gain`` steps of its change (``scripts/study_warm_prediction.py``
+    compares the predictors).
     """
     o = older
     if (o is None or o.traction is None or time is None or o.time is None

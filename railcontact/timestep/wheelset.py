@@ -696,12 +696,11 @@ class _RolledApproaches:
         from an earlier one's approach does; within that the frame moves the approach by
         at most about a fifth of the rigid search's tolerance (:data:`~.rigid.RIGID_RTOL`
         of the approach; 0.16 for a frame 0.9e-3 off, solved tightly on the flange; 0.005
-        on the tread), far below the solves' own scatter at the step's tolerances. (Until
-        issue 18's ninth round a wheel was solved once more whenever its approach missed
-        the guess by more than :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL`: in
-        every second warm step, and in cold ones, where a solve without memory forms its
-        frame from Hertz's approach and the guess changes nothing; docs/performance.md,
-        "Round 9".)"""
+        on the tread), far below the solves' own scatter at the step's tolerances. So a
+        wheel is not solved a second time when its approach misses the guess by more than
+        :data:`~railcontact.contact.wheelrail.REFERENCE_RTOL`: that repeat would cost a
+        solve in every second warm step, and in cold ones, where a solve without memory
+        forms its frame from Hertz's approach, it would repeat the same solve."""
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         last = self.solved.get("memory")
