@@ -74,9 +74,11 @@ def test_readme_is_short_and_names_the_test_command():
     text = README.read_text(encoding="utf-8")
     assert len(text.splitlines()) <= 250
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    fresh = (ROOT / ".ci" / "fresh_clone_test").read_text(encoding="utf-8")
     command = next(line for b in README_BLOCKS if b.lang == "bash"
                    for line in b.text.splitlines() if "pytest" in line)
-    assert command.strip() in ci, "CI must run the README's test command"
+    assert ".ci/fresh_clone_test" in ci and "sphinx-build -W" in ci
+    assert command.strip() in fresh, "CI must run the README's test command"
 
 
 def test_readme_has_its_examples():
