@@ -1,4 +1,4 @@
-"""Per-call time of the simplified estimates on wheel-rail patches (issue 18, round 8).
+"""Per-call time of the simplified estimates on wheel-rail patches.
 
 For the patch of S1002 on 60E1 (1:40, 83.3 kN, 0.5 mm elements, the case file
 ``models/cases/s1002_60e1_dy-2mm.toml``) at the lateral displacements ``--lateral`` [mm],
@@ -71,7 +71,7 @@ def main() -> None:
     grid_of = {id(p): p.normal.grid for p, _, _ in cases}
     if hasattr(infcon[id(cases[0][0])], "pressure_on"):
         calls["INFCON re-meshed"] = lambda p, pair: infcon[id(p)].pressure_on(grid_of[id(p)])
-    else:  # (before round 8)
+    else:  # older versions of the package without pressure_on
         calls["INFCON re-meshed"] = lambda p, pair: infcon[id(p)].pressure_at(
             *grid_of[id(p)].mesh())
     calls["FaStrip re-meshed"] = lambda p, pair: remesh_strips(fastrip[id(p)], grid_of[id(p)])

@@ -1,5 +1,5 @@
-"""Resident memory over a long time series with changing grid shapes (issue 18: bounded
-over 1e5 steps; issue 20: flat over 2e4 steps under penetration control).
+"""Resident memory over a long time series with changing grid shapes (bounded over 1e5
+steps; flat over 2e4 steps under penetration control).
 
 ``WheelsetContact`` under penetration control (S1002 on 60E1 at 1:40, steel, mu 0.4), the
 vertical displacement (-0.25 to -0.45 mm) and the lateral displacement (+-4 mm, with the roll at

@@ -1,6 +1,6 @@
 """Benchmark of one wheelset time step: wall time, iterations and where the time goes.
 
-The hunting-like run of issue 18, in-process through :class:`railcontact.WheelsetContact`:
+The hunting-like run, in-process through :class:`railcontact.WheelsetContact`:
 S1002 on 60E1 at 1:40, 0.5 mm elements, mu = 0.4, 83.3 kN per wheel (load control with the
 creep forces counted), 30 m/s with kinematic creepages, a 3 mm lateral sine at 1.5 Hz
 (lateral velocity from it, no yaw), 1 ms steps, ``--steps`` steps (300). For the warm
@@ -12,8 +12,8 @@ and FFT planning for a new grid shape) and the rest (load loop, resultants, Pyth
 
 A fixed numpy workload is timed in the same run (128 x 128 FFT round trips x 200, then a
 600 x 600 matrix-vector product x 400), and every time is also given as a ratio to it, so
-that figures compare across machines (issue 18's targets: warm step <= 0.03, cold step
-<= 0.25 of the workload). The resident memory (RSS) is printed at the end.
+that figures compare across machines (the targets: warm step <= 0.03, cold step <= 0.25
+of the workload). The resident memory (RSS) is printed at the end.
 
 Usage: python scripts/bench_step.py [--steps 300] [--modes previous+estimate,none]
        [--solver steadygs|convexgs] [--patch-frame reference|rigid]
@@ -57,7 +57,7 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
 LEGACY = frozenset({"strips_from_contact", "sample_on_strips"})
-"""Targets of older versions of the package (before issue 18's eighth round), timed when
+"""Targets of older versions of the package (functions it no longer has), timed when
 present: the script also runs against an older package (bench_step_ab.py)."""
 
 
@@ -155,7 +155,7 @@ def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None,
     times and iterations."""
     clear_caches()
     extra = {} if solver is None else {"tangential_solver": solver}
-    if patch_frame is not None:  # versions before issue 19 solve at the rigid point only
+    if patch_frame is not None:  # older versions without patch_frame: the rigid point only
         extra["patch_frame"] = patch_frame
     wc = rc.WheelsetContact(
         rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),

@@ -1,4 +1,4 @@
-"""Contact tables (issue 21): interpolation cost per wheelset step, interpolation error
+"""Contact tables: interpolation cost per wheelset step, interpolation error
 against exact solves between the nodes, and (``--scaling``) the build's points per second
 with 1, 2, ... Dask workers.
 

@@ -1,6 +1,6 @@
 """Benchmark of the full wheel-rail case beside CONTACT: time and iterations per wheel case.
 
-The cases of ``models/reference/contact/`` (issue 18): S1002 on UIC60 (the Manchester
+The cases of ``models/reference/contact/``: S1002 on UIC60 (the Manchester
 benchmark files, the rail canted in the file), G = 82 GPa, nu = 0.28, mu = 0.4, a vertical
 wheel load of 83.3 kN (load control, creep forces counted), steady rolling with the
 creepages CONTACT used (xi = eta = 2e-4, its kinematic spin), roll = yaw = 0, both wheels,

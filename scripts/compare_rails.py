@@ -1,5 +1,5 @@
 """The built-in CN60 head beside 60E1: both uncanted heads, their widths, height difference
-and the surface angle of their slopes (issue 19, point 5).
+and the surface angle of their slopes.
 
 Usage: python scripts/compare_rails.py [--out docs/cn60_60e1.png]
 """

@@ -1,5 +1,4 @@
-"""Seeded fuzzer of railcontact's inputs (issue 22, point 8: never a wrong answer reported as
-success).
+"""Seeded fuzzer of railcontact's inputs (never a wrong answer reported as success).
 
 Two kinds of input:
 

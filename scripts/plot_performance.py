@@ -4,7 +4,7 @@ Reads the ``--json`` files of ``scripts/bench_step.py`` (one per version, in the
 given) and draws, for the warm (``previous+estimate``) and the cold (``none``) start, the
 mean step time as a ratio to the fixed workload of its own run, split by stage (the
 stage shares are of the run's total time, so they split the mean exactly), the median as
-a marker, and issue 18's targets (on the median) as lines.
+a marker, and the targets (on the median) as lines.
 
 Usage: python scripts/plot_performance.py BEFORE.json AFTER.json [--labels before after]
        [--out docs/performance_step.png]
@@ -22,7 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 TARGETS = {"previous+estimate": 0.03, "none": 0.25}
-"""Issue 18's targets per step, as ratios to the fixed workload."""
+"""The targets per step, as ratios to the fixed workload."""
 STAGES = ["search", "meshing", "estimate", "normal BEM", "tangential BEM", "operators", "rest"]
 
 
@@ -54,7 +54,7 @@ def main() -> None:
                     label="median" if i == 0 else None)
             ax.text(i, bottom, f"mean {total:.3f}\nmedian {median:.3f}", ha="center",
                     va="bottom", fontsize=8)
-        ax.axhline(TARGETS[mode], color="k", ls="--", lw=1, label="issue 18 target (median)")
+        ax.axhline(TARGETS[mode], color="k", ls="--", lw=1, label="target (median)")
         ax.set_xticks(range(len(data)), labels)
         ax.set_ylim(0, ax.get_ylim()[1] * 1.12)
         ax.set_title(f"{mode} start: time per step")

@@ -1,6 +1,6 @@
 """railcontact beside CONTACT on CONTACT's own wheel-rail cases, in CONTACT's convention.
 
-The cases of ``models/reference/contact/`` (issue 19, point 4): S1002 on UIC60 (the
+The cases of ``models/reference/contact/``: S1002 on UIC60 (the
 Manchester benchmark files, the rail canted in the file), G = 82 GPa, nu = 0.28, mu = 0.4,
 a vertical wheel load of 83.3 kN (load control, creep forces counted), steady rolling with
 CONTACT's creepages (xi = eta = 2e-4 and its kinematic spin), roll = yaw = 0, both wheels,

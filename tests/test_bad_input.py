@@ -226,7 +226,7 @@ def test_f05_flange_and_tread_carry_their_load():
         if w.status != 1:
             assert w.track_force[2] == pytest.approx(q, rel=0.01)
     assert len(r.right.patches) == 2 or r.right.status == 1
-    # the 70 deg flange pushes back hard: Y/Q beyond Nadal's limit (issue 20)
+    # the 70 deg flange pushes back hard: Y/Q beyond Nadal's limit
     assert r.right.status == 1 or r.right.validity & NADAL
 
 
@@ -247,7 +247,7 @@ def test_a_failed_estimate_falls_back_to_none_and_says_so(monkeypatch):
 
     monkeypatch.setattr(patch_module, "virtual_penetration", fails)
     r = _wheelset(warm_start="estimate").solve(pose, loads=loads)
-    assert r.status == OUTSIDE_VALIDITY  # the left flange: Y/Q above 0.8 (issue 20)
+    assert r.status == OUTSIDE_VALIDITY  # the left flange: Y/Q above 0.8
     assert r.left.validity & Y_Q and r.left.derailment_quotient > 0.8
     labels = [p.estimate for w in r.wheels for p in w.patches]
     assert labels and all(s.startswith("infcon failed (infcon: no virtual") for s in labels)
@@ -286,7 +286,7 @@ def test_a_wheel_load_missed_by_more_than_a_percent_is_not_converged():
     the load with status ok. The slack for the creep forces' noise is capped at 1 %; and a
     3.9 MN patch (Hertz: 111 mm long on a 475 mm wheel) is beyond the half-space model,
     out of range (status 3) before the load loop gets there. In the frame at the reference
-    point (issue 19) the patch is smaller (N = 1.07 MN, 67.9 deg) and is solved with the
+    point the patch is smaller (N = 1.07 MN, 67.9 deg) and is solved with the
     load met: outside validity (Y/Q, Nadal, flange climb, penetration), never ok."""
     r = _wheelset(warm_start="none").solve(
         rc.Pose(0.007799220052098445, 0.007321114375577168, 0.0),
@@ -342,9 +342,9 @@ def test_f04_warm_and_cold_agree_on_the_same_inputs(element_size):
     With 2 mm elements the flange patch is cut where the wheel profile folds over the
     flange tip (p_max on the cut): both say so (not converged); at 1 mm it is whole.
     At the rigid point (the frame of F04's report): in the frame at the reference point
-    (issue 19) both meet the load to the default 1e-3 too, but on this flange climb
-    (Y/Q = 5) N moves by more than the load error and the two differ by 0.25 % (1 mm) and
-    0.5 % (2 mm, cut patch): open, see the issue 19 report."""
+    both meet the load to the default 1e-3 too, but on this flange climb (Y/Q = 5) N
+    moves by more than the load error and the two differ by 0.25 % (1 mm) and 0.5 % (2 mm,
+    cut patch): an open question."""
     warm = _wheelset(element_size=element_size, patch_frame="rigid")
     for n in (6518, 6519, 6520):
         pose, kw, t = _random_step(n)
@@ -357,7 +357,7 @@ def test_f04_warm_and_cold_agree_on_the_same_inputs(element_size):
         assert w.track_force[2] == pytest.approx(c.track_force[2], rel=2e-3)
         assert w.load_unique and c.load_unique
     assert res.right.status in (0, OUTSIDE_VALIDITY)
-    # the left flange at 64 deg with lateral creep: Y/Q beyond 0.8 (issue 20)
+    # the left flange at 64 deg with lateral creep: Y/Q beyond 0.8
     assert res.left.status == (1 if element_size == 2e-3 else OUTSIDE_VALIDITY)
     if res.left.status == 1:
         assert "cut off" in res.left.message
@@ -388,8 +388,8 @@ def test_several_patches_steeper_than_nadal_are_flagged():
     """F05's right wheel: a 70 deg flange (mu tan(gamma) = 1.06 at mu = 0.4) pulling
     while the tread carries: the load may have several solutions, and the wheel says so.
     At the rigid point, whose angle is the flange's 70 deg (in the frame at the reference
-    point the right wheel's load loop stops 3 % short here: not converged, open in the
-    issue 19 report)."""
+    point the right wheel's load loop stops 3 % short here: not converged, an open
+    question)."""
     r = _wheelset(warm_start="none", patch_frame="rigid").solve(F05_POSE, loads=F05_LOADS,
                                                                 creepages=F05_CREEPAGES)
     w = r.right
@@ -446,7 +446,7 @@ def test_a_contact_cut_where_the_profiles_end_is_not_converged():
 def test_a_wheel_that_has_climbed_its_flange_is_out_of_range():
     """S1002 on 60E1: the flange's steepest point is S = -39 mm at 70 deg. Contacts on the
     upper flank (8-20 mm lateral, 70 down to 35 deg) are solved, reported outside validity
-    (flange climb, issue 20); past 35 deg, towards the
+    (flange climb); past 35 deg, towards the
     tip (30 mm: 14 deg at S = -52 mm), the wheel has climbed its flange: out of range at
     once, for the time step (both wheels, status 3) and for a case file (exit 2)."""
     ws = rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46)
@@ -469,7 +469,7 @@ def test_a_wheel_that_has_climbed_its_flange_is_out_of_range():
 
 
 def test_cli_version_and_several_case_files(capsys):
-    """Issue 20 (CLI): --version; solve takes several files, one JSON object per line, a
+    """CLI: --version; solve takes several files, one JSON object per line, a
     bad file is a one-line error naming it, the others are still solved, exit 2."""
     with pytest.raises(SystemExit) as exc:
         main(["--version"])
@@ -488,7 +488,7 @@ def test_cli_version_and_several_case_files(capsys):
 
 
 def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
-    """Issue 20 (CLI): a zero load solves nothing: a one-line warning and exit 3, not a
+    """CLI: a zero load solves nothing: a one-line warning and exit 3, not a
     silent exit 0."""
     case = tmp_path / "zero.toml"
     case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = "quadratic"'
@@ -500,9 +500,9 @@ def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
 
 
 def test_one_wheel_of_a_wheelset_off_its_rail_is_an_error():
-    """Issue 20 (CLI): lateral displacement -0.05 m, left wheel only, used to solve its
-    outer tread without a word; the wheelset is one body, and its right wheel has climbed
-    its flange: an error naming it."""
+    """CLI: lateral displacement -0.05 m, left wheel only, whose outer tread alone could be
+    solved; the wheelset is one body, and its right wheel has climbed its flange: an error
+    naming it, not a silent solve of the left tread."""
     case = {"material": {"young": 206e9, "poisson": 0.28},
             "geometry": {"type": "wheel-rail", "lateral_displacement": -0.05, "side": "left"},
             "normal": {"load": 8e4}}

@@ -165,7 +165,7 @@ def test_bad_tangential_cases(root, mutate, match):
 ])
 def test_a_lateral_displacement_beyond_the_profiles_is_a_clear_error(root, tmp_path,
                                                                       lateral, words):
-    """Issue 20 (CLI): nothing is solved: one line naming the input and why, exit 2."""
+    """CLI: nothing is solved: one line naming the input and why, exit 2."""
     text = (root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").read_text()
     case = tmp_path / "far.toml"
     case.write_text(text.replace("lateral_displacement = -0.002",

@@ -1,4 +1,4 @@
-"""CONTACT's conventions on request (issue 19, point 1).
+"""CONTACT's conventions on request.
 
 ``convention = "contact"`` reads a wheel-rail case's creepages and reports its forces as
 CONTACT's wheel-rail module does (the rail is body 1, its contact normal points into the

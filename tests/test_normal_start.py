@@ -252,7 +252,7 @@ def test_time_steps_reuse_the_displacements_and_solve_as_from_a_convolution():
 
 
 def test_two_patch_and_penetration_control_steps_start_from_exact_displacements():
-    """Review (round 7): warm steps the hunting test does not reach - a wheel with two
+    """Warm steps the hunting test does not reach - a wheel with two
     patches (flange root and tread, S1002/60E1 at 5.1 mm, 12 kN), then penetration control
     with the time restarted (the memory's step lies ahead: no extrapolation). Every start
     given with a displacement has ``A p`` of its pressure as the operator convolves it, and

@@ -265,7 +265,7 @@ def test_import_leaves_out_pyfftws_dask_interface():
 
 
 def test_import_of_pyfftw_leaves_other_threads_imports_of_dask_array_alone():
-    """Review (round 7): while railcontact imports pyfftw without its dask interface,
+    """While railcontact imports pyfftw without its dask interface,
     another thread's ``import dask.array`` (a dask worker's) is not refused. The other
     thread imports dask.array exactly while pyfftw is imported (a hook on that import
     waits for it)."""

@@ -1,4 +1,4 @@
-"""CONTACT's contact reference point against CONTACT's own results (issue 19, point 2).
+"""CONTACT's contact reference point against CONTACT's own results.
 
 The cases of ``models/reference/contact/`` (S1002/UIC60 Manchester files, 83.3 kN,
 0.5 mm, both wheels, -8 .. 8 mm): CONTACT reports the centre of the interpenetration area
@@ -47,8 +47,8 @@ def test_reference_point_is_contacts(row):
     ref = json.loads(solution_json(sol))["patches"][0]["reference_point"]
     mirror = -1.0 if row["side"] == "left" else 1.0  # CONTACT's y against ours
     tread = abs(float(row["y_mm"])) <= 4.0
-    # each patch is solved in the frame at its reference point (issue 19, point 3), formed
-    # as CONTACT forms it: CONTACT's point within 0.01 mm, its angle within 1e-4 rad on
+    # each patch is solved in the frame at its reference point, formed as CONTACT forms
+    # it: CONTACT's point within 0.01 mm, its angle within 1e-4 rad on
     # the tread and 4e-4 rad on the flange, its kinematic rolling radius within 0.017 mm
     tol_mm, tol_rad = (0.015, 2e-4) if tread else (0.015, 1e-3)
     assert ref["rail_profile_coordinate"] * 1e3 == pytest.approx(

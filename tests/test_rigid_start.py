@@ -227,8 +227,8 @@ def test_rolled_solves_start_from_the_previous_root():
 def test_a_frame_within_the_warm_tolerance_keeps_the_approach(lateral):
     """A rolled wheel's solve keeps the frame formed at its guessed approach when the
     approach found is within :data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL` of
-    it (the solve's own frame tolerance from a start; since issue 18's ninth round there is
-    no second solve at a tighter one): solved tightly (the normal problem, one load pass,
+    it (the solve's own frame tolerance from a start; there is no second solve at a
+    tighter one): solved tightly (the normal problem, one load pass,
     so that only the frame differs), the approach with the frame formed 0.9e-3
     above or below the approach found is that of the frame formed at it to within a
     quarter of the rigid search's tolerance (measured: 0.005 on the tread and at 3 mm,
@@ -253,7 +253,7 @@ def test_a_missed_guess_forms_the_frame_again_inside_the_one_solve(lateral):
     """A rolled wheel whose approach misses its guess by far more than
     :data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL` (2 %) is solved once: its
     solve forms the frame again at the approach it found (two passes a wheel, where a
-    second solve after it, as before issue 18's ninth round, made three), and gives the
+    second solve after it would make three), and gives the
     approach of the frame formed at it to within a quarter of the rigid search's
     tolerance (solved tightly, the normal problem: only the frame differs)."""
     wc = contact(normal_tolerance=1e-9)

@@ -1,4 +1,4 @@
-"""Contact tables (issue 21): built on a 2-process Dask LocalCluster shared by the module's
+"""Contact tables: built on a 2-process Dask LocalCluster shared by the module's
 tests, on a coarse grid (2 mm elements) so that a point solves in milliseconds.
 
 The truth for the table is the exact solver itself, ``railcontact solve`` at each node:
@@ -415,8 +415,8 @@ def test_fmu_table_mode_bad_parameters_are_an_error_at_initialization(
 def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, table_fmu):
     """The FMU with contact_model = table (fmu_src/slave.py making TableContact its
     contact, docs/tables.md) through fmpy: every node of the table, both wheels, exactly;
-    outside the table status 3. Runs once the FMU has the mode (wired with the FMU's
-    enumerations, after issue 21's merge)."""
+    outside the table status 3. The mode is set through the FMU's enumeration, as FMI
+    tools set it."""
     s, var = _table_slave(table_fmu, "table", str(built[1].resolve()))
     s.exitInitializationMode()
     table = ContactTable.open(built[1])

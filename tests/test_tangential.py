@@ -231,9 +231,10 @@ def test_bad_tangential_input(sphere):
 
 @pytest.mark.parametrize("solver", ["steadygs", "convexgs"])
 def test_zero_creepage_is_zero_traction_at_once(solver):
-    """Issue 20: creepages set back to exactly zero after non-zero ones cost ConvexGS 213
-    sweeps for a zero answer. With no creepage the steady state carries no traction: both
-    solvers return it with no sweep, whatever the start; a time step too."""
+    """Creepages set back to exactly zero after non-zero ones: with no creepage the steady
+    state carries no traction, and both solvers return it with no sweep, whatever the start
+    (iterating from the non-zero ones' traction would cost ConvexGS 213 sweeps for that
+    zero answer); a time step too."""
     from railcontact.tangential import SOLVERS
 
     hz, g, nr = hertz_patch(1.0, 21)

@@ -1,5 +1,5 @@
-"""railcontact beside CONTACT on a few of CONTACT's own wheel-rail cases (issue 19,
-point 4): the targets of ``scripts/validate_contact.py`` - tread (|y| <= 4 mm): forces
+"""railcontact beside CONTACT on a few of CONTACT's own wheel-rail cases: the targets
+of ``scripts/validate_contact.py`` - tread (|y| <= 4 mm): forces
 within 2 % (floor 0.2 % of mu N), p_max and area within 1 %, rolling radius within 0.02 mm;
 flange root and flange (|y| >= 5 mm): within 5 %. The cases are those where the targets
 were missed before the patch frame was at the reference point and its grid on it (the

@@ -1,4 +1,4 @@
-"""Issue 20: honest statuses beyond the model's validity, the moments about the wheelset
+"""Honest statuses beyond the model's validity, the moments about the wheelset
 centre and the rigid wheelset's vertical displacement and roll under load control.
 
 Truth: Nadal's formula by hand; the balance of a flange in full sliding (Y/Q equals
@@ -105,7 +105,7 @@ def test_full_sliding_on_the_flange_gives_nadals_quotient(eta):
 
 
 def test_flange_climb_at_10_mm_is_outside_validity():
-    """Issue 20's case: at 10 mm the left contact is past the flange's steepest point
+    """At 10 mm the left contact is past the flange's steepest point
     (61 deg at S = -41 mm against 70 deg at -38.5 mm) and, at mu = 0.4 with no creep
     forces, Y/Q = tan(61 deg) = 1.8 is beyond Nadal's 1.12: solved, outside validity,
     the message naming each quantity; the right wheel on its tread is ok. At the rigid

@@ -1,4 +1,4 @@
-"""A warm step whose patches merge (found in the review of issue 18 round 6).
+"""A warm step whose patches merge.
 
 Two patches of the left wheel (S1002 on 60E1 at 1:40, 5 mm lateral, 2 mrad yaw, the
 wheelset lowered for about 0.05 mm of approach: the gap has two minima) merge into one

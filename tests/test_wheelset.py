@@ -191,8 +191,8 @@ def test_warm_step_meshes_where_the_contact_was_and_grows_when_it_moves():
     cold step's Hertz area is the rigid point's curvatures' (in the frame at the reference
     point B is the overlap's parabola, a tighter area: 56 x 64 elements against the warm
     step's 48 x 64). The Hertz area compared with is the rigid interpenetration area with
-    a margin of 1.2 (the default margin is 1.0 since issue 18: a cold step's area is
-    then only a little larger than the warm box)."""
+    a margin of 1.2 (the default margin is 1.0: a cold step's area is then only a little
+    larger than the warm box)."""
     kin = Kinematics(30.0, 0.02)
     rigid = {"patch_frame": "rigid"}
     warm, cold = contact(warm_start="previous", **rigid), contact(warm_start="none", **rigid)

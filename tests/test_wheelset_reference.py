@@ -1,5 +1,5 @@
 """The time step's patch frame at CONTACT's reference point in railcontact's own
-convention (issue 19, point 3).
+convention.
 
 ``WheelsetContact`` (the time loop and the FMU) solves each patch in the frame at the
 weighted centre of the interpenetration, as ``solve()`` does: at the flange root and on the

@@ -187,12 +187,12 @@ def test_a_grown_area_keeps_the_fixed_extent_of_a_snapped_grid():
 
 
 def test_rigid_work_is_the_solution_own(calls):
-    """Review finding (issue 18, ninth round): the rigid solution's work was the rolled
-    solves' running counter itself, so searching again (``result.rigid.solve()``, or a
-    retry after an error) counted the first search twice and changed the solution already
-    returned. Each solution's work is now its own search's: a second search of the same
-    step counts exactly the BEM solves it made (counted independently at the solvers), and
-    the first solution keeps its count."""
+    """The rigid solution's work is its own search's, not the rolled solves' running
+    counter itself: with that counter, searching again (``result.rigid.solve()``, or a
+    retry after an error) would count the first search twice and change the solution
+    already returned. A second search of the same step counts exactly the BEM solves it
+    made (counted independently at the solvers), and the first solution keeps its
+    count."""
     wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 1 / 40),
                             rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
                             rc.ElasticPair.of(rc.STEEL, rc.STEEL),
