@@ -214,13 +214,13 @@ def start(resources, located):
         # the FMU's own choice of Python failed (named first: it is why the host's packages
         # had to do), and the host's packages lack what the FMU needs
         raise StartError(
-            warnings[0][0].upper() + warnings[0][1:]
+            f"the railcontact FMU cannot start in this Python host: {warnings[0]}"
             + f"\nThe FMU runs in the host's {here} instead, whose packages cannot run it:"
             + "".join(f"\n  - {p}" for p in problems)
-            + "\n" + "\n".join(report)
-            + "\nFix the FMU's choice of Python as said above (RAILCONTACT_PYTHON, or rebuild "
-            "the FMU with `railcontact fmu build --python PATH`), or install railcontact's "
-            "dependencies in the host's environment ("
+            + "\n" + "\n".join(report[1:])  # (the first line: the host's Python, said)
+            + "\nFix the FMU's choice of Python (RAILCONTACT_PYTHON, or rebuild the FMU with "
+            "`railcontact fmu build --python PATH`), or install railcontact's dependencies "
+            "in the host's environment ("
             + " ".join(f"'{m}>={v}'" if v else m for m, v in requirements(cfg).items())
             + "); `railcontact fmu check FILE.fmu` prints what the FMU will use.")
     if problems:
