@@ -8,6 +8,12 @@ Python it was built with, railcontact's version and the dependency versions it n
 extra profile files, all in ``resources/``. No Python is bundled: the FMU runs in the Python
 named by ``RAILCONTACT_PYTHON``, ``python.txt`` or ``python.cfg`` (in that order), with that
 environment's numpy, scipy, pyfftw and numba.
+
+The FMU's copy of railcontact keeps its numba kernels in the per-user cache
+(``railcontact/_kernelcache.py``: ``$RAILCONTACT_CACHE_DIR``, else
+``$XDG_CACHE_HOME/railcontact`` or ``~/.cache/railcontact``), not in the folder a host
+unpacks it to; the build compiles them there in the Python the FMU will run in
+(``fmu_bootstrap.py warm``), so that a freshly unpacked FMU's first step loads them.
 """
 
 from __future__ import annotations

@@ -5,7 +5,9 @@ variable table is :mod:`railcontact.fmu.variables`.
 The sources are ``fmu_src/`` at the top of a source checkout (``pip install -e .``); a wheel
 or sdist carries them as ``railcontact/_fmu_src/`` (``setup.py``). The built FMU runs in the
 Python named by ``RAILCONTACT_PYTHON``, by ``--python`` at build time, or else the one that
-built it (``railcontact fmu check FILE.fmu`` tells which).
+built it (``railcontact fmu check FILE.fmu`` tells which). The build compiles the FMU's numba
+kernels into the per-user cache in that Python (once per environment and railcontact
+version; ``--no-warm`` skips it), so that a freshly unpacked FMU starts in seconds.
 """
 
 from __future__ import annotations
