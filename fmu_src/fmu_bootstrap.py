@@ -275,6 +275,25 @@ def warm(resources, located):
     print("end=1")
 
 
+def kernel_cache(resources):
+    """A line on the FMU's compiled kernels in this environment (after :func:`start`): how
+    many the per-user cache holds, or that the first step will compile them."""
+    cfg = read_config(resources)
+    try:
+        kc = importlib.import_module(cfg["package"] + "._kernelcache")
+        folder = kc.user_cache_folder() if kc.uses_user_cache() else None
+    except Exception as exc:  # noqa: BLE001 - a report line, not a failure
+        return f"  kernels: cache not known ({type(exc).__name__}: {exc})"
+    if folder is None:
+        return ("  kernels: no per-user cache folder (no home folder; set "
+                "RAILCONTACT_CACHE_DIR): each unpacking compiles them at its first step")
+    count = len(list(folder.rglob("*.nbi"))) if folder.is_dir() else 0
+    if count:
+        return f"  kernels: {count} compiled in {folder} (loaded at the first step)"
+    return (f"  kernels: none compiled yet in {folder}: the first step compiles them (about a "
+            "minute, once; `railcontact fmu build` does it ahead)")
+
+
 def _main(argv):
     if len(argv) >= 2 and argv[0] == "probe":
         probe(argv[1])
@@ -288,6 +307,7 @@ def _main(argv):
             print(exc)
             return 1
         print(report)
+        print(kernel_cache(resources))
         if warning:
             print("warning: " + warning)
         return 0

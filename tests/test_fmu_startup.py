@@ -146,15 +146,12 @@ def test_a_fresh_unpacking_starts_without_compiling(fmu, cache, tmp_path):
           f"{second['seconds']:.2f} s ({wall:.2f} s with the process's start)")
 
 
-def test_a_second_build_finds_the_kernels_cached(fmu, cache, tmp_path):
+def test_a_second_build_finds_the_kernels_cached(fmu, cache, tmp_path, monkeypatch):
     """Building again in the same environment compiles nothing: the build's warm-up loads
     every kernel from the cache."""
     lines: list[str] = []
-    os.environ["RAILCONTACT_CACHE_DIR"] = str(cache)
-    try:
-        build_fmu(tmp_path / "again.fmu", log=lines.append)
-    finally:
-        os.environ.pop("RAILCONTACT_CACHE_DIR")
+    monkeypatch.setenv("RAILCONTACT_CACHE_DIR", str(cache))
+    build_fmu(tmp_path / "again.fmu", log=lines.append)
     assert any("already in the cache" in line for line in lines), lines
 
 
@@ -177,3 +174,17 @@ def test_a_bad_python_is_named_in_a_python_host(fmu, tmp_path):
         < error.index("numba (needs >=0.58) cannot be imported")
     assert "chosen from the environment variable RAILCONTACT_PYTHON" in error
     assert "runs in the host's Python" in error and "[WARNING]" not in out
+
+
+def test_fmu_check_tells_whether_the_kernels_are_compiled(fmu, cache, tmp_path, monkeypatch):
+    """``railcontact fmu check`` says where the kernels are cached, or that the first step
+    will compile them."""
+    from railcontact.fmu import check_fmu
+
+    monkeypatch.delenv("RAILCONTACT_PYTHON", raising=False)
+    monkeypatch.setenv("RAILCONTACT_CACHE_DIR", str(cache))
+    report = check_fmu(fmu[0])
+    assert report.ok, report.text
+    assert "  kernels: " in report.text and f"compiled in {cache}" in report.text
+    monkeypatch.setenv("RAILCONTACT_CACHE_DIR", str(tmp_path / "empty"))
+    assert "kernels: none compiled yet in " in check_fmu(fmu[0]).text
