@@ -327,8 +327,8 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
             from railcontact.fmu.check import warm_unpacked
 
             if log is not None:
-                log("compiling the FMU's kernels into the per-user cache (once per "
-                    "environment; up to a few minutes the first time) ...")
+                log("warming the FMU's kernels in the per-user cache (compiled once per "
+                    "environment: about a minute the first time) ...")
             result = warm_unpacked(root, use_env=False)
             if log is not None:
                 log(result.text)
