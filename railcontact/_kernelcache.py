@@ -14,9 +14,10 @@ A copy of the package that is unpacked anew for every run (the FMU's, which fmpy
 hosts extract into a fresh folder each time) keeps its kernels in a per-user cache folder
 instead (:func:`user_cache_folder`), so that they are compiled once per environment, not
 once per unpacking. numba's own keys (its ``__pycache__`` folder, or ``NUMBA_CACHE_DIR``
-with a hash of the folder's path, and in numba before 0.61 the file's modification time)
-would change with every unpacking. Such a copy holds the file :data:`USER_CACHE_MARKER`
-(``railcontact fmu build`` writes it); its kernels are then keyed on
+with a hash of the folder's path; before numba 0.68 also the file's modification time and
+size as its source stamp) would change with every unpacking. Such a copy holds the file
+:data:`USER_CACHE_MARKER` (``railcontact fmu build`` writes it); its kernels are then keyed
+on
 
 - the package's module name (numba's cached code imports its module by name when it is
   loaded, so ``railcontact`` and the FMU's ``railcontact_fmu_<id>`` never share entries),
