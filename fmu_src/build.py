@@ -8,6 +8,12 @@ Python it was built with, railcontact's version and the dependency versions it n
 extra profile files, all in ``resources/``. No Python is bundled: the FMU runs in the Python
 named by ``RAILCONTACT_PYTHON``, ``python.txt`` or ``python.cfg`` (in that order), with that
 environment's numpy, scipy, pyfftw and numba.
+
+The FMU's copy of railcontact keeps its numba kernels in the per-user cache
+(``railcontact/_kernelcache.py``: ``$RAILCONTACT_CACHE_DIR``, else
+``$XDG_CACHE_HOME/railcontact`` or ``~/.cache/railcontact``), not in the folder a host
+unpacks it to; the build compiles them there in the Python the FMU will run in
+(``fmu_bootstrap.py warm``), so that a freshly unpacked FMU's first step loads them.
 """
 
 from __future__ import annotations
@@ -167,6 +173,13 @@ def _copy_package(dst: Path, package: str) -> None:
                                                   "_fmu_src"))
     shutil.copy(HERE / "slave.py", dst / package / "_fmu_slave.py")
     shutil.copy(HERE / "fmu_bootstrap.py", dst / "fmu_bootstrap.py")
+    from railcontact._kernelcache import USER_CACHE_MARKER
+
+    (dst / package / USER_CACHE_MARKER).write_text(  # kernels compiled once per environment
+        "This copy of railcontact is unpacked anew for each run: its numba kernels are cached "
+        "in the per-user cache folder\n($RAILCONTACT_CACHE_DIR, else "
+        "$XDG_CACHE_HOME/railcontact or ~/.cache/railcontact), see _kernelcache.py.\n",
+        encoding="utf-8")
 
 
 def source_digest(profiles: list[str | Path] = (),
@@ -242,8 +255,16 @@ def named_python(path: str | Path) -> str:
     return str(p)
 
 
+def _files(root: Path) -> list[Path]:
+    """The files of the staged FMU, sorted; no ``__pycache__`` (the checks and the warm-up
+    run the staged copy, and may write Python's or numba's caches into it)."""
+    return [f for f in sorted(root.rglob("*"))
+            if f.is_file() and "__pycache__" not in f.relative_to(root).parts]
+
+
 def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path] = (),
-          model_identifier: str = MODEL_IDENTIFIER, python: str | Path | None = None) -> Path:
+          model_identifier: str = MODEL_IDENTIFIER, python: str | Path | None = None,
+          warm: bool = True, log=None) -> Path:
     """Build the FMU and return its path.
 
     Parameters
@@ -257,6 +278,13 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
         The Python the FMU is to run in (a python executable or a venv/prefix folder),
         written to ``resources/python.txt``; it is checked here as ``railcontact fmu check``
         does (it must have railcontact's dependencies). Default: the Python building it.
+    warm
+        Whether to compile the FMU's kernels into the per-user cache in that Python
+        (``fmu_bootstrap.py warm``), so that a fresh unpacking's first step does not
+        compile them (40-100 s once; seconds when they are cached already). The build does
+        not fail when that is not possible: ``log`` says why.
+    log
+        Called with a line of text for the user (what the warm-up did), or None.
     """
     import railcontact
 
@@ -295,20 +323,27 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
             if not report.ok:
                 raise BuildError(f"the Python given with --python cannot run the FMU:\n"
                                  f"{report.text}")
+        if warm:
+            from railcontact.fmu.check import warm_unpacked
+
+            if log is not None:
+                log("warming the FMU's kernels in the per-user cache (compiled once per "
+                    "environment: about a minute the first time) ...")
+            result = warm_unpacked(root, use_env=False)
+            if log is not None:
+                log(result.text)
         digest = hashlib.sha1()
-        for f in sorted(root.rglob("*")):
-            if f.is_file():
-                digest.update(f.relative_to(root).as_posix().encode())
-                digest.update(f.read_bytes())
+        for f in _files(root):
+            digest.update(f.relative_to(root).as_posix().encode())
+            digest.update(f.read_bytes())
         h = digest.hexdigest()
         guid = f"{{{h[:8]}-{h[8:12]}-{h[12:16]}-{h[16:20]}-{h[20:32]}}}"
         (root / "modelDescription.xml").write_text(
             model_description(guid, model_identifier, cfg["railcontact"]), encoding="utf-8")
         output.parent.mkdir(parents=True, exist_ok=True)
         with zipfile.ZipFile(output, "w", zipfile.ZIP_DEFLATED) as z:
-            for f in sorted(root.rglob("*")):
-                if f.is_file():
-                    z.write(f, f.relative_to(root).as_posix())
+            for f in _files(root):
+                z.write(f, f.relative_to(root).as_posix())
     return output
 
 

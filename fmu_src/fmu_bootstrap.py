@@ -1,6 +1,6 @@
 """The FMU's start-up in Python: copied to ``resources/python/fmu_bootstrap.py``.
 
-Used three ways, all with what ``resources/python.cfg`` records (the FMU's package name,
+Used four ways, all with what ``resources/python.cfg`` records (the FMU's package name,
 railcontact's version and the dependency versions it needs):
 
 - ``PYTHON -I fmu_bootstrap.py probe RESOURCES``: the C shim runs it with the Python it
@@ -12,7 +12,9 @@ railcontact's version and the dependency versions it needs):
   with a report of what it uses;
 - ``PYTHON -I fmu_bootstrap.py check RESOURCES LOCATED``: the same ``start`` in a separate
   process, for ``railcontact fmu check`` (prints the report, exit status 0 when the FMU can
-  start).
+  start);
+- ``PYTHON -I fmu_bootstrap.py warm RESOURCES LOCATED``: ``start``, then a few steps that
+  compile the kernels into the per-user cache, for ``railcontact fmu build``.
 
 It runs in whatever Python the FMU was given, so it uses the standard library only.
 """
@@ -171,8 +173,8 @@ def start(resources, located):
     here = f"Python {platform.python_version()} ({sys.executable})"
     report, warnings = [], []
     if mode == "host":
-        report.append(f"the host process already runs {here}: the FMU runs in it with the "
-                      "host's sys.path (it cannot isolate itself from the host's packages)")
+        report.append(f"runs in the host's {here}, with the host's packages first on "
+                      "sys.path")
         if loc.get("locate_error"):
             warnings.append("the FMU's own choice of Python is not usable, so only the host's "
                             "packages are available:\n" + loc["locate_error"])
@@ -208,6 +210,19 @@ def start(resources, located):
     report += deps
     if problem:
         problems.insert(0, problem)
+    if problems and mode == "host" and warnings:
+        # the FMU's own choice of Python failed (named first: it is why the host's packages
+        # had to do), and the host's packages lack what the FMU needs
+        raise StartError(
+            f"the railcontact FMU cannot start in this Python host: {warnings[0]}"
+            + f"\nThe FMU runs in the host's {here} instead, whose packages cannot run it:"
+            + "".join(f"\n  - {p}" for p in problems)
+            + "\n" + "\n".join(report[1:])  # (the first line: the host's Python, said)
+            + "\nFix the FMU's choice of Python (RAILCONTACT_PYTHON, or rebuild the FMU with "
+            "`railcontact fmu build --python PATH`), or install railcontact's dependencies "
+            "in the host's environment ("
+            + " ".join(f"'{m}>={v}'" if v else m for m, v in requirements(cfg).items())
+            + "); `railcontact fmu check FILE.fmu` prints what the FMU will use.")
     if problems:
         raise StartError(
             f"the railcontact FMU cannot run in {here}, chosen from "
@@ -233,6 +248,52 @@ def start(resources, located):
     return module, "railcontact FMU: " + "\n".join(report), "\n".join(warnings)
 
 
+def warm(resources, located):
+    """Start as :func:`start` does, then run the kernels of a default step so that numba
+    compiles them into the per-user cache (``railcontact fmu build`` runs this in the
+    Python the FMU will use: a fresh unpacking then loads them instead of compiling).
+    Prints ``key=value`` lines: ``compiled``, ``loaded`` (kernels), ``seconds`` [s],
+    ``cache`` (the folder, or the reason there is none) and ``persistent`` (1 when the
+    kernels went to the per-user cache), then ``end=1``. Raises :class:`StartError` when the
+    FMU cannot start here."""
+    cfg = read_config(resources)
+    module, _, _ = start(resources, located)
+    compiled, loaded, seconds = module.warm(resources)
+    kernelcache = importlib.import_module(cfg["package"] + "._kernelcache")
+    user = [f for f, kind in kernelcache.cache_locations().items() if kind == "user"]
+    if user:
+        where = user[0]
+    elif kernelcache.cache_root() is None:
+        where = "no per-user cache folder (no home folder; set RAILCONTACT_CACHE_DIR)"
+    else:
+        where = (f"the per-user cache folder {kernelcache.user_cache_folder()} cannot be "
+                 "created or written (set RAILCONTACT_CACHE_DIR to a writable folder)")
+    for key, value in (("compiled", compiled), ("loaded", loaded),
+                       ("seconds", f"{seconds:.1f}"), ("cache", where),
+                       ("persistent", int(bool(user)))):
+        print(f"{key}={value}")
+    print("end=1")
+
+
+def kernel_cache(resources):
+    """A line on the FMU's compiled kernels in this environment (after :func:`start`): how
+    many the per-user cache holds, or that the first step will compile them."""
+    cfg = read_config(resources)
+    try:
+        kc = importlib.import_module(cfg["package"] + "._kernelcache")
+        folder = kc.user_cache_folder() if kc.uses_user_cache() else None
+    except Exception as exc:  # noqa: BLE001 - a report line, not a failure
+        return f"  kernels: cache not known ({type(exc).__name__}: {exc})"
+    if folder is None:
+        return ("  kernels: no per-user cache folder (no home folder; set "
+                "RAILCONTACT_CACHE_DIR): each unpacking compiles them at its first step")
+    count = len(list(folder.rglob("*.nbi"))) if folder.is_dir() else 0
+    if count:
+        return f"  kernels: {count} compiled in {folder} (loaded at the first step)"
+    return (f"  kernels: none compiled yet in {folder}: the first step compiles them (about a "
+            "minute, once; `railcontact fmu build` does it ahead)")
+
+
 def _main(argv):
     if len(argv) >= 2 and argv[0] == "probe":
         probe(argv[1])
@@ -246,10 +307,22 @@ def _main(argv):
             print(exc)
             return 1
         print(report)
+        print(kernel_cache(resources))
         if warning:
             print("warning: " + warning)
         return 0
-    print("usage: fmu_bootstrap.py probe RESOURCES | check RESOURCES LOCATED", file=sys.stderr)
+    if len(argv) >= 3 and argv[0] == "warm":
+        try:
+            warm(argv[1], argv[2])
+        except StartError as exc:
+            print(f"error={exc}".replace("\n", "\x1f"))
+            return 1
+        except Exception as exc:  # noqa: BLE001 - warming is optional: say why it failed
+            print(f"error={type(exc).__name__}: {exc}".replace("\n", "\x1f"))
+            return 1
+        return 0
+    print("usage: fmu_bootstrap.py probe RESOURCES | check RESOURCES LOCATED | warm RESOURCES "
+          "LOCATED", file=sys.stderr)
     return 2
 
 

@@ -324,4 +324,58 @@ def make_slave(resources: str, instance_name: str) -> Slave:
     return Slave(resources, instance_name)
 
 
-__all__ = ["Slave", "make_slave"]
+WARM_RUNS = (
+    ({}, [{"lateral_displacement": y, "xi_left": 1e-3, "eta_left": -5e-4, "phi_left": 0.3,
+           "xi_right": 1e-3, "eta_right": -5e-4, "phi_right": -0.3}
+          for y in (0.0, 1e-3, 1.5e-3, 3e-3, 7e-3, -7e-3, 0.0)]),
+    ({"creepage_input": "kinematic"},
+     [{"lateral_displacement": y, "yaw": 1e-3 * y / 4e-3, "lateral_velocity": v,
+       "yaw_rate": -v / 2, "speed": 30.0} for y, v in ((4e-3, 0.0), (3.9e-3, -0.02),
+                                                       (3.6e-3, -0.05), (-2e-3, 0.05))]),
+)
+"""What :func:`warm` runs: (parameters, the inputs of each step) of a few instances, the
+default settings with direct creepages, then kinematic creepages (as ``railcontact demo``);
+tread and flange contact, cold and warm-started steps."""
+
+
+def warm(resources: str) -> tuple[int, int, float]:
+    """Run every kernel a default step uses, so that numba compiles them into its cache
+    (or loads them from it): the steps of :data:`WARM_RUNS`, each instance initialised
+    (its first, cold solve) and stepped by 1 ms.
+
+    Parameters
+    ----------
+    resources
+        The FMU's resources folder.
+
+    Returns
+    -------
+    compiled, loaded, seconds
+        Kernel compilations (numba's cache misses), kernels loaded from the cache, and the
+        wall time [s] of the runs.
+
+    Raises
+    ------
+    RailContactError
+        A step failed (FMI status Error or Discard); the message is the slave's log.
+    """
+    from . import _kernelcache
+
+    t0 = time.perf_counter()
+    for parameters, steps in WARM_RUNS:
+        s = Slave(resources, "warm")
+        for name, value in parameters.items():
+            s[name] = value
+        if s.exit_initialization() not in (FMI_OK, FMI_WARNING):
+            raise RailContactError(f"warming the kernels: initialisation failed: {s.pop_log()}")
+        for k, inputs in enumerate(steps):
+            for name, value in inputs.items():
+                s[name] = value
+            s.control[:] = (k * 1e-3, 1e-3)
+            if s.do_step() not in (FMI_OK, FMI_WARNING):
+                raise RailContactError(f"warming the kernels: step {k} failed: {s.pop_log()}")
+    compiled, loaded = _kernelcache.kernel_counts()
+    return compiled, loaded, time.perf_counter() - t0
+
+
+__all__ = ["Slave", "make_slave", "warm"]

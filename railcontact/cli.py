@@ -139,7 +139,8 @@ def settings_reference() -> str:
 def _cmd_fmu_build(args: argparse.Namespace) -> int:
     from .fmu import build_fmu
 
-    out = build_fmu(args.output, args.profile or [], python=args.python)
+    out = build_fmu(args.output, args.profile or [], python=args.python,
+                    warm=not args.no_warm, log=print)
     print(f"FMU written to {out}")
     return 0
 
@@ -317,6 +318,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "venv/prefix folder with railcontact's dependencies, written to "
                     "resources/python.txt (default: this Python); RAILCONTACT_PYTHON "
                     "overrides it where the FMU runs")
+    fb.add_argument("--no-warm", action="store_true",
+                    help="do not compile the FMU's kernels into the per-user cache now "
+                    "(the FMU's first run in an environment then compiles them: 40-100 s)")
     fb.set_defaults(func=_cmd_fmu_build)
     fc = fsub.add_parser("check", help="which Python an FMU will run in, and whether it can",
                          description="Asks the FMU which Python it chooses here "

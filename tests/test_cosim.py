@@ -203,3 +203,78 @@ def test_demo_bad_input_is_one_line(fmu, tmp_path, capsys):
     assert main(["demo", "--wheel-profile", str(tmp_path / "nope.txt"), "--fmu", str(fmu),
                  "--no-plots"]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+def _synthetic(duration: float = 0.6, step: float = 2e-3):
+    """A CoSimResult without an FMU: a decaying sine of y, an F_x start-up transient of
+    18 kN decaying within 10 ms, and two slow steps (a kernel compiled on first use)."""
+    from railcontact.sim.cosim import CoSimResult, Run
+
+    run = Run(speed=30.0, duration=duration, step=step,
+              parameters={"wheel_profile": "S1002", "rail_profile": "60E1",
+                          "element_size": 8e-4, "warm_start": "previous+estimate"})
+    t = np.arange(run.steps) * step
+    y = 4e-3 * np.cos(2 * math.pi * 3.2 * t) * np.exp(-t)
+    fx = 2e3 * np.sin(2 * math.pi * 3.2 * t) + 18e3 * np.exp(-t / 2e-3)
+    zeros = np.zeros_like(t)
+    solve = np.full_like(t, 4e-3)
+    solve[[0, 5]] = (2.6, 0.9)
+    outputs = {"creep_force_x_left": fx, "creep_force_x_right": -fx,
+               "creep_force_y_left": 5e3 + zeros, "creep_force_y_right": -5e3 + zeros,
+               "force_lateral": 1e3 * np.sin(t), "yaw_moment": 3e3 + zeros,
+               "normal_force_left": 83.3e3 + zeros, "normal_force_right": 83.3e3 + zeros,
+               "normal_iterations": 8 + zeros, "tangential_iterations": 9 + zeros,
+               "solve_time": solve}
+    track, ws = s1002_60e1()
+    position = np.column_stack([y, 1e-3 * np.sin(t), zeros])
+    return CoSimResult(time=t, distance=30.0 * t, position=position,
+                       velocity=np.zeros_like(position), outputs=outputs,
+                       wall_time=solve + 1e-4, shadows={}, jacobians=[], completed=True,
+                       message="completed", run=run, fmu=Path("RailContact.fmu"),
+                       radius=0.46, half_distance=0.75, track=track, wheelset=ws,
+                       startup={"instantiate": 1.1, "initialise": 0.3})
+
+
+def test_demo_peaks_leave_out_the_start_up_transient_and_say_so(tmp_path):
+    """The summary's peaks are those after the start-up transient (the window named); the
+    transient's |F_x| is given apart; the solve-time panel keeps the steps' own scale and
+    draws the slow first steps at its top edge, labelled."""
+    from railcontact.sim.demo import (
+        STARTUP,
+        DemoOptions,
+        describe,
+        plot_motion,
+        summarise,
+    )
+
+    sim = _synthetic()
+    s = summarise(sim)
+    assert s["peak_from"] == pytest.approx(STARTUP)
+    assert s["startup_creep_force_x"] == pytest.approx(18e3, rel=1e-3)
+    assert s["peak_creep_force_x"] < 2.1e3
+    text = describe(sim, s, DemoOptions(quick=True), built=False)
+    assert "peaks after the start-up transient (t = 0.050-0.598 s;" in text
+    assert "|F_x| reaches 18.00 kN" in text and "creep force |F_x| 2.00 kN" in text
+    assert "FMU start-up (unpacked afresh): instantiate 1.10 s" in text
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    shown = []
+    real_close = plt.close
+    plt.close = lambda fig=None: shown.append(fig)  # keep the figure to look at it
+    try:
+        plot_motion(sim, tmp_path / "motion.png")
+    finally:
+        plt.close = real_close
+    panel = shown[0].axes[3]
+    assert panel.get_ylim()[1] < 100  # [ms]: not flattened by the 2.6 s step
+    labels = sorted(t.get_text() for t in panel.texts)
+    assert labels == ["2600 ms", "900 ms"]
+    assert "2 slower steps" in panel.get_title()
+    real_close(shown[0])
+
+    short = summarise(_synthetic(duration=0.04))  # shorter than the transient: all of it
+    assert short["peak_from"] == 0.0 and short["startup_creep_force_x"] == 0.0

@@ -283,7 +283,7 @@ def test_in_a_python_host_a_broken_choice_is_a_warning(plain_fmu, monkeypatch, c
     s.freeInstance()
     assert "[WARNING] the FMU's own choice of Python is not usable" in log
     assert "'/nonexistent/env' does not exist" in log
-    assert f"the host process already runs Python {platform.python_version()} " \
+    assert f"railcontact FMU: runs in the host's Python {platform.python_version()} " \
            f"({sys.executable})" in log
 
 

@@ -5,13 +5,16 @@ variable table is :mod:`railcontact.fmu.variables`.
 The sources are ``fmu_src/`` at the top of a source checkout (``pip install -e .``); a wheel
 or sdist carries them as ``railcontact/_fmu_src/`` (``setup.py``). The built FMU runs in the
 Python named by ``RAILCONTACT_PYTHON``, by ``--python`` at build time, or else the one that
-built it (``railcontact fmu check FILE.fmu`` tells which).
+built it (``railcontact fmu check FILE.fmu`` tells which). The build compiles the FMU's numba
+kernels into the per-user cache in that Python (once per environment and railcontact
+version; ``--no-warm`` skips it), so that a freshly unpacked FMU starts in seconds.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import RailContactError
@@ -44,13 +47,30 @@ def _builder():
 
 
 def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = (),
-              python: str | Path | None = None) -> Path:
-    """Build the FMU (gcc + fmpy's FMI 2 headers) and return its path; ``python`` (a python
-    executable or a venv/prefix folder) is the Python it is to run in (default: this one),
-    checked before the FMU is written."""
+              python: str | Path | None = None, warm: bool = True,
+              log: Callable[[str], None] | None = None) -> Path:
+    """Build the FMU (gcc + fmpy's FMI 2 headers) and return its path.
+
+    Parameters
+    ----------
+    output
+        The .fmu file to write.
+    profiles
+        Profile files to put into the FMU's resources.
+    python
+        The Python it is to run in (a python executable or a venv/prefix folder; default:
+        this one), checked before the FMU is written.
+    warm
+        Whether to compile the FMU's numba kernels into the per-user cache in that Python
+        (the first build in an environment takes 40-100 s longer; then a freshly unpacked
+        FMU starts in seconds). Not possible there: the build still succeeds, ``log`` says
+        why.
+    log
+        Called with lines for the user (the warm-up's outcome); None: silent.
+    """
     b = _builder()
     try:
-        return b.build(output, list(profiles), python=python)
+        return b.build(output, list(profiles), python=python, warm=warm, log=log)
     except b.BuildError as exc:
         raise RailContactError(f"cannot build the FMU: {exc}") from None
 
@@ -71,9 +91,10 @@ def fmu_is_current(path: str | Path, profiles: list[str | Path] = ()) -> bool:
     return stored == _builder().source_digest(list(profiles))
 
 
-def ensure_fmu(path: str | Path = DEFAULT_OUTPUT,
-               profiles: list[str | Path] = ()) -> tuple[Path, bool]:
-    """Build the FMU at ``path`` if it is missing or stale; returns (path, built)."""
+def ensure_fmu(path: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = (),
+               log: Callable[[str], None] | None = None) -> tuple[Path, bool]:
+    """Build the FMU at ``path`` if it is missing or stale (its kernels warmed, see
+    :func:`build_fmu`; ``log`` gets the build's lines); returns (path, built)."""
     if fmu_is_current(path, profiles):
         return Path(path).resolve(), False
-    return build_fmu(path, profiles), True
+    return build_fmu(path, profiles, log=log), True

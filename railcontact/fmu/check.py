@@ -125,6 +125,92 @@ def check_unpacked(root: str | Path, use_env: bool = True) -> FMUCheck:
     return FMUCheck(good, "\n".join([*head, out, tail, verdict]))
 
 
+WARM_TIMEOUT = 900.0
+"""Seconds the kernels' warm-up may take in the chosen Python (compiling them all takes
+40-100 s on a desktop machine, longer on a busy one)."""
+
+
+@dataclass(frozen=True)
+class FMUWarm:
+    """The outcome of warming an FMU's kernels (:func:`warm_unpacked`).
+
+    Attributes
+    ----------
+    ok
+        Whether the warm-up ran and its kernels went to the per-user cache (a fresh
+        unpacking in this environment then loads them instead of compiling them).
+    text
+        One paragraph for the user: what was compiled and where it was cached, or why
+        nothing was.
+    compiled, loaded
+        Kernel compilations and kernels loaded from the cache in the warm-up.
+    seconds
+        Wall time of the warm-up's steps [s] (the Python's start-up not included).
+    """
+
+    ok: bool
+    text: str
+    compiled: int = 0
+    loaded: int = 0
+    seconds: float = 0.0
+
+
+def warm_unpacked(root: str | Path, use_env: bool = False,
+                  timeout: float = WARM_TIMEOUT) -> FMUWarm:
+    """Compile the kernels of an unpacked FMU's copy of railcontact into the per-user cache
+    (``resources/python/fmu_bootstrap.py warm``), in the Python the FMU chooses, started as
+    ``python -I`` as a C host starts it; never raises for a Python that cannot do it (the
+    result says why).
+
+    Parameters
+    ----------
+    root
+        The unpacked (or staged) FMU.
+    use_env
+        Whether ``RAILCONTACT_PYTHON`` counts (False: ``resources/python.txt`` or the
+        build interpreter, as ``railcontact fmu build`` checks it).
+    timeout
+        Seconds before the warm-up is given up [s].
+    """
+    root = Path(root)
+    resources = root / "resources"
+    not_warmed = "the kernels were not compiled ahead: the FMU's first run compiles them"
+    try:
+        ok, located = _locate(_binary(root), resources, use_env)
+    except RailContactError as exc:
+        return FMUWarm(False, f"{not_warmed} ({exc})")
+    if not ok:
+        return FMUWarm(False, f"{not_warmed} (its Python cannot start: "
+                              f"{located.splitlines()[0] if located else '?'})")
+    values = dict(line.partition("=")[::2] for line in located.splitlines() if "=" in line)
+    exe = values["executable"]
+    try:
+        r = subprocess.run(
+            [exe, "-I", str(resources / "python" / "fmu_bootstrap.py"), "warm",
+             str(resources), "mode=check\n" + located],
+            capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        return FMUWarm(False, f"{not_warmed} (the warm-up in {exe} took longer than "
+                              f"{timeout:g} s)")
+    except OSError as exc:
+        return FMUWarm(False, f"{not_warmed} (cannot run {exe}: {exc})")
+    out = {k: v.replace("\x1f", "\n") for k, v in
+           (line.partition("=")[::2] for line in r.stdout.splitlines() if "=" in line)}
+    if r.returncode != 0 or out.get("end") != "1":
+        why = out.get("error") or (r.stdout + r.stderr).strip()[-2000:] or \
+            f"exit status {r.returncode}"
+        return FMUWarm(False, f"{not_warmed} (the warm-up in {exe} failed: {why})")
+    compiled, loaded = int(out["compiled"]), int(out["loaded"])
+    seconds = float(out["seconds"])
+    if out.get("persistent") != "1":
+        return FMUWarm(False, f"{not_warmed} (in {exe}: {out['cache']}; each unpacking "
+                              "compiles them again)", compiled, loaded, seconds)
+    what = (f"{compiled} compiled, {loaded} loaded from the cache" if compiled else
+            f"all {loaded} already in the cache")
+    return FMUWarm(True, f"kernels warmed for {exe} in {seconds:.0f} s ({what}): "
+                         f"{out['cache']}", compiled, loaded, seconds)
+
+
 def check_fmu(path: str | Path) -> FMUCheck:
     """Check the FMU file at ``path`` in this environment (``railcontact fmu check``)."""
     path = Path(path)

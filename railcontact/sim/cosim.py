@@ -134,6 +134,10 @@ class CoSimResult:
         All FMU parameters of the main instance (start values and ``run.parameters``).
     track, wheelset
         The geometry the FMU was given.
+    startup
+        The main instance's start-up [s]: ``instantiate`` (the FMU's Python start-up and
+        imports) and ``initialise`` (initialisation, which makes the first solve; with the
+        kernels not yet compiled in this environment, their compilation).
     """
 
     time: np.ndarray
@@ -153,6 +157,7 @@ class CoSimResult:
     parameters: dict[str, Any] = field(default_factory=dict)
     track: Any = None
     wheelset: Any = None
+    startup: dict[str, float] = field(default_factory=dict)
 
     @property
     def lateral(self) -> np.ndarray:
@@ -190,7 +195,9 @@ class _Instance:
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
                              modelIdentifier=md.coSimulation.modelIdentifier,
                              instanceName=name)
+        t0 = time.perf_counter()
         self.fmu.instantiate()
+        t1 = time.perf_counter()
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         for k, value in parameters.items():
@@ -202,6 +209,7 @@ class _Instance:
             else:
                 self.fmu.setInteger([v.valueReference], [int(value)])
         self.fmu.exitInitializationMode()
+        self.startup = {"instantiate": t1 - t0, "initialise": time.perf_counter() - t1}
         self.inputs = [self.vars[n].valueReference for n in INPUTS]
         self.real_out = [n for n, v in self.vars.items()
                          if v.causality == "output" and v.type == "Real"]
@@ -377,7 +385,8 @@ def simulate(fmu: str | Path, run: Run,
                        wall_time=np.array(rec_wall), shadows=shadows, jacobians=jacobians,
                        completed=completed, message=message, run=run, fmu=fmu,
                        radius=centre.radius, half_distance=centre.half_distance,
-                       parameters=params, track=track, wheelset=ws)
+                       parameters=params, track=track, wheelset=ws,
+                       startup=dict(instances["main"].startup) if "main" in instances else {})
 
 
 def print_progress(k: int, n: int) -> None:
