@@ -288,7 +288,7 @@ def test_bad_input_is_a_clean_status(fmu, extracted, md):
 
 
 def test_inputs_the_modes_do_not_use_may_be_nan(fmu, extracted, md):
-    """Issue 20: a NaN in an input the modes do not read (speed and velocities with direct
+    """A NaN in an input the modes do not read (speed and velocities with direct
     creepages; creepages under kinematic input) changes nothing; a NaN in a used input is
     fmi2Discard with the previous outputs kept."""
     nan = float("nan")
@@ -454,7 +454,7 @@ def test_fuzz_step_inputs(fuzz_slave, md):
     run()
 
 
-# -- issue 20: enumerations, honest status, the new outputs ---------------------------------
+# -- enumerations, honest status, the validity outputs --------------------------------------
 
 def _api_from(values: dict):
     """The settings and a WheelsetContact from FMU parameter values, as the slave builds
@@ -588,7 +588,7 @@ def _api_step(words: dict) -> dict:
 
 
 def test_enumerations_set_before_initialization_take_effect(md, extracted):
-    """Issue 20: OMSimulator sets start values right after fmi2Instantiate, and drops the
+    """OMSimulator sets start values right after fmi2Instantiate, and drops the
     String ones. Each item of each enumeration, set so: the step equals the Python API's
     with that word as the setting (forces to 1e-9, iterations exactly), and the three
     FMU modes change the answer from the default's. (1 mm elements, for time; the dense
@@ -646,7 +646,7 @@ def test_enumeration_errors_name_the_parameters(md, extracted, capsys):
 
 
 def test_outside_validity_through_the_fmu(fmu, extracted, md, capsys):
-    """Issue 20's flange climb at 10 mm: status_left 4 (outside validity), validity bits
+    """A flange climb at 10 mm: status_left 4 (outside validity), validity bits
     Y/Q, Nadal and flange climb, Y/Q as the API's, a warning naming Y/Q and its value;
     the limits are parameters (max_y_q = 5 drops that bit). Back on the tread: ok."""
     s = Slave(fmu, extracted, md, "validity", warm_start="none")

@@ -1,4 +1,4 @@
-"""Issue 20: railcontact installed the ordinary way builds an FMU that finds its Python.
+"""railcontact installed the ordinary way builds an FMU that finds its Python.
 
 An sdist is built from this checkout and ``pip install``-ed (not editable) into a fresh
 virtual environment; that installation builds the FMU with ``--python`` naming the

@@ -40,10 +40,10 @@ def test_a_bad_enumeration_value_is_shown_as_a_plain_number():
 
 
 def test_choice_enumerations_keep_their_value_references():
-    """The Integer ``_choice`` enumerations (issue 20, 9aea8f3) are a published interface
-    as well: outputs added after them (``APPENDED_OUTPUTS``: the rigid wheelset's work)
-    are numbered after them, not before (the review of issue 18's ninth round found them
-    moved by 3). These numbers are written down, not computed."""
+    """The Integer ``_choice`` enumerations are a published interface as well: outputs
+    added after them (``APPENDED_OUTPUTS``: the rigid wheelset's work) are numbered after
+    them, so that adding an output never moves a published value reference. These numbers
+    are written down, not computed."""
     published = {"profile_unit_choice": 19, "control_choice": 20,
                  "load_definition_choice": 21, "creepage_input_choice": 22,
                  "normal_estimate_choice": 23, "tangential_estimate_choice": 24,
@@ -55,6 +55,6 @@ def test_choice_enumerations_keep_their_value_references():
         k: ("Integer", vr) for k, vr in published.items()}
     appended = {"rigid_evaluations": 32, "rigid_normal_iterations": 33,
                 "rigid_tangential_iterations": 34, "rigid_load_passes": 35,
-                "rigid_remeshes": 36}  # issue 18's ninth round, after the enumerations
+                "rigid_remeshes": 36}  # appended after the enumerations
     assert {k: (table[k].type, table[k].vr) for k in appended} == {
         k: ("Integer", vr) for k, vr in appended.items()}
