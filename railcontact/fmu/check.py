@@ -76,6 +76,20 @@ def _locate(binary: Path, resources: Path, use_env: bool) -> tuple[bool, str]:
     return bool(ok.value), text
 
 
+def _run_bootstrap(resources: Path, located: str, command: str,
+                   timeout: float) -> tuple[str, subprocess.CompletedProcess]:
+    """Run ``fmu_bootstrap.py COMMAND`` in the Python the shim located (as ``python -I``, as
+    a C host starts it); returns (that Python's executable, the finished process). Raises
+    OSError or subprocess.TimeoutExpired as :func:`subprocess.run` does."""
+    values = dict(line.partition("=")[::2] for line in located.splitlines() if "=" in line)
+    exe = values["executable"]
+    r = subprocess.run(
+        [exe, "-I", str(resources / "python" / "fmu_bootstrap.py"), command,
+         str(resources), "mode=check\n" + located],
+        capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    return exe, r
+
+
 def check_unpacked(root: str | Path, use_env: bool = True) -> FMUCheck:
     """Check an unpacked FMU (the folder holding ``binaries/`` and ``resources/``).
 
@@ -95,10 +109,7 @@ def check_unpacked(root: str | Path, use_env: bool = True) -> FMUCheck:
     values = dict(line.partition("=")[::2] for line in located.splitlines() if "=" in line)
     exe = values["executable"]
     try:
-        r = subprocess.run(
-            [exe, "-I", str(resources / "python" / "fmu_bootstrap.py"), "check",
-             str(resources), "mode=check\n" + located],
-            capture_output=True, text=True, timeout=CHECK_TIMEOUT, stdin=subprocess.DEVNULL)
+        exe, r = _run_bootstrap(resources, located, "check", CHECK_TIMEOUT)
     except (OSError, subprocess.TimeoutExpired) as exc:
         return FMUCheck(False, f"cannot run {exe}: {exc}")
     cfg = dict(line.partition("=")[::2] for line in
@@ -182,13 +193,10 @@ def warm_unpacked(root: str | Path, use_env: bool = False,
     if not ok:
         return FMUWarm(False, f"{not_warmed} (its Python cannot start: "
                               f"{located.splitlines()[0] if located else '?'})")
-    values = dict(line.partition("=")[::2] for line in located.splitlines() if "=" in line)
-    exe = values["executable"]
+    exe = dict(line.partition("=")[::2] for line in located.splitlines() if "=" in line)[
+        "executable"]
     try:
-        r = subprocess.run(
-            [exe, "-I", str(resources / "python" / "fmu_bootstrap.py"), "warm",
-             str(resources), "mode=check\n" + located],
-            capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+        exe, r = _run_bootstrap(resources, located, "warm", timeout)
     except subprocess.TimeoutExpired:
         return FMUWarm(False, f"{not_warmed} (the warm-up in {exe} took longer than "
                               f"{timeout:g} s)")
