@@ -147,8 +147,8 @@ def estimate_label(estimate_of: PressureEstimate, name: str) -> str:
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
-                       automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None
-                       ) -> tuple[NormalResult, Work]:
+                       automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None,
+                       profiles: bool = True) -> tuple[NormalResult, Work]:
     """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
     it took.
 
@@ -162,6 +162,11 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     edge (each growth a re-mesh, its iterations counted in the work), at most
     :data:`MAX_GROW` times, after which the result is not converged; a user-given extent
     that the contact reaches is an error. A result that is not finite is not converged.
+
+    A contact next to an element whose gap is :data:`UNDEFINED_GAP` or more is not
+    converged: with ``profiles`` (the gap comes from profiles) the contact reaches where the
+    profiles end; without (an analytic gap, defined everywhere) the elements are so large
+    that the gap grows by that much from one element to the next.
     """
     t0 = time.perf_counter()
     work = Work(remeshes=-1)
@@ -192,9 +197,15 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
             break
         if _cut_off(res.contact, gap):
             res.converged = False
-            res.message = ("the contact reaches where the profiles end (or turn away), so "
-                           "the patch is cut off there; the pose or the load is beyond the "
-                           f"profiles ({res.message})")
+            if profiles:
+                res.message = ("the contact reaches where the profiles end (or turn away), "
+                               "so the patch is cut off there; the pose or the load is beyond "
+                               f"the profiles ({res.message})")
+            else:
+                res.message = (f"the undeformed gap next to the contact is {UNDEFINED_GAP:g} m "
+                               f"or more: the elements ({grid.dx:.3g} x {grid.dy:.3g} m) are "
+                               "far larger than the contact; give a smaller potential area "
+                               f"([grid] x, y) or smaller elements ({res.message})")
             break
         if not res.touches_boundary:
             break
