@@ -4,6 +4,7 @@ tests/data/reliability/round2: each now ends in a clear one-line error or an hon
 from __future__ import annotations
 
 import json
+import math
 import re
 
 import pytest
@@ -12,6 +13,7 @@ from conftest import RELIABILITY
 import railcontact as rc
 from railcontact.cli import main
 from railcontact.settings import WheelRailGeometry
+from railcontact.timestep.wheelset import NO_CONTACT, OK
 
 ROUND2 = RELIABILITY / "round2"
 
@@ -75,3 +77,50 @@ def test_a_quadratic_case_is_not_told_about_profiles(monkeypatch, capsys):
     assert re.search(r"the undeformed gap next to the contact is 0.5 m or more: the elements "
                      r"\(6.25e\+04 x 6.25e\+04 m\) are far larger than the contact",
                      normal["message"]), normal["message"]
+
+
+def test_a_subnormal_load_is_no_contact(monkeypatch, capsys):
+    """A load of 5e-324 N once raised ZeroDivisionError. Below MIN_LOAD (1e-6 N) a load is
+    treated as a zero load is: no contact, a one-line warning and exit 3."""
+    code, out, err = _solve("T1h_subnormal_load.toml", monkeypatch, capsys)
+    assert code == 3
+    assert json.loads(out)["patches"] == []
+    assert err.startswith("railcontact: warning: ") and err.count("\n") == 1
+    assert "a load below 1e-06 N" in err
+
+
+@pytest.mark.parametrize("load", [5e-324, 1e-310, 1e-300, 1e-9])
+def test_a_negligible_load_of_a_quadratic_case_is_no_contact(load):
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0}, "normal": {"load": load},
+            "tangential": {"creepage": [1e-3, 0.0, 0.0], "friction": 0.3}}
+    normal = rc.solve(case).patches[0].normal
+    assert normal.force == 0.0 and normal.converged
+    assert normal.message == f"no contact: the load {load:g} N is below 1e-06 N, the " \
+                             "smallest load solved"
+
+
+@pytest.mark.parametrize("load", [5e-324, 1e-310, 1e-300])
+def test_hertz_of_a_subnormal_load_is_finite(load):
+    """Hertz's semi-axes underflow (a b = 0): the pressure from its n^(1/3) scaling."""
+    pair = rc.ElasticPair.of(rc.STEEL, rc.STEEL)
+    hz = rc.hertz(1.0, 5.0, pair, load=load)
+    ref = rc.hertz(1.0, 5.0, pair, load=1.0)
+    assert hz.max_pressure == pytest.approx(ref.max_pressure * load ** (1 / 3), rel=1e-6)
+
+
+def test_a_wheelset_with_a_subnormal_wheel_load_gives_that_wheel_a_status():
+    """WheelsetContact.solve with left wheel loads of 5e-324, 1e-310 and 1e-300 N (once a
+    ZeroDivisionError out of solve()): the left wheel has no contact and says why, the
+    right wheel is solved."""
+    wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+                            rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                            rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                            rc.ContactSettings(element_size=2e-3))
+    for q in (5e-324, 1e-310, 1e-300):
+        r = wc.solve(rc.Pose(0.002), loads=(q, 8e4), creepages=((1e-3, 0, 0), (1e-3, 0, 0)))
+        assert r.left.status == NO_CONTACT and r.left.track_force == (0.0, 0.0, 0.0)
+        assert r.left.message == f"no contact: the load {q:g} N is below 1e-06 N, the " \
+                                 "smallest load solved"
+        assert r.right.status == OK
+        assert r.right.track_force[2] == pytest.approx(8e4, rel=2e-3)

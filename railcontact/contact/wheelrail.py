@@ -53,7 +53,13 @@ from ..geometry.search import (
 )
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
-from ..halfspace.hertz import HertzSolution, hertz, hertz_when_read, semi_axis_bound
+from ..halfspace.hertz import (
+    HertzSolution,
+    hertz,
+    hertz_when_read,
+    negligible_load,
+    semi_axis_bound,
+)
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
@@ -296,7 +302,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     if settings.tangential is None:
         return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                   reference=reference)
-    if not control.by_load or control.load == 0:
+    if not control.by_load or negligible_load(control.load):
         return _add_tangential(
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                reference=reference),
@@ -352,7 +358,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         return _patches(points(track, ws, pose, side, approach), ws, approach,
                         settings, pair, estimate_for=estimate_for, previous=previous)
     q = control.load
-    if q == 0:
+    if negligible_load(q):
         return []
     # one patch: force control (exact) in the frame at the reference point, formed at the
     # approach of the pass before (or Hertz's) and again until the approach holds

@@ -49,6 +49,7 @@ import numpy as np
 
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
+from ..halfspace.hertz import negligible_load, no_contact_load
 from ..halfspace.operator import PRECONDITIONER_FLOOR, InfluenceOperator
 from ..halfspace.sums import array_sum, numpy_sum
 
@@ -596,9 +597,10 @@ def solve_normal(
             displacement=shown)
 
     # Trivial cases: no load, or no interpenetration anywhere.
-    if force_control and load == 0.0:
+    if force_control and negligible_load(load):
         zeros = np.zeros(shape)
-        return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
+        why = "zero load" if load == 0.0 else no_contact_load(load)
+        return finish(zeros, zeros, float(h.min()), 0, True, f"no contact: {why}", 0.0, [])
     if not force_control and hmin >= penetration:  # (np.all(h >= penetration))
         zeros = np.zeros(shape)
         return finish(zeros, zeros, penetration, 0, True,
