@@ -124,3 +124,39 @@ def test_a_wheelset_with_a_subnormal_wheel_load_gives_that_wheel_a_status():
                                  "smallest load solved"
         assert r.right.status == OK
         assert r.right.track_force[2] == pytest.approx(8e4, rel=2e-3)
+
+
+def test_a_decimal_comma_profile_is_an_error_naming_file_and_line(monkeypatch, capsys):
+    """A European CSV wheel profile (``-70;10,1595``) was read as (-70, 10), the wheel a
+    staircase, exit 0: now a one-line error naming the file, the line and the number."""
+    monkeypatch.chdir(ROUND2 / "T1b_decimal_comma_profile")
+    code = main(["solve", "case.toml", "--json"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "w_eu_comma.txt:1: '-70;10,1595' has a decimal comma ('10,1595'); write numbers " \
+           "with a decimal point ('10.1595')" in err, err
+
+
+@pytest.mark.parametrize("line, match", [
+    ("-70 10,1595", "decimal comma"), ("-70\t10,1595", "decimal comma"),
+    ("-70;10,1595", "decimal comma"), ("-70,5 10", "decimal comma"),
+    ("-70 10 1595", r"expected two columns .* got 3 in '-70 10 1595'"),
+    ("-70,10,1595", "got 3"), ("-70;10;5", "got 3"), ("-70 10 x", "got 3"),
+])
+def test_profile_lines_with_decimal_commas_or_extra_columns_are_refused(line, match,
+                                                                        tmp_path):
+    body = ["-60 12.5", line, "-50 13.0"]
+    f = tmp_path / "w.txt"
+    f.write_text("\n".join(body) + "\n")
+    with pytest.raises(rc.RailContactError, match=rf"w.txt:2: .*{match}"):
+        rc.read_profile(str(f), "wheel")
+
+
+@pytest.mark.parametrize("sep", [" ", "\t", ",", ", ", ";", "; "])
+def test_two_columns_with_decimal_points_are_read(sep, tmp_path):
+    """S1002 in mm with each separator the reader takes reads as with spaces."""
+    good = RELIABILITY / "profiles" / "good_wheel.txt"
+    f = tmp_path / "w.txt"
+    f.write_text(good.read_text().replace(" ", sep))
+    p, ref = rc.read_profile(str(f), "wheel"), rc.read_profile(str(good), "wheel")
+    assert p.y.tolist() == ref.y.tolist() and p.z.tolist() == ref.z.tolist()

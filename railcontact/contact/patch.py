@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import CaseError, RailContactError
 from ..geometry.search import FAR
 from ..halfspace.grid import Grid, nonzero_box, remesh
-from ..halfspace.hertz import HertzSolution, hertz
+from ..halfspace.hertz import MIN_LOAD, HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.operator import influence_operator
 from ..normal import NormalResult, solve_normal
@@ -185,7 +185,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         res = solve_normal(gap, grid, op, initial_pressure=start,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, initial_displacement=shown,
-                           **control.kwargs())
+                           min_load=MIN_LOAD, **control.kwargs())
         work.normal_iterations += res.iterations
         # the pressure array checked by the solver's summary of it (solve_normal: the
         # force is its sum, max_pressure its largest value or NaN when one is NaN; a
