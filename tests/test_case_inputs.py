@@ -160,3 +160,31 @@ def test_two_columns_with_decimal_points_are_read(sep, tmp_path):
     f.write_text(good.read_text().replace(" ", sep))
     p, ref = rc.read_profile(str(f), "wheel"), rc.read_profile(str(good), "wheel")
     assert p.y.tolist() == ref.y.tolist() and p.z.tolist() == ref.z.tolist()
+
+
+def test_a_dense_product_beyond_the_memory_budget_is_refused_before_allocating(
+        monkeypatch, capsys):
+    """fft = 'dense' on 256 x 256 elements (within max_elements) once built a 32 GiB matrix
+    and died of MemoryError: the operator's memory is estimated first."""
+    code, _, err = _solve("T1a_fft_dense_memory_256.toml", monkeypatch, capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert "[normal] fft = 'dense' needs a 65536 x 65536 matrix for 256 x 256 elements, 32 " \
+           "GiB, more than the 0.5 GiB that [grid] max_elements = 262144 allows; set " \
+           "[normal] fft = 'auto'" in err, err
+
+
+def test_a_dense_wheel_rail_patch_is_checked_too():
+    """A wheel-rail patch on 0.1 mm elements (its grid known only once meshed)."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail"}, "grid": {"dx": 1e-4, "dy": 1e-4},
+            "normal": {"load": 8e4, "fft": "dense"}}
+    with pytest.raises(rc.CaseError, match=r"fft = 'dense' needs a \d+ x \d+ matrix"):
+        rc.solve(case)
+
+
+def test_operator_memory_estimates():
+    from railcontact.halfspace.operator import operator_bytes
+    assert operator_bytes(256, 256, 1, "dense") == pytest.approx(32 * 2**30, rel=1e-3)
+    assert operator_bytes(32, 32, 2, "dense") == pytest.approx(2 * 8 * 2048**2, rel=0.01)
+    for backend in ("scipy", "pyfftw"):  # within the grid budget of 2 kB per element
+        assert operator_bytes(512, 512, 3, backend) < 2048 * 512 * 512

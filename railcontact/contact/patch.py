@@ -19,12 +19,12 @@ from ..geometry.search import FAR
 from ..halfspace.grid import Grid, nonzero_box, remesh
 from ..halfspace.hertz import MIN_LOAD, HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
-from ..halfspace.operator import influence_operator
+from ..halfspace.operator import influence_operator, operator_bytes, resolve_backend
 from ..normal import NormalResult, solve_normal
 from ..normal.bem import Displacement
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
-from ..settings.case import check_grid_size
+from ..settings.case import ELEMENT_BYTES, MAX_ELEMENTS, check_grid_size
 from ..tangential import SOLVERS, TangentialResult, rolling_operator
 from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
@@ -144,6 +144,25 @@ def estimate_label(estimate_of: PressureEstimate, name: str) -> str:
     return getattr(estimate_of, "label", name)
 
 
+def check_operator_memory(grid: Grid, components: str, backend: str,
+                          max_elements: int = MAX_ELEMENTS) -> None:
+    """Raise a :class:`~railcontact.errors.CaseError` when the influence operator of
+    ``components`` on ``grid`` with ``backend`` would take more memory than ``max_elements``
+    elements are budgeted (:data:`~railcontact.settings.case.ELEMENT_BYTES` each), before
+    anything is allocated: a dense product grows as the square of the element count."""
+    concrete = resolve_backend(backend, grid.size)
+    need = operator_bytes(grid.nx, grid.ny, len(components), concrete)
+    budget = float(max_elements) * ELEMENT_BYTES
+    if not need <= budget:
+        n = len(components) * grid.size
+        what = (f"fft = 'dense' needs a {n} x {n} matrix" if concrete == "dense"
+                else f"fft = {concrete!r} needs its spectra")
+        raise CaseError(f"[normal] {what} for {grid.nx} x {grid.ny} elements, {need / 2**30:.3g} "
+                        f"GiB, more than the {budget / 2**30:.3g} GiB that [grid] max_elements "
+                        f"= {max_elements} allows; set [normal] fft = 'auto' (an FFT product, "
+                        "memory in proportion to the elements) or use fewer elements")
+
+
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
@@ -174,6 +193,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         work.remeshes += 1
         if grid is None or k > 0:
             grid = make_grid(grid_settings, bounds)
+        check_operator_memory(grid, "z", settings.fft, grid_settings.max_elements)
         op = influence_operator(grid, pair, "z", settings.fft)
         gap = gap_of(grid)
         # a grown area starts from the estimate again, not from the truncated solution:
@@ -374,6 +394,7 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         p0 = None if p0 is None else np.asarray(p0)[:, sx, sy]
         st0 = None if st0 is None else np.asarray(st0)[sx, sy]
     # (on a window: the result on the patch's grid, zero outside the window)
+    check_operator_memory(grid, "xy", fft)
     patch.tangential = SOLVERS[settings.solver](
         grid, rolling_operator(grid, pair, fft), pn, settings.friction,
         creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,

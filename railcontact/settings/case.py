@@ -108,6 +108,10 @@ MAX_PENETRATION = 0.01
 10 mm into its rail is a wrong input)."""
 MAX_ELEMENTS = 1 << 18
 """Default largest grid of a patch (512 x 512 elements, ~0.5 GB with the FFT buffers)."""
+ELEMENT_BYTES = 2048
+"""Memory [bytes] per element that [grid] max_elements budgets (an FFT operator and the
+solvers' arrays take less): the influence operator of a patch may take max_elements times
+this."""
 
 
 def check_grid_size(what: str, nx: float, ny: float, budget: int) -> None:
@@ -212,7 +216,8 @@ class GridSettings(Record):
                             minimum=0.0, open_min=True, maximum=100.0)
     max_elements: int = setting(MAX_ELEMENTS, "int", "", "largest grid (nx * ny) a patch may "
                                 "have, checked before anything is allocated (a memory budget: "
-                                "~2 kB per element)", minimum=4)
+                                "~2 kB per element; the influence operator, dense ones "
+                                "included, must fit in it)", minimum=4)
     quantum: int = setting(1, "int", "", "element counts rounded up to a multiple of this "
                            "(fewer operators in a time series)", minimum=1, case=False)
     snap: bool = setting(False, "bool", "", "grid centre on a multiple of the element size "
