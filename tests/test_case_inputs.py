@@ -188,3 +188,26 @@ def test_operator_memory_estimates():
     assert operator_bytes(32, 32, 2, "dense") == pytest.approx(2 * 8 * 2048**2, rel=0.01)
     for backend in ("scipy", "pyfftw"):  # within the grid budget of 2 kB per element
         assert operator_bytes(512, 512, 3, backend) < 2048 * 512 * 512
+
+
+def test_one_wheel_failing_its_load_loop_keeps_the_other_wheel(monkeypatch, capsys):
+    """side = 'both', the right wheel's load loop (flange, 67 deg) does not converge: the
+    case once ended in exit 2 with nothing for the converged left wheel. Now each wheel
+    has its own result: the left converged and carrying its load, the right marked not
+    converged with the load loop's failure, exit 1."""
+    code, out, _ = _solve("T1f_one_wheel_load_loop_fails_whole_case_exit2.toml",
+                          monkeypatch, capsys)
+    assert code == 1
+    patches = json.loads(out)["patches"]
+    assert [p["side"] for p in patches] == ["left", "right"]
+    left, right = patches
+    assert left["normal"]["converged"] and left["tangential"]["converged"]
+    assert right["normal"]["converged"] is False
+    assert right["normal"]["message"].startswith(
+        "not converged: right wheel: the vertical load with creep forces did not converge")
+    case = rc.load_case(ROUND2 / "T1f_one_wheel_load_loop_fails_whole_case_exit2.toml")
+    d = case.to_dict()
+    d["geometry"]["side"] = "left"
+    alone = rc.solve(d)  # the left wheel alone: the same solution
+    assert alone.converged
+    assert alone.patches[0].normal.force == pytest.approx(left["normal"]["force"], rel=1e-9)
