@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 from . import __version__
 from .errors import RailContactError
+from .halfspace.hertz import MIN_LOAD
 from .settings import ContactSettings
 from .settings.choices import PROFILE_UNITS, WARM_STARTS
 
@@ -116,8 +117,9 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         if not sol.converged:
             outcomes.add(1)
         if not any(p.normal.force > 0 for p in sol.patches):
-            print(f"railcontact: warning: {case}: no contact (zero load, or a penetration "
-                  "below the gap): nothing was solved", file=sys.stderr)
+            print(f"railcontact: warning: {case}: no contact (zero load, a load below "
+                  f"{MIN_LOAD:g} N, or a penetration below the gap): nothing was solved",
+                  file=sys.stderr)
             outcomes.add(NO_CONTACT_EXIT)
     return next((c for c in EXIT_PRIORITY if c in outcomes), 0)
 

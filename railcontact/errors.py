@@ -20,7 +20,15 @@ class CaseError(RailContactError):
 
 class ConvergenceError(CaseError):
     """An iteration (a load loop) that did not reach its tolerance: the input is valid, the
-    answer is not good enough to report as one."""
+    answer is not good enough to report as one.
+
+    ``partial`` is the last iterate (e.g. a wheel's patches at the last load pass), None
+    when there is none: a caller that reports several results (both wheels) reports it as
+    not converged instead of losing the others."""
+
+    def __init__(self, message: str, partial: object = None):
+        super().__init__(message)
+        self.partial = partial
 
 
 def check_finite(name: str, value: object, unit: str = "") -> float:

@@ -17,14 +17,14 @@ import numpy as np
 from ..errors import CaseError, RailContactError
 from ..geometry.search import FAR
 from ..halfspace.grid import Grid, nonzero_box, remesh
-from ..halfspace.hertz import HertzSolution, hertz
+from ..halfspace.hertz import MIN_LOAD, HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
-from ..halfspace.operator import influence_operator
+from ..halfspace.operator import influence_operator, operator_bytes, resolve_backend
 from ..normal import NormalResult, solve_normal
 from ..normal.bem import Displacement
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
-from ..settings.case import check_grid_size
+from ..settings.case import ELEMENT_BYTES, MAX_ELEMENTS, check_grid_size
 from ..tangential import SOLVERS, TangentialResult, rolling_operator
 from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
@@ -144,11 +144,30 @@ def estimate_label(estimate_of: PressureEstimate, name: str) -> str:
     return getattr(estimate_of, "label", name)
 
 
+def check_operator_memory(grid: Grid, components: str, backend: str,
+                          max_elements: int = MAX_ELEMENTS) -> None:
+    """Raise a :class:`~railcontact.errors.CaseError` when the influence operator of
+    ``components`` on ``grid`` with ``backend`` would take more memory than ``max_elements``
+    elements are budgeted (:data:`~railcontact.settings.case.ELEMENT_BYTES` each), before
+    anything is allocated: a dense product grows as the square of the element count."""
+    concrete = resolve_backend(backend, grid.size)
+    need = operator_bytes(grid.nx, grid.ny, len(components), concrete)
+    budget = float(max_elements) * ELEMENT_BYTES
+    if not need <= budget:
+        n = len(components) * grid.size
+        what = (f"fft = 'dense' needs a {n} x {n} matrix" if concrete == "dense"
+                else f"fft = {concrete!r} needs its spectra")
+        raise CaseError(f"[normal] {what} for {grid.nx} x {grid.ny} elements, {need / 2**30:.3g} "
+                        f"GiB, more than the {budget / 2**30:.3g} GiB that [grid] max_elements "
+                        f"= {max_elements} allows; set [normal] fft = 'auto' (an FFT product, "
+                        "memory in proportion to the elements) or use fewer elements")
+
+
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
-                       automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None
-                       ) -> tuple[NormalResult, Work]:
+                       automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None,
+                       profiles: bool = True) -> tuple[NormalResult, Work]:
     """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
     it took.
 
@@ -162,6 +181,11 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     edge (each growth a re-mesh, its iterations counted in the work), at most
     :data:`MAX_GROW` times, after which the result is not converged; a user-given extent
     that the contact reaches is an error. A result that is not finite is not converged.
+
+    A contact next to an element whose gap is :data:`UNDEFINED_GAP` or more is not
+    converged: with ``profiles`` (the gap comes from profiles) the contact reaches where the
+    profiles end; without (an analytic gap, defined everywhere) the elements are so large
+    that the gap grows by that much from one element to the next.
     """
     t0 = time.perf_counter()
     work = Work(remeshes=-1)
@@ -169,6 +193,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         work.remeshes += 1
         if grid is None or k > 0:
             grid = make_grid(grid_settings, bounds)
+        check_operator_memory(grid, "z", settings.fft, grid_settings.max_elements)
         op = influence_operator(grid, pair, "z", settings.fft)
         gap = gap_of(grid)
         # a grown area starts from the estimate again, not from the truncated solution:
@@ -180,7 +205,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         res = solve_normal(gap, grid, op, initial_pressure=start,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, initial_displacement=shown,
-                           **control.kwargs())
+                           min_load=MIN_LOAD, **control.kwargs())
         work.normal_iterations += res.iterations
         # the pressure array checked by the solver's summary of it (solve_normal: the
         # force is its sum, max_pressure its largest value or NaN when one is NaN; a
@@ -192,9 +217,15 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
             break
         if _cut_off(res.contact, gap):
             res.converged = False
-            res.message = ("the contact reaches where the profiles end (or turn away), so "
-                           "the patch is cut off there; the pose or the load is beyond the "
-                           f"profiles ({res.message})")
+            if profiles:
+                res.message = ("the contact reaches where the profiles end (or turn away), "
+                               "so the patch is cut off there; the pose or the load is beyond "
+                               f"the profiles ({res.message})")
+            else:
+                res.message = (f"the undeformed gap next to the contact is {UNDEFINED_GAP:g} m "
+                               f"or more: the elements ({grid.dx:.3g} x {grid.dy:.3g} m) are "
+                               "far larger than the contact; give a smaller potential area "
+                               f"([grid] x, y) or smaller elements ({res.message})")
             break
         if not res.touches_boundary:
             break
@@ -363,6 +394,7 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         p0 = None if p0 is None else np.asarray(p0)[:, sx, sy]
         st0 = None if st0 is None else np.asarray(st0)[sx, sy]
     # (on a window: the result on the patch's grid, zero outside the window)
+    check_operator_memory(grid, "xy", fft)
     patch.tangential = SOLVERS[settings.solver](
         grid, rolling_operator(grid, pair, fft), pn, settings.friction,
         creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,

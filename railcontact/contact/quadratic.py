@@ -44,7 +44,7 @@ def solve_quadratic(case: Case) -> PatchSolution:
     s = np.linspace(bounds[2], bounds[3], 2001)
     est = normal_estimate(settings, hz, s, B * s**2, np.full_like(s, A), pair, control)
     res, work = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
-                                   grid_settings.automatic)
+                                   grid_settings.automatic, profiles=False)
     work.seconds = time.perf_counter() - t0  # the estimate's set-up included
     patch = PatchSolution(normal=res, hertz=hz, estimate=estimate_label(est, settings.estimate),
                           curvatures=(A, B), work=work)

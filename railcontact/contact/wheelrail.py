@@ -53,7 +53,13 @@ from ..geometry.search import (
 )
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
-from ..halfspace.hertz import HertzSolution, hertz, hertz_when_read, semi_axis_bound
+from ..halfspace.hertz import (
+    HertzSolution,
+    hertz,
+    hertz_when_read,
+    negligible_load,
+    semi_axis_bound,
+)
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
@@ -296,7 +302,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     if settings.tangential is None:
         return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                   reference=reference)
-    if not control.by_load or control.load == 0:
+    if not control.by_load or negligible_load(control.load):
         return _add_tangential(
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                reference=reference),
@@ -315,7 +321,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
 
     ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
     if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
-        raise ConvergenceError(f"{side} wheel: {failure}")
+        raise ConvergenceError(f"{side} wheel: {failure}", ps)
     unique = load_unique(ps, settings.tangential.friction)
     for p in ps:
         p.load_unique = unique
@@ -352,7 +358,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         return _patches(points(track, ws, pose, side, approach), ws, approach,
                         settings, pair, estimate_for=estimate_for, previous=previous)
     q = control.load
-    if q == 0:
+    if negligible_load(q):
         return []
     # one patch: force control (exact) in the frame at the reference point, formed at the
     # approach of the pass before (or Hertz's) and again until the approach holds
@@ -386,7 +392,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         r1, ps1 = residual(a1)
     if abs(r1) > 1e-3 * q:
         raise ConvergenceError(f"{side} wheel: load control did not converge (vertical "
-                               f"force {r1 + q:.6g} N for load {q:.6g} N)")
+                               f"force {r1 + q:.6g} N for load {q:.6g} N)", ps1)
     return count_passes(ps1, passes)
 
 
@@ -497,12 +503,26 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], contr
             out[side] = solve_wheel(track, ws, pose, side, control,
                                     side_settings(settings, side, convention), pair,
                                     start[0], reference, start[1])
+        except ConvergenceError as exc:
+            if len(sides) == 1 or not exc.partial:
+                raise
+            out[side] = _not_converged(exc.partial, str(exc))  # the other wheel kept
         except RailContactError as exc:
             if isinstance(exc, CaseError):
                 raise
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m: "
                             f"{side} wheel: {exc}") from None
     return out
+
+
+def _not_converged(patches: list[PatchSolution], why: str) -> list[PatchSolution]:
+    """A wheel's ``patches`` of the last pass of a load loop that did not converge, each
+    marked not converged with ``why`` (the load loop's failure) in its normal message: of
+    a case with both wheels, the failed wheel is reported so, the other as it is."""
+    for p in patches:
+        p.normal.converged = False
+        p.normal.message = f"not converged: {why} (this pass: {p.normal.message})"
+    return patches
 
 
 def side_settings(settings: PatchSettings, side: str, convention: str) -> PatchSettings:

@@ -325,6 +325,20 @@ def _parse_float(tok: str, path: Path, lineno: int) -> float:
         raise RailContactError(f"{path}:{lineno}: cannot read {tok!r} as a number") from None
 
 
+def _check_decimal_commas(line: str, raw: str, path: Path, lineno: int) -> None:
+    """Raise a :class:`RailContactError` naming the file and line when ``line`` (a data
+    line, comments removed) has a comma between two digits while its columns are separated
+    by something else (a semicolon, spaces or tabs): a decimal comma, as European
+    spreadsheets write ``10,1595`` for 10.1595, which would be split into two numbers."""
+    if "," not in line or not re.search(r"\d,\d", line):
+        return
+    if ";" in line or len(line.split()) >= 2:
+        number = re.search(r"[-+]?\d*,\d+", line).group(0)  # type: ignore[union-attr]
+        raise RailContactError(
+            f"{path}:{lineno}: {raw.strip()!r} has a decimal comma ({number!r}); write "
+            f"numbers with a decimal point ({number.replace(',', '.')!r})")
+
+
 def read_simpack(path: str | Path) -> Profile:
     """Read a SIMPACK ``.prr`` (rail) or ``.prw`` (wheel) profile.
 
@@ -357,6 +371,7 @@ def read_simpack(path: str | Path) -> Profile:
             in_points = False
             continue
         if in_points:
+            _check_decimal_commas(line, raw, p, lineno)
             tok = line.replace(",", " ").split()
             if len(tok) < 2:
                 raise RailContactError(f"{p}:{lineno}: expected 'y z [weight]', got {raw!r}")
@@ -397,7 +412,9 @@ def read_xy(path: str | Path, kind: str, unit: str = "mm") -> Profile:
     """Read a two-column text or CSV profile (y, z) in ``unit`` (comments with # or !).
 
     The columns are railcontact's frame (module docstring); points may be given in either
-    order of y.
+    order of y. Columns are separated by spaces, tabs, a comma or a semicolon, and numbers
+    written with a decimal point: a line with another number of columns, or with a decimal
+    comma (``-70;10,1595``), is an error naming the file and line.
     """
     p = Path(path)
     if not p.is_file():
@@ -408,9 +425,12 @@ def read_xy(path: str | Path, kind: str, unit: str = "mm") -> Profile:
         line = re.split(r"[#!%]", raw)[0].strip()
         if not line:
             continue
+        _check_decimal_commas(line, raw, p, lineno)
         tok = line.replace(",", " ").replace(";", " ").split()
-        if len(tok) < 2:
-            raise RailContactError(f"{p}:{lineno}: expected two columns 'y z', got {raw!r}")
+        if len(tok) != 2:
+            raise RailContactError(f"{p}:{lineno}: expected two columns 'y z' (separated by "
+                                   f"spaces, a comma or a semicolon), got {len(tok)} in "
+                                   f"{raw.strip()!r}")
         rows.append((_parse_float(tok[0], p, lineno), _parse_float(tok[1], p, lineno)))
     if not rows:
         raise RailContactError(f"{p}: no profile points found")

@@ -245,6 +245,26 @@ def semi_axis_bound(A: float, B: float, pair: ElasticPair, *, load: float | None
     return 2.0 * r ** (2.0 / 3.0) * math.sqrt(penetration / (A + B))
 
 
+MIN_LOAD = 1e-6
+"""Smallest normal load [N] whose contact is solved. Hertz's patch grows as the cube root
+of the load: at 1e-6 N that of steel wheels on rails (A = 1, B = 5 1/m) is 4 um long, less
+than the smallest element a wheel-rail time step takes (10 um), and at 1e-300 N its semi-axes
+and pressure underflow. A positive load below this is treated as no contact, as a zero load
+is: zero forces, which differ from the exact ones by less than the load itself, so that a
+wheel unloading towards zero (lifting) passes into no contact continuously and never into
+an error."""
+
+
+def negligible_load(load: float) -> bool:
+    """Whether a load [N] is below :data:`MIN_LOAD` (zero included): no contact."""
+    return load < MIN_LOAD
+
+
+def no_contact_load(load: float) -> str:
+    """Why a positive load [N] below :data:`MIN_LOAD` has no contact, in words."""
+    return f"the load {load:g} N is below {MIN_LOAD:g} N, the smallest load solved"
+
+
 def semi_axes(A: float, B: float, e_star: float, *, load: float | None = None,
               penetration: float | None = None) -> tuple[float, float, float, float]:
     """Hertz's semi-axes ``a`` (along x) and ``b`` [m], load [N] and penetration [m] for
@@ -310,6 +330,12 @@ def hertz(
     else:
         penetration = check_positive("penetration", penetration, "m", allow_zero=True)
     a, b, n, delta = semi_axes(A, B, e_star, load=load, penetration=penetration)
-    p0 = 3.0 * n / (2.0 * math.pi * a * b) if n > 0 else 0.0
+    if n > 0 and a * b > 0:
+        p0 = 3.0 * n / (2.0 * math.pi * a * b)
+    elif n > 0:  # a * b underflows: p0 scales as n^(1/3) (from the solution at 1 N)
+        a1, b1, _, _ = semi_axes(A, B, e_star, load=1.0)
+        p0 = 3.0 / (2.0 * math.pi * a1 * b1) * n ** (1.0 / 3.0)
+    else:
+        p0 = 0.0
     return HertzSolution(A=A, B=B, a=a, b=b, load=n, penetration=delta, max_pressure=p0,
                          e_star=e_star)

@@ -146,6 +146,20 @@ def padded_shape(nx: int, ny: int) -> tuple[int, int]:
     return fft_size(2 * nx), fft_size(2 * ny)
 
 
+def operator_bytes(nx: int, ny: int, components: int, backend: str) -> float:
+    """Memory [bytes] an :class:`InfluenceOperator` of ``components`` (1-3) on an ``nx``
+    x ``ny`` grid takes with the concrete ``backend`` (not ``"auto"``), estimated before
+    anything is allocated: the kernels, and the dense matrix (``(components nx ny)^2``
+    numbers, twice that while the blocks of several components are joined) or the
+    kernels' spectra on the padded grid."""
+    nc, n = float(components), float(nx) * float(ny)
+    kernels = 8.0 * nc * nc * (2.0 * nx - 1.0) * (2.0 * ny - 1.0)
+    if backend == "dense":
+        return kernels + 8.0 * (nc * n) ** 2 * (2.0 if components > 1 else 1.0)
+    px, py = padded_shape(nx, ny) if n < 1e12 else (2.0 * nx, 2.0 * ny)
+    return kernels + 16.0 * nc * nc * px * (py // 2 + 1)
+
+
 class _PrunedPlan:
     """The DC-FFT product of ``nc`` components with pruned transforms: of the padded input
     only the ``nx`` rows that hold the traction are transformed along y (the rest are

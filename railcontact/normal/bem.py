@@ -49,6 +49,7 @@ import numpy as np
 
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
+from ..halfspace.hertz import no_contact_load
 from ..halfspace.operator import PRECONDITIONER_FLOOR, InfluenceOperator
 from ..halfspace.sums import array_sum, numpy_sum
 
@@ -499,6 +500,7 @@ def solve_normal(
     max_iterations: int = 500,
     preconditioner: str = "fft",
     initial_displacement: Displacement | None = None,
+    min_load: float = 0.0,
 ) -> NormalResult:
     """Solve the frictionless normal contact problem by Polonsky–Keer's CG method.
 
@@ -540,6 +542,10 @@ def solve_normal(
         convolved). Ignored (``A p`` convolved) with ``initial_contact``, when not finite,
         not of the grid's shape, or older than :data:`REUSE_GENERATIONS`
         (:class:`Displacement`).
+    min_load
+        A ``load`` [N] below this, as a zero load, is no contact (zero pressure, converged):
+        the contact solvers pass :data:`~railcontact.halfspace.hertz.MIN_LOAD`; the default
+        solves any positive load, e.g. a problem scaled to test the CG's range.
 
     Returns
     -------
@@ -596,9 +602,10 @@ def solve_normal(
             displacement=shown)
 
     # Trivial cases: no load, or no interpenetration anywhere.
-    if force_control and load == 0.0:
+    if force_control and (load == 0.0 or load < min_load):
         zeros = np.zeros(shape)
-        return finish(zeros, zeros, float(h.min()), 0, True, "no contact: zero load", 0.0, [])
+        why = "zero load" if load == 0.0 else no_contact_load(load)
+        return finish(zeros, zeros, float(h.min()), 0, True, f"no contact: {why}", 0.0, [])
     if not force_control and hmin >= penetration:  # (np.all(h >= penetration))
         zeros = np.zeros(shape)
         return finish(zeros, zeros, penetration, 0, True,

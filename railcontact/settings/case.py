@@ -108,6 +108,10 @@ MAX_PENETRATION = 0.01
 10 mm into its rail is a wrong input)."""
 MAX_ELEMENTS = 1 << 18
 """Default largest grid of a patch (512 x 512 elements, ~0.5 GB with the FFT buffers)."""
+ELEMENT_BYTES = 2048
+"""Memory [bytes] per element that [grid] max_elements budgets (an FFT operator and the
+solvers' arrays take less): the influence operator of a patch may take max_elements times
+this."""
 
 
 def check_grid_size(what: str, nx: float, ny: float, budget: int) -> None:
@@ -119,6 +123,13 @@ def check_grid_size(what: str, nx: float, ny: float, budget: int) -> None:
                         f"the {budget} of [grid] max_elements (about 2 kB each); use fewer "
                         "or larger elements, or raise max_elements")
 
+
+MIN_WHEEL_RADIUS, MAX_WHEEL_RADIUS = 0.2, 0.7
+"""Range of a railway wheel's nominal rolling radius [m] (small tram and freight wheels to
+locomotive wheels): a radius outside is a wrong input, often millimetres typed as metres."""
+MIN_GAUGE, MAX_GAUGE = 0.5, 2.0
+"""Range of a track gauge [m] (narrow gauges from 0.6 m, broad gauges to 1.676 m, with room
+on both sides); the wheelset's flange-back distance is a little less than its gauge."""
 
 _TRACK = {f.name: f.default for f in fields(Track)}
 _WHEELSET = {f.name: f.default for f in fields(Wheelset)}
@@ -147,17 +158,20 @@ class WheelRailGeometry(Record):
     inclination: float = setting(_TRACK["inclination"], "float", "rad",
                                  "rail cant (1:40; 0 for a file that is canted already)")
     gauge: float = setting(_TRACK["gauge"], "float", "m", "track gauge, measured gauge_depth "
-                           "below the top of rail", minimum=0.0, open_min=True)
+                           "below the top of rail (narrow 0.6 m to broad 1.676 m gauges)",
+                           minimum=MIN_GAUGE, maximum=MAX_GAUGE)
     gauge_depth: float = setting(_TRACK["gauge_depth"], "float", "m", "depth below the top of "
-                                 "rail at which the gauge is measured", minimum=0.0,
-                                 open_min=True)
+                                 "rail at which the gauge is measured (14 mm in EN 13848)",
+                                 minimum=0.0, open_min=True, maximum=0.05)
     back_to_back: float = setting(_WHEELSET["back_to_back"], "float", "m",
-                                  "flange-back distance of the wheelset", minimum=0.0,
-                                  open_min=True)
+                                  "flange-back distance of the wheelset (a little less than "
+                                  "the gauge)", minimum=MIN_GAUGE - 0.1, maximum=MAX_GAUGE)
     flange_back: float = setting(_WHEELSET["flange_back"], "float", "m",
-                                 "wheel profile coordinate S of the flange back")
-    wheel_radius: float = setting(_WHEELSET["radius"], "float", "m", "nominal rolling radius",
-                                  minimum=0.0, open_min=True)
+                                 "wheel profile coordinate S of the flange back (S1002: "
+                                 "-0.07 m)", minimum=-0.2, maximum=0.2)
+    wheel_radius: float = setting(_WHEELSET["radius"], "float", "m", "nominal rolling radius "
+                                  "(tram to locomotive wheels)", minimum=MIN_WHEEL_RADIUS,
+                                  maximum=MAX_WHEEL_RADIUS)
     lateral_displacement: float = setting(0.0, "float", "m",
                                           "wheelset lateral displacement, positive to the left")
     yaw: float = setting(0.0, "float", "rad", "wheelset yaw angle")
@@ -202,7 +216,8 @@ class GridSettings(Record):
                             minimum=0.0, open_min=True, maximum=100.0)
     max_elements: int = setting(MAX_ELEMENTS, "int", "", "largest grid (nx * ny) a patch may "
                                 "have, checked before anything is allocated (a memory budget: "
-                                "~2 kB per element)", minimum=4)
+                                "~2 kB per element; the influence operator, dense ones "
+                                "included, must fit in it)", minimum=4)
     quantum: int = setting(1, "int", "", "element counts rounded up to a multiple of this "
                            "(fewer operators in a time series)", minimum=1, case=False)
     snap: bool = setting(False, "bool", "", "grid centre on a multiple of the element size "

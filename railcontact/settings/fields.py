@@ -57,6 +57,13 @@ class Spec:
     required: bool = False
     case: bool = True
 
+    def admits(self, x: float) -> bool:
+        """Whether the number ``x`` lies within the bounds (each element of a list)."""
+        lo, hi = self.minimum, self.maximum
+        if lo is not None and (x < lo or (self.open_min and x == lo)):
+            return False
+        return not (hi is not None and (x > hi or (self.open_max and x == hi)))
+
     def bounds_text(self) -> str:
         """The allowed values in words, for messages and the reference."""
         if self.kind == "choice":
@@ -191,13 +198,15 @@ class Record:
         except RailContactError as exc:
             cls._fail(str(exc))
         unit = f" [{unit}]" if unit else ""
-        lo, hi = spec.minimum, spec.maximum
-        if lo is not None and (x < lo or (spec.open_min and x == lo)):
-            word = ("positive" if spec.open_min else "non-negative") if lo == 0 and hi is None \
-                else spec.bounds_text()
-            cls._fail(f"{where}{unit} must be {word}, got {x:g}")
-        if hi is not None and (x > hi or (spec.open_max and x == hi)):
-            cls._fail(f"{where}{unit} must be {spec.bounds_text()}, got {x:g}")
+        if not spec.admits(x):
+            lo, hi = spec.minimum, spec.maximum
+            word = ("positive" if spec.open_min else "non-negative") \
+                if lo == 0 and hi is None else spec.bounds_text()
+            hint = ""
+            if spec.unit == "m" and spec.admits(x / 1000.0):
+                hint = (f"; {x:g} looks like millimetres: {x:g} mm is {x / 1000.0:g} m "
+                        "(lengths are in metres)")
+            cls._fail(f"{where}{unit} must be {word}, got {x:g}{hint}")
         return x
 
     @classmethod

@@ -83,7 +83,7 @@ from ..errors import (
 from ..geometry.search import ContactPoint, at_reference, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
-from ..halfspace.hertz import HertzSolution, hertz
+from ..halfspace.hertz import HertzSolution, hertz, negligible_load, no_contact_load
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import array_sum, numpy_sum
 from ..settings import ContactSettings, Control
@@ -505,6 +505,9 @@ class WheelsetContact:
         wheel = WheelContact(side=side)
         if control.value == 0.0:
             return wheel, []
+        if control.by_load and negligible_load(control.load):
+            wheel.message = f"no contact: {no_contact_load(control.load)}"
+            return wheel, []
         tangential = creep is not None or kin is not None
         if not (control.by_load and tangential and self.settings.load_includes_creep):
             patches, creepages, mem = self._pass(side, pose, control, creep, kin, time,
@@ -707,7 +710,7 @@ class _RolledApproaches:
         memory: dict[str, list[PatchMemory]] = {}
         self.solved.clear()  # (a call that raises leaves none)
         for k, side in enumerate(("left", "right")):
-            if self.loads[k] <= 0:
+            if negligible_load(self.loads[k]):
                 out.append(0.0)
                 memory[side] = []
                 continue
