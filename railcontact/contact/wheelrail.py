@@ -217,7 +217,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             continue
         # beside other patches: the patch's own run of the overlap alone (the others'
         # lobes, which its plane's gap also shows, are theirs)
-        gap_of = cp.gap_on_grid if len(cps) == 1 or loads is not None else own_gap(cp, dn)
+        gap_of = (cp.gap_on_grid if len(cps) == 1 or loads is not None else
+                  own_gap(cp, [o for o in cps if o is not cp]))
         if not (math.isfinite(cp.B) and cp.B > 0 and cp.A > 0):
             raise CaseError(f"{cp.side} wheel: no convex contact at S = {cp.wheel_s:.4g} m "
                             "(conformal or concave gap); cannot set up the patch")
@@ -281,19 +282,38 @@ lobe of its overlap (:func:`own_gap`): far beyond any penetration, below the gap
 mark where the profiles end (:data:`~.patch.UNDEFINED_GAP`)."""
 
 
-def own_gap(cp: ContactPoint, penetration: float) -> Callable[[Grid], Any]:
+def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], Any]:
     """The undeformed gap of the patch ``cp`` on a grid [m] (:meth:`~railcontact.geometry.
-    search.ContactPoint.gap_on_grid`) with the columns beyond its own run of the rigid
-    overlap at the normal ``penetration`` [m] (:func:`~railcontact.geometry.search.
-    overlap_box`) raised to :data:`OTHER_PATCH_GAP`, for a wheel with several patches.
+    search.ContactPoint.gap_on_grid`) with the columns beyond the watershed towards each
+    of the wheel's ``others`` patches raised to :data:`OTHER_PATCH_GAP`.
 
     The gap in a patch's plane also shows the lobes of the other patches' overlaps (the
     tread seen from a flange-root patch's plane): a grid reaching them - an earlier load
-    pass's, kept, or one grown to hold a lobe before the contact search split it off -
-    would carry their load a second time beside the other patch's own solve. Columns
-    beyond the run have a gap above the penetration up to the next lobe, so no contact of
-    this patch is cut."""
-    lo, hi = overlap_box(cp, penetration)[2:]
+    pass's, kept, or one grown to hold a lobe - would carry their load a second time
+    beside the other patch's own solve. The watershed is the sample of the largest gap
+    ``f(s)`` between the patch's origin and the other patch's point (its rail position
+    read in this plane): it does not depend on the approach, so the load loops'
+    residuals stay continuous, and up to it the gap rises, so no contact of this patch's
+    own lobe is cut."""
+    s, f = cp.s, cp.f
+    u = cp.rail_u_of_s
+    ok = np.isfinite(u) & np.isfinite(f)
+    k0 = int(np.argmin(np.abs(s)))
+    lo, hi = -math.inf, math.inf
+    for o in others:
+        hits = np.flatnonzero(ok)
+        if hits.size < 2:
+            continue
+        k = int(hits[np.argmin(np.abs(u[hits] - o.rail_u))])  # the other's point here
+        if k == k0:
+            continue
+        a, b = (k0, k) if k > k0 else (k, k0)
+        seg = np.where(ok[a:b + 1], f[a:b + 1], -math.inf)
+        w = float(s[a + int(np.argmax(seg))])
+        if k > k0:
+            hi = min(hi, w)
+        else:
+            lo = max(lo, w)
 
     def gap_of(grid: Grid):
         g = cp.gap_on_grid(grid)

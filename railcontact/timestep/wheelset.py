@@ -109,6 +109,16 @@ STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contac
 accurate); no contact (zero forces); out of range (the pose or a patch beyond the model:
 nothing solved, zero forces); outside validity (solved, but beyond a limit of
 :mod:`.validity`: Y/Q, Nadal's limit, flange climb, penetration, wheel load)."""
+WARM_PROMISE = (0.01, 0.02)
+"""What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
+eps_tau = 1e-2, load tolerance 1e-3): its wheel's normal force N within this first share
+of N, and each creep force component within the second share of mu N, of a cold solve
+of the same state at tight tolerances. The previous step's solution starts the solves
+and bounds each patch's potential area; the area is grown wherever the rigid overlap
+beyond it may touch (:func:`railcontact.contact.patch.uncovered`), so no contact is
+left out, and the solvers stop on the same criteria as from cold. (A wheel whose load is
+met at more than one approach, :attr:`WheelContact.load_unique`, may take another root
+than the cold solve.)"""
 SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
 """The statuses from the least to the most severe: the wheelset's status is its wheels'
 most severe."""
@@ -919,4 +929,4 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
 
 
 __all__ = ["ContactSettings", "Kinematics", "WheelContact", "WheelsetContact",
-           "WheelsetResult", "STATUS_NAMES"]
+           "WheelsetResult", "STATUS_NAMES", "WARM_PROMISE"]
