@@ -116,9 +116,12 @@ of N, and each creep force component within the second share of mu N, of a cold 
 of the same state at tight tolerances. The previous step's solution starts the solves
 and bounds each patch's potential area; the area is grown wherever the rigid overlap
 beyond it may touch (:func:`railcontact.contact.patch.uncovered`), so no contact is
-left out, and the solvers stop on the same criteria as from cold. (A wheel whose load is
-met at more than one approach, :attr:`WheelContact.load_unique`, may take another root
-than the cold solve.)"""
+left out, and the solvers stop on the same criteria as from cold. Not promised: a wheel
+whose load is met at more than one approach may take another root than the cold solve -
+a steep patch's creep force (:attr:`WheelContact.load_unique` False), or the flange root
+and the tread as two patches at one approach and as one merged patch at a larger one
+(which ``load_unique`` does not detect; ``scripts/fuzz_warm.py`` finds it in about 1 of
+1,400 warm wheels across the flange root)."""
 SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
 """The statuses from the least to the most severe: the wheelset's status is its wheels'
 most severe."""
