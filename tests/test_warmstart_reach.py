@@ -164,3 +164,48 @@ def test_warm_steps_across_the_flange_root_and_flange_equal_tight_cold_solves(ge
                                                                           dn, df)
                 compared += 1
     assert compared >= 300, compared
+
+
+def _solved(gap_of, bounds, h, load):
+    from railcontact import Grid, solve_normal
+    from railcontact.halfspace.operator import influence_operator
+    x0, x1, y0, y1 = bounds
+    nx, ny = round((x1 - x0) / h), round((y1 - y0) / h)
+    grid = Grid(nx, ny, h, h, x0 + h / 2, y0 + h / 2)
+    return solve_normal(gap_of(grid), grid, influence_operator(grid, PAIR, "z", "auto"),
+                        load=load, tolerance=1e-8)
+
+
+def test_uncovered_finds_a_second_lobe_and_leaves_a_hertz_contact_alone():
+    """A gap ``A x^2 + f(y)`` with a second dip of ``f`` 10 mm beside the first: solved on
+    a box around the first lobe (the contact inside, off its edges), the scan flags the
+    second lobe, and a solve on a grid holding both (the independent truth) carries load
+    there. Without the dip the same box around a Hertz contact is left as it is: its
+    overlap's rim clears the bound."""
+    from railcontact.contact.patch import uncovered
+
+    a_x, b_y, h, load = 1 / (2 * 0.46), 1 / (2 * 0.3), 0.5e-3, 20e3
+
+    def gap(dip):
+        def of(grid):
+            x, y = grid.mesh()
+            f = b_y * y ** 2 - dip * np.exp(-(((y - 10e-3) / 1.5e-3) ** 2))
+            return a_x * x ** 2 + f
+        return of
+
+    for dip, lobe in ((0.0, False), (160e-6, True)):
+        small = _solved(gap(dip), (-8e-3, 8e-3, -5e-3, 5e-3), h, load)
+        assert not small.touches_boundary
+        pen = small.penetration
+        xl = math.sqrt(pen / a_x)
+        overlap = (-xl, xl, -14e-3, 14e-3)  # (holds the rigid overlap of both lobes)
+        flagged = uncovered(gap(dip), small, PAIR, overlap)
+        large = _solved(gap(dip), (-12e-3, 12e-3, -6e-3, 14e-3), h, load)
+        far = large.grid.y > 5e-3
+        carried = float(np.asarray(large.pressure)[:, far].sum()) * h * h
+        if lobe:
+            assert carried > 0.05 * load  # the second lobe carries load ...
+            assert flagged is not None and flagged[2] < 10e-3 < flagged[3]  # ... and is found
+        else:
+            assert carried == 0.0 and flagged is None
+            assert large.force == pytest.approx(small.force, rel=1e-6)
