@@ -120,8 +120,8 @@ left out, and the solvers stop on the same criteria as from cold. Not promised: 
 whose load is met at more than one approach may take another root than the cold solve -
 a steep patch's creep force (:attr:`WheelContact.load_unique` False), or the flange root
 and the tread as two patches at one approach and as one merged patch at a larger one
-(which ``load_unique`` does not detect; ``scripts/fuzz_warm.py`` finds it in about 1 of
-1,400 warm wheels across the flange root)."""
+(which ``load_unique`` does not detect; ``scripts/fuzz_warm.py`` finds it in 10 of
+8,669 warm wheels across the flange root, seeds 1, 3 and 4, at 4.9-5.4 mm lateral)."""
 SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
 """The statuses from the least to the most severe: the wheelset's status is its wheels'
 most severe."""
