@@ -6,7 +6,9 @@ creep forces counted), 30 m/s with kinematic creepages, a 3 mm lateral sine at 1
 (lateral velocity from it, no yaw), 1 ms steps, ``--steps`` steps (300). For the warm
 (``previous+estimate``) and cold (``none``) starts it prints the median step time and
 iterations, and the breakdown of the step time by stage: contact search, meshing
-(grids, gaps, re-meshing the previous step), estimates (INFCON, FaStrip, previous-step
+(grids, gaps, re-meshing the previous step), reach check (whether the contact could
+reach beyond a warm patch's area: its scan of the overlap, the gap it forms counted as
+meshing), estimates (INFCON, FaStrip, previous-step
 prediction), normal BEM, tangential BEM, operators (influence coefficients, kernel spectra
 and FFT planning for a new grid shape) and the rest (load loop, resultants, Python).
 
@@ -46,6 +48,7 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                (wheelset_module, "vertical_gap")],
     "meshing": [(patch_module, "make_grid"), (geometry_search.ContactPoint, "gap_on_grid"),
                 (warmstart_module, "remesh")],
+    "reach check": [(wheelrail_module, "uncovered"), (wheelrail_module, "overlap_box")],
     "estimate": [(patch_module, "virtual_penetration"), (patch_module, "remesh_strips"),
                  (patch_module, "fastrip"), (patch_module, "fastsim"),
                  (patch_module, "strips_on_contact"),

@@ -271,6 +271,103 @@ def _next_to(contact, gap, limit):  # pragma: no cover - compiled
     return False
 
 
+UNCOVERED_MARGIN = 2
+"""Elements added around the places :func:`uncovered` finds when the area is grown to
+hold them."""
+
+
+def uncovered(gap_of: Callable[[Grid], np.ndarray], res: NormalResult, pair: ElasticPair,
+              overlap: Bounds) -> Bounds | None:
+    """The box (xmin, xmax, ymin, ymax) [m] of the element centres on the lattice of the
+    solution ``res``'s grid, outside that grid and inside the box ``overlap`` [m] that
+    holds the rigid overlap at its penetration, where the solution's deformed gap may be
+    negative; None when there is none (the solution is then that of any larger grid).
+
+    Outside the grid the pressure is zero and the deformed gap is ``h - delta + u``
+    (``h`` the undeformed gap ``gap_of`` gives, ``delta`` the penetration, ``u`` the
+    displacement of the solved pressure). A place with ``h >= delta`` cannot touch
+    (``u >= 0``); elsewhere a lower bound of ``u`` decides: by Jensen's inequality for
+    the convex ``1/r`` and Cauchy-Schwarz,
+
+        u(x) = 1/(pi E*) int p(y) / |x - y| dy >= F / (pi E* sqrt(|x - c|^2 + s^2)),
+
+    ``F`` the force, ``c`` the pressure's centroid and ``s^2`` its second moment about it
+    (the elements' own spread ``(dx^2 + dy^2) / 12`` included). An element where
+    ``h - delta`` plus this bound is negative is flagged. The bound is low for places far
+    from a wide contact, so it flags some that would not touch (a re-mesh, not an error);
+    it flags none of those that do. One pass over the lattice of the overlap box; the gap
+    there is formed once."""
+    g = res.grid
+    pen = float(res.penetration)
+    dx, dy = g.dx, g.dy
+    b = g.bounds
+    if (b[0] <= overlap[0] and overlap[1] <= b[1] and b[2] <= overlap[2]
+            and overlap[3] <= b[3]):
+        return None
+    i0 = min(0, math.ceil((overlap[0] - g.x0) / dx))
+    i1 = max(g.nx, math.floor((overlap[1] - g.x0) / dx) + 1)
+    j0 = min(0, math.ceil((overlap[2] - g.y0) / dy))
+    j1 = max(g.ny, math.floor((overlap[3] - g.y0) / dy) + 1)
+    outer = Grid(int(i1 - i0), int(j1 - j0), dx, dy, g.x0 + i0 * dx, g.y0 + j0 * dy)
+    h = gap_of(outer)
+    p = np.asarray(res.pressure, dtype=float)
+    found, a0, a1, c0, c1 = _uncovered(h, pen, p, int(-i0), int(-j0), float(g.x0), dx,
+                                       float(g.y0), dy, float(outer.x0), float(outer.y0),
+                                       1.0 / (math.pi * pair.e_star))
+    if not found:
+        return None
+    return (outer.x0 + (a0 - 0.5) * dx, outer.x0 + (a1 + 0.5) * dx,
+            outer.y0 + (c0 - 0.5) * dy, outer.y0 + (c1 + 0.5) * dy)
+
+
+@numba.njit(cache=True)
+def _uncovered(h, pen, p, ia, jb, x0, dx, y0, dy, ox, oy, k):  # pragma: no cover
+    """:func:`uncovered`'s pass: the pressure's force, centroid and second moment on its
+    grid (at the offset ``(ia, jb)`` in the outer one), then the outer elements outside
+    it with ``h - pen + k F / sqrt(r^2 + s^2) < 0``; returns (found, first and last row,
+    first and last column of them)."""
+    nx, ny = p.shape
+    w = sx = sy = 0.0
+    for i in range(nx):
+        for j in range(ny):
+            q = p[i, j]
+            if q > 0.0:
+                w += q
+                sx += q * (x0 + i * dx)
+                sy += q * (y0 + j * dy)
+    if not w > 0.0:
+        return False, 0, 0, 0, 0
+    cx, cy = sx / w, sy / w
+    s2 = 0.0
+    for i in range(nx):
+        for j in range(ny):
+            q = p[i, j]
+            if q > 0.0:
+                ex, ey = x0 + i * dx - cx, y0 + j * dy - cy
+                s2 += q * (ex * ex + ey * ey)
+    s2 = s2 / w + (dx * dx + dy * dy) / 12.0
+    force = w * dx * dy
+    mx, my = h.shape
+    found = False
+    a0 = c0 = 1 << 30
+    a1 = c1 = -1
+    for a in range(mx):
+        inside_x = ia <= a < ia + nx
+        ex = ox + a * dx - cx
+        for c in range(my):
+            if inside_x and jb <= c < jb + ny:
+                continue
+            d = h[a, c] - pen
+            if d >= 0.0:
+                continue
+            ey = oy + c * dy - cy
+            if d + k * force / math.sqrt(ex * ex + ey * ey + s2) < 0.0:
+                found = True
+                a0, a1 = min(a0, a), max(a1, a)
+                c0, c1 = min(c0, c), max(c1, c)
+    return found, a0, a1, c0, c1
+
+
 def _grown(meshed: Bounds, asked: Bounds, automatic: tuple[bool, bool]) -> Bounds:
     """The area ``meshed`` (the grid's) scaled by :data:`GROW_FACTOR` about its centre
     along the automatic axes; along the others the area ``asked`` for, unchanged (a grid

@@ -38,6 +38,7 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import CaseError, ConvergenceError, RailContactError
@@ -49,6 +50,7 @@ from ..geometry.search import (
     at_reference,
     contact_points,
     count_contacts,
+    overlap_box,
     reference_point,
 )
 from ..geometry.track import Pose, Track, Wheelset
@@ -61,7 +63,7 @@ from ..halfspace.hertz import (
     semi_axis_bound,
 )
 from ..halfspace.materials import ElasticPair
-from ..settings import Case, Control, PatchSettings, WheelRailGeometry
+from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
 from .loadloop import (
     CREEP_LOAD_RTOL,
@@ -74,6 +76,7 @@ from .loadloop import (
     vertical_force,
 )
 from .patch import (
+    UNCOVERED_MARGIN,
     estimate_label,
     labelled,
     normal_estimate,
@@ -81,6 +84,7 @@ from .patch import (
     solve_patch_tangential,
     start_from,
     start_pressure,
+    uncovered,
 )
 from .results import PatchSolution
 
@@ -217,6 +221,10 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         dn = cp.normal_penetration(approach)
         if dn <= 0 and loads is None:
             continue
+        # beside other patches: the patch's own run of the overlap alone (the others'
+        # lobes, which its plane's gap also shows, are theirs)
+        gap_of = (cp.gap_on_grid if len(cps) == 1 or loads is not None else
+                  own_gap(cp, [o for o in cps if o is not cp]))
         if not (math.isfinite(cp.B) and cp.B > 0 and cp.A > 0):
             raise CaseError(f"{cp.side} wheel: no convex contact at S = {cp.wheel_s:.4g} m "
                             "(conformal or concave gap); cannot set up the patch")
@@ -247,6 +255,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         # an estimate may know a tighter area (a time step: where the contact was);
         # else the rigid overlap's, with the margin
         bounds = getattr(est, "bounds", None)
+        given = bool(bounds)  # (a time step's: where the contact was, checked after)
         if not bounds:
             d0 = hz.penetration if loads is not None else dn
             if loads is not None and cp.approach is not None:  # formed at one: its own
@@ -256,13 +265,111 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             bounds = (-xl, xl, ylo, yhi)
         keep = last is not None and _covers(last.normal.grid.bounds, bounds,
                                             grid.dx is None or grid.dy is None)
-        res, work = solve_patch_normal(cp.gap_on_grid, bounds, grid, normal, pair, control,
+        res, work = solve_patch_normal(gap_of, bounds, grid, normal, pair, control,
                                        est, grid=last.normal.grid if keep else None)
+        if given:
+            res = _overlap_covered(cp, gap_of, bounds, grid, normal, pair, control, est, res,
+                                   work)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz,
                                  estimate=estimate_label(est, normal.estimate),
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work))
     return out
+
+
+MAX_OVERLAP_PASSES = 3
+"""Solves of a patch on an area grown to hold where its contact could reach at most
+(:func:`_overlap_covered`)."""
+
+
+OTHER_PATCH_GAP = 0.01
+"""Undeformed gap [m] given to the elements of a patch's grid that lie in another patch's
+lobe of its overlap (:func:`own_gap`): far beyond any penetration, below the gaps that
+mark where the profiles end (:data:`~.patch.UNDEFINED_GAP`)."""
+
+
+def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], Any]:
+    """The undeformed gap of the patch ``cp`` on a grid [m] (:meth:`~railcontact.geometry.
+    search.ContactPoint.gap_on_grid`) with the columns beyond the watershed towards each
+    of the wheel's ``others`` patches raised to :data:`OTHER_PATCH_GAP`.
+
+    The gap in a patch's plane also shows the lobes of the other patches' overlaps (the
+    tread seen from a flange-root patch's plane): a grid reaching them - an earlier load
+    pass's, kept, or one grown to hold a lobe - would carry their load a second time
+    beside the other patch's own solve. The watershed is the sample of the largest gap
+    ``f(s)`` between the patch's origin and the other patch's point (its rail position
+    read in this plane): it does not depend on the approach, so the load loops'
+    residuals stay continuous, and up to it the gap rises, so no contact of this patch's
+    own lobe is cut."""
+    s, f = cp.s, cp.f
+    u = cp.rail_u_of_s
+    ok = np.isfinite(u) & np.isfinite(f)
+    k0 = int(np.argmin(np.abs(s)))
+    lo, hi = -math.inf, math.inf
+    for o in others:
+        hits = np.flatnonzero(ok)
+        if hits.size < 2:
+            continue
+        k = int(hits[np.argmin(np.abs(u[hits] - o.rail_u))])  # the other's point here
+        if k == k0:
+            continue
+        a, b = (k0, k) if k > k0 else (k, k0)
+        seg = np.where(ok[a:b + 1], f[a:b + 1], -math.inf)
+        w = float(s[a + int(np.argmax(seg))])
+        if k > k0:
+            hi = min(hi, w)
+        else:
+            lo = max(lo, w)
+
+    def gap_of(grid: Grid):
+        g = cp.gap_on_grid(grid)
+        y = grid.y
+        cols = (y < lo) | (y > hi)
+        if cols.any():
+            g[:, cols] = np.maximum(g[:, cols], OTHER_PATCH_GAP)
+        return g
+    return gap_of
+
+
+def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
+                     bounds: tuple[float, float, float, float], grid: GridSettings, normal,
+                     pair: ElasticPair, control: Control, est, res, work):
+    """The normal solution ``res`` of the patch ``cp`` on a potential area ``bounds``
+    [m] that an estimate gave (a time step's: the previous contact's box with a margin),
+    checked against the patch's rigid overlap at the penetration it found
+    (:func:`~railcontact.geometry.search.overlap_box`, :func:`~.patch.uncovered`): while
+    the overlap beyond the grid holds places where the solution's deformed gap may be
+    negative, the patch is solved again on the area grown to hold them (with
+    :data:`~.patch.UNCOVERED_MARGIN` elements around), its work added to ``work``.
+
+    A contact that does not reach the edge of the given area can still miss a region of
+    the overlap beyond it (a second lobe of the gap across the flange root, the tread
+    beside a flange-root contact) and carry the load on the part the area holds: the
+    patch solver grows an area only where its contact reaches the edge. After the check
+    the solution is the one a grid holding the whole overlap gives (a cold solve's),
+    within the solver's tolerance. A solve still uncovered after
+    :data:`MAX_OVERLAP_PASSES` is not converged."""
+    for k in range(MAX_OVERLAP_PASSES + 1):
+        if not (res.force > 0 and math.isfinite(res.penetration) and res.penetration > 0):
+            return res
+        flagged = uncovered(gap_of, res, pair, overlap_box(cp, res.penetration))
+        if flagged is None:
+            return res
+        if k == MAX_OVERLAP_PASSES:
+            break
+        m = UNCOVERED_MARGIN
+        bounds = (min(bounds[0], flagged[0] - m * res.grid.dx),
+                  max(bounds[1], flagged[1] + m * res.grid.dx),
+                  min(bounds[2], flagged[2] - m * res.grid.dy),
+                  max(bounds[3], flagged[3] + m * res.grid.dy))
+        res, more = solve_patch_normal(gap_of, bounds, grid, normal, pair, control, est)
+        work.absorb(more)
+        work.remeshes += 1
+    if res.converged:
+        res.converged = False
+        res.message = ("the contact may reach beyond the potential area after "
+                       f"{MAX_OVERLAP_PASSES} enlargements ({res.message})")
+    return res
 
 
 def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,

@@ -166,6 +166,50 @@ class ContactPoint:
         return margin * a, margin * b
 
 
+def overlap_box(cp: ContactPoint, penetration: float) -> tuple[float, float, float, float]:
+    """The box (xmin, xmax, ymin, ymax) [m] in the patch's plane around its rigid
+    overlap at the normal ``penetration`` [m]: the points ``(x, s)`` of the run of lateral
+    samples through the origin where ``f(s) <= penetration`` (the run the cold potential
+    area is formed on, :meth:`ContactPoint.lateral_extent`) with ``f(s) + A(s) x^2 <=
+    penetration``, widened by one sample spacing across.
+
+    Where the undeformed gap exceeds the penetration the surfaces cannot touch (the
+    elastic displacements of a compressive pressure only open the gap), so a potential
+    area that holds this box holds every place the patch's contact can reach. A frame
+    at the reference point formed over part of its samples (:func:`at_reference`) forms
+    more only where the run reaches the part's edge."""
+    penetration = float(penetration)
+    d = cp.__dict__
+    part = d.get("_part")
+    while part is not None and "f" not in d:
+        frame, i0, i1, _ = part
+        f = frame[kernels.F, i0:i1]
+        lo, hi = kernels.lateral_extent(_S_SAMPLES[i0:i1], f, penetration,
+                                        min(max(K0 - i0, 0), i1 - i0 - 1))
+        a, b = i0 - kernels.FRAME_GROW if lo == 0 and i0 > 0 else i0, \
+            i1 + kernels.FRAME_GROW if hi == i1 - i0 - 1 and i1 < N_S else i1
+        if (a, b) == (i0, i1):
+            return _box(_S_SAMPLES[i0:i1], f, frame[kernels.A_OF_S, i0:i1], lo, hi,
+                        penetration)
+        part = _extended(part, max(a, 0), min(b, N_S))
+        d["_part"] = part
+    s, f = cp.s, cp.f
+    k0 = K0 if s is _S_SAMPLES else kernels.nearest(s, 0.0)
+    lo, hi = kernels.lateral_extent(s, f, penetration, k0)
+    return _box(s, f, cp.a_of_s, lo, hi, penetration)
+
+
+def _box(s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, lo: int, hi: int,
+         penetration: float) -> tuple[float, float, float, float]:
+    """:func:`overlap_box` of the run ``lo..hi`` (inclusive) of the samples."""
+    ds = float(s[1] - s[0])
+    depth = penetration - f[lo:hi + 1]
+    a = a_of_s[lo:hi + 1]
+    ok = (depth > 0) & (a > 0)
+    xl = math.sqrt(float(np.max(depth[ok] / a[ok]))) if ok.any() else 0.0
+    return (-xl, xl, float(s[lo]) - ds, float(s[hi]) + ds)
+
+
 def overlap_on_rail(cp: ContactPoint, penetration: float) -> tuple[float, float] | None:
     """The lateral positions on the rail [m] (side frame, as :attr:`ContactPoint.rail_u`)
     spanned by the lateral samples of ``cp`` where its gap ``f`` is below the normal

@@ -371,7 +371,11 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
 
     The BEM's answer does not depend on the potential area as long as the contact stays
     inside it (the grids share one lattice); one that the contact reaches is grown and
-    solved again by the patch solver, so a tight area costs a re-mesh at worst. A warm
+    solved again by the patch solver, and one beyond which the rigid overlap holds a place
+    the solved pressure may not keep open (a second lobe of the gap: the tread beside a
+    flange-root contact) is grown to hold it and solved again
+    (:func:`railcontact.contact.wheelrail._overlap_covered`), so a tight area costs a
+    re-mesh at worst and never leaves contact out. A warm
     step then transforms and iterates on a grid a third of the size the Hertz estimate
     would mesh (whose area, for the wheel load, is the rigid interpenetration area with a
     margin)."""

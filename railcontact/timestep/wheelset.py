@@ -109,6 +109,19 @@ STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contac
 accurate); no contact (zero forces); out of range (the pose or a patch beyond the model:
 nothing solved, zero forces); outside validity (solved, but beyond a limit of
 :mod:`.validity`: Y/Q, Nadal's limit, flange climb, penetration, wheel load)."""
+WARM_PROMISE = (0.01, 0.02)
+"""What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
+eps_tau = 1e-2, load tolerance 1e-3): its wheel's normal force N within this first share
+of N, and each creep force component within the second share of mu N, of a cold solve
+of the same state at tight tolerances. The previous step's solution starts the solves
+and bounds each patch's potential area; the area is grown wherever the rigid overlap
+beyond it may touch (:func:`railcontact.contact.patch.uncovered`), so no contact is
+left out, and the solvers stop on the same criteria as from cold. Not promised: a wheel
+whose load is met at more than one approach may take another root than the cold solve -
+a steep patch's creep force (:attr:`WheelContact.load_unique` False), or the flange root
+and the tread as two patches at one approach and as one merged patch at a larger one
+(which ``load_unique`` does not detect; ``scripts/fuzz_warm.py`` finds it in 10 of
+8,669 warm wheels across the flange root, seeds 1, 3 and 4, at 4.9-5.4 mm lateral)."""
 SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
 """The statuses from the least to the most severe: the wheelset's status is its wheels'
 most severe."""
@@ -922,4 +935,4 @@ def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -
 
 
 __all__ = ["ContactSettings", "Kinematics", "WheelContact", "WheelsetContact",
-           "WheelsetResult", "STATUS_NAMES"]
+           "WheelsetResult", "STATUS_NAMES", "WARM_PROMISE"]
