@@ -287,7 +287,7 @@ def uncovered(gap_of: Callable[[Grid], np.ndarray], res: NormalResult, pair: Ela
     (``h`` the undeformed gap ``gap_of`` gives, ``delta`` the penetration, ``u`` the
     displacement of the solved pressure). A place with ``h >= delta`` cannot touch
     (``u >= 0``); elsewhere a lower bound of ``u`` decides: by Jensen's inequality for
-    the convex ``1/r`` and Cauchy-Schwarz,
+    the convex ``1/r`` and Cauchy-Schwarz::
 
         u(x) = 1/(pi E*) int p(y) / |x - y| dy >= F / (pi E* sqrt(|x - c|^2 + s^2)),
 
