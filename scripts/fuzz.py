@@ -476,6 +476,10 @@ def check_solution(d: dict, case: dict) -> list[str]:
                 bad.append(f"{where}: rolling radius {p['rolling_radius']:.4g} m")
             fs = t["force"][1] if t is not None else 0.0
             side = p["side"]
+            if case.get("convention", "railcontact") == "contact":
+                from railcontact.settings.convention import SIDE_SIGN
+
+                fs = SIDE_SIGN[side] * fs  # CONTACT's F_s (on the rail, mirrored) -> the wheel's
             vertical[side] = vertical.get(side, 0.0) + force * math.cos(gam) + fs * math.sin(gam)
         else:
             vertical["-"] = vertical.get("-", 0.0) + force

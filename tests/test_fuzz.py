@@ -125,3 +125,23 @@ def test_fuzzed_wheelset_steps_in_process():
                                 f"{step}")
     assert not findings, _report(findings)
     assert kinds.get("ok", 0) >= N_STEPS // 2
+
+
+def test_the_load_check_reads_contact_convention():
+    """Under ``convention = "contact"`` the JSON's lateral creep forces are CONTACT's (on the
+    rail, the right wheel mirrored); the vertical-load check turns them back into the
+    wheel's before it sums N cos(gamma) + F_s sin(gamma). On the right wheel's flange root
+    (large F_s, steep angle) a misread sign misses the load by far more than LOAD_RTOL."""
+    from railcontact.io.jsonout import solution_json
+
+    case = {"convention": "contact",
+            "material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                         "lateral_displacement": -5.5e-3, "side": "right"},
+            "grid": {"dx": 0.5e-3, "dy": 0.5e-3},
+            "normal": {"load": 83.3e3},
+            "tangential": {"creepage": [0.0, 1e-3, 0.0], "friction": 0.4}}
+    d = fuzz.strict_json(solution_json(rc.solve(case)))
+    assert fuzz.check_solution(d, case) == []
+    railcontact_case = {**case, "convention": "railcontact"}  # the same JSON, misread
+    assert any("misses the load" in p for p in fuzz.check_solution(d, railcontact_case))
