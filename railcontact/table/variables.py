@@ -56,8 +56,11 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("area", "m2", "contact area (sum over patches)", lambda w: w.area),
     Quantity("max_pressure", "Pa", "maximum pressure", lambda w: w.max_pressure),
     Quantity("slip_area_ratio", "1", "slip area / contact area", lambda w: w.slip_area_ratio),
+    Quantity("penetration", "m", "largest normal penetration of the patches",
+             lambda w: w.penetration),
 )
-"""The interpolated quantities (floats)."""
+"""The interpolated quantities (floats). A store written before ``penetration`` was one
+lacks it (:attr:`~.interpolate.ContactTable.missing`)."""
 
 COUNTS: tuple[Quantity, ...] = (
     Quantity("n_patches", "1", "number of contact patches", lambda w: w.n_patches),
