@@ -753,6 +753,8 @@ def test_table_step_checks_validity_as_the_exact_step(flange_table):
     want = bem.solve(Pose(0.008), loads=loads, creepages=cr).left
     assert want.status == got.status == 4
     assert want.validity == got.validity == Y_Q | NADAL | FLANGE_CLIMB
+    other = tc.solve(Pose(0.006), loads=loads, creepages=cr).left  # the other node
+    assert other.validity == bem.solve(Pose(0.006), loads=loads, creepages=cr).left.validity
     assert got.derailment_quotient == pytest.approx(want.derailment_quotient, rel=0.01)
     assert got.derailment_quotient == pytest.approx(
         -got.track_force[1] / got.track_force[2])
@@ -799,11 +801,12 @@ def test_table_step_outside_the_axes_is_out_of_range_never_clamped(flange_table)
         tc.solve(Pose(0.008), loads=(83.3e3, -1.0), creepages=cr)
 
 
-def test_a_store_without_penetration_is_read_and_refused_by_the_table_step(flange_table,
-                                                                           tmp_path):
-    """A store written before ``penetration`` and the wheel's flange were stored: it is
-    read (the quantity NaN, named in ``missing``; the flange from the case's wheel
-    profile), a table step refuses it naming what it lacks, a build does not resume it."""
+def test_a_store_without_the_validity_quantities_is_read_and_refused_by_a_step(
+        flange_table, tmp_path):
+    """A store written before penetration, the patch nearest the flange tip and the wheel's
+    flange were stored: it is read (those quantities NaN, named in ``missing``; the flange
+    from the case's wheel profile), a table step refuses it naming what it lacks, a build
+    does not resume it."""
     import zarr
 
     from railcontact.table.step import TableContact
@@ -812,19 +815,22 @@ def test_a_store_without_penetration_is_read_and_refused_by_the_table_step(flang
     old = tmp_path / "old.zarr"
     shutil.copytree(flange_table, old)
     g = zarr.open_group(str(old), mode="r+")
-    del g["penetration"]
+    for name in ("penetration", "tip_position", "tip_angle"):
+        del g[name]
     flange = json.loads(g.attrs["flange_flank"])
     del g.attrs["flange_flank"]
     table = ContactTable.open(old)
-    assert table.missing == ("penetration",)
+    assert table.missing == ("penetration", "tip_position", "tip_angle")
     assert np.isnan(table.node((1,), "left")["penetration"])
     assert table.flange == pytest.approx(flange)
     assert ContactTable.open(flange_table).flange == tuple(flange)
-    with pytest.raises(RailContactError, match="without penetration.*build it anew"):
+    with pytest.raises(RailContactError, match="without penetration, tip_position, "
+                       "tip_angle, which a table step needs.*build it anew"):
         TableContact(table)
     spec = tmp_path / "spec.toml"
     spec.write_text(FLANGE_SPEC)
-    with pytest.raises(RailContactError, match="without penetration: it cannot be resumed"):
+    with pytest.raises(RailContactError, match="without penetration, tip_position, "
+                       "tip_angle: it cannot be resumed"):
         Store(old, load_spec(spec))
 
 

@@ -26,10 +26,11 @@ and its ``validity`` bits checked against the limits as the exact step does
 ``max_y_q`` or beyond Nadal's limit (with the table's friction coefficient), flange climb,
 penetration above ``max_penetration``, wheel load above ``max_wheel_load``; an ok wheel
 beyond one is outside validity (status 4). All from the interpolated values: the rail's
-force on the wheel, the largest penetration of the patches (stored per node), and the
-contact point of the main patch (the table keeps only that one's profile coordinate and
-angle, so flange climb is judged on the main patch, the exact step on every patch). A
-table whose store lacks ``penetration`` (written by an earlier railcontact) is refused.
+force on the wheel, the largest penetration of the patches and the profile coordinate and
+contact angle of the patch nearest the flange tip (the one that decides flange climb),
+each stored per node. At a node the bits are the exact solve's; between nodes they are
+those of the interpolated values. A table whose store lacks any of these (written by an
+earlier railcontact) is refused, naming them.
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ from ..timestep.wheelset import (
 )
 from .interpolate import ContactTable
 from .spec import AXES
-from .variables import NOT_COMPUTED
+from .variables import NOT_COMPUTED, VALIDITY_QUANTITIES
 
 ABSENT_RTOL = 1e-9
 """How close an input must be to the case's value on an axis the table does not have."""
@@ -90,11 +91,12 @@ class TableContact:
                  settings: ContactSettings | None = None) -> None:
         if method not in ("linear", "cubic"):
             raise RailContactError(f"method must be 'linear' or 'cubic', got {method!r}")
-        if "penetration" in table.missing:
+        lacking = [n for n in VALIDITY_QUANTITIES if n in table.missing]
+        if lacking:
             raise RailContactError(
                 f"the table {table.path} was built by an earlier railcontact without "
-                f"{', '.join(table.missing)}, which a table step needs for its validity "
-                "(max_penetration); build it anew with railcontact table build")
+                f"{', '.join(lacking)}, which a table step needs for its validity "
+                "(penetration, flange climb); build it anew with railcontact table build")
         self.table, self.method = table, method
         case = table.case
         tangential = case.get("tangential") or {}
@@ -217,7 +219,7 @@ class TableContact:
 
     def _fill(self, side: str, vals: np.ndarray, status: int, creep) -> WheelContact:
         (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl,
-         pen) = vals.tolist()
+         pen, ts, ta) = vals.tolist()
         if status != OK:
             forces = (fn, fx, fy, mz, tx, ty, tz, ym, ar, pm, sl, pen)
             if status == NO_CONTACT or not all(map(math.isfinite, forces)):
@@ -226,6 +228,7 @@ class TableContact:
                     "the table has no value here (a node around it is not ok)"))
             cx, cy, cz, ws, rs, ga, rr = (0.0 if not math.isfinite(a) else a
                                           for a in (cx, cy, cz, ws, rs, ga, rr))
+            ts, ta = (ws, ga) if not math.isfinite(ts + ta) else (ts, ta)
         s = SIDES[side]
         wheel = WheelContact(
             side=side, status=status,
@@ -237,7 +240,7 @@ class TableContact:
             contact_point=(cx, cy, cz), penetration=pen)
         wheel.derailment_quotient = derailment_quotient(s, wheel.track_force)
         if fn > 0.0:  # (the same marking as WheelsetContact's)
-            v = check_limits(s, wheel.track_force, [(ws, ga)], pen, self.flange, self.limits)
+            v = check_limits(s, wheel.track_force, [(ts, ta)], pen, self.flange, self.limits)
             wheel.validity = v.flags
             if v.flags and wheel.status == OK:
                 wheel.status = OUTSIDE_VALIDITY
@@ -253,7 +256,7 @@ _FIELDS = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment",
            "force_longitudinal", "force_lateral", "force_vertical", "yaw_moment",
            "contact_x", "contact_y", "contact_z", "wheel_position", "rail_position",
            "contact_angle", "rolling_radius", "area", "max_pressure", "slip_area_ratio",
-           "penetration")
+           "penetration", "tip_position", "tip_angle")
 _GEOMETRIC = ("contact_x", "contact_y", "contact_z", "wheel_position", "rail_position",
               "contact_angle", "rolling_radius")
 
