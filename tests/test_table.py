@@ -802,11 +802,11 @@ def test_table_step_outside_the_axes_is_out_of_range_never_clamped(flange_table)
 
 
 def test_a_store_without_the_validity_quantities_is_read_and_refused_by_a_step(
-        flange_table, tmp_path):
+        flange_table, tmp_path, capsys):
     """A store written before penetration, the patch nearest the flange tip and the wheel's
     flange were stored: it is read (those quantities NaN, named in ``missing``; the flange
     from the case's wheel profile), a table step refuses it naming what it lacks, a build
-    does not resume it."""
+    does not resume it, ``railcontact table show`` still shows it."""
     import zarr
 
     from railcontact.table.step import TableContact
@@ -832,6 +832,8 @@ def test_a_store_without_the_validity_quantities_is_read_and_refused_by_a_step(
     with pytest.raises(RailContactError, match="without penetration, tip_position, "
                        "tip_angle: it cannot be resumed"):
         Store(old, load_spec(spec))
+    assert main(["table", "show", str(old)]) == 0  # still shown
+    assert "left   ok 2" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("axes, words", [
