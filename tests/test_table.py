@@ -460,7 +460,9 @@ def _cubic_field_table(bad: dict[tuple[int, int], int]) -> tuple[ContactTable, o
         status[(*index, 0)] = st
         values[(*index, 0)] = np.nan
     axes = {"lateral_displacement": ys, "creepage_y": etas}
-    return ContactTable(axes, ("left", "right"), values, status, {}), f
+    # (the flange of S1002, which a table step's validity needs: this case has no wheel)
+    return ContactTable(axes, ("left", "right"), values, status, {},
+                        flange=(-0.03845, 1.22193)), f
 
 
 def test_cubic_with_failed_nodes_is_local_or_linear_never_a_traceback():
@@ -682,3 +684,193 @@ def test_messages_are_written_per_batch_and_gathered_when_the_build_ends(tmp_pat
     store.write(b, result(b), msg(b, "new b"))
     store.finish(False)
     assert [m["message"] for m in read_messages(old)] == ["old a", "new b"]
+
+
+FLANGE_SPEC = """
+name = "flange"
+[material]
+young = 206e9
+poisson = 0.28
+[geometry]
+type = "wheel-rail"
+wheel = "S1002"
+rail = "60E1"
+[grid]
+dx = 2e-3
+dy = 2e-3
+[normal]
+load = 83.3e3
+[tangential]
+creepage = [0.002, -0.002, 0.3]
+friction = 0.3
+[table]
+lateral_displacement = [0.006, 0.008, 2]
+"""
+
+
+@pytest.fixture(scope="module")
+def flange_table(tmp_path_factory, scheduler):
+    """A table of the flange (the left wheel at y = 6 and 8 mm: Y/Q about 3.6 at 8 mm)."""
+    d = tmp_path_factory.mktemp("flange")
+    (d / "spec.toml").write_text(FLANGE_SPEC)
+    out = d / "flange.zarr"
+    assert main(["table", "build", str(d / "spec.toml"), "-o", str(out), "--scheduler",
+                 scheduler, "--quiet"]) == 0
+    return out
+
+
+def test_table_step_checks_validity_as_the_exact_step(flange_table):
+    """On the flange (y = 8 mm, 83.3 kN, creepages (2e-3, -2e-3, 0.3 1/m), mu 0.3) the
+    exact step is outside validity (status 4, validity Y_Q | NADAL | FLANGE_CLIMB, Y/Q
+    3.64): the table step gives the same status and bits, its Y/Q and penetration to the
+    solvers' tolerances (was: status 0, Y/Q 0, validity 0, penetration 0). The limits are
+    the step's settings (a tighter max_penetration and max_wheel_load set their bits;
+    Nadal's limit with the table's friction, whatever the settings' friction); between the
+    nodes Y/Q is that of the interpolated forces."""
+    import railcontact as rc
+    from railcontact.geometry.track import Pose
+    from railcontact.table.step import TableContact
+    from railcontact.timestep.validity import (
+        FLANGE_CLIMB,
+        LOAD,
+        NADAL,
+        PENETRATION,
+        Y_Q,
+        nadal_limit,
+    )
+    from railcontact.timestep.wheelset import WheelsetContact
+
+    tc = TableContact.open(flange_table)
+    steel = rc.Material(206e9, 0.28)
+    bem = WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 0.0249948),
+                          rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                          rc.ElasticPair.of(steel, steel),
+                          rc.ContactSettings(friction=0.3, element_size=2e-3,
+                                             warm_start="none"))
+    cr = ((0.002, -0.002, 0.3), (0.002, 0.002, -0.3))
+    loads = (83.3e3, 83.3e3)
+    got = tc.solve(Pose(0.008), loads=loads, creepages=cr).left
+    want = bem.solve(Pose(0.008), loads=loads, creepages=cr).left
+    assert want.status == got.status == 4
+    assert want.validity == got.validity == Y_Q | NADAL | FLANGE_CLIMB
+    other = tc.solve(Pose(0.006), loads=loads, creepages=cr).left  # the other node
+    assert other.validity == bem.solve(Pose(0.006), loads=loads, creepages=cr).left.validity
+    assert got.derailment_quotient == pytest.approx(want.derailment_quotient, rel=0.01)
+    assert got.derailment_quotient == pytest.approx(
+        -got.track_force[1] / got.track_force[2])
+    assert got.penetration == pytest.approx(want.penetration, rel=0.05)
+    assert got.message.startswith("outside validity: Y/Q = 3.6")
+    assert "Nadal's limit" in got.message and "flange climb" in got.message
+    # the step's limits; the table's friction for Nadal's limit
+    tight = TableContact.open(flange_table, settings=rc.ContactSettings(
+        friction=0.9, max_y_q=10.0, max_penetration=0.1e-3, max_wheel_load=80e3))
+    assert tight.limits.friction == 0.3
+    w = tight.solve(Pose(0.008), loads=loads, creepages=cr).left
+    assert w.status == 4 and w.validity == NADAL | FLANGE_CLIMB | PENETRATION | LOAD
+    assert f"Nadal's limit {nadal_limit(tc.flange[1], 0.3):.3g}" in w.message
+    # between the nodes: the interpolated forces' Y/Q, the same checks
+    lo, hi = (tc.solve(Pose(y), loads=loads, creepages=cr).left for y in (0.006, 0.008))
+    mid = tc.solve(Pose(0.007), loads=loads, creepages=cr).left
+    assert mid.derailment_quotient == pytest.approx(
+        -(lo.track_force[1] + hi.track_force[1]) / (lo.track_force[2] + hi.track_force[2]))
+    assert mid.status == 4 and mid.validity & (Y_Q | NADAL) == Y_Q | NADAL
+
+
+def test_table_step_outside_the_axes_is_out_of_range_never_clamped(flange_table):
+    """A state just outside the table's axis (below or above it) is out of range (status
+    3) with zero forces and a message naming the axis, the value and the table's range,
+    never the nearest node's values; a negative load is an error, as in the exact step."""
+    from railcontact.geometry.track import Pose
+    from railcontact.table.step import TableContact
+
+    tc = TableContact.open(flange_table)
+    cr = ((0.002, -0.002, 0.3), (0.002, 0.002, -0.3))
+    for y in (0.006 - 1e-9, 0.008 + 1e-9):
+        res = tc.solve(Pose(y), loads=(83.3e3, 83.3e3), creepages=cr)
+        for w in res.wheels:
+            assert (w.status, w.normal_force, w.track_force, w.derailment_quotient,
+                    w.validity) == (3, 0.0, (0.0, 0.0, 0.0), 0.0, 0)
+            assert f"lateral_displacement = {y:g} m is outside the table [0.006, 0.008]" \
+                in w.message
+        assert res.status == 3
+    # the case's load (83.3 kN) only: another is out of range, named
+    res = tc.solve(Pose(0.008), loads=(83.3e3, 90e3), creepages=cr)
+    assert (res.left.status, res.right.status) == (4, 3)
+    assert "no load axis" in res.right.message
+    with pytest.raises(RailContactError, match="right wheel load .N. must be non-negative"):
+        tc.solve(Pose(0.008), loads=(83.3e3, -1.0), creepages=cr)
+
+
+def test_a_store_without_the_validity_quantities_is_read_and_refused_by_a_step(
+        flange_table, tmp_path, capsys):
+    """A store written before penetration, the patch nearest the flange tip and the wheel's
+    flange were stored: it is read (those quantities NaN, named in ``missing``; the flange
+    from the case's wheel profile), a table step refuses it naming what it lacks, a build
+    does not resume it, ``railcontact table show`` still shows it."""
+    import zarr
+
+    from railcontact.table.step import TableContact
+    from railcontact.table.store import Store
+
+    old = tmp_path / "old.zarr"
+    shutil.copytree(flange_table, old)
+    g = zarr.open_group(str(old), mode="r+")
+    for name in ("penetration", "tip_position", "tip_angle"):
+        del g[name]
+    flange = json.loads(g.attrs["flange_flank"])
+    del g.attrs["flange_flank"]
+    table = ContactTable.open(old)
+    assert table.missing == ("penetration", "tip_position", "tip_angle")
+    assert np.isnan(table.node((1,), "left")["penetration"])
+    assert table.flange == pytest.approx(flange)
+    assert ContactTable.open(flange_table).flange == tuple(flange)
+    with pytest.raises(RailContactError, match="without penetration, tip_position, "
+                       "tip_angle, which a table step needs.*build it anew"):
+        TableContact(table)
+    spec = tmp_path / "spec.toml"
+    spec.write_text(FLANGE_SPEC)
+    with pytest.raises(RailContactError, match="without penetration, tip_position, "
+                       "tip_angle: it cannot be resumed"):
+        Store(old, load_spec(spec))
+    assert main(["table", "show", str(old)]) == 0  # still shown
+    assert "left   ok 2" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("axes, words", [
+    ({"lateral_displacement": [0.0, 0.004, 10_000_000_000]},
+     "10000000000 points (lateral_displacement 10000000000); at most 10000000"),
+    ({"lateral_displacement": [0.0, 0.004, 100_000], "load": [60e3, 80e3, 100_000]},
+     "10000000000 points (lateral_displacement 100000 x load 100000)"),
+    ({"load": [60e3, 80e3, 0], "lateral_displacement": [0.0, 0.004, 10_000_000_000]},
+     "at most 10000000"),
+])
+def test_a_huge_axis_count_is_refused_before_any_allocation(axes, words, tmp_path, capsys):
+    """An axis count of 1e10 (or a product of counts beyond the limit): a one-line error
+    naming the counts, the limit and the memory the table would take, raised before any
+    axis is made (was: np.linspace allocated 74.5 GiB, a MemoryError); also from the
+    command line (exit 2)."""
+    import tracemalloc
+
+    from railcontact.errors import CaseError
+    from railcontact.table import parse_spec
+    from railcontact.table.spec import tomllib
+
+    raw = tomllib.loads(FLANGE_SPEC.split("[table]")[0])
+    raw["table"] = axes
+    tracemalloc.start()
+    try:
+        with pytest.raises(CaseError, match="GiB in memory") as err:
+            parse_spec(raw)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert words in str(err.value)
+    assert peak < 10 * 2**20
+    spec = tmp_path / "spec.toml"
+    spec.write_text(FLANGE_SPEC.split("[table]")[0] + "[table]\n" + "".join(
+        f"{k} = {v!r}\n" for k, v in axes.items()))
+    assert main(["table", "build", str(spec), "-o", str(tmp_path / "t.zarr"),
+                 "--workers", "1", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "at most 10000000" in err and "Traceback" not in err
+    assert not (tmp_path / "t.zarr").exists()

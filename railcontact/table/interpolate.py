@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .spec import AXES
-from .store import IDENTITY, open_dataset
+from .store import FLANGE, IDENTITY, open_dataset, wheel_flange
 from .variables import NOT_COMPUTED, OK, QUANTITIES, STATUS_MEANINGS
 
 METHODS = ("linear", "cubic")
@@ -138,11 +138,16 @@ class ContactTable:
     """
 
     def __init__(self, axes: dict[str, np.ndarray], sides: tuple[str, ...],
-                 values: np.ndarray, status: np.ndarray, case: dict, path: str = "") -> None:
+                 values: np.ndarray, status: np.ndarray, case: dict, path: str = "",
+                 flange: tuple[float, float] | None = None,
+                 missing: tuple[str, ...] = ()) -> None:
         self.axes = {n: np.asarray(v, dtype=float) for n, v in axes.items()}
         self.sides = tuple(sides)
         self.names = tuple(q.name for q in QUANTITIES)
         self.case, self.path = case, path
+        self.missing = tuple(missing)
+        """Quantities the store lacks (written by an earlier railcontact): NaN here."""
+        self._flange = None if flange is None else (float(flange[0]), float(flange[1]))
         self._values = values  # (*axes, side, quantity)
         self._status = status  # (*axes, side)
         self._nodes = [list(map(float, v)) for v in self.axes.values()]
@@ -173,10 +178,33 @@ class ContactTable:
         ident = json.loads(ds.attrs[IDENTITY])
         names = list(ident["axes"])
         axes = {n: ds[n].values for n in names}
-        values = np.stack([ds[q.name].values for q in QUANTITIES], axis=-1)
+        missing = tuple(q.name for q in QUANTITIES if q.name not in ds)
         status = ds["status"].values.astype(np.int8)
+        values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
+                           ds[q.name].values for q in QUANTITIES], axis=-1)
+        flange = json.loads(ds.attrs[FLANGE]) if FLANGE in ds.attrs else None
         return cls(axes, tuple(ds["side"].values.tolist()), values, status, ident["case"],
-                   str(path))
+                   str(path), flange, missing)
+
+    @property
+    def flange(self) -> tuple[float, float]:
+        """Profile coordinate S [m] and angle [rad] of the steepest point of the wheel's
+        flange (the store's, else from the case's wheel profile,
+        :func:`~.store.wheel_flange`).
+
+        Raises
+        ------
+        RailContactError
+            When the store does not hold it and the wheel profile cannot be read.
+        """
+        if self._flange is None:
+            try:
+                self._flange = tuple(wheel_flange(self.case))
+            except RailContactError as exc:
+                raise RailContactError(f"the table {self.path} does not hold its wheel's "
+                                       f"flange, and its wheel profile cannot be read: {exc}"
+                                       ) from None
+        return self._flange
 
     # -- lookup --------------------------------------------------------------------------
     def _side(self, side: str) -> int:

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import CaseError
 from ..settings import Case
+from .variables import QUANTITIES
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -173,6 +174,51 @@ def case_with(case: dict[str, Any], values: dict[str, float], side: str | None =
     return out
 
 
+def axis_count(name: str, value: Any) -> int:
+    """The number of nodes of an axis from its ``[table]`` entry, without making the nodes
+    (so that a huge count is refused before any memory is taken); at least 1, and 1 for an
+    entry :func:`axis_values` refuses (with its own message)."""
+    if isinstance(value, dict):
+        value = value.get("values")
+        explicit = True
+    else:
+        explicit = not (isinstance(value, list) and len(value) == 3)
+    if not isinstance(value, list):
+        return 1
+    if explicit:
+        return max(len(value), 1)
+    count = value[2]
+    if (not isinstance(count, (int, float)) or isinstance(count, bool)
+            or not math.isfinite(count) or count != int(count)):
+        return 1
+    return max(int(count), 1)
+
+
+def table_bytes(points: int, sides: int = 2) -> int:
+    """Memory [bytes] of a table of ``points`` grid points and ``sides`` wheels read to
+    interpolate (:class:`~.interpolate.ContactTable`: every quantity as float64, the status
+    as int8)."""
+    return points * sides * (8 * len(QUANTITIES) + 1)
+
+
+def check_size(counts: dict[str, int], sides: int = 2) -> None:
+    """Refuse a table of more than :data:`MAX_POINTS` points, naming each axis's count and
+    the memory it would take (:func:`table_bytes`), before any axis is made.
+
+    Raises
+    ------
+    CaseError
+        When the product of ``counts`` (axis name -> number of nodes) exceeds
+        :data:`MAX_POINTS`.
+    """
+    total = math.prod(counts.values())
+    if total > MAX_POINTS:
+        each = " x ".join(f"{n} {c}" for n, c in counts.items())
+        raise CaseError(f"[table]: {total} points ({each}); at most {MAX_POINTS} (the table "
+                        f"would take {table_bytes(total, sides) / 2**30:.3g} GiB in memory, "
+                        f"its axes alone {8 * sum(counts.values()) / 2**30:.3g} GiB)")
+
+
 def axis_values(name: str, value: Any) -> np.ndarray:
     """The node values of an axis from its ``[table]`` entry (module docstring)."""
     where = f"[table] {name}"
@@ -232,6 +278,7 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     names = [k for k in table if k in AXES]
     if not names:
         raise CaseError(f"[table] has no axis (known: {', '.join(AXES)})")
+    check_size({n: axis_count(n, table[n]) for n in names})  # before any axis is made
     axes = {n: axis_values(n, table[n]) for n in names}
     geo = raw.get("geometry")
     if not isinstance(geo, dict) or geo.get("type") != "wheel-rail":
@@ -252,8 +299,6 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     sides = ("left", "right") if side == "both" else (side,)
     d["geometry"]["side"] = side
     shape = [len(v) for v in axes.values()]
-    if math.prod(shape) > MAX_POINTS:
-        raise CaseError(f"[table]: {math.prod(shape)} points; at most {MAX_POINTS}")
     batch = table.get("batch", shape[-1])
     if not isinstance(batch, int) or isinstance(batch, bool) or batch < 1:
         raise CaseError(f"[table] batch must be an integer >= 1, got {batch!r}")

@@ -15,33 +15,50 @@ the creepage axes, then at the creepages found).
 
 Statuses: those of the table's nodes (the largest of the nodes used); a state outside the
 table's axes, or different from the case's value on an axis the table does not have, is
-out of range (all outputs of that wheel zero, the message says which input); a node not
-computed is out of range too. Penetration control (``vertical``) is not in a table (it
-is built by load): an error, as for bad input.
+out of range (all outputs of that wheel zero, the message says which input and the
+table's range: never clamped to the nearest node); a node not computed is out of range
+too. Penetration control (``vertical``) is not in a table (it is built by load), nor is a
+negative load: errors, as for bad input.
+
+Validity: a wheel with forces has its Y/Q (``derailment_quotient``), its ``penetration``
+and its ``validity`` bits checked against the limits as the exact step does
+(:func:`~railcontact.timestep.validity.check_limits`, the same function): Y/Q above
+``max_y_q`` or beyond Nadal's limit (with the table's friction coefficient), flange climb,
+penetration above ``max_penetration``, wheel load above ``max_wheel_load``; an ok wheel
+beyond one is outside validity (status 4). All from the interpolated values: the rail's
+force on the wheel, the largest penetration of the patches and the profile coordinate and
+contact angle of the patch nearest the flange tip (the one that decides flange climb),
+each stored per node. At a node the bits are the exact solve's; between nodes they are
+those of the interpolated values. A table whose store lacks any of these (written by an
+earlier railcontact) is refused, naming them.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from time import perf_counter
 from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import RailContactError, check_finite
+from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.track import SIDES, Pose
+from ..settings import ContactSettings
+from ..timestep.validity import check_limits, derailment_quotient
 from ..timestep.wheelset import (
     NO_CONTACT,
     OK,
     OUT_OF_RANGE,
+    OUTSIDE_VALIDITY,
     Kinematics,
     WheelContact,
     WheelsetResult,
 )
 from .interpolate import ContactTable
 from .spec import AXES
-from .variables import NOT_COMPUTED
+from .variables import NOT_COMPUTED, VALIDITY_QUANTITIES
 
 ABSENT_RTOL = 1e-9
 """How close an input must be to the case's value on an axis the table does not have."""
@@ -57,14 +74,38 @@ class TableContact:
         The :class:`ContactTable` (both wheels, or the wheel a state asks for).
     method
         ``"linear"`` or ``"cubic"``.
+    settings
+        The validity limits read from it: ``max_y_q`` [-], ``max_penetration`` [m],
+        ``max_wheel_load`` [N] (None: :class:`~railcontact.settings.ContactSettings`'s
+        defaults). The friction coefficient of Nadal's limit is always the table's (its
+        forces were solved with it), whatever ``settings.friction`` says.
+
+    Raises
+    ------
+    RailContactError
+        For an unknown method, a table without ``penetration`` (an earlier store) or
+        whose wheel flange is neither stored nor readable from its wheel profile.
     """
 
-    def __init__(self, table: ContactTable, method: str = "linear") -> None:
+    def __init__(self, table: ContactTable, method: str = "linear",
+                 settings: ContactSettings | None = None) -> None:
         if method not in ("linear", "cubic"):
             raise RailContactError(f"method must be 'linear' or 'cubic', got {method!r}")
+        lacking = [n for n in VALIDITY_QUANTITIES if n in table.missing]
+        if lacking:
+            raise RailContactError(
+                f"the table {table.path} was built by an earlier railcontact without "
+                f"{', '.join(lacking)}, which a table step needs for its validity "
+                "(penetration, flange climb); build it anew with railcontact table build")
         self.table, self.method = table, method
         case = table.case
-        creep = (case.get("tangential") or {}).get("creepage", (0.0, 0.0, 0.0))
+        tangential = case.get("tangential") or {}
+        settings = ContactSettings() if settings is None else settings
+        self.limits = replace(settings, friction=tangential.get("friction", settings.friction))
+        """The validity limits (with the table's friction coefficient)."""
+        self.flange = table.flange
+        """S [m] and angle [rad] of the steepest point of the wheel's flange."""
+        creep = tangential.get("creepage", (0.0, 0.0, 0.0))
         fixed = {"lateral_displacement": case["geometry"]["lateral_displacement"],
                  "yaw": case["geometry"]["yaw"], "load": case["normal"].get("load"),
                  "creepage_x": creep[0], "creepage_y": creep[1], "spin": creep[2]}
@@ -80,8 +121,10 @@ class TableContact:
             raise RailContactError(f"table quantities {table.names} are not {_FIELDS}")
 
     @classmethod
-    def open(cls, path: str | Path, method: str = "linear") -> TableContact:
-        return cls(ContactTable.open(path), method)
+    def open(cls, path: str | Path, method: str = "linear",
+             settings: ContactSettings | None = None) -> TableContact:
+        """The table step of the store at ``path`` (arguments as the class's)."""
+        return cls(ContactTable.open(path), method, settings)
 
     def reset(self) -> None:
         """Nothing to forget: a table has no memory between steps."""
@@ -110,6 +153,8 @@ class TableContact:
                                   ("yaw", pose.yaw, "rad")):  # as Pose names them
                 check_finite(name, v, unit)
             raise RailContactError(f"creepages must be finite numbers, got {creepages!r}")
+        for side, q in (("left", ql), ("right", qr)):  # as WheelsetContact
+            check_positive(f"{side} wheel load", q, "N", allow_zero=True)
         kin = kinematics if creepages is None else None
         left = self._wheel("left", pose, ql, (xl, el, pl), kin)
         right = self._wheel("right", pose, qr, (xr, -er, -pr), kin)
@@ -173,24 +218,36 @@ class TableContact:
         return self._fill(side, vals, status, creep)
 
     def _fill(self, side: str, vals: np.ndarray, status: int, creep) -> WheelContact:
-        (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl) = vals.tolist()
+        (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl,
+         pen, ts, ta) = vals.tolist()
         if status != OK:
-            forces = (fn, fx, fy, mz, tx, ty, tz, ym, ar, pm, sl)
+            forces = (fn, fx, fy, mz, tx, ty, tz, ym, ar, pm, sl, pen)
             if status == NO_CONTACT or not all(map(math.isfinite, forces)):
                 return WheelContact(side=side, status=status, message=(
                     "no contact" if status == NO_CONTACT else
                     "the table has no value here (a node around it is not ok)"))
             cx, cy, cz, ws, rs, ga, rr = (0.0 if not math.isfinite(a) else a
                                           for a in (cx, cy, cz, ws, rs, ga, rr))
+            ts, ta = (ws, ga) if not math.isfinite(ts + ta) else (ts, ta)
         s = SIDES[side]
-        return WheelContact(
+        wheel = WheelContact(
             side=side, status=status,
             message="ok (table)" if status == OK else "a node of the table did not converge",
             creepages=[(creep[0], s * creep[1], s * creep[2])], normal_force=fn,
             creep_force=(fx, fy), spin_moment=mz, track_force=(tx, ty, tz), yaw_moment=ym,
             wheel_position=ws, rail_position=rs, lateral_position=cy, contact_angle=ga,
             rolling_radius=rr, area=ar, max_pressure=pm, slip_area_ratio=sl,
-            contact_point=(cx, cy, cz))
+            contact_point=(cx, cy, cz), penetration=pen)
+        wheel.derailment_quotient = derailment_quotient(s, wheel.track_force)
+        if fn > 0.0:  # (the same marking as WheelsetContact's)
+            v = check_limits(s, wheel.track_force, [(ts, ta)], pen, self.flange, self.limits)
+            wheel.validity = v.flags
+            if v.flags and wheel.status == OK:
+                wheel.status = OUTSIDE_VALIDITY
+                wheel.message = f"outside validity: {v.message} (table)"
+            elif v.flags:
+                wheel.message += f"; also outside validity: {v.message}"
+        return wheel
 
 
 _STATE = ("lateral_displacement", "yaw", "load", "creepage_x", "creepage_y", "spin")
@@ -198,7 +255,8 @@ _STATE = ("lateral_displacement", "yaw", "load", "creepage_x", "creepage_y", "sp
 _FIELDS = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment",
            "force_longitudinal", "force_lateral", "force_vertical", "yaw_moment",
            "contact_x", "contact_y", "contact_z", "wheel_position", "rail_position",
-           "contact_angle", "rolling_radius", "area", "max_pressure", "slip_area_ratio")
+           "contact_angle", "rolling_radius", "area", "max_pressure", "slip_area_ratio",
+           "penetration", "tip_position", "tip_angle")
 _GEOMETRIC = ("contact_x", "contact_y", "contact_z", "wheel_position", "rail_position",
               "contact_angle", "rolling_radius")
 

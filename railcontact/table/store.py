@@ -4,7 +4,8 @@ Layout (``railcontact table build``)::
 
     dims     the axes in spec order (the last the fastest), then ``side``
     coords   each axis [SI unit] and ``side`` ("left", "right")
-    data     every quantity of :mod:`.variables` (float64; NaN where not defined), the work
+    data     every quantity of :mod:`.variables` (float64; NaN where not defined; a store
+             of an earlier railcontact may lack ``penetration``), the work
              counters (int32) and ``status`` (int8: -1 not computed, 0 ok, 1 not converged,
              2 no contact, 3 out of range), each with ``units`` and ``long_name``; chunked
              one batch per chunk (1 along the slow axes, ``batch`` along the fastest)
@@ -12,7 +13,8 @@ Layout (``railcontact table build``)::
              of a batch's data are written, so that a batch cut off while being written is
              not complete and is computed again
     attrs    ``railcontact_table`` (the identity: case, axes, sides, batch, as JSON),
-             ``railcontact_version``, ``case_name``, ``complete`` (all batches done),
+             ``flange_flank`` (S [m] and angle [rad] of the wheel flange's steepest
+             point, JSON), ``railcontact_version``, ``case_name``, ``complete`` (all batches done),
              ``messages`` (JSON: the message of every point that is not ok, gathered
              when a build ends)
     messages/<batch>   a group per batch with points that are not ok (``<batch>`` its
@@ -33,11 +35,15 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from ..contact.wheelrail import build_geometry
 from ..errors import RailContactError
+from ..settings import Case
 from .spec import AXES, TableSpec, comparable
 from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS
 
 IDENTITY = "railcontact_table"
+FLANGE = "flange_flank"
+"""The attribute holding the wheel's flange (:func:`wheel_flange`, JSON)."""
 MESSAGES = "messages"
 """The group of the per-batch message groups (and the root attribute that gathers them)."""
 
@@ -50,6 +56,21 @@ def _libs():
         raise RailContactError(f"tables need the [tables] extra (pip install "
                                f"'railcontact[tables]'): {exc}") from None
     return xr, zarr
+
+
+def wheel_flange(case: dict[str, Any]) -> list[float]:
+    """The steepest point of the case's wheel flange: its profile coordinate S [m] and angle
+    [rad] (:attr:`~railcontact.geometry.Wheelset.flange_flank`), which the validity of a
+    table step needs (Nadal's limit, flange climb); kept in the store so that a table is
+    used without its profile files.
+
+    Raises
+    ------
+    RailContactError
+        When the case's wheel profile cannot be read.
+    """
+    _, ws, _ = build_geometry(Case.from_dict(case).geometry)
+    return list(ws.flange_flank)
 
 
 def create_store(path: str | Path, spec: TableSpec) -> None:
@@ -80,6 +101,7 @@ def create_store(path: str | Path, spec: TableSpec) -> None:
                           {"long_name": "every point of the batch is written"})
     ds = xr.Dataset(data, coords=coords, attrs={
         IDENTITY: json.dumps(spec.identity()), "railcontact_version": __version__,
+        FLANGE: json.dumps(wheel_flange(spec.case)),
         "case_name": spec.case.get("name", "case"), "complete": 0, "messages": "[]"})
     encoding = {v: {"chunks": ds[v].data.chunksize} for v in ds.data_vars}
     encoding["status"]["_FillValue"] = NOT_COMPUTED  # a lost chunk reads "not computed"
@@ -108,6 +130,11 @@ class Store:
                                    f"{IDENTITY} attribute)")
         check_identity(path, json.loads(found), spec.identity())
         names = [q.name for q in QUANTITIES + COUNTS] + ["status", "batch_done"]
+        lacking = [n for n in names if n not in self.group]
+        if lacking:
+            raise RailContactError(f"{path} was written by an earlier railcontact without "
+                                   f"{', '.join(lacking)}: it cannot be resumed; build the "
+                                   "table anew (another output, or remove it)")
         self.arrays = {n: self.group[n] for n in names}  # opened once: metadata read once
         self.written = False
         if MESSAGES in self.group:

@@ -3,8 +3,10 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, STATUS_NAMES
@@ -56,8 +58,30 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("area", "m2", "contact area (sum over patches)", lambda w: w.area),
     Quantity("max_pressure", "Pa", "maximum pressure", lambda w: w.max_pressure),
     Quantity("slip_area_ratio", "1", "slip area / contact area", lambda w: w.slip_area_ratio),
+    Quantity("penetration", "m", "largest normal penetration of the patches",
+             lambda w: w.penetration),
+    Quantity("tip_position", "m", "wheel profile coordinate of the patch nearest the "
+             "flange tip", lambda w: _tip(w).wheel_s, True),
+    Quantity("tip_angle", "rad", "contact angle of the patch nearest the flange tip",
+             lambda w: _tip(w).contact_angle, True),
 )
-"""The interpolated quantities (floats)."""
+"""The interpolated quantities (floats). ``penetration``, ``tip_position`` and
+``tip_angle`` are what the validity of a table step needs besides the forces
+(:mod:`.step`): the patch nearest the flange tip (smallest S) is the one that decides
+flange climb. A store written before they were lacks them
+(:attr:`~.interpolate.ContactTable.missing`)."""
+VALIDITY_QUANTITIES = ("penetration", "tip_position", "tip_angle")
+"""The quantities a table step's validity needs (a store without them is refused)."""
+
+
+def _tip(wheel: Any) -> Any:
+    """The contact point of the wheel's patch nearest the flange tip (smallest S; NaN
+    without one)."""
+    return min((p.geometry for p in wheel.patches if p.geometry is not None),
+               key=lambda cp: cp.wheel_s, default=_NO_POINT)
+
+
+_NO_POINT = SimpleNamespace(wheel_s=math.nan, contact_angle=math.nan)
 
 COUNTS: tuple[Quantity, ...] = (
     Quantity("n_patches", "1", "number of contact patches", lambda w: w.n_patches),
@@ -75,4 +99,4 @@ STATUS_MEANINGS = {NOT_COMPUTED: "not computed", **STATUS_NAMES}
 """The ``status`` codes: those of the time loop and the FMU, and -1."""
 
 __all__ = ["COUNTS", "NOT_COMPUTED", "NO_CONTACT", "NOT_CONVERGED", "OK", "OUT_OF_RANGE",
-           "QUANTITIES", "STATUS_MEANINGS", "Quantity"]
+           "QUANTITIES", "STATUS_MEANINGS", "VALIDITY_QUANTITIES", "Quantity"]

@@ -70,7 +70,8 @@ class Validity:
 def check_validity(side_sign: int, track_force: Sequence[float],
                    patches: Sequence[PatchSolution], flange_flank: tuple[float, float],
                    settings: ContactSettings) -> Validity:
-    """The validity of a solved wheel (module docstring).
+    """The validity of a solved wheel (module docstring): :func:`check_limits` with each
+    patch's contact point and the largest normal penetration of the patches.
 
     Parameters
     ----------
@@ -85,6 +86,35 @@ def check_validity(side_sign: int, track_force: Sequence[float],
     settings
         The limits (and the friction coefficient).
     """
+    contacts = [(p.geometry.wheel_s, p.geometry.contact_angle) for p in patches
+                if p.geometry is not None]
+    penetration = max((p.normal.penetration for p in patches), default=0.0)
+    return check_limits(side_sign, track_force, contacts, penetration, flange_flank, settings)
+
+
+def check_limits(side_sign: int, track_force: Sequence[float],
+                 contacts: Sequence[tuple[float, float]], penetration: float,
+                 flange_flank: tuple[float, float], settings: ContactSettings) -> Validity:
+    """The validity of a wheel from its resultants (module docstring); what
+    :func:`check_validity` checks, also for a wheel without its patches (a table step).
+
+    Parameters
+    ----------
+    side_sign
+        +1 for the left wheel, -1 for the right.
+    track_force
+        The rail's force on the wheel (X, Y, Z) in the track frame [N].
+    contacts
+        Wheel profile coordinate S [m] and contact angle [rad] of each patch's contact
+        point (for flange climb).
+    penetration
+        The largest normal penetration of the patches [m].
+    flange_flank
+        Profile coordinate S [m] and angle [rad] of the flange's steepest point.
+    settings
+        The limits (``max_y_q``, ``max_penetration``, ``max_wheel_load``) and the friction
+        coefficient.
+    """
     flags, why = 0, []
     yq = derailment_quotient(side_sign, track_force)
     q = float(track_force[2])
@@ -97,17 +127,14 @@ def check_validity(side_sign: int, track_force: Sequence[float],
         flags |= NADAL
         why.append(f"Y/Q = {yq:.3g} beyond Nadal's limit {limit:.3g} (flange "
                    f"{math.degrees(steepest):.3g} deg, mu {settings.friction:g})")
-    for p in patches:
-        cp = p.geometry
-        if (cp is not None and cp.wheel_s < s_steep
-                and abs(cp.contact_angle) < steepest - FLANGE_CLIMB_MARGIN):
+    for wheel_s, angle in contacts:
+        if wheel_s < s_steep and abs(angle) < steepest - FLANGE_CLIMB_MARGIN:
             flags |= FLANGE_CLIMB
-            why.append(f"flange climb: contact at S = {cp.wheel_s * 1e3:.4g} mm at "
-                       f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's "
+            why.append(f"flange climb: contact at S = {wheel_s * 1e3:.4g} mm at "
+                       f"{math.degrees(abs(angle)):.3g} deg, past the flange's "
                        f"steepest point (S = {s_steep * 1e3:.4g} mm, "
                        f"{math.degrees(steepest):.3g} deg)")
             break
-    penetration = max((p.normal.penetration for p in patches), default=0.0)
     if penetration > settings.max_penetration:
         flags |= PENETRATION
         why.append(f"normal penetration {penetration * 1e3:.3g} mm above max_penetration = "
@@ -120,5 +147,5 @@ def check_validity(side_sign: int, track_force: Sequence[float],
 
 
 __all__ = ["FLANGE_CLIMB", "FLANGE_CLIMB_MARGIN", "LOAD", "NADAL", "PENETRATION",
-           "VALIDITY_NAMES", "Validity", "Y_Q", "check_validity", "derailment_quotient",
-           "nadal_limit"]
+           "VALIDITY_NAMES", "Validity", "Y_Q", "check_limits", "check_validity",
+           "derailment_quotient", "nadal_limit"]
