@@ -175,8 +175,9 @@ class Slave:
     def set_state(self, data: bytes) -> int:
         """Restore a state of :meth:`get_state`: fmi2Error, the instance unchanged, for
         bytes that are no state of this FMU, and for a state of another parameter set than
-        this instance's solver was built with (before initialisation any parameter set:
-        the solver is then built from the state's)."""
+        this instance's solver was built with. An instance not initialised takes any
+        state of this FMU: its variables, parameters included, from which initialisation
+        builds the solver (without the state's warm start)."""
         return self._guard("setFMUstate", FMI_ERROR, self._set_state, data)
 
     def _set_state(self, data: bytes) -> int:
@@ -190,11 +191,11 @@ class Slave:
         np.copyto(self.integer, state.integer)
         np.copyto(self.control, state.control)
         self.strings[:] = state.strings
+        if self.contact is None:  # not initialised: the solver is built from the
+            return FMI_OK         # parameters just restored at initialisation
         if state.initialised:
-            if self.contact is None:  # built from the parameters just restored
-                self._build()
             self.contact.memory = state.memory
-        elif self.contact is not None:
+        else:
             self.contact.reset()
         return FMI_OK
 

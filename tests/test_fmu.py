@@ -323,6 +323,22 @@ def test_state_of_another_parameter_set_is_refused(fmu, extracted, md, capsys):
     for s in (a, c):
         s.step(lateral_displacement=3.2e-3)
     assert c.get(*outs) == a.get(*outs)
+    # an instance not initialised takes it: initialisation builds the solver from its
+    # parameters (friction 0.1 read and used)
+    d = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="d")
+    d.instantiate()
+    d.setFMUstate(state_a)
+    d.setupExperiment(startTime=0.0)
+    d.enterInitializationMode()
+    d.exitInitializationMode()
+    d.doStep(0.0, STEP)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert d.getReal([vr["friction"]]) == [0.1]
+    fx, n = d.getReal([vr["creep_force_x_left"], vr["normal_force_left"]])
+    assert 0.05 < abs(fx) / n <= 0.1 + 1e-9
+    d.terminate()
+    d.freeInstance()
     for s, st in ((a, state_a), (b, state_b)):
         s.s.freeFMUstate(st)
     for s in (a, b, c):
