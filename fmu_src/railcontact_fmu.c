@@ -633,6 +633,18 @@ static char *uri_to_path(const char *uri) {
 
 static PyObject *method(PyObject *obj, const char *name) { return py.GetAttrString(obj, name); }
 
+/* log the slave's messages since the last call (pop_log) with status s; GIL held */
+static void log_pending(Instance *c, fmi2Status s) {
+    PyObject *msg = py.CallObject(c->m_pop_log, NULL);
+    if (msg) {
+        const char *t = py.UnicodeAsUTF8(msg);
+        if (t && *t) logf_(c, s, category_of(s), "%s", t);
+        py.DecRef(msg);
+    } else {
+        py.ErrClear();
+    }
+}
+
 /* call a no-argument (or prebuilt-argument) method that returns an FMI status */
 static fmi2Status call_status(Instance *c, PyObject *m, PyObject *args) {
     PyObject *r = py.CallObject(m, args);
@@ -643,16 +655,7 @@ static fmi2Status call_status(Instance *c, PyObject *m, PyObject *args) {
     } else {
         py.ErrClear();
     }
-    if (s != 0) {
-        PyObject *msg = py.CallObject(c->m_pop_log, NULL);
-        if (msg) {
-            const char *t = py.UnicodeAsUTF8(msg);
-            if (t && *t) logf_(c, (fmi2Status)s, category_of((fmi2Status)s), "%s", t);
-            py.DecRef(msg);
-        } else {
-            py.ErrClear();
-        }
-    }
+    if (s != 0) log_pending(c, (s >= 0 && s <= 3) ? (fmi2Status)s : fmi2Error);
     return (s >= 0 && s <= 3) ? (fmi2Status)s : fmi2Error;
 }
 
@@ -1058,6 +1061,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state) {
     ENTER;
     PyObject *b = py.CallObject(c->m_get_state, NULL);
     fmi2Status s = store_state(state, b);
+    if (s != fmi2OK) log_pending(c, s); /* why the state could not be saved */
     LEAVE;
     return s;
 }

@@ -12,7 +12,7 @@ railcontact package, hence the relative imports.
 from __future__ import annotations
 
 import math
-import pickle
+import re
 import time
 import traceback
 from dataclasses import replace
@@ -20,7 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
+from . import __version__
 from .errors import RailContactError
+from .fmu import state as S
 from .fmu import variables as V
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
@@ -82,6 +84,8 @@ class Slave:
         self.log: list[str] = []
         self.contact: WheelsetContact | None = None
         self.modes: FMUModes | None = None
+        self.built: dict | None = None  # the parameters self.contact was built with
+        self.guid, self.model = _identity(self.resources)
         self._start_values()
 
     # -- plumbing for the shim ------------------------------------------------------------
@@ -138,33 +142,97 @@ class Slave:
         return self._guard("initialization", FMI_ERROR, self._exit_initialization)
 
     def do_step(self) -> int:
-        return self._guard("doStep", FMI_DISCARD, self._do_step)
+        status = self._guard("doStep", None, self._communication_step)
+        if status is None:  # an unexpected error: nothing of the step is to be trusted
+            self._discard()
+            return FMI_DISCARD
+        return status
 
     def reset(self) -> int:
         self._start_values()
         self.contact = None
+        self.built = None
         return FMI_OK
 
     def get_state(self) -> bytes:
-        memory = None if self.contact is None else self.contact.memory
-        return pickle.dumps((self.real.copy(), self.integer.copy(), list(self.strings),
-                             self.control.copy(), memory), protocol=pickle.HIGHEST_PROTOCOL)
+        """The instance's state as bytes (:mod:`railcontact.fmu.state`): the variables,
+        the parameters the solver was built with and its memory of the previous steps.
+        Raises (the shim's fmi2GetFMUstate returns fmi2Error) with the reason in the
+        log."""
+        try:
+            return S.pack(S.State(
+                guid=self.guid, model=self.model, initialised=self.contact is not None,
+                parameters=self.built if self.built is not None else self._parameters(
+                    self.real, self.integer, self.strings),
+                real=self.real, integer=self.integer, control=self.control,
+                strings=list(self.strings),
+                memory=None if self.contact is None else self.contact.memory,
+                railcontact=__version__))
+        except Exception as exc:
+            self.log.append(f"getFMUstate: {type(exc).__name__}: {exc}")
+            raise
 
-    def set_state(self, state: bytes) -> int:
-        def restore():
-            real, integer, strings, control, memory = pickle.loads(state)
-            np.copyto(self.real, real)  # in place: the shim holds these buffers' addresses
-            np.copyto(self.integer, integer)
-            np.copyto(self.control, control)
-            self.strings[:] = strings
-            if memory is not None:
-                if self.contact is None:
-                    self._build()
-                self.contact.memory = memory
-            elif self.contact is not None:
-                self.contact.reset()
-            return FMI_OK
-        return self._guard("setFMUstate", FMI_ERROR, restore)
+    def set_state(self, data: bytes) -> int:
+        """Restore a state of :meth:`get_state`: fmi2Error, the instance unchanged, for
+        bytes that are no state of this FMU, and for a state of another parameter set than
+        this instance's solver was built with. An instance not initialised takes any
+        state of this FMU: its variables, parameters included, from which initialisation
+        builds the solver (without the state's warm start)."""
+        return self._guard("setFMUstate", FMI_ERROR, self._set_state, data)
+
+    def _set_state(self, data: bytes) -> int:
+        try:
+            state = S.unpack(data)
+            self._check_state(state)
+        except RailContactError as exc:
+            self.log.append(f"setFMUstate refused, the instance is unchanged: {exc}")
+            return FMI_ERROR
+        np.copyto(self.real, state.real)  # in place: the shim holds these buffers' addresses
+        np.copyto(self.integer, state.integer)
+        np.copyto(self.control, state.control)
+        self.strings[:] = state.strings
+        if self.contact is None:  # not initialised: the solver is built from the
+            return FMI_OK         # parameters just restored at initialisation
+        if state.initialised:
+            self.contact.memory = state.memory
+        else:
+            self.contact.reset()
+        return FMI_OK
+
+    def _check_state(self, state: S.State) -> None:
+        """Raise :class:`~railcontact.fmu.state.StateError` unless ``state`` is one of
+        this FMU whose parameters are those this instance's solver was built with."""
+        if (state.guid, state.model) != (self.guid, self.model):
+            raise S.StateError(f"a state of another FMU (model {state.model!r}, GUID "
+                               f"{state.guid}; this one: model {self.model!r}, GUID "
+                               f"{self.guid})")
+        shapes = [(state.real.shape, self.real.shape), (state.integer.shape,
+                                                        self.integer.shape),
+                  (state.control.shape, self.control.shape),
+                  ((len(state.strings),), (len(self.strings),))]
+        if any(a != b for a, b in shapes):
+            raise S.StateError("a damaged state (its variables are not this FMU's)")
+        held = self._parameters(state.real, state.integer, state.strings)
+        if state.initialised and _differences(held, state.parameters):
+            raise S.StateError("a damaged state (its parameters and its variables differ: "
+                               + _differences(held, state.parameters) + ")")
+        if self.built is not None:
+            diff = _differences(held, self.built, ("the state", "this instance"))
+            if diff:
+                raise S.StateError(
+                    f"the state belongs to another parameter set ({diff}); a state is set "
+                    f"only in an instance initialised with its parameters, or in one not "
+                    f"yet initialised")
+
+    def _parameters(self, real, integer, strings) -> dict:
+        """The parameter values by name held in the buffers ``real``, ``integer`` and
+        ``strings`` (Python numbers and strings)."""
+        held = {"Real": (real, float), "Integer": (integer, int), "String": (strings, str)}
+        out = {}
+        for v in V.PARAMETERS + V.CHOICES:
+            buffer, kind = held[v.type]
+            out[v.name] = kind(buffer[self._slots[v.name][1]])
+        return out
 
     # -- the model ------------------------------------------------------------------------
     def _profile(self, parameter: str, kind: str, unit: str):
@@ -177,13 +245,16 @@ class Slave:
             raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
 
     def _build(self) -> None:
+        self.contact = self.built = None
         for v in V.PARAMETERS:
             if v.type == "Real" and not math.isfinite(self[v.name]):
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
-        ps = V.parameter_settings({v.name: self[v.name] for v in V.PARAMETERS + V.CHOICES})
+        built = self._parameters(self.real, self.integer, self.strings)
+        ps = V.parameter_settings(built)
         self.modes = ps.modes
         if ps.modes.contact_model == "table":
             self.contact = self._table(ps.modes)
+            self.built = built
             return
         g = ps.geometry  # profile_unit: the String or its enumeration
         wheel = self._profile("wheel_profile", "wheel", g.profile_unit)
@@ -195,6 +266,7 @@ class Slave:
             raise RailContactError(f"parameter error: {exc}") from None
         self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact,
                                        convention=ps.modes.convention)
+        self.built = built
 
     def _table(self, modes: FMUModes):
         """The contact table of ``table_file`` (looked up in the resources first, like a
@@ -228,17 +300,64 @@ class Slave:
         except RailContactError as exc:
             self.log.append(str(exc))
             return FMI_ERROR
-        status = self._do_step()
-        return FMI_OK if status == FMI_DISCARD else status
+        status = self._do_step()  # the outputs at the start values of the inputs
+        # (initialisation has no Discard: inputs it cannot solve are a warning, its message
+        # logged, the outputs and statuses saying so)
+        return FMI_WARNING if status == FMI_DISCARD else status
 
     def _inputs(self, names: list[str]) -> dict[str, float]:
+        """The inputs ``names`` [SI units]; a :class:`RailContactError` naming each one
+        not finite, and each load or direct creepage beyond its range
+        (:data:`~railcontact.fmu.variables.LOAD_LIMITS`,
+        :data:`~railcontact.fmu.variables.CREEPAGE_LIMITS`)."""
         values = {n: float(self[n]) for n in names}
         bad = [f"{n} = {x}" for n, x in values.items() if not math.isfinite(x)]
         if bad:
-            raise ValueError("inputs not finite: " + ", ".join(bad))
+            raise RailContactError("inputs not finite: " + ", ".join(bad))
+        for n, x in values.items():
+            if n.startswith("load_") and not V.LOAD_LIMITS[0] <= x <= V.LOAD_LIMITS[1]:
+                bad.append(f"{n} = {x:g} N: a wheel load must be within "
+                           f"{V.LOAD_LIMITS[0]:g} to {V.LOAD_LIMITS[1]:g} N (0 lifts the "
+                           f"wheel)")
+            elif n.split("_")[0] in ("xi", "eta", "phi") and not abs(x) <= \
+                    V.CREEPAGE_LIMITS[1]:
+                bad.append(f"{n} = {x:g} {'1/m' if n.startswith('phi') else ''}: "
+                           f"{_CREEPAGE_RANGE}")
+        if bad:
+            raise RailContactError("inputs out of range: " + "; ".join(bad))
         return values
 
+    def _discard(self) -> None:
+        """Every output zero, the wheelset's and each wheel's status out of range: what a
+        discarded step shows (nothing solved)."""
+        self._write(None)
+        for name in ("status", "status_left", "status_right"):
+            self[name] = OUT_OF_RANGE
+
+    def _discarded(self, message: str) -> int:
+        self.log.append(message)
+        self._discard()
+        return FMI_DISCARD
+
+    def _communication_step(self) -> int:
+        """fmi2DoStep: the step at the communication point (``control``: time [s], step
+        size [s]); fmi2Error, nothing done, for a time not finite or a step size not
+        above zero."""
+        t, h = float(self.control[0]), float(self.control[1])
+        if not (math.isfinite(t) and math.isfinite(h) and h > 0.0):
+            self.log.append(f"doStep at currentCommunicationPoint = {t} s with "
+                            f"communicationStepSize = {h} s: the time must be finite and "
+                            f"the step size above 0 s; nothing was done (the outputs are "
+                            f"the last step's)")
+            return FMI_ERROR
+        return self._do_step()
+
     def _do_step(self) -> int:
+        """Solve the step of the inputs. fmi2Discard when nothing could be solved for a
+        wheel in contact (the outputs and statuses say what was: a wheel not solved has
+        zero forces and its own status 3 or 1, the wheelset's status 3 or 1; an input not
+        finite or beyond its range zeroes every output, each status 3); fmi2Warning for a
+        wheel not ok but solved; fmi2OK otherwise."""
         if self.contact is None:
             self.log.append("doStep before initialization")
             return FMI_ERROR
@@ -252,17 +371,15 @@ class Slave:
                   [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
         try:
             x = self._inputs(names)
-        except ValueError as exc:
-            self.log.append(str(exc))
-            self["status"] = OUT_OF_RANGE
-            return FMI_DISCARD
+        except RailContactError as exc:
+            return self._discarded(str(exc))
         try:
             pose = Pose(x["lateral_displacement"], x["yaw"], x.get("roll", 0.0))
             kw: dict = {"time": float(self.control[0])}
             if penetration:
                 kw["vertical"] = x["vertical_displacement"]
             else:
-                kw["loads"] = (max(x["load_left"], 0.0), max(x["load_right"], 0.0))
+                kw["loads"] = (x["load_left"], x["load_right"])
             if kinematic:
                 spin = x["spin_speed"]
                 kw["kinematics"] = Kinematics(x["speed"], x["lateral_velocity"], x["yaw_rate"],
@@ -272,10 +389,7 @@ class Slave:
                                         for s in V.SIDES)
             res = self.contact.solve(pose, **kw)
         except RailContactError as exc:
-            self.log.append(f"input out of range: {exc}")
-            self._write(None)
-            self["status"] = OUT_OF_RANGE
-            return FMI_WARNING
+            return self._discarded(f"input out of range: {exc}")
         t0 = time.perf_counter()  # the rigid wheelset's vertical and roll are found lazily
         if not penetration and self.modes.rigid_wheelset == "skip":  # not asked for
             res.rigid_solution = RigidSolution(0.0, 0.0, message="skipped")
@@ -298,16 +412,23 @@ class Slave:
             if SEVERITY.index(NOT_CONVERGED) > SEVERITY.index(int(self["status"])):
                 self["status"] = NOT_CONVERGED
         if not np.all(np.isfinite(self.real[self.real_outputs])):  # (inputs may be NaN)
-            self.log.append("non-finite result; outputs set to zero")
-            self._write(None)
-            self["status"] = OUT_OF_RANGE
-            return FMI_DISCARD
+            return self._discarded("non-finite result; outputs set to zero")
+        if kinematic:  # the creepages the velocities formed, as direct ones
+            beyond = [f"{w.side} wheel: (xi, eta, phi) = ({c[0]:g}, {c[1]:g}, {c[2]:g} 1/m)"
+                      for w in res.wheels for c in w.creepages
+                      if not all(abs(v) <= V.CREEPAGE_LIMITS[1] for v in c)]
+            if beyond:
+                return self._discarded("inputs out of range: the kinematic inputs (speed = "
+                                       f"{x['speed']:g} m/s) give creepages beyond the "
+                                       f"range, {'; '.join(beyond)}: {_CREEPAGE_RANGE}")
         failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
                                                         OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
             name = STATUS_NAMES[w.status]  # (a message may name its status already)
             text = w.message if w.message.startswith(name) else f"{name}: {w.message}"
             self.log.append(f"{w.side} wheel: {text}")
+        if any(_unsolved(w) for w in res.wheels):  # zero forces are no contact's only
+            return FMI_DISCARD
         return FMI_WARNING if failed or not rigid.converged else FMI_OK
 
     def _write(self, res: WheelsetResult | None) -> None:
@@ -318,6 +439,46 @@ class Slave:
             return
         for buffer, vrs, values in self._outputs:
             buffer[vrs] = [value(res) for value in values]
+
+
+_CREEPAGE_RANGE = (f"creepages must be within {V.CREEPAGE_LIMITS[0]:g} to "
+                   f"{V.CREEPAGE_LIMITS[1]:g} (xi, eta [-]; phi [1/m]), as a case file's")
+
+
+def _unsolved(wheel) -> bool:
+    """Whether ``wheel`` (a :class:`~railcontact.timestep.WheelContact`) has no solution
+    though it should carry load: out of range, or a load loop that found none (zero
+    forces, status not converged)."""
+    return wheel.status == OUT_OF_RANGE or (wheel.status == NOT_CONVERGED
+                                            and not wheel.patches)
+
+
+def _differences(mine: dict, other: dict, names: tuple[str, str] = ("variables", "header"),
+                 most: int = 4) -> str:
+    """The parameters in which ``mine`` and ``other`` differ (their ``_choice``
+    enumerations resolved), as ``name = a (names[0]), b (names[1])``; "" when none."""
+    try:
+        a, b = V.resolve_choices(mine), V.resolve_choices(other)
+    except RailContactError as exc:
+        return str(exc)
+    keys = sorted(a.keys() | b.keys())
+    diff = [f"{k} = {a.get(k)!r} in {names[0]}, {b.get(k)!r} in {names[1]}" for k in keys
+            if a.get(k) != b.get(k)]
+    more = f", and {len(diff) - most} more" if len(diff) > most else ""
+    return "; ".join(diff[:most]) + more
+
+
+def _identity(resources: Path) -> tuple[str, str]:
+    """(GUID, model identifier) of the FMU whose ``resources`` folder this is, from its
+    modelDescription.xml beside it; ("", "") without one (the kernels' warm-up runs the
+    slave before the FMU is zipped)."""
+    try:
+        text = (resources.parent / "modelDescription.xml").read_text(encoding="utf-8")
+    except OSError:
+        return "", ""
+    guid = re.search(r'\sguid="([^"]*)"', text)
+    model = re.search(r'\smodelIdentifier="([^"]*)"', text)
+    return (guid.group(1) if guid else "", model.group(1) if model else "")
 
 
 def make_slave(resources: str, instance_name: str) -> Slave:

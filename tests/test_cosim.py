@@ -278,3 +278,42 @@ def test_demo_peaks_leave_out_the_start_up_transient_and_say_so(tmp_path):
 
     short = summarise(_synthetic(duration=0.04))  # shorter than the transient: all of it
     assert short["peak_from"] == 0.0 and short["startup_creep_force_x"] == 0.0
+
+
+def test_a_discarded_step_is_reported_not_raised():
+    """A step the FMU discards (fmi2Discard: a state beyond the model, zero forces, status
+    3) comes back with ``discarded`` set and its outputs, so that the run stops with its
+    message; fmi2Error raises."""
+    pytest.importorskip("fmpy")
+    from fmpy.fmi1 import FMICallException
+
+    from railcontact.sim.cosim import _Instance
+
+    class FakeFMU:
+        status = 2
+
+        def setReal(self, vrs, values):  # noqa: N802 - fmpy's names
+            pass
+
+        def doStep(self, currentCommunicationPoint, communicationStepSize):  # noqa: N802, N803
+            if self.status:
+                raise FMICallException(function="fmi2DoStep", status=self.status)
+
+        def getReal(self, vrs):  # noqa: N802
+            return [0.0] * len(vrs)
+
+        def getInteger(self, vrs):  # noqa: N802
+            return [3] * len(vrs)
+
+    inst = object.__new__(_Instance)
+    inst.fmu, inst.inputs, inst.discarded = FakeFMU(), [0], False
+    inst.real_out, inst.int_out, inst._real_vr, inst._int_vr = ["force_lateral"], ["status"], \
+        [0], [1]
+    out = inst.step(0.0, 1e-3, [0.0])
+    assert inst.discarded and out == {"force_lateral": 0.0, "status": 3}
+    inst.fmu.status = 0
+    inst.step(1e-3, 1e-3, [0.0])
+    assert not inst.discarded
+    inst.fmu.status = 3
+    with pytest.raises(FMICallException):
+        inst.step(2e-3, 1e-3, [0.0])

@@ -237,6 +237,160 @@ def test_state_round_trip_is_bit_identical(fmu, extracted, md):
     s.free()
 
 
+def _all_outputs(s: Slave, md) -> dict:
+    return {v.name: s.get(v.name) for v in md.modelVariables if v.causality == "output"}
+
+
+def test_discarded_step_statuses_agree_with_outputs(fmu, extracted, md, capsys):
+    """After fmi2Discard every status agrees with the outputs: a NaN in a used input and an
+    out-of-range pose (yaw 0.5) zero every output, each status 3 (not the previous step's
+    forces beside status_left/right 0, nor zero forces with status 0 under fmi2Warning); a
+    negative load and creepages beyond a case file's range are discarded, named; a time
+    that is not finite and a step size not above 0 are fmi2Error, nothing done."""
+    from fmpy.fmi1 import FMICallException
+
+    s = Slave(fmu, extracted, md, "discard", warm_start="none", element_size=2e-3)
+    assert s.step(lateral_displacement=2e-3, xi_left=1e-3, xi_right=1e-3) == 0
+    good = _all_outputs(s, md)
+    assert good["status"] == 0 and good["normal_force_left"] > 0
+    zero_reals = [v.name for v in md.modelVariables
+                  if v.causality == "output" and v.type == "Real"]
+    for inputs, words in (({"load_left": float("nan")}, "load_left = nan"),
+                          ({"load_left": 83.3e3, "yaw": 0.5}, "small angles"),
+                          ({"yaw": 0.0, "load_left": -5.0}, "load_left = -5 N"),
+                          ({"load_left": 83.3e3, "xi_right": 2e3}, "xi_right = 2000")):
+        assert s.step(**inputs) == 2, inputs  # fmi2Discard
+        out = _all_outputs(s, md)
+        assert [out[n] for n in ("status", "status_left", "status_right")] == [3, 3, 3]
+        assert all(out[n] == 0.0 for n in zero_reals), inputs
+        assert words in capsys.readouterr().out
+    assert s.step(xi_right=1e-3) == 0  # back in range: solved again (cold: the same)
+    again = _all_outputs(s, md)
+    assert {**again, "solve_time": 0.0} == {**good, "solve_time": 0.0}
+    good = again
+    for t, h in ((float("nan"), STEP), (s.t, 0.0), (s.t, -STEP), (s.t, float("inf"))):
+        with pytest.raises(FMICallException) as err:
+            s.s.doStep(t, h)
+        assert err.value.status == 3  # fmi2Error, nothing done
+        assert _all_outputs(s, md) == good
+        assert "communicationStepSize" in capsys.readouterr().out
+    s.free()
+    # kinematic creepages: a speed that makes them beyond the range is discarded, named
+    k = Slave(fmu, extracted, md, "kinematic_range", warm_start="none",
+              creepage_input="kinematic", element_size=2e-3)
+    assert k.step(lateral_displacement=2e-3, speed=30.0, lateral_velocity=0.01) == 0
+    assert k.step(speed=1e-9) == 2
+    assert k.get("status", "status_left", "status_right") == [3, 3, 3]
+    assert k.get("normal_force_left") == 0.0 and "creepages" in capsys.readouterr().out
+    assert k.step(speed=0.0) == 2 and "speed" in capsys.readouterr().out
+    k.free()
+
+
+def _stepped(fmu, extracted, md, name, **parameters) -> Slave:
+    s = Slave(fmu, extracted, md, name, element_size=2e-3, **parameters)
+    assert s.step(lateral_displacement=3e-3, xi_left=5e-3, xi_right=5e-3) == 0
+    return s
+
+
+def test_state_of_another_parameter_set_is_refused(fmu, extracted, md, capsys):
+    """fmi2SetFMUstate with the state of an instance of other parameters (friction 0.1 in
+    one of friction 0.6) is fmi2Error naming the parameter, the instance unchanged (not its
+    buffers reading 0.1 while it computes with 0.6); the state of an instance of the same
+    parameters is taken, and its next step equals that instance's bit for bit."""
+    from fmpy.fmi1 import FMICallException
+
+    outs = ["creep_force_x_left", "normal_force_left", "normal_iterations", "status"]
+    a = _stepped(fmu, extracted, md, "a", friction=0.1)
+    b = _stepped(fmu, extracted, md, "b", friction=0.6)
+    c = _stepped(fmu, extracted, md, "c", friction=0.1)
+    state_a, state_b = a.s.getFMUstate(), b.s.getFMUstate()
+    with pytest.raises(FMICallException) as err:
+        b.s.setFMUstate(state_a)
+    assert err.value.status == 3
+    log = capsys.readouterr().out
+    assert "another parameter set" in log and "friction = 0.1 in the state, 0.6" in log
+    assert b.get("friction") == 0.6
+    b.step(lateral_displacement=3.2e-3)
+    after_refusal = b.get(*outs)
+    b.s.setFMUstate(state_b)
+    b.t -= STEP
+    b.step(lateral_displacement=3.2e-3)
+    assert b.get(*outs) == after_refusal  # the refused state changed nothing
+    fx, n = after_refusal[:2]
+    assert abs(fx) / n > 0.3  # computes with its own friction 0.6 (0.5 of it here)
+    # the same parameters in another instance: taken, the next step is a's
+    c.s.setFMUstate(state_a)
+    for s in (a, c):
+        s.step(lateral_displacement=3.2e-3)
+    assert c.get(*outs) == a.get(*outs)
+    # an instance not initialised takes it: initialisation builds the solver from its
+    # parameters (friction 0.1 read and used)
+    d = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="d")
+    d.instantiate()
+    d.setFMUstate(state_a)
+    d.setupExperiment(startTime=0.0)
+    d.enterInitializationMode()
+    d.exitInitializationMode()
+    d.doStep(0.0, STEP)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert d.getReal([vr["friction"]]) == [0.1]
+    fx, n = d.getReal([vr["creep_force_x_left"], vr["normal_force_left"]])
+    assert 0.05 < abs(fx) / n <= 0.1 + 1e-9
+    d.terminate()
+    d.freeInstance()
+    for s, st in ((a, state_a), (b, state_b)):
+        s.s.freeFMUstate(st)
+    for s in (a, b, c):
+        s.free()
+
+
+def test_serialized_state_runs_no_code(fmu, extracted, md, tmp_path, capsys):
+    """fmi2DeSerializeFMUstate + fmi2SetFMUstate read numbers and arrays only: a pickle
+    that would run code is refused (fmi2Error) without running it, as are damaged bytes
+    and a state of a later format version; the serialized bytes are the documented format
+    (railcontact.fmu.state), and a good one is still taken."""
+    import os
+    import pickle
+    import struct
+
+    from fmpy.fmi1 import FMICallException
+
+    from railcontact.fmu import state as S
+
+    flag = tmp_path / "pickle_flag"
+
+    class Exploit:
+        def __reduce__(self):
+            return (os.system, (f"echo EXECUTED > {flag}",))
+
+    s = _stepped(fmu, extracted, md, "serial")
+    kept = s.s.getFMUstate()
+    good = s.s.serializeFMUstate(kept)
+    s.s.freeFMUstate(kept)
+    saved = S.unpack(good)
+    assert saved.guid == md.guid and saved.model == md.coSimulation.modelIdentifier
+    assert saved.initialised and saved.parameters["element_size"] == 2e-3
+    assert saved.memory["left"] and saved.real.dtype == np.float64
+    later = good[:16] + struct.pack("<I", S.VERSION + 1) + good[20:]
+    for bad, words in ((pickle.dumps(Exploit()), "not a railcontact FMU state"),
+                       (b"", "not a railcontact FMU state"),
+                       (good[:200], "cut short"), (good[:-20], "its arrays"),
+                       (later, "format version")):
+        with pytest.raises(FMICallException) as err:
+            s.s.setFMUstate(s.s.deSerializeFMUstate(bad))
+        assert err.value.status == 3
+        assert words in capsys.readouterr().out
+    assert not flag.exists()
+    s.step(lateral_displacement=3.1e-3)
+    first = s.get("creep_force_x_left", "normal_iterations")
+    s.s.setFMUstate(s.s.deSerializeFMUstate(good))
+    s.t -= STEP
+    s.step(lateral_displacement=3.1e-3)
+    assert s.get("creep_force_x_left", "normal_iterations") == first
+    s.free()
+
+
 def test_profile_file_in_resources(fmu, extracted, md):
     """wheel_profile names a file packed into the FMU (built with --profile): the tabulated
     S1002 gives the built-in S1002's contact (to the table's resolution)."""
@@ -271,16 +425,17 @@ def test_reset(fmu, extracted, md):
 
 def test_bad_input_is_a_clean_status(fmu, extracted, md):
     s = Slave(fmu, extracted, md, "bad", warm_start="none")
-    # NaN input: the step is discarded, outputs stay finite, status "out of range"
+    # NaN input: the step is discarded, outputs zero, every status "out of range"
     assert s.step(lateral_displacement=float("nan"), **CREEP) == 2
-    assert s.get("status") == 3
+    assert s.get("status", "status_left", "status_right") == [3, 3, 3]
     # lift-off: zero forces, status "no contact"
     s.step(lateral_displacement=0.0, load_left=0.0, load_right=0.0, **CREEP)
     assert s.get("status") == 2
     assert s.get("normal_force_left", "force_vertical") == [0.0, 0.0]
-    # beyond the profiles: a warning (not an error), zero forces, status "out of range"
-    assert s.step(lateral_displacement=0.08, load_left=83.3e3, load_right=83.3e3) == 0
-    assert s.get("status") == 3 and s.get("normal_force_left") == 0.0
+    # beyond the profiles: discarded (not an error), zero forces, status "out of range"
+    assert s.step(lateral_displacement=0.08, load_left=83.3e3, load_right=83.3e3) == 2
+    assert s.get("status", "status_left", "status_right") == [3, 3, 3]
+    assert s.get("normal_force_left") == 0.0
     # back in range
     assert s.step(lateral_displacement=0.0) == 0
     assert s.get("status") == 0 and s.get("normal_force_left") > 0
@@ -290,7 +445,7 @@ def test_bad_input_is_a_clean_status(fmu, extracted, md):
 def test_inputs_the_modes_do_not_use_may_be_nan(fmu, extracted, md):
     """A NaN in an input the modes do not read (speed and velocities with direct
     creepages; creepages under kinematic input) changes nothing; a NaN in a used input is
-    fmi2Discard with the previous outputs kept."""
+    fmi2Discard with every output zero and every status out of range."""
     nan = float("nan")
     direct = Slave(fmu, extracted, md, "direct", warm_start="none")
     assert direct.step(lateral_displacement=1e-3, **CREEP) == 0
@@ -301,8 +456,9 @@ def test_inputs_the_modes_do_not_use_may_be_nan(fmu, extracted, md):
     assert direct.step(load_left=0.0) == 0  # the left wheel lifts off, the right one rolls
     assert direct.get("status_left", "status_right", "status") == [2, 0, 2]
     assert direct.step(load_left=83.3e3) == 0
-    assert direct.step(xi_left=nan) == 2  # used: discarded, outputs kept
-    assert direct.get("normal_force_left") == before
+    assert direct.step(xi_left=nan) == 2  # used: discarded, nothing solved
+    assert direct.get("normal_force_left", "normal_force_right") == [0.0, 0.0]
+    assert direct.get("status", "status_left", "status_right") == [3, 3, 3]
     direct.free()
     kinematic = Slave(fmu, extracted, md, "kinematic", warm_start="none",
                       creepage_input="kinematic")

@@ -17,7 +17,14 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from ..errors import RailContactError
-from ..settings import ContactSettings, FMUModes, MaterialSettings, WheelRailGeometry
+from ..settings import (
+    ContactSettings,
+    FMUModes,
+    MaterialSettings,
+    NormalSettings,
+    TangentialSettings,
+    WheelRailGeometry,
+)
 from ..settings.fields import Record, default_of, spec_of
 
 SIDES = ("left", "right")
@@ -244,24 +251,45 @@ def parameter_settings(values: Mapping[str, Any]) -> ParameterSettings:
                              ContactSettings(**contact), modes)
 
 
+def _limits(record: type[Record], key: str) -> tuple[float, float]:
+    """The (minimum, maximum) of a case-file setting: what a step's input of the same
+    quantity may be."""
+    s = spec_of(next(f for f in fields(record) if f.name == key))  # type: ignore[arg-type]
+    return float(s.minimum), float(s.maximum)
+
+
+LOAD_LIMITS = _limits(NormalSettings, "load")
+"""The wheel loads [N] a step takes (control=load): a case file's ``[normal] load``
+range; beyond it (a negative load among them) the step is discarded, status 3."""
+CREEPAGE_LIMITS = _limits(TangentialSettings, "creepage")
+"""The creepages a step takes, each of xi and eta [-] and phi [1/m] (given, or formed
+from the kinematic inputs): a case file's ``[tangential] creepage`` range; beyond it the
+step is discarded, status 3."""
+_OUTSIDE = "; outside it the step is discarded (fmi2Discard, status 3)"
+_LOADS = f"{LOAD_LIMITS[0]:g} to {LOAD_LIMITS[1]:g} N (0 lifts the wheel){_OUTSIDE}"
+_CREEP = f"{CREEPAGE_LIMITS[0]:g} to {CREEPAGE_LIMITS[1]:g}{_OUTSIDE}"
+
 INPUTS = [
     Variable("lateral_displacement", "Real", "input", 0.0, "m",
              "wheelset lateral displacement, positive to the left"),
     Variable("yaw", "Real", "input", 0.0, "rad", "wheelset yaw angle"),
-    Variable("load_left", "Real", "input", 83.3e3, "N", "vertical wheel load, left (control=load)"),
+    Variable("load_left", "Real", "input", 83.3e3, "N",
+             f"vertical wheel load, left (control=load): {_LOADS}"),
     Variable("load_right", "Real", "input", 83.3e3, "N",
-             "vertical wheel load, right (control=load)"),
+             f"vertical wheel load, right (control=load): {_LOADS}"),
     Variable("vertical_displacement", "Real", "input", 0.0, "m",
              "wheelset vertical displacement, positive up (control=penetration)"),
     Variable("roll", "Real", "input", 0.0, "rad", "wheelset roll angle (control=penetration)"),
-    Variable("speed", "Real", "input", 30.0, "m/s", "forward speed V"),
+    Variable("speed", "Real", "input", 30.0, "m/s", "forward speed V (creepage_input="
+             "kinematic: > 0, and the creepages it forms within "
+             f"{CREEPAGE_LIMITS[0]:g} to {CREEPAGE_LIMITS[1]:g}{_OUTSIDE})"),
     *[v for s in SIDES for v in (
         Variable(f"xi_{s}", "Real", "input", 0.0, "1",
-                 f"longitudinal creepage, {s} wheel (creepage_input=direct)"),
+                 f"longitudinal creepage, {s} wheel (creepage_input=direct): {_CREEP}"),
         Variable(f"eta_{s}", "Real", "input", 0.0, "1",
-                 f"lateral creepage, {s} wheel (creepage_input=direct)"),
+                 f"lateral creepage, {s} wheel (creepage_input=direct): {_CREEP}"),
         Variable(f"phi_{s}", "Real", "input", 0.0, "1/m",
-                 f"spin creepage, {s} wheel (creepage_input=direct)"))],
+                 f"spin creepage, {s} wheel (creepage_input=direct): {_CREEP} 1/m"))],
     Variable("lateral_velocity", "Real", "input", 0.0, "m/s",
              "wheelset lateral velocity (creepage_input=kinematic)"),
     Variable("yaw_rate", "Real", "input", 0.0, "rad/s",
@@ -271,8 +299,11 @@ INPUTS = [
              "V / wheel_radius"),
 ]
 
-STATUS = ("0 ok, 1 not converged, 2 no contact, 3 out of range (nothing solved: zero "
-          "forces), 4 outside validity (solved, beyond a limit: Y/Q above max_y_q, Nadal's "
+STATUS = ("0 ok, 1 not converged (forces given, less accurate; none when the load loop "
+          "found no solution: n_patches 0, fmi2Discard), 2 no contact, 3 out of range "
+          "(nothing solved: zero forces; the step returns fmi2Discard: a pose beyond the model, "
+          "or a used input not finite or beyond its range, which zeroes every output), "
+          "4 outside validity (solved, beyond a limit: Y/Q above max_y_q, Nadal's "
           "limit, flange climb, penetration above max_penetration, load above max_wheel_load)")
 """The status codes (:data:`railcontact.timestep.wheelset.STATUS_NAMES`)."""
 

@@ -31,6 +31,7 @@ from ..errors import RailContactError, check_count, check_finite, check_positive
 from .dynamics import WheelsetModel, implicit_step
 
 STATUS_OUT_OF_RANGE = 3
+FMI_DISCARD = 2
 INPUTS = ("lateral_displacement", "yaw", "lateral_velocity", "yaw_rate", "speed",
           "spin_speed", "load_left", "load_right")
 JACOBIAN_PERTURBATION = 1e-4
@@ -217,10 +218,22 @@ class _Instance:
                         if v.causality == "output" and v.type == "Integer"]
         self._real_vr = [self.vars[n].valueReference for n in self.real_out]
         self._int_vr = [self.vars[n].valueReference for n in self.int_out]
+        self.discarded = False
 
     def step(self, t: float, h: float, inputs: list[float]) -> dict[str, float]:
+        """One communication step; its outputs by name. A step the FMU discards
+        (fmi2Discard: a state beyond the model) sets :attr:`discarded` and returns the
+        outputs, whose statuses say why; fmi2Error raises."""
+        from fmpy.fmi1 import FMICallException
+
         self.fmu.setReal(self.inputs, inputs)
-        self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        try:
+            self.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            self.discarded = False
+        except FMICallException as exc:
+            if exc.status != FMI_DISCARD:
+                raise
+            self.discarded = True
         out = dict(zip(self.real_out, self.fmu.getReal(self._real_vr), strict=True))
         out.update(zip(self.int_out, self.fmu.getInteger(self._int_vr), strict=True))
         return out
@@ -255,7 +268,7 @@ def _jacobian(inst: _Instance, t: float, h: float, inputs: list[float],
             pert[slot] += dv
             out = inst.step(t, h, pert)
             inst.fmu.setFMUState(state)
-            if out["status"] == STATUS_OUT_OF_RANGE:
+            if inst.discarded or out["status"] == STATUS_OUT_OF_RANGE:
                 return None
             jac[:, j] = (generalized_force(out) - base) / dv
     finally:
@@ -332,7 +345,7 @@ def simulate(fmu: str | Path, run: Run,
             t0 = time.perf_counter()
             out = main.step(t, h, inputs)
             wall = time.perf_counter() - t0
-            if out["status"] == STATUS_OUT_OF_RANGE:
+            if main.discarded or out["status"] == STATUS_OUT_OF_RANGE:
                 completed = False
                 message = (f"stopped at t = {t:.4f} s: the contact solver rejected the state "
                            f"(y = {x[0] * 1e3:.2f} mm, yaw = {x[1] * 1e3:.2f} mrad)")
