@@ -26,7 +26,7 @@ from .fmu import state as S
 from .fmu import variables as V
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
-from .settings import FMUModes
+from .settings import ContactSettings, FMUModes
 from .table import TableContact  # (xarray, zarr: imported when a table is opened)
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
 from .timestep.rigid import RigidSolution
@@ -253,7 +253,7 @@ class Slave:
         ps = V.parameter_settings(built)
         self.modes = ps.modes
         if ps.modes.contact_model == "table":
-            self.contact = self._table(ps.modes)
+            self.contact = self._table(ps.modes, ps.contact)
             self.built = built
             return
         g = ps.geometry  # profile_unit: the String or its enumeration
@@ -268,9 +268,10 @@ class Slave:
                                        convention=ps.modes.convention)
         self.built = built
 
-    def _table(self, modes: FMUModes):
+    def _table(self, modes: FMUModes, contact: ContactSettings):
         """The contact table of ``table_file`` (looked up in the resources first, like a
-        profile) as the step's contact (:class:`railcontact.table.TableContact`)."""
+        profile) as the step's contact (:class:`railcontact.table.TableContact`), with the
+        limits of validity of ``contact`` (max_y_q, max_penetration, max_wheel_load)."""
         if modes.control != "load" or modes.load_definition != "total":
             raise RailContactError(
                 "contact_model = table: a contact table is built by the total vertical wheel "
@@ -287,7 +288,7 @@ class Slave:
                                    "(a store of railcontact table build)")
         path = self.resources / value
         try:
-            return TableContact.open(path if path.exists() else value)
+            return TableContact.open(path if path.exists() else value, settings=contact)
         except RailContactError as exc:
             raise RailContactError(f"parameter table_file = {value!r}: {exc}") from None
         except Exception as exc:  # a folder that is no Zarr store, a damaged store

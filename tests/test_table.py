@@ -878,3 +878,24 @@ def test_a_huge_axis_count_is_refused_before_any_allocation(axes, words, tmp_pat
     err = capsys.readouterr().err
     assert "at most 10000000" in err and "Traceback" not in err
     assert not (tmp_path / "t.zarr").exists()
+
+
+def test_fmu_table_mode_uses_its_limits_of_validity(flange_table, table_fmu):
+    """The FMU's parameters max_y_q, max_penetration and max_wheel_load are the table
+    step's limits too: on the flange table's 8 mm node (Y/Q 3.6, beyond Nadal's limit,
+    flange climb) max_y_q = 10 leaves the Y/Q bit out, the other two stay."""
+    from railcontact.timestep.validity import FLANGE_CLIMB, NADAL
+
+    s, var = _table_slave(table_fmu, "table", str(flange_table.resolve()))
+    s.setReal([var["max_y_q"].valueReference], [10.0])
+    s.exitInitializationMode()
+    inputs = {"lateral_displacement": 0.008, "load_left": 83.3e3, "load_right": 83.3e3,
+              "xi_left": 0.002, "eta_left": -0.002, "phi_left": 0.3,
+              "xi_right": 0.002, "eta_right": 0.002, "phi_right": -0.3}
+    s.setReal([var[k].valueReference for k in inputs], list(inputs.values()))
+    s.doStep(0.0, 1e-3)
+    assert s.getInteger([var["status_left"].valueReference])[0] == 4
+    assert s.getInteger([var["validity_left"].valueReference])[0] == NADAL | FLANGE_CLIMB
+    assert s.getReal([var["derailment_quotient_left"].valueReference])[0] > 3.0
+    s.terminate()
+    s.freeInstance()
