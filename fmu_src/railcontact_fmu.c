@@ -28,6 +28,7 @@
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <pthread.h>
 #include <spawn.h>
 #include <stdarg.h>
@@ -96,7 +97,7 @@ typedef struct {
     int mode;
     PyObject *slave;
     PyObject *m_do_step, *m_exit_init, *m_enter_init, *m_reset, *m_get_state, *m_set_state,
-        *m_get_string, *m_set_string, *m_pop_log;
+        *m_check_state, *m_get_string, *m_set_string, *m_pop_log;
     double *real;
     size_t n_real;
     int32_t *integer;
@@ -682,7 +683,8 @@ static void free_instance(Instance *c) {
     if (c->slave && py_ready) {
         ENTER;
         PyObject *objs[] = {c->m_do_step, c->m_exit_init, c->m_enter_init, c->m_reset,
-                            c->m_get_state, c->m_set_state, c->m_get_string, c->m_set_string,
+                            c->m_get_state, c->m_set_state, c->m_check_state,
+                            c->m_get_string, c->m_set_string,
                             c->m_pop_log, c->slave};
         for (size_t k = 0; k < sizeof objs / sizeof objs[0]; ++k)
             if (objs[k]) py.DecRef(objs[k]);
@@ -786,6 +788,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
             c->m_reset = method(slave, "reset");
             c->m_get_state = method(slave, "get_state");
             c->m_set_state = method(slave, "set_state");
+            c->m_check_state = method(slave, "check_state");
             c->m_get_string = method(slave, "get_string");
             c->m_set_string = method(slave, "set_string");
             c->m_pop_log = method(slave, "pop_log");
@@ -804,7 +807,8 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
                 c->string_cache = calloc(c->n_string ? c->n_string : 1, sizeof(char *));
                 py.DecRef(b);
                 ok = c->m_do_step && c->m_exit_init && c->m_enter_init && c->m_reset &&
-                     c->m_get_state && c->m_set_state && c->m_get_string &&
+                     c->m_get_state && c->m_set_state && c->m_check_state &&
+                     c->m_get_string &&
                      c->m_set_string && c->m_pop_log && !py.ErrOccurred();
             }
             if (!ok) {
@@ -1116,13 +1120,29 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate state, fmi2Byt
     return s;
 }
 
+/* the bytes are kept only if the slave finds them a state of this FMU (check_state:
+ * format, version, lengths, JSON header, archive, GUID and model); else fmi2Error with
+ * the reason logged, *state untouched */
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte data[], size_t size,
                                    fmi2FMUstate *state) {
-    (void)comp;
-    if (!state) return fmi2Error;
+    Instance *c = comp;
+    if (!c || !state || (!data && size) || size > (size_t)LONG_MAX) return fmi2Error;
     ENTER;
-    PyObject *b = py.BytesFromStringAndSize((const char *)data, (long)size);
-    fmi2Status s = store_state(state, b);
+    PyObject *b = py.BytesFromStringAndSize(size ? (const char *)data : "", (long)size);
+    fmi2Status s = fmi2Error;
+    if (b) {
+        PyObject *args = py.BuildValue("(O)", b);
+        s = args ? call_status(c, c->m_check_state, args) : fmi2Error;
+        if (args) py.DecRef(args);
+        else py.ErrClear();
+    }
+    if (s == fmi2OK) {
+        s = store_state(state, b);
+    } else {
+        if (b) py.DecRef(b);
+        else py.ErrClear();
+        s = fmi2Error;
+    }
     LEAVE;
     return s;
 }

@@ -180,6 +180,22 @@ class Slave:
         builds the solver (without the state's warm start)."""
         return self._guard("setFMUstate", FMI_ERROR, self._set_state, data)
 
+    def check_state(self, data: bytes) -> int:
+        """fmi2DeSerializeFMUstate's check of the bytes: fmi2OK for a state of this FMU
+        (the format, its version and lengths, the JSON header, an archive read without
+        pickle, this FMU's GUID and model identifier, its variables), else fmi2Error with
+        the reason in the log. Whether its parameters fit an instance is left to
+        :meth:`set_state`."""
+        return self._guard("deSerializeFMUstate", FMI_ERROR, self._check_bytes, data)
+
+    def _check_bytes(self, data: bytes) -> int:
+        try:
+            self._check_own(S.unpack(data))
+        except RailContactError as exc:
+            self.log.append(f"deSerializeFMUstate refused: {exc}")
+            return FMI_ERROR
+        return FMI_OK
+
     def _set_state(self, data: bytes) -> int:
         try:
             state = S.unpack(data)
@@ -202,6 +218,19 @@ class Slave:
     def _check_state(self, state: S.State) -> None:
         """Raise :class:`~railcontact.fmu.state.StateError` unless ``state`` is one of
         this FMU whose parameters are those this instance's solver was built with."""
+        held = self._check_own(state)
+        if self.built is not None:
+            diff = _differences(held, self.built, ("the state", "this instance"))
+            if diff:
+                raise S.StateError(
+                    f"the state belongs to another parameter set ({diff}); a state is set "
+                    f"only in an instance initialised with its parameters, or in one not "
+                    f"yet initialised")
+
+    def _check_own(self, state: S.State) -> dict:
+        """Raise :class:`~railcontact.fmu.state.StateError` unless ``state`` is one of
+        this FMU (its GUID and model identifier, its variables, parameters that agree with
+        them); the parameter values it holds by name."""
         if (state.guid, state.model) != (self.guid, self.model):
             raise S.StateError(f"a state of another FMU (model {state.model!r}, GUID "
                                f"{state.guid}; this one: model {self.model!r}, GUID "
@@ -216,13 +245,7 @@ class Slave:
         if state.initialised and _differences(held, state.parameters):
             raise S.StateError("a damaged state (its parameters and its variables differ: "
                                + _differences(held, state.parameters) + ")")
-        if self.built is not None:
-            diff = _differences(held, self.built, ("the state", "this instance"))
-            if diff:
-                raise S.StateError(
-                    f"the state belongs to another parameter set ({diff}); a state is set "
-                    f"only in an instance initialised with its parameters, or in one not "
-                    f"yet initialised")
+        return held
 
     def _parameters(self, real, integer, strings) -> dict:
         """The parameter values by name held in the buffers ``real``, ``integer`` and

@@ -346,9 +346,9 @@ def test_state_of_another_parameter_set_is_refused(fmu, extracted, md, capsys):
 
 
 def test_serialized_state_runs_no_code(fmu, extracted, md, tmp_path, capsys):
-    """fmi2DeSerializeFMUstate + fmi2SetFMUstate read numbers and arrays only: a pickle
-    that would run code is refused (fmi2Error) without running it, as are damaged bytes
-    and a state of a later format version; the serialized bytes are the documented format
+    """fmi2DeSerializeFMUstate reads numbers and arrays only: a pickle that would run code
+    is refused (fmi2Error) without running it, as are damaged bytes and a state of a later
+    format version; the serialized bytes are the documented format
     (railcontact.fmu.state), and a good one is still taken."""
     import os
     import pickle
@@ -378,9 +378,10 @@ def test_serialized_state_runs_no_code(fmu, extracted, md, tmp_path, capsys):
                        (good[:200], "cut short"), (good[:-20], "its arrays"),
                        (later, "format version")):
         with pytest.raises(FMICallException) as err:
-            s.s.setFMUstate(s.s.deSerializeFMUstate(bad))
-        assert err.value.status == 3
-        assert words in capsys.readouterr().out
+            s.s.deSerializeFMUstate(bad)
+        assert err.value.status == 3 and "DeSerializeFMUstate" in str(err.value)
+        log = capsys.readouterr().out
+        assert "deSerializeFMUstate refused" in log and words in log
     assert not flag.exists()
     s.step(lateral_displacement=3.1e-3)
     first = s.get("creep_force_x_left", "normal_iterations")
@@ -389,6 +390,74 @@ def test_serialized_state_runs_no_code(fmu, extracted, md, tmp_path, capsys):
     s.step(lateral_displacement=3.1e-3)
     assert s.get("creep_force_x_left", "normal_iterations") == first
     s.free()
+
+
+def test_deserialize_refuses_what_is_no_state_of_this_fmu(fmu, extracted, md, capsys):
+    """fmi2DeSerializeFMUstate itself is fmi2Error, the reason logged, for bytes that are
+    no state of this FMU: another header, a damaged JSON header, an archive that would
+    need pickle, another FMU's GUID or model identifier; a state handed in for reuse is
+    left as it was. A good state round-trips bit for bit, and one of another parameter set
+    is still deserialized and refused only by fmi2SetFMUstate."""
+    import io
+    from dataclasses import replace
+
+    from fmpy.fmi1 import FMICallException
+
+    from railcontact.fmu import state as S
+
+    s = _stepped(fmu, extracted, md, "deser", friction=0.3)
+    kept = s.s.getFMUstate()
+    good = s.s.serializeFMUstate(kept)
+    saved = S.unpack(good)
+    start = S._PREFIX.size
+    length = S._PREFIX.unpack_from(good)[2]
+    header, archive = good[start:start + length], good[start + length:]
+    assert header.startswith(b"{") and archive.startswith(b"PK")
+    pickled = io.BytesIO()
+    np.savez(pickled, real=np.array([object()] * len(saved.real)), integer=saved.integer,
+             control=saved.control)
+    bad = {
+        "another header": (b"OTHERFMUSTATE123" + good[16:], "does not start with"),
+        "damaged JSON": (good[:start] + b"[" + header[1:] + archive, "its header"),
+        "pickled archive": (good[:start + length] + pickled.getvalue(), "its arrays"),
+        "another GUID": (S.pack(replace(saved, guid="{00000000-0000-0000-0000-0000000000"
+                                                     "00}")), "a state of another FMU"),
+        "another model": (S.pack(replace(saved, model="OtherModel")),
+                          "a state of another FMU"),
+        "other variables": (S.pack(replace(saved, real=saved.real[:-1])),
+                            "its variables are not this FMU's"),
+    }
+    capsys.readouterr()
+    for name, (data, words) in bad.items():
+        with pytest.raises(FMICallException) as err:
+            s.s.deSerializeFMUstate(data)
+        assert err.value.status == 3, name
+        log = capsys.readouterr().out
+        assert "deSerializeFMUstate refused" in log and words in log, (name, log)
+        # a state given for reuse keeps its bytes
+        with pytest.raises(FMICallException):
+            s.s.deSerializeFMUstate(data, kept)
+        assert s.s.serializeFMUstate(kept) == good, name
+    # a good state: deserialized, serialized again bit for bit, and set
+    restored = s.s.deSerializeFMUstate(good)
+    assert s.s.serializeFMUstate(restored) == good
+    s.step(lateral_displacement=3.1e-3)
+    first = s.get("creep_force_x_left", "normal_iterations")
+    s.s.setFMUstate(restored)
+    s.t -= STEP
+    s.step(lateral_displacement=3.1e-3)
+    assert s.get("creep_force_x_left", "normal_iterations") == first
+    # a state of this FMU with other parameters: deserialized, refused when set
+    other = _stepped(fmu, extracted, md, "deser_other", friction=0.5)
+    other_state = other.s.getFMUstate()
+    foreign = s.s.deSerializeFMUstate(other.s.serializeFMUstate(other_state))
+    with pytest.raises(FMICallException) as err:
+        s.s.setFMUstate(foreign)
+    assert err.value.status == 3 and "another parameter set" in capsys.readouterr().out
+    for inst, st in ((s, kept), (s, restored), (s, foreign), (other, other_state)):
+        inst.s.freeFMUstate(st)
+    s.free()
+    other.free()
 
 
 def test_profile_file_in_resources(fmu, extracted, md):
