@@ -8,10 +8,11 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from ..normal.resolution import under_resolved
 from ..settings import Case, load_case, validate_case
 from ..settings.case import check_convention
 from .quadratic import solve_quadratic
-from .results import Solution
+from .results import PatchSolution, Solution
 from .wheelrail import solve_wheel_rail
 
 
@@ -40,6 +41,12 @@ def solve(case: Case | Mapping[str, Any] | str | Path, *,
     ------
     CaseError
         For a case that breaks the schema or cannot be solved as given.
+
+    Notes
+    -----
+    A patch whose contact spans fewer than
+    :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x and y is
+    under-resolved: its normal result is not converged, with a message saying so.
     """
     t0 = time.perf_counter()
     case = load_case(case) if isinstance(case, (str, Path)) else validate_case(case)
@@ -47,7 +54,24 @@ def solve(case: Case | Mapping[str, Any] | str | Path, *,
         case = replace(case, convention=check_convention(convention))
     if case.wheel_rail:
         patches, pose = solve_wheel_rail(case)  # with the tangential problem
-        return Solution(case=case, patches=patches, roll=pose.roll,
-                        seconds=time.perf_counter() - t0)
-    return Solution(case=case, patches=[solve_quadratic(case)],
-                    seconds=time.perf_counter() - t0)
+        roll = pose.roll
+    else:
+        patches, roll = [solve_quadratic(case)], None
+    for p in patches:
+        _check_resolution(p)
+    return Solution(case=case, patches=patches, roll=roll, seconds=time.perf_counter() - t0)
+
+
+def _check_resolution(patch: PatchSolution) -> None:
+    """Mark a converged patch whose contact spans fewer than
+    :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x and y not
+    converged, its normal message saying so: the solve met its tolerance, but its pressure
+    has not converged under grid refinement (the case exits 1, as a contact cut off by
+    elements far larger than it)."""
+    n = patch.normal
+    if not n.converged:
+        return
+    why = under_resolved(n.contact, n.grid.dx, n.grid.dy)
+    if why:
+        n.converged = False
+        n.message = f"{why} ({n.message})"

@@ -304,7 +304,8 @@ STATUS = ("0 ok, 1 not converged (forces given, less accurate; none when the loa
           "(nothing solved: zero forces; the step returns fmi2Discard: a pose beyond the model, "
           "or a used input not finite or beyond its range, which zeroes every output), "
           "4 outside validity (solved, beyond a limit: Y/Q above max_y_q, Nadal's "
-          "limit, flange climb, penetration above max_penetration, load above max_wheel_load)")
+          "limit, flange climb, penetration above max_penetration, load above max_wheel_load, "
+          "a patch under-resolved)")
 """The status codes (:data:`railcontact.timestep.wheelset.STATUS_NAMES`)."""
 
 
@@ -441,7 +442,8 @@ OUTPUTS = [
             value=lambda w: w.penetration),
     *_wheel("validity", "Integer", "", "the limits the wheel is beyond, a sum of bits: 1 "
             "Y/Q above max_y_q, 2 beyond Nadal's limit, 4 flange climb, 8 penetration above "
-            "max_penetration, 16 load above max_wheel_load (0: within all)",
+            "max_penetration, 16 load above max_wheel_load, 32 a patch under-resolved (its "
+            "contact fewer than 4 elements across along x and y) (0: within all)",
             value=lambda w: w.validity),
 ]
 """The outputs; ``value(result)`` reads each from a

@@ -20,6 +20,11 @@ A wheel whose contact was solved (status ok) is *outside validity* when one of t
 * ``PENETRATION``: a patch's normal penetration exceeds
   :attr:`ContactSettings.max_penetration`.
 * ``LOAD``: ``Q`` exceeds :attr:`ContactSettings.max_wheel_load`.
+* ``RESOLUTION``: a patch's contact spans fewer than
+  :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x and along y
+  (:func:`~railcontact.normal.resolution.under_resolved`): its
+  pressure and area are the grid's (the largest pressure 4 % to 50 % off Hertz's), not the
+  contact's; smaller elements resolve it.
 
 The forces are still given; the status says not to trust them as a prediction.
 """
@@ -31,12 +36,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ..contact.results import PatchSolution
+from ..normal.resolution import under_resolved
 from ..settings import ContactSettings
 
-Y_Q, NADAL, FLANGE_CLIMB, PENETRATION, LOAD = 1, 2, 4, 8, 16
+Y_Q, NADAL, FLANGE_CLIMB, PENETRATION, LOAD, RESOLUTION = 1, 2, 4, 8, 16, 32
 VALIDITY_NAMES = {Y_Q: "Y/Q above max_y_q", NADAL: "beyond Nadal's limit",
                   FLANGE_CLIMB: "flange climb", PENETRATION: "penetration above "
-                  "max_penetration", LOAD: "wheel load above max_wheel_load"}
+                  "max_penetration", LOAD: "wheel load above max_wheel_load",
+                  RESOLUTION: "a patch under-resolved"}
 """The bits of a wheel's ``validity`` and their meaning."""
 FLANGE_CLIMB_MARGIN = math.radians(1.0)
 """How far below the flange's steepest angle [rad] a contact past the steepest point
@@ -71,7 +78,8 @@ def check_validity(side_sign: int, track_force: Sequence[float],
                    patches: Sequence[PatchSolution], flange_flank: tuple[float, float],
                    settings: ContactSettings) -> Validity:
     """The validity of a solved wheel (module docstring): :func:`check_limits` with each
-    patch's contact point and the largest normal penetration of the patches.
+    patch's contact point and the largest normal penetration of the patches, and
+    ``RESOLUTION`` for a patch whose contact spans too few elements.
 
     Parameters
     ----------
@@ -89,7 +97,13 @@ def check_validity(side_sign: int, track_force: Sequence[float],
     contacts = [(p.geometry.wheel_s, p.geometry.contact_angle) for p in patches
                 if p.geometry is not None]
     penetration = max((p.normal.penetration for p in patches), default=0.0)
-    return check_limits(side_sign, track_force, contacts, penetration, flange_flank, settings)
+    v = check_limits(side_sign, track_force, contacts, penetration, flange_flank, settings)
+    coarse = [w for p in patches if p.normal.force > 0
+              for w in [under_resolved(p.normal.contact, p.normal.grid.dx, p.normal.grid.dy)]
+              if w]
+    if not coarse:
+        return v
+    return Validity(v.flags | RESOLUTION, "; ".join([m for m in (v.message, coarse[0]) if m]))
 
 
 def check_limits(side_sign: int, track_force: Sequence[float],
@@ -147,5 +161,5 @@ def check_limits(side_sign: int, track_force: Sequence[float],
 
 
 __all__ = ["FLANGE_CLIMB", "FLANGE_CLIMB_MARGIN", "LOAD", "NADAL", "PENETRATION",
-           "VALIDITY_NAMES", "Validity", "Y_Q", "check_limits", "check_validity",
+           "RESOLUTION", "VALIDITY_NAMES", "Validity", "Y_Q", "check_limits", "check_validity",
            "derailment_quotient", "nadal_limit"]

@@ -217,8 +217,8 @@ class WheelContact:
     from the normal share Q; the message says so."""
     validity: int = 0
     """The limits of :mod:`~railcontact.timestep.validity` the solved wheel is beyond (bits
-    Y_Q 1, NADAL 2, FLANGE_CLIMB 4, PENETRATION 8, LOAD 16; 0 within all); any makes an
-    otherwise ok wheel's status OUTSIDE_VALIDITY."""
+    Y_Q 1, NADAL 2, FLANGE_CLIMB 4, PENETRATION 8, LOAD 16, RESOLUTION 32; 0 within all);
+    any makes an otherwise ok wheel's status OUTSIDE_VALIDITY."""
     derailment_quotient: float = 0.0
     """Y/Q [-]: the wheel's lateral force on the rail towards the field side over the
     vertical force (:func:`~railcontact.timestep.validity.derailment_quotient`)."""

@@ -1,0 +1,103 @@
+"""A patch resolved by too few elements is said to be, against Hertz's solution."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from railcontact import hertz, solve, validate_case
+from railcontact.geometry.profiles import read_profile
+from railcontact.geometry.track import Pose, Track, Wheelset
+from railcontact.halfspace.materials import ElasticPair, Material
+from railcontact.normal.resolution import MIN_ELEMENTS_ACROSS, elements_across
+from railcontact.timestep.validity import RESOLUTION, VALIDITY_NAMES
+from railcontact.timestep.wheelset import (
+    OK,
+    OUTSIDE_VALIDITY,
+    ContactSettings,
+    WheelsetContact,
+)
+
+LOAD = 50e3
+
+
+def quadratic_case(per_axis: int) -> dict:
+    """A 1:5 quadratic patch at 50 kN with square-aspect elements, ``per_axis`` of them
+    across Hertz's contact ellipse along x and along y."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+            "normal": {"load": LOAD}}
+    h = hertz(1.0, 5.0, validate_case({**case, "grid": {"nx": 8, "ny": 8}}).pair, load=LOAD)
+    case["grid"] = {"dx": 2 * h.a / per_axis, "dy": 2 * h.b / per_axis}
+    return case
+
+
+def test_elements_across_spans_first_to_last():
+    c = np.zeros((6, 7), bool)
+    assert elements_across(c) == (0, 0)
+    c[1, 2] = c[4, 2] = c[2, 5] = True
+    assert elements_across(c) == (4, 4)
+
+
+@pytest.mark.parametrize("per_axis", [1, 2])
+def test_under_resolved_patch_is_far_off_hertz_and_not_converged(per_axis):
+    case = quadratic_case(per_axis)
+    sol = solve(case)
+    n = sol.patches[0].normal
+    h = hertz(1.0, 5.0, validate_case(case).pair, load=LOAD)
+    assert n.force == pytest.approx(LOAD, rel=1e-3)  # the load is met...
+    assert abs(n.max_pressure / h.max_pressure - 1) > 0.10  # ...the pressure is the grid's
+    assert max(elements_across(n.contact)) < MIN_ELEMENTS_ACROSS
+    assert not n.converged and not sol.converged
+    assert n.message.startswith("under-resolved patch: its contact spans")
+    assert "use smaller elements" in n.message
+
+
+@pytest.mark.parametrize("per_axis", [5, 8])
+def test_resolved_patch_is_within_a_few_percent_of_hertz(per_axis):
+    case = quadratic_case(per_axis)
+    sol = solve(case)
+    n = sol.patches[0].normal
+    h = hertz(1.0, 5.0, validate_case(case).pair, load=LOAD)
+    assert max(elements_across(n.contact)) >= MIN_ELEMENTS_ACROSS
+    assert n.max_pressure == pytest.approx(h.max_pressure, rel=0.03)
+    assert n.converged and "under-resolved" not in n.message
+
+
+def test_under_resolved_case_file_exits_1(tmp_path):
+    g = quadratic_case(1)["grid"]
+    f = tmp_path / "coarse.toml"
+    f.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = "quadratic"\n'
+                 f'A = 1.0\nB = 5.0\n[normal]\nload = {LOAD}\n'
+                 f'[grid]\ndx = {g["dx"]!r}\ndy = {g["dy"]!r}\n')
+    p = subprocess.run([sys.executable, "-m", "railcontact", "solve", str(f), "--json"],
+                       capture_output=True, text=True, check=False)
+    assert p.returncode == 1, p.stderr
+    normal = json.loads(p.stdout)["patches"][0]["normal"]
+    assert normal["converged"] is False and "under-resolved" in normal["message"]
+
+
+def _wheelset(element_size: float) -> WheelsetContact:
+    mat = Material(206e9, 0.28)
+    return WheelsetContact(Track(read_profile("60E1", "rail"), math.atan(1 / 40)),
+                           Wheelset(read_profile("S1002", "wheel"), 0.46),
+                           ElasticPair.of(mat, mat),
+                           ContactSettings(warm_start="none", element_size=element_size))
+
+
+def test_wheel_with_an_under_resolved_patch_is_outside_validity():
+    """5 mm elements on the centred tread patch at 2 kN (Hertz: a few mm across)."""
+    none = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    r = _wheelset(5e-3).solve(Pose(0.0), loads=(2e3, 2e3), creepages=none)
+    for w in r.wheels:
+        assert w.status == OUTSIDE_VALIDITY and w.validity == RESOLUTION
+        assert w.message.startswith("outside validity: under-resolved patch")
+        assert w.track_force[2] == pytest.approx(2e3, rel=1e-2)  # forces still given
+    assert VALIDITY_NAMES[RESOLUTION] == "a patch under-resolved"
+    r = _wheelset(0.5e-3).solve(Pose(0.0), loads=(2e3, 2e3), creepages=none)
+    assert all(w.status == OK and w.validity == 0 for w in r.wheels)
