@@ -59,9 +59,10 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                        else [(patch_module, "solve_tangential")]),
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
-LEGACY = frozenset({"strips_from_contact", "sample_on_strips"})
-"""Targets of older versions of the package (functions it no longer has), timed when
-present: the script also runs against an older package (bench_step_ab.py)."""
+LEGACY = frozenset({"strips_from_contact", "sample_on_strips", "uncovered", "overlap_box"})
+"""Targets that one version of the package has and another lacks (functions it no longer
+has, or not yet: the reach check), timed when present: the script also runs against an
+older package (bench_step_ab.py)."""
 
 
 class Breakdown:

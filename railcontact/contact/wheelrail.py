@@ -306,10 +306,8 @@ def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], An
     ok = np.isfinite(u) & np.isfinite(f)
     k0 = int(np.argmin(np.abs(s)))
     lo, hi = -math.inf, math.inf
-    for o in others:
-        hits = np.flatnonzero(ok)
-        if hits.size < 2:
-            continue
+    hits = np.flatnonzero(ok)
+    for o in others if hits.size >= 2 else ():
         k = int(hits[np.argmin(np.abs(u[hits] - o.rail_u))])  # the other's point here
         if k == k0:
             continue

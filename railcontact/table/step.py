@@ -51,7 +51,6 @@ from ..timestep.wheelset import (
     NO_CONTACT,
     OK,
     OUT_OF_RANGE,
-    OUTSIDE_VALIDITY,
     Kinematics,
     WheelContact,
     WheelsetResult,
@@ -239,14 +238,9 @@ class TableContact:
             rolling_radius=rr, area=ar, max_pressure=pm, slip_area_ratio=sl,
             contact_point=(cx, cy, cz), penetration=pen)
         wheel.derailment_quotient = derailment_quotient(s, wheel.track_force)
-        if fn > 0.0:  # (the same marking as WheelsetContact's)
-            v = check_limits(s, wheel.track_force, [(ts, ta)], pen, self.flange, self.limits)
-            wheel.validity = v.flags
-            if v.flags and wheel.status == OK:
-                wheel.status = OUTSIDE_VALIDITY
-                wheel.message = f"outside validity: {v.message} (table)"
-            elif v.flags:
-                wheel.message += f"; also outside validity: {v.message}"
+        if fn > 0.0:
+            wheel.mark_validity(check_limits(s, wheel.track_force, [(ts, ta)], pen,
+                                             self.flange, self.limits))
         return wheel
 
 

@@ -98,9 +98,8 @@ def check_validity(side_sign: int, track_force: Sequence[float],
                 if p.geometry is not None]
     penetration = max((p.normal.penetration for p in patches), default=0.0)
     v = check_limits(side_sign, track_force, contacts, penetration, flange_flank, settings)
-    coarse = [w for p in patches if p.normal.force > 0
-              for w in [under_resolved(p.normal.contact, p.normal.grid.dx, p.normal.grid.dy)]
-              if w]
+    coarse = [m for m in (under_resolved(p.normal.contact, p.normal.grid.dx, p.normal.grid.dy)
+                          for p in patches if p.normal.force > 0) if m]
     if not coarse:
         return v
     return Validity(v.flags | RESOLUTION, "; ".join([m for m in (v.message, coarse[0]) if m]))

@@ -90,7 +90,7 @@ from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
 from .rigid import RigidMemory, RigidSolution, RigidWheelset
-from .validity import check_validity, derailment_quotient
+from .validity import Validity, check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
     box_edges,
@@ -236,6 +236,20 @@ class WheelContact:
     @property
     def n_patches(self) -> int:
         return len(self.patches)
+
+    def mark_validity(self, validity: Validity) -> None:
+        """Record a validity check: its bits in :attr:`validity`; an ok wheel beyond a
+        limit becomes OUTSIDE_VALIDITY, its message naming each quantity and value (a
+        wheel with another status keeps it, the limits added to its message)."""
+        self.validity = validity.flags
+        if not validity.flags:
+            return
+        if self.status == OK:
+            note = self.message.removeprefix("ok")  # e.g. "; the load may have several ..."
+            self.status = OUTSIDE_VALIDITY
+            self.message = f"outside validity: {validity.message}{note}"
+        else:
+            self.message += f"; also outside validity: {validity.message}"
 
 
 @dataclass
@@ -478,17 +492,9 @@ class WheelsetContact:
         OUTSIDE_VALIDITY, its message naming each quantity and value."""
         if not wheel.patches:
             return
-        v = check_validity(SIDES[wheel.side], wheel.track_force, wheel.patches,
-                           self.wheelset.flange_flank, self.settings)
-        wheel.validity = v.flags
-        if not v.flags:
-            return
-        if wheel.status == OK:
-            note = wheel.message.removeprefix("ok")  # e.g. "; the load may have several ..."
-            wheel.status = OUTSIDE_VALIDITY
-            wheel.message = f"outside validity: {v.message}{note}"
-        else:
-            wheel.message += f"; also outside validity: {v.message}"
+        wheel.mark_validity(check_validity(SIDES[wheel.side], wheel.track_force,
+                                           wheel.patches, self.wheelset.flange_flank,
+                                           self.settings))
 
     def _approach(self, pose: Pose, side: str, vertical: float) -> float:
         """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
