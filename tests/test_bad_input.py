@@ -209,9 +209,9 @@ def test_a_wheel_that_cannot_be_solved_has_its_own_status(monkeypatch):
     """F05: the right wheel (flange and tread) gets a load loop that cannot converge (one
     secant step allowed); the step does not raise, the right wheel says 'not converged'
     and the left wheel (one patch, no approach secant) is solved."""
-    import railcontact.contact.wheelrail as wheelrail
+    import railcontact.contact.loadloop as loadloop
 
-    monkeypatch.setattr(wheelrail, "MAX_SECANT", 1)
+    monkeypatch.setattr(loadloop, "MAX_SECANT", 1)
     r = _wheelset(warm_start="none").solve(F05_POSE, loads=F05_LOADS, creepages=F05_CREEPAGES)
     assert r.left.status == 0 and r.left.track_force[2] == pytest.approx(F05_LOADS[0], rel=2e-3)
     assert r.right.status == 1 and "did not converge" in r.right.message

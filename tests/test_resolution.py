@@ -69,6 +69,44 @@ def test_resolved_patch_is_within_a_few_percent_of_hertz(per_axis):
     assert n.converged and "under-resolved" not in n.message
 
 
+def narrow_case(across: int, creepage: float = 5e-4) -> dict:
+    """A Hertz ellipse 18 times longer across the track than along it (A = 100, B = 1 /m,
+    50 kN), square elements, ``across`` of them along its narrow axis (x, the rolling
+    direction), longitudinal creepage ``creepage`` at mu = 0.3."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 100.0, "B": 1.0},
+            "normal": {"load": LOAD},
+            "tangential": {"creepage": [creepage, 0.0, 0.0], "friction": 0.3}}
+    h = hertz(100.0, 1.0, validate_case({**case, "grid": {"nx": 8, "ny": 8}}).pair,
+              load=LOAD)
+    case["grid"] = {"dx": 2 * h.a / across, "dy": 2 * h.a / across}
+    return case
+
+
+@pytest.mark.parametrize("across", [1, 2, 3])
+def test_a_long_narrow_patch_few_elements_wide_is_under_resolved(across):
+    """Long across the track (18 mm by 1 mm): many elements along y but 1 or 3 along x.
+    Its creep force is 20-46 % off the converged one (33 elements across, 16 within 2 %
+    of it); it is said to be under-resolved."""
+    sol = solve(narrow_case(across))
+    p = sol.patches[0]
+    nx, ny = elements_across(p.normal.contact)
+    assert nx < MIN_ELEMENTS_ACROSS <= ny
+    fine = solve(narrow_case(32)).patches[0]
+    assert abs(p.tangential.force[0] / fine.tangential.force[0] - 1) > 0.15
+    assert not p.normal.converged and not sol.converged
+    assert "fewer than 4 across its narrow way" in p.normal.message
+
+
+def test_a_long_narrow_patch_resolved_across_is_not_flagged():
+    """From 5 elements across the narrow way on (creep force 18 % off, falling as the
+    elements shrink: a convergence study's business, not a flag's)."""
+    sol = solve(narrow_case(4))
+    n = sol.patches[0].normal
+    assert min(elements_across(n.contact)) >= MIN_ELEMENTS_ACROSS
+    assert n.converged and "under-resolved" not in n.message
+
+
 def test_under_resolved_case_file_exits_1(tmp_path):
     g = quadratic_case(1)["grid"]
     f = tmp_path / "coarse.toml"

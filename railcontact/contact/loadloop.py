@@ -243,3 +243,87 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
         return best, ""
     return best, (f"the vertical load with creep forces did not converge (vertical force "
                   f"off by {best_r:.6g} N for load {load:.6g} N)")
+
+
+MERGE_WINDOW = 1.6
+"""Merges of a wheel's patches (:func:`~railcontact.geometry.search.merge_approaches`)
+checked for another solution of its load (:func:`first_root`): those within this factor
+of the root's vertical approach. The vertical force grows about as the approach to the
+power 3/2 (Hertz), so a merge 1.6 times the approach away is met at about twice the load
+(or half of it): its jump would have to be half the load to bring a second root."""
+MERGE_STEP = 1e-6
+"""Relative step [-] below and above a merge's approach at which the two patches and the
+merged one are solved."""
+
+
+def approach_secant(residual: Callable[[float], tuple[float, T]], a0: float, load: float,
+                    rtol: float, below: float = math.inf) -> tuple[T, float]:
+    """Secant iteration on a wheel's vertical approach for its vertical ``load`` [N].
+
+    ``residual(a)`` solves the wheel at the vertical approach ``a`` [m] and returns (its
+    vertical force - ``load`` [N], the solution). Starts at ``a0`` [m]; every approach
+    tried stays at most ``below`` [m]. Stops at ``|residual| <= rtol load``, after
+    :data:`MAX_SECANT` steps, or when :data:`MAX_STALLED` steps in a row do not halve the
+    smallest residual (the creep forces' noise, :func:`creep_load_secant`). Returns the
+    solution closest to the load and its residual [N]."""
+    r0, sol = residual(a0)
+    best, best_r = sol, r0
+    if abs(r0) <= rtol * load:
+        return best, best_r
+    a1 = min(a0 * (0.9 if r0 > 0 else 1.1), below)
+    stalled = 0
+    for _ in range(MAX_SECANT):
+        r1, sol = residual(a1)
+        stalled = 0 if abs(r1) < 0.5 * abs(best_r) else stalled + 1
+        if abs(r1) < abs(best_r):
+            best, best_r = sol, r1
+        if abs(r1) <= rtol * load or r1 == r0 or stalled >= MAX_STALLED:
+            break
+        a2 = a1 - r1 * (a1 - a0) / (r1 - r0)
+        a0, r0 = a1, r1
+        a1 = min(max(a2, 0.5 * a1), 2.0 * a1, below)
+    return best, best_r
+
+
+def first_root(residual: Callable[[float], tuple[float, T]], solution: T, approach: float,
+               merges: Iterable[float], load: float, rtol: float
+               ) -> tuple[T, float | None]:
+    """The solution of a wheel's load with the smallest vertical approach, and the
+    approach [m] of another solution (or of the merge of patches beyond which one lies),
+    None when none was found: the wheel lowered onto its rail stops at the first
+    approach whose vertical force is the load.
+
+    Within one set of patches the vertical force rises with the approach (a half-space's
+    pressure rises everywhere as its gap closes; the creep forces' share is bounded by
+    :func:`load_unique`'s argument). Where two of the wheel's contact regions join into
+    one patch (a saddle of the gap, ``merges`` [m]: the tread and the flange root) the
+    model changes: two patches, each in its own tangent plane and blind to the other's
+    pressure, become one patch in one plane whose lobes press on one another, and the
+    vertical force jumps - down, on S1002/60E1 at 5.3 mm by 11-17 % of the load. A load
+    within such a jump is carried at two approaches, one each side of the merge.
+
+    ``solution`` is a root at ``approach`` [m], by whatever start reached it;
+    ``residual(a)`` solves the wheel at the approach ``a`` (:func:`approach_secant`).
+    The nearest merge each side within :data:`MERGE_WINDOW` is checked, the wheel solved
+    just below and just above it: when the load is carried below a merge under
+    ``approach``, the root there is found (to ``rtol``) and returned; when it is not yet
+    carried just above a merge beyond, another root lies beyond it. Warm and cold starts
+    so return the same root."""
+    m = [float(a) for a in merges]
+    below = [a for a in m if approach / MERGE_WINDOW <= a < approach]
+    above = [a for a in m if approach < a <= approach * MERGE_WINDOW]
+    if approach > 0 and below:
+        top = max(below) * (1.0 - MERGE_STEP)
+        r, at_top = residual(top)
+        if r >= 0:  # carried before the patches join: the root below is the first
+            if abs(r) <= rtol * load:
+                return at_top, approach
+            start = top * (load / (r + load)) ** (2 / 3)  # (as Hertz's)
+            first, _ = approach_secant(residual, start, load, rtol, below=top)
+            return first, approach
+    if approach > 0 and above:
+        bottom = min(above) * (1.0 + MERGE_STEP)
+        r, _ = residual(bottom)
+        if r <= 0:  # not carried just beyond the merge: a second root further on
+            return solution, bottom
+    return solution, None

@@ -93,8 +93,14 @@ class PatchSolution:
     geometry: ContactPoint | None = None
     work: Work = field(default_factory=Work)
     load_unique: bool | None = None
-    """Whether the wheel load has one solution (:func:`~.loadloop.load_unique`); None
-    where no load loop with creep forces ran."""
+    """Whether the wheel load has one solution: False when a steep patch's creep force
+    (:func:`~.loadloop.load_unique`) or a merge of patches
+    (:attr:`load_other`) may let it be carried at another approach too; None where no
+    load loop ran."""
+    load_other: float | None = None
+    """The vertical approach [m] beyond first contact of another solution of the wheel's
+    load (found below this one's), or of the merge of patches beyond which another lies
+    (:func:`~railcontact.contact.wheelrail._first_root`); None when none was found."""
     reference: ReferencePoint | None = None
     """CONTACT's contact reference point of the patch (wheel-rail cases)."""
     convention: str = "railcontact"
@@ -158,6 +164,8 @@ class PatchSolution:
                           "max_pressure": h.max_pressure, "area": h.area}
         if self.load_unique is not None:
             d["load_unique"] = self.load_unique
+        if self.load_other is not None:
+            d["load_other_approach"] = self.load_other
         d["work"] = self.work.to_dict()
         return d
 

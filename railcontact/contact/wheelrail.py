@@ -36,6 +36,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -50,8 +51,10 @@ from ..geometry.search import (
     at_reference,
     contact_points,
     count_contacts,
+    merge_approaches,
     overlap_box,
     reference_point,
+    run_on_rail,
 )
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.grid import Grid
@@ -67,9 +70,10 @@ from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeom
 from ..settings.convention import side_creepage
 from .loadloop import (
     CREEP_LOAD_RTOL,
-    MAX_SECANT,
+    approach_secant,
     count_passes,
     creep_load_secant,
+    first_root,
     load_met,
     load_unique,
     probe_settings,
@@ -94,6 +98,10 @@ function of its BEM grid (e.g. the previous time step's)."""
 TractionFor = Callable[[PatchSolution], Any]
 """``traction_for(patch)``: the (traction (2, nx, ny) [Pa], adhesion/slip map) that starts the
 tangential BEM of a normal-solved patch on its grid, or None (e.g. a neighbouring solve's)."""
+RunOf = Callable[[float, float], tuple[float, float]]
+"""``run_of(approach, rail_u)``: the rail positions [m] spanned by a wheel's run of vertical
+overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
+(:func:`~railcontact.geometry.search.run_on_rail` at a pose)."""
 Starts = Callable[[str], tuple[EstimateFor | None, TractionFor | None]]
 """``starts(side)``: the ``(estimate_for, traction_for)`` of a wheel (see :func:`solve_wheel`)."""
 LOAD_RTOL = 1e-6
@@ -205,9 +213,16 @@ def _covers(outer: tuple[float, float, float, float],
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
              pair: ElasticPair, loads: list[float] | None = None,
              estimate_for: EstimateFor | None = None,
-             previous: list[PatchSolution] | None = None) -> list[PatchSolution]:
+             previous: list[PatchSolution] | None = None,
+             run_of: RunOf | None = None) -> list[PatchSolution]:
     """The normal BEM solution of each contact point's patch: at the vertical ``approach``
     [m], or carrying the normal ``loads`` [N] (one per point).
+
+    Each solution is checked against the patch's rigid overlap (:func:`_overlap_covered`):
+    on a potential area an estimate gave (a time step's), and with ``run_of`` (the rail
+    positions spanned by the wheel's run of vertical overlap at an approach around a rail
+    position, :func:`~railcontact.geometry.search.run_on_rail`) on every area, so that
+    a second lobe of the run that the patch's plane shows apart is not left out.
 
     A patch of ``previous`` (the wheel's last load pass) at the same contact point starts
     the solve: its pressure is the initial estimate, and its grid is kept when it serves
@@ -267,9 +282,9 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                                             grid.dx is None or grid.dy is None)
         res, work = solve_patch_normal(gap_of, bounds, grid, normal, pair, control,
                                        est, grid=last.normal.grid if keep else None)
-        if given:
+        if given or run_of is not None:
             res = _overlap_covered(cp, gap_of, bounds, grid, normal, pair, control, est, res,
-                                   work)
+                                   work, run_of)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz,
                                  estimate=estimate_label(est, normal.estimate),
@@ -331,11 +346,14 @@ def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], An
 
 def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
                      bounds: tuple[float, float, float, float], grid: GridSettings, normal,
-                     pair: ElasticPair, control: Control, est, res, work):
+                     pair: ElasticPair, control: Control, est, res, work,
+                     run_of: RunOf | None = None):
     """The normal solution ``res`` of the patch ``cp`` on a potential area ``bounds``
-    [m] that an estimate gave (a time step's: the previous contact's box with a margin),
+    [m] (a time step's: the previous contact's box with a margin; or the cold one),
     checked against the patch's rigid overlap at the penetration it found
-    (:func:`~railcontact.geometry.search.overlap_box`, :func:`~.patch.uncovered`): while
+    (:func:`~railcontact.geometry.search.overlap_box`, with every lobe of the wheel's
+    run of vertical overlap at the approach it found when ``run_of`` gives the run;
+    :func:`~.patch.uncovered`): while
     the overlap beyond the grid holds places where the solution's deformed gap may be
     negative, the patch is solved again on the area grown to hold them (with
     :data:`~.patch.UNCOVERED_MARGIN` elements around), its work added to ``work``.
@@ -350,7 +368,9 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
     for k in range(MAX_OVERLAP_PASSES + 1):
         if not (res.force > 0 and math.isfinite(res.penetration) and res.penetration > 0):
             return res
-        flagged = uncovered(gap_of, res, pair, overlap_box(cp, res.penetration))
+        run = None if run_of is None else run_of(
+            res.penetration / math.cos(cp.contact_angle) + cp.gap, cp.rail_u)
+        flagged = uncovered(gap_of, res, pair, overlap_box(cp, res.penetration, run))
         if flagged is None:
             return res
         if k == MAX_OVERLAP_PASSES:
@@ -424,13 +444,39 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
+    def at_approach(a: float) -> tuple[float, list[PatchSolution]]:
+        last = passes[-1]
+        ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(penetration=a),
+                                                settings, pair, estimate_for, last,
+                                                reference=reference),
+                             settings, pair, last, traction_for)
+        passes.append(ps)
+        return vertical_force(ps) - q, ps
+
     ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
+    other = None
+    if not failure:  # the smallest approach of the load with its creep forces
+        ps, other = first_root(at_approach, ps, vertical_approach(ps),
+                               merge_approaches(track, ws, pose, side, MIN_LOBE), q,
+                               CREEP_LOAD_RTOL)
+        failure = "" if other is None else _first_root_failure(ps, q)
     if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
         raise ConvergenceError(f"{side} wheel: {failure}", ps)
-    unique = load_unique(ps, settings.tangential.friction)
+    unique = load_unique(ps, settings.tangential.friction) and other is None
     for p in ps:
-        p.load_unique = unique
+        p.load_unique, p.load_other = unique, other
     return count_passes(ps, passes)
+
+
+def _first_root_failure(ps: list[PatchSolution], q: float) -> str:
+    """Why the root :func:`~.loadloop.first_root` returned misses the load ``q`` [N]
+    (checked by :func:`~.loadloop.load_met`), or ""."""
+    r = vertical_force(ps) - q
+    if abs(r) <= CREEP_LOAD_RTOL * q:
+        return ""
+    return (f"the vertical load with creep forces did not converge at the smallest "
+            f"approach that carries it (vertical force off by {abs(r):.6g} N for load "
+            f"{q:.6g} N)")
 
 
 def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
@@ -456,12 +502,14 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`.
     """
     points = referenced if reference else _rigid
+    run_of = partial(run_on_rail, track, ws, pose, side)
     if not control.by_load:
         approach = control.penetration
         if approach <= 0:
             return []
         return _patches(points(track, ws, pose, side, approach), ws, approach,
-                        settings, pair, estimate_for=estimate_for, previous=previous)
+                        settings, pair, estimate_for=estimate_for, previous=previous,
+                        run_of=run_of)
     q = control.load
     if negligible_load(q):
         return []
@@ -469,36 +517,51 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     # approach of the pass before (or Hertz's) and again until the approach holds
     first = contact_points(track, ws, pose, side, 0.0)[0]
     single, passes = _single_patch(track, ws, pose, first, q, settings, pair, estimate_for,
-                                   previous, reference, start)
-    approach = vertical_approach(single)
-    if count_contacts(track, ws, pose, side, approach) == 1:
-        return count_passes(single, passes) if len(passes) > 1 else single
-    # several patches: secant on the vertical approach
+                                   previous, reference, start, run_of)
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
         ps = _patches(points(track, ws, pose, side, a), ws, a, settings, pair,
-                      estimate_for=estimate_for, previous=passes[-1])
+                      estimate_for=estimate_for, previous=passes[-1], run_of=run_of)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
-    a0 = approach
-    r0, ps0 = residual(a0)
-    a1 = a0 * (0.9 if r0 > 0 else 1.1)
-    r1, ps1 = residual(a1)
-    for _ in range(MAX_SECANT):
-        if abs(r1) < LOAD_RTOL * q:
-            return count_passes(ps1, passes)
-        if r1 == r0:
-            break
-        a2 = a1 - r1 * (a1 - a0) / (r1 - r0)
-        a2 = min(max(a2, 0.5 * a1), 2.0 * a1)
-        a0, r0 = a1, r1
-        a1 = a2
-        r1, ps1 = residual(a1)
-    if abs(r1) > 1e-3 * q:
+    approach = vertical_approach(single)
+    if count_contacts(track, ws, pose, side, approach) == 1:
+        ps = single
+    else:  # several patches: secant on the vertical approach
+        ps, r = approach_secant(residual, approach, q, LOAD_RTOL)
+        _check_load(ps, r, q, side)
+    ps, other = first_root(residual, ps, vertical_approach(ps),
+                           merge_approaches(track, ws, pose, side, MIN_LOBE), q, LOAD_RTOL)
+    if other is not None:
+        _check_load(ps, vertical_force(ps) - q, q, side)
+    mark_other(ps, other)
+    return count_passes(ps, passes) if len(passes) > 1 else ps
+
+
+def _check_load(ps: list[PatchSolution], r: float, q: float, side: str) -> None:
+    """Raise a :class:`ConvergenceError` when the vertical force misses the load ``q``
+    [N] by ``r`` [N] more than 1e-3 of it."""
+    if abs(r) > 1e-3 * q:
         raise ConvergenceError(f"{side} wheel: load control did not converge (vertical "
-                               f"force {r1 + q:.6g} N for load {q:.6g} N)", ps1)
-    return count_passes(ps1, passes)
+                               f"force {r + q:.6g} N for load {q:.6g} N)", ps)
+
+
+MIN_LOBE = 0.05
+"""Saddles whose shallower lobe is less deep than this share of the saddle's approach are
+ripples of the profiles, not checked for another root (:func:`~.loadloop.first_root`):
+the lobe's own run carries about ``0.05^(3/2)`` ~ 1 % of the load (Hertz, the same
+curvatures)."""
+
+
+def mark_other(ps: list[PatchSolution], other: float | None) -> None:
+    """Set the patches' :attr:`~.results.PatchSolution.load_other` to ``other`` [m] and
+    their ``load_unique`` (False with another root, else True where not yet set)."""
+    for p in ps:
+        if other is not None:
+            p.load_other, p.load_unique = other, False
+        elif p.load_unique is None:
+            p.load_unique = True
 
 
 def _rigid(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float
@@ -520,7 +583,7 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
                   settings: PatchSettings, pair: ElasticPair,
                   estimate_for: EstimateFor | None,
                   previous: list[PatchSolution] | None, reference: bool = True,
-                  start: tuple[float, float] | None = None
+                  start: tuple[float, float] | None = None, run_of: RunOf | None = None
                   ) -> tuple[list[PatchSolution], list[list[PatchSolution]]]:
     """The patch of a wheel with one contact point ``first`` carrying the vertical load
     ``q`` [N] by its normal force, solved in the frame at its reference point, and the
@@ -543,7 +606,7 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     if not reference:
         cosg = math.cos(first.contact_angle)
         single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
-                          estimate_for=estimate_for, previous=previous)
+                          estimate_for=estimate_for, previous=previous, run_of=run_of)
         return single, [single]
     if previous:  # the pass before, its approach scaled to this load as Hertz's
         q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
@@ -567,7 +630,7 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
         cp = cp or first
         ps = _patches([cp], ws, 0.0, probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
-                      previous=last)
+                      previous=last, run_of=run_of)
         passes.append(ps)
         new = vertical_approach(ps)
         if cp is first and (approach <= 0 or at_reference(first, track, ws, pose, new)

@@ -409,8 +409,10 @@ OUTPUTS = [
     *_wheel("remeshes", "Integer", "", "normal solves of the wheel's contact solve repeated "
             "on a grown potential area in the last step", value=lambda w: w.remeshes),
     *_wheel("load_unique", "Integer", "", "1 when the wheel load has one solution, 0 when "
-            "it may have several (several patches, mu tan(gamma) >= 1 on one; the one "
-            "continuous with the previous step is returned); meaningful with status 0 or 1",
+            "it has or may have several: two contact regions joining into one patch "
+            "between two roots (the smallest approach is returned), or several patches "
+            "with mu tan(gamma) >= 1 on one (the one continuous with the previous step); "
+            "meaningful with status 0 or 1",
             value=lambda w: int(w.load_unique)),
     *_wheel("status", "Integer", "", f"the wheel's own status: {STATUS}",
             value=lambda w: w.status),

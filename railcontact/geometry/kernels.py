@@ -637,3 +637,71 @@ def lateral_extent(s, f, delta, k0):
     while hi < s.size - 1 and f[hi + 1] <= delta:
         hi += 1
     return lo, hi
+
+
+@numba.njit(cache=True, nogil=True)
+def saddles(g, g_min):
+    """The saddles of the gap ``g - g_min`` [m] along the trace: for each interior local
+    maximum, (its height above first contact, the depth below it of the shallower of the
+    two lobes it separates) (m, 2). A lobe is the connected part on one side that lies
+    below the saddle (up to the first higher sample); at the saddle's height the two runs
+    of :func:`count_runs` on either side join into one."""
+    n = g.size
+    out = np.empty((max(n - 2, 0), 2))
+    m = 0
+    for i in range(1, n - 1):
+        h = g[i]
+        if not (h > g[i - 1] and h >= g[i + 1]):
+            continue
+        lo_left = h
+        j = i - 1
+        while j >= 0 and g[j] <= h:
+            lo_left = min(lo_left, g[j])
+            j -= 1
+        lo_right = h
+        j = i + 1
+        while j < n and g[j] <= h:
+            lo_right = min(lo_right, g[j])
+            j += 1
+        out[m, 0] = h - g_min
+        out[m, 1] = min(h - lo_left, h - lo_right)
+        m += 1
+    return out[:m]
+
+
+@numba.njit(cache=True, nogil=True)
+def run_extent(g, u, g_min, approach, u_c):
+    """``(u_lo, u_hi)``: the lateral positions on the rail [m] spanned by the run of the
+    trace (gap above first contact ``g - g_min`` at most ``approach`` [m], rail positions
+    ``u``) that holds the run's sample nearest ``u_c`` [m]; ``(u_c, u_c)`` without any
+    run."""
+    n = g.size
+    best = -1
+    dist = np.inf
+    for i in range(n):
+        if g[i] - g_min <= approach and abs(u[i] - u_c) < dist:
+            dist = abs(u[i] - u_c)
+            best = i
+    if best < 0:
+        return u_c, u_c
+    a = best
+    while a > 0 and g[a - 1] - g_min <= approach:
+        a -= 1
+    b = best
+    while b < n - 1 and g[b + 1] - g_min <= approach:
+        b += 1
+    return min(u[a], u[b]), max(u[a], u[b])
+
+
+@numba.njit(cache=True, nogil=True)
+def lobes_extent(f, u, delta, k0, u_lo, u_hi):
+    """``(lo, hi)``: the samples from the first to the last where ``f <= delta`` and the
+    rail position ``u`` lies in ``[u_lo, u_hi]``, together with the run through ``k0``
+    where ``f <= delta`` (:func:`lateral_extent`; all of it when ``u_lo > u_hi``)."""
+    lo, hi = lateral_extent(f, f, delta, k0)
+    if u_lo <= u_hi:
+        for i in range(f.size):
+            if f[i] <= delta and u_lo <= u[i] <= u_hi:
+                lo = min(lo, i)
+                hi = max(hi, i)
+    return lo, hi

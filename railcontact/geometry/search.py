@@ -166,28 +166,37 @@ class ContactPoint:
         return margin * a, margin * b
 
 
-def overlap_box(cp: ContactPoint, penetration: float) -> tuple[float, float, float, float]:
+def overlap_box(cp: ContactPoint, penetration: float,
+                run: tuple[float, float] | None = None) -> tuple[float, float, float, float]:
     """The box (xmin, xmax, ymin, ymax) [m] in the patch's plane around its rigid
     overlap at the normal ``penetration`` [m]: the points ``(x, s)`` of the run of lateral
     samples through the origin where ``f(s) <= penetration`` (the run the cold potential
     area is formed on, :meth:`ContactPoint.lateral_extent`) with ``f(s) + A(s) x^2 <=
-    penetration``, widened by one sample spacing across.
+    penetration``, widened by one sample spacing across. With ``run`` (the lateral
+    positions on the rail [m] spanned by the patch's run of vertical overlap,
+    :func:`run_on_rail`) also every other sample where ``f(s) <= penetration`` whose rail
+    position lies in it: the plane of a patch whose run holds two lobes of the gap (the
+    tread and the flange root joined) can show them apart, the second beyond a saddle
+    of ``f`` above the penetration.
 
     Where the undeformed gap exceeds the penetration the surfaces cannot touch (the
     elastic displacements of a compressive pressure only open the gap), so a potential
     area that holds this box holds every place the patch's contact can reach. A frame
     at the reference point formed over part of its samples (:func:`at_reference`) forms
-    more only where the run reaches the part's edge."""
+    more only where the overlap, or the run, reaches the part's edge."""
     penetration = float(penetration)
+    lo_u, hi_u = run if run is not None else (math.inf, -math.inf)
     d = cp.__dict__
     part = d.get("_part")
     while part is not None and "f" not in d:
         frame, i0, i1, _ = part
         f = frame[kernels.F, i0:i1]
-        lo, hi = kernels.lateral_extent(_S_SAMPLES[i0:i1], f, penetration,
-                                        min(max(K0 - i0, 0), i1 - i0 - 1))
-        a, b = i0 - kernels.FRAME_GROW if lo == 0 and i0 > 0 else i0, \
-            i1 + kernels.FRAME_GROW if hi == i1 - i0 - 1 and i1 < N_S else i1
+        u = frame[kernels.RAIL_U, i0:i1]
+        lo, hi = kernels.lobes_extent(f, u, penetration, min(max(K0 - i0, 0), i1 - i0 - 1),
+                                      lo_u, hi_u)
+        a = i0 - kernels.FRAME_GROW if i0 > 0 and (lo == 0 or lo_u <= u[0] <= hi_u) else i0
+        b = i1 + kernels.FRAME_GROW if i1 < N_S and (
+            hi == i1 - i0 - 1 or lo_u <= u[-1] <= hi_u) else i1
         if (a, b) == (i0, i1):
             return _box(_S_SAMPLES[i0:i1], f, frame[kernels.A_OF_S, i0:i1], lo, hi,
                         penetration)
@@ -195,8 +204,18 @@ def overlap_box(cp: ContactPoint, penetration: float) -> tuple[float, float, flo
         d["_part"] = part
     s, f = cp.s, cp.f
     k0 = K0 if s is _S_SAMPLES else kernels.nearest(s, 0.0)
-    lo, hi = kernels.lateral_extent(s, f, penetration, k0)
+    lo, hi = kernels.lobes_extent(f, cp.rail_u_of_s, penetration, k0, lo_u, hi_u)
     return _box(s, f, cp.a_of_s, lo, hi, penetration)
+
+
+def run_on_rail(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float,
+                rail_u: float) -> tuple[float, float]:
+    """The lateral positions on the rail [m] (side frame, as :attr:`ContactPoint.rail_u`)
+    spanned by the run of the wheel's vertical overlap at the vertical ``approach`` [m]
+    beyond first contact that holds (or lies nearest) the rail position ``rail_u`` [m]:
+    the extent of one patch's rigid contact region (:func:`~.kernels.run_extent`)."""
+    trace, g_min, _, _, _ = _trace_of_pose(track, ws, pose, side)
+    return kernels.run_extent(trace[4], trace[2], g_min, float(approach), float(rail_u))
 
 
 def _box(s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, lo: int, hi: int,
@@ -355,6 +374,19 @@ def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
     out[0].flags.writeable = False  # (its rows too)
     _LAST_GAP[side] = (track, ws, pose, out)
     return out
+
+
+def merge_approaches(track: Track, ws: Wheelset, pose: Pose, side: str,
+                     min_lobe: float = 0.0) -> np.ndarray:
+    """The vertical approaches [m] beyond first contact at which two of the wheel's rigid
+    contact regions (runs of :func:`contact_points`) join into one patch, increasing: the
+    saddles of the trace's gap (:func:`~.kernels.saddles`) whose shallower lobe is at least
+    ``min_lobe`` times the saddle's approach deep (a lobe shallower than that is a ripple
+    of the profiles: its run carries little of the load)."""
+    trace, g_min, _, _, _ = _trace_of_pose(track, ws, pose, side)
+    s = kernels.saddles(trace[4], g_min)
+    keep = s[:, 1] >= min_lobe * s[:, 0]
+    return np.sort(s[keep, 0])
 
 
 def least_gap(track: Track, ws: Wheelset, pose: Pose, side: str) -> float:

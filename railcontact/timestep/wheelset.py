@@ -61,6 +61,7 @@ from ..contact.loadloop import (
     charge,
     count_passes,
     creep_load_secant,
+    first_root,
     load_met,
     load_unique,
     vertical_creep_estimate,
@@ -69,6 +70,7 @@ from ..contact.loadloop import (
 from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
 from ..contact.wheelrail import (
+    MIN_LOBE,
     contact_points,
     solve_wheel_normal,
     vertical_approach,
@@ -80,7 +82,7 @@ from ..errors import (
     check_finite,
     check_positive,
 )
-from ..geometry.search import ContactPoint, at_reference, vertical_gap
+from ..geometry.search import ContactPoint, at_reference, merge_approaches, vertical_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz, negligible_load, no_contact_load
@@ -116,12 +118,16 @@ of N, and each creep force component within the second share of mu N, of a cold 
 of the same state at tight tolerances. The previous step's solution starts the solves
 and bounds each patch's potential area; the area is grown wherever the rigid overlap
 beyond it may touch (:func:`railcontact.contact.patch.uncovered`), so no contact is
-left out, and the solvers stop on the same criteria as from cold. Not promised: a wheel
-whose load is met at more than one approach may take another root than the cold solve -
-a steep patch's creep force (:attr:`WheelContact.load_unique` False), or the flange root
-and the tread as two patches at one approach and as one merged patch at a larger one
-(which ``load_unique`` does not detect; ``scripts/fuzz_warm.py`` finds it in 10 of
-8,669 warm wheels across the flange root, seeds 1, 3 and 4, at 4.9-5.4 mm lateral)."""
+left out, and the solvers stop on the same criteria as from cold. Where the load is met
+at more than one approach (two patches joining into one between them), warm and cold
+starts return the same root, the smallest approach
+(:func:`~railcontact.contact.loadloop.first_root`), and the wheel says that there is
+another (:attr:`WheelContact.load_unique` False). Not promised: a steep patch's creep
+force with another patch beside it (``mu tan(gamma) >= 1``,
+:func:`~railcontact.contact.loadloop.load_unique`) may let the load be met at another
+root than a cold solve's; the wheel says so too. ``scripts/fuzz_warm.py`` checks the
+promise on seeded trajectories across the flange root and the flange (seeds 1, 3 and 4:
+none beyond it)."""
 SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
 """The statuses from the least to the most severe: the wheelset's status is its wheels'
 most severe."""
@@ -210,11 +216,13 @@ class WheelContact:
     contact_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """The rigid contact point of the main patch in the track frame (X, Y, Z) [m]."""
     load_unique: bool = True
-    """False when the wheel load (counting the creep forces) may have several solutions
-    (several patches, one with ``mu tan(gamma) >= 1``,
-    :func:`~railcontact.contact.loadloop.load_unique`):
-    the step returns the one continuous with the previous step, or, cold, the one reached
-    from the normal share Q; the message says so."""
+    """False when the wheel load (counting the creep forces) has, or may have, more than
+    one solution; the message says why. Two of the wheel's contact regions joining into
+    one patch between two roots (:func:`~railcontact.contact.loadloop.first_root`): the
+    step returns the smallest approach, from warm and cold starts alike. Several patches,
+    one with ``mu tan(gamma) >= 1`` (:func:`~railcontact.contact.loadloop.load_unique`):
+    the one continuous with the previous step, or, cold, the one reached from the normal
+    share Q."""
     validity: int = 0
     """The limits of :mod:`~railcontact.timestep.validity` the solved wheel is beyond (bits
     Y_Q 1, NADAL 2, FLANGE_CLIMB 4, PENETRATION 8, LOAD 16, RESOLUTION 32; 0 within all);
@@ -531,7 +539,9 @@ class WheelsetContact:
         if not (control.by_load and tangential and self.settings.load_includes_creep):
             patches, creepages, mem = self._pass(side, pose, control, creep, kin, time,
                                                  previous, first, approach)
-            return self._finish(wheel, patches, creepages, pose), mem if keep else []
+            self._finish(wheel, patches, creepages, pose)
+            _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous))
+            return wheel, mem if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
         q = control.load
         passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
@@ -558,24 +568,36 @@ class WheelsetContact:
             share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
                                             self.settings.friction)
             estimate_seconds = perf_counter() - t0
+        def at_approach(a: float) -> tuple[float, tuple]:
+            passes.append(self._pass(side, pose, Control(penetration=a), creep, kin, time,
+                                     previous, passes[-1][2]))
+            return vertical_force(passes[-1][0]) - q, passes[-1]
+
         start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
         (patches, creepages, mem), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
         if not patches:
             return wheel, []
+        if not failure:  # the smallest approach of the load with its creep forces
+            (patches, creepages, mem), other = first_root(
+                at_approach, (patches, creepages, mem), vertical_approach(patches),
+                merge_approaches(self.track, self.wheelset, pose, side, MIN_LOBE), q,
+                self.settings.load_tolerance)
+            for p in patches:  # (the total's roots, not the normal share's of a pass)
+                p.load_other, p.load_unique = other, other is None
+            if other is not None and not load_met(patches, q, self.settings.load_tolerance,
+                                                  self.settings.tangential_tolerance):
+                failure = ("the vertical load with creep forces did not converge at the "
+                           "smallest approach that carries it (vertical force "
+                           f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
         count_passes(patches, [p for p, _, _ in passes])  # the work of every pass counts
         patches[0].work.seconds += estimate_seconds
         self._finish(wheel, patches, creepages, pose)
-        wheel.load_unique = load_unique(patches, self.settings.friction)
         if failure and not load_met(patches, q, self.settings.load_tolerance,
                                     self.settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
             wheel.message = failure
-        elif not wheel.load_unique and wheel.status == OK:
-            which = ("the one continuous with the previous step" if previous else
-                     "the one reached from the normal share Q (cold start)")
-            wheel.message = ("ok; the load may have several solutions (several patches, "
-                             f"mu tan(gamma) >= 1 on one): {which}")
+        _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous))
         return wheel, mem if keep else []
 
     def _finish(self, wheel: WheelContact, patches: list[PatchSolution], creepages: list,
@@ -675,6 +697,31 @@ class WheelsetContact:
                 vertical_normal=n.force * math.cos(cp.contact_angle), traction_rate=rate,
                 displacement=n.displacement))
         return patches, creepages, memory
+
+
+def _mark_uniqueness(wheel: WheelContact, patches: list[PatchSolution], friction: float,
+                     warm: bool) -> None:
+    """Set the wheel's :attr:`~WheelContact.load_unique`, and say in an ok wheel's message
+    why its load may have another solution: a merge of patches
+    (:attr:`~railcontact.contact.results.PatchSolution.load_other`; the smallest approach
+    is returned, from warm and cold starts alike) or a steep patch's creep force
+    (:func:`~railcontact.contact.loadloop.load_unique`; the root the start leads to)."""
+    steep = any(p.tangential is not None for p in patches) and not load_unique(patches,
+                                                                                friction)
+    other = next((p.load_other for p in patches if p.load_other is not None), None)
+    wheel.load_unique = not steep and other is None
+    if wheel.load_unique or wheel.status != OK:
+        return
+    why = []
+    if other is not None:
+        why.append("two of its contact regions join into one patch between this "
+                   f"solution and another (approach {other * 1e6:.4g} um): the smallest "
+                   "approach that carries the load is returned")
+    if steep:
+        which = ("the one continuous with the previous step" if warm else
+                 "the one reached from the normal share Q (cold start)")
+        why.append(f"several patches with mu tan(gamma) >= 1 on one: {which}")
+    wheel.message = "ok; the load has more than one solution: " + "; ".join(why)
 
 
 @dataclass(frozen=True)
