@@ -218,14 +218,17 @@ def test_a_wheel_that_cannot_be_solved_has_its_own_status(monkeypatch):
 
 
 def test_f05_flange_and_tread_carry_their_load():
-    """F05 itself: the right wheel's two patches (flange at 70 deg with spin, and tread)
+    """F05 itself: the right wheel's patches (flange at 70 deg with spin, and tread)
     carry its vertical load within the load loop's cap (1 %) when it reports ok."""
     r = _wheelset(warm_start="none").solve(F05_POSE, loads=F05_LOADS, creepages=F05_CREEPAGES)
     for w, q in zip(r.wheels, F05_LOADS, strict=True):
         assert w.status in (0, 1, OUTSIDE_VALIDITY)
         if w.status != 1:
             assert w.track_force[2] == pytest.approx(q, rel=0.01)
-    assert len(r.right.patches) == 2 or r.right.status == 1
+    # the flange and the tread (and the flange root, just before it joins the tread: the
+    # smallest approach that carries the load, tests/test_load_roots.py)
+    assert r.right.status == 1 or (len(r.right.patches) >= 2 and max(
+        p.geometry.contact_angle for p in r.right.patches) > math.radians(60))
     # the 70 deg flange pushes back hard: Y/Q beyond Nadal's limit
     assert r.right.status == 1 or r.right.validity & NADAL
 
@@ -393,9 +396,10 @@ def test_several_patches_steeper_than_nadal_are_flagged():
     r = _wheelset(warm_start="none", patch_frame="rigid").solve(F05_POSE, loads=F05_LOADS,
                                                                 creepages=F05_CREEPAGES)
     w = r.right
-    assert len(w.patches) == 2 and w.status == OUTSIDE_VALIDITY and w.validity & NADAL
+    assert len(w.patches) >= 2 and w.status == OUTSIDE_VALIDITY and w.validity & NADAL
     assert max(0.4 * math.tan(p.geometry.contact_angle) for p in w.patches) >= 1
-    assert not w.load_unique and "several solutions" in w.message
+    assert not w.load_unique and "more than one solution" in w.message
+    assert "mu tan(gamma) >= 1" in w.message
     assert r.left.load_unique  # one patch
 
 

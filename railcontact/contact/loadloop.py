@@ -257,14 +257,17 @@ merged one are solved."""
 
 
 def approach_secant(residual: Callable[[float], tuple[float, T]], a0: float, load: float,
-                    rtol: float, below: float = math.inf) -> tuple[T, float]:
+                    rtol: float, below: float = math.inf, noisy: bool = False
+                    ) -> tuple[T, float]:
     """Secant iteration on a wheel's vertical approach for its vertical ``load`` [N].
 
     ``residual(a)`` solves the wheel at the vertical approach ``a`` [m] and returns (its
     vertical force - ``load`` [N], the solution). Starts at ``a0`` [m]; every approach
     tried stays at most ``below`` [m]. Stops at ``|residual| <= rtol load``, after
-    :data:`MAX_SECANT` steps, or when :data:`MAX_STALLED` steps in a row do not halve the
-    smallest residual (the creep forces' noise, :func:`creep_load_secant`). Returns the
+    :data:`MAX_SECANT` steps, or, ``noisy`` (the creep forces in the load: their noise
+    floor, :func:`creep_load_secant`), when :data:`MAX_STALLED` steps in a row do not halve
+    the smallest residual. (The normal forces alone are smooth in the approach but for a
+    kink where a patch appears, which the secant passes in a few more steps.) Returns the
     solution closest to the load and its residual [N]."""
     r0, sol = residual(a0)
     best, best_r = sol, r0
@@ -277,7 +280,7 @@ def approach_secant(residual: Callable[[float], tuple[float, T]], a0: float, loa
         stalled = 0 if abs(r1) < 0.5 * abs(best_r) else stalled + 1
         if abs(r1) < abs(best_r):
             best, best_r = sol, r1
-        if abs(r1) <= rtol * load or r1 == r0 or stalled >= MAX_STALLED:
+        if abs(r1) <= rtol * load or r1 == r0 or (noisy and stalled >= MAX_STALLED):
             break
         a2 = a1 - r1 * (a1 - a0) / (r1 - r0)
         a0, r0 = a1, r1
@@ -286,7 +289,7 @@ def approach_secant(residual: Callable[[float], tuple[float, T]], a0: float, loa
 
 
 def first_root(residual: Callable[[float], tuple[float, T]], solution: T, approach: float,
-               merges: Iterable[float], load: float, rtol: float
+               merges: Iterable[float], load: float, rtol: float, noisy: bool = False
                ) -> tuple[T, float | None]:
     """The solution of a wheel's load with the smallest vertical approach, and the
     approach [m] of another solution (or of the merge of patches beyond which one lies),
@@ -303,7 +306,8 @@ def first_root(residual: Callable[[float], tuple[float, T]], solution: T, approa
     within such a jump is carried at two approaches, one each side of the merge.
 
     ``solution`` is a root at ``approach`` [m], by whatever start reached it;
-    ``residual(a)`` solves the wheel at the approach ``a`` (:func:`approach_secant`).
+    ``residual(a)`` solves the wheel at the approach ``a`` (:func:`approach_secant`, with
+    ``noisy``).
     The nearest merge each side within :data:`MERGE_WINDOW` is checked, the wheel solved
     just below and just above it: when the load is carried below a merge under
     ``approach``, the root there is found (to ``rtol``) and returned; when it is not yet
@@ -319,7 +323,7 @@ def first_root(residual: Callable[[float], tuple[float, T]], solution: T, approa
             if abs(r) <= rtol * load:
                 return at_top, approach
             start = top * (load / (r + load)) ** (2 / 3)  # (as Hertz's)
-            first, _ = approach_secant(residual, start, load, rtol, below=top)
+            first, _ = approach_secant(residual, start, load, rtol, below=top, noisy=noisy)
             return first, approach
     if approach > 0 and above:
         bottom = min(above) * (1.0 + MERGE_STEP)

@@ -458,7 +458,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     if not failure:  # the smallest approach of the load with its creep forces
         ps, other = first_root(at_approach, ps, vertical_approach(ps),
                                merge_approaches(track, ws, pose, side, MIN_LOBE), q,
-                               CREEP_LOAD_RTOL)
+                               CREEP_LOAD_RTOL, noisy=True)
         failure = "" if other is None else _first_root_failure(ps, q)
     if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
         raise ConvergenceError(f"{side} wheel: {failure}", ps)

@@ -582,7 +582,7 @@ class WheelsetContact:
             (patches, creepages, mem), other = first_root(
                 at_approach, (patches, creepages, mem), vertical_approach(patches),
                 merge_approaches(self.track, self.wheelset, pose, side, MIN_LOBE), q,
-                self.settings.load_tolerance)
+                self.settings.load_tolerance, noisy=True)
             for p in patches:  # (the total's roots, not the normal share's of a pass)
                 p.load_other, p.load_unique = other, other is None
             if other is not None and not load_met(patches, q, self.settings.load_tolerance,
