@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 import math
 import re
-import tomllib
 
 import pytest
+import tomllib
 from conftest import RELIABILITY
 
 import railcontact as rc
