@@ -15,7 +15,6 @@ import math
 import re
 import time
 import traceback
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +28,6 @@ from .geometry.track import Pose, Track, Wheelset
 from .settings import ContactSettings, FMUModes
 from .table import TableContact  # (xarray, zarr: imported when a table is opened)
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
-from .timestep.rigid import RigidSolution
 from .timestep.wheelset import (
     NOT_CONVERGED,
     OUT_OF_RANGE,
@@ -414,24 +412,9 @@ class Slave:
             res = self.contact.solve(pose, **kw)
         except RailContactError as exc:
             return self._discarded(f"input out of range: {exc}")
-        t0 = time.perf_counter()  # the rigid wheelset's vertical and roll are found lazily
-        if not penetration and self.modes.rigid_wheelset == "skip":  # not asked for
-            res.rigid_solution = RigidSolution(0.0, 0.0, message="skipped")
-        try:
-            rigid = res.rigid_solution
-        except RailContactError as exc:  # e.g. a wheel not solvable at another roll
-            # the work before the error: the step's rolled solves are counted by an
-            # approach_at made for this step (WheelsetContact.solve), so all of it is this
-            # search's
-            done = getattr(getattr(res.rigid, "approach_at", None), "work", None)
-            rigid = res.rigid_solution = RigidSolution(
-                0.0, 0.0, converged=False,
-                message=f"rigid wheelset's vertical displacement and roll: {exc}",
-                **({} if done is None else {"work": (replace(done["left"]),
-                                                     replace(done["right"]))}))
-        res.wall_time += time.perf_counter() - t0  # solve_time: all of the step's solving
-        self._write(res)
-        if not rigid.converged:  # not found: the wheelset's status says so
+        self._write(res)  # (the rigid wheelset: a stage of the solve when asked for)
+        rigid = res.rigid_solution
+        if rigid is not None and not rigid.converged:  # not found: the status says so
             self.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")
             if SEVERITY.index(NOT_CONVERGED) > SEVERITY.index(int(self["status"])):
                 self["status"] = NOT_CONVERGED

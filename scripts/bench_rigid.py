@@ -5,9 +5,10 @@ The FMU reports ``wheelset_vertical_displacement`` and ``wheelset_roll`` every s
 solves of both wheels at other rolls (:mod:`railcontact.timestep.rigid`). This times a time
 loop (S1002/60E1, 83.3 kN per wheel, creepages (1e-3, 0, 0), 1 ms steps, default warm
 start) with the lateral displacement y(t) = amplitude sin(2 pi 1.5 Hz t), and prints per step
-the median solve time, the median time of the rigid wheelset's solve, its evaluations, and
-both as ratios to the fixed numpy workload of ``scripts/bench_step.py`` (measured in the
-same run: quote the ratios).
+the median step time with the rigid wheelset's stage (``rigid_wheelset = "solve"``), the
+median time of that stage (the same step without it, ``"skip"``, interleaved, subtracted),
+its evaluations, and both as ratios to the fixed numpy workload of ``scripts/bench_step.py``
+(measured in the same run: quote the ratios).
 
 Usage: python scripts/bench_rigid.py [--steps 200] [--amplitudes 0.003,0.008]
 """
@@ -34,21 +35,24 @@ Q = 83.3e3
 
 def run(amplitude: float, steps: int) -> dict:
     steel = Material(206e9, 0.28)
-    wc = WheelsetContact(Track(read_profile("60E1", "rail"), math.atan(1 / 40)),
-                         Wheelset(read_profile("S1002", "wheel"), 0.46),
-                         ElasticPair.of(steel, steel), ContactSettings())
+    geometry = (Track(read_profile("60E1", "rail"), math.atan(1 / 40)),
+                Wheelset(read_profile("S1002", "wheel"), 0.46), ElasticPair.of(steel, steel))
+    with_rigid = WheelsetContact(*geometry, ContactSettings(rigid_wheelset="solve"))
+    without = WheelsetContact(*geometry, ContactSettings(rigid_wheelset="skip"))
     solve, rigid, evaluations, failed = [], [], [], 0
     for k in range(steps):
         t = k * 1e-3
         pose = Pose(amplitude * math.sin(2 * math.pi * 1.5 * t))
+        kw = {"loads": (Q, Q), "creepages": ((1e-3, 0, 0), (1e-3, 0, 0)), "time": t}
         t0 = time.perf_counter()
-        r = wc.solve(pose, loads=(Q, Q), creepages=((1e-3, 0, 0), (1e-3, 0, 0)), time=t)
+        r = with_rigid.solve(pose, **kw)
         t1 = time.perf_counter()
-        s = r.rigid_solution
+        without.solve(pose, **kw)
         t2 = time.perf_counter()
+        s = r.rigid_solution
         if k:  # the first step compiles and plans
             solve.append(t1 - t0)
-            rigid.append(t2 - t1)
+            rigid.append((t1 - t0) - (t2 - t1))
             evaluations.append(s.evaluations)
             failed += not s.converged
     return {"solve": statistics.median(solve), "rigid": statistics.median(rigid),

@@ -54,12 +54,15 @@ def md(fmu):
     return read_model_description(str(fmu))
 
 
-def api(warm_start="none", friction=0.4) -> WheelsetContact:
+def api(warm_start="none", friction=0.4, rigid_wheelset="solve") -> WheelsetContact:
+    """The API's wheelset contact with the FMU's default settings (the rigid wheelset
+    solved under load control)."""
     mat = Material(206e9, 0.28)
     return WheelsetContact(
         Track(read_profile("60E1", "rail"), math.atan(1 / 40), 1.435),
         Wheelset(read_profile("S1002", "wheel"), 0.46, 1.360), ElasticPair.of(mat, mat),
-        ContactSettings(friction=friction, warm_start=warm_start))
+        ContactSettings(friction=friction, warm_start=warm_start,
+                        rigid_wheelset=rigid_wheelset))
 
 
 class Slave:
@@ -791,10 +794,7 @@ def _api_step(words: dict) -> dict:
         else:
             kw["creepages"] = tuple(tuple(creep[f"{c}_{s}"] for c in ("xi", "eta", "phi"))
                                     for s in ("left", "right"))
-        r = wc.solve(Pose(lateral), **kw)
-        if ps.modes.control == "load" and ps.modes.rigid_wheelset == "solve":
-            _ = r.rigid_solution  # the FMU finds it every step (its memory, its work)
-        return r
+        return wc.solve(Pose(lateral), **kw)
 
     solve(0.0, 0.0, 0.0, dict.fromkeys(CREEP, 0.0))
     r = solve(2e-3, -2.2e-4, 0.01, CREEP)
@@ -1028,14 +1028,14 @@ def test_rigid_wheelset_can_be_skipped(fmu, extracted, md):
     """rigid_wheelset = skip (its enumeration 2): under load control the rigid wheelset's
     vertical displacement and roll are not solved (0), the moments are taken about the
     nominal centre height r0, as the API's with vertical 0; the forces are the same."""
-    from railcontact.timestep.rigid import RigidSolution
-
     s = Slave(fmu, extracted, md, "skip", warm_start="none", rigid_wheelset="skip")
     assert s.step(lateral_displacement=3e-3, **CREEP) == 0
-    r = api("none").solve(Pose(3e-3), loads=(83.3e3, 83.3e3),
-                          creepages=((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3)))
-    assert r.vertical != 0.0 and r.roll > 0  # solved by default
-    r.rigid_solution = RigidSolution(0.0, 0.0)
+    pose, loads = Pose(3e-3), (83.3e3, 83.3e3)
+    creep = ((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3))
+    solved = api("none").solve(pose, loads=loads, creepages=creep)
+    assert solved.vertical != 0.0 and solved.roll > 0  # solved by default
+    r = api("none", rigid_wheelset="skip").solve(pose, loads=loads, creepages=creep)
+    assert r.vertical is None and r.roll is None and r.rigid_solution is None
     assert s.get("wheelset_vertical_displacement", "wheelset_roll", "status") == [0, 0, 0]
     np.testing.assert_allclose(s.get("roll_moment", "pitch_moment", "normal_force_left"),
                                [r.moment[0], r.moment[1], r.left.normal_force], rtol=1e-9)

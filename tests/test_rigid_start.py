@@ -40,7 +40,8 @@ def contact(**settings) -> WheelsetContact:
     mat = Material(206e9, 0.28)
     return WheelsetContact(Track(read_profile("60E1", "rail"), math.atan(1 / 40)),
                            Wheelset(read_profile("S1002", "wheel"), 0.46),
-                           ElasticPair.of(mat, mat), ContactSettings(**settings))
+                           ElasticPair.of(mat, mat),
+                           ContactSettings(**{"rigid_wheelset": "solve", **settings}))
 
 
 def hunting(amplitude: float, k: int) -> tuple[Pose, float]:

@@ -164,7 +164,7 @@ def test_moments_of_a_centred_wheelset():
     at height h = r0 + vertical."""
     # the rigid frame: its patches are mirror images to round-off (the reference point's
     # frame leaves a few nm of longitudinal lever, 1.7e-4 N m, above the 1e-9 bound)
-    wc = contact(patch_frame="rigid")
+    wc = contact(patch_frame="rigid", rigid_wheelset="solve")
     r = wc.solve(Pose(0.0), loads=(Q, Q), creepages=NONE)
     scale = Q * 0.75
     assert all(abs(m) < 1e-9 * scale for m in r.moment), r.moment

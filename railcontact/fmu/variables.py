@@ -246,6 +246,7 @@ def parameter_settings(values: Mapping[str, Any]) -> ParameterSettings:
     modes = FMUModes(**per_record.get(FMUModes, {}))
     contact = per_record.get(ContactSettings, {})
     contact["load_includes_creep"] = modes.load_definition == "total"
+    contact["rigid_wheelset"] = modes.rigid_wheelset
     return ParameterSettings(WheelRailGeometry(**per_record.get(WheelRailGeometry, {})),
                              MaterialSettings(**per_record.get(MaterialSettings, {})),
                              ContactSettings(**contact), modes)
@@ -325,6 +326,11 @@ def _step_work(attribute: str):
     wheelset's search evaluated."""
     return lambda r: sum(getattr(w, attribute) + getattr(x, attribute)
                          for w, x in zip(r.wheels, r.rigid_work, strict=True))
+
+
+def _solved(attribute: str):
+    """The result's ``vertical`` or ``roll``, 0 where it was not solved (None)."""
+    return lambda r: getattr(r, attribute) or 0.0
 
 
 def _rigid_work(attribute: str):
@@ -424,12 +430,12 @@ OUTPUTS = [
              "wheelset centre's vertical displacement, positive up, from r0 above the rail "
              "tops: the input under control=penetration; under control=load the rigid "
              "wheelset's at which both wheels, penetration-controlled, carry their loads "
-             "(status 1 when not found; 0 with rigid_wheelset=skip)", lambda r: r.vertical),
+             "(status 1 when not found; 0 with rigid_wheelset=skip)", _solved("vertical")),
     Variable("wheelset_roll", "Real", "output", None, "rad",
              "wheelset roll angle, positive left side up: the input under "
              "control=penetration; under control=load the rigid wheelset's (0 with "
              "rigid_wheelset=skip)",
-             lambda r: r.roll),
+             _solved("roll")),
     Variable("roll_moment", "Real", "output", None, "N.m",
              "moment of the rails on the wheelset about the track X axis through its centre "
              "(positive lifts the left wheel)", lambda r: r.moment[0]),
@@ -445,7 +451,7 @@ OUTPUTS = [
     *_wheel("validity", "Integer", "", "the limits the wheel is beyond, a sum of bits: 1 "
             "Y/Q above max_y_q, 2 beyond Nadal's limit, 4 flange climb, 8 penetration above "
             "max_penetration, 16 load above max_wheel_load, 32 a patch under-resolved (its "
-            "contact fewer than 4 elements across along x and y) (0: within all)",
+            "contact fewer than 4 elements across along x or y) (0: within all)",
             value=lambda w: w.validity),
 ]
 """The outputs; ``value(result)`` reads each from a
@@ -455,7 +461,8 @@ APPENDED_OUTPUTS = [
     Variable("rigid_evaluations", "Integer", "output", None, "",
              "evaluations of the rigid wheelset's search in the last step (control=load, "
              "rigid_wheelset=solve; each at a roll other than the pose's solves both "
-             "wheels again; 0 when not solved)", lambda r: r.rigid_solution.evaluations),
+             "wheels again; 0 when not solved)",
+             lambda r: 0 if r.rigid_solution is None else r.rigid_solution.evaluations),
     Variable("rigid_normal_iterations", "Integer", "output", None, "",
              "BEM normal iterations of the rigid wheelset's solves at other rolls in the "
              "last step, both wheels (part of normal_iterations)",

@@ -93,6 +93,12 @@ class ContactSettings(Record):
                                     "the wheel is outside validity (twice a 40 t heavy-haul "
                                     "axle's static wheel load)", minimum=0.0, open_min=True)
     patch_frame: str = inherit(WheelRailGeometry, "patch_frame")
+    rigid_wheelset: str = setting("skip", "choice", "", "under load control, a step's stage "
+                                  "after the wheels: find the rigid wheelset's vertical "
+                                  "displacement and roll at which both wheels carry their "
+                                  "loads (solve: load-controlled solves of both wheels at "
+                                  "other rolls, 1-2 a step warm) or not (skip: the result's "
+                                  "vertical and roll None)", choices=RIGID_WHEELSET)
 
     @property
     def uses_estimate(self) -> bool:

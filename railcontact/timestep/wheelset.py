@@ -50,7 +50,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields, replace
-from functools import cached_property
 from time import perf_counter
 
 import numba
@@ -270,10 +269,26 @@ class WheelsetResult:
     wheelset_radius: float = 0.0
     """Nominal rolling radius r0 [m]: the centre's height above the rail tops at
     ``vertical = 0``."""
-    rigid: RigidWheelset | tuple[float, float] | None = field(default=None, repr=False,
-                                                               compare=False)
-    """:attr:`vertical` and :attr:`roll`: given (penetration control), or the problem
-    that finds them when first asked for (load control); None when out of range."""
+    vertical: float | None = None
+    """Vertical displacement of the wheelset centre [m], positive up, from one nominal
+    radius above the rail tops: the input under penetration control; under load control
+    the rigid wheelset's at which both wheels, penetration-controlled, carry their loads,
+    when :attr:`ContactSettings.rigid_wheelset` is "solve" (:mod:`~railcontact.timestep.
+    rigid`; whether it was found: :attr:`rigid_solution`); None when not solved (skipped,
+    or out of range)."""
+    roll: float | None = None
+    """Roll angle of the wheelset [rad] (positive: left side up): the pose's under
+    penetration control, the rigid wheelset's under load control (as :attr:`vertical`)."""
+    rigid_solution: RigidSolution | None = None
+    """:attr:`vertical` and :attr:`roll` with whether they were found
+    (:class:`~railcontact.timestep.rigid.RigidSolution`: under load control check its
+    ``converged`` and ``message``); None where they were not solved."""
+    rigid_work: tuple[Work, Work] = field(
+        default_factory=lambda: (Work(load_passes=0), Work(load_passes=0)))
+    """The work (:class:`~railcontact.contact.results.Work`: iterations, load passes,
+    re-meshes, wall time [s]) of the wheels' solves at the rolls the rigid wheelset's
+    search evaluated, left and right; zero where it did not run. Not in the wheels' own
+    counts: the step's whole work is the wheels' plus this."""
 
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:
@@ -283,59 +298,16 @@ class WheelsetResult:
     def status(self) -> int:
         """The wheels' most severe status (:data:`SEVERITY`). Whether the rigid
         wheelset's :attr:`vertical` and :attr:`roll` were found under load control is
-        :attr:`rigid_solution`'s (found only when asked for; the FMU's ``status`` counts
-        it)."""
+        :attr:`rigid_solution`'s (the FMU's ``status`` counts it)."""
         return max((w.status for w in self.wheels), key=SEVERITY.index)
-
-    @cached_property
-    def rigid_solution(self) -> RigidSolution:
-        """:attr:`vertical` and :attr:`roll` with whether they were found
-        (:class:`~railcontact.timestep.rigid.RigidSolution`: under load control check its
-        ``converged`` and ``message``)."""
-        if self.rigid is None:
-            return RigidSolution(0.0, 0.0)
-        if isinstance(self.rigid, tuple):
-            return RigidSolution(*self.rigid)
-        return self.rigid.solve()
-
-    @property
-    def rigid_work(self) -> tuple[Work, Work]:
-        """The work (:class:`~railcontact.contact.results.Work`: iterations, load passes,
-        re-meshes, wall time [s]) of the wheels' solves at the rolls the rigid wheelset's
-        search evaluated, left and right (:attr:`RigidSolution.work`), once
-        :attr:`rigid_solution` has been found; zero before (asking does not solve it),
-        under penetration control and out of range. Not in the wheels' own counts:
-        the step's whole work is the wheel's plus this."""
-        found = self.__dict__.get("rigid_solution")  # (cached_property's value, if any)
-        return found.work if found is not None else RigidSolution(0.0, 0.0).work
-
-    @property
-    def _vertical_roll(self) -> tuple[float, float]:
-        s = self.rigid_solution
-        return (s.vertical, s.roll)
-
-    @property
-    def vertical(self) -> float:
-        """Vertical displacement of the wheelset centre [m], positive up, from one nominal
-        radius above the rail tops: the input under penetration control; under load
-        control the rigid wheelset's at which both wheels, penetration-controlled, carry
-        their loads (:mod:`~railcontact.timestep.rigid`; whether it was found:
-        :attr:`rigid_solution`); 0 when out of range."""
-        return self._vertical_roll[0]
-
-    @property
-    def roll(self) -> float:
-        """Roll angle of the wheelset [rad] (positive: left side up): the input's under
-        penetration control, the rigid wheelset's under load control (:attr:`vertical`)."""
-        return self._vertical_roll[1]
 
     @property
     def moment(self) -> tuple[float, float, float]:
         """Moment of the rails' forces on the wheelset about its centre (0, y, r0 +
-        vertical), track components (M_X roll, M_Y pitch, M_Z yaw) [N m]: right-handed
-        about X forward, Y left, Z up (M_X > 0 lifts the left wheel, M_Z > 0 turns the
-        nose to the left)."""
-        h = self.wheelset_radius + self.vertical
+        vertical; r0 when :attr:`vertical` was not solved), track components (M_X roll,
+        M_Y pitch, M_Z yaw) [N m]: right-handed about X forward, Y left, Z up (M_X > 0
+        lifts the left wheel, M_Z > 0 turns the nose to the left)."""
+        h = self.wheelset_radius + (self.vertical or 0.0)
         fx, fy, _ = self.force
         m = [self.left.moment[k] + self.right.moment[k] for k in range(3)]
         return (m[0] + h * fy, m[1] - h * fx, m[2])
@@ -477,17 +449,22 @@ class WheelsetContact:
                   else None)  # the previous step's wheels at its root: the rolled starts
         if remember:
             self.memory = new_memory
-        result = WheelsetResult(wheels[0], wheels[1], perf_counter() - t0, self.wheelset.radius)
+        result = WheelsetResult(wheels[0], wheels[1], 0.0, self.wheelset.radius)
         if vertical is not None:
-            result.rigid = (vertical, pose.roll)
-        elif not off_track:  # found when first asked for (the wheels solved at other rolls)
-            result.rigid = RigidWheelset(
+            result.vertical, result.roll = vertical, pose.roll
+            result.rigid_solution = RigidSolution(vertical, pose.roll)
+        elif not off_track and self.settings.rigid_wheelset == "solve":
+            rigid = RigidWheelset(
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
                 _RolledApproaches(self, pose, loads, creepages, kinematics, time, rolled),
                 history=history, time=time,
                 memory=new_memory if remember and self.settings.uses_previous else None)
+            s = _rigid_stage(rigid)
+            result.rigid_solution, result.rigid_work = s, s.work
+            result.vertical, result.roll = s.vertical, s.roll
+        result.wall_time = perf_counter() - t0
         return result
 
     def _rigid_history(self) -> list[RigidMemory]:
@@ -801,6 +778,19 @@ class _RolledApproaches:
         """The memory of the wheels' solves at roll ``phi`` [rad] when the last call was
         there (what the next step starts from), else None."""
         return self.solved["memory"] if self.solved.get("roll") == phi else None
+
+
+def _rigid_stage(rigid: RigidWheelset) -> RigidSolution:
+    """The rigid wheelset's vertical displacement and roll (:meth:`RigidWheelset.solve`),
+    or, when a wheel cannot be solved at a roll its search tries, a solution not
+    converged that says why, with the work done until then."""
+    try:
+        return rigid.solve()
+    except RailContactError as exc:  # e.g. a wheel not solvable at another roll
+        done = rigid.approach_at.work  # (this step's: all of it is this search's)
+        return RigidSolution(0.0, 0.0, converged=False,
+                             message=f"rigid wheelset's vertical displacement and roll: {exc}",
+                             work=(replace(done["left"]), replace(done["right"])))
 
 
 def _count(work: Work, wheel: WheelContact) -> None:

@@ -1,0 +1,103 @@
+"""A time step's stages run in the step: reading its result solves nothing.
+
+The rigid wheelset's vertical displacement and roll under load control are a stage of
+:meth:`WheelsetContact.solve` when ``ContactSettings.rigid_wheelset`` asks for it; the
+result's attributes are values. Reading every attribute of a result (and of its wheels)
+must run no BEM solve and leave the contact's memory - the next step's warm start - as it
+was.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+import railcontact as rc
+import railcontact.contact.wheelrail as wheelrail
+import railcontact.timestep.wheelset as wheelset
+from railcontact.timestep.wheelset import WheelContact, WheelsetContact, WheelsetResult
+
+STEEL = rc.Material(206e9, 0.28)
+CREEP = ((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3))
+
+
+def _contact(**settings) -> WheelsetContact:
+    return WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+                           rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                           rc.ElasticPair.of(STEEL, STEEL),
+                           rc.ContactSettings(element_size=1e-3, **settings))
+
+
+@pytest.fixture
+def solves(monkeypatch):
+    """The number of normal and tangential patch solves run since the fixture was made."""
+    count = {"normal": 0, "tangential": 0}
+
+    def counted(kind, f):
+        def wrapper(*args, **kwargs):
+            count[kind] += 1
+            return f(*args, **kwargs)
+        return wrapper
+
+    monkeypatch.setattr(wheelrail, "solve_patch_normal",
+                        counted("normal", wheelrail.solve_patch_normal))
+    monkeypatch.setattr(wheelset, "solve_patch_tangential",
+                        counted("tangential", wheelset.solve_patch_tangential))
+    return count
+
+
+def _read_everything(obj) -> list:
+    """Every dataclass field and every public property of ``obj`` (and of its wheels)."""
+    out = []
+    names = {f.name for f in dataclasses.fields(obj)}
+    names |= {n for n, v in vars(type(obj)).items()
+              if isinstance(v, property) and not n.startswith("_")}
+    for n in sorted(names):
+        out.append(getattr(obj, n))
+    if isinstance(obj, WheelsetResult):
+        for w in obj.wheels:
+            out.extend(_read_everything(w))
+    return out
+
+
+@pytest.mark.parametrize("rigid", ["solve", "skip"])
+def test_reading_a_result_solves_nothing(solves, rigid):
+    contact = _contact(rigid_wheelset=rigid)
+    for k, y in enumerate((2e-3, 2.5e-3)):
+        r = contact.solve(rc.Pose(y), loads=(83.3e3, 80e3), creepages=CREEP, time=k * 1e-3)
+    assert solves["normal"] > 0 and solves["tangential"] > 0  # (the counts see the step)
+    before = dict(solves)
+    memory = {side: list(m) for side, m in contact.memory.items()}
+    values = _read_everything(r)
+    assert dict(solves) == before
+    assert {side: list(m) for side, m in contact.memory.items()} == memory
+    assert len(values) > 40
+    if rigid == "solve":  # a stage of the step: found, and its work counted apart
+        assert r.rigid_solution.converged and r.vertical is not None and r.roll > 0
+        assert sum(w.normal_iterations for w in r.rigid_work) > 0
+    else:
+        assert r.vertical is None and r.roll is None and r.rigid_solution is None
+        assert all(w.normal_iterations == 0 for w in r.rigid_work)
+
+
+def test_the_rigid_stage_carries_both_loads_at_one_vertical_position():
+    """The stage's vertical displacement and roll put both wheels, penetration-controlled,
+    at the loads (the rigid wheelset's definition): the penetration-controlled step there
+    gives the wheel loads back."""
+    loads = (83.3e3, 70e3)
+    contact = _contact(rigid_wheelset="solve", warm_start="none")
+    r = contact.solve(rc.Pose(3e-3), loads=loads, creepages=CREEP)
+    assert r.rigid_solution.converged
+    check = _contact(warm_start="none").solve(rc.Pose(3e-3, 0.0, r.roll), vertical=r.vertical,
+                                              creepages=CREEP)
+    for w, q in zip(check.wheels, loads, strict=True):
+        assert w.track_force[2] == pytest.approx(q, rel=5e-3)
+
+
+def test_a_wheel_contact_is_a_record_of_values():
+    """A WheelContact's properties are read from its fields (no solver reference)."""
+    w = WheelContact(side="left")
+    assert _read_everything(w)
+    assert not any(callable(getattr(w, f.name)) for f in dataclasses.fields(w))
