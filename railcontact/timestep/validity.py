@@ -21,7 +21,8 @@ A wheel whose contact was solved (status ok) is *outside validity* when one of t
   :attr:`ContactSettings.max_penetration`.
 * ``LOAD``: ``Q`` exceeds :attr:`ContactSettings.max_wheel_load`.
 * ``RESOLUTION``: a patch's contact spans fewer than
-  :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x or along y
+  :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x, the
+  rolling direction, or along both x and y
   (:func:`~railcontact.normal.resolution.under_resolved`): its
   pressure, area and creep forces are the grid's (the largest pressure 4 % to 50 % off
   Hertz's; a creep force along a narrow x 20-46 % off), not the contact's; smaller
