@@ -436,7 +436,8 @@ class Slave:
             self.log.append(f"{w.side} wheel: {text}")
         if any(_unsolved(w) for w in res.wheels):  # zero forces are no contact's only
             return FMI_DISCARD
-        return FMI_WARNING if failed or not rigid.converged else FMI_OK
+        unfound = rigid is not None and not rigid.converged
+        return FMI_WARNING if failed or unfound else FMI_OK
 
     def _write(self, res: WheelsetResult | None) -> None:
         """Outputs from ``res``; all zero (and no patches) for None."""

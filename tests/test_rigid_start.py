@@ -54,8 +54,9 @@ def residuals(wc: WheelsetContact, pose: Pose, t: float, vertical: float, roll: 
               ) -> tuple[float, float]:
     """(m_L + delta_L - m_R - delta_R, v + (h_L + h_R) / 2) [m] at ``roll``, the
     approaches from a cold solve of the same wheelset without memory (module doc)."""
-    cold = contact().solve(pose, loads=(Q, Q), creepages=CREEP, time=t)
-    dl, dr = cold.rigid.approach_at(roll)
+    cold = contact(rigid_wheelset="skip")
+    cold.solve(pose, loads=(Q, Q), creepages=CREEP, time=t)
+    dl, dr = cold.rolled_approaches(pose, loads=(Q, Q), creepages=CREEP, time=t)(roll)
     p = Pose(pose.lateral, pose.yaw, roll)
     hl = first_contact_gap(wc.track, wc.wheelset, p, "left") + dl
     hr = first_contact_gap(wc.track, wc.wheelset, p, "right") + dr
@@ -237,8 +238,9 @@ def test_a_frame_within_the_warm_tolerance_keeps_the_approach(lateral):
     the solves themselves at the step's tolerances (module docstring: up to 11 tol). Each
     call is one pass a wheel: the frame is the guess's, not formed again inside the
     solve."""
-    wc = contact(normal_tolerance=1e-9)
-    at = wc.solve(Pose(lateral), loads=(Q, Q), time=0.0).rigid.approach_at
+    wc = contact(normal_tolerance=1e-9, rigid_wheelset="skip")
+    wc.solve(Pose(lateral), loads=(Q, Q), time=0.0)
+    at = wc.rolled_approaches(Pose(lateral), loads=(Q, Q), time=0.0)
     phi = 2e-4  # [rad], a root's size near the track centre
     found = at(phi, at(phi))  # the frame formed at the approach it gives
     for factor in (1 + 0.9 * WARM_REFERENCE_RTOL, 1 - 0.9 * WARM_REFERENCE_RTOL):
@@ -257,8 +259,9 @@ def test_a_missed_guess_forms_the_frame_again_inside_the_one_solve(lateral):
     second solve after it would make three), and gives the
     approach of the frame formed at it to within a quarter of the rigid search's
     tolerance (solved tightly, the normal problem: only the frame differs)."""
-    wc = contact(normal_tolerance=1e-9)
-    at = wc.solve(Pose(lateral), loads=(Q, Q), time=0.0).rigid.approach_at
+    wc = contact(normal_tolerance=1e-9, rigid_wheelset="skip")
+    wc.solve(Pose(lateral), loads=(Q, Q), time=0.0)
+    at = wc.rolled_approaches(Pose(lateral), loads=(Q, Q), time=0.0)
     phi = 2e-4  # [rad]
     found = at(phi, at(phi))  # the frame formed at the approach it gives
     passes = [at.work[s].load_passes for s in ("left", "right")]

@@ -467,6 +467,18 @@ class WheelsetContact:
         result.wall_time = perf_counter() - t0
         return result
 
+    def rolled_approaches(self, pose: Pose, *, loads: tuple[float, float],
+                          creepages: tuple | None = None,
+                          kinematics: Kinematics | None = None,
+                          time: float | None = None) -> _RolledApproaches:
+        """``phi -> (delta_L, delta_R)``: the vertical approaches [m] at which the wheels,
+        the wheelset at ``pose`` rolled to ``phi`` [rad], carry ``loads`` [N] with the
+        creepages - the function the rigid wheelset's stage searches
+        (:class:`_RolledApproaches`), started from this contact's memory as that stage's
+        is. Each call solves both wheels (for studies and tests; a step forms its own)."""
+        rolled = self.memory.get("rolled") if self.settings.uses_previous else None
+        return _RolledApproaches(self, pose, loads, creepages, kinematics, time, rolled)
+
     def _rigid_history(self) -> list[RigidMemory]:
         """The previous steps' rigid wheelset roots (newest first) that start this step's
         search (:mod:`.rigid`): kept in the memory under ``"rigid"`` with a warm start."""
