@@ -8,5 +8,5 @@ from setuptools import find_packages, setup
 setup(
     packages=[*find_packages(include=["railcontact", "railcontact.*"]), "railcontact._fmu_src"],
     package_dir={"railcontact._fmu_src": "fmu_src"},
-    package_data={"railcontact._fmu_src": ["*.c"]},
+    package_data={"railcontact._fmu_src": ["*.c", "*.h"]},
 )

@@ -148,15 +148,23 @@ def libpython() -> Path:
     return Path(lib)
 
 
+def shim_sources() -> list[Path]:
+    """The C shim's files (``*.c`` of this folder, by job: see ``railcontact_fmu.h``), all
+    compiled into the one binary."""
+    return sorted(HERE.glob("*.c"))
+
+
 def compile_shim(out: Path, model_identifier: str = MODEL_IDENTIFIER) -> Path:
+    """Compile the C shim into ``binaries/linux64/<model_identifier>.so`` under ``out``;
+    only the FMI functions and ``railcontact_fmu_locate``/``_free`` are exported."""
     cc = os.environ.get("CC", "gcc")
     if shutil.which(cc) is None:
         raise BuildError(f"C compiler {cc!r} not found (install gcc)")
     so = out / "binaries" / "linux64" / f"{model_identifier}.so"
     so.parent.mkdir(parents=True, exist_ok=True)
     cmd = [cc, "-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-std=gnu11",
-           f"-I{fmi_headers()}", str(HERE / "railcontact_fmu.c"), "-o", str(so), "-ldl",
-           "-pthread",
+           "-fvisibility=hidden", f"-I{fmi_headers()}", f"-I{HERE}",
+           *(str(f) for f in shim_sources()), "-o", str(so), "-ldl", "-pthread",
            "-Wl,-z,nodelete"]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
@@ -195,7 +203,7 @@ def source_digest(profiles: list[str | Path] = (),
     if python is not None:
         digest.update(f"python.txt={python}\n".encode())
     pkg = Path(railcontact.__file__).resolve().parent
-    for base, pattern in ((pkg, "*.py"), (HERE, "*.[pc]*")):
+    for base, pattern in ((pkg, "*.py"), (HERE, "*.[pch]*")):
         for f in sorted(base.rglob(pattern)):
             if f.is_file() and not {"__pycache__", "_fmu_src"} & set(f.relative_to(base).parts):
                 digest.update(f"{base.name}/{f.relative_to(base).as_posix()}".encode())

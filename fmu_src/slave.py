@@ -1,9 +1,9 @@
 """The Python side of the railcontact FMU: one object per FMU instance.
 
-The C shim (``railcontact_fmu.c``) owns nothing but pointers: it reads and writes the Real
-and Integer variables directly in this object's numpy buffers (``buffers()``), and calls the
-methods below, each of which returns an FMI status (0 OK, 1 Warning, 2 Discard, 3 Error)
-and never raises; what went wrong is kept for ``pop_log()``.
+The C shim (the ``*.c`` files, their jobs listed in ``railcontact_fmu.h``) owns nothing but
+pointers: it reads and writes the Real and Integer variables directly in this object's numpy
+buffers (``buffers()``), and calls the methods below, each of which returns an FMI status
+(0 OK, 1 Warning, 2 Discard, 3 Error) and never raises; what went wrong is kept for ``pop_log()``.
 
 This file is copied into the FMU as ``<package>/_fmu_slave.py`` next to a copy of the
 railcontact package, hence the relative imports.

@@ -41,8 +41,10 @@ def least(fn, before=None, repeats: int = 5):
 
 def forget() -> None:
     """Clear the search's memory of the last pose (every pass of a new step misses it)."""
-    search._LAST_POINTS[0] = None
-    search._LAST_GAP[0] = None
+    if hasattr(search, "forget"):
+        search.forget(traces=False)
+    else:  # an older package (its memory a module global)
+        search._LAST_POINTS[0] = None
 
 
 APPROACH = 8e-5

@@ -240,3 +240,29 @@ def test_rail_coordinate_is_the_nearest_placed_rail_point(y):
 def test_rail_coordinate_of_a_non_finite_point_is_an_error(u, z):
     with pytest.raises(RailContactError, match="not finite"):
         TRACK.rail_coordinate(u, z)
+
+
+def test_overlap_half_length_is_the_largest_root_of_the_overlap():
+    """The compiled half length of the overlap ``f + A x^2 <= delta`` over a run of samples
+    is ``sqrt(max((delta - f) / A))`` over the samples with ``delta > f`` and ``A > 0``
+    (0 without any), NaN samples left out, the same bits as the numpy form."""
+    from railcontact.geometry import kernels
+
+    rng = np.random.default_rng(1)
+    for t in range(2000):
+        n = int(rng.integers(3, 60))
+        f, a = rng.normal(0, 1e-4, n), rng.normal(1.0, 2.0, n)
+        if t % 7 == 0:
+            f[rng.integers(0, n)] = np.nan
+        if t % 11 == 0:
+            a[rng.integers(0, n)] = np.nan
+        lo = int(rng.integers(0, n))
+        hi = int(rng.integers(lo, n))
+        delta = float(rng.normal(0, 1e-4))
+        depth, aa = delta - f[lo:hi + 1], a[lo:hi + 1]
+        ok = (depth > 0) & (aa > 0)
+        expected = math.sqrt(float(np.max(depth[ok] / aa[ok]))) if ok.any() else 0.0
+        assert kernels.overlap_half_length(f, a, lo, hi, delta) == expected
+    # a parabola's overlap: f = 0, A = 2 over the run, delta = 8e-4 -> x = 0.02 exactly
+    assert kernels.overlap_half_length(np.zeros(5), np.full(5, 2.0), 1, 3, 8e-4) == \
+        pytest.approx(0.02, rel=1e-15)

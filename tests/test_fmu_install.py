@@ -30,7 +30,8 @@ import railcontact
 fmpy = pytest.importorskip("fmpy")
 
 ROOT = Path(__file__).resolve().parents[1]
-FMU_SOURCES = ("railcontact_fmu.c", "slave.py", "build.py", "fmu_bootstrap.py")
+FMU_SOURCES = (*sorted(p.name for p in (ROOT / "fmu_src").glob("*.[ch]")), "slave.py", "build.py",
+               "fmu_bootstrap.py")
 LOG = re.compile(r"^\[host\|(\d)\|(\w+)\] ", re.M)
 
 pytestmark = pytest.mark.slow

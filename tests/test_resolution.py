@@ -42,6 +42,14 @@ def test_elements_across_spans_first_to_last():
     assert elements_across(c) == (0, 0)
     c[1, 2] = c[4, 2] = c[2, 5] = True
     assert elements_across(c) == (4, 4)
+    rng = np.random.default_rng(0)  # random masks, transposed views too
+    for k in range(500):
+        m = rng.random(tuple(rng.integers(1, 40, 2))) < rng.random() ** 3
+        m = m.T if k % 3 == 0 else m
+        i, j = np.nonzero(m)
+        expected = (0, 0) if i.size == 0 else (int(i.max() - i.min() + 1),
+                                               int(j.max() - j.min() + 1))
+        assert elements_across(m) == expected
 
 
 @pytest.mark.parametrize("per_axis", [1, 2])

@@ -113,7 +113,7 @@ def test_first_contact_of_one_least_sample_is_the_scans_point():
             trace, g_min, k, _, ties = search._trace(track, ws, pose, side)
             assert ties == np.count_nonzero(trace[4] == trace[4].min())
             rows = kernels.rigid_points(trace, g_min, k, 0.0, *rail, *wheel[:2], *wheel[3:])
-            search._LAST_POINTS[0] = None
+            search.forget(traces=False)
             points = contact_points(track, ws, pose, side, 0.0)
             assert len(points) == len(rows) == 1
             cp, row = points[0], rows[0]

@@ -255,7 +255,7 @@ def _cut_off(contact: np.ndarray, gap: np.ndarray) -> bool:
                          UNDEFINED_GAP))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _next_to(contact, gap, limit):  # pragma: no cover - compiled
     """Whether an element with ``gap >= limit`` (NaN: not) is in ``contact`` or has a
     neighbour along x or y that is, in one pass (the gap is read; the contact only
@@ -320,7 +320,7 @@ def uncovered(gap_of: Callable[[Grid], np.ndarray], res: NormalResult, pair: Ela
             outer.y0 + (c0 - 0.5) * dy, outer.y0 + (c1 + 0.5) * dy)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _uncovered(h, pen, p, ia, jb, x0, dx, y0, dy, ox, oy, k):  # pragma: no cover
     """:func:`uncovered`'s pass: the pressure's force, centroid and second moment on its
     grid (at the offset ``(ia, jb)`` in the outer one), then the outer elements outside

@@ -28,7 +28,7 @@ def fmu_sources() -> Path:
     package = Path(__file__).resolve().parents[1]
     places = (package / "_fmu_src", package.parent / "fmu_src")
     for d in places:
-        if (d / "railcontact_fmu.c").is_file():
+        if (d / "railcontact_fmu.h").is_file():
             return d
     raise RailContactError(f"FMU sources not found (looked in {places[0]} and {places[1]}): "
                            "reinstall railcontact (`pip install railcontact`, or "

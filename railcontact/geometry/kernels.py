@@ -28,14 +28,14 @@ F, A_OF_S, WHEEL_S, RAIL_U, RAIL_Z = range(5)
 """Rows of a frame array."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def spline_at(x, c, t, nu):
     """The ``nu``-th derivative of the piecewise cubic (``x``, ``c``) at one point ``t``."""
     j = _interval(x, t)
     return _piece(c, j, t - x[j], nu)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nearest(u, u_c):
     """The index of the sample of ``u`` nearest ``u_c`` (the first of equals)."""
     k = 0
@@ -48,7 +48,7 @@ def nearest(u, u_c):
     return k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nearest_sorted(x, v):
     """:func:`nearest` for increasing ``x``: a binary search."""
     j = np.searchsorted(x, v)
@@ -59,7 +59,7 @@ def nearest_sorted(x, v):
     return j - 1 if abs(x[j - 1] - v) <= abs(x[j] - v) else j
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nearest_point_sorted(pu, pz, order, pu_sorted, u, z):
     """The index of the point (pu, pz) nearest (u, z), the first of equals (as
     ``argmin((pu - u)**2 + (pz - z)**2)``), searched outward from ``u`` in ``pu_sorted`` =
@@ -81,7 +81,7 @@ def nearest_point_sorted(pu, pz, order, pu_sorted, u, z):
     return k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def interp_sorted(x, xp, fp):
     """``np.interp(x, xp, fp)`` at one point for increasing ``xp`` (numpy's algorithm:
     the end values beyond ``xp``, the sample's value where ``x`` falls on one, the other
@@ -89,14 +89,14 @@ def interp_sorted(x, xp, fp):
     return _interp(x, xp, fp, False)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _at(fp, j, finite):
     """``fp[j]``, or 0 where it is not finite when ``finite``."""
     v = fp[j]
     return v if not finite or math.isfinite(v) else 0.0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _interp(x, xp, fp, finite):
     """:func:`interp_sorted` of ``fp``, or (``finite``) of ``fp`` with its values that
     are not finite read as 0."""
@@ -123,19 +123,19 @@ def _interp(x, xp, fp, finite):
     return v
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _along(u, z, za, zb, i, u_c, z_c, cg, sg):
     """The coordinate s' in the plane of sample ``i`` of the curve (u, (z - za) - zb)."""
     return (u[i] - u_c) * cg + (((z[i] - za) - zb) - z_c) * sg
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _normal(u, z, za, zb, i, u_c, z_c, cg, sg):
     """The distance n from the plane of sample ``i`` of the curve (u, (z - za) - zb)."""
     return -(u[i] - u_c) * sg + (((z[i] - za) - zb) - z_c) * cg
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
     """Along the branch through sample ``k`` of the curve (u, z) on which its coordinate
     s' = (u - u_c) cg + (z - z_c) sg increases, the curve's distance
@@ -147,7 +147,7 @@ def interp_in_plane(s, u, z, a, b, u_c, z_c, cg, sg, k, out):
                           out, 0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out,
                           o):
     """:func:`interp_in_plane` of the curve (u, (z - za) - zb) at the samples
@@ -203,7 +203,7 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
             out[2, i - o] = b[j] + t * (b[j + 1] - b[j])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
                   z_c, gamma, eta_c, kw, kr, s, i0, i1, out):
     """Both profiles in the tangent plane through the rail point ``(u_c, z_c)`` inclined
@@ -240,7 +240,7 @@ def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_bac
         out[WHEEL_S, i] = si if math.isfinite(e) else math.nan
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, rx, rc, out):
     """The trace points of one wheel (axial positions ``eta``, radii ``r``, dr/deta ``dr``)
     moved into the side frame (yaw ``psi`` about the vertical axis, then roll ``phi``
@@ -298,7 +298,7 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     return m, g_min, k, increasing, ties
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def count_runs(g, g_min, k, approach):
     """How many connected runs of samples the gap above first contact ``g - g_min`` is
     at most ``approach`` [m] on (the least gap's sample ``k`` always in one): the runs of
@@ -315,7 +315,7 @@ def count_runs(g, g_min, k, approach):
     return m
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back):
     """The rigid contact point of the run ``a:b`` of the trace: its least gap above
     ``g_min``, refined by a parabola through three samples. Returns (eta, x, u, Z, gap,
@@ -346,7 +346,7 @@ def rigid_point(eta, x, u, g, g_min, a, b, rx, rc, wx, wc, half_bb, flange_back)
     return eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, spline_at(wx, wc, s_c, 0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def rigid_points(tr, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
     """:func:`rigid_point` of each run of the trace ``tr`` (5, n) (the index ranges
     ``a:b`` of the connected runs where the gap above first contact ``g - g_min`` is at
@@ -372,7 +372,7 @@ def rigid_points(tr, g_min, k, approach, rx, rc, wx, wc, half_bb, flange_back):
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
                 gamma, eta_c, s, k0, out):
     """The tangent frame of a rigid contact point (:func:`rigid_point`):
@@ -395,7 +395,7 @@ def rigid_frame(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, 
             f[i] = math.inf
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nearest_first(u, v, increasing):
     """:func:`nearest` (the first of equals), by bisection when ``u`` increases strictly
     (the distances then fall, rounded, towards ``v`` and rise after it: the first of
@@ -415,7 +415,7 @@ FRAME_GROW = 32
 """Samples added at a time where the overlap's run reaches the formed samples' edge."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx,
                     wc, radius, half_bb, flange_back, s, k0, power, out):
     """CONTACT's reference point of the patch around the rigid point at ``u_rigid``, the
@@ -533,21 +533,21 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
             g_min, height)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _own(f, ru_s, u_lo, u_hi, i):
     """Whether sample ``i`` of a frame lies in the overlap whose rail points are
     ``u_lo ... u_hi``."""
     return math.isfinite(f[i]) and f[i] < 0 and ru_s[i] >= u_lo and ru_s[i] <= u_hi
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _shift(f, overlap, i0, i1):
     """``f + overlap`` at the samples ``i0:i1``, infinite where ``f`` is not finite."""
     for i in range(i0, i1):
         f[i] = f[i] + overlap if math.isfinite(f[i]) else math.inf
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def extend_frame(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
                  gamma, eta_c, kw, kr, s, overlap, i0, i1, a, b, out):
     """A frame of :func:`reference_frame` formed at the samples ``i0:i1`` of ``out``,
@@ -563,7 +563,7 @@ def extend_frame(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back
         out[:, lo:hi] = buf[:, lo:hi]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _samples_read(y, s):
     """The first and the last sample of ``s`` that :func:`interp_sorted` reads at ``y``."""
     n = s.size
@@ -579,7 +579,7 @@ def _samples_read(y, s):
     return j, j + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
     """:func:`gap_on_grid` from a frame (5, len(s)) formed at the samples ``i0:i1`` only.
     Returns (done, a, b): not done (``out`` not written) when the grid reads samples
@@ -594,7 +594,7 @@ def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
     return True, i0, i1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     """``out[ix, jy]`` = f(y) + A(y) x^2 interpolated from the samples (``f`` = ``far``
     beyond them, ``A`` = 0 where it is not finite; ``far`` wherever the sum is not
@@ -617,7 +617,7 @@ def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
             out[ix, jy] = h if math.isfinite(h) else far
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def gap_on_grid(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     """``h = f(y) + A(y) x^2`` at the element centres of a grid ((nx, ny) written to
     ``out``) with ``f`` and ``A`` interpolated at ``y`` from the samples ``s`` as
@@ -626,7 +626,7 @@ def gap_on_grid(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def lateral_extent(s, f, delta, k0):
     """``(lo, hi)``: the run of samples through ``k0`` where ``f <= delta`` (``k0``
     always in it)."""
@@ -705,3 +705,20 @@ def lobes_extent(f, u, delta, k0, u_lo, u_hi):
                 lo = min(lo, i)
                 hi = max(hi, i)
     return lo, hi
+
+
+@numba.njit(cache=True, nogil=True)
+def overlap_half_length(f, a_of_s, lo, hi, delta):
+    """The half length ``max sqrt((delta - f) / A)`` [m] along x of the overlap ``f(s) +
+    A(s) x^2 <= delta`` over the samples ``lo..hi`` (inclusive) where ``delta - f > 0``
+    and ``A > 0``; 0 without any. The square root of the largest quotient, as
+    ``sqrt(max(q))`` of the numpy form (the same bits)."""
+    q_max = -1.0
+    for i in range(lo, hi + 1):
+        depth = delta - f[i]
+        a = a_of_s[i]
+        if depth > 0.0 and a > 0.0:
+            q = depth / a
+            if q > q_max:
+                q_max = q
+    return math.sqrt(q_max) if q_max >= 0.0 else 0.0

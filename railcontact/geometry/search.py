@@ -27,6 +27,7 @@ trace offset) but the gap is taken symmetric in x.
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 
@@ -222,10 +223,7 @@ def _box(s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, lo: int, hi: int,
          penetration: float) -> tuple[float, float, float, float]:
     """:func:`overlap_box` of the run ``lo..hi`` (inclusive) of the samples."""
     ds = float(s[1] - s[0])
-    depth = penetration - f[lo:hi + 1]
-    a = a_of_s[lo:hi + 1]
-    ok = (depth > 0) & (a > 0)
-    xl = math.sqrt(float(np.max(depth[ok] / a[ok]))) if ok.any() else 0.0
+    xl = kernels.overlap_half_length(f, a_of_s, lo, hi, penetration)
     return (-xl, xl, float(s[lo]) - ds, float(s[hi]) + ds)
 
 
@@ -323,7 +321,8 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     (the first one has gap 0).
     """
     approach = check_positive("approach", approach, "m", allow_zero=True)
-    last = _LAST_POINTS[0]  # a load iteration asks again for the same wheel's first contact
+    # a load iteration asks again for the same wheel's first contact
+    last = getattr(_memo, "points", None)
     if (last is not None and last[0] is track and last[1] is ws
             and (last[2] is pose or last[2] == pose) and last[3] == side
             and last[4] == approach):
@@ -342,12 +341,23 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
     points = [_point(track, ws, side, trace, g_min, row) for row in rows]
     if len(points) > 1:
         points.sort(key=lambda c: c.gap)
-    _LAST_POINTS[0] = (track, ws, pose, side, approach, tuple(points))
+    _memo.points = (track, ws, pose, side, approach, tuple(points))
     return points
 
 
-_LAST_POINTS: list = [None]
-"""The last call of :func:`contact_points` (its arguments and points)."""
+_memo = threading.local()
+"""This thread's memory of the search: ``points``, the last call of :func:`contact_points`
+(its arguments and points), and ``traces``, the last trace of :func:`_trace_of_pose` of
+each side (track, wheelset, pose, trace). Per thread, so that wheelsets stepping on
+several threads neither share nor evict each other's memory."""
+
+
+def forget(traces: bool = True) -> None:
+    """Clear this thread's memory of the last pose: the last :func:`contact_points` and,
+    with ``traces``, the last trace of each side."""
+    _memo.points = None
+    if traces:
+        _memo.traces = {}
 
 
 def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -358,21 +368,20 @@ def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
     return kernels.count_runs(trace[4], g_min, k, float(approach))
 
 
-_LAST_GAP: dict = {}
-"""The last trace of :func:`_trace_of_pose` of each side: (track, wheelset, pose, trace)."""
-
-
 def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
     """:func:`_trace`, remembered for the last (track, wheelset, pose) of each side: a load
     iteration asks for the same wheel's contact several times, and the rigid wheelset's
     search for both wheels' least gaps after solving them (:func:`least_gap`)."""
-    last = _LAST_GAP.get(side)  # (a step passes one pose to every call: identity first)
+    traces = getattr(_memo, "traces", None)
+    if traces is None:
+        traces = _memo.traces = {}
+    last = traces.get(side)  # (a step passes one pose to every call: identity first)
     if (last is not None and last[0] is track and last[1] is ws
             and (last[2] is pose or last[2] == pose)):
         return last[3]
     out = _trace(track, ws, pose, side)
     out[0].flags.writeable = False  # (its rows too)
-    _LAST_GAP[side] = (track, ws, pose, out)
+    traces[side] = (track, ws, pose, out)
     return out
 
 

@@ -20,7 +20,7 @@ MIN_POINTS = 32
 """Arrays shorter than this are left to ``CubicSpline`` (the call overhead dominates)."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _interval(x, ti):
     """The piece of breakpoints ``x`` that holds ``ti`` (the end pieces beyond them)."""
     n = x.size - 1
@@ -31,7 +31,7 @@ def _interval(x, ti):
     return np.searchsorted(x, ti, side="right") - 1
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _piece(c, j, s, nu):
     """The ``nu``-th derivative (0, 1 or 2) of piece ``j`` at ``s`` from its start."""
     if nu == 0:
@@ -41,7 +41,7 @@ def _piece(c, j, s, nu):
     return 6.0 * c[0, j] * s + 2.0 * c[1, j]
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _interval_near(x, ti, j):
     """:func:`_interval` for ``ti`` (not NaN) searched from piece ``j``: a walk when
     ``ti`` lies within 16 pieces of it, else bisection (the same piece either way)."""
@@ -66,7 +66,7 @@ def _interval_near(x, ti, j):
     return j
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always")
 def _interval_walk(x, ti, j):
     """:func:`_interval_near`, walking forward first where ``ti`` lies in one of the
     four pieces from ``j`` on (points ordered along the breakpoints: a step or two)."""
@@ -77,7 +77,7 @@ def _interval_walk(x, ti, j):
     return _interval_near(x, ti, j)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _evaluate(x, c, t, nu, out):
     """``out[i]`` = the ``nu``-th derivative of the piecewise cubic at ``t[i]``; each
     interval search starts from the previous point's interval."""
@@ -91,7 +91,7 @@ def _evaluate(x, c, t, nu, out):
         out[i] = _piece(c, j, ti - x[j], nu)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _evaluate_one(x, c, ti, nu):
     """The ``nu``-th derivative of the piecewise cubic at the one point ``ti``."""
     if math.isnan(ti):

@@ -217,7 +217,7 @@ def _shifted_copy(v: np.ndarray, shape: tuple[int, int], i: int, j: int) -> np.n
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def nonzero_box(field):  # pragma: no cover - compiled
     """The rows ``i0:i1`` and columns ``j0:j1`` (ends exclusive) of a field (nx, ny) that
     hold its elements ``!= 0`` (a contact mask's set elements, a pressure's loaded ones;

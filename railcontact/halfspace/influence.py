@@ -116,7 +116,7 @@ def influence_kernel(
     return coefficients_at(block, X, Y, dx, dy, pair)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _zz_antiderivative(a, b):  # pragma: no cover - compiled
     """``a asinh(b/|a|) + b asinh(a/|b|)`` (0 where ``a`` or ``b`` is 0): the zz block's
     ``F`` without ``(1-nu)/(pi G)``, as ``sign(a b) (|a| ln((|b| + r)/|a|) + |b| ln((|a| +
@@ -131,7 +131,7 @@ def _zz_antiderivative(a, b):  # pragma: no cover - compiled
     return out if (a > 0.0) == (b > 0.0) else -out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def zz_displacement_at(x, y, xmin, dx, ymin, dy, traction):  # pragma: no cover - compiled
     """The normal displacement difference [m] at the point (x, y) [m] of a normal traction
     [Pa] given on a grid of ``traction.shape`` elements of size ``dx * dy`` whose outer
@@ -158,7 +158,7 @@ def zz_displacement_at(x, y, xmin, dx, ymin, dy, traction):  # pragma: no cover 
     return total
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def zz_displacement_centred(y, dx, ymin, dy, traction):  # pragma: no cover - compiled
     """:func:`zz_displacement_at` the point (0, y) [m] for a grid centred on x = 0 (its x
     edges ``(k - nx/2) dx``, k = 0 .. nx): the coefficients of the columns ``i`` and

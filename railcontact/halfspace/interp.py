@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def interp_walk_sloped(x, xp, fp, slopes, j):  # pragma: no cover - compiled
     """``(np.interp(x, xp, fp), j)`` for increasing ``xp``, with the pieces' slopes
     ``slopes[j] = (fp[j+1] - fp[j]) / (xp[j+1] - xp[j])`` given (:func:`slopes_of`;
@@ -59,7 +59,7 @@ def slopes_of(xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray((fp[1:] - fp[:-1]) / (xp[1:] - xp[:-1]))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def interp_on_piece(x, xp, fp, j):  # pragma: no cover - compiled
     """``np.interp(x, xp, fp)`` for increasing ``xp`` when ``j`` is the last sample at or
     before ``x`` (any ``j`` when ``x`` is NaN or outside ``xp``; :func:`uniform_piece`
@@ -86,7 +86,7 @@ def interp_on_piece(x, xp, fp, j):  # pragma: no cover - compiled
     return v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def uniform_piece(x, xp, x0, h):  # pragma: no cover - compiled
     """The last sample ``j`` of increasing ``xp`` at or before ``x`` (0 before the first,
     ``xp.size - 1`` from the last on; NaN: 0), for samples spaced about ``h`` from ``x0``:

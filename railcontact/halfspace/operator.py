@@ -407,8 +407,9 @@ def _unpack_pair_py(w: np.ndarray, out: np.ndarray) -> None:
 
 if numba is not None:
     _real_linear, _pack_rows, _unpack_rows, _pack_pair, _unpack_pair = (
-        numba.njit(cache=True)(f) for f in (_real_linear_py, _pack_rows_py, _unpack_rows_py,
-                                            _pack_pair_py, _unpack_pair_py))
+        numba.njit(cache=True, nogil=True)(f)
+        for f in (_real_linear_py, _pack_rows_py, _unpack_rows_py, _pack_pair_py,
+                  _unpack_pair_py))
 
 
 def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
@@ -425,7 +426,7 @@ def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
 
 
 if numba is not None:
-    _spectral_product_2c = numba.njit(cache=True)(_spectral_product_2)
+    _spectral_product_2c = numba.njit(cache=True, nogil=True)(_spectral_product_2)
 else:  # pragma: no cover
     _spectral_product_2c = None
 

@@ -17,7 +17,7 @@ PAIRWISE_BLOCK = 128
 """numpy's ``PW_BLOCKSIZE``: runs up to this length are summed with eight accumulators."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _block_sum(a, lo, n):  # pragma: no cover - compiled
     """numpy's sum of a run of at most :data:`PAIRWISE_BLOCK` elements ``a[lo:lo + n]``."""
     if n < 8:
@@ -47,7 +47,7 @@ def _block_sum(a, lo, n):  # pragma: no cover - compiled
     return res
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def pairwise_sum(a, lo, n):  # pragma: no cover - compiled
     """The sum of ``a[lo:lo + n]`` (1-D, float) in numpy's pairwise order: a run longer
     than :data:`PAIRWISE_BLOCK` is the sum of its halves (the first ``n // 2`` rounded
@@ -87,7 +87,7 @@ def pairwise_sum(a, lo, n):  # pragma: no cover - compiled
     return values[0]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def numpy_sum(a):  # pragma: no cover - compiled
     """``a.sum()`` of a C-contiguous float64 array, as numpy adds it: the pairwise sum
     added to the reduction's start ``+0.0`` (which turns the -0.0 of a run of -0.0 into

@@ -208,7 +208,7 @@ assumption about NaN or infinities, which the solver must see."""
 # arrays (row-major, as the grid's (nx, ny) arrays), in place of a dozen numpy calls with
 # their masks and temporaries. ``c`` is the contact set of the iteration (bool).
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _overlaps_flat(h, u, p, force_control, delta, tolerance):  # pragma: no cover - compiled
     n = p.size
     count = 0
@@ -230,7 +230,7 @@ def _overlaps_flat(h, u, p, force_control, delta, tolerance):  # pragma: no cove
     return least < -tolerance * scale
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - compiled
     """The result's fields on the (nx, ny) arrays: the approach (``own_delta``: the mean
     of ``h + u`` on the contact, or the least ``h`` without contact), ``gap = h + u -
@@ -277,7 +277,7 @@ def _summary(h, u, p, delta, own_delta, gap, contact):  # pragma: no cover - com
     return delta, total, (np.nan if nan else largest), count, edge, (i0, i1, j0, j1)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _least(h):  # pragma: no cover - compiled
     """The smallest value of ``h`` (any shape, C-ordered; +inf when empty) and whether
     all its values are finite, in one pass."""
@@ -291,7 +291,7 @@ def _least(h):  # pragma: no cover - compiled
     return float(least), finite
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _floored(p, index, change, load, area):  # pragma: no cover - compiled
     """The start ``q = np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0
     made 0, as numpy's) and its sum, added as numpy adds it; with a ``load`` > 0 [N] and a
@@ -322,7 +322,7 @@ def _floored(p, index, change, load, area):  # pragma: no cover - compiled
     return q, total, changes, scale
 
 
-@numba.njit(cache=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - compiled
     """The contact set ``c`` (p > 0, or where the bodies interpenetrate if no pressure is
     left), the approach (force control: the mean of ``h + u`` on ``c``), the gradient
@@ -352,7 +352,7 @@ def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - co
     return delta
 
 
-@numba.njit(cache=True, fastmath=REASSOCIATE, inline="always")
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE, inline="always")
 def _mean_on(x, c):  # pragma: no cover - compiled
     """The mean of ``x`` over the elements set in ``c`` (0 without any)."""
     total = 0.0
@@ -364,7 +364,7 @@ def _mean_on(x, c):  # pragma: no cover - compiled
     return total / max(count, 1)
 
 
-@numba.njit(cache=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - compiled
     """The search direction ``t`` (in place): the correction ``z`` on ``c`` (minus its mean
     there when ``project``) plus the conjugate share of the previous ``t``; returns
@@ -383,7 +383,7 @@ def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - com
     return gz, gg
 
 
-@numba.njit(cache=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover - compiled
     """``u += sum_k change[k] * A[:, index[k]]``: the columns of the influence matrix are
     the offset kernel (2nx-1, 2ny-1) shifted to each element; a row of ``u`` at a time,
@@ -401,7 +401,7 @@ def _add_columns(u, kernel, nx, ny, index, change, changes):  # pragma: no cover
                 urow[iy] += dj * krow[iy]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _shown_start(values, u, scale, kernel, index, change, changes):  # pragma: no cover
     """``u = scale (values + sum_k change[k] A[:, index[k]])`` (:func:`_add_columns`):
     ``A p`` of a start from ``A`` of the pressure before it was floored (``values``,
@@ -422,7 +422,7 @@ def _shown_start(values, u, scale, kernel, index, change, changes):  # pragma: n
     return True
 
 
-@numba.njit(cache=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area,
           self_compliance, kernel, nx, ny, index, change):  # pragma: no cover - compiled
     """One CG step from ``p`` into ``q``; ``r = A t`` (before its mean is taken out).

@@ -23,7 +23,10 @@ say (the table above).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
+
+from ..errors import RailContactError
 
 MIN_ELEMENTS_ACROSS = 4
 """Fewest elements a patch's contact set must span along x, or along y when it spans
@@ -39,11 +42,27 @@ def elements_across(contact: np.ndarray) -> tuple[int, int]:
     contact
         The contact mask, shape (nx, ny).
     """
-    c = np.asarray(contact, dtype=bool)
-    if not c.any():
+    c = np.ascontiguousarray(contact, dtype=bool)
+    if c.ndim != 2:
+        raise RailContactError(f"the contact mask must be 2-D (nx, ny), got shape {c.shape}")
+    nx, ny = _span(c)
+    return int(nx), int(ny)
+
+
+@numba.njit(cache=True, nogil=True)
+def _span(c):
+    """:func:`elements_across` of a C-contiguous 2-D boolean mask (one pass)."""
+    r0, r1, c0, c1 = c.shape[0], -1, c.shape[1], -1
+    for i in range(c.shape[0]):
+        for j in range(c.shape[1]):
+            if c[i, j]:
+                r0 = min(r0, i)
+                r1 = i
+                c0 = min(c0, j)
+                c1 = max(c1, j)
+    if r1 < 0:
         return 0, 0
-    rows, cols = np.flatnonzero(c.any(axis=1)), np.flatnonzero(c.any(axis=0))
-    return int(rows[-1] - rows[0] + 1), int(cols[-1] - cols[0] + 1)
+    return r1 - r0 + 1, c1 - c0 + 1
 
 
 def under_resolved(contact: np.ndarray, dx: float, dy: float) -> str:

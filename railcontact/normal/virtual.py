@@ -130,7 +130,7 @@ def _half_width(s: np.ndarray, f: np.ndarray, level: float) -> tuple[float, floa
     return _half_width_at(s, f, float(level))
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _half_width_at(s, f, level):  # pragma: no cover - compiled
     """:func:`_half_width`: the run of samples ``f <= level`` (NaN: not) through the
     sample nearest s = 0 (``np.argmin(abs(s))``: the first such, or the first NaN),
@@ -163,7 +163,7 @@ def _half_width_at(s, f, level):  # pragma: no cover - compiled
     return ends[0], ends[1]
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
                          ):  # pragma: no cover - compiled
     """The square of the virtual patch's half length [m^2] at ``y`` (of :func:`_shape`'s
@@ -177,7 +177,7 @@ def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
     return v, j
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
                  ):  # pragma: no cover - compiled
     """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny)."""
@@ -197,7 +197,7 @@ def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
     return out
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
                    ):  # pragma: no cover - compiled
     """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (at the penetration

@@ -224,13 +224,13 @@ def _sweep_numpy(rxx, rxy, ryx, ryy, wx, wy, g, px, py, state, lo, hi, c11, c12,
 
 
 if HAVE_NUMBA:
-    _turn_c = numba.njit(cache=True, inline="always")(_turn)
-    _slip_x_c = numba.njit(cache=True, inline="always")(slip_x)
-    _slip_y_c = numba.njit(cache=True, inline="always")(slip_y)
-    _norm_c = numba.njit(cache=True, inline="always")(_norm)
-    _angle_c = numba.njit(cache=True, inline="always")(_angle)
-    _element_solve_c = numba.njit(cache=True, inline="always")(_element_solve)
-    _block_sweep_numba = numba.njit(cache=True, fastmath=True)(_block_sweep)
+    _turn_c = numba.njit(cache=True, nogil=True, inline="always")(_turn)
+    _slip_x_c = numba.njit(cache=True, nogil=True, inline="always")(slip_x)
+    _slip_y_c = numba.njit(cache=True, nogil=True, inline="always")(slip_y)
+    _norm_c = numba.njit(cache=True, nogil=True, inline="always")(_norm)
+    _angle_c = numba.njit(cache=True, nogil=True, inline="always")(_angle)
+    _element_solve_c = numba.njit(cache=True, nogil=True, inline="always")(_element_solve)
+    _block_sweep_numba = numba.njit(cache=True, nogil=True, fastmath=True)(_block_sweep)
 else:  # pragma: no cover
     _turn_c = _turn
     _slip_x_c = slip_x
@@ -457,9 +457,9 @@ _NO_STATE = np.zeros((0, 0), dtype=np.int8)
 _NO_START = np.zeros((2, 0, 0))
 
 if HAVE_NUMBA:
-    _clip_start = numba.njit(cache=True)(_clip_start)
-    _bound_layout = numba.njit(cache=True)(_bound_layout)
-    _squares = numba.njit(cache=True)(_squares)
+    _clip_start = numba.njit(cache=True, nogil=True)(_clip_start)
+    _bound_layout = numba.njit(cache=True, nogil=True)(_bound_layout)
+    _squares = numba.njit(cache=True, nogil=True)(_squares)
 
 
 @lru_cache(maxsize=16)
@@ -648,10 +648,10 @@ def _embedded_fields(swept, state, nx, ny, i0, j0, x0, dx, y0, dy):
 
 
 if HAVE_NUMBA:
-    _block_rows = numba.njit(cache=True)(_block_rows)
-    _counts_and_max = numba.njit(cache=True)(_counts_and_max)
-    _summary_sums = numba.njit(cache=True)(_summary_sums)
-    _embedded_fields = numba.njit(cache=True)(_embedded_fields)
+    _block_rows = numba.njit(cache=True, nogil=True)(_block_rows)
+    _counts_and_max = numba.njit(cache=True, nogil=True)(_counts_and_max)
+    _summary_sums = numba.njit(cache=True, nogil=True)(_summary_sums)
+    _embedded_fields = numba.njit(cache=True, nogil=True)(_embedded_fields)
 
 
 @dataclass

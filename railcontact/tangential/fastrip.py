@@ -113,7 +113,7 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     return strip_result(strips, traction, state, pn, sums, "FaStrip", t0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _fastrip_all(x_lo, x_hi, t, w, y, width, pn, mu, cx, cy, phi, l3, xi_, eta_, phi_, eta2,
                  one_phi2, d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
     """FASTSIM's march (the slip directions), :func:`_fastrip_strips` and the sums of
@@ -128,7 +128,7 @@ def _fastrip_all(x_lo, x_hi, t, w, y, width, pn, mu, cx, cy, phi, l3, xi_, eta_,
     return traction, state, summary(x_lo, x_hi, width, y, t, w, traction, state)
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _fastrip_strips(x_lo, x_hi, t, y, pn, mu, fs_traction, xi_, eta_, phi_, eta2, one_phi2,
                     d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
     """FaStrip's traction (2, ny, nx) [Pa] and state (ny, nx) at the samples ``t`` of the

@@ -62,7 +62,7 @@ def _march(strips: Strips, bound: np.ndarray, creepage, flex, spin_scale=(1.0, 1
                          spin_scale[0] * phi, spin_scale[1] * phi, l3)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _march_strips(x_lo, x_hi, t, y, bound, cx, cy, spin_x, spin_y, l3
                   ):  # pragma: no cover - compiled
     """:func:`_march` on the strips at ``y`` (ny,) [m] from ``x_lo`` to ``x_hi`` [m]

@@ -342,17 +342,18 @@ if HAVE_NUMBA:
     # numpy's error model: a division by zero gives inf/NaN (which the sweep's measure
     # catches) instead of raising, so the compiled code carries no zero-divisor checks
     # (the same bits, 3-5 % less time per block)
-    _jit = numba.njit(cache=True, inline="always", error_model="numpy")
+    _jit = numba.njit(cache=True, nogil=True, inline="always", error_model="numpy")
     _element_solve_c = _jit(_element_solve)
     _shift_run_c = _jit(_shift_run)
     _row_dot_c = _jit(_row_dot)
     # (compiled inside the block only: the five share one name, which numba's cache
     # would take for one function)
     _cross_rows16_c, _cross_rows20_c, _cross_rows24_c, _cross_rows28_c, _cross_rows32_c = (
-        numba.njit(inline="always", fastmath=True, error_model="numpy")(_cross_rows_of(n))
+        numba.njit(nogil=True, inline="always", fastmath=True,
+                   error_model="numpy")(_cross_rows_of(n))
         for n in LANES)
     _visit_c = _jit(_visit)
-    _steady_block_numba = numba.njit(cache=True, fastmath=True, error_model="numpy")(
+    _steady_block_numba = numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")(
         _steady_block)
 else:  # pragma: no cover
     _element_solve_c = _element_solve
@@ -374,7 +375,7 @@ def _add_product(ux, uy, bx, by, u, r0):
             uy[iy, ix] = by[iy, ix] + u[1, ix, iy]
 
 
-_add_product_c = numba.njit(cache=True)(_add_product) if HAVE_NUMBA else _add_product
+_add_product_c = numba.njit(cache=True, nogil=True)(_add_product) if HAVE_NUMBA else _add_product
 
 
 def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,

@@ -116,7 +116,7 @@ def _strips_of_rows(grid: Grid, contact: np.ndarray, nx: int) -> tuple:
     return strips, rows, i0, i1, count
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _row_ends(contact):  # pragma: no cover - compiled
     """The grid rows ``j`` (along x) with contact in ``contact`` (nx, ny), the first and
     last element ``i`` in contact on each, the first and last ``i`` with contact on any
@@ -153,7 +153,7 @@ def sample_on_strips(values: np.ndarray, grid: Grid, strips: Strips) -> np.ndarr
                         strips.x_lo, strips.x_hi, strips.t)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _sample_rows(values, gx, rows, x_lo, x_hi, t):  # pragma: no cover - compiled
     """``np.interp(x[k], gx, values[:, rows[k]])`` at every strip's samples ``x[k]``
     (:attr:`Strips.x`'s), (ny_s, nx_s)."""
@@ -201,7 +201,7 @@ def strips_on_contact(grid: Grid, contact: np.ndarray, pressure: np.ndarray, for
                         float(r * math.sqrt(across / length)))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _carry(pn, width, x_lo, x_hi, w, force):  # pragma: no cover - compiled
     """Scale the samples ``pn`` (ny_s, nx_s) [Pa] in place so that they carry ``force``
     [N] (``pn * (force / sum(pn da))``, ``da`` as :attr:`Strips.area` forms it; unscaled
@@ -296,7 +296,7 @@ def strip_result(strips: Strips, traction: np.ndarray, state: np.ndarray,
                        wall_time=time.perf_counter() - t0)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def summary(x_lo, x_hi, width, y, t, w, traction, state):  # pragma: no cover - compiled
     """The sums of :func:`summarise` as numpy forms them: the forces ``sum(p_c da)`` [N],
     the spin moment ``sum((x p_y - y p_x) da)`` [N m] (``da`` and ``x`` as
@@ -349,7 +349,7 @@ def remesh_strips(result: StripResult, grid: Grid) -> tuple[np.ndarray, np.ndarr
                    np.ascontiguousarray(result.state, dtype=np.int8), grid.x, grid.y)
 
 
-@numba.njit(cache=True, error_model="numpy")
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _remesh(y, width, x_lo, x_hi, t, order, traction, state, gx, gy
             ):  # pragma: no cover - compiled
     """:func:`remesh_strips` on the grid with element centres ``gx``, ``gy`` [m] (the

@@ -239,7 +239,7 @@ def _inside(memory: PatchMemory, shown: Displacement, grid: Grid) -> tuple[int, 
     return i, j
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _extrapolated_pair(p1, u1, i1, j1, p0, u0, i0, j0, c, extrapolate, nx,
                        ny):  # pragma: no cover - compiled
     """``p = p1 + c (p1 - p0)`` and ``u = u1 + c (u1 - u0)`` on the (nx, ny) grid at the
@@ -275,7 +275,7 @@ def _on_lattice(memory: PatchMemory, grid: Grid) -> tuple[int, int] | None:
     return (0, 0) if source is grid else _lattice_shift(source, grid)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _extrapolated(v1, i1, j1, v0, i0, j0, c, extrapolate, clip, nx, ny):  # pragma: no cover
     """``remesh`` on one lattice (``out[a, b] = v[a + i, b + j]``, zero outside ``v``) of
     ``v1`` and, when ``extrapolate``, ``v1 + c (v1 - v0)`` (``v0`` remeshed the same way),
@@ -342,7 +342,7 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
     return out if math.isfinite(total) else None
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _rate(p, p0, i0, j0, v0, smooth, gain, dt):  # pragma: no cover - compiled
     """``(1 - gain) v0 + gain (p - p0) / dt`` (``smooth``; else ``(p - p0) / dt``) of
     the fields (2, nx, ny) ``p``, ``p0``, ``v0``, the last two read on ``p``'s grid at
@@ -477,7 +477,7 @@ def _state_on(memory: PatchMemory, grid: Grid, shift: tuple[int, int] | None) ->
 _NO_MAP = np.zeros((0, 0), dtype=np.int8)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _advanced(v, rate, state, i, j, h, nx, ny):  # pragma: no cover - compiled
     """``v + h rate`` (fields (k, nx', ny')) on the grid (nx, ny) of one lattice
     (``out[:, a, b]`` from ``[:, a + i, b + j]`` of both, zero outside them), as

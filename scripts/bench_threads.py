@@ -1,0 +1,276 @@
+"""Benchmark of two wheelsets stepping on two threads against one after the other.
+
+Two :class:`railcontact.WheelsetContact` instances run the hunting-like run of
+``scripts/bench_step.py`` (S1002 on 60E1 at 1:40, 0.5 mm elements, mu = 0.4, 83.3 kN per
+wheel with the creep forces counted, 30 m/s, kinematic creepages, warm starts, 1 ms steps)
+on two different lateral trajectories: A a 3 mm sine at 1.5 Hz, B a 2 mm sine at 2.1 Hz
+with a phase of 0.7 rad. Each repetition runs them
+
+* one after the other on one worker thread (``sequential``), and
+* at the same time, one on each of two worker threads (``threaded``),
+
+each from new instances over ``--steps`` steps, the two orders interleaved (on a shared
+machine the load of other processes changes over minutes). The worker threads live for
+the whole run and are warmed up first (numba kernels, FFTW plans: plans are kept per
+thread), so both ways pay the same per-step work. It prints the wall time of each way
+per repetition, their medians and the ratio threaded / sequential (1.0: nothing runs in
+parallel; 0.5: two cores fully used), the process's CPU time over the wall time of each
+way (below 1 for the sequential way: other processes take the core; the threaded way can
+reach 2 only with two cores free), and checks that the threaded results equal the
+sequential ones (forces and tractions, bit for bit).
+
+Where the time under the GIL remains: ``--profile`` runs trajectory A on one thread with
+every compiled kernel of the package (numba, ``nogil=True``) and every DC-FFT product
+(FFTW's executes between compiled packing and spectral kernels) timed, and prints the
+share of the step time that runs without the GIL, per kernel, and the ratio two threads
+could reach at best on two free cores, ``max(0.5, 1 - share)`` (the GIL-holding rest of
+the two runs cannot overlap). numpy's own loops, which release the GIL on large arrays,
+count as holding it here.
+
+Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import math
+import os
+import pkgutil
+import queue
+import threading
+import time
+from collections import defaultdict
+
+import numpy as np
+
+import railcontact as rc
+
+TRAJECTORIES = {"A": (3e-3, 1.5, 0.0), "B": (2e-3, 2.1, 0.7)}
+"""Lateral displacement amplitude [m], frequency [Hz] and phase [rad] of each run."""
+
+
+def contact(mode: str = "previous+estimate") -> rc.WheelsetContact:
+    """A new wheelset (its own track, profiles and settings, as two FMU instances have)."""
+    return rc.WheelsetContact(
+        rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+        rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+        rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+
+
+def run(name: str, steps: int, step: float = 1e-3) -> list[tuple]:
+    """Trajectory ``name`` over ``steps`` steps on a new wheelset; per step the wheels'
+    fingerprints (:func:`fingerprint`)."""
+    amplitude, frequency, phase = TRAJECTORIES[name]
+    w = 2 * math.pi * frequency
+    wc = contact()
+    out = []
+    for k in range(steps):
+        t = k * step
+        r = wc.solve(rc.Pose(amplitude * math.sin(w * t + phase)), loads=(83.3e3, 83.3e3),
+                     kinematics=rc.Kinematics(30.0, amplitude * w * math.cos(w * t + phase)),
+                     time=t)
+        out.append(fingerprint(r))
+    return out
+
+
+def fingerprint(result) -> tuple:
+    """The values of a step that must not depend on the thread: per wheel its status,
+    forces, moments, approach and iteration counts, and each patch's pressure and
+    traction (as bytes: compared bit for bit)."""
+    wheels = []
+    for w in (result.left, result.right):
+        patches = tuple((p.normal.pressure.tobytes(),
+                         None if p.tangential is None else
+                         np.asarray(p.tangential.traction).tobytes()) for p in w.patches)
+        wheels.append((w.status, w.normal_force, w.creep_force, w.spin_moment,
+                       w.track_force, w.yaw_moment, w.approach, w.moment,
+                       w.normal_iterations, w.tangential_iterations, w.load_passes,
+                       patches))
+    return tuple(wheels)
+
+
+class Worker:
+    """A thread that runs the jobs given to it, one after the other."""
+
+    def __init__(self, name: str) -> None:
+        self.jobs: queue.Queue = queue.Queue()
+        self.done: queue.Queue = queue.Queue()
+        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self.thread.start()
+
+    def _loop(self) -> None:
+        while True:
+            job = self.jobs.get()
+            if job is None:
+                return
+            try:
+                self.done.put((True, job()))
+            except BaseException as exc:  # reported in the main thread
+                self.done.put((False, exc))
+
+    def submit(self, job) -> None:
+        self.jobs.put(job)
+
+    def result(self):
+        ok, value = self.done.get()
+        if not ok:
+            raise value
+        return value
+
+    def stop(self) -> None:
+        self.jobs.put(None)
+        self.thread.join()
+
+
+def sequential(workers: list[Worker], steps: int) -> tuple[float, float, dict]:
+    """A then B on the first worker; wall and process CPU time [s] and the results."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    workers[0].submit(lambda: {n: run(n, steps) for n in TRAJECTORIES})
+    out = workers[0].result()
+    return time.perf_counter() - t0, time.process_time() - c0, out
+
+
+def threaded(workers: list[Worker], steps: int) -> tuple[float, float, dict]:
+    """A on the first worker and B on the second at the same time; wall and process CPU
+    time [s] and the results."""
+    names = list(TRAJECTORIES)
+    t0, c0 = time.perf_counter(), time.process_time()
+    for worker, n in zip(workers, names, strict=True):
+        worker.submit(lambda n=n: run(n, steps))
+    out = {n: worker.result() for worker, n in zip(workers, names, strict=True)}
+    return time.perf_counter() - t0, time.process_time() - c0, out
+
+
+class NogilTimer:
+    """Wall time inside the GIL-free calls of one thread (outermost calls only)."""
+
+    PACKAGES = ("contact", "geometry", "halfspace", "normal", "tangential", "timestep")
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = defaultdict(float)
+        self.calls: dict[str, int] = defaultdict(int)
+        self._depth = 0
+        self._saved: list = []
+
+    def wrap(self, name: str, fn):
+        def timed(*args, **kwargs):
+            if self._depth:
+                return fn(*args, **kwargs)
+            self._depth += 1
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self.seconds[name] += time.perf_counter() - t0
+                self.calls[name] += 1
+                self._depth -= 1
+        return timed
+
+    def install(self) -> None:
+        """Wrap every numba dispatcher in the package's modules' globals (compiled
+        already: run the same work once before) and the FFT plans' products."""
+        from numba.core.registry import CPUDispatcher
+
+        from railcontact.halfspace import operator
+
+        wrapped: dict[int, object] = {}
+        for info in pkgutil.walk_packages(rc.__path__, "railcontact."):
+            if info.name.split(".")[1] not in self.PACKAGES:
+                continue
+            module = importlib.import_module(info.name)
+            for attr, value in list(vars(module).items()):
+                if isinstance(value, CPUDispatcher):
+                    if id(value) not in wrapped:
+                        wrapped[id(value)] = self.wrap(value.__name__, value)
+                    self._saved.append((module, attr, value))
+                    setattr(module, attr, wrapped[id(value)])
+        for cls in (operator._PackedPlan, operator._PrunedPlan):
+            self._saved.append((cls, "convolve", cls.convolve))
+            cls.convolve = self.wrap(f"DC-FFT product ({cls.__name__})", cls.convolve)
+
+    def uninstall(self) -> None:
+        for owner, attr, value in reversed(self._saved):
+            setattr(owner, attr, value)
+        self._saved.clear()
+
+
+def profile(steps: int) -> None:
+    """Trajectory A on this thread, the GIL-free calls timed; prints their share."""
+    run("A", steps)  # compiled, planned
+    timer = NogilTimer()
+    timer.install()
+    try:
+        t0 = time.perf_counter()
+        run("A", steps)
+        total = time.perf_counter() - t0
+    finally:
+        timer.uninstall()
+    free = sum(timer.seconds.values())
+    print(f"trajectory A, {steps} steps on one thread: {total:.3f} s "
+          f"({total / steps * 1e3:.2f} ms a step)")
+    print(f"without the GIL (compiled kernels, DC-FFT products): {free:.3f} s = "
+          f"{free / total:.1%}; holding it (Python, numpy): {1 - free / total:.1%}")
+    print(f"best ratio on two free cores, max(0.5, 1 - share): "
+          f"{max(0.5, 1 - free / total):.3f}")
+    print(f"\n{'GIL-free call':<40} {'share':>6} {'calls/step':>10} {'us/call':>8}")
+    for name, s in sorted(timer.seconds.items(), key=lambda kv: -kv[1])[:20]:
+        n = timer.calls[name]
+        print(f"{name:<40} {s / total:6.1%} {n / steps:10.1f} {s / n * 1e6:8.1f}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=100)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--profile", action="store_true", help="time the GIL-free calls of "
+                    "one run instead (where the time under the GIL remains)")
+    args = ap.parse_args()
+    if args.profile:
+        profile(args.steps)
+        return
+    workers = [Worker("wheelset-1"), Worker("wheelset-2")]
+    try:
+        for worker in workers:  # numba kernels and each thread's FFTW plans
+            worker.submit(lambda: [run(n, args.steps) for n in TRAJECTORIES])
+        for worker in workers:
+            worker.result()
+        print(f"{os.cpu_count()} cores; {args.steps} steps of 1 ms per wheelset, two "
+              f"wheelsets (trajectories {', '.join(TRAJECTORIES)})")
+        print(f"{'repeat':>6} {'sequential [s]':>14} {'threaded [s]':>12} {'ratio':>6} "
+              f"{'CPU/wall seq.':>13} {'CPU/wall thr.':>13}")
+        seq, thr = [], []
+        reference = None
+        for k in range(args.repeats):
+            ways = (sequential, threaded) if k % 2 == 0 else (threaded, sequential)
+            times, cpu = {}, {}
+            for way in ways:
+                seconds, cpu_seconds, results = way(workers, args.steps)
+                times[way.__name__] = seconds
+                cpu[way.__name__] = cpu_seconds / seconds
+                if reference is None:
+                    reference = results
+                elif results != reference:
+                    raise SystemExit(f"repeat {k}: the {way.__name__} results differ from "
+                                     "the first run's")
+            seq.append(times["sequential"])
+            thr.append(times["threaded"])
+            print(f"{k:6d} {seq[-1]:14.3f} {thr[-1]:12.3f} {thr[-1] / seq[-1]:6.3f} "
+                  f"{cpu['sequential']:13.2f} {cpu['threaded']:13.2f}")
+    finally:
+        for worker in workers:
+            worker.stop()
+    ms, mt = float(np.median(seq)), float(np.median(thr))
+    ratios = np.array(thr) / np.array(seq)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
+    print(f"load average (1 min) at the end: {load:.1f}")
+    print(f"median sequential {ms:.3f} s ({ms / (2 * args.steps) * 1e3:.2f} ms a step), "
+          f"threaded {mt:.3f} s")
+    print(f"ratio threaded / sequential: {mt / ms:.3f} (of the medians), per repeat "
+          f"median {np.median(ratios):.3f}, min {ratios.min():.3f}, max {ratios.max():.3f}")
+    print("threaded results equal the sequential ones bit for bit")
+
+
+if __name__ == "__main__":
+    main()
