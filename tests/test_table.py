@@ -132,16 +132,22 @@ def test_rerun_computes_nothing(built, scheduler, capsys):
 
 
 def test_resume_completes_a_removed_batch(built, scheduler, tmp_path, capsys):
+    """A client killed while writing batch (1, 0, 0): its data partly in the chunks (here:
+    not computed, -1 and NaN, in some quantities, the others written), its done flag not
+    set. The rerun computes that batch alone and the table equals the uninterrupted one."""
+    import zarr
+
     spec, out = built
     cut = tmp_path / "cut.zarr"
     shutil.copytree(out, cut)
-    # a run killed before batch (1, 0, 0) was written: its chunks and its marker are absent
-    for var in cut.iterdir():
-        for chunk in var.glob("1.0.0*"):
-            chunk.unlink()
+    g = zarr.open_group(str(cut), mode="r+")
+    g["status"][1, 0] = -1
+    g["normal_force"][1, 0] = np.nan
+    done = g["batch_done"][...]
+    done[1, 0, 0] = False
+    g["batch_done"][...] = done
     ds = open_dataset(cut)
-    assert not ds["batch_done"].values[1, 0, 0]
-    assert (ds["status"].values[1, 0] == -1).all()  # a lost chunk reads "not computed"
+    assert (ds["status"].values[1, 0] == -1).all()
     assert np.isnan(ds["normal_force"].values[1, 0]).all()
     assert main(["table", "build", str(spec), "-o", str(cut), "--scheduler", scheduler,
                  "--quiet", "--resume"]) == 0
@@ -150,6 +156,37 @@ def test_resume_completes_a_removed_batch(built, scheduler, tmp_path, capsys):
     for name in ("normal_force", "creep_force_y", "max_pressure", "status"):
         np.testing.assert_array_equal(a[name].values, b[name].values)
     assert b.attrs["complete"] == 1
+
+
+def test_an_interrupted_build_keeps_what_finished_and_resumes_to_the_same_table(
+        built, scheduler, tmp_path, capsys, monkeypatch):
+    """Ctrl-C after the third finished batch of six: the build writes the batches that
+    finished (exit status 130, the message says to resume), and --resume computes the
+    others; the table equals the uninterrupted build value for value."""
+    from railcontact.table import build
+
+    spec, out = built
+    cut = tmp_path / "cut.zarr"
+    real, calls = build._messages, []
+
+    def interrupted(*args):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(build, "_messages", interrupted)
+    assert main(["table", "build", str(spec), "-o", str(cut), "--scheduler", scheduler,
+                 "--quiet"]) == 130
+    assert "rerun with --resume" in capsys.readouterr().err
+    assert open_dataset(cut)["batch_done"].values.sum() == 2
+    monkeypatch.setattr(build, "_messages", real)
+    assert main(["table", "build", str(spec), "-o", str(cut), "--scheduler", scheduler,
+                 "--quiet", "--resume"]) == 0
+    assert "computed 8 " in capsys.readouterr().out
+    a, b = open_dataset(out), open_dataset(cut)
+    for name in ("normal_force", "creep_force_y", "max_pressure", "contact_angle", "status"):
+        np.testing.assert_array_equal(a[name].values, b[name].values)
 
 
 def test_interpolation_at_nodes_and_between(built):
@@ -641,11 +678,13 @@ def test_table_node_equals_the_exact_wheelset_step():
         assert np.allclose(a.contact_point, b.contact_point, rtol=0, atol=1e-5)
 
 
-def test_messages_are_written_per_batch_and_gathered_when_the_build_ends(tmp_path):
-    """A batch writes only its own messages (a group per batch, not one growing document
-    rewritten per batch); a batch computed again replaces its own; a build cut off before
-    its end keeps them readable; the root attribute gathers them when the build ends; a
-    store of the earlier layout (messages only in the root attribute) keeps them."""
+def test_messages_are_written_per_write_and_gathered_when_the_build_ends(tmp_path):
+    """A write of batches records their messages (and which batches it wrote: a batch
+    written again counts its latest write, also when it has none then); messages count
+    once their batch is done (a write cut off before its done flags leaves them out); a
+    build cut off before its end keeps them readable; the root attribute gathers them when
+    the build ends and the write groups go; a store of the earlier layout (a group per
+    batch, and the root attribute) keeps them."""
     import zarr
 
     from railcontact.table.store import Store, create_store, read_messages
@@ -669,32 +708,105 @@ def test_messages_are_written_per_batch_and_gathered_when_the_build_ends(tmp_pat
                  "message": text}]
 
     batches = list(np.ndindex(*spec.batch_shape))
-    a, b = batches[0], batches[-1]
+    a, b, c = batches[0], batches[-1], batches[1]
     store = Store(out, spec)
-    store.write(b, result(b), msg(b, "b first"))
-    store.write(a, result(a), msg(a, "a"))
+    store.write_batches([(b, result(b), msg(b, "b first")), (a, result(a), msg(a, "a"))])
     # cut off here (no finish): the messages are there, in batch order
     assert [m["message"] for m in read_messages(out)] == ["a", "b first"]
     root = zarr.open_group(str(out), mode="r")
     assert json.loads(root.attrs["messages"]) == []  # not gathered yet
-    key = ".".join(map(str, b))
-    assert root["messages"][key].attrs["messages"] == msg(b, "b first")
+    # a write cut off before its done flags: its messages do not count
+    g = zarr.open_group(str(out), mode="r+")
+    g["messages"].require_group("w99").attrs.update({"messages": msg(c, "c cut"),
+                                                     "batches": ["0.1.0"]})
+    assert [m["message"] for m in read_messages(out)] == ["a", "b first"]
     store = Store(out, spec)  # resumed: b computed again, now ok; a again, other text
     store.write(b, result(b), [])
     store.write(a, result(a), msg(a, "a again"))
     store.finish(False)
     assert [m["message"] for m in read_messages(out)] == ["a again"]
-    assert json.loads(zarr.open_group(str(out), mode="r").attrs["messages"]) == msg(a, "a again")
+    root = zarr.open_group(str(out), mode="r")
+    assert json.loads(root.attrs["messages"]) == msg(a, "a again")
+    assert list(root["messages"].group_keys()) == []  # gathered: the groups removed
+    assert json.loads(root.attrs["failed"]) == {"not converged": 8, "not computed": 16}
 
-    old = tmp_path / "old.zarr"  # the earlier layout: no message groups
+    old = tmp_path / "old.zarr"  # the earlier layout: a group per batch, and the root's
     create_store(old, spec)
     g = zarr.open_group(str(old), mode="r+")
     g.attrs["messages"] = json.dumps(msg(a, "old a") + msg(b, "old b"))
+    g["messages"].require_group(".".join(map(str, b))).attrs["messages"] = msg(b, "old b")
+    done = g["batch_done"][...]
+    done[a] = done[b] = True
+    g["batch_done"][...] = done
     assert read_messages(old) == msg(a, "old a") + msg(b, "old b")
     store = Store(old, spec)
     store.write(b, result(b), msg(b, "new b"))
     store.finish(False)
     assert [m["message"] for m in read_messages(old)] == ["old a", "new b"]
+
+
+def test_the_store_is_a_few_files_whatever_its_batches(tmp_path):
+    """The same 3 x 2 x 8 table cut into 48 batches of one point and into 6 of 8: the
+    stores have the same files, a few per quantity (the chunks are axis blocks, not
+    batches), and hold the same values; an empty store has no data chunk at all."""
+    import zarr
+
+    from railcontact.table.store import Store, create_store
+    from railcontact.table.variables import COUNTS, QUANTITIES
+
+    files = {}
+    tables = {}
+    for batch in (1, 8):
+        spec_path = tmp_path / f"spec{batch}.toml"
+        spec_path.write_text(SPEC.replace("load = [60e3, 80e3, 2]",
+                                          f"load = [60e3, 80e3, 8]\nbatch = {batch}"))
+        spec = load_spec(spec_path)
+        assert spec.batch_shape == (3, 2, 8 // batch)
+        out = tmp_path / f"b{batch}.zarr"
+        create_store(out, spec)
+        names = [q.name for q in QUANTITIES + COUNTS] + ["status"]
+        empty = {p.relative_to(out) for p in out.rglob("*") if p.is_file()}
+        assert not any(p.parts[0] in names and not p.name.startswith(".") for p in empty)
+        store = Store(out, spec)
+        items = []
+        for ix in np.ndindex(*spec.batch_shape):
+            pts = spec.batch_points(ix)
+            r = {q.name: np.array([[float(sum(p) * 10 + j) for j in range(2)] for p in pts])
+                 for q in QUANTITIES}
+            r.update({q.name: np.ones((len(pts), 2), dtype=np.int32) for q in COUNTS})
+            r["status"] = np.zeros((len(pts), 2), dtype=np.int8)
+            items.append((ix, r, []))
+        store.write_batches(items[: len(items) // 2])
+        store.write_batches(items[len(items) // 2:])
+        store.finish(True)
+        files[batch] = {p.relative_to(out) for p in out.rglob("*") if p.is_file()}
+        tables[batch] = zarr.open_group(str(out), mode="r")
+        assert tables[batch]["batch_done"][...].all()
+    assert files[1] == files[8]
+    assert len(files[1]) <= 3 * (len(QUANTITIES) + len(COUNTS) + 6) + 4
+    for name in ("normal_force", "status", "n_patches"):
+        np.testing.assert_array_equal(tables[1][name][...], tables[8][name][...])
+    want = np.add.outer(np.add.outer(np.arange(3), np.arange(2)), np.arange(8)) * 10.0
+    np.testing.assert_array_equal(tables[1]["normal_force"][..., 1], want + 1)
+
+
+def test_a_cluster_without_workers_is_an_error_after_the_timeout(tmp_path, capsys):
+    """A scheduler whose workers are all gone (here: none): the build stops after
+    --lost-timeout with an error saying to resume, the store is there (empty: nothing
+    finished) and a progress line was printed before the wait."""
+    from distributed import LocalCluster
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC)
+    out = tmp_path / "t.zarr"
+    with LocalCluster(n_workers=0, processes=True, dashboard_address=":0") as cluster:
+        code = main(["table", "build", str(spec), "-o", str(out), "--scheduler",
+                     cluster.scheduler_address, "--lost-timeout", "2"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "had no worker for 2 s" in err and "rerun with --resume" in err
+    assert f"table {out}: 12 points x 2 wheel(s) in 6 batches" in err
+    assert open_dataset(out)["batch_done"].values.sum() == 0
 
 
 FLANGE_SPEC = """

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .spec import AXES
-from .store import FLANGE, IDENTITY, open_dataset, wheel_flange
+from .store import FLANGE, IDENTITY, read_table, wheel_flange
 from .variables import (
     NOT_COMPUTED,
     OK,
@@ -193,16 +193,15 @@ class ContactTable:
         RailContactError
             When there is no table at ``path``.
         """
-        ds = open_dataset(path)
-        ident = json.loads(ds.attrs[IDENTITY])
-        names = list(ident["axes"])
-        axes = {n: ds[n].values for n in names}
-        missing = tuple(q.name for q in QUANTITIES if q.name not in ds)
-        status = ds["status"].values.astype(np.int8)
+        attrs, arrays = read_table(path, ["status"] + [q.name for q in QUANTITIES])
+        ident = json.loads(attrs[IDENTITY])
+        axes = {n: np.asarray(v, dtype=float) for n, v in ident["axes"].items()}
+        missing = tuple(q.name for q in QUANTITIES if q.name not in arrays)
+        status = np.asarray(arrays["status"]).astype(np.int8)
         values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
-                           ds[q.name].values for q in QUANTITIES], axis=-1)
-        flange = json.loads(ds.attrs[FLANGE]) if FLANGE in ds.attrs else None
-        table = cls(axes, tuple(ds["side"].values.tolist()), values, status, ident["case"],
+                           np.asarray(arrays[q.name], dtype=float) for q in QUANTITIES], axis=-1)
+        flange = json.loads(attrs[FLANGE]) if FLANGE in attrs else None
+        table = cls(axes, tuple(arrays["side"]), values, status, ident["case"],
                     str(path), flange, missing)
         if table.failed:
             warnings.warn(f"table {path}: {failed_text(table.failed)}; interpolation at a "
