@@ -226,15 +226,20 @@ def _cmd_table_build(args: argparse.Namespace) -> int:
     spec = load_spec(args.spec)
     try:
         rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
-                          resume=args.resume, progress=not args.quiet)
+                          resume=args.resume, progress=not args.quiet,
+                          **({} if args.lost_timeout is None else
+                             {"lost_timeout": args.lost_timeout}))
     except KeyboardInterrupt:
         print(f"railcontact: interrupted; the finished batches are in {args.output}: rerun "
               "with --resume to complete it", file=sys.stderr)
         return 130
+    kinds = ", ".join(f"{n} {k}" for k, n in rep.statuses.items())
     print(f"table {args.output}: {rep.points} points x {len(spec.sides)} wheel(s); "
           f"computed {rep.computed} ({rep.rate:.3g} points/s on {rep.workers} worker(s)), "
-          f"{rep.skipped} already there; {rep.not_ok} point-wheel(s) not ok (see "
-          f"'railcontact table show')")
+          f"{rep.skipped} already there; {rep.not_ok} point-wheel(s) not ok"
+          + (f" ({kinds})" if kinds else "")
+          + (f"; {rep.recovered} solved again from another start" if rep.recovered else "")
+          + " (see 'railcontact table show')")
     for f in rep.failed_batches:
         print(f"railcontact: error: {f}", file=sys.stderr)
     if rep.failed_batches:
@@ -269,6 +274,9 @@ def _add_table(sub) -> None:
     b.add_argument("--resume", action="store_true",
                    help="complete an existing store (error when there is none)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
+    b.add_argument("--lost-timeout", type=float, metavar="SECONDS",
+                   help="stop with an error when the cluster has had no worker this long "
+                   "(default 120 s); the finished batches are kept: resume")
     b.set_defaults(func=_cmd_table_build)
     s = tsub.add_parser("show", help="summary of a table (axes, ranges, failed points)")
     s.add_argument("table", help="the Zarr store")

@@ -20,6 +20,7 @@ from __future__ import annotations
 import bisect
 import json
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,10 +29,22 @@ import numpy as np
 
 from ..errors import RailContactError
 from .spec import AXES
-from .store import FLANGE, IDENTITY, open_dataset, wheel_flange
-from .variables import NOT_COMPUTED, OK, QUANTITIES, STATUS_MEANINGS
+from .store import FLANGE, IDENTITY, read_table, wheel_flange
+from .variables import (
+    NOT_COMPUTED,
+    OK,
+    QUANTITIES,
+    STATUS_MEANINGS,
+    failed_counts,
+    failed_text,
+)
 
 METHODS = ("linear", "cubic")
+
+
+class TableHolesWarning(UserWarning):
+    """A table opened with failed points (not converged, out of range, not computed):
+    interpolation at a state that uses one returns its status, not a value."""
 
 
 @dataclass(frozen=True)
@@ -164,27 +177,38 @@ class ContactTable:
         self._cell_ok = [_cells_ok(status[..., j] == OK).ravel().tolist()
                          for j in range(len(self.sides))]
         self._cubic: dict[str, object] = {}
+        self.failed = failed_counts(status)
+        """Point-wheels of each failed status (:func:`~.variables.failed_counts`): empty
+        for a table without holes."""
 
     @classmethod
     def open(cls, path: str | Path) -> ContactTable:
         """Read the table at ``path`` (a store of ``railcontact table build``).
+
+        Warns (:class:`TableHolesWarning`) when some points failed: how many of each
+        status (also in :attr:`failed`).
 
         Raises
         ------
         RailContactError
             When there is no table at ``path``.
         """
-        ds = open_dataset(path)
-        ident = json.loads(ds.attrs[IDENTITY])
-        names = list(ident["axes"])
-        axes = {n: ds[n].values for n in names}
-        missing = tuple(q.name for q in QUANTITIES if q.name not in ds)
-        status = ds["status"].values.astype(np.int8)
+        attrs, arrays = read_table(path, ["status"] + [q.name for q in QUANTITIES])
+        ident = json.loads(attrs[IDENTITY])
+        axes = {n: np.asarray(v, dtype=float) for n, v in ident["axes"].items()}
+        missing = tuple(q.name for q in QUANTITIES if q.name not in arrays)
+        status = np.asarray(arrays["status"]).astype(np.int8)
         values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
-                           ds[q.name].values for q in QUANTITIES], axis=-1)
-        flange = json.loads(ds.attrs[FLANGE]) if FLANGE in ds.attrs else None
-        return cls(axes, tuple(ds["side"].values.tolist()), values, status, ident["case"],
-                   str(path), flange, missing)
+                           np.asarray(arrays[q.name], dtype=float) for q in QUANTITIES], axis=-1)
+        flange = json.loads(attrs[FLANGE]) if FLANGE in attrs else None
+        table = cls(axes, tuple(arrays["side"]), values, status, ident["case"],
+                    str(path), flange, missing)
+        if table.failed:
+            warnings.warn(f"table {path}: {failed_text(table.failed)}; interpolation at a "
+                          "state using one of them returns its status, not a value "
+                          "('railcontact table show' lists them)", TableHolesWarning,
+                          stacklevel=2)
+        return table
 
     @property
     def flange(self) -> tuple[float, float]:

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import RailContactError
 from .spec import AXES
 from .store import IDENTITY, open_dataset, read_messages
-from .variables import STATUS_MEANINGS
+from .variables import STATUS_MEANINGS, failed_counts, failed_text
 
 SHOWN = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment", "contact_angle",
          "max_pressure")
@@ -31,6 +31,10 @@ def summary(path: str | Path) -> str:
              f"({', '.join(ds['side'].values.tolist())}); batches done "
              f"{int(done.sum())}/{done.size} along '{names[-1]}' (fastest axis)"
              + ("" if done.all() else " - incomplete: rerun with --resume")]
+    failed = failed_counts(status)
+    if failed:
+        lines.append(f"WARNING: {failed_text(failed)}: holes of the table, where "
+                     "interpolation returns the status, not a value (listed below)")
     lines.append("axes:")
     for n in names:
         v = ds[n].values

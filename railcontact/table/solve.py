@@ -13,6 +13,15 @@ therefore equals a cold solve to the solvers' tolerances (``[normal] tolerance``
 ``[tangential] tolerance``), not bit for bit; the batches are fixed by the spec (not by the
 workers), so a table is the same however many workers build it and however often it is
 resumed.
+
+A point that fails from the previous point's start (not converged, or any failure but no
+contact) is not stored so: it is solved again cold, as ``railcontact solve`` does, and when
+that fails too, cold from the simplified models' estimates the exact step falls back on
+(:class:`~railcontact.settings.ContactSettings`' ``normal_estimate`` and
+``tangential_estimate``; on the flange the load loop meets the load from them where it
+stalls at the tangential BEM's noise floor from the case's own start). Only a point that
+fails all of these is stored with its failure; every start is deterministic, so the table
+stays the same across workers and resumes. :data:`STARTS` names the starts.
 """
 
 from __future__ import annotations
@@ -25,11 +34,16 @@ import numpy as np
 from ..contact.patch import labelled, normal_estimate
 from ..contact.wheelrail import solve_wheel_rail
 from ..errors import CaseError, ConvergenceError, RailContactError
-from ..settings import Case
+from ..settings import Case, ContactSettings
 from ..timestep.warmstart import PatchMemory, match, previous_pressure, previous_tangential
 from ..timestep.wheelset import WheelContact, _resultants
 from .spec import case_with
-from .variables import COUNTS, NO_CONTACT, NOT_CONVERGED, OUT_OF_RANGE, QUANTITIES
+from .variables import COUNTS, NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, QUANTITIES
+
+STARTS = ("warm", "cold", "estimate")
+"""The starts a point is solved from, in order, until one succeeds: the previous point's
+solution (not for a batch's first point), the case's own (``railcontact solve``), the
+exact step's simplified-model estimates (:func:`estimate_case`)."""
 
 
 def _memory(patches) -> list[PatchMemory]:
@@ -103,6 +117,43 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
     return wheel, _memory(patches)
 
 
+def estimate_case(case: dict[str, Any]) -> dict[str, Any] | None:
+    """The case with the estimates the exact step falls back on (the defaults of
+    :class:`~railcontact.settings.ContactSettings`: the normal and, with creepages, the
+    tangential one); None when the case already starts from them."""
+    defaults = ContactSettings()
+    want = {"normal": defaults.normal_estimate, "tangential": defaults.tangential_estimate}
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in case.items()}
+    changed = False
+    for table, estimate in want.items():
+        if isinstance(out.get(table), dict) and out[table].get("estimate") != estimate:
+            out[table]["estimate"] = estimate
+            changed = True
+    return out if changed else None
+
+
+def solve_recovering(case: dict[str, Any], side: str, memory: list[PatchMemory] | None = None
+                     ) -> tuple[WheelContact, list[PatchMemory], str]:
+    """:func:`solve_point` from each start of :data:`STARTS` in turn until the wheel is ok
+    or has no contact: its result, its memory and the start that gave it (the last one
+    tried when none succeeded; its failure is then the wheel's status and message)."""
+    tries: list[tuple[str, dict[str, Any], list[PatchMemory] | None]] = []
+    if memory:
+        tries.append(("warm", case, memory))
+    tries.append(("cold", case, None))
+    est = estimate_case(case)
+    if est is not None:
+        tries.append(("estimate", est, None))
+    for how, c, mem in tries:
+        wheel, new = solve_point(c, side, mem)
+        if wheel.status in (OK, NO_CONTACT):
+            return wheel, new, how
+    if len(tries) > 1:
+        starts = ", ".join(t[0] for t in tries)
+        wheel.message = f"{wheel.message} (solved from each start: {starts})"
+    return wheel, new, how
+
+
 def solve_batch(case: dict[str, Any], sides: tuple[str, ...],
                 points: list[dict[str, float]]) -> dict[str, Any]:
     """Solve the points (axis name -> value, in order along the fastest axis) for each wheel.
@@ -113,9 +164,12 @@ def solve_batch(case: dict[str, Any], sides: tuple[str, ...],
         Each quantity of :data:`~.variables.QUANTITIES` and :data:`~.variables.COUNTS` as an
         array (points, sides); ``status`` (int8) likewise; ``messages``: the message of
         every point that is not ok, as ``(point, side, status, message)``; ``seconds``
-        and ``cpu_seconds``: the batch's wall and CPU time in its worker [s]. A quantity
-        that a point does not define (its geometry without contact, anything after an
-        error) is NaN, always with a non-zero status.
+        and ``cpu_seconds``: the batch's wall and CPU time in its worker [s];
+        ``recovered``: the points that failed from the previous point's start (or, a
+        batch's first, from the case's) and were solved from a later start of
+        :data:`STARTS`, as ``(point, side, start)``. A quantity that a point does not define
+        (its geometry without contact, anything after an error) is NaN, always with a
+        non-zero status.
     """
     t0, c0 = time.perf_counter(), time.process_time()
     shape = (len(points), len(sides))
@@ -123,10 +177,14 @@ def solve_batch(case: dict[str, Any], sides: tuple[str, ...],
     out.update({q.name: np.zeros(shape, dtype=np.int32) for q in COUNTS})
     out["status"] = np.zeros(shape, dtype=np.int8)
     out["messages"] = []
+    out["recovered"] = []
     for j, side in enumerate(sides):
         memory: list[PatchMemory] = []
         for i, values in enumerate(points):
-            wheel, memory = solve_point(case_with(case, values), side, memory)
+            first = "warm" if memory else "cold"
+            wheel, memory, how = solve_recovering(case_with(case, values), side, memory)
+            if how != first and wheel.status in (OK, NO_CONTACT):
+                out["recovered"].append((i, side, how))
             out["status"][i, j] = wheel.status
             if wheel.status != 0:
                 out["messages"].append((i, side, int(wheel.status), wheel.message))

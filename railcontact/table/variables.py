@@ -9,6 +9,8 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
+
 from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, STATUS_NAMES
 
 
@@ -98,5 +100,25 @@ NOT_COMPUTED = -1
 STATUS_MEANINGS = {NOT_COMPUTED: "not computed", **STATUS_NAMES}
 """The ``status`` codes: those of the time loop and the FMU, and -1."""
 
-__all__ = ["COUNTS", "NOT_COMPUTED", "NO_CONTACT", "NOT_CONVERGED", "OK", "OUT_OF_RANGE",
-           "QUANTITIES", "STATUS_MEANINGS", "VALIDITY_QUANTITIES", "Quantity"]
+FAILED = (NOT_CONVERGED, OUT_OF_RANGE, NOT_COMPUTED)
+"""The statuses of a point without trustworthy values (a hole of the table: interpolation
+there returns the status, not a value); no contact is an answer, not a failure."""
+
+
+def failed_counts(status) -> dict[str, int]:
+    """The number of point-wheels of each failed status (:data:`FAILED`) in the array
+    ``status``, by the status's meaning; only those present."""
+    st = np.asarray(status)
+    out = {STATUS_MEANINGS[k]: int(np.count_nonzero(st == k)) for k in FAILED}
+    return {k: v for k, v in out.items() if v}
+
+
+def failed_text(counts: dict[str, int]) -> str:
+    """``"N point-wheel(s) failed (a not converged, b out of range)"``."""
+    return (f"{sum(counts.values())} point-wheel(s) failed ("
+            + ", ".join(f"{v} {k}" for k, v in counts.items()) + ")")
+
+
+__all__ = ["COUNTS", "FAILED", "NOT_COMPUTED", "NO_CONTACT", "NOT_CONVERGED", "OK", "OUT_OF_RANGE",
+           "QUANTITIES", "STATUS_MEANINGS", "VALIDITY_QUANTITIES", "Quantity", "failed_counts",
+           "failed_text"]
