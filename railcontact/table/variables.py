@@ -9,7 +9,8 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
-from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, STATUS_NAMES
+from ..status import Status
+from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE
 
 
 @dataclass(frozen=True)
@@ -93,9 +94,9 @@ COUNTS: tuple[Quantity, ...] = (
 )
 """Work counters (integers, not interpolated)."""
 
-NOT_COMPUTED = -1
+NOT_COMPUTED = Status.NOT_COMPUTED
 """``status`` of a point not computed yet (its values are NaN)."""
-STATUS_MEANINGS = {NOT_COMPUTED: "not computed", **STATUS_NAMES}
+STATUS_MEANINGS = {s: s.label for s in Status}
 """The ``status`` codes: those of the time loop and the FMU, and -1."""
 
 __all__ = ["COUNTS", "NOT_COMPUTED", "NO_CONTACT", "NOT_CONVERGED", "OK", "OUT_OF_RANGE",
