@@ -26,13 +26,13 @@ from .fmu import variables as V
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import ContactSettings, FMUModes
+from .status import Status
 from .table import TableContact  # (xarray, zarr: imported when a table is opened)
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
 from .timestep.wheelset import (
     NOT_CONVERGED,
     OUT_OF_RANGE,
     OUTSIDE_VALIDITY,
-    SEVERITY,
     STATUS_NAMES,
 )
 
@@ -416,8 +416,7 @@ class Slave:
         rigid = res.rigid_solution
         if rigid is not None and not rigid.converged:  # not found: the status says so
             self.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")
-            if SEVERITY.index(NOT_CONVERGED) > SEVERITY.index(int(self["status"])):
-                self["status"] = NOT_CONVERGED
+            self["status"] = Status.worst((NOT_CONVERGED, int(self["status"])))
         if not np.all(np.isfinite(self.real[self.real_outputs])):  # (inputs may be NaN)
             return self._discarded("non-finite result; outputs set to zero")
         if kinematic:  # the creepages the velocities formed, as direct ones

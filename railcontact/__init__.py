@@ -12,6 +12,7 @@ import-linter, contract in ``pyproject.toml``; see ``docs/architecture.md``)::
     geometry | normal | tangential   profiles, contact search | normal BEM, KP, INFCON |
                                 tangential BEM, FASTSIM, FaStrip, Kalker
     halfspace                   materials, grid, influence coefficients, DC-FFT, Hertz
+    status                      the one status vocabulary (Status, status_of)
     errors
 
 Public API
@@ -50,6 +51,7 @@ from .settings import (
     load_case,
     validate_case,
 )
+from .status import Status
 from .tangential import TangentialResult, rolling_operator, solve_tangential
 from .timestep import Kinematics, WheelContact, WheelsetContact, WheelsetResult
 
@@ -61,6 +63,7 @@ __all__ = [
     "STEEL", "Case", "CaseError", "ContactSettings", "ElasticPair", "Grid", "GridSettings",
     "HertzSolution", "InfluenceOperator", "Kinematics", "Material", "NormalResult",
     "NormalSettings", "PatchSolution", "Pose", "Profile", "RailContactError", "Solution",
+    "Status",
     "TangentialResult", "TangentialSettings", "Track", "WheelContact", "Wheelset",
     "WheelsetContact", "WheelsetResult", "hertz", "influence_operator", "load_case",
     "read_profile", "rolling_operator", "solve", "solve_normal", "solve_tangential",

@@ -26,6 +26,7 @@ from ..settings import (
     WheelRailGeometry,
 )
 from ..settings.fields import Record, default_of, spec_of
+from ..status import Status
 
 SIDES = ("left", "right")
 UNITS = {"-": "1", "": ""}
@@ -300,14 +301,18 @@ INPUTS = [
              "V / wheel_radius"),
 ]
 
-STATUS = ("0 ok, 1 not converged (forces given, less accurate; none when the load loop "
-          "found no solution: n_patches 0, fmi2Discard), 2 no contact, 3 out of range "
-          "(nothing solved: zero forces; the step returns fmi2Discard: a pose beyond the model, "
-          "or a used input not finite or beyond its range, which zeroes every output), "
-          "4 outside validity (solved, beyond a limit: Y/Q above max_y_q, Nadal's "
-          "limit, flange climb, penetration above max_penetration, load above max_wheel_load, "
-          "a patch under-resolved)")
-"""The status codes (:data:`railcontact.timestep.wheelset.STATUS_NAMES`)."""
+_FMU_NOTES = {
+    Status.NOT_CONVERGED: "none when the load loop found no solution: n_patches 0, "
+                          "fmi2Discard",
+    Status.OUT_OF_RANGE: "the step returns fmi2Discard: a pose beyond the model, or a used "
+                         "input not finite or beyond its range, which zeroes every output",
+    Status.OUTSIDE_VALIDITY: "validity_left/right says which limit",
+}
+STATUS = ", ".join(
+    f"{int(s)} {s.label} ({s.description}" + (f"; {_FMU_NOTES[s]}" if s in _FMU_NOTES else "")
+    + ")" for s in Status if s != Status.NOT_COMPUTED)
+"""The status codes as the FMU's variables describe them
+(:class:`~railcontact.status.Status`, with what the FMU does)."""
 
 
 def _used(k: int):

@@ -28,9 +28,10 @@ from typing import Any
 import numpy as np
 
 from ..errors import RailContactError, check_count, check_finite, check_positive
+from ..status import Status
 from .dynamics import WheelsetModel, implicit_step
 
-STATUS_OUT_OF_RANGE = 3
+STATUS_OUT_OF_RANGE = Status.OUT_OF_RANGE
 FMI_DISCARD = 2
 INPUTS = ("lateral_displacement", "yaw", "lateral_velocity", "yaw_rate", "speed",
           "spin_speed", "load_left", "load_right")

@@ -33,12 +33,13 @@ import numpy as np
 
 from ..contact.patch import labelled, normal_estimate
 from ..contact.wheelrail import solve_wheel_rail
-from ..errors import CaseError, ConvergenceError, RailContactError
+from ..errors import CaseError, RailContactError
 from ..settings import Case, ContactSettings
+from ..status import status_of
 from ..timestep.warmstart import PatchMemory, match, previous_pressure, previous_tangential
 from ..timestep.wheelset import WheelContact, _resultants
 from .spec import case_with
-from .variables import COUNTS, NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, QUANTITIES
+from .variables import COUNTS, NO_CONTACT, OK, OUT_OF_RANGE, QUANTITIES
 
 STARTS = ("warm", "cold", "estimate")
 """The starts a point is solved from, in order, until one succeeds: the previous point's
@@ -97,11 +98,8 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
     try:
         c = Case.from_dict(case_with(case, {}, side))
         patches, pose = solve_wheel_rail(c, _starts(c, memory) if memory else None)
-    except ConvergenceError as exc:
-        wheel.status, wheel.message = NOT_CONVERGED, str(exc)
-        return wheel, []
-    except RailContactError as exc:  # CaseError and the geometry's own errors
-        wheel.status = OUT_OF_RANGE
+    except RailContactError as exc:  # a load loop, a CaseError, the geometry's own errors
+        wheel.status = status_of(exc)
         wheel.message = str(exc) if isinstance(exc, CaseError) else f"{side} wheel: {exc}"
         return wheel, []
     except Exception as exc:  # a fault of the solver: this point lost, never the batch

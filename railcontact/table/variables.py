@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE, STATUS_NAMES
+from ..status import Status
+from ..timestep.wheelset import NO_CONTACT, NOT_CONVERGED, OK, OUT_OF_RANGE
 
 
 @dataclass(frozen=True)
@@ -95,9 +96,9 @@ COUNTS: tuple[Quantity, ...] = (
 )
 """Work counters (integers, not interpolated)."""
 
-NOT_COMPUTED = -1
+NOT_COMPUTED = Status.NOT_COMPUTED
 """``status`` of a point not computed yet (its values are NaN)."""
-STATUS_MEANINGS = {NOT_COMPUTED: "not computed", **STATUS_NAMES}
+STATUS_MEANINGS = {s: s.label for s in Status}
 """The ``status`` codes: those of the time loop and the FMU, and -1."""
 
 FAILED = (NOT_CONVERGED, OUT_OF_RANGE, NOT_COMPUTED)

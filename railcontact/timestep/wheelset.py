@@ -76,7 +76,6 @@ from ..contact.wheelrail import (
 )
 from ..errors import (
     CaseError,
-    ConvergenceError,
     RailContactError,
     check_finite,
     check_positive,
@@ -90,6 +89,7 @@ from ..halfspace.sums import array_sum, numpy_sum
 from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
+from ..status import Status, status_of
 from .rigid import RigidMemory, RigidSolution, RigidWheelset
 from .validity import Validity, check_validity, derailment_quotient
 from .warmstart import (
@@ -103,13 +103,15 @@ from .warmstart import (
     traction_rate,
 )
 
-OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE, OUTSIDE_VALIDITY = 0, 1, 2, 3, 4
-STATUS_NAMES = {OK: "ok", NOT_CONVERGED: "not converged", NO_CONTACT: "no contact",
-                OUT_OF_RANGE: "out of range", OUTSIDE_VALIDITY: "outside validity"}
-"""A wheel's status: ok; not converged (a BEM solve or the load loop; forces given, less
-accurate); no contact (zero forces); out of range (the pose or a patch beyond the model:
-nothing solved, zero forces); outside validity (solved, but beyond a limit of
-:mod:`.validity`: Y/Q, Nadal's limit, flange climb, penetration, wheel load)."""
+OK, NOT_CONVERGED, NO_CONTACT, OUT_OF_RANGE, OUTSIDE_VALIDITY = (
+    Status.OK, Status.NOT_CONVERGED, Status.NO_CONTACT, Status.OUT_OF_RANGE,
+    Status.OUTSIDE_VALIDITY)
+STATUS_NAMES = {s: s.label for s in Status if s != Status.NOT_COMPUTED}
+"""A wheel's status (:class:`~railcontact.status.Status`) and its label: ok; not converged
+(a BEM solve or the load loop; forces given, less accurate); no contact (zero forces); out
+of range (the pose or a patch beyond the model: nothing solved, zero forces); outside
+validity (solved, but beyond a limit of :mod:`.validity`: Y/Q, Nadal's limit, flange
+climb, penetration, wheel load, an under-resolved patch)."""
 WARM_PROMISE = (0.01, 0.02)
 """What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
 eps_tau = 1e-2, load tolerance 1e-3): its wheel's normal force N within this first share
@@ -127,9 +129,9 @@ force with another patch beside it (``mu tan(gamma) >= 1``,
 root than a cold solve's; the wheel says so too. ``scripts/fuzz_warm.py`` checks the
 promise on seeded trajectories across the flange root and the flange (seeds 1, 3 and 4:
 none beyond it)."""
-SEVERITY = (OK, NO_CONTACT, OUTSIDE_VALIDITY, NOT_CONVERGED, OUT_OF_RANGE)
-"""The statuses from the least to the most severe: the wheelset's status is its wheels'
-most severe."""
+SEVERITY = tuple(sorted(STATUS_NAMES, key=lambda s: s.severity))
+"""The statuses from the least to the most severe (:attr:`Status.severity`): the
+wheelset's status is its wheels' most severe."""
 
 
 @dataclass(frozen=True)
@@ -183,7 +185,7 @@ class WheelContact:
     """
 
     side: str
-    status: int = NO_CONTACT
+    status: Status = NO_CONTACT
     message: str = "no contact"
     patches: list[PatchSolution] = field(default_factory=list)
     creepages: list[tuple[float, float, float]] = field(default_factory=list)
@@ -299,7 +301,7 @@ class WheelsetResult:
         """The wheels' most severe status (:data:`SEVERITY`). Whether the rigid
         wheelset's :attr:`vertical` and :attr:`roll` were found under load control is
         :attr:`rigid_solution`'s (the FMU's ``status`` counts it)."""
-        return max((w.status for w in self.wheels), key=SEVERITY.index)
+        return Status.worst(w.status for w in self.wheels)
 
     @property
     def moment(self) -> tuple[float, float, float]:
@@ -429,8 +431,8 @@ class WheelsetContact:
                 creep = None if creepages is None else creepages[k]
                 wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
             except CaseError as exc:  # the load loop, or the patch problem of this wheel
-                status = NOT_CONVERGED if isinstance(exc, ConvergenceError) else OUT_OF_RANGE
-                wheel, mem = WheelContact(side=side, status=status, message=str(exc)), []
+                wheel = WheelContact(side=side, status=status_of(exc), message=str(exc))
+                mem = []
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
                 off_track = off_track or f"{side} wheel: {exc}"
                 wheel, mem = WheelContact(side=side), []

@@ -1,0 +1,86 @@
+"""The one status vocabulary of a solved wheel: the time step, the tables, the FMU and the
+co-simulation all say what became of a wheel with a :class:`Status`.
+
+A status is an integer (the FMU's ``status`` outputs, the tables' ``status`` variable) with
+a label, a description and a severity: a wheelset's status is its wheels' most severe
+(:meth:`Status.worst`). :func:`status_of` is the one map from an exception raised while
+solving a wheel to the status the wheel is given.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from enum import IntEnum
+
+from .errors import CaseError, ConvergenceError, RailContactError
+
+
+class Status(IntEnum):
+    """What became of a wheel (or a table point).
+
+    The values are those of the FMU's ``status`` outputs and of a table's ``status``
+    variable; :attr:`label` and :attr:`description` are their words (the FMU's
+    modelDescription and docs are generated from them).
+    """
+
+    NOT_COMPUTED = -1
+    OK = 0
+    NOT_CONVERGED = 1
+    NO_CONTACT = 2
+    OUT_OF_RANGE = 3
+    OUTSIDE_VALIDITY = 4
+
+    @property
+    def label(self) -> str:
+        """The status in words ("ok", "not converged", ...)."""
+        return _LABELS[self]
+
+    @property
+    def description(self) -> str:
+        """What the status means for the forces given."""
+        return _DESCRIPTIONS[self]
+
+    @property
+    def severity(self) -> int:
+        """Rank from the least severe (0, ok) to the most (out of range)."""
+        return _SEVERITY.index(self)
+
+    @classmethod
+    def worst(cls, statuses: Iterable[int]) -> Status:
+        """The most severe of ``statuses`` (ok for none)."""
+        return max((cls(s) for s in statuses), key=_SEVERITY.index, default=cls.OK)
+
+
+_LABELS = {Status.NOT_COMPUTED: "not computed", Status.OK: "ok",
+           Status.NOT_CONVERGED: "not converged", Status.NO_CONTACT: "no contact",
+           Status.OUT_OF_RANGE: "out of range", Status.OUTSIDE_VALIDITY: "outside validity"}
+_DESCRIPTIONS = {
+    Status.NOT_COMPUTED: "a table point not computed yet (its values NaN)",
+    Status.OK: "solved within the tolerances and every limit of validity",
+    Status.NOT_CONVERGED: "a BEM solve or the load loop missed its tolerance: forces given, "
+                          "less accurate",
+    Status.NO_CONTACT: "no contact: zero forces",
+    Status.OUT_OF_RANGE: "the pose or a patch beyond the model: nothing solved, zero forces",
+    Status.OUTSIDE_VALIDITY: "solved, but beyond a limit of validity (Y/Q, Nadal's limit, "
+                             "flange climb, penetration, wheel load, an under-resolved "
+                             "patch): forces given",
+}
+_SEVERITY = (Status.NOT_COMPUTED, Status.OK, Status.NO_CONTACT, Status.OUTSIDE_VALIDITY,
+             Status.NOT_CONVERGED, Status.OUT_OF_RANGE)
+"""The statuses from the least to the most severe."""
+
+
+def status_of(exc: BaseException) -> Status:
+    """The status of a wheel whose solve raised ``exc``: not converged for a
+    :class:`~railcontact.errors.ConvergenceError` (an iteration that missed its
+    tolerance), out of range for any other :class:`~railcontact.errors.RailContactError`
+    (the pose, a patch or an input beyond the model). Raises ``exc`` itself for anything
+    else (a fault of the code, not of the wheel)."""
+    if isinstance(exc, ConvergenceError):
+        return Status.NOT_CONVERGED
+    if isinstance(exc, (CaseError, RailContactError)):
+        return Status.OUT_OF_RANGE
+    raise exc
+
+
+__all__ = ["Status", "status_of"]
