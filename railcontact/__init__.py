@@ -28,7 +28,7 @@ WheelsetContact, ContactSettings, Kinematics   the time-step solver
 from . import _kernelcache  # noqa: F401  (first: keys the kernels' caches)
 from ._moved import install as _install_moved
 from .contact import PatchSolution, Solution, solve
-from .errors import CaseError, RailContactError
+from .errors import CaseError, ConvergenceError, RailContactError, SolverError
 from .geometry import Profile, read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .halfspace import (
@@ -60,12 +60,11 @@ _install_moved()  # the module paths of 0.1 still import, with a DeprecationWarn
 __version__ = "0.1.0"
 
 __all__ = [
-    "STEEL", "Case", "CaseError", "ContactSettings", "ElasticPair", "Grid", "GridSettings",
-    "HertzSolution", "InfluenceOperator", "Kinematics", "Material", "NormalResult",
-    "NormalSettings", "PatchSolution", "Pose", "Profile", "RailContactError", "Solution",
-    "Status",
-    "TangentialResult", "TangentialSettings", "Track", "WheelContact", "Wheelset",
-    "WheelsetContact", "WheelsetResult", "hertz", "influence_operator", "load_case",
-    "read_profile", "rolling_operator", "solve", "solve_normal", "solve_tangential",
-    "validate_case",
+    "STEEL", "Case", "CaseError", "ContactSettings", "ConvergenceError", "ElasticPair", "Grid",
+    "GridSettings", "HertzSolution", "InfluenceOperator", "Kinematics", "Material",
+    "NormalResult", "NormalSettings", "PatchSolution", "Pose", "Profile", "RailContactError",
+    "Solution", "SolverError", "Status", "TangentialResult", "TangentialSettings", "Track",
+    "WheelContact", "Wheelset", "WheelsetContact", "WheelsetResult", "hertz",
+    "influence_operator", "load_case", "read_profile", "rolling_operator", "solve",
+    "solve_normal", "solve_tangential", "validate_case",
 ]

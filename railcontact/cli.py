@@ -19,7 +19,7 @@ import sys
 from collections.abc import Sequence
 
 from . import __version__
-from .errors import RailContactError
+from .errors import RailContactError, SolverError
 from .halfspace.hertz import MIN_LOAD
 from .settings import ContactSettings
 from .settings.choices import PROFILE_UNITS, WARM_STARTS
@@ -97,7 +97,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     for case in args.case:
         try:
             sol = solve(case)
-        except RailContactError as exc:
+        except (RailContactError, SolverError) as exc:
             if not several:
                 raise
             print(f"railcontact: error: {case}: {exc}", file=sys.stderr)
@@ -350,7 +350,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = args.func(args)
         sys.stdout.flush()  # a failing write shows here, not at exit
         return code
-    except RailContactError as exc:
+    except (RailContactError, SolverError) as exc:
         print(f"railcontact: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader stopped early (| head): nothing more to say

@@ -2,7 +2,11 @@
 
 Every error that a user can cause (a bad case file, a bad parameter, a grid that is too
 small) is a :class:`RailContactError`, a :class:`ValueError` whose message names the
-offending quantity, its unit and the value received.
+offending quantity, its unit and the value received. A solve of valid input that does not
+reach its goal (a load loop that misses its tolerance) is a :class:`SolverError`, not a
+``ValueError``: the input was fine, the answer is not good enough to report as one. A time
+step, a table and the FMU turn either into a wheel's status
+(:func:`railcontact.status.status_of`).
 """
 
 from __future__ import annotations
@@ -18,7 +22,12 @@ class CaseError(RailContactError):
     """A case file or case dictionary that cannot be solved as given."""
 
 
-class ConvergenceError(CaseError):
+class SolverError(Exception):
+    """A solve of valid input that did not reach its goal; the message says what was
+    missed."""
+
+
+class ConvergenceError(SolverError):
     """An iteration (a load loop) that did not reach its tolerance: the input is valid, the
     answer is not good enough to report as one.
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from enum import IntEnum
 
-from .errors import CaseError, ConvergenceError, RailContactError
+from .errors import RailContactError, SolverError
 
 
 class Status(IntEnum):
@@ -72,13 +72,14 @@ _SEVERITY = (Status.NOT_COMPUTED, Status.OK, Status.NO_CONTACT, Status.OUTSIDE_V
 
 def status_of(exc: BaseException) -> Status:
     """The status of a wheel whose solve raised ``exc``: not converged for a
-    :class:`~railcontact.errors.ConvergenceError` (an iteration that missed its
-    tolerance), out of range for any other :class:`~railcontact.errors.RailContactError`
-    (the pose, a patch or an input beyond the model). Raises ``exc`` itself for anything
-    else (a fault of the code, not of the wheel)."""
-    if isinstance(exc, ConvergenceError):
+    :class:`~railcontact.errors.SolverError` (a :class:`~railcontact.errors.
+    ConvergenceError`: an iteration that missed its tolerance), out of range for a
+    :class:`~railcontact.errors.RailContactError` (the pose, a patch or an input beyond
+    the model). Raises ``exc`` itself for anything else (a fault of the code, not of the
+    wheel)."""
+    if isinstance(exc, SolverError):
         return Status.NOT_CONVERGED
-    if isinstance(exc, (CaseError, RailContactError)):
+    if isinstance(exc, RailContactError):
         return Status.OUT_OF_RANGE
     raise exc
 

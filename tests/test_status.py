@@ -43,6 +43,9 @@ def test_severity_orders_the_wheelset_status():
 
 
 def test_one_map_from_exceptions_to_statuses():
+    """A convergence failure is a solver's, not a bad value: not a ValueError."""
+    assert not issubclass(ConvergenceError, ValueError)
+    assert issubclass(CaseError, ValueError) and issubclass(RailContactError, ValueError)
     assert status_of(ConvergenceError("load loop")) is Status.NOT_CONVERGED
     assert status_of(CaseError("a patch beyond the model")) is Status.OUT_OF_RANGE
     assert status_of(RailContactError("beside its rail")) is Status.OUT_OF_RANGE

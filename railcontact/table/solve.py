@@ -33,7 +33,7 @@ import numpy as np
 
 from ..contact.patch import labelled, normal_estimate
 from ..contact.wheelrail import solve_wheel_rail
-from ..errors import CaseError, RailContactError
+from ..errors import CaseError, RailContactError, SolverError
 from ..settings import Case, ContactSettings
 from ..status import status_of
 from ..timestep.warmstart import PatchMemory, match, previous_pressure, previous_tangential
@@ -98,7 +98,7 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
     try:
         c = Case.from_dict(case_with(case, {}, side))
         patches, pose = solve_wheel_rail(c, _starts(c, memory) if memory else None)
-    except RailContactError as exc:  # a load loop, a CaseError, the geometry's own errors
+    except (RailContactError, SolverError) as exc:  # a load loop, a case, the geometry
         wheel.status = status_of(exc)
         wheel.message = str(exc) if isinstance(exc, CaseError) else f"{side} wheel: {exc}"
         return wheel, []

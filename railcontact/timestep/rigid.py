@@ -60,7 +60,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from ..contact.results import Work
-from ..errors import RailContactError
+from ..errors import RailContactError, SolverError
 from ..geometry.roll import MAX_ROLL, first_contact_gap
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from .warmstart import MAX_EXTRAPOLATION
@@ -280,7 +280,7 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
     for _ in range(MAX_EVALUATIONS):
         try:
             g, v = evaluate(phi)
-        except RailContactError as exc:  # beyond the profiles, or a wheel not solved
+        except (RailContactError, SolverError) as exc:  # beyond the profiles, not solved
             failure = f"at roll {phi:.6g} rad: {exc}"
             if not points and phi != pose.roll:  # the start in time: from the pose's roll
                 phi, slope, rates, base = pose.roll, geometric, None, (pose.roll, approaches)

@@ -76,6 +76,7 @@ from ..contact.wheelrail import (
 )
 from ..errors import (
     CaseError,
+    ConvergenceError,
     RailContactError,
     check_finite,
     check_positive,
@@ -430,7 +431,7 @@ class WheelsetContact:
                     penetration=self._approach(pose, side, vertical))
                 creep = None if creepages is None else creepages[k]
                 wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
-            except CaseError as exc:  # the load loop, or the patch problem of this wheel
+            except (CaseError, ConvergenceError) as exc:  # the patch problem, the load loop
                 wheel = WheelContact(side=side, status=status_of(exc), message=str(exc))
                 mem = []
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
@@ -800,7 +801,7 @@ def _rigid_stage(rigid: RigidWheelset) -> RigidSolution:
     converged that says why, with the work done until then."""
     try:
         return rigid.solve()
-    except RailContactError as exc:  # e.g. a wheel not solvable at another roll
+    except (RailContactError, ConvergenceError) as exc:  # a wheel not solved at a roll
         done = rigid.approach_at.work  # (this step's: all of it is this search's)
         return RigidSolution(0.0, 0.0, converged=False,
                              message=f"rigid wheelset's vertical displacement and roll: {exc}",
