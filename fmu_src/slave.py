@@ -78,7 +78,8 @@ class Slave:
         # the Real and the Integer outputs each written by one assignment of their values
         self._outputs = [(buffer[t], vrs, [v.value for v in outputs if v.type == t])
                          for t, (_, vrs) in zip(("Real", "Integer"), self._zeroed, strict=True)]
-        assert all(v.type in ("Real", "Integer") for v in outputs)
+        if not all(v.type in ("Real", "Integer") for v in outputs):
+            raise TypeError("the FMU's outputs are Real or Integer variables")
         self.log: list[str] = []
         self.contact: WheelsetContact | None = None
         self.modes: FMUModes | None = None

@@ -244,3 +244,16 @@ def test_api_reference_documents_every_module_of_the_layers(root):
         for module in pkgutil.iter_modules([str(package)]):
             name = f"railcontact.{page.stem}.{module.name}"
             assert f".. automodule:: {name}\n" in text, f"{page.name} lacks {name}"
+
+
+def test_invariants_survive_python_O(root):
+    """The package states its invariants with explicit checks, not ``assert`` (which
+    ``python -O`` removes)."""
+    import ast
+
+    found = []
+    for path in [*(root / "railcontact").rglob("*.py"), *(root / "fmu_src").glob("*.py")]:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        found += [f"{path.relative_to(root)}:{n.lineno}" for n in ast.walk(tree)
+                  if isinstance(n, ast.Assert)]
+    assert not found, found

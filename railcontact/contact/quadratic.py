@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from ..errors import CaseError
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz
 from ..settings import Case, QuadraticGeometry
@@ -27,7 +28,8 @@ def solve_quadratic(case: Case) -> PatchSolution:
     Hertz's penetration (:func:`~railcontact.contact.patch.potential_area`).
     """
     geo = case.geometry
-    assert isinstance(geo, QuadraticGeometry)
+    if not isinstance(geo, QuadraticGeometry):
+        raise CaseError(f"a quadratic case needs a quadratic geometry, got {type(geo).__name__}")
     grid_settings, settings, pair = case.grid, case.normal, case.pair
     A, B = geo.A, geo.B
     control = settings.control

@@ -790,7 +790,8 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
     patch starts as the case's estimates say, as ``railcontact solve`` does.
     """
     geo = case.geometry
-    assert isinstance(geo, WheelRailGeometry)
+    if not isinstance(geo, WheelRailGeometry):
+        raise CaseError(f"a wheel-rail case needs a wheel-rail geometry, got {type(geo).__name__}")
     track, ws, pose = build_geometry(geo)
     control, settings, pair = case.normal.control, case.patch_settings, case.pair
     convention = case.convention  # CONTACT's: always at the reference point

@@ -261,7 +261,8 @@ def _formed_later(later: dict[str, Callable[[ContactPoint], dict]], **now) -> Co
     when it is first read. (The point is passed, not held by the functions: a point that
     its own functions held would be a reference cycle, freed - with its arrays - only by
     the garbage collector.)"""
-    assert later.keys().isdisjoint(now) and len(later) + len(now) == len(_FIELDS)
+    if not (later.keys().isdisjoint(now) and len(later) + len(now) == len(_FIELDS)):
+        raise TypeError("a ContactPoint needs each field once, now or formed later")
     cp = object.__new__(ContactPoint)
     cp.__dict__.update(now)
     cp.__dict__["_later"] = later

@@ -840,7 +840,8 @@ def _memory(box: tuple[int, int, int, int] | None, **values) -> PatchMemory:
     :attr:`~PatchMemory.element_box` and :attr:`~PatchMemory.contact_box` formed from the
     normal solution's ``box`` of its pressure (:func:`~.warmstart.box_edges`) instead of
     by a pass over the pressure."""
-    assert values.keys() == _MEMORY_FIELDS
+    if values.keys() != _MEMORY_FIELDS:
+        raise TypeError(f"PatchMemory fields {sorted(values)} are not {sorted(_MEMORY_FIELDS)}")
     out = object.__new__(PatchMemory)
     out.__dict__.update(values)
     if box is not None:
