@@ -5,14 +5,17 @@ minimum 0 at ``s = 0``, ``A(s)`` the longitudinal curvature) and a normal penetr
 ``delta``. The patch is the region of *virtual* interpenetration: strip ``s`` is in
 contact for ``|x| <= x_l(s)``, with the pressure semi-elliptic along x,
 
-    p(x, s) = p0 sqrt(x_l(s)^2 - x^2) / x_l(s0),
+    p(x, s) = c(s) sqrt(x_l(s)^2 - x^2),
 
-``s0`` the strip of maximum penetration. ``p0`` follows from the condition that the
-elastic displacement at ``(0, s0)`` equals ``delta`` (Love's coefficients on the estimate
-grid, as CONTACT does it); for a prescribed force the penetration is found by a secant.
+on the strips (rows) of an estimate grid of ``(nx, ny)`` elements over the virtual patch
+(Love's coefficients, as CONTACT does it); for a prescribed force the penetration is found
+by a secant. The two differ in the outline ``x_l`` and the amplitude ``c``.
 
 Kik–Piotrowski (Piotrowski & Kik, VSD 46:27-48, 2008): ``x_l(s)^2 = (eps delta - f(s)) /
-A(s)`` with the virtual penetration factor ``eps = 0.55``.
+A(s)`` with the virtual penetration factor ``eps = 0.55``, and one amplitude ``c`` for the
+patch (the pressure along the strips' centres proportional to their half lengths), set so
+that the elastic displacement at ``(0, 0)``, the point of maximum penetration, is
+``delta``.
 
 INFCON (An & Wang; the paper's Sec. 2.2.3, ``chi = n_e^2 B_e / (r_e (A + B_e))``). The
 original definition of the "equivalent" quantities was not available; railcontact resolves
@@ -25,10 +28,19 @@ it as follows (``docs/algorithms.md`` 4.3 marks this as uncertain):
   (chi = 1/2 for a circle, and ``A a^2 / delta = 1 - chi`` along x);
 * the patch is KP's construction with ``delta_0 = chi delta`` across the track and the
   longitudinal half-lengths scaled to Hertz's, ``x_l(s)^2 = (1-chi)/chi (chi delta - f(s))
-  / A(s)``.
+  / A(s)``;
+* the pressure is the paper's strip-like Boussinesq integral: one amplitude ``c_j`` per
+  strip, from the strips' mutual influence, such that the elastic displacement at each
+  strip's centre ``(0, s_j)`` equals the rigid interpenetration there, ``delta - f(s_j)``
+  (``ny`` equations; a strip whose amplitude would be negative is left without pressure
+  and the others solved again). Between the strips' centres ``c`` is interpolated
+  linearly in ``s`` when the estimate is re-meshed onto the BEM grid.
 
-With these choices INFCON reproduces Hertz exactly for a quadratic gap, and follows the
-actual lateral gap ``f(s)`` otherwise (non-elliptic patches, several patches).
+With these choices INFCON reproduces Hertz for a quadratic gap (its pressure ``p0
+sqrt(1 - x^2/a^2 - y^2/b^2)`` is one of the family, with ``c = p0 / a`` on every strip, and
+displaces the line x = 0 by ``delta - B y^2``), and follows the actual lateral gap ``f(s)``
+otherwise (non-elliptic patches, several patches): the pressure across the track comes
+from the gap itself, not from the strips' lengths.
 """
 
 from __future__ import annotations
@@ -44,7 +56,7 @@ import numpy as np
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz, semi_axes
-from ..halfspace.influence import zz_displacement_centred
+from ..halfspace.influence import _zz_antiderivative, zz_displacement_centred
 from ..halfspace.interp import interp_walk_sloped, slopes_of
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import numpy_sum
@@ -87,18 +99,23 @@ class NormalEstimate:
     message: str
     wall_time: float
     half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
-    amplitude: float = 0.0
+    amplitude: np.ndarray = field(repr=False, default=None)
+    """The pressure's amplitude [Pa/m] on each strip (row) of the estimate grid, (ny,):
+    ``p(x, y_j) = amplitude[j] sqrt(x_l(y_j)^2 - x^2)`` (one value for all strips in
+    KP; between the strips' centres it is interpolated linearly in y, beyond them held)."""
     shape_data: tuple | None = field(repr=False, default=None, compare=False)
     """(s, f, a_of_s, the slopes of f and a_of_s, d0, stretch) of :func:`_shape`, for the
     compiled evaluations."""
 
     def pressure_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The model's pressure [Pa] at any points (x, y) [m]: this is how the estimate is
-        re-meshed onto the BEM grid (the estimate grid only fixes the amplitude)."""
-        xl = self.half_length(np.asarray(y, dtype=float))
-        inside = (np.asarray(y) >= self.grid.bounds[2]) & (np.asarray(y) <= self.grid.bounds[3])
-        return np.where(inside, self.amplitude * np.sqrt(np.clip(xl**2 - np.asarray(x) ** 2,
-                                                                 0, None)), 0.0)
+        re-meshed onto the BEM grid (the estimate grid only fixes the amplitudes)."""
+        y = np.asarray(y, dtype=float)
+        xl = self.half_length(y)
+        inside = (y >= self.grid.bounds[2]) & (y <= self.grid.bounds[3])
+        c = np.interp(y, self.grid.y, self.amplitude)
+        return np.where(inside, c * np.sqrt(np.clip(xl**2 - np.asarray(x) ** 2, 0, None)),
+                        0.0)
 
     def pressure_on(self, grid: Grid) -> np.ndarray:
         """:meth:`pressure_at` the element centres of ``grid`` [Pa], (nx, ny): the same
@@ -106,7 +123,8 @@ class NormalEstimate:
         if self.shape_data is None:
             return self.pressure_at(*grid.mesh())
         _, _, ylo, yhi = self.grid.bounds
-        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.amplitude)
+        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.grid.y,
+                            self.amplitude, slopes_of(self.grid.y, self.amplitude))
 
 
 _UNIT_PAIR = ElasticPair(shear=1.0, poisson=0.0)
@@ -178,12 +196,15 @@ def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
+def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, ys, amplitude, slopes
                  ):  # pragma: no cover - compiled
-    """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny)."""
+    """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny) (the
+    strips' amplitudes ``amplitude`` at their centres ``ys``, with their ``slopes``)."""
     out = np.zeros((x.size, y.size))
     j_s = -1
+    j_c = -1
     for j in range(y.size):
+        c, j_c = interp_walk_sloped(y[j], ys, amplitude, slopes, j_c)
         xl, j_s = _squared_half_length(y[j], s, f, a_of_s, sf, sa, d0, stretch, j_s)
         xl = math.sqrt(xl)
         if not (y[j] >= ylo and y[j] <= yhi):
@@ -193,24 +214,142 @@ def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
             v = xl2 - x[i] * x[i]
             if not v > 0.0 and not math.isnan(v):
                 v = 0.0
-            out[i, j] = amplitude * math.sqrt(v)
+            out[i, j] = c * math.sqrt(v)
     return out
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
+def _strip_influence(shape, dx, dy):  # pragma: no cover - compiled
+    """The strips' mutual influence ``C`` (ny, ny) [m per (Pa/m)] without the factor
+    ``(1-nu)/(pi G)``: ``C[j, k]`` is the normal displacement at the centre ``(0, y_j)``
+    of strip ``j`` of the pressure ``shape[:, k]`` on strip ``k`` alone (Love's
+    coefficients of the zz block, :func:`~railcontact.halfspace.influence.coefficients_at`,
+    on a grid of ``shape.shape`` elements ``dx * dy`` [m] centred on x = 0).
+
+    The corner antiderivative is formed once per x edge and row offset (the corners the
+    elements share), the coefficients once per column and row offset, then summed over
+    each strip's elements."""
+    nx, ny = shape.shape
+    half = 0.5 * nx
+    # F at x = -(edge e), e = 0 .. nx, and y = (t - ny + 1/2) dy, t = 0 .. 2 ny - 1; F is
+    # odd in each argument: formed for x >= 0 and y > 0 (a quarter), the rest by sign
+    corner = np.empty((nx + 1, 2 * ny))
+    for e in range(nx // 2 + 1):
+        a = (half - e) * dx
+        for t in range(ny, 2 * ny):
+            v = _zz_antiderivative(a, (t - ny + 0.5) * dy)
+            corner[e, t] = v
+            corner[e, 2 * ny - 1 - t] = -v
+            corner[nx - e, t] = -v
+            corner[nx - e, 2 * ny - 1 - t] = v
+    # the coefficient of column i at the row offset d = j - k: coef[i, d + ny - 1]
+    coef = np.empty((nx, 2 * ny - 1))
+    for i in range(nx):
+        for d in range(-(ny - 1), ny):
+            t = d + ny
+            coef[i, d + ny - 1] = (corner[i, t] - corner[i, t - 1] - corner[i + 1, t]
+                                   + corner[i + 1, t - 1])
+    # the columns i and nx - 1 - i have the same coefficients (the zz block is even in
+    # x): each pair's shapes added and summed once
+    out = np.empty((ny, ny))
+    column = np.empty(ny)
+    for k in range(ny):
+        column[:] = 0.0
+        for i in range((nx + 1) // 2):
+            mirror = nx - 1 - i
+            w = shape[i, k] + shape[mirror, k] if mirror != i else shape[i, k]
+            if w != 0.0:
+                for j in range(ny):
+                    column[j] += w * coef[i, j - k + ny - 1]
+        for j in range(ny):
+            out[j, k] = column[j]
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _strip_amplitudes(influence, rhs):  # pragma: no cover - compiled
+    """The strips' amplitudes ``c`` (ny) that solve the strip-wise Boussinesq equations
+    ``influence[j] . c = rhs[j]`` on the strips that carry pressure, ``c >= 0``: strips
+    whose shape is empty (a zero column) take no part; a strip whose amplitude comes out
+    negative is set to zero and the rest solved again (at most ny times). Returns ``c``
+    and whether each strip is in the final set (bool, ny)."""
+    ny = rhs.size
+    active = np.zeros(ny, dtype=numba.boolean)
+    for k in range(ny):
+        for j in range(ny):
+            if influence[j, k] != 0.0:
+                active[k] = True
+                break
+    c = np.zeros(ny)
+    for _ in range(ny):
+        idx = np.flatnonzero(active)
+        m = idx.size
+        if m == 0:
+            break
+        sub = np.empty((m, m))
+        b = np.empty(m)
+        for a in range(m):
+            b[a] = rhs[idx[a]]
+            for q in range(m):
+                sub[a, q] = influence[idx[a], idx[q]]
+        x = np.linalg.solve(sub, b)
+        negative = False
+        for a in range(m):
+            if not x[a] >= 0.0:
+                active[idx[a]] = False
+                negative = True
+        if not negative:
+            c[:] = 0.0
+            for a in range(m):
+                c[idx[a]] = x[a]
+            break
+    return c, active
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _hold_into_empty(shape, amplitudes):  # pragma: no cover - compiled
+    """Give each strip whose shape is empty (``x_l`` within half an element of 0: no
+    element centre inside) the amplitude of the nearest strip that has one (the lower on
+    a tie), in place: on a finer grid such a strip's rows do carry pressure."""
+    nx, ny = shape.shape
+    full = np.zeros(ny, dtype=numba.boolean)
+    for j in range(ny):
+        for i in range(nx):
+            if shape[i, j] != 0.0:
+                full[j] = True
+                break
+    source = amplitudes.copy()
+    for j in range(ny):
+        if full[j]:
+            continue
+        for step in range(1, ny):
+            if j - step >= 0 and full[j - step]:
+                amplitudes[j] = source[j - step]
+                break
+            if j + step < ny and full[j + step]:
+                amplitudes[j] = source[j + step]
+                break
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny, strips
                    ):  # pragma: no cover - compiled
     """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (at the penetration
     ``delta`` [m]; ``sf``, ``sa`` the slopes of ``f`` and ``a_of_s``): its lateral ends
     ``lo``, ``hi`` [m] (:func:`_half_width` at ``d0``), its largest half length ``xmax``
     [m] at :data:`SEARCH_SAMPLES` points ``np.linspace(lo, hi)`` (NaN if one is NaN) and,
     when ``xmax > 0`` (and the ends are finite), on the estimate grid
-    ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)``: the pressure [Pa] whose
-    displacement at (0, 0) is ``delta`` (the semi-elliptic shape ``sqrt(x_l(y)^2 - x^2)``
-    times ``amplitude = delta / u``, ``u`` its displacement, :func:`zz_displacement_centred`
-    times ``scale = (1-nu)/(pi G)``), the amplitude [Pa/m], the force [N] (numpy's sum
-    times the element area), the largest pressure [Pa] and the count of elements in
-    contact."""
+    ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)``: the pressure [Pa], the semi-elliptic
+    shape ``sqrt(x_l(y)^2 - x^2)`` times an amplitude [Pa/m] per strip (row), the
+    amplitudes (ny), the force [N] (numpy's sum times the element area), the largest
+    pressure [Pa] and the count of elements in contact.
+
+    One amplitude for all strips (``strips`` False, Kik–Piotrowski): the displacement at
+    (0, 0) is ``delta`` (``amplitude = delta / u``, ``u`` the shape's displacement,
+    :func:`zz_displacement_centred` times ``scale = (1-nu)/(pi G)``). One per strip
+    (``strips`` True, INFCON's strip-wise Boussinesq integral): the displacement at each
+    strip's centre ``(0, y_j)`` is the rigid interpenetration there, ``delta - f(y_j)``
+    (:func:`_strip_influence`, :func:`_strip_amplitudes`)."""
     lo, hi = _half_width_at(s, f, d0)
     num = SEARCH_SAMPLES
     div = num - 1
@@ -248,16 +387,16 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
         xmax = max(xmax, v)
     xmax = math.sqrt(xmax)
     shape = np.zeros((nx, ny))
+    amplitudes = np.zeros(ny)
     if not (xmax > 0.0 and hi > lo and xmax < math.inf and math.isfinite(lo)
             and math.isfinite(hi)):
-        return lo, hi, xmax, shape, 0.0, 0.0, 0.0, 0
+        return lo, hi, xmax, shape, amplitudes, 0.0, 0.0, 0
     xmin = -xmax
     dx = (xmax - xmin) / nx
     dy = (hi - lo) / ny
     x0 = xmin + dx / 2
     y0 = lo + dy / 2
     j_s = -1
-    count = 0
     for j in range(ny):
         xl, j_s = _squared_half_length(y0 + dy * float(j), s, f, a_of_s, sf, sa, d0,
                                        stretch, j_s)
@@ -269,15 +408,25 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
             if not v > 0.0 and not math.isnan(v):
                 v = 0.0
             shape[i, j] = math.sqrt(v)
-            if shape[i, j] > 0.0:
-                count += 1
-    u = zz_displacement_centred(0.0, dx, lo, dy, shape) * scale
-    amplitude = delta / u
+    if strips:
+        rhs = np.empty(ny)
+        j_s = -1
+        for j in range(ny):
+            fy, j_s = interp_walk_sloped(y0 + dy * float(j), s, f, sf, j_s)
+            rhs[j] = (delta - fy) / scale
+        amplitudes, _ = _strip_amplitudes(_strip_influence(shape, dx, dy), rhs)
+        _hold_into_empty(shape, amplitudes)
+    else:
+        u = zz_displacement_centred(0.0, dx, lo, dy, shape) * scale
+        amplitudes[:] = delta / u
     p = shape  # (in place: the pressure)
+    count = 0
     for i in range(nx):
         for j in range(ny):
-            p[i, j] = shape[i, j] * amplitude
-    return lo, hi, xmax, p, amplitude, numpy_sum(p) * (dx * dy), p.max(), count
+            p[i, j] = shape[i, j] * amplitudes[j]
+            if p[i, j] > 0.0:
+                count += 1
+    return lo, hi, xmax, p, amplitudes, numpy_sum(p) * (dx * dy), p.max(), count
 
 
 def _shape(method: str, samples: tuple, a0: float, delta: float) -> tuple[float, float]:
@@ -302,12 +451,15 @@ def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float
     m]): factor, d0, stretch and :func:`_virtual_patch`'s values, checked."""
     factor, stretch = _shape(method, samples, a0, delta)
     d0 = factor * delta
-    out = _virtual_patch(*samples, d0, stretch, delta, scale, nx, ny)
+    out = _virtual_patch(*samples, d0, stretch, delta, scale, nx, ny, method == "infcon")
     lo, hi, xmax = out[:3]
     if not xmax > 0 or hi <= lo:
         raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
     if not (xmax < math.inf and math.isfinite(lo) and math.isfinite(hi)):
         Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)  # (raises: not finite)
+    if not out[5] > 0:  # (no strip with a positive amplitude)
+        raise RailContactError(f"{method}: no pressure on the virtual patch for delta = "
+                               f"{delta:g} m")
     return (factor, d0, stretch, *out)
 
 
