@@ -26,9 +26,14 @@ it as follows (``docs/algorithms.md`` 4.3 marks this as uncertain):
 * ``n_e, r_e`` are Hertz's coefficients (``docs/algorithms.md`` 1.2) for the curvatures
   ``(A, B_e)``, so ``chi = B_e b^2 / delta`` is Hertz's lateral virtual-penetration factor
   (chi = 1/2 for a circle, and ``A a^2 / delta = 1 - chi`` along x);
-* the patch is KP's construction with ``delta_0 = chi delta`` across the track and the
-  longitudinal half-lengths scaled to Hertz's, ``x_l(s)^2 = (1-chi)/chi (chi delta - f(s))
-  / A(s)``;
+* each side of the patch (s < 0, s > 0) has its own lateral factor ``chi_-``, ``chi_+``,
+  the same with ``B_e`` from that side's reach ``w_-``, ``w_+`` of the rigid overlap
+  (``B_e = delta / w_-^2``: a gap that rises slowly on one side is in contact further out
+  there, relative to its overlap, than on a steep side);
+* the patch is KP's construction with ``delta_0 = chi_+- delta`` on each side and the
+  longitudinal half-lengths Hertz's along the paper's ``a(y) = a_e sqrt(g(y) / (chi
+  delta))``: ``x_l(s)^2 = (1-chi) delta / A(s) (1 - f(s) / (chi_+- delta))``, continuous at
+  s = 0;
 * the pressure is the paper's strip-like Boussinesq integral: one amplitude ``c_j`` per
   strip, from the strips' mutual influence, such that the elastic displacement at each
   strip's centre ``(0, s_j)`` equals the rigid interpenetration there, ``delta - f(s_j)``
@@ -104,8 +109,8 @@ class NormalEstimate:
     ``p(x, y_j) = amplitude[j] sqrt(x_l(y_j)^2 - x^2)`` (one value for all strips in
     KP; between the strips' centres it is interpolated linearly in y, beyond them held)."""
     shape_data: tuple | None = field(repr=False, default=None, compare=False)
-    """(s, f, a_of_s, the slopes of f and a_of_s, d0, stretch) of :func:`_shape`, for the
-    compiled evaluations."""
+    """(s, f, a_of_s, the slopes of f and a_of_s, d0, stretch) of :func:`_shape` (``d0``
+    and ``stretch`` for the sides s < 0 and s >= 0), for the compiled evaluations."""
 
     def pressure_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The model's pressure [Pa] at any points (x, y) [m]: this is how the estimate is
@@ -185,11 +190,13 @@ def _half_width_at(s, f, level):  # pragma: no cover - compiled
 def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
                          ):  # pragma: no cover - compiled
     """The square of the virtual patch's half length [m^2] at ``y`` (of :func:`_shape`'s
-    ``x_half``: ``max(stretch (d0 - f(y)) / A(y), 0)``, NaN kept; ``sf``, ``sa`` the
-    slopes of ``f`` and ``A``) and the piece of ``s`` it is on."""
+    ``x_half``: ``max(stretch[k] (d0[k] - f(y)) / A(y), 0)`` with ``k`` 0 for y < 0 and 1
+    else, NaN kept; ``sf``, ``sa`` the slopes of ``f`` and ``A``) and the piece of ``s``
+    it is on."""
     fy, j = interp_walk_sloped(y, s, f, sf, j)
     ay, _ = interp_walk_sloped(y, s, a_of_s, sa, j)
-    v = stretch * (d0 - fy) / ay
+    k = 0 if y < 0.0 else 1
+    v = stretch[k] * (d0[k] - fy) / ay
     if not v > 0.0 and not math.isnan(v):
         v = 0.0
     return v, j
@@ -334,9 +341,10 @@ def _hold_into_empty(shape, amplitudes):  # pragma: no cover - compiled
 @numba.njit(cache=True, error_model="numpy")
 def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny, strips
                    ):  # pragma: no cover - compiled
-    """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (at the penetration
-    ``delta`` [m]; ``sf``, ``sa`` the slopes of ``f`` and ``a_of_s``): its lateral ends
-    ``lo``, ``hi`` [m] (:func:`_half_width` at ``d0``), its largest half length ``xmax``
+    """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (per side; at the
+    penetration ``delta`` [m]; ``sf``, ``sa`` the slopes of ``f`` and ``a_of_s``): its
+    lateral ends ``lo``, ``hi`` [m] (:func:`_half_width` at ``d0[0]``, ``d0[1]``), its
+    largest half length ``xmax``
     [m] at :data:`SEARCH_SAMPLES` points ``np.linspace(lo, hi)`` (NaN if one is NaN) and,
     when ``xmax > 0`` (and the ends are finite), on the estimate grid
     ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)``: the pressure [Pa], the semi-elliptic
@@ -350,7 +358,8 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny, stri
     (``strips`` True, INFCON's strip-wise Boussinesq integral): the displacement at each
     strip's centre ``(0, y_j)`` is the rigid interpenetration there, ``delta - f(y_j)``
     (:func:`_strip_influence`, :func:`_strip_amplitudes`)."""
-    lo, hi = _half_width_at(s, f, d0)
+    lo, _ = _half_width_at(s, f, d0[0])
+    _, hi = _half_width_at(s, f, d0[1])
     num = SEARCH_SAMPLES
     div = num - 1
     step = (hi - lo) / div
@@ -376,7 +385,8 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny, stri
             fy = sf[j] * (yk - s[j]) + f[j]
             ay = sa[j] * (yk - s[j]) + a_of_s[j]
             inner = not (math.isnan(fy) or math.isnan(ay))
-            v = stretch * (d0 - fy) / ay
+            k = 0 if yk < 0.0 else 1
+            v = stretch[k] * (d0[k] - fy) / ay
             if not v > 0.0 and not math.isnan(v):
                 v = 0.0
         if not inner:
@@ -429,19 +439,25 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny, stri
     return lo, hi, xmax, p, amplitudes, numpy_sum(p) * (dx * dy), p.max(), count
 
 
-def _shape(method: str, samples: tuple, a0: float, delta: float) -> tuple[float, float]:
-    """The virtual-penetration factor and the stretch of the half lengths at the
-    penetration ``delta`` [m] (KP: 0.55 and 1; INFCON: chi from the rigid overlap's width
-    and ``a0 = A(0)`` [1/m], and ``(1 - chi) / chi``)."""
+def _shape(method: str, samples: tuple, a0: float, delta: float
+           ) -> tuple[float, np.ndarray, np.ndarray]:
+    """The virtual-penetration factor, and the virtual penetrations [m] and stretches of
+    the half lengths on the two sides (s < 0, s >= 0) at the penetration ``delta`` [m]
+    (KP: 0.55, 0.55 delta and 1 on both; INFCON: see the module doc)."""
     if method == "kp":
-        return KP_FACTOR, 1.0
+        return KP_FACTOR, np.full(2, KP_FACTOR * delta), np.ones(2)
     lo, hi = _half_width_at(samples[0], samples[1], delta)
     w = 0.5 * (hi - lo)
     if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
         raise RailContactError(f"INFCON estimate: the undeformed gap has no width at "
                                f"penetration {delta:g} m")
     factor = infcon_factor(a0, delta / w**2)
-    return factor, (1 - factor) / factor
+    if lo < 0 < hi:
+        sides = np.array([infcon_factor(a0, delta / lo**2), infcon_factor(a0, delta / hi**2)])
+    else:
+        sides = np.full(2, factor)
+    d0 = sides * delta
+    return factor, d0, (1 - factor) * delta / d0
 
 
 def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float, nx: int,
@@ -449,8 +465,7 @@ def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float
     """The virtual patch at the penetration ``delta`` [m] (``samples`` = (s, f, a_of_s and
     the slopes of f and a_of_s), ``a0 = A(0)`` [1/m], ``scale = (1-nu)/(pi G)`` [m/Pa /
     m]): factor, d0, stretch and :func:`_virtual_patch`'s values, checked."""
-    factor, stretch = _shape(method, samples, a0, delta)
-    d0 = factor * delta
+    factor, d0, stretch = _shape(method, samples, a0, delta)
     out = _virtual_patch(*samples, d0, stretch, delta, scale, nx, ny, method == "infcon")
     lo, hi, xmax = out[:3]
     if not xmax > 0 or hi <= lo:
@@ -470,8 +485,9 @@ def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: 
     s, f, a_of_s = samples[:3]
 
     def x_half(sv):
-        g = d0 - np.interp(sv, s, f)
-        return np.sqrt(np.clip(stretch * g / np.interp(sv, s, a_of_s), 0, None))
+        k = (np.asarray(sv) >= 0).astype(int)
+        g = d0[k] - np.interp(sv, s, f)
+        return np.sqrt(np.clip(stretch[k] * g / np.interp(sv, s, a_of_s), 0, None))
 
     grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
     return NormalEstimate(grid=grid, pressure=p, contact=p > 0, force=float(force),
