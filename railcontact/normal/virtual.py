@@ -68,6 +68,10 @@ from ..halfspace.sums import numpy_sum
 
 KP_FACTOR = 0.55
 METHODS = ("kp", "infcon")
+SCALED_LOAD = 1e-4
+"""INFCON's load secant stops when an evaluation carries the load within this share, and
+its pressure is scaled to the load (the strips' equations then hold for the interpenetration
+scaled by as much; each further evaluation solves them again)."""
 SEARCH_SAMPLES = 801
 """Points from one end of the virtual patch to the other at which its largest half
 length is sought (the estimate grid's extent along x)."""
@@ -274,6 +278,39 @@ def _strip_influence(shape, dx, dy):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _solved(a, b):  # pragma: no cover - compiled
+    """``x`` with ``a x = b`` (Gaussian elimination with partial pivoting, in place on
+    ``a`` and ``b``; a zero pivot gives a non-finite ``x``): the strips' few dozen
+    equations without a LAPACK call, whose threads on a loaded machine cost more than the
+    elimination."""
+    n = b.size
+    for k in range(n):
+        piv = k
+        big = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                big, piv = abs(a[i, k]), i
+        if piv != k:
+            for j in range(n):
+                a[k, j], a[piv, j] = a[piv, j], a[k, j]
+            b[k], b[piv] = b[piv], b[k]
+        d = a[k, k]
+        for i in range(k + 1, n):
+            m = a[i, k] / d
+            if m != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= m * a[k, j]
+                b[i] -= m * b[k]
+    x = np.empty(n)
+    for k in range(n - 1, -1, -1):
+        v = b[k]
+        for j in range(k + 1, n):
+            v -= a[k, j] * x[j]
+        x[k] = v / a[k, k]
+    return x
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _strip_amplitudes(influence, rhs):  # pragma: no cover - compiled
     """The strips' amplitudes ``c`` (ny) that solve the strip-wise Boussinesq equations
     ``influence[j] . c = rhs[j]`` on the strips that carry pressure, ``c >= 0``: strips
@@ -299,7 +336,7 @@ def _strip_amplitudes(influence, rhs):  # pragma: no cover - compiled
             b[a] = rhs[idx[a]]
             for q in range(m):
                 sub[a, q] = influence[idx[a], idx[q]]
-        x = np.linalg.solve(sub, b)
+        x = _solved(sub, b)
         negative = False
         for a in range(m):
             if not x[a] >= 0.0:
@@ -478,6 +515,15 @@ def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float
     return (factor, d0, stretch, *out)
 
 
+def _scaled(evaluation: tuple, ratio: float) -> tuple:
+    """An :func:`_evaluate` with its pressure, amplitudes, force and largest pressure
+    multiplied by ``ratio``."""
+    out = list(evaluation)
+    for k in (6, 7, 8, 9):  # pressure, amplitudes, force, largest pressure
+        out[k] = out[k] * ratio
+    return tuple(out)
+
+
 def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: int, ny: int,
               t0: float) -> NormalEstimate:
     """The :class:`NormalEstimate` of an :func:`_evaluate` at ``delta`` [m]."""
@@ -551,6 +597,9 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     for _ in range(30):
         e2 = _evaluate(method, samples, a0, d2, scale, nx, ny)
         if abs(e2[force] - load) < 1e-6 * load:
+            break
+        if method == "infcon" and abs(e2[force] - load) < SCALED_LOAD * load:
+            e2 = _scaled(e2, load / e2[force])
             break
         # secant in log-log (force ~ delta^(3/2))
         slope = (math.log(e2[force]) - math.log(e1[force])) / (math.log(d2) - math.log(d1)) \
