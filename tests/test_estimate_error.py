@@ -74,7 +74,7 @@ def test_estimate_error_counts_missing_and_extra_elements():
 def test_estimate_error_in_the_json(root):
     """``solve --json``'s patches report it under ``normal``: the INFCON start of a
     penetration-controlled wheel-rail solve (one solve) against its solution, a start from
-    the previous load pass under load control, and null without an estimate."""
+    the previous load pass under load control, and none without an estimate."""
     base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
     c = copy.deepcopy(base)
     c["normal"] = {"penetration": 1e-4, "estimate": "infcon", "tolerance": 1e-3}
@@ -82,7 +82,7 @@ def test_estimate_error_in_the_json(root):
     assert d["start"] == "infcon" and 0 < d["l1"] < 0.05
     assert d["missing"] + d["extra"] < 0.15 * d["contact"]
     c["normal"]["estimate"] = "none"
-    assert rc.solve(c).to_dict()["patches"][0]["normal"]["estimate_error"] is None
+    assert "estimate_error" not in rc.solve(c).to_dict()["patches"][0]["normal"]
     c = copy.deepcopy(base)
     c["normal"]["estimate"] = "infcon"
     d = rc.solve(c).to_dict()["patches"][0]["normal"]["estimate_error"]

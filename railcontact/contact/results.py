@@ -143,11 +143,13 @@ class PatchSolution:
                 "iterations": n.iterations, "converged": n.converged,
                 "message": n.message, "wall_time": n.wall_time, "error": n.error,
                 "estimate": self.estimate,
-                "estimate_error": self._estimate_error_dict(),
                 "grid": {"nx": n.grid.nx, "ny": n.grid.ny, "dx": n.grid.dx, "dy": n.grid.dy,
                          "bounds": list(n.grid.bounds)},
             }
         }
+        error = self._estimate_error_dict()
+        if error is not None:  # (JSON's null is "not finite": none without a start)
+            d["normal"]["estimate_error"] = error
         if self.geometry is not None:
             g = self.geometry
             d["side"] = g.side

@@ -46,8 +46,13 @@ class EstimateError:
         return self.extra / self.contact if self.contact else None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"l1": self.l1, "missing": self.missing, "extra": self.extra,
-                "contact": self.contact}
+        """The fields (``l1`` left out when it is None: a JSON null reads as a value that
+        is not finite)."""
+        d: dict[str, Any] = {"missing": self.missing, "extra": self.extra,
+                             "contact": self.contact}
+        if self.l1 is not None:
+            d = {"l1": self.l1, **d}
+        return d
 
 
 def estimate_error(start: np.ndarray, pressure: np.ndarray) -> EstimateError:
