@@ -78,15 +78,24 @@ def one_case(dy: float, control: str = "penetration", roll: str = "0") -> list[d
         base["normal"] = {"penetration": approach_for_load(base, nspec["load"]),
                           "tolerance": nspec["tolerance"]}
     normal_its: dict[str, list[int]] = {}
+    start_errors: dict[str, list[float | None]] = {}
     for pre, prefix in SOLVERS.items():
         for est in NORMAL:
             c = copy.deepcopy(base)
             c["normal"].update(estimate=est, preconditioner=pre)
             sol = rc.solve(c)
             normal_its[f"{prefix}_{est}"] = [p.normal.iterations for p in sol.patches]
+            if pre == "fft" and est in ("kp", "infcon"):  # how good the start was
+                errs = [p.estimate_error for p in sol.patches]
+                start_errors[f"{est}_l1"] = [None if e is None else e.l1 for e in errs]
+                start_errors[f"{est}_missing"] = [None if e is None else e.missing_share
+                                                  for e in errs]
+                start_errors[f"{est}_extra"] = [None if e is None else e.extra_share
+                                                for e in errs]
     for k, patch_its in enumerate(zip(*normal_its.values(), strict=True)):
         rows.append({"dy_mm": dy * 1e3, "patch": k, "roll_mrad": base["geometry"]["roll"] * 1e3,
-                     **dict(zip(normal_its, patch_its, strict=True))})
+                     **dict(zip(normal_its, patch_its, strict=True)),
+                     **{name: v[k] for name, v in start_errors.items()}})
     for name, cr in CREEP.items():
         tan_its = {}
         for est in ("none", "fastsim", "fastrip"):
@@ -130,7 +139,7 @@ def main() -> None:
     keys = list(rows[0])
     write_csv(args.out / "study_sweep.csv", rows)
     mean = {k: float(np.mean([r[k] for r in rows])) for k in keys
-            if k not in ("dy_mm", "patch", "roll_mrad")}
+            if k not in ("dy_mm", "patch", "roll_mrad") and not k.startswith(("kp_", "infcon_"))}
     print(f"{len(dys)} displacements, {len(rows)} patches, {len(failed)} failed")
     report_failed(failed)
     print(f"{'normal':<22} {'none':>7} {'hertz':>7} {'kp':>7} {'infcon':>7}")
@@ -139,6 +148,18 @@ def main() -> None:
     print(f"{'paper (Fig. 7)':<22} " + " ".join(f"{PAPER[f'normal_{e}']:7.2f}" for e in NORMAL))
     worse = sum(r["normal_hertz"] > r["normal_none"] for r in rows)
     print(f"Hertz start costs more than none on {worse} of {len(rows)} patches")
+    # the estimates' errors against the solution of their own (penetration-controlled:
+    # the only) solve, in % (PatchSolution.estimate_error)
+    for est in ("kp", "infcon"):
+        err = {q: np.array([r[f"{est}_{q}"] for r in rows
+                            if r.get(f"{est}_{q}") is not None], dtype=float) * 100
+               for q in ("l1", "missing", "extra")}
+        if err["l1"].size:
+            print(f"{est} start error [%] over {err['l1'].size} patches: L1 mean "
+                  f"{err['l1'].mean():.2f}, median {np.median(err['l1']):.2f}, p90 "
+                  f"{np.percentile(err['l1'], 90):.2f}; elements missing "
+                  f"{err['missing'].mean():.2f}, extra {err['extra'].mean():.2f} (of the "
+                  "contact)")
     print(f"{'tangential':<22} {'none':>7} {'fastsim':>7} {'fastrip':>7}")
     for name in CREEP:
         print(f"{'railcontact ' + name:<22} " + " ".join(

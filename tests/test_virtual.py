@@ -39,6 +39,66 @@ def test_infcon_is_hertz_for_quadratic_gaps(A, B):
                        atol=5e-3 * hz.max_pressure)
 
 
+def test_infcon_strips_solve_the_strip_wise_boussinesq_equations():
+    """On a non-elliptic patch (a lateral gap with a steep flank and a flat one, A varying
+    across) INFCON's pressure, one semi-ellipse along x per strip with its own amplitude,
+    displaces each strip's centre (0, y_j) by the rigid interpenetration there, delta -
+    f(y_j): summed here with Love's coefficients of the zz block (``coefficients_at``,
+    independent of the estimate's compiled strip sums) on the estimate grid. A strip left
+    without pressure (its amplitude would be negative) opens: its centre is displaced by
+    more than the interpenetration. A strip whose semi-ellipse holds no element centre
+    has no equation."""
+    from railcontact.halfspace.influence import coefficients_at
+
+    s = np.linspace(-0.02, 0.02, 801)
+    f = np.where(s < 0, 4.0 * s**2, 1.5 * s**2 + 40.0 * s**3)
+    a = 1.1 + 8.0 * s
+    delta = 1.2e-4
+    e = virtual_penetration("infcon", s, f, a, PAIR, penetration=delta, nx=40, ny=40)
+    g = e.grid
+    X, Y = g.mesh()
+    shape = np.sqrt(np.clip(e.half_length(g.y) ** 2 - X**2, 0, None))
+    strips = shape.any(axis=0)
+    loaded = e.pressure.any(axis=0)
+    assert not (loaded & ~strips).any() and loaded.sum() >= g.ny - 3
+    # the strip amplitudes differ (one amplitude would not solve the equations)
+    assert e.amplitude.max() > 1.2 * e.amplitude.min()
+    u = np.array([float(np.sum(coefficients_at("zz", -X, yj - Y, g.dx, g.dy, PAIR)
+                                * e.pressure)) for yj in g.y])
+    want = delta - np.interp(g.y, s, f)
+    np.testing.assert_allclose(u[loaded], want[loaded], rtol=1e-9, atol=0)
+    assert np.all(u[strips & ~loaded] > want[strips & ~loaded])
+    # the pressure is the semi-ellipse of the outline on each strip
+    np.testing.assert_allclose(e.pressure, e.amplitude * shape, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("rail, lateral, bound", [("60E1", -0.002, 0.025),
+                                                  ("CN60", 0.0, 0.06)])
+def test_infcon_pressure_against_the_converged_bem(root, rail, lateral, bound):
+    """S1002 on 60E1 at -2 mm (a nearly elliptic tread patch) and on CN60 at 0 mm (the
+    patch runs across the rail's R300/R80 joint), 83.3 kN, 64 x 64 elements: INFCON at the
+    converged solution's normal penetration, on its grid, is within the stated L1 bound
+    of the BEM pressure converged to eps_n = 1e-9 (Sum |p_est - p| / Sum p), and KP's
+    error there is at least twice INFCON's."""
+    from railcontact.contact import normal_estimate
+    from railcontact.settings import Control, NormalSettings
+
+    c = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
+    c["geometry"].update(rail=rail, lateral_displacement=lateral)
+    c["normal"].update(tolerance=1e-9, estimate="infcon")
+    patch = rc.solve(c).patches[0]
+    n, cp = patch.normal, patch.geometry
+    assert n.converged
+    error = {}
+    for method in ("infcon", "kp"):
+        est = normal_estimate(NormalSettings(estimate=method), None, cp.s, cp.f, cp.a_of_s,
+                              PAIR, Control(penetration=n.penetration))(n.grid)
+        error[method] = float(np.abs(est - n.pressure).sum() / n.pressure.sum())
+    print(rail, lateral, error)
+    assert error["infcon"] <= bound
+    assert error["kp"] >= 2 * error["infcon"]
+
+
 def test_kp_is_close_to_hertz_for_quadratic_gaps():
     """KP's constant factor 0.55 gives a near-Hertz patch (exact shape only for eps = 1/2
     on a circle): force and maximum pressure within 10 %, area within 15 %."""

@@ -8,6 +8,7 @@ from typing import Any
 from ..geometry.search import ContactPoint, ReferencePoint
 from ..halfspace.hertz import HertzSolution
 from ..normal import NormalResult
+from ..normal.starterror import EstimateError, estimate_error
 from ..settings import Case
 from ..settings.convention import reported_forces
 from ..tangential import TangentialResult
@@ -107,6 +108,20 @@ class PatchSolution:
     """The convention :attr:`creep_forces` and the JSON report the forces in: railcontact's
     (on the wheel, side frame) or CONTACT's (on the rail, its frame and mirroring; the
     result arrays - tractions - stay railcontact's)."""
+    started_from: str | None = None
+    """What the last normal solve started from when it was not the estimate named by
+    :attr:`estimate`: "previous load pass" (a load loop's pass before, on the same
+    contact point); None: the estimate."""
+
+    @property
+    def estimate_error(self) -> EstimateError | None:
+        """How good the start of the last normal solve (the one ``normal.iterations``
+        counts) was: its L1 pressure error and the elements it missed and added, against
+        that solve's solution on the same grid (converged to the case's tolerance when
+        ``normal.converged``); None when the solve started from its own uniform pressure
+        (no estimate). Formed when asked (the solve keeps only its start)."""
+        start = self.normal.start
+        return None if start is None else estimate_error(start, self.normal.pressure)
 
     @property
     def creep_forces(self) -> tuple[float, float, float] | None:
@@ -118,6 +133,12 @@ class PatchSolution:
         if self.geometry is None:  # a quadratic patch: Kalker's convention, as CONTACT's
             return (*t.force, t.spin_moment)
         return reported_forces(*t.force, t.spin_moment, self.geometry.side, self.convention)
+
+    def _estimate_error_dict(self) -> dict[str, Any] | None:
+        e = self.estimate_error
+        if e is None:
+            return None
+        return {**e.to_dict(), "start": self.started_from or self.estimate}
 
     def to_dict(self) -> dict[str, Any]:
         n = self.normal
@@ -132,6 +153,9 @@ class PatchSolution:
                          "bounds": list(n.grid.bounds)},
             }
         }
+        error = self._estimate_error_dict()
+        if error is not None:  # (JSON's null is "not finite": none without a start)
+            d["normal"]["estimate_error"] = error
         if self.geometry is not None:
             g = self.geometry
             d["side"] = g.side

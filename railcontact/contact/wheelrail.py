@@ -288,7 +288,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz,
                                  estimate=estimate_label(est, normal.estimate),
-                                 curvatures=(cp.A, cp.B), geometry=cp, work=work))
+                                 curvatures=(cp.A, cp.B), geometry=cp, work=work,
+                                 started_from=None if last is None else "previous load pass"))
     return out
 
 

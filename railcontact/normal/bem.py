@@ -144,6 +144,11 @@ class NormalResult:
         ``A p`` of the pressure [m] as the solve carried it (its gap is ``h + u - delta``),
         for a later solve's start (:func:`solve_normal`'s ``initial_displacement``); None
         when the solve did not form it (no contact, a pressure that vanished).
+    start
+        The initial pressure [Pa] the solve was given (the caller's array, not copied; its
+        error against :attr:`pressure` is formed only when asked,
+        :func:`~railcontact.normal.starterror.estimate_error`); None when it started
+        from its own uniform pressure.
     """
 
     grid: Grid
@@ -163,6 +168,7 @@ class NormalResult:
     touches_boundary: bool = False
     contact_box: tuple[int, int, int, int] | None = None
     displacement: Displacement | None = field(default=None, repr=False)
+    start: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
@@ -577,6 +583,7 @@ def solve_normal(
     else:
         penetration = check_positive("penetration", penetration, "m", allow_zero=True)
     p = _check_field("initial_pressure", initial_pressure, shape)
+    given = p
     mask = None if initial_contact is None else np.asarray(initial_contact, dtype=bool)
     if mask is not None and mask.shape != shape:
         raise RailContactError(f"initial_contact must have the grid shape {shape}, "
@@ -599,7 +606,7 @@ def solve_normal(
             iterations=its, converged=converged, message=message,
             wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
             touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
-            displacement=shown)
+            displacement=shown, start=given)
 
     # Trivial cases: no load, or no interpenetration anywhere.
     if force_control and (load == 0.0 or load < min_load):

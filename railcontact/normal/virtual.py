@@ -5,14 +5,17 @@ minimum 0 at ``s = 0``, ``A(s)`` the longitudinal curvature) and a normal penetr
 ``delta``. The patch is the region of *virtual* interpenetration: strip ``s`` is in
 contact for ``|x| <= x_l(s)``, with the pressure semi-elliptic along x,
 
-    p(x, s) = p0 sqrt(x_l(s)^2 - x^2) / x_l(s0),
+    p(x, s) = c(s) sqrt(x_l(s)^2 - x^2),
 
-``s0`` the strip of maximum penetration. ``p0`` follows from the condition that the
-elastic displacement at ``(0, s0)`` equals ``delta`` (Love's coefficients on the estimate
-grid, as CONTACT does it); for a prescribed force the penetration is found by a secant.
+on the strips (rows) of an estimate grid of ``(nx, ny)`` elements over the virtual patch
+(Love's coefficients, as CONTACT does it); for a prescribed force the penetration is found
+by a secant. The two differ in the outline ``x_l`` and the amplitude ``c``.
 
 Kik–Piotrowski (Piotrowski & Kik, VSD 46:27-48, 2008): ``x_l(s)^2 = (eps delta - f(s)) /
-A(s)`` with the virtual penetration factor ``eps = 0.55``.
+A(s)`` with the virtual penetration factor ``eps = 0.55``, and one amplitude ``c`` for the
+patch (the pressure along the strips' centres proportional to their half lengths), set so
+that the elastic displacement at ``(0, 0)``, the point of maximum penetration, is
+``delta``.
 
 INFCON (An & Wang; the paper's Sec. 2.2.3, ``chi = n_e^2 B_e / (r_e (A + B_e))``). The
 original definition of the "equivalent" quantities was not available; railcontact resolves
@@ -23,12 +26,26 @@ it as follows (``docs/algorithms.md`` 4.3 marks this as uncertain):
 * ``n_e, r_e`` are Hertz's coefficients (``docs/algorithms.md`` 1.2) for the curvatures
   ``(A, B_e)``, so ``chi = B_e b^2 / delta`` is Hertz's lateral virtual-penetration factor
   (chi = 1/2 for a circle, and ``A a^2 / delta = 1 - chi`` along x);
-* the patch is KP's construction with ``delta_0 = chi delta`` across the track and the
-  longitudinal half-lengths scaled to Hertz's, ``x_l(s)^2 = (1-chi)/chi (chi delta - f(s))
-  / A(s)``.
+* each side of the patch (s < 0, s > 0) has its own lateral factor ``chi_-``, ``chi_+``,
+  the same with ``B_e`` from that side's reach ``w_-``, ``w_+`` of the rigid overlap
+  (``B_e = delta / w_-^2``: a gap that rises slowly on one side is in contact further out
+  there, relative to its overlap, than on a steep side);
+* the patch is KP's construction with ``delta_0 = chi_+- delta`` on each side and the
+  longitudinal half-lengths Hertz's along the paper's ``a(y) = a_e sqrt(g(y) / (chi
+  delta))``: ``x_l(s)^2 = (1-chi) delta / A(s) (1 - f(s) / (chi_+- delta))``, continuous at
+  s = 0;
+* the pressure is the paper's strip-like Boussinesq integral: one amplitude ``c_j`` per
+  strip, from the strips' mutual influence, such that the elastic displacement at each
+  strip's centre ``(0, s_j)`` equals the rigid interpenetration there, ``delta - f(s_j)``
+  (``ny`` equations; a strip whose amplitude would be negative is left without pressure
+  and the others solved again). Between the strips' centres ``c`` is interpolated
+  linearly in ``s`` when the estimate is re-meshed onto the BEM grid.
 
-With these choices INFCON reproduces Hertz exactly for a quadratic gap, and follows the
-actual lateral gap ``f(s)`` otherwise (non-elliptic patches, several patches).
+With these choices INFCON reproduces Hertz for a quadratic gap (its pressure ``p0
+sqrt(1 - x^2/a^2 - y^2/b^2)`` is one of the family, with ``c = p0 / a`` on every strip, and
+displaces the line x = 0 by ``delta - B y^2``), and follows the actual lateral gap ``f(s)``
+otherwise (non-elliptic patches, several patches): the pressure across the track comes
+from the gap itself, not from the strips' lengths.
 """
 
 from __future__ import annotations
@@ -44,13 +61,17 @@ import numpy as np
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz, semi_axes
-from ..halfspace.influence import zz_displacement_centred
+from ..halfspace.influence import _zz_antiderivative, zz_displacement_centred
 from ..halfspace.interp import interp_walk_sloped, slopes_of
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import numpy_sum
 
 KP_FACTOR = 0.55
 METHODS = ("kp", "infcon")
+SCALED_LOAD = 1e-4
+"""INFCON's load secant stops when an evaluation carries the load within this share, and
+its pressure is scaled to the load (the strips' equations then hold for the interpenetration
+scaled by as much; each further evaluation solves them again)."""
 SEARCH_SAMPLES = 801
 """Points from one end of the virtual patch to the other at which its largest half
 length is sought (the estimate grid's extent along x)."""
@@ -87,18 +108,23 @@ class NormalEstimate:
     message: str
     wall_time: float
     half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
-    amplitude: float = 0.0
+    amplitude: np.ndarray = field(repr=False, default=None)
+    """The pressure's amplitude [Pa/m] on each strip (row) of the estimate grid, (ny,):
+    ``p(x, y_j) = amplitude[j] sqrt(x_l(y_j)^2 - x^2)`` (one value for all strips in
+    KP; between the strips' centres it is interpolated linearly in y, beyond them held)."""
     shape_data: tuple | None = field(repr=False, default=None, compare=False)
-    """(s, f, a_of_s, the slopes of f and a_of_s, d0, stretch) of :func:`_shape`, for the
-    compiled evaluations."""
+    """(s, f, a_of_s, the slopes of f and a_of_s, d0, stretch) of :func:`_shape` (``d0``
+    and ``stretch`` for the sides s < 0 and s >= 0), for the compiled evaluations."""
 
     def pressure_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The model's pressure [Pa] at any points (x, y) [m]: this is how the estimate is
-        re-meshed onto the BEM grid (the estimate grid only fixes the amplitude)."""
-        xl = self.half_length(np.asarray(y, dtype=float))
-        inside = (np.asarray(y) >= self.grid.bounds[2]) & (np.asarray(y) <= self.grid.bounds[3])
-        return np.where(inside, self.amplitude * np.sqrt(np.clip(xl**2 - np.asarray(x) ** 2,
-                                                                 0, None)), 0.0)
+        re-meshed onto the BEM grid (the estimate grid only fixes the amplitudes)."""
+        y = np.asarray(y, dtype=float)
+        xl = self.half_length(y)
+        inside = (y >= self.grid.bounds[2]) & (y <= self.grid.bounds[3])
+        c = np.interp(y, self.grid.y, self.amplitude)
+        return np.where(inside, c * np.sqrt(np.clip(xl**2 - np.asarray(x) ** 2, 0, None)),
+                        0.0)
 
     def pressure_on(self, grid: Grid) -> np.ndarray:
         """:meth:`pressure_at` the element centres of ``grid`` [Pa], (nx, ny): the same
@@ -106,7 +132,8 @@ class NormalEstimate:
         if self.shape_data is None:
             return self.pressure_at(*grid.mesh())
         _, _, ylo, yhi = self.grid.bounds
-        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.amplitude)
+        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.grid.y,
+                            self.amplitude, slopes_of(self.grid.y, self.amplitude))
 
 
 _UNIT_PAIR = ElasticPair(shear=1.0, poisson=0.0)
@@ -167,23 +194,28 @@ def _half_width_at(s, f, level):  # pragma: no cover - compiled
 def _squared_half_length(y, s, f, a_of_s, sf, sa, d0, stretch, j
                          ):  # pragma: no cover - compiled
     """The square of the virtual patch's half length [m^2] at ``y`` (of :func:`_shape`'s
-    ``x_half``: ``max(stretch (d0 - f(y)) / A(y), 0)``, NaN kept; ``sf``, ``sa`` the
-    slopes of ``f`` and ``A``) and the piece of ``s`` it is on."""
+    ``x_half``: ``max(stretch[k] (d0[k] - f(y)) / A(y), 0)`` with ``k`` 0 for y < 0 and 1
+    else, NaN kept; ``sf``, ``sa`` the slopes of ``f`` and ``A``) and the piece of ``s``
+    it is on."""
     fy, j = interp_walk_sloped(y, s, f, sf, j)
     ay, _ = interp_walk_sloped(y, s, a_of_s, sa, j)
-    v = stretch * (d0 - fy) / ay
+    k = 0 if y < 0.0 else 1
+    v = stretch[k] * (d0[k] - fy) / ay
     if not v > 0.0 and not math.isnan(v):
         v = 0.0
     return v, j
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
+def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, ys, amplitude, slopes
                  ):  # pragma: no cover - compiled
-    """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny)."""
+    """:meth:`NormalEstimate.pressure_at` the points ``(x[i], y[j])`` [Pa], (nx, ny) (the
+    strips' amplitudes ``amplitude`` at their centres ``ys``, with their ``slopes``)."""
     out = np.zeros((x.size, y.size))
     j_s = -1
+    j_c = -1
     for j in range(y.size):
+        c, j_c = interp_walk_sloped(y[j], ys, amplitude, slopes, j_c)
         xl, j_s = _squared_half_length(y[j], s, f, a_of_s, sf, sa, d0, stretch, j_s)
         xl = math.sqrt(xl)
         if not (y[j] >= ylo and y[j] <= yhi):
@@ -193,25 +225,178 @@ def _pressure_on(x, y, s, f, a_of_s, sf, sa, d0, stretch, ylo, yhi, amplitude
             v = xl2 - x[i] * x[i]
             if not v > 0.0 and not math.isnan(v):
                 v = 0.0
-            out[i, j] = amplitude * math.sqrt(v)
+            out[i, j] = c * math.sqrt(v)
     return out
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
+def _strip_influence(shape, dx, dy):  # pragma: no cover - compiled
+    """The strips' mutual influence ``C`` (ny, ny) [m per (Pa/m)] without the factor
+    ``(1-nu)/(pi G)``: ``C[j, k]`` is the normal displacement at the centre ``(0, y_j)``
+    of strip ``j`` of the pressure ``shape[:, k]`` on strip ``k`` alone (Love's
+    coefficients of the zz block, :func:`~railcontact.halfspace.influence.coefficients_at`,
+    on a grid of ``shape.shape`` elements ``dx * dy`` [m] centred on x = 0).
+
+    The corner antiderivative is formed once per x edge and row offset (the corners the
+    elements share), the coefficients once per column and row offset, then summed over
+    each strip's elements."""
+    nx, ny = shape.shape
+    half = 0.5 * nx
+    # F at x = -(edge e), e = 0 .. nx, and y = (t - ny + 1/2) dy, t = 0 .. 2 ny - 1; F is
+    # odd in each argument: formed for x >= 0 and y > 0 (a quarter), the rest by sign
+    corner = np.empty((nx + 1, 2 * ny))
+    for e in range(nx // 2 + 1):
+        a = (half - e) * dx
+        for t in range(ny, 2 * ny):
+            v = _zz_antiderivative(a, (t - ny + 0.5) * dy)
+            corner[e, t] = v
+            corner[e, 2 * ny - 1 - t] = -v
+            corner[nx - e, t] = -v
+            corner[nx - e, 2 * ny - 1 - t] = v
+    # the coefficient of column i at the row offset d = j - k: coef[i, d + ny - 1]
+    coef = np.empty((nx, 2 * ny - 1))
+    for i in range(nx):
+        for d in range(-(ny - 1), ny):
+            t = d + ny
+            coef[i, d + ny - 1] = (corner[i, t] - corner[i, t - 1] - corner[i + 1, t]
+                                   + corner[i + 1, t - 1])
+    # the columns i and nx - 1 - i have the same coefficients (the zz block is even in
+    # x): each pair's shapes added and summed once
+    out = np.empty((ny, ny))
+    column = np.empty(ny)
+    for k in range(ny):
+        column[:] = 0.0
+        for i in range((nx + 1) // 2):
+            mirror = nx - 1 - i
+            w = shape[i, k] + shape[mirror, k] if mirror != i else shape[i, k]
+            if w != 0.0:
+                for j in range(ny):
+                    column[j] += w * coef[i, j - k + ny - 1]
+        for j in range(ny):
+            out[j, k] = column[j]
+    return out
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _solved(a, b):  # pragma: no cover - compiled
+    """``x`` with ``a x = b`` (Gaussian elimination with partial pivoting, in place on
+    ``a`` and ``b``; a zero pivot gives a non-finite ``x``): the strips' few dozen
+    equations without a LAPACK call, whose threads on a loaded machine cost more than the
+    elimination."""
+    n = b.size
+    for k in range(n):
+        piv = k
+        big = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                big, piv = abs(a[i, k]), i
+        if piv != k:
+            for j in range(n):
+                a[k, j], a[piv, j] = a[piv, j], a[k, j]
+            b[k], b[piv] = b[piv], b[k]
+        d = a[k, k]
+        for i in range(k + 1, n):
+            m = a[i, k] / d
+            if m != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= m * a[k, j]
+                b[i] -= m * b[k]
+    x = np.empty(n)
+    for k in range(n - 1, -1, -1):
+        v = b[k]
+        for j in range(k + 1, n):
+            v -= a[k, j] * x[j]
+        x[k] = v / a[k, k]
+    return x
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _strip_amplitudes(influence, rhs):  # pragma: no cover - compiled
+    """The strips' amplitudes ``c`` (ny) that solve the strip-wise Boussinesq equations
+    ``influence[j] . c = rhs[j]`` on the strips that carry pressure, ``c >= 0``: strips
+    whose shape is empty (a zero column) take no part; a strip whose amplitude comes out
+    negative is set to zero and the rest solved again (at most ny times). Returns ``c``
+    and whether each strip is in the final set (bool, ny)."""
+    ny = rhs.size
+    active = np.zeros(ny, dtype=numba.boolean)
+    for k in range(ny):
+        for j in range(ny):
+            if influence[j, k] != 0.0:
+                active[k] = True
+                break
+    c = np.zeros(ny)
+    for _ in range(ny):
+        idx = np.flatnonzero(active)
+        m = idx.size
+        if m == 0:
+            break
+        sub = np.empty((m, m))
+        b = np.empty(m)
+        for a in range(m):
+            b[a] = rhs[idx[a]]
+            for q in range(m):
+                sub[a, q] = influence[idx[a], idx[q]]
+        x = _solved(sub, b)
+        negative = False
+        for a in range(m):
+            if not x[a] >= 0.0:
+                active[idx[a]] = False
+                negative = True
+        if not negative:
+            c[:] = 0.0
+            for a in range(m):
+                c[idx[a]] = x[a]
+            break
+    return c, active
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _hold_into_empty(shape, amplitudes):  # pragma: no cover - compiled
+    """Give each strip whose shape is empty (``x_l`` within half an element of 0: no
+    element centre inside) the amplitude of the nearest strip that has one (the lower on
+    a tie), in place: on a finer grid such a strip's rows do carry pressure."""
+    nx, ny = shape.shape
+    full = np.zeros(ny, dtype=numba.boolean)
+    for j in range(ny):
+        for i in range(nx):
+            if shape[i, j] != 0.0:
+                full[j] = True
+                break
+    source = amplitudes.copy()
+    for j in range(ny):
+        if full[j]:
+            continue
+        for step in range(1, ny):
+            if j - step >= 0 and full[j - step]:
+                amplitudes[j] = source[j - step]
+                break
+            if j + step < ny and full[j + step]:
+                amplitudes[j] = source[j + step]
+                break
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny, strips
                    ):  # pragma: no cover - compiled
-    """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (at the penetration
-    ``delta`` [m]; ``sf``, ``sa`` the slopes of ``f`` and ``a_of_s``): its lateral ends
-    ``lo``, ``hi`` [m] (:func:`_half_width` at ``d0``), its largest half length ``xmax``
+    """The virtual patch of :func:`_shape`'s ``d0``, ``stretch`` (per side; at the
+    penetration ``delta`` [m]; ``sf``, ``sa`` the slopes of ``f`` and ``a_of_s``): its
+    lateral ends ``lo``, ``hi`` [m] (:func:`_half_width` at ``d0[0]``, ``d0[1]``), its
+    largest half length ``xmax``
     [m] at :data:`SEARCH_SAMPLES` points ``np.linspace(lo, hi)`` (NaN if one is NaN) and,
     when ``xmax > 0`` (and the ends are finite), on the estimate grid
-    ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)``: the pressure [Pa] whose
-    displacement at (0, 0) is ``delta`` (the semi-elliptic shape ``sqrt(x_l(y)^2 - x^2)``
-    times ``amplitude = delta / u``, ``u`` its displacement, :func:`zz_displacement_centred`
-    times ``scale = (1-nu)/(pi G)``), the amplitude [Pa/m], the force [N] (numpy's sum
-    times the element area), the largest pressure [Pa] and the count of elements in
-    contact."""
-    lo, hi = _half_width_at(s, f, d0)
+    ``Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)``: the pressure [Pa], the semi-elliptic
+    shape ``sqrt(x_l(y)^2 - x^2)`` times an amplitude [Pa/m] per strip (row), the
+    amplitudes (ny), the force [N] (numpy's sum times the element area), the largest
+    pressure [Pa] and the count of elements in contact.
+
+    One amplitude for all strips (``strips`` False, Kik–Piotrowski): the displacement at
+    (0, 0) is ``delta`` (``amplitude = delta / u``, ``u`` the shape's displacement,
+    :func:`zz_displacement_centred` times ``scale = (1-nu)/(pi G)``). One per strip
+    (``strips`` True, INFCON's strip-wise Boussinesq integral): the displacement at each
+    strip's centre ``(0, y_j)`` is the rigid interpenetration there, ``delta - f(y_j)``
+    (:func:`_strip_influence`, :func:`_strip_amplitudes`)."""
+    lo, _ = _half_width_at(s, f, d0[0])
+    _, hi = _half_width_at(s, f, d0[1])
     num = SEARCH_SAMPLES
     div = num - 1
     step = (hi - lo) / div
@@ -237,7 +422,8 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
             fy = sf[j] * (yk - s[j]) + f[j]
             ay = sa[j] * (yk - s[j]) + a_of_s[j]
             inner = not (math.isnan(fy) or math.isnan(ay))
-            v = stretch * (d0 - fy) / ay
+            k = 0 if yk < 0.0 else 1
+            v = stretch[k] * (d0[k] - fy) / ay
             if not v > 0.0 and not math.isnan(v):
                 v = 0.0
         if not inner:
@@ -248,16 +434,16 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
         xmax = max(xmax, v)
     xmax = math.sqrt(xmax)
     shape = np.zeros((nx, ny))
+    amplitudes = np.zeros(ny)
     if not (xmax > 0.0 and hi > lo and xmax < math.inf and math.isfinite(lo)
             and math.isfinite(hi)):
-        return lo, hi, xmax, shape, 0.0, 0.0, 0.0, 0
+        return lo, hi, xmax, shape, amplitudes, 0.0, 0.0, 0
     xmin = -xmax
     dx = (xmax - xmin) / nx
     dy = (hi - lo) / ny
     x0 = xmin + dx / 2
     y0 = lo + dy / 2
     j_s = -1
-    count = 0
     for j in range(ny):
         xl, j_s = _squared_half_length(y0 + dy * float(j), s, f, a_of_s, sf, sa, d0,
                                        stretch, j_s)
@@ -269,30 +455,46 @@ def _virtual_patch(s, f, a_of_s, sf, sa, d0, stretch, delta, scale, nx, ny
             if not v > 0.0 and not math.isnan(v):
                 v = 0.0
             shape[i, j] = math.sqrt(v)
-            if shape[i, j] > 0.0:
-                count += 1
-    u = zz_displacement_centred(0.0, dx, lo, dy, shape) * scale
-    amplitude = delta / u
+    if strips:
+        rhs = np.empty(ny)
+        j_s = -1
+        for j in range(ny):
+            fy, j_s = interp_walk_sloped(y0 + dy * float(j), s, f, sf, j_s)
+            rhs[j] = (delta - fy) / scale
+        amplitudes, _ = _strip_amplitudes(_strip_influence(shape, dx, dy), rhs)
+        _hold_into_empty(shape, amplitudes)
+    else:
+        u = zz_displacement_centred(0.0, dx, lo, dy, shape) * scale
+        amplitudes[:] = delta / u
     p = shape  # (in place: the pressure)
+    count = 0
     for i in range(nx):
         for j in range(ny):
-            p[i, j] = shape[i, j] * amplitude
-    return lo, hi, xmax, p, amplitude, numpy_sum(p) * (dx * dy), p.max(), count
+            p[i, j] = shape[i, j] * amplitudes[j]
+            if p[i, j] > 0.0:
+                count += 1
+    return lo, hi, xmax, p, amplitudes, numpy_sum(p) * (dx * dy), p.max(), count
 
 
-def _shape(method: str, samples: tuple, a0: float, delta: float) -> tuple[float, float]:
-    """The virtual-penetration factor and the stretch of the half lengths at the
-    penetration ``delta`` [m] (KP: 0.55 and 1; INFCON: chi from the rigid overlap's width
-    and ``a0 = A(0)`` [1/m], and ``(1 - chi) / chi``)."""
+def _shape(method: str, samples: tuple, a0: float, delta: float
+           ) -> tuple[float, np.ndarray, np.ndarray]:
+    """The virtual-penetration factor, and the virtual penetrations [m] and stretches of
+    the half lengths on the two sides (s < 0, s >= 0) at the penetration ``delta`` [m]
+    (KP: 0.55, 0.55 delta and 1 on both; INFCON: see the module doc)."""
     if method == "kp":
-        return KP_FACTOR, 1.0
+        return KP_FACTOR, np.full(2, KP_FACTOR * delta), np.ones(2)
     lo, hi = _half_width_at(samples[0], samples[1], delta)
     w = 0.5 * (hi - lo)
     if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
         raise RailContactError(f"INFCON estimate: the undeformed gap has no width at "
                                f"penetration {delta:g} m")
     factor = infcon_factor(a0, delta / w**2)
-    return factor, (1 - factor) / factor
+    if lo < 0 < hi:
+        sides = np.array([infcon_factor(a0, delta / lo**2), infcon_factor(a0, delta / hi**2)])
+    else:
+        sides = np.full(2, factor)
+    d0 = sides * delta
+    return factor, d0, (1 - factor) * delta / d0
 
 
 def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float, nx: int,
@@ -300,15 +502,26 @@ def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float
     """The virtual patch at the penetration ``delta`` [m] (``samples`` = (s, f, a_of_s and
     the slopes of f and a_of_s), ``a0 = A(0)`` [1/m], ``scale = (1-nu)/(pi G)`` [m/Pa /
     m]): factor, d0, stretch and :func:`_virtual_patch`'s values, checked."""
-    factor, stretch = _shape(method, samples, a0, delta)
-    d0 = factor * delta
-    out = _virtual_patch(*samples, d0, stretch, delta, scale, nx, ny)
+    factor, d0, stretch = _shape(method, samples, a0, delta)
+    out = _virtual_patch(*samples, d0, stretch, delta, scale, nx, ny, method == "infcon")
     lo, hi, xmax = out[:3]
     if not xmax > 0 or hi <= lo:
         raise RailContactError(f"{method}: no virtual interpenetration for delta = {delta:g} m")
     if not (xmax < math.inf and math.isfinite(lo) and math.isfinite(hi)):
         Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)  # (raises: not finite)
+    if not out[5] > 0:  # (no strip with a positive amplitude)
+        raise RailContactError(f"{method}: no pressure on the virtual patch for delta = "
+                               f"{delta:g} m")
     return (factor, d0, stretch, *out)
+
+
+def _scaled(evaluation: tuple, ratio: float) -> tuple:
+    """An :func:`_evaluate` with its pressure, amplitudes, force and largest pressure
+    multiplied by ``ratio``."""
+    out = list(evaluation)
+    for k in (6, 7, 8, 9):  # pressure, amplitudes, force, largest pressure
+        out[k] = out[k] * ratio
+    return tuple(out)
 
 
 def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: int, ny: int,
@@ -318,8 +531,9 @@ def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: 
     s, f, a_of_s = samples[:3]
 
     def x_half(sv):
-        g = d0 - np.interp(sv, s, f)
-        return np.sqrt(np.clip(stretch * g / np.interp(sv, s, a_of_s), 0, None))
+        k = (np.asarray(sv) >= 0).astype(int)
+        g = d0[k] - np.interp(sv, s, f)
+        return np.sqrt(np.clip(stretch[k] * g / np.interp(sv, s, a_of_s), 0, None))
 
     grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
     return NormalEstimate(grid=grid, pressure=p, contact=p > 0, force=float(force),
@@ -383,6 +597,9 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     for _ in range(30):
         e2 = _evaluate(method, samples, a0, d2, scale, nx, ny)
         if abs(e2[force] - load) < 1e-6 * load:
+            break
+        if method == "infcon" and abs(e2[force] - load) < SCALED_LOAD * load:
+            e2 = _scaled(e2, load / e2[force])
             break
         # secant in log-log (force ~ delta^(3/2))
         slope = (math.log(e2[force]) - math.log(e1[force])) / (math.log(d2) - math.log(d1)) \
