@@ -71,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             rt = tight.solve(pose, loads=loads, creepages=creep)
             for w, t in zip(rw.wheels, rt.wheels, strict=True):
-                statuses[w.status] = statuses.get(w.status, 0) + 1
+                statuses[int(w.status)] = statuses.get(int(w.status), 0) + 1
                 if w.status != OK:
                     continue
                 n = t.normal_force

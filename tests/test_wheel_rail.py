@@ -149,7 +149,7 @@ def test_load_beyond_nadals_limit_is_an_error(base):
     c = variant(base, lateral_displacement=7e-3, normal={"load": 83.3e3, "tolerance": 1e-3})
     c["grid"] = {"nx": 40, "ny": 40}
     c["tangential"] = {"creepage": [0.0, 0.01, 0.0], "friction": 0.6}
-    with pytest.raises(CaseError, match="Nadal"):
+    with pytest.raises(rc.ConvergenceError, match="Nadal"):  # (a solver's, not an input's)
         rc.solve(c)
 
 
