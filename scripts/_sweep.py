@@ -44,7 +44,7 @@ def run_sweep(dys: np.ndarray, one_case: Callable[[float], list[dict]]
     for i, dy in enumerate(dys):
         try:
             rows += one_case(float(dy))
-        except rc.RailContactError as exc:
+        except (rc.RailContactError, rc.SolverError) as exc:
             failed.append((float(dy), str(exc)))
         done = (i + 1) / len(dys)
         eta = (time.perf_counter() - t0) * (1 / done - 1)

@@ -107,7 +107,7 @@ def run(rows: list[dict], dx_mm: float, tol: tuple[float, float], start: tuple[s
             sol = rc.solve(case)
             ok = all(p.normal.converged and (p.tangential is None or p.tangential.converged)
                      for p in sol.patches)  # (Solution.converged in newer versions)
-        except rc.RailContactError as exc:
+        except (rc.RailContactError, rc.SolverError) as exc:
             print(f"  y = {row['y_mm']} {row['side']}: {exc}", file=sys.stderr)
             continue
         dt = time.perf_counter() - t0

@@ -624,6 +624,8 @@ def solve_in_process(case: dict, timeout: float) -> Outcome:
         return Outcome("hang", "no answer within the time limit", time.perf_counter() - t0)
     except MemoryError as exc:
         return Outcome("memory", f"MemoryError: {exc}", time.perf_counter() - t0)
+    except rc.SolverError as exc:  # valid input, a load loop that did not converge
+        return Outcome("not converged", str(exc).splitlines()[0], time.perf_counter() - t0)
     except rc.RailContactError as exc:
         return Outcome("clean error", str(exc).splitlines()[0], time.perf_counter() - t0)
     except Exception as exc:
@@ -943,6 +945,8 @@ def run_step(wc, step: dict, settings: dict, timeout: float | None = None) -> Ou
         return Outcome("hang", "no answer within the time limit", time.perf_counter() - t0)
     except MemoryError as exc:
         return Outcome("memory", f"MemoryError: {exc}", time.perf_counter() - t0)
+    except rc.SolverError as exc:
+        return Outcome("not converged", str(exc)[:200], time.perf_counter() - t0)
     except rc.RailContactError as exc:
         return Outcome("clean error", str(exc)[:200], time.perf_counter() - t0)
     except Exception as exc:

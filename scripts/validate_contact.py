@@ -125,7 +125,7 @@ def run(folder: Path, profiles: Path) -> list[dict]:
                           convention="contact")
         try:
             sol = rc.solve(case)
-        except rc.RailContactError as exc:
+        except (rc.RailContactError, rc.SolverError) as exc:
             print(f"  y = {y:g} {row['side']}: {exc}", file=sys.stderr)
             continue
         theirs = contact_values(row)

@@ -45,8 +45,8 @@ def solve(case: Case | Mapping[str, Any] | str | Path, *,
     Notes
     -----
     A patch whose contact spans fewer than
-    :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x and y is
-    under-resolved: its normal result is not converged, with a message saying so.
+    :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x (the rolling
+    direction) is under-resolved: its normal result is not converged, with a message saying so.
     """
     t0 = time.perf_counter()
     case = load_case(case) if isinstance(case, (str, Path)) else validate_case(case)
@@ -64,10 +64,10 @@ def solve(case: Case | Mapping[str, Any] | str | Path, *,
 
 def _check_resolution(patch: PatchSolution) -> None:
     """Mark a converged patch whose contact spans fewer than
-    :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x and y not
-    converged, its normal message saying so: the solve met its tolerance, but its pressure
-    has not converged under grid refinement (the case exits 1, as a contact cut off by
-    elements far larger than it)."""
+    :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x (the rolling
+    direction) not converged, its normal message saying so: the solve met its tolerance,
+    but its pressure has not converged under grid refinement (the case exits 1, as a
+    contact cut off by elements far larger than it)."""
     n = patch.normal
     if not n.converged:
         return

@@ -101,7 +101,7 @@ class PatchSolution:
     load_other: float | None = None
     """The vertical approach [m] beyond first contact of another solution of the wheel's
     load (found below this one's), or of the merge of patches beyond which another lies
-    (:func:`~railcontact.contact.wheelrail._first_root`); None when none was found."""
+    (:func:`~railcontact.contact.loadloop.first_root`); None when none was found."""
     reference: ReferencePoint | None = None
     """CONTACT's contact reference point of the patch (wheel-rail cases)."""
     convention: str = "railcontact"

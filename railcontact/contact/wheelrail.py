@@ -15,7 +15,10 @@ vertical force Q to :data:`~.loadloop.CREEP_LOAD_RTOL`, or as close as the tange
 tolerance lets it (an error beyond 1e-3 and beyond ``eps_tau`` of the creep forces' share,
 :func:`~.loadloop.load_met`); on a flange the creep force carries a large part of the load
 (``mu tan(gamma)`` ~ 0.8 at 70 deg with mu = 0.3), and beyond Nadal's limit
-(``mu tan(gamma) > 1``, sliding up) no normal force carries it: an error.
+(``mu tan(gamma) > 1``, sliding up) no normal force carries it: an error. Where two of the
+wheel's contact regions join into one patch, a load may be carried at two approaches; the
+wheel takes the smallest (:func:`~.loadloop.first_root`, the merges from
+:func:`~railcontact.geometry.search.merge_approaches`) and says that another exists.
 
 ``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
 wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or

@@ -456,7 +456,7 @@ OUTPUTS = [
     *_wheel("validity", "Integer", "", "the limits the wheel is beyond, a sum of bits: 1 "
             "Y/Q above max_y_q, 2 beyond Nadal's limit, 4 flange climb, 8 penetration above "
             "max_penetration, 16 load above max_wheel_load, 32 a patch under-resolved (its "
-            "contact fewer than 4 elements along x, or along x and y) (0: within all)",
+            "contact fewer than 4 elements along x, the rolling direction) (0: within all)",
             value=lambda w: w.validity),
 ]
 """The outputs; ``value(result)`` reads each from a

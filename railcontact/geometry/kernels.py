@@ -653,6 +653,11 @@ def saddles(g, g_min):
         h = g[i]
         if not (h > g[i - 1] and h >= g[i + 1]):
             continue
+        j = i + 1  # a plateau: a saddle only where the gap falls again after it
+        while j < n and g[j] == h:
+            j += 1
+        if j == n or g[j] > h:
+            continue
         lo_left = h
         j = i - 1
         while j >= 0 and g[j] <= h:

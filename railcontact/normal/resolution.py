@@ -1,8 +1,9 @@
 """Whether a patch's contact is resolved by enough elements.
 
 A patch's normal solution is *under-resolved* when its contact set spans fewer than
-:data:`MIN_ELEMENTS_ACROSS` elements along x (the rolling direction), or along both x and
-y (from its first to its last element in contact, gaps included). Against Hertz (a
+:data:`MIN_ELEMENTS_ACROSS` elements along x, the rolling direction, whatever it spans
+along y (from its first to its last element in contact, gaps included; the message says
+whether y is narrow too). Against Hertz (a
 quadratic patch, the potential area automatic, elements of equal aspect to the ellipse),
 the largest pressure's error by the number of elements across the contact is about 48 %
 with 1 element, 4 to 12 % with 2 or 3, within 4 % with 4 and within 3 % with 5 or more;
@@ -29,8 +30,8 @@ import numpy as np
 from ..errors import RailContactError
 
 MIN_ELEMENTS_ACROSS = 4
-"""Fewest elements a patch's contact set must span along x, or along y when it spans
-fewer along x too (module docstring)."""
+"""Fewest elements a patch's contact set must span along x, the rolling direction,
+whatever it spans along y (module docstring)."""
 
 
 def elements_across(contact: np.ndarray) -> tuple[int, int]:

@@ -100,7 +100,9 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
         patches, pose = solve_wheel_rail(c, _starts(c, memory) if memory else None)
     except (RailContactError, SolverError) as exc:  # a load loop, a case, the geometry
         wheel.status = status_of(exc)
-        wheel.message = str(exc) if isinstance(exc, CaseError) else f"{side} wheel: {exc}"
+        text = str(exc)  # (a case's and a load loop's messages name the wheel already)
+        wheel.message = text if isinstance(exc, (CaseError, SolverError)) else \
+            f"{side} wheel: {text}"
         return wheel, []
     except Exception as exc:  # a fault of the solver: this point lost, never the batch
         wheel.status = OUT_OF_RANGE

@@ -346,8 +346,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
 
 @dataclass(frozen=True)
 class RigidWheelset:
-    """The data of :func:`vertical_and_roll`, kept by a load-controlled step's result
-    until its vertical displacement or roll is asked for (a picklable record).
+    """The data of :func:`vertical_and_roll` for one load-controlled step: the problem
+    the step's rigid-wheelset stage solves (a picklable record).
     ``approach_at`` gives the wheels' approaches carrying their loads at another roll (the
     step's solve of each wheel at that roll); None: the first-order answer."""
 

@@ -22,7 +22,7 @@ A wheel whose contact was solved (status ok) is *outside validity* when one of t
 * ``LOAD``: ``Q`` exceeds :attr:`ContactSettings.max_wheel_load`.
 * ``RESOLUTION``: a patch's contact spans fewer than
   :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x, the
-  rolling direction, or along both x and y
+  rolling direction (whatever y)
   (:func:`~railcontact.normal.resolution.under_resolved`): its
   pressure, area and creep forces are the grid's (the largest pressure 4 % to 50 % off
   Hertz's; a creep force along a narrow x 20-46 % off), not the contact's; smaller

@@ -76,8 +76,8 @@ from ..contact.wheelrail import (
 )
 from ..errors import (
     CaseError,
-    ConvergenceError,
     RailContactError,
+    SolverError,
     check_finite,
     check_positive,
 )
@@ -431,7 +431,7 @@ class WheelsetContact:
                     penetration=self._approach(pose, side, vertical))
                 creep = None if creepages is None else creepages[k]
                 wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
-            except (CaseError, ConvergenceError) as exc:  # the patch problem, the load loop
+            except (CaseError, SolverError) as exc:  # the patch problem, the load loop
                 wheel = WheelContact(side=side, status=status_of(exc), message=str(exc))
                 mem = []
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
@@ -466,7 +466,8 @@ class WheelsetContact:
                 memory=new_memory if remember and self.settings.uses_previous else None)
             s = _rigid_stage(rigid)
             result.rigid_solution, result.rigid_work = s, s.work
-            result.vertical, result.roll = s.vertical, s.roll
+            if s.evaluations:  # (found, or its best estimate; none when the search raised)
+                result.vertical, result.roll = s.vertical, s.roll
         result.wall_time = perf_counter() - t0
         return result
 
@@ -532,7 +533,8 @@ class WheelsetContact:
             patches, creepages, mem = self._pass(side, pose, control, creep, kin, time,
                                                  previous, first, approach)
             self._finish(wheel, patches, creepages, pose)
-            _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous))
+            _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous),
+                             creep_in_load=False)
             return wheel, mem if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
         q = control.load
@@ -576,7 +578,8 @@ class WheelsetContact:
                 merge_approaches(self.track, self.wheelset, pose, side, MIN_LOBE), q,
                 self.settings.load_tolerance, noisy=True)
             for p in patches:  # (the total's roots, not the normal share's of a pass)
-                p.load_other, p.load_unique = other, other is None
+                p.load_other = other
+                p.load_unique = other is None and load_unique(patches, self.settings.friction)
             if other is not None and not load_met(patches, q, self.settings.load_tolerance,
                                                   self.settings.tangential_tolerance):
                 failure = ("the vertical load with creep forces did not converge at the "
@@ -589,7 +592,8 @@ class WheelsetContact:
                                     self.settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
             wheel.message = failure
-        _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous))
+        _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous),
+                         creep_in_load=True)
         return wheel, mem if keep else []
 
     def _finish(self, wheel: WheelContact, patches: list[PatchSolution], creepages: list,
@@ -692,14 +696,15 @@ class WheelsetContact:
 
 
 def _mark_uniqueness(wheel: WheelContact, patches: list[PatchSolution], friction: float,
-                     warm: bool) -> None:
+                     warm: bool, creep_in_load: bool) -> None:
     """Set the wheel's :attr:`~WheelContact.load_unique`, and say in an ok wheel's message
     why its load may have another solution: a merge of patches
     (:attr:`~railcontact.contact.results.PatchSolution.load_other`; the smallest approach
     is returned, from warm and cold starts alike) or a steep patch's creep force
-    (:func:`~railcontact.contact.loadloop.load_unique`; the root the start leads to)."""
-    steep = any(p.tangential is not None for p in patches) and not load_unique(patches,
-                                                                                friction)
+    (:func:`~railcontact.contact.loadloop.load_unique`; the root the start leads to), the
+    latter only where the creep forces are in the load (``creep_in_load``: load control
+    with :attr:`ContactSettings.load_includes_creep`)."""
+    steep = creep_in_load and not load_unique(patches, friction)
     other = next((p.load_other for p in patches if p.load_other is not None), None)
     wheel.load_unique = not steep and other is None
     if wheel.load_unique or wheel.status != OK:
@@ -801,7 +806,7 @@ def _rigid_stage(rigid: RigidWheelset) -> RigidSolution:
     converged that says why, with the work done until then."""
     try:
         return rigid.solve()
-    except (RailContactError, ConvergenceError) as exc:  # a wheel not solved at a roll
+    except (RailContactError, SolverError) as exc:  # a wheel not solved at a roll
         done = rigid.approach_at.work  # (this step's: all of it is this search's)
         return RigidSolution(0.0, 0.0, converged=False,
                              message=f"rigid wheelset's vertical displacement and roll: {exc}",
