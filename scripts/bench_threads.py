@@ -28,6 +28,7 @@ the two runs cannot overlap). numpy's own loops, which release the GIL on large 
 count as holding it here.
 
 Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile]
+                                      [--switch-interval SECONDS]
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ import math
 import os
 import pkgutil
 import queue
+import sys
 import threading
 import time
 from collections import defaultdict
@@ -226,7 +228,11 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--profile", action="store_true", help="time the GIL-free calls of "
                     "one run instead (where the time under the GIL remains)")
+    ap.add_argument("--switch-interval", type=float, default=None, help="sys."
+                    "setswitchinterval [s] for the run (Python's default: 0.005)")
     args = ap.parse_args()
+    if args.switch_interval is not None:
+        sys.setswitchinterval(args.switch_interval)
     if args.profile:
         profile(args.steps)
         return
