@@ -439,23 +439,22 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     q = control.load
     passes: list[list[PatchSolution]] = []
 
-    def residual(qn: float) -> tuple[float, list[PatchSolution]]:
+    def wheel_pass(normal: Control) -> tuple[float, list[PatchSolution]]:
+        """The wheel solved with its normal problem under ``normal`` (a normal share or
+        an approach), then the tangential one: (vertical force - q [N], patches)."""
         last = passes[-1] if passes else None  # each pass starts from the one before
-        ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(load=qn),
-                                                settings, pair, estimate_for, last,
+        ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, normal, settings,
+                                                pair, estimate_for, last,
                                                 reference=reference),
                              settings, pair, last, traction_for)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
+    def residual(qn: float) -> tuple[float, list[PatchSolution]]:
+        return wheel_pass(Control(load=qn))
+
     def at_approach(a: float) -> tuple[float, list[PatchSolution]]:
-        last = passes[-1]
-        ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, Control(penetration=a),
-                                                settings, pair, estimate_for, last,
-                                                reference=reference),
-                             settings, pair, last, traction_for)
-        passes.append(ps)
-        return vertical_force(ps) - q, ps
+        return wheel_pass(Control(penetration=a))
 
     ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
     other = None

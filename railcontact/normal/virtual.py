@@ -318,12 +318,7 @@ def _strip_amplitudes(influence, rhs):  # pragma: no cover - compiled
     negative is set to zero and the rest solved again (at most ny times). Returns ``c``
     and whether each strip is in the final set (bool, ny)."""
     ny = rhs.size
-    active = np.zeros(ny, dtype=numba.boolean)
-    for k in range(ny):
-        for j in range(ny):
-            if influence[j, k] != 0.0:
-                active[k] = True
-                break
+    active = _nonzero_columns(influence)
     c = np.zeros(ny)
     for _ in range(ny):
         idx = np.flatnonzero(active)
@@ -350,18 +345,25 @@ def _strip_amplitudes(influence, rhs):  # pragma: no cover - compiled
     return c, active
 
 
+@numba.njit(cache=True, nogil=True)
+def _nonzero_columns(a):  # pragma: no cover - compiled
+    """Whether each column of the 2-D array ``a`` holds a nonzero value (bool, a.shape[1])."""
+    out = np.zeros(a.shape[1], dtype=numba.boolean)
+    for k in range(a.shape[1]):
+        for j in range(a.shape[0]):
+            if a[j, k] != 0.0:
+                out[k] = True
+                break
+    return out
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _hold_into_empty(shape, amplitudes):  # pragma: no cover - compiled
     """Give each strip whose shape is empty (``x_l`` within half an element of 0: no
     element centre inside) the amplitude of the nearest strip that has one (the lower on
     a tie), in place: on a finer grid such a strip's rows do carry pressure."""
     nx, ny = shape.shape
-    full = np.zeros(ny, dtype=numba.boolean)
-    for j in range(ny):
-        for i in range(nx):
-            if shape[i, j] != 0.0:
-                full[j] = True
-                break
+    full = _nonzero_columns(shape)
     source = amplitudes.copy()
     for j in range(ny):
         if full[j]:

@@ -540,11 +540,17 @@ class WheelsetContact:
         q = control.load
         passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
 
-        def residual(qn: float) -> tuple[float, tuple]:
+        def wheel_pass(normal: Control) -> tuple[float, tuple]:
             source = passes[-1][2] if passes else first  # later passes: the one before
-            passes.append(self._pass(side, pose, Control(load=qn), creep, kin, time, previous,
+            passes.append(self._pass(side, pose, normal, creep, kin, time, previous,
                                      source, None if passes else approach))
             return vertical_force(passes[-1][0]) - q, passes[-1]
+
+        def residual(qn: float) -> tuple[float, tuple]:
+            return wheel_pass(Control(load=qn))
+
+        def at_approach(a: float) -> tuple[float, tuple]:  # (after the load loop's passes)
+            return wheel_pass(Control(penetration=a))
 
         estimate_seconds = 0.0  # the cold estimate's time, charged to the wheel's work
         if own:  # the previous step's creep share (the rolled solves: this step's)
@@ -562,11 +568,6 @@ class WheelsetContact:
             share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
                                             self.settings.friction)
             estimate_seconds = perf_counter() - t0
-        def at_approach(a: float) -> tuple[float, tuple]:
-            passes.append(self._pass(side, pose, Control(penetration=a), creep, kin, time,
-                                     previous, passes[-1][2]))
-            return vertical_force(passes[-1][0]) - q, passes[-1]
-
         start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
         (patches, creepages, mem), failure = creep_load_secant(
             residual, q, start, self.settings.load_tolerance)
