@@ -39,6 +39,28 @@ SHA256 = {  # the files as their sources have them, byte for byte
         "5a431b69bd7ae8418b641412da6fdf1d852f4d9865080875cf3f0f3e874e3588",
     CONTACT_REFERENCE / "wheelrail_dx0.5.csv":
         "d88f19eb00002a1d4c0a6cfecefb2cc1983dff9201a5288e6c760c7075460484",
+    PROFILES / "MBench_S1002_coars.prw":
+        "0b8764061f845882fe839c2048e88458a627aa187857cc872b047ff218f1ca04",
+    PROFILES / "r300_wide.prr":
+        "21a256c48c52ecd1cb1a531b56120c6a730135ed0e2afaea1b6a327555c3d13b",
+    PROFILES / "worn_high_mileage.prw":
+        "2fb3aad3cdbc044efe9aa21c94530116ed7343f71659dd5a4b8c8a817aa0020d",
+    CONTACT_REFERENCE / "track" / "track_public.csv":
+        "74a65ada6eaec33c826ce35e759b79f43a5f44c7d58f65dfac2fca8c45a338b1",
+    **{CONTACT_REFERENCE / "track" / "inp" / name: digest for name, digest in (
+        ("trk_A_left.inp", "ede7ca1c6678077cfd5cfe99126357c94e6be984f70d73956b46522d618200f3"),
+        ("trk_A_right.inp", "981436676e7202c78feed287d541a23f2baefa98f3a8336e85c7152244d797c6"),
+        ("trk_B_left.inp", "69d7077f50b98e7df2a00ac3877186d1e55d614eeae55769e5e6c8c9378ae0e4"),
+        ("trk_B_right.inp", "f7d1c96f246e28efd30fa0dd9d807474f2d62439a9b1628338ee506bf072759d"),
+        ("trk_C_C1_left_r300_wide.inp",
+         "c2b583952000a7a02c2e85e5d8daaef68ff18bd03125d0128cfd7f2964089ed5"),
+        ("trk_C_C1_right_UIC60_v3.inp",
+         "55860d536a8a2b0950916aca67ee81382e7061fa26c8c3f36492dafe8961d8fb"),
+        ("trk_C_C2_left_UIC60_v3.inp",
+         "57f6339e67116ea04c53ff69c2be2e031dc87563a66e3e7b5e4531824154ca19"),
+        ("trk_C_C2_right_r300_wide.inp",
+         "45d1b3e7593d86623368032bc92c105c7bd349db0cd8712c6916f0b81f13aab2"),
+    )},
 }
 
 
