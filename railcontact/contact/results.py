@@ -5,12 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
 from ..geometry.search import ContactPoint, ReferencePoint
 from ..halfspace.hertz import HertzSolution
 from ..normal import NormalResult
 from ..normal.starterror import EstimateError, estimate_error
 from ..settings import Case
-from ..settings.convention import reported_forces
+from ..settings.convention import reported_forces, side_creepage
 from ..tangential import TangentialResult
 from ..tangential.strips import StripResult
 
@@ -112,6 +114,18 @@ class PatchSolution:
     """What the last normal solve started from when it was not the estimate named by
     :attr:`estimate`: "previous load pass" (a load loop's pass before, on the same
     contact point); None: the estimate."""
+    creepage: tuple[float, float, float] | None = None
+    """The creepages (xi [-], eta [-], phi [1/m]) the tangential problem was solved with,
+    railcontact's (side frame, body 1 the wheel; :attr:`reported_creepage` gives them in
+    :attr:`convention`); None without a tangential solution."""
+    velocity: float | None = None
+    """The reference velocity [m/s] of the creepages (the patch's rolling speed, from the
+    case's ``[kinematics]``: :mod:`railcontact.geometry.kinematics`); None when the case
+    gives creepages, not velocities."""
+    kinematic_radius: float | None = None
+    """The rolling radius [m] where the ``[kinematics]`` creepages were taken: the distance
+    of the wheel's point below the reference point from the axle (CONTACT's ``r(cp)``); None
+    when the case gives creepages."""
 
     @property
     def estimate_error(self) -> EstimateError | None:
@@ -133,6 +147,42 @@ class PatchSolution:
         if self.geometry is None:  # a quadratic patch: Kalker's convention, as CONTACT's
             return (*t.force, t.spin_moment)
         return reported_forces(*t.force, t.spin_moment, self.geometry.side, self.convention)
+
+    @property
+    def reported_creepage(self) -> tuple[float, float, float] | None:
+        """:attr:`creepage` in :attr:`convention` (CONTACT's: rail minus wheel, its
+        mirroring; :mod:`railcontact.settings.convention`)."""
+        if self.creepage is None:
+            return None
+        if self.geometry is None:
+            return self.creepage
+        return side_creepage(self.creepage, self.geometry.side, self.convention)
+
+    @property
+    def frictional_power_per_speed(self) -> float | None:
+        """The traction times the relative slip (slip velocity over the rolling speed)
+        integrated over the patch [N = W per m/s]: the frictional power at unit rolling
+        speed, negative (the traction opposes the slip). None without a BEM tangential
+        solution (the strip models have no slip field)."""
+        t = self.tangential
+        if t is None or not hasattr(t, "slip"):
+            return None
+        g = t.grid
+        return float(np.sum(np.asarray(t.traction) * np.asarray(t.slip))) * g.dx * g.dy
+
+    @property
+    def frictional_power(self) -> float | None:
+        """Frictional power of the patch [W]: the traction times the local slip velocity
+        integrated over the patch, ``V_ref`` (:attr:`velocity`) times
+        :attr:`frictional_power_per_speed`; negative, the power dissipated (CONTACT's
+        sign; the same in both conventions). None without a rolling speed (creepages
+        given) or without a slip field. In steady rolling it equals
+        ``V_ref (F_x xi + F_y eta + M_z phi)`` with the forces and creepages of one
+        convention (the energy balance; on a grid to the discretisation's accuracy)."""
+        per = self.frictional_power_per_speed
+        if per is None or self.velocity is None:
+            return None
+        return self.velocity * per
 
     def _estimate_error_dict(self) -> dict[str, Any] | None:
         e = self.estimate_error
@@ -182,6 +232,17 @@ class PatchSolution:
                 "wall_time": t.wall_time, "model": self.tangential_model,
                 "estimate": self.tangential_estimate,
             }
+            if self.creepage is not None:
+                d["tangential"]["creepage"] = list(self.reported_creepage)
+                d["creepage"] = list(self.reported_creepage)
+            per = self.frictional_power_per_speed
+            if per is not None:
+                d["tangential"]["frictional_power_per_speed"] = per
+            if self.velocity is not None:
+                d["tangential"]["velocity"] = self.velocity
+                d["tangential"]["kinematic_radius"] = self.kinematic_radius
+            if self.frictional_power is not None:
+                d["frictional_power"] = self.frictional_power
         if self.hertz is not None:
             h = self.hertz
             d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,

@@ -46,6 +46,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import CaseError, ConvergenceError, RailContactError
+from ..geometry.kinematics import PatchKinematics, WheelsetMotion, patch_kinematics
 from ..geometry.profiles import read_profile
 from ..geometry.roll import contact_roll, first_contact_gap
 from ..geometry.search import (
@@ -54,12 +55,13 @@ from ..geometry.search import (
     at_reference,
     contact_points,
     count_contacts,
+    least_gap,
     merge_approaches,
     overlap_box,
     reference_point,
     run_on_rail,
 )
-from ..geometry.track import Pose, Track, Wheelset
+from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import (
     HertzSolution,
@@ -394,12 +396,41 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
     return res
 
 
+KinematicsOf = Callable[[PatchSolution, list[PatchSolution]], PatchKinematics]
+"""``kinematics_of(patch, patches)``: the creepages of a normal-solved ``patch`` of a wheel
+whose pass solved ``patches`` (:func:`wheel_kinematics`)."""
+
+
+def wheel_kinematics(track: Track, ws: Wheelset, pose: Pose, side: str,
+                     motion: WheelsetMotion) -> KinematicsOf:
+    """The creepages of the ``side`` wheel's patches from the velocities ``motion``
+    (:func:`~railcontact.geometry.kinematics.patch_kinematics`): at each patch's origin
+    (its reference point), with the wheel's point at its normal approach below it, and the
+    wheelset centre where the pass's vertical approach puts it (the wheel lowered from
+    first contact by that approach). The rail's origin is that of ``track``'s rail (with
+    its deviation)."""
+    sgn = SIDES[side]
+    u0, z0 = track.rail_origin
+    origin = (sgn * u0, z0)
+
+    def of(patch: PatchSolution, patches: list[PatchSolution]) -> PatchKinematics:
+        cp = patch.geometry
+        height = ws.radius - least_gap(track, ws, pose, side) - vertical_approach(patches)
+        return patch_kinematics(side, cp.position, cp.contact_angle, patch.normal.penetration,
+                                (0.0, pose.lateral, height), pose.roll, pose.yaw, origin,
+                                motion)
+    return of
+
+
 def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
                     pair: ElasticPair, previous: list[PatchSolution] | None = None,
-                    traction_for: TractionFor | None = None) -> list[PatchSolution]:
+                    traction_for: TractionFor | None = None,
+                    kinematics_of: KinematicsOf | None = None) -> list[PatchSolution]:
     """The tangential solution of each loaded patch, started from the traction of the same
     patch in ``previous`` (the wheel's last load pass) where there is one, else from
-    ``traction_for(patch)`` when given."""
+    ``traction_for(patch)`` when given. With ``kinematics_of`` each patch is solved with
+    the creepages it gives at the patch (and keeps their reference velocity), else with
+    the settings' creepages."""
     for p in patches:
         if p.normal.force > 0:
             last = same_patch(previous, p.geometry)
@@ -408,8 +439,13 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
                 start = traction_for(p)
             if start is not None and start[0] is None:
                 start = None
+            creepage = None
+            if kinematics_of is not None:
+                kin = kinematics_of(p, patches)
+                creepage, p.velocity = kin.creepage, kin.velocity
+                p.kinematic_radius = kin.rolling_radius
             solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft,
-                                   previous=start)
+                                   creepage=creepage, previous=start)
     return patches
 
 
@@ -431,11 +467,13 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
     if settings.tangential is None:
         return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                   reference=reference)
+    kinematics_of = None if settings.kinematics is None else wheel_kinematics(
+        track, ws, pose, side, settings.kinematics)
     if not control.by_load or negligible_load(control.load):
         return _add_tangential(
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                reference=reference),
-            settings, pair, traction_for=traction_for)
+            settings, pair, traction_for=traction_for, kinematics_of=kinematics_of)
     q = control.load
     passes: list[list[PatchSolution]] = []
 
@@ -446,7 +484,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, normal, settings,
                                                 pair, estimate_for, last,
                                                 reference=reference),
-                             settings, pair, last, traction_for)
+                             settings, pair, last, traction_for, kinematics_of)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -797,6 +835,13 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
         raise CaseError(f"a wheel-rail case needs a wheel-rail geometry, got {type(geo).__name__}")
     track, ws, pose = build_geometry(geo)
     control, settings, pair = case.normal.control, case.patch_settings, case.pair
+    placed = track  # the other wheel's rail: where it is placed
+    if geo.rail_deviated:  # (one side, Case checks) its rail deviated
+        try:
+            track = track.deviated(geo.side, geo.rail_offset, geo.rail_roll)
+            _ = track.side_rail
+        except RailContactError as exc:
+            raise CaseError(f"[geometry] rail_offset, rail_roll: {exc}") from None
     convention = case.convention  # CONTACT's: always at the reference point
     reference = geo.patch_frame == "reference" or convention == "contact"
     if reference:  # the reference point is an element's centre, as in CONTACT's grids
@@ -804,7 +849,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
     sides = ["left", "right"] if geo.side == "both" else [geo.side]
     for other in {"left", "right"} - set(sides):  # the wheelset is one body
         try:
-            check_on_rail(contact_points(track, ws, pose, other, 0.0)[0], ws)
+            check_on_rail(contact_points(placed, ws, pose, other, 0.0)[0], ws)
         except RailContactError as exc:
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
                             f"{other} wheel off its rail: {exc}") from None

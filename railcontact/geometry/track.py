@@ -8,7 +8,11 @@ rotations about Z and X: in the side frame the yaw is ``s psi`` and the roll ``s
 
 Rail placement (side frame): the profile is canted by the inclination with its top towards
 the track centre, its highest point at ``Z = 0``, and its gauge point - the gauge-side
-point ``gauge_depth`` (14 mm) below the top - at ``u = gauge / 2``.
+point ``gauge_depth`` (14 mm) below the top - at ``u = gauge / 2``. A deviation of the rail
+from that place (an irregularity, a gauge change) then turns the placed profile about its
+own origin by ``tilt`` (the same sense as the inclination) and shifts it by ``shift``
+``(du, dZ)``, as CONTACT places a rail with its deviations (so a tilted rail's gauge point
+and top move a little); :meth:`Track.deviated` sets them from the track frame's values.
 
 Wheel placement: the wheel profile coordinate ``S`` (y of the wheel profile) and the axial
 coordinate ``eta`` (from the wheelset centre towards the field side) are related by the
@@ -46,12 +50,20 @@ class Track:
         Track gauge [m], measured ``gauge_depth`` below the top of rail.
     gauge_depth
         Depth of the gauge measurement [m] (14 mm).
+    shift
+        Deviation of the placed rail (du, dZ) [m], side frame: du towards the field side,
+        dZ up.
+    tilt
+        Deviation of the placed rail's angle [rad], side frame, about the profile's origin:
+        positive turns its top towards the track centre (as the inclination).
     """
 
     rail: Profile
     inclination: float = math.atan(1 / 40)
     gauge: float = 1.435
     gauge_depth: float = 0.014
+    shift: tuple[float, float] = (0.0, 0.0)
+    tilt: float = 0.0
 
     def __post_init__(self) -> None:
         if self.rail.kind != "rail":
@@ -62,11 +74,37 @@ class Track:
                                    f"0.025), got {inc:g}")
         check_positive("gauge", self.gauge, "m")
         check_positive("gauge_depth", self.gauge_depth, "m")
+        du, dz = (check_finite("rail shift", v, "m") for v in self.shift)
+        if max(abs(du), abs(dz)) > 0.05:
+            raise RailContactError(f"a rail deviation must be small (|shift| <= 0.05 m), got "
+                                   f"({du:g}, {dz:g}) m")
+        object.__setattr__(self, "shift", (float(du), float(dz)))
+        if abs(check_finite("rail tilt", self.tilt, "rad")) > 0.1:
+            raise RailContactError(f"a rail's roll must be a small angle (|roll| <= 0.1 rad), "
+                                   f"got {self.tilt:g}")
+
+    def deviated(self, side: str, offset: tuple[float, float] = (0.0, 0.0),
+                 roll: float = 0.0) -> Track:
+        """This track with the ``side`` rail deviated (the other rail of the returned track
+        is not meant to be used): ``offset`` (dY, dZ) [m] and ``roll`` [rad, about X] in the
+        track frame (Y to the left, Z up), the roll about the rail profile's origin after
+        the rail is placed."""
+        sgn = SIDES[side]
+        return Track(self.rail, self.inclination, self.gauge, self.gauge_depth,
+                     (sgn * float(offset[0]), float(offset[1])), sgn * float(roll))
+
+    @property
+    def rail_origin(self) -> tuple[float, float]:
+        """The rail profile's origin placed in the side frame (u, Z) [m]."""
+        _, _, _, du, dz = self.placement
+        return du, dz
 
     @cached_property
     def placement(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
         """The rail profile canted: profile y, canted (u, z) and the offsets (du, dz) that
-        place it (gauge point at gauge/2, top at 0), so that placed = (u + du, z + dz)."""
+        place it (gauge point at gauge/2, top at 0), so that placed = (u + du, z + dz).
+        With a deviation (:attr:`shift`, :attr:`tilt`) the offsets are those of the rail
+        without it plus the shift, and (u, z) are turned by the tilt too."""
         r = self.rail
         y = np.linspace(*r.bounds, 4001)
         z = r.height(y)
@@ -79,7 +117,11 @@ class Track:
             raise RailContactError(f"rail profile {r.name!r} does not reach {self.gauge_depth} m "
                                    "below its top on the gauge side; cannot place the gauge")
         ug = float(np.interp(-self.gauge_depth, zc[gauge_side] + dz, uc[gauge_side]))
-        return y, uc, zc, self.gauge / 2 - ug, dz
+        du = self.gauge / 2 - ug
+        if self.tilt != 0.0:
+            c, s = math.cos(self.inclination + self.tilt), math.sin(self.inclination + self.tilt)
+            uc, zc = y * c - z * s, y * s + z * c
+        return y, uc, zc, du + self.shift[0], dz + self.shift[1]
 
     @cached_property
     def side_rail(self) -> Profile:

@@ -15,6 +15,7 @@ from .case import (
     Case,
     Control,
     GridSettings,
+    KinematicsSettings,
     MaterialSettings,
     NormalSettings,
     PatchSettings,
@@ -28,7 +29,8 @@ from .reference import markdown, setting_rows
 from .timestep import ContactSettings, FMUModes
 
 __all__ = [
-    "Case", "ContactSettings", "Control", "FMUModes", "GridSettings", "MaterialSettings",
+    "Case", "ContactSettings", "Control", "FMUModes", "GridSettings", "KinematicsSettings",
+    "MaterialSettings",
     "NormalSettings", "PatchSettings", "QuadraticGeometry", "TangentialSettings",
     "WheelRailGeometry", "load_case", "markdown", "setting_rows", "validate_case",
 ]

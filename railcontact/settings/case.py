@@ -25,6 +25,9 @@ Example::
     [tangential]          # optional: steady rolling in +x
     creepage = [1e-3, 0.0, 0.0]
     friction = 0.4
+
+    [kinematics]          # wheel-rail, instead of creepage: velocities [m/s, rad/s]
+    speed = 30.0
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from ..errors import CaseError
+from ..geometry.kinematics import WheelsetMotion
 from ..geometry.track import Track, Wheelset
 from ..halfspace.materials import ElasticPair, Material
 from .choices import (
@@ -180,6 +184,18 @@ class WheelRailGeometry(Record):
                                 "or 'equal-loads' (both carry [normal] load)",
                                 choices=ROLL_MODES)
     side: str = setting("left", "choice", "", "wheel(s) to solve", choices=CASE_SIDES)
+    curvature: float = setting(0.0, "float", "1/m", "track curvature, positive when the track "
+                               "turns left (towards +Y); enters the [kinematics] creepages "
+                               "only", minimum=-0.1, maximum=0.1)
+    rail_offset: tuple[float, float] = setting((0.0, 0.0), "floats2", "m",
+                                               "deviation [dY, dZ] of the rail of the "
+                                               "case's side from its place (Y to the left, "
+                                               "Z up; a gauge change is a lateral offset)",
+                                               minimum=-0.05, maximum=0.05)
+    rail_roll: float = setting(0.0, "float", "rad", "roll of the rail of the case's side "
+                               "about X (right-hand rule: positive turns its head to the "
+                               "right), about the rail profile's origin after the rail is "
+                               "placed", minimum=-0.1, maximum=0.1)
     patch_frame: str = setting("reference", "choice", "",
                                "origin of each patch's frame (where its contact angle, rolling "
                                "radius, spin and moments are taken): 'reference' = CONTACT's "
@@ -188,6 +204,11 @@ class WheelRailGeometry(Record):
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.TYPE, **super().to_dict()}
+
+    @property
+    def rail_deviated(self) -> bool:
+        """Whether the rail of the case's side is offset or rolled."""
+        return self.rail_offset != (0.0, 0.0) or self.rail_roll != 0.0
 
 
 @document
@@ -332,14 +353,50 @@ class TangentialSettings(Record):
                                  minimum=0.0, maximum=1.0)
 
 
+@document
+@dataclass(frozen=True)
+class KinematicsSettings(Record):
+    """The wheelset's and the rail's velocities (wheel-rail cases), instead of
+    ``[tangential] creepage``: each patch's creepages follow from rigid-body kinematics at
+    its reference point, with the track curvature (``[geometry] curvature``), as CONTACT
+    forms them (:mod:`railcontact.geometry.kinematics`). Track frame: X forward, Y to the
+    left, Z up."""
+
+    TABLE: ClassVar[str] = "kinematics"
+    speed: float = setting(MISSING, "float", "m/s", "forward speed V of the wheelset",
+                           minimum=0.0, open_min=True, maximum=1000.0, required=True)
+    lateral_velocity: float = setting(0.0, "float", "m/s", "lateral velocity of the wheelset "
+                                      "centre (to the left)", minimum=-100.0, maximum=100.0)
+    vertical_velocity: float = setting(0.0, "float", "m/s", "vertical velocity of the "
+                                       "wheelset centre (up)", minimum=-100.0, maximum=100.0)
+    roll_rate: float = setting(0.0, "float", "rad/s", "roll rate of the wheelset (about X)",
+                               minimum=-100.0, maximum=100.0)
+    yaw_rate: float = setting(0.0, "float", "rad/s", "yaw rate of the wheelset (about Z: "
+                              "positive turns its nose to the left)", minimum=-100.0,
+                              maximum=100.0)
+    spin_speed: float | None = setting(None, "float", "rad/s", "angular speed of the axle, "
+                                       "positive when rolling forward (default: speed / "
+                                       "[geometry] wheel_radius, pure rolling at the "
+                                       "nominal radius)", minimum=-1e4, maximum=1e4)
+    rail_velocity: tuple[float, float] = setting((0.0, 0.0), "floats2", "m/s",
+                                                 "velocity [vY, vZ] of the rail of the "
+                                                 "case's side", minimum=-100.0, maximum=100.0)
+    rail_roll_rate: float = setting(0.0, "float", "rad/s", "roll rate of the rail of the "
+                                    "case's side about X, about its profile's origin",
+                                    minimum=-100.0, maximum=100.0)
+
+
 @dataclass(frozen=True)
 class PatchSettings:
     """How every patch of a problem is solved: its grid, the normal BEM and, when there is
-    a tangential problem, the tangential model (None: normal contact only)."""
+    a tangential problem, the tangential model (None: normal contact only); with
+    ``kinematics`` each patch's creepages follow from the velocities (the tangential
+    settings' creepage is then not used)."""
 
     grid: GridSettings
     normal: NormalSettings
     tangential: TangentialSettings | None = None
+    kinematics: WheelsetMotion | None = None
 
 
 CASE_TABLES: dict[str, tuple[type[Record], ...]] = {
@@ -348,6 +405,7 @@ CASE_TABLES: dict[str, tuple[type[Record], ...]] = {
     "grid": (GridSettings,),
     "normal": (NormalSettings,),
     "tangential": (TangentialSettings,),
+    "kinematics": (KinematicsSettings,),
 }
 """The tables of a case file and the records they become."""
 _REQUIRED_TABLES = ("material", "geometry", "normal")
@@ -368,11 +426,23 @@ class Case:
     tangential: TangentialSettings | None = None
     name: str = "case"
     convention: str = "railcontact"
+    kinematics: KinematicsSettings | None = None
 
     def __post_init__(self) -> None:
         _ = self.normal.control  # raises unless exactly one of load and penetration
         check_convention(self.convention)
         geo = self.geometry
+        if self.kinematics is not None:
+            if not isinstance(geo, WheelRailGeometry):
+                raise CaseError("[kinematics] is for wheel-rail cases (a quadratic case "
+                                "takes [tangential] creepage)")
+            if self.tangential is None:
+                raise CaseError("[kinematics] needs a [tangential] table (friction, model)")
+        if isinstance(geo, WheelRailGeometry) and geo.rail_deviated and (
+                geo.side == "both" or isinstance(geo.roll, str)):
+            raise CaseError("[geometry] rail_offset and rail_roll deviate the rail of the "
+                            "case's side: give side = 'left' or 'right' and a roll angle "
+                            "(not 'rigid' or 'equal-loads', which place both wheels)")
         if isinstance(geo, WheelRailGeometry):
             if geo.roll == "equal-loads" and self.normal.load is None:
                 raise CaseError("[geometry] roll = 'equal-loads' needs [normal] load (the load "
@@ -395,7 +465,20 @@ class Case:
     @property
     def patch_settings(self) -> PatchSettings:
         """The grid, normal and tangential settings of the case's patches."""
-        return PatchSettings(self.grid, self.normal, self.tangential)
+        return PatchSettings(self.grid, self.normal, self.tangential, self.motion)
+
+    @property
+    def motion(self) -> WheelsetMotion | None:
+        """The velocities of ``[kinematics]`` with the track curvature of ``[geometry]``
+        (the spin speed for pure rolling at the nominal radius when not given); None
+        without ``[kinematics]``."""
+        k, geo = self.kinematics, self.geometry
+        if k is None or not isinstance(geo, WheelRailGeometry):
+            return None
+        spin = k.spin_speed if k.spin_speed is not None else k.speed / geo.wheel_radius
+        return WheelsetMotion(k.speed, spin, k.lateral_velocity, k.vertical_velocity,
+                              k.roll_rate, k.yaw_rate, geo.curvature, k.rail_velocity,
+                              k.rail_roll_rate)
 
     @property
     def pair(self) -> ElasticPair:
@@ -419,11 +502,19 @@ class Case:
         problems: list[str] = [f"missing table [{t}]" for t in _REQUIRED_TABLES
                                if t not in case]
         records: dict[str, Any] = {}
+        tangential = case.get("tangential")
+        by_kinematics = "kinematics" in case and isinstance(tangential, Mapping)
+        if by_kinematics and "creepage" in tangential:
+            problems.append("give [tangential] creepage or a [kinematics] table, not both "
+                            "(the kinematics give each patch its creepages)")
         for table in CASE_TABLES:
             if table not in case:
                 continue
+            values = case[table]
+            if table == "tangential" and by_kinematics and "creepage" not in values:
+                values = {**values, "creepage": (0.0, 0.0, 0.0)}  # not used: kinematics
             try:
-                records[table] = _record(table, case[table])
+                records[table] = _record(table, values)
             except CaseError as exc:
                 problems.append(str(exc))
         normal = case.get("normal")
@@ -450,6 +541,8 @@ class Case:
             rec = getattr(self, table)
             if rec is not None:
                 out[table] = rec.to_dict()
+        if self.kinematics is not None and "tangential" in out:
+            del out["tangential"]["creepage"]  # the kinematics give them
         return out
 
 

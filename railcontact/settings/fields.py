@@ -27,7 +27,8 @@ class Spec:
     kind
         ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"str?"`` (a string that may be
         empty: not set), ``"choice"``, ``"ints2"`` (a pair of
-        counts), ``"range"`` ([min, max], increasing), ``"floats3"`` (three numbers),
+        counts), ``"range"`` ([min, max], increasing), ``"floats2"`` (two numbers: a vector in a
+        plane, e.g. [y, z]), ``"floats3"`` (three numbers),
         ``"floats12"`` (one number, or one per body) or ``"float|choice"`` (a number or one
         of ``choices``).
     unit
@@ -167,6 +168,10 @@ class Record:
         if kind == "ints2":
             items = cls._sequence(where, value, 2, "[nx, ny]")
             return tuple(cls._integer(f"{where}[{i}]", spec, v) for i, v in enumerate(items))
+        if kind == "floats2":
+            items = cls._sequence(where, value, 2, f"of two numbers ({spec.unit})")
+            return tuple(cls._number(f"{where}[{i}]", unit, spec, v)
+                         for i, v in enumerate(items))
         if kind == "floats3":
             items = cls._sequence(where, value, 3, f"[xi, eta, phi] ({spec.unit})")
             return tuple(cls._number(f"{where}[{i}]", "", spec, v)

@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields
 
 from .case import (
     GridSettings,
+    KinematicsSettings,
     MaterialSettings,
     NormalSettings,
     QuadraticGeometry,
@@ -18,7 +19,7 @@ from .timestep import ContactSettings, FMUModes
 
 RECORDS: tuple[type[Record], ...] = (
     MaterialSettings, QuadraticGeometry, WheelRailGeometry, GridSettings, NormalSettings,
-    TangentialSettings, ContactSettings, FMUModes)
+    TangentialSettings, KinematicsSettings, ContactSettings, FMUModes)
 """Every settings record, in the order of the reference."""
 
 
@@ -73,7 +74,7 @@ def markdown() -> str:
            "`railcontact settings`; do not edit by hand. SI units; `-` is dimensionless "
            "(`1` in the FMU's modelDescription). "
            "A case file holds the tables `[material]`, `[geometry]` (`type = \"quadratic\"` "
-           "or `\"wheel-rail\"`), `[grid]`, `[normal]` and `[tangential]`; "
+           "or `\"wheel-rail\"`), `[grid]`, `[normal]`, `[tangential]` and `[kinematics]`; "
            "`ContactSettings` and `FMUModes` are the time step's and the FMU's.", ""]
     for rec in RECORDS:
         title = f"`[{rec.TABLE}]` — `{rec.__name__}`" if rec.TABLE else f"`{rec.__name__}`"
