@@ -405,7 +405,23 @@ def read_simpack(path: str | Path) -> Profile:
         y, z = y[::-1], z[::-1]
     if y.size > 1 and y[0] > y[-1]:
         y, z = y[::-1], z[::-1]
+    if kind == "rail":
+        y, z = vertical_flanks_cut(y, z)
     return Profile(y, z, kind, p.stem)
+
+
+def vertical_flanks_cut(y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A rail profile's points (y increasing) without the vertical runs at its ends - the
+    vertical sides of an idealised rail head (CONTACT's ``r300_wide``), which a profile
+    z(y) cannot hold - but for the top point of each run, where the head's curve meets it.
+    The head above is kept as it is; a wheel does not reach below it (a gauge point lower
+    than it cannot be placed: :class:`~railcontact.geometry.track.Track` says so)."""
+    lo, hi = 0, y.size - 1
+    while lo < hi and y[lo + 1] == y[lo] and z[lo + 1] > z[lo]:
+        lo += 1
+    while hi > lo and y[hi - 1] == y[hi] and z[hi - 1] > z[hi]:
+        hi -= 1
+    return y[lo:hi + 1], z[lo:hi + 1]
 
 
 def read_xy(path: str | Path, kind: str, unit: str = "mm") -> Profile:

@@ -127,7 +127,9 @@ class Track:
     def side_rail(self) -> Profile:
         """The rail in the side frame: Z(u), canted and placed (see the module docstring)."""
         _, uc, zc, du, dz = self.placement
-        keep = np.concatenate([[True], np.diff(uc) > 0])  # drop any fold-back of the flank
+        # drop any fold-back of the flank (an undercut the wheel cannot reach: the points
+        # not beyond every point before them)
+        keep = np.concatenate([[True], uc[1:] > np.maximum.accumulate(uc)[:-1]])
         try:
             return Profile(uc[keep] + du, zc[keep] + dz, "rail", self.rail.name + " (placed)")
         except RailContactError as exc:
