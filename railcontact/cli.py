@@ -60,6 +60,13 @@ def _summary(sol) -> str:
             lines.append(f"  creep force    Fx = {fx:.6g} N, Fy = {fy:.6g} N"
                          + ("  (CONTACT's convention)" if ps.convention == "contact" else ""))
             lines.append(f"  spin moment    {mz:12.6g} N m")
+            c = ps.reported_creepage
+            if c is not None:
+                lines.append(f"  creepages      xi = {c[0]:.6g}, eta = {c[1]:.6g}, phi = "
+                             f"{c[2]:.6g} 1/m")
+            if ps.frictional_power is not None:
+                lines.append(f"  friction power {ps.frictional_power:12.6g} W   (at "
+                             f"{ps.velocity:.6g} m/s)")
             lines.append(f"  slip area      {t.slip_area_ratio:12.4f} of the contact area")
             lines.append(f"  max traction   {t.max_traction:12.6g} Pa")
             lines.append(f"  iterations     {t.iterations:12d}   ({t.message})")

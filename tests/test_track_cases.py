@@ -267,3 +267,13 @@ def test_kinematics_and_creepage_exclude_each_other():
     case["geometry"]["side"] = "both"
     with pytest.raises(rc.CaseError, match="rail of the case's side"):
         rc.solve(case)
+
+
+def test_example_case_file_is_contacts_curve_case(root):
+    """``models/cases/mbench_curve_r600.toml`` poses CONTACT's case A1_L_013 (curve of
+    600 m to the right, left wheel): its results meet the targets against CONTACT's."""
+    row = ROWS["A1_L_013"]
+    sol = rc.solve(root / "models" / "cases" / "mbench_curve_r600.toml")
+    assert sol.converged
+    diff = V.differences(V.railcontact_values(sol), V.contact_values(row), V.zone(row))
+    assert not {k: v for k, v in diff.items() if v[0] > 1.0}
