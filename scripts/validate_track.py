@@ -20,7 +20,11 @@ deviations, C profiles) the largest differences against the targets:
 
 It writes the rows to a CSV and a figure of the relative differences per case.
 
-Usage: python scripts/validate_track.py [--csv FILE] [--plot FILE] [--cases ID ...]
+Usage: python scripts/validate_track.py [--reference CSV] [--csv FILE] [--plot FILE]
+       [--cases ID ...]
+
+``--reference`` reads another CSV of CONTACT's results with the same columns (e.g. the cases
+kept back) instead of ``track_public.csv``.
 """
 
 from __future__ import annotations
@@ -64,9 +68,9 @@ QUANTITIES = [  # (key, label, unit, kind)
 ]
 
 
-def contact_rows(folder: Path = TRACK_REFERENCE) -> list[dict]:
-    """The rows of CONTACT's ``track_public.csv``."""
-    with open(folder / "track_public.csv", newline="") as f:
+def contact_rows(path: Path = TRACK_REFERENCE / "track_public.csv") -> list[dict]:
+    """The rows of CONTACT's ``track_public.csv`` (or another CSV with its columns)."""
+    with open(path, newline="") as f:
         return list(csv.DictReader(f))
 
 
@@ -267,11 +271,12 @@ def plot(rows: list[dict], path: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--reference", type=Path, default=TRACK_REFERENCE / "track_public.csv")
     ap.add_argument("--csv", type=Path, default=DOCS / "validate_track.csv")
     ap.add_argument("--plot", type=Path, default=DOCS / "validate_track.png")
     ap.add_argument("--cases", nargs="*", help="case ids (default: all)")
     args = ap.parse_args()
-    rows = contact_rows()
+    rows = contact_rows(args.reference)
     if args.cases:
         rows = [r for r in rows if r["case_id"] in args.cases]
     out = run(rows)
