@@ -13,6 +13,7 @@ from ..settings import Case
 from ..settings.convention import reported_forces
 from ..tangential import TangentialResult
 from ..tangential.strips import StripResult
+from .start import WarmStart
 
 
 @dataclass
@@ -112,6 +113,10 @@ class PatchSolution:
     """What the last normal solve started from when it was not the estimate named by
     :attr:`estimate`: "previous load pass" (a load loop's pass before, on the same
     contact point); None: the estimate."""
+    start: WarmStart | None = field(default=None, repr=False, compare=False)
+    """The start the last normal solve was given (:class:`~.start.WarmStart`); its
+    traction starts the patch's tangential BEM when no earlier load pass does. Not
+    reported."""
 
     @property
     def estimate_error(self) -> EstimateError | None:
