@@ -29,6 +29,7 @@ from .settings import ContactSettings, FMUModes
 from .status import Status
 from .table import TableContact  # (xarray, zarr: imported when a table is opened)
 from .timestep import Kinematics, WheelsetContact, WheelsetResult
+from .timestep.memory import StepMemory
 from .timestep.wheelset import (
     NOT_CONVERGED,
     OUT_OF_RANGE,
@@ -234,6 +235,9 @@ class Slave:
             raise S.StateError(f"a state of another FMU (model {state.model!r}, GUID "
                                f"{state.guid}; this one: model {self.model!r}, GUID "
                                f"{self.guid})")
+        if state.initialised and not isinstance(state.memory, StepMemory):
+            raise S.StateError(f"the state's memory is a {type(state.memory).__name__}, "
+                               "not a time step's memory (StepMemory)")
         shapes = [(state.real.shape, self.real.shape), (state.integer.shape,
                                                         self.integer.shape),
                   (state.control.shape, self.control.shape),

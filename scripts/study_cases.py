@@ -91,7 +91,8 @@ def normal_case(dy: float) -> dict:
         patch = {"reference": rp, "estimates": {}, "runs": {}, "runs_pk": {}}
         for est in NORMAL_ESTIMATES[1:]:
             settings = replace(ref.case.normal, estimate=est)
-            p0 = normal_estimate(settings, rp.hertz, cp.s, cp.f, cp.a_of_s, pair, control)(grid)
+            start = normal_estimate(settings, rp.hertz, cp.s, cp.f, cp.a_of_s, pair, control)
+            p0 = start.pressure_on(grid).pressure
             patch["estimates"][est] = np.clip(p0, 0.0, None)
         out["patches"].append(patch)
     for est, (pre, runs) in itertools.product(NORMAL_ESTIMATES, SOLVERS.items()):

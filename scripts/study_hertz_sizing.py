@@ -19,6 +19,7 @@ import math
 import numpy as np
 from _sweep import approach_for_load, displacements, paper_case, run_sweep
 
+from railcontact.contact import NormalStart, WarmStart
 from railcontact.contact.wheelrail import build_geometry, solve_wheel
 from railcontact.halfspace.hertz import hertz
 from railcontact.settings import validate_case
@@ -32,7 +33,7 @@ def hertz_by_load(pair):
     """An ``estimate_for`` hook: Hertz's pressure for the normal load Q / cos(gamma)."""
     def estimate_for(cp, hz, control):
         h = hertz(cp.A, cp.B, pair, load=Q / math.cos(cp.contact_angle))
-        return lambda grid: h.pressure(*grid.mesh())
+        return WarmStart("hertz", lambda grid: NormalStart(h.pressure(*grid.mesh())))
     return estimate_for
 
 

@@ -374,7 +374,7 @@ def test_serialized_state_runs_no_code(fmu, extracted, md, tmp_path, capsys):
     saved = S.unpack(good)
     assert saved.guid == md.guid and saved.model == md.coSimulation.modelIdentifier
     assert saved.initialised and saved.parameters["element_size"] == 2e-3
-    assert saved.memory["left"] and saved.real.dtype == np.float64
+    assert saved.memory.left and saved.real.dtype == np.float64
     later = good[:16] + struct.pack("<I", S.VERSION + 1) + good[20:]
     for bad, words in ((pickle.dumps(Exploit()), "not a railcontact FMU state"),
                        (b"", "not a railcontact FMU state"),

@@ -16,6 +16,7 @@ from railcontact.fmu import state as S
 from railcontact.geometry.profiles import read_profile
 from railcontact.geometry.track import Pose, Track, Wheelset
 from railcontact.halfspace.materials import ElasticPair, Material
+from railcontact.timestep import StepMemory
 from railcontact.timestep.wheelset import ContactSettings, WheelsetContact
 
 CREEP = ((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3))
@@ -55,7 +56,7 @@ def test_memory_round_trips_bit_for_bit():
     for k, y in enumerate((1e-3, 1.05e-3, 1.1e-3)):
         _step(contact, k, y)
     memory = contact.memory
-    assert {"left", "right", "rigid"} <= memory.keys() and memory["left"]
+    assert isinstance(memory, StepMemory) and memory.left and memory.rigid
     data = S.pack(_state(memory))
     restored = S.unpack(data).memory
     original = _step(contact, 3, 1.15e-3)
@@ -63,7 +64,7 @@ def test_memory_round_trips_bit_for_bit():
     again = _step(contact, 3, 1.15e-3)
     assert _outputs(again) == _outputs(original)
     # the same record reached twice is one record again; arrays keep dtype and order
-    patch = memory["left"][0]
+    patch = memory.left[0]
     twice = S.unpack(S.pack(_state({"a": [patch, patch]}))).memory["a"]
     assert twice[0] is twice[1] and type(twice[0]) is type(patch)
     assert twice[0].pressure.dtype == patch.pressure.dtype
@@ -117,7 +118,7 @@ def test_pickle_and_damaged_bytes_are_refused(tmp_path):
             return (open, (str(flag), "w"))
 
     for data, words in ((pickle.dumps(Exploit()), "not a railcontact FMU state"),
-                        (S.MAGIC + b"\x01\x00\x00\x00" + b"\xff" * 8, "cut short"),
+                        (S.MAGIC + struct.pack("<I", S.VERSION) + b"\xff" * 8, "cut short"),
                         (S.pack(_state(None))[:-30], "its arrays")):
         with pytest.raises(S.StateError, match=words):
             S.unpack(data)

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import railcontact as rc
+from railcontact.contact import WarmStart
 from railcontact.contact.loadloop import vertical_force
 from railcontact.contact.patch import solve_patch_normal
 from railcontact.contact.wheelrail import solve_wheel_normal
@@ -76,7 +77,7 @@ def test_a_merged_patch_carries_both_lobes_of_its_run(geometry):
                                                   s_lobes.max() + 3e-3),
                                  settings.grid, settings.normal, PAIR,
                                  Control(penetration=patch.normal.penetration),
-                                 lambda grid: None)
+                                 WarmStart("none"))
     assert patch.normal.force == pytest.approx(wide.force, rel=2e-3)
     loaded = patch.normal.grid.y[np.asarray(patch.normal.pressure).sum(axis=0) > 0]
     assert loaded.max() - loaded.min() > 10e-3  # the tread's lobe, 8-12 mm beside

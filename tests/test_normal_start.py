@@ -7,6 +7,7 @@ convolution."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -125,10 +126,8 @@ def test_a_solve_from_a_shown_displacement_saves_its_first_product(monkeypatch, 
 
 
 def _moved(m: PatchMemory, **fields) -> PatchMemory:
-    out = object.__new__(PatchMemory)
-    out.__dict__.update({k: v for k, v in m.__dict__.items() if k != "element_box"})
-    out.__dict__.update(fields)
-    return out
+    """``m`` with ``fields`` replaced and its element box formed again."""
+    return replace(m, element_box=None, **fields)
 
 
 def _fallbacks():
@@ -281,7 +280,7 @@ def test_two_patch_and_penetration_control_steps_start_from_exact_displacements(
             t = k * 1e-3
             wc.solve(Pose(5.1e-3 + 0.1e-3 * math.sin(2 * math.pi * 20 * t)),
                      loads=(12e3, 12e3), kinematics=Kinematics(30.0, 0.0), time=t)
-            assert len(wc.memory["left"]) == 2
+            assert len(wc.memory.left) == 2
         loaded = len(calls)
         for k in range(4):
             wc.solve(Pose(2e-3 + 0.1e-4 * k), vertical=-3e-4,

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import pickle
+from dataclasses import replace
 
 import pytest
 
@@ -28,7 +29,7 @@ from railcontact.geometry.profiles import read_profile
 from railcontact.geometry.roll import first_contact_gap
 from railcontact.geometry.track import Pose, Track, Wheelset
 from railcontact.halfspace.materials import ElasticPair, Material
-from railcontact.timestep import rigid
+from railcontact.timestep import StepMemory, rigid
 from railcontact.timestep.rigid import RigidMemory, predicted_approaches, predicted_roll
 from railcontact.timestep.wheelset import ContactSettings, WheelsetContact
 
@@ -84,7 +85,7 @@ def test_started_in_time_meets_the_tolerance(amplitude, steps, every):
             g, dv = residuals(wc, pose, t, s.vertical, s.roll)
             assert abs(g) <= tol and abs(dv) <= tol, (k, g / tol, dv / tol)
     assert sum(evaluations[3:]) / len(evaluations[3:]) < 2.0
-    assert wc.memory["rigid"][0].time == t  # the last step's root is remembered
+    assert wc.memory.rigid[0].time == t  # the last step's root is remembered
 
 
 def test_the_root_is_part_of_the_saved_state():
@@ -97,7 +98,7 @@ def test_the_root_is_part_of_the_saved_state():
         pose, t = hunting(3e-3, k)
         wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t).rigid_solution  # noqa: B018
     saved = pickle.dumps(wc.memory, protocol=pickle.HIGHEST_PROTOCOL)
-    assert [m.time for m in wc.memory["rigid"]] == [3e-3, 2e-3, 1e-3]  # newest first
+    assert [m.time for m in wc.memory.rigid] == [3e-3, 2e-3, 1e-3]  # newest first
 
     def steps(c: WheelsetContact) -> list[tuple[float, float, int, float, float]]:
         out = []
@@ -116,8 +117,7 @@ def test_the_root_is_part_of_the_saved_state():
     other.memory = pickle.loads(saved)
     assert steps(other) == first
     forgot = contact()
-    forgot.memory = pickle.loads(saved)
-    del forgot.memory["rigid"]
+    forgot.memory = replace(pickle.loads(saved), rigid=())
     again = steps(forgot)
     assert again[0][2] > first[0][2]  # from the pose's roll: G(phi0) and a solve at least
     for (v, phi, _, slope, tol), (v2, phi2, _, _, _) in zip(first, again, strict=True):
@@ -131,7 +131,7 @@ def test_no_memory_without_a_warm_start():
     for k in range(3):
         pose, t = hunting(3e-3, k)
         wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t).rigid_solution  # noqa: B018
-    assert "rigid" not in wc.memory
+    assert wc.memory == StepMemory()
 
 
 def test_predicted_roll_is_the_polynomial_in_time():
@@ -169,7 +169,8 @@ def test_a_start_out_of_range_falls_back_to_the_pose_roll():
     wc = contact()
     pose, t = hunting(3e-3, 5)
     wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t)
-    wc.memory["rigid"] = [RigidMemory(t, 0.045, 1.0, (0.0, 0.0), (1e-4, 1e-4))]  # climbed
+    climbed = RigidMemory(t, 0.045, 1.0, (0.0, 0.0), (1e-4, 1e-4))
+    wc.memory = replace(wc.memory, rigid=(climbed,))
     r = wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t + 1e-3)
     s = r.rigid_solution
     assert s.converged, s.message
@@ -195,7 +196,7 @@ class _Counting(WheelsetContact):
 
 
 def test_rolled_solves_start_from_the_previous_root():
-    """The wheels' solves at the root are kept with the step (under ``"rolled"``, at the
+    """The wheels' solves at the root are kept with the step (:attr:`StepMemory.rolled`, at the
     step's time) and start the next step's solves at the rolled pose: over the 3 mm hunting
     run they take fewer iterations than the same solves started from the step's own
     solution at the pose's roll (the kept ones dropped before every step), and find the
@@ -207,7 +208,7 @@ def test_rolled_solves_start_from_the_previous_root():
         roots = []
         for k in range(120):
             if not keep:
-                wc.memory.pop("rolled", None)
+                wc.memory = replace(wc.memory, rolled=None)
             pose, t = hunting(3e-3, k)
             r = wc.solve(pose, loads=(Q, Q), creepages=CREEP, time=t)
             s = r.rigid_solution
@@ -215,9 +216,9 @@ def test_rolled_solves_start_from_the_previous_root():
             tol = rigid.RIGID_RTOL * max(r.left.approach, r.right.approach)
             roots.append((s.roll, s.vertical, s.slope, tol))
             if keep and k > 1:  # (step 0 is centred: its root is the pose's roll)
-                rolled = wc.memory["rolled"]
-                assert [m.time for m in rolled["left"] + rolled["right"]] == [t, t]
-                assert rolled["left"][0].older.time == pytest.approx(t - 1e-3, abs=1e-12)
+                left, right = wc.memory.rolled
+                assert [m.time for m in left + right] == [t, t]
+                assert left[0].older.time == pytest.approx(t - 1e-3, abs=1e-12)
         runs[keep] = (wc.rolled_iterations / wc.rolled_solves, roots)
     assert runs[True][0] < 0.75 * runs[False][0], (runs[True][0], runs[False][0])
     for (phi, v, slope, tol), (phi2, v2, _, _) in zip(runs[True][1], runs[False][1],

@@ -169,6 +169,7 @@ def test_a_grown_area_keeps_the_fixed_extent_of_a_snapped_grid():
     """Review finding: with element sizes and snap, a grid is a little wider than the area
     asked for; growing the automatic y from the grid's bounds also widened the user's x,
     one element per growth. The given x stays as asked (to an element)."""
+    from railcontact.contact import WarmStart
     from railcontact.contact.patch import make_grid, solve_patch_normal
     from railcontact.settings import Control, GridSettings, NormalSettings
 
@@ -182,7 +183,7 @@ def test_a_grown_area_keeps_the_fixed_extent_of_a_snapped_grid():
     bounds = (-12e-3, 12e-3, -0.5e-3, 0.5e-3)  # y far too small: grown several times
     first = make_grid(gs, bounds)
     res, work = solve_patch_normal(gap, bounds, gs, NormalSettings(), pair,
-                                   Control(load=74e3), lambda g: None, (False, True))
+                                   Control(load=74e3), WarmStart("none"), (False, True))
     assert work.remeshes >= 2
     assert res.grid.nx == first.nx
 

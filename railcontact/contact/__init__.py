@@ -7,6 +7,7 @@ result types. Modules import downwards only::
     loadloop                vertical force, the creep-load secant
     patch                   one patch: grid, estimate, normal and tangential solve
     results                 PatchSolution, Solution
+    start                   WarmStart: how a patch's solves start
 """
 
 from .dispatch import solve
@@ -17,6 +18,8 @@ from .patch import (
            solve_patch_tangential,
 )
 from .results import PatchSolution, Solution
+from .start import NormalStart, TangentialStart, WarmStart
 
-__all__ = ["PatchSolution", "Solution", "normal_estimate", "simplified_tangential", "solve",
+__all__ = ["NormalStart", "PatchSolution", "Solution", "TangentialStart", "WarmStart",
+           "normal_estimate", "simplified_tangential", "solve",
            "solve_patch_normal", "solve_patch_tangential"]

@@ -21,7 +21,6 @@ from ..halfspace.hertz import MIN_LOAD, HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.operator import influence_operator, operator_bytes, resolve_backend
 from ..normal import NormalResult, solve_normal
-from ..normal.bem import Displacement
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
 from ..settings.case import ELEMENT_BYTES, MAX_ELEMENTS, check_grid_size
@@ -30,6 +29,7 @@ from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
 from ..tangential.strips import StripResult, remesh_strips, strips_on_contact
 from .results import PatchSolution, Work
+from .start import Bounds, NormalStart, WarmStart, no_start
 
 UNDEFINED_GAP = 0.5 * FAR
 """Gaps [m] from this up mark elements where the profiles give no gap (the search's
@@ -39,12 +39,6 @@ GROW_FACTOR = 1.5
 MAX_GROW = 4
 """Enlargements of an automatic potential area at most."""
 
-Bounds = tuple[float, float, float, float]
-"""A potential contact area (xmin, xmax, ymin, ymax) [m]."""
-PressureEstimate = Callable[[Grid], "np.ndarray | tuple[np.ndarray, Displacement] | None"]
-"""An initial pressure [Pa] as a function of the BEM grid (None: no estimate), or the
-pressure and its displacement ``A p`` (:class:`~railcontact.normal.bem.Displacement`; a
-time step's, :func:`railcontact.timestep.warmstart.previous_start`)."""
 
 
 def potential_area(A: float, B: float, delta0: float, margin: float = 1.0) -> Bounds:
@@ -104,44 +98,27 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
 
 def normal_estimate(settings: NormalSettings, hz: HertzSolution | None, s: np.ndarray,
                     f: np.ndarray, a_of_s: np.ndarray, pair: ElasticPair,
-                    control: Control) -> PressureEstimate:
-    """The initial estimate of the pressure that ``settings.estimate`` asks for.
+                    control: Control) -> WarmStart:
+    """The start that ``settings.estimate`` asks for, as a :class:`~.start.WarmStart`.
 
     "hertz": Hertz's pressure at the element centres; "kp" / "infcon": the virtual
     penetration model on the lateral samples ``s`` [m] with the gap ``f(s)`` [m] and the
     longitudinal curvature ``a_of_s`` [1/m], its amplitude set on its own grid
-    (``estimate_grid``), evaluated at the BEM element centres; "none": no estimate.
+    (``estimate_grid``), evaluated at the BEM element centres; "none": no estimate. A
+    model that fails gives no start, labelled with why (the BEM does not need one).
     """
     method = settings.estimate
     if method == "hertz" and hz is not None:
-        return lambda grid: hz.pressure(*grid.mesh())
+        return WarmStart(method, lambda grid: NormalStart(hz.pressure(*grid.mesh())))
     if method in ("kp", "infcon"):
         nx, ny = settings.estimate_grid
         try:
             est = virtual_penetration(method, s, f, a_of_s, pair, nx=nx, ny=ny,
                                       **control.kwargs())
         except RailContactError as exc:  # the BEM does not need it: start without
-            return _no_estimate(f"{method} failed ({exc}); no estimate")
-        return lambda grid: est.pressure_on(grid)
-    return lambda grid: None
-
-
-def _no_estimate(why: str) -> PressureEstimate:
-    """An estimate that gives none, with a label that says why."""
-    def none(grid: Grid) -> None:
-        return None
-    return labelled(none, why)
-
-
-def labelled(estimate_of: PressureEstimate, label: str) -> PressureEstimate:
-    """``estimate_of`` carrying the name of the start it gives (reported per patch)."""
-    estimate_of.label = label  # type: ignore[attr-defined]
-    return estimate_of
-
-
-def estimate_label(estimate_of: PressureEstimate, name: str) -> str:
-    """What started the patch: the estimate's own label, else the settings' ``name``."""
-    return getattr(estimate_of, "label", name)
+            return no_start(f"{method} failed ({exc}); no estimate")
+        return WarmStart(method, lambda grid: NormalStart(est.pressure_on(grid)))
+    return no_start(method)
 
 
 def check_operator_memory(grid: Grid, components: str, backend: str,
@@ -165,7 +142,7 @@ def check_operator_memory(grid: Grid, components: str, backend: str,
 
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
-                       pair: ElasticPair, control: Control, estimate_of: PressureEstimate,
+                       pair: ElasticPair, control: Control, start: WarmStart,
                        automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None,
                        profiles: bool = True) -> tuple[NormalResult, Work]:
     """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
@@ -175,10 +152,11 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     instead of the one meshed on ``bounds``, so that a solution on it can start the next
     solve without interpolation.
 
-    ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``estimate_of(grid)`` the
-    initial pressure [Pa] (or None). ``automatic`` says along which axes (x, y) the area is
-    the solver's: there it is grown by :data:`GROW_FACTOR` while the contact reaches its
-    edge (each growth a re-mesh, its iterations counted in the work), at most
+    ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``start.pressure_on(grid)``
+    the initial pressure [Pa] (and its displacement, when known). ``automatic`` says
+    along which axes (x, y) the area is the solver's: there it is grown by
+    :data:`GROW_FACTOR` while the contact reaches its edge (each growth a re-mesh, its
+    iterations counted in the work), at most
     :data:`MAX_GROW` times, after which the result is not converged; a user-given extent
     that the contact reaches is an error. A result that is not finite is not converged.
 
@@ -199,10 +177,8 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         # a grown area starts from the estimate again, not from the truncated solution:
         # that start (its pressure piled up at the old edge) let the CG stop early, with the
         # relative change small but the pressure wrong (a fuzzed two-patch wheel)
-        start, shown = estimate_of(grid), None
-        if type(start) is tuple:  # the pressure and its A p
-            start, shown = start
-        res = solve_normal(gap, grid, op, initial_pressure=start,
+        p0, shown = start.pressure_on(grid)
+        res = solve_normal(gap, grid, op, initial_pressure=p0,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, initial_displacement=shown,
                            min_load=MIN_LOAD, **control.kwargs())

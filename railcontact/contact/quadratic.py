@@ -11,7 +11,6 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz
 from ..settings import Case, QuadraticGeometry
 from .patch import (
-    estimate_label,
     normal_estimate,
     potential_area,
     solve_patch_normal,
@@ -48,8 +47,8 @@ def solve_quadratic(case: Case) -> PatchSolution:
     res, work = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
                                    grid_settings.automatic, profiles=False)
     work.seconds = time.perf_counter() - t0  # the estimate's set-up included
-    patch = PatchSolution(normal=res, hertz=hz, estimate=estimate_label(est, settings.estimate),
-                          curvatures=(A, B), work=work)
+    patch = PatchSolution(normal=res, hertz=hz, estimate=est.label, curvatures=(A, B),
+                          work=work, start=est)
     if case.tangential is not None and res.force > 0:
         solve_patch_tangential(patch, case.tangential, pair, settings.fft)
     return patch

@@ -15,6 +15,7 @@ from ..settings import Case
 from ..settings.convention import reported_forces, side_creepage
 from ..tangential import TangentialResult
 from ..tangential.strips import StripResult
+from .start import WarmStart
 
 
 @dataclass
@@ -126,6 +127,10 @@ class PatchSolution:
     """The rolling radius [m] where the ``[kinematics]`` creepages were taken: the distance
     of the wheel's point below the reference point from the axle (CONTACT's ``r(cp)``); None
     when the case gives creepages."""
+    start: WarmStart | None = field(default=None, repr=False, compare=False)
+    """The start the last normal solve was given (:class:`~.start.WarmStart`); its
+    traction starts the patch's tangential BEM when no earlier load pass does. Not
+    reported."""
 
     @property
     def estimate_error(self) -> EstimateError | None:

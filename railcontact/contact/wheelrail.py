@@ -86,8 +86,6 @@ from .loadloop import (
 )
 from .patch import (
     UNCOVERED_MARGIN,
-    estimate_label,
-    labelled,
     normal_estimate,
     solve_patch_normal,
     solve_patch_tangential,
@@ -96,19 +94,17 @@ from .patch import (
     uncovered,
 )
 from .results import PatchSolution
+from .start import NormalStart, WarmStart
 
-EstimateFor = Callable[[ContactPoint, HertzSolution, Control], Callable[[Grid], Any]]
-"""``estimate_for(contact point, hertz, control)``: the initial pressure of a patch as a
-function of its BEM grid (e.g. the previous time step's)."""
-TractionFor = Callable[[PatchSolution], Any]
-"""``traction_for(patch)``: the (traction (2, nx, ny) [Pa], adhesion/slip map) that starts the
-tangential BEM of a normal-solved patch on its grid, or None (e.g. a neighbouring solve's)."""
+EstimateFor = Callable[[ContactPoint, HertzSolution, Control], WarmStart]
+"""``estimate_for(contact point, hertz, control)``: the start of a patch's solves (e.g. the
+previous time step's, or a table's previous point), instead of the settings' estimate."""
 RunOf = Callable[[float, float], tuple[float, float]]
 """``run_of(approach, rail_u)``: the rail positions [m] spanned by a wheel's run of vertical
 overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
 (:func:`~railcontact.geometry.search.run_on_rail` at a pose)."""
-Starts = Callable[[str], tuple[EstimateFor | None, TractionFor | None]]
-"""``starts(side)``: the ``(estimate_for, traction_for)`` of a wheel (see :func:`solve_wheel`)."""
+Starts = Callable[[str], EstimateFor | None]
+"""``starts(side)``: the ``estimate_for`` of a wheel (see :func:`solve_wheel`), or None."""
 LOAD_RTOL = 1e-6
 """Relative tolerance on the vertical load carried by the normal forces of several patches."""
 ROLL_TOL = 1e-8
@@ -266,15 +262,17 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                     "the load or penetration")
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
-        if last is not None:
-            est = labelled(lambda g, last=last: start_pressure(last, g), last.estimate)
+        if last is not None:  # (its traction start that of the pass's own start)
+            est = WarmStart(last.estimate,
+                            lambda g, last=last: NormalStart(start_pressure(last, g)),
+                            traction_on=last.start.traction_on)
         elif estimate_for is None:
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
-        # an estimate may know a tighter area (a time step: where the contact was);
-        # else the rigid overlap's, with the margin
-        bounds = getattr(est, "bounds", None)
+        # a start may know a tighter area (a time step: where the contact was); else the
+        # rigid overlap's, with the margin
+        bounds = est.bounds
         given = bool(bounds)  # (a time step's: where the contact was, checked after)
         if not bounds:
             d0 = hz.penetration if loads is not None else dn
@@ -291,9 +289,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             res = _overlap_covered(cp, gap_of, bounds, grid, normal, pair, control, est, res,
                                    work, run_of)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
-        out.append(PatchSolution(normal=res, hertz=hz,
-                                 estimate=estimate_label(est, normal.estimate),
-                                 curvatures=(cp.A, cp.B), geometry=cp, work=work,
+        out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
+                                 curvatures=(cp.A, cp.B), geometry=cp, work=work, start=est,
                                  started_from=None if last is None else "previous load pass"))
     return out
 
@@ -352,7 +349,7 @@ def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], An
 
 def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
                      bounds: tuple[float, float, float, float], grid: GridSettings, normal,
-                     pair: ElasticPair, control: Control, est, res, work,
+                     pair: ElasticPair, control: Control, est: WarmStart, res, work,
                      run_of: RunOf | None = None):
     """The normal solution ``res`` of the patch ``cp`` on a potential area ``bounds``
     [m] (a time step's: the previous contact's box with a margin; or the cold one),
@@ -424,19 +421,18 @@ def wheel_kinematics(track: Track, ws: Wheelset, pose: Pose, side: str,
 
 def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
                     pair: ElasticPair, previous: list[PatchSolution] | None = None,
-                    traction_for: TractionFor | None = None,
                     kinematics_of: KinematicsOf | None = None) -> list[PatchSolution]:
     """The tangential solution of each loaded patch, started from the traction of the same
-    patch in ``previous`` (the wheel's last load pass) where there is one, else from
-    ``traction_for(patch)`` when given. With ``kinematics_of`` each patch is solved with
-    the creepages it gives at the patch (and keeps their reference velocity), else with
-    the settings' creepages."""
+    patch in ``previous`` (the wheel's last load pass) where there is one, else from the
+    patch's own start (:attr:`~.start.WarmStart.traction_on`). With ``kinematics_of`` each
+    patch is solved with the creepages it gives at the patch (and keeps their reference
+    velocity), else with the settings' creepages."""
     for p in patches:
         if p.normal.force > 0:
             last = same_patch(previous, p.geometry)
             start = None if last is None else start_from(last, p.normal.grid)[1:]
-            if start is None and traction_for is not None:
-                start = traction_for(p)
+            if start is None and p.start is not None:
+                start = p.start.traction_on(p.normal.grid)
             if start is not None and start[0] is None:
                 start = None
             creepage = None
@@ -451,18 +447,18 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
 
 def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
                 settings: PatchSettings, pair: ElasticPair,
-                estimate_for: EstimateFor | None = None, reference: bool = False,
-                traction_for: TractionFor | None = None) -> list[PatchSolution]:
+                estimate_for: EstimateFor | None = None, reference: bool = False
+                ) -> list[PatchSolution]:
     """The BEM solutions of one wheel's contact patches.
 
     ``control`` is the vertical wheel load [N] or the vertical approach [m]; with
     ``settings.tangential`` the patches are solved for it too and the load includes the
     creep forces' vertical components (module docstring). ``estimate_for(cp, hertz,
-    control)`` replaces the settings' estimate: it returns a function of the BEM grid
-    giving the initial pressure (or None), e.g. the previous time step's;
-    ``traction_for(patch)`` likewise starts the tangential BEM of a patch that no earlier
-    load pass of this solve starts. ``reference``: each patch is solved in the frame at its
-    reference point (:func:`solve_wheel_normal`).
+    control)`` replaces the settings' estimate: it returns the patch's
+    :class:`~.start.WarmStart` (e.g. the previous time step's), whose traction starts the
+    tangential BEM of a patch that no earlier load pass of this solve starts.
+    ``reference``: each patch is solved in the frame at its reference point
+    (:func:`solve_wheel_normal`).
     """
     if settings.tangential is None:
         return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
@@ -473,7 +469,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         return _add_tangential(
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                reference=reference),
-            settings, pair, traction_for=traction_for, kinematics_of=kinematics_of)
+            settings, pair, kinematics_of=kinematics_of)
     q = control.load
     passes: list[list[PatchSolution]] = []
 
@@ -484,7 +480,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, normal, settings,
                                                 pair, estimate_for, last,
                                                 reference=reference),
-                             settings, pair, last, traction_for, kinematics_of)
+                             settings, pair, last, kinematics_of)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -707,11 +703,11 @@ def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], contr
                  ) -> dict[str, list[PatchSolution]]:
     out = {}
     for side in sides:
-        start = (None, None) if starts is None else starts(side)
+        estimate_for = None if starts is None else starts(side)
         try:
             out[side] = solve_wheel(track, ws, pose, side, control,
                                     side_settings(settings, side, convention), pair,
-                                    start[0], reference, start[1])
+                                    estimate_for, reference)
         except ConvergenceError as exc:
             if len(sides) == 1 or not exc.partial:
                 raise
@@ -826,7 +822,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
     whatever ``[geometry] patch_frame`` says, and the patches report their forces as
     CONTACT's (:attr:`PatchSolution.convention`).
 
-    ``starts(side)`` gives the ``(estimate_for, traction_for)`` of each wheel (either None),
+    ``starts(side)`` gives the ``estimate_for`` of each wheel (or None),
     e.g. a neighbouring solution's start (:mod:`railcontact.table.solve`); without it every
     patch starts as the case's estimates say, as ``railcontact solve`` does.
     """

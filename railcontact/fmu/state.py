@@ -3,7 +3,8 @@
 ``fmi2GetFMUstate`` keeps, and ``fmi2SerializeFMUstate`` hands out, the bytes of
 :func:`pack`; ``fmi2SetFMUstate`` reads them back with :func:`unpack`, which runs no code
 from them: no pickle, only JSON and NumPy arrays read with ``allow_pickle=False``, and
-objects only of the few record types of :data:`TYPES`, filled field by field.
+records only of the few types of :data:`TYPES`, made from their fields by their own
+constructors (whose checks run: a record that is not one is a :class:`StateError`).
 
 Layout (integers little-endian)::
 
@@ -59,7 +60,7 @@ import json
 import math
 import struct
 import zipfile
-from dataclasses import dataclass, fields, is_dataclass
+from dataclasses import MISSING, dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -67,18 +68,19 @@ import numpy as np
 from ..errors import RailContactError
 from ..halfspace.grid import Grid
 from ..normal.bem import Displacement
+from ..timestep.memory import StepMemory
 from ..timestep.rigid import RigidMemory
 from ..timestep.warmstart import PatchMemory
 
 MAGIC = b"RAILCONTACTSTATE"
-VERSION = 1
+VERSION = 2
 FORMAT = "railcontact-fmu-state"
 _PREFIX = struct.Struct("<16sIQ")
 MAX_HEADER = 1 << 30
 """Largest header [bytes] read (a length beyond it is a damaged state)."""
 
-TYPES: dict[str, type] = {cls.__name__: cls for cls in (PatchMemory, Grid, Displacement,
-                                                        RigidMemory)}
+TYPES: dict[str, type] = {cls.__name__: cls for cls in (StepMemory, PatchMemory, Grid,
+                                                        Displacement, RigidMemory)}
 """The records a saved memory may hold, by name. A new kind of record in the time step's
 memory (:attr:`railcontact.timestep.WheelsetContact.memory`) must be added here, or saving
 a state says which one it is."""
@@ -168,9 +170,7 @@ class _Encoder:
                 return {"$ref": n}
             n = self._object_ids[id(value)] = len(self._object_ids)
             self._keep.append(value)
-            attributes = value.__getstate__()
-            if not isinstance(attributes, dict):
-                raise StateError(f"cannot save {where}: a {name} without a __dict__")
+            attributes = {f.name: getattr(value, f.name) for f in fields(value) if f.init}
             return {"$object": name, "id": n,
                     "fields": {k: self.encode(v, f"{where}.{k}")
                                for k, v in attributes.items()}}
@@ -253,30 +253,23 @@ class _Decoder:
         if cls is None or type(n) is not int or n in self.objects or not isinstance(
                 attributes, dict):
             raise StateError(f"not a record a state may hold: {_short(value)}")
-        names = {f.name for f in fields(cls)} if is_dataclass(cls) else set()
-        missing = names - attributes.keys()
-        unknown = [k for k in attributes if k not in names and not _formed(cls, k)]
+        given = [f for f in fields(cls) if f.init]
+        names = {f.name for f in given}
+        required = {f.name for f in given
+                    if f.default is MISSING and f.default_factory is MISSING}
+        missing = required - attributes.keys()
+        unknown = [k for k in attributes if k not in names]
         if missing or unknown:
             raise StateError(f"a {name} of the state with attributes "
                              f"{sorted(attributes)} (missing {sorted(missing)}, unknown "
                              f"{unknown})")
-        obj = object.__new__(cls)  # no __init__, no code: its attributes, set one by one
+        values = {k: self.decode(v) for k, v in attributes.items()}
+        try:  # the record made as the solver makes it: its own checks run
+            obj = cls(**values)
+        except (RailContactError, TypeError, ValueError) as exc:
+            raise StateError(f"a {name} of the state that is not one: {exc}") from None
         self.objects[n] = obj
-        obj.__dict__.update({k: self.decode(v) for k, v in attributes.items()})
         return obj
-
-
-def _formed(cls: type, name: str) -> bool:
-    """Whether ``name`` is an attribute that ``cls`` forms once and keeps in the
-    instance (a cached property), not a field."""
-    if name.startswith("_"):
-        return False
-    for klass in cls.__mro__:
-        attribute = klass.__dict__.get(name)
-        if attribute is not None:
-            return hasattr(attribute, "__get__") and not hasattr(attribute, "__set__") \
-                and not callable(attribute)
-    return False
 
 
 def _short(value: Any) -> str:

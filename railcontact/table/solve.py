@@ -31,13 +31,14 @@ from typing import Any
 
 import numpy as np
 
-from ..contact.patch import labelled, normal_estimate
+from ..contact.patch import normal_estimate
+from ..contact.start import NormalStart, TangentialStart, WarmStart
 from ..contact.wheelrail import solve_wheel_rail
 from ..errors import CaseError, RailContactError, SolverError
 from ..settings import Case, ContactSettings
 from ..status import status_of
 from ..timestep.warmstart import PatchMemory, match, previous_pressure, previous_tangential
-from ..timestep.wheelset import WheelContact, _resultants
+from ..timestep.wheelset import WheelContact, fill_resultants
 from .spec import case_with
 from .variables import COUNTS, NO_CONTACT, OK, OUT_OF_RANGE, QUANTITIES
 
@@ -55,7 +56,8 @@ def _memory(patches) -> list[PatchMemory]:
         out.append(PatchMemory(grid=p.normal.grid, pressure=p.normal.pressure,
                                traction=getattr(t, "traction", None),
                                state=getattr(t, "state", None),
-                               u=cp.rail_u, z=cp.position[2]))
+                               u=cp.rail_u, z=cp.position[2],
+                               element_box=p.normal.contact_box))
     return out
 
 
@@ -63,25 +65,22 @@ def _starts(case: Case, memory: list[PatchMemory]):
     """``starts(side)`` for :func:`solve_wheel_rail` from the previous point's patches."""
     normal, pair = case.normal, case.pair
 
-    def estimate_for(cp, hz, control):
+    def estimate_for(cp, hz, control) -> WarmStart:
         m = match(memory, cp.rail_u, cp.position[2])
         cold = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         if m is None:
             return cold
 
-        def of(grid):
+        def pressure_on(grid) -> NormalStart:
             p = previous_pressure(m, grid)
-            return p if p.sum() > 0 else cold(grid)
-        return labelled(of, "previous")
+            return NormalStart(p) if p.sum() > 0 else cold.pressure_on(grid)
 
-    def traction_for(patch):
-        m = match(memory, patch.geometry.rail_u, patch.geometry.position[2])
-        if m is None:
-            return None
-        t, st = previous_tangential(m, patch.normal.grid)
-        return None if t is None else (t, st)
+        def traction_on(grid) -> TangentialStart | None:
+            t, st = previous_tangential(m, grid)
+            return None if t is None else TangentialStart(t, st)
+        return WarmStart("previous", pressure_on, traction_on=traction_on)
 
-    return lambda side: (estimate_for, traction_for)
+    return lambda side: estimate_for
 
 
 def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | None = None
@@ -113,7 +112,7 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
         return wheel, []
     if c.tangential is not None:
         wheel.creepages = [tuple(c.tangential.creepage)] * len(patches)
-    _resultants(wheel, patches, pose)
+    fill_resultants(wheel, patches, pose)
     return wheel, _memory(patches)
 
 

@@ -46,6 +46,8 @@ import numpy as np
 from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.track import SIDES, Pose
 from ..settings import ContactSettings
+from ..timestep.memory import EMPTY as EMPTY_MEMORY
+from ..timestep.memory import StepMemory
 from ..timestep.validity import check_limits, derailment_quotient
 from ..timestep.wheelset import (
     NO_CONTACT,
@@ -113,7 +115,7 @@ class TableContact:
         self._take = [order.index(n) for n in table.axes]
         self._absent = [(order.index(n), n, fixed[n]) for n in order if n not in table.axes]
         self._j = {s: table.sides.index(s) for s in table.sides}
-        self.memory: dict[str, list] = {"left": [], "right": []}
+        self.memory: StepMemory = EMPTY_MEMORY
         """Always empty (a table keeps nothing between steps); there so that the FMU's
         get/set state handles a table as it handles ``WheelsetContact``."""
         if table.names != _FIELDS:  # _fill unpacks the values in this order
@@ -127,7 +129,7 @@ class TableContact:
 
     def reset(self) -> None:
         """Nothing to forget: a table has no memory between steps."""
-        self.memory = {"left": [], "right": []}
+        self.memory = EMPTY_MEMORY
 
     def solve(self, pose: Pose, *, loads: tuple[float, float] | None = None,
               vertical: float | None = None,

@@ -3,12 +3,14 @@
 - :mod:`.wheelset`: :class:`WheelsetContact`, both wheels of a wheelset per step,
   kinematic creepages, the load loop with creep forces;
 - :mod:`.warmstart`: the previous steps' solutions as the next step's start;
+- :mod:`.memory`: :class:`StepMemory`, what a step keeps for the next one (a value);
 - :mod:`.validity`: where a solved wheel is beyond the model's validity (Y/Q, Nadal,
   flange climb, penetration, load);
 - :mod:`.rigid`: the rigid wheelset's vertical displacement and roll under load control.
 """
 
 from ..settings import ContactSettings
+from .memory import StepMemory
 from .wheelset import (
     OUTSIDE_VALIDITY,
     STATUS_NAMES,
@@ -18,5 +20,5 @@ from .wheelset import (
     WheelsetResult,
 )
 
-__all__ = ["OUTSIDE_VALIDITY", "STATUS_NAMES", "ContactSettings", "Kinematics", "WheelContact",
-           "WheelsetContact", "WheelsetResult"]
+__all__ = ["OUTSIDE_VALIDITY", "STATUS_NAMES", "ContactSettings", "Kinematics", "StepMemory",
+           "WheelContact", "WheelsetContact", "WheelsetResult"]

@@ -48,7 +48,7 @@ evaluation's along the last secant), instead of at the step's approach at ``phi0
 again when its approach misses the guess by more than the frames' tolerance for a solve
 started from an earlier one (:data:`~railcontact.contact.wheelrail.WARM_REFERENCE_RTOL`),
 so ``G`` is as accurate as without the guess.
-The wheels' solves at the root are kept as well (``"rolled"``, when ``approach_at`` gives
+The wheels' solves at the root are kept as well (``rolled``, when ``approach_at`` gives
 them, ``memory_at(phi)``): the next step's rolled solves start from them (its pose and
 roll close to this root's) instead of from that step's solve at the pose's roll.
 """
@@ -58,6 +58,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 from ..contact.results import Work
 from ..errors import RailContactError, SolverError
@@ -361,14 +362,10 @@ class RigidWheelset:
     """The previous steps' roots, newest first (:class:`RigidMemory`): the start in time."""
     time: float | None = None
     """Simulation time of the step [s]."""
-    memory: dict | None = field(default=None, repr=False, compare=False)
-    """The wheelset's memory of this step, where the root found is kept (under
-    ``"rigid"``, with the history: the next step's start; and under ``"rolled"`` the
-    wheels' solves there, when ``approach_at`` has ``memory_at``); None: not kept."""
 
     def solve(self) -> RigidSolution:
-        """(:func:`vertical_and_roll`, started in time from :attr:`history`; the root
-        found, when converged, kept in :attr:`memory`)."""
+        """(:func:`vertical_and_roll`, started in time from :attr:`history`; what the
+        next step keeps of it: :meth:`remembered`)."""
         start = predicted_roll(self.history, self.time)
         approaches = predicted_approaches(self.history, self.time)
         work = getattr(self.approach_at, "work", None)  # its count over all its calls
@@ -382,16 +379,20 @@ class RigidWheelset:
                                       else (start, approaches)))
         if work is not None:  # the wheels' solves at other rolls: the step's work too
             s = replace(s, work=tuple(work_since(work[k], before[k]) for k in ("left", "right")))
-        if self.memory is not None and s.converged:
-            self.memory["rigid"] = [RigidMemory(self.time, s.estimate, s.slope,
-                                                s.approach_slopes, s.approaches),
-                                    *self.history[:MAX_HISTORY - 1]]
-            # the wheels' solves at the root: where the next step's rolled solves start
-            rolled = getattr(self.approach_at, "memory_at", None)
-            rolled = None if rolled is None else rolled(s.roll)
-            if rolled is not None:
-                self.memory["rolled"] = rolled
         return s
+
+    def remembered(self, s: RigidSolution) -> tuple[tuple[RigidMemory, ...], Any]:
+        """What the next step keeps of the solution ``s`` of :meth:`solve`: the roots
+        (``s``'s first, then :attr:`history`'s, at most :data:`MAX_HISTORY`), and the
+        wheels' solves at ``s``'s root when ``approach_at`` has ``memory_at`` (where the
+        next step's rolled solves start; else None); nothing when ``s`` did not
+        converge."""
+        if not s.converged:
+            return (), None
+        roots = (RigidMemory(self.time, s.estimate, s.slope, s.approach_slopes, s.approaches),
+                 *self.history[:MAX_HISTORY - 1])
+        at = getattr(self.approach_at, "memory_at", None)
+        return roots, None if at is None else at(s.roll)
 
 
 __all__ = ["MAX_EVALUATIONS", "RIGID_RTOL", "RigidMemory", "RigidSolution", "RigidWheelset",

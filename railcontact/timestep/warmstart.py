@@ -26,8 +26,7 @@ extrapolation brings this to 0.01 %, the traction's error from 1.2 % to 0.2 %.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from functools import cached_property
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -49,7 +48,7 @@ AREA_MARGIN_SHARE = 0.05
 side by this many elements plus this share of its extent (:func:`previous_bounds`)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class PatchMemory:
     """What a time step keeps of one contact patch for the next one (SI units).
 
@@ -88,6 +87,13 @@ class PatchMemory:
         The normal solve's ``A p`` of ``pressure`` [m] (:class:`~railcontact.normal.bem.
         Displacement`), or None: the next step's start's ``A p`` is then convolved
         (:func:`previous_start`).
+    element_box
+        The rows ``i0:i1`` and columns ``j0:j1`` of ``grid`` that hold the elements with
+        pressure (:func:`~railcontact.halfspace.grid.nonzero_box`; ``i0 < 0``: none);
+        formed from ``pressure`` when not given (a normal solve knows it).
+    contact_box
+        Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None;
+        formed from ``element_box``.
     """
 
     grid: Grid
@@ -104,17 +110,15 @@ class PatchMemory:
     traction_rate: np.ndarray | None = None
     displacement: Displacement | None = None
 
-    @cached_property
-    def contact_box(self) -> tuple[float, float, float, float] | None:
-        """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None;
-        formed once (the step after, this memory is the older one)."""
-        return box_edges(self.element_box, self.grid)
+    element_box: tuple[int, int, int, int] | None = None
+    contact_box: tuple[float, float, float, float] | None = field(init=False)
 
-    @cached_property
-    def element_box(self) -> tuple[int, int, int, int]:
-        """The rows ``i0:i1`` and columns ``j0:j1`` of ``grid`` that hold the elements with
-        pressure (:func:`~railcontact.halfspace.grid.nonzero_box`; ``i0 < 0``: none)."""
-        return nonzero_box(np.asarray(self.pressure))
+    def __post_init__(self) -> None:  # (the frozen record's own fields, formed once)
+        box = self.element_box
+        if box is None:
+            box = nonzero_box(np.asarray(self.pressure))
+            object.__setattr__(self, "element_box", box)
+        object.__setattr__(self, "contact_box", box_edges(box, self.grid))
 
     def extrapolation(self, time: float | None) -> float:
         """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when

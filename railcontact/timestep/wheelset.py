@@ -49,7 +49,7 @@ right wheel is mirrored; lateral components and the spin change sign there.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from time import perf_counter
 
 import numba
@@ -66,8 +66,9 @@ from ..contact.loadloop import (
     vertical_creep_estimate,
     vertical_force,
 )
-from ..contact.patch import labelled, normal_estimate, solve_patch_tangential
+from ..contact.patch import normal_estimate, solve_patch_tangential
 from ..contact.results import PatchSolution, Work
+from ..contact.start import NormalStart, WarmStart
 from ..contact.wheelrail import (
     MIN_LOBE,
     contact_points,
@@ -91,11 +92,12 @@ from ..settings import ContactSettings, Control
 from ..settings.case import MAX_PENETRATION, check_convention
 from ..settings.convention import wheel_frame_creepage
 from ..status import Status, status_of
-from .rigid import RigidMemory, RigidSolution, RigidWheelset
+from .memory import EMPTY as EMPTY_MEMORY
+from .memory import StepMemory
+from .rigid import RigidSolution, RigidWheelset
 from .validity import Validity, check_validity, derailment_quotient
 from .warmstart import (
     PatchMemory,
-    box_edges,
     match,
     merged,
     previous_bounds,
@@ -366,11 +368,14 @@ class WheelsetContact:
         if self.convention == "contact":  # CONTACT's: always at the reference point
             settings = replace(settings, patch_frame="reference")
         self.settings = settings
-        self.memory: dict[str, list[PatchMemory]] = {"left": [], "right": []}
+        self.memory: StepMemory = EMPTY_MEMORY
+        """The last step's memory (:class:`~.memory.StepMemory`), where the next starts;
+        a value that only :meth:`solve` replaces (an FMU saves and restores it as it
+        is)."""
 
     def reset(self) -> None:
         """Forget the previous step (the next one starts without it)."""
-        self.memory = {"left": [], "right": []}
+        self.memory = EMPTY_MEMORY
 
     # -- the time step -----------------------------------------------------------------
     def solve(self, pose: Pose, *, loads: tuple[float, float] | None = None,
@@ -423,7 +428,7 @@ class WheelsetContact:
         if time is not None:
             time = check_finite("time", time, "s")
         wheels = []
-        new_memory: dict[str, list[PatchMemory]] = {}
+        new_memory: dict[str, tuple[PatchMemory, ...]] = {}
         off_track = ""
         for k, side in enumerate(("left", "right")):
             try:  # a wheel that cannot be solved has its own status; the other still is
@@ -438,36 +443,41 @@ class WheelsetContact:
                 off_track = off_track or f"{side} wheel: {exc}"
                 wheel, mem = WheelContact(side=side), []
             wheels.append(wheel)
-            new_memory[side] = mem
+            new_memory[side] = tuple(mem)
         if off_track:  # a wheelset with a wheel off its rail has no contact forces to give
             msg = f"wheelset out of range: {off_track}"
             wheels = [WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
                       for s in ("left", "right")]
-            new_memory = {"left": [], "right": []}
+            new_memory = {"left": (), "right": ()}
         else:
             for wheel in wheels:
                 self._check_validity(wheel)
-        history = tuple(self._rigid_history()) if loads is not None else ()
-        rolled = (self.memory.get("rolled") if loads is not None and self.settings.uses_previous
-                  else None)  # the previous step's wheels at its root: the rolled starts
-        if remember:
-            self.memory = new_memory
+        keep = remember and self.settings.uses_previous  # (what the next step starts from)
+        step = StepMemory(new_memory["left"], new_memory["right"]) if keep else EMPTY_MEMORY
         result = WheelsetResult(wheels[0], wheels[1], 0.0, self.wheelset.radius)
         if vertical is not None:
             result.vertical, result.roll = vertical, pose.roll
             result.rigid_solution = RigidSolution(vertical, pose.roll)
         elif not off_track and self.settings.rigid_wheelset == "solve":
+            last = self.memory if self.settings.uses_previous else EMPTY_MEMORY
+            # the rolled wheels start from this step's solves (the previous step's when
+            # this one is not remembered) and from the previous step's at its root
             rigid = RigidWheelset(
                 self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
-                _RolledApproaches(self, pose, loads, creepages, kinematics, time, rolled),
-                history=history, time=time,
-                memory=new_memory if remember and self.settings.uses_previous else None)
+                _RolledApproaches(self, pose, loads, creepages, kinematics, time,
+                                  step if remember else self.memory, last.rolled),
+                history=last.rigid, time=time)
             s = _rigid_stage(rigid)
             result.rigid_solution, result.rigid_work = s, s.work
             if s.evaluations:  # (found, or its best estimate; none when the search raised)
                 result.vertical, result.roll = s.vertical, s.roll
+            if keep:
+                roots, rolled = rigid.remembered(s)
+                step = replace(step, rigid=roots, rolled=rolled)
+        if remember:
+            self.memory = step
         result.wall_time = perf_counter() - t0
         return result
 
@@ -480,13 +490,9 @@ class WheelsetContact:
         creepages - the function the rigid wheelset's stage searches
         (:class:`_RolledApproaches`), started from this contact's memory as that stage's
         is. Each call solves both wheels (for studies and tests; a step forms its own)."""
-        rolled = self.memory.get("rolled") if self.settings.uses_previous else None
-        return _RolledApproaches(self, pose, loads, creepages, kinematics, time, rolled)
-
-    def _rigid_history(self) -> list[RigidMemory]:
-        """The previous steps' rigid wheelset roots (newest first) that start this step's
-        search (:mod:`.rigid`): kept in the memory under ``"rigid"`` with a warm start."""
-        return self.memory.get("rigid", []) if self.settings.uses_previous else []
+        rolled = self.memory.rolled if self.settings.uses_previous else None
+        return _RolledApproaches(self, pose, loads, creepages, kinematics, time, self.memory,
+                                 rolled)
 
     def _check_validity(self, wheel: WheelContact) -> None:
         """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
@@ -511,17 +517,18 @@ class WheelsetContact:
     def _solve_side(self, side: str, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
                     time: float | None, approach: float | None = None,
-                    memory: tuple[list[PatchMemory], list[PatchMemory]] | None = None
+                    memory: tuple[tuple[PatchMemory, ...], ...] | None = None
                     ) -> tuple[WheelContact, list[PatchMemory]]:
         """``approach``: the vertical approach [m] expected, at which the first pass forms
         its frame (instead of the remembered step's, extrapolated: the rolled wheelset's
         solves, :class:`_RolledApproaches`). ``memory``: (the older step remembered, the
-        solution the first pass starts from), the rolled wheelset's (with a warm start);
-        None: this contact's memory of the previous step for both."""
+        solution the first pass starts from, the step whose creep share starts the load
+        loop), the rolled wheelset's (with a warm start); None: this contact's memory of
+        the previous step for all three."""
         keep = self.settings.uses_previous  # remember this step for the next one
-        own = previous = first = self.memory[side] if keep else []
+        own = previous = first = self.memory.wheel(side) if keep else ()
         if memory is not None and keep:
-            previous, first = memory
+            previous, first, own = memory
         wheel = WheelContact(side=side)
         if control.value == 0.0:
             return wheel, []
@@ -601,7 +608,7 @@ class WheelsetContact:
                 pose: Pose) -> WheelContact:
         if patches:
             wheel.creepages = creepages
-            _resultants(wheel, patches, pose)
+            fill_resultants(wheel, patches, pose)
             if self.convention == "contact":  # the creepages and creep forces as CONTACT's
                 wheel.creepages = [wheel_frame_creepage(c) for c in creepages]
                 fx, fy = wheel.creep_force
@@ -623,8 +630,8 @@ class WheelsetContact:
         settings = self.settings
         pair = self.pair
 
-        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: Control):
-            def estimate():  # KP/INFCON cost a solve of their own: only when needed
+        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: Control) -> WarmStart:
+            def estimate() -> WarmStart:  # KP/INFCON cost a solve of their own: when needed
                 return normal_estimate(settings.normal_settings, hz, cp.s, cp.f, cp.a_of_s,
                                        pair, ctrl)
 
@@ -632,18 +639,18 @@ class WheelsetContact:
             if m is None:
                 return estimate()
 
-            def of(grid):  # (with A p of the pressure, when the memory gives it)
+            def pressure_on(grid: Grid) -> NormalStart:  # (with A p, when the memory has it)
                 p, shown = previous_start(m, grid, time)
                 if shown is not None:  # (then p has pressure)
-                    return p, shown
-                return p if array_sum(p) > 0 else estimate()(grid)
+                    return NormalStart(p, shown)
+                return NormalStart(p) if array_sum(p) > 0 else estimate().pressure_on(grid)
             # the potential area: where the contact was - unless the patch's rigid overlap
             # took in another remembered patch (two patches merged): then the rigid
             # overlap's, as from cold (the other's area lies outside this one's, and the
             # contact inside would not reach its edge); Hertz's penetration read only then
-            of.bounds = (None if len(source) > 1 and merged(cp, m, source, hz.penetration)
-                         else previous_bounds(m))
-            return labelled(of, "previous")
+            bounds = (None if len(source) > 1 and merged(cp, m, source, hz.penetration)
+                      else previous_bounds(m))
+            return WarmStart("previous", pressure_on, bounds)
 
         # the frame at the reference point formed first at the approach of the step (or
         # pass) that starts this one, extrapolated in time: one pass in the common case
@@ -683,16 +690,19 @@ class WheelsetContact:
                 t1 = perf_counter()
                 rate = traction_rate(t.traction, patch.normal.grid, time, last)
                 patch.work.seconds += perf_counter() - t1
-            older = None if last is None else _without_older(last)
+            # what a newer step keeps of the older one: its traction and time for the
+            # extrapolation, not its own older step or traction rate, which this step's
+            # rate has taken in (the memory, and an FMU's saved state, stay two steps deep)
+            older = None if last is None else replace(last, older=None, traction_rate=None)
             n = patch.normal
-            memory.append(_memory(
-                n.contact_box, grid=n.grid, pressure=n.pressure,
+            memory.append(PatchMemory(
+                grid=n.grid, pressure=n.pressure,
                 traction=None if t is None else t.traction,
                 state=None if t is None else t.state, u=u, z=z, time=time, older=older,
                 vertical_creep=0.0 if t is None else
                 float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
                 vertical_normal=n.force * math.cos(cp.contact_angle), traction_rate=rate,
-                displacement=n.displacement))
+                displacement=n.displacement, element_box=n.contact_box))
         return patches, creepages, memory
 
 
@@ -730,7 +740,7 @@ class _RolledApproaches:
 
     With a warm start each wheel's solve starts from the solution nearest in pose: this
     step's last rolled solve of the wheel, else the previous step's at its root
-    (``rolled``: its memory, kept under ``"rolled"`` with the step's), else this step's
+    (``rolled``: its memory, :attr:`StepMemory.rolled`), else this step's
     own at the pose's roll; the older step it remembers is the previous step's at its root
     (else this step's). The solves at the root found are what the next step keeps
     (:meth:`memory_at`)."""
@@ -741,9 +751,12 @@ class _RolledApproaches:
     creepages: tuple | None
     kinematics: Kinematics | None
     time: float | None
-    rolled: dict[str, list[PatchMemory]] | None = None
-    """The previous step's memory of its wheels at its root (``{"left": ..., "right":
-    ...}``); None: none kept."""
+    step: StepMemory = EMPTY_MEMORY
+    """The memory of the wheels' solves at the step's own roll (the step's, or the
+    previous step's when the step is not remembered)."""
+    rolled: tuple[tuple[PatchMemory, ...], tuple[PatchMemory, ...]] | None = None
+    """The previous step's memory of its wheels (left, right) at its root; None: none
+    kept."""
     solved: dict = field(default_factory=dict, repr=False, compare=False)
     """The last call's roll [rad] and memory of its solves (``"roll"``, ``"memory"``)."""
     work: dict[str, Work] = field(
@@ -771,33 +784,33 @@ class _RolledApproaches:
         pose = Pose(self.pose.lateral, self.pose.yaw, phi)
         out = []
         last = self.solved.get("memory")
-        memory: dict[str, list[PatchMemory]] = {}
+        memory: list[tuple[PatchMemory, ...]] = []
         self.solved.clear()  # (a call that raises leaves none)
         for k, side in enumerate(("left", "right")):
             if negligible_load(self.loads[k]):
                 out.append(0.0)
-                memory[side] = []
+                memory.append(())
                 continue
-            step = self.contact.memory[side]
-            older = (self.rolled or {}).get(side) or step
-            start = (last or {}).get(side) or older
+            older = (self.rolled[k] if self.rolled else ()) or self.step.wheel(side)
+            start = (last[k] if last else ()) or older
             creep = None if self.creepages is None else self.creepages[k]
             wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
                                                   creep, self.kinematics, self.time,
                                                   None if guess is None else guess[k],
-                                                  (older, start))
+                                                  (older, start, self.step.wheel(side)))
             _count(self.work[side], wheel)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
             out.append(wheel.approach)
-            memory[side] = mem
-        self.solved.update(roll=phi, memory=memory)
+            memory.append(tuple(mem))
+        self.solved.update(roll=phi, memory=(memory[0], memory[1]))
         return out[0], out[1]
 
-    def memory_at(self, phi: float) -> dict[str, list[PatchMemory]] | None:
-        """The memory of the wheels' solves at roll ``phi`` [rad] when the last call was
-        there (what the next step starts from), else None."""
+    def memory_at(self, phi: float
+                  ) -> tuple[tuple[PatchMemory, ...], tuple[PatchMemory, ...]] | None:
+        """The memory of the wheels' solves (left, right) at roll ``phi`` [rad] when the
+        last call was there (what the next step starts from), else None."""
         return self.solved["memory"] if self.solved.get("roll") == phi else None
 
 
@@ -834,40 +847,6 @@ def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]
         a_o, q_o = older[0].approach, sum([o.vertical_normal for o in older])
         a, q = max(a + f * (a - a_o), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
     return a, q
-
-
-_MEMORY_FIELDS = frozenset(f.name for f in fields(PatchMemory))
-
-
-def _memory(box: tuple[int, int, int, int] | None, **values) -> PatchMemory:
-    """``PatchMemory(**values)`` (every field given) with its fields set as a copy (a
-    per-pass path: the frozen dataclass's ``__init__`` sets each through
-    ``object.__setattr__``; the values are the step's own), and its
-    :attr:`~PatchMemory.element_box` and :attr:`~PatchMemory.contact_box` formed from the
-    normal solution's ``box`` of its pressure (:func:`~.warmstart.box_edges`) instead of
-    by a pass over the pressure."""
-    if values.keys() != _MEMORY_FIELDS:
-        raise TypeError(f"PatchMemory fields {sorted(values)} are not {sorted(_MEMORY_FIELDS)}")
-    out = object.__new__(PatchMemory)
-    out.__dict__.update(values)
-    if box is not None:
-        out.__dict__["element_box"] = box
-        out.__dict__["contact_box"] = box_edges(box, values["grid"])
-    return out
-
-
-def _without_older(m: PatchMemory) -> PatchMemory:
-    """``dataclasses.replace(m, older=None, traction_rate=None)`` as a copy of its fields
-    (a per-pass path: ``replace`` reads and passes every field; the fields are the
-    memory's own, checked when it was made): what a newer step keeps of it - its traction
-    and time for the extrapolation, not its own older step or traction rate, which the
-    newer step's rate has taken in (the memory, and an FMU's saved state, stay two steps
-    deep)."""
-    out = object.__new__(type(m))
-    out.__dict__.update(m.__dict__)
-    out.__dict__["older"] = None
-    out.__dict__["traction_rate"] = None
-    return out
 
 
 def _per_wheel(name: str, value, size: int, shape: str) -> tuple:
@@ -912,7 +891,7 @@ def _moment_sums(x0, dx, y0, dy, p):  # pragma: no cover - compiled
     return numpy_sum(out[0]), numpy_sum(out[1])
 
 
-def _resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
+def fill_resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
     """Fill ``wheel`` with the sums over its patches (module docstring for the frames).
 
     Scalars and 3-vectors in plain floats (a per-step path: numpy's calls cost more than
