@@ -53,7 +53,13 @@ from .settings import (
 )
 from .status import Status
 from .tangential import TangentialResult, rolling_operator, solve_tangential
-from .timestep import Kinematics, WheelContact, WheelsetContact, WheelsetResult
+from .timestep import (
+    Kinematics,
+    RailDeviation,
+    WheelContact,
+    WheelsetContact,
+    WheelsetResult,
+)
 
 _install_moved()  # the module paths of 0.1 still import, with a DeprecationWarning
 
@@ -61,7 +67,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "STEEL", "Case", "CaseError", "ContactSettings", "ConvergenceError", "ElasticPair", "Grid",
-    "GridSettings", "HertzSolution", "InfluenceOperator", "Kinematics", "Material",
+    "GridSettings", "HertzSolution", "InfluenceOperator", "Kinematics", "Material", "RailDeviation",
     "NormalResult", "NormalSettings", "PatchSolution", "Pose", "Profile", "RailContactError",
     "Solution", "SolverError", "Status", "TangentialResult", "TangentialSettings", "Track",
     "WheelContact", "Wheelset", "WheelsetContact", "WheelsetResult", "hertz",

@@ -15,10 +15,11 @@ from .wheelset import (
     OUTSIDE_VALIDITY,
     STATUS_NAMES,
     Kinematics,
+    RailDeviation,
     WheelContact,
     WheelsetContact,
     WheelsetResult,
 )
 
-__all__ = ["OUTSIDE_VALIDITY", "STATUS_NAMES", "ContactSettings", "Kinematics", "StepMemory",
-           "WheelContact", "WheelsetContact", "WheelsetResult"]
+__all__ = ["OUTSIDE_VALIDITY", "STATUS_NAMES", "ContactSettings", "Kinematics", "RailDeviation",
+           "StepMemory", "WheelContact", "WheelsetContact", "WheelsetResult"]

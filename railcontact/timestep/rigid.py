@@ -199,7 +199,8 @@ def predicted_approaches(history: Sequence[RigidMemory], time: float | None
                  for k in range(2))
 
 
-def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
+def vertical_and_roll(track: Track | tuple[Track, Track],
+                      ws: Wheelset | tuple[Wheelset, Wheelset], pose: Pose,
                       approaches: Sequence[float],
                       contacts: Sequence[tuple[float, float, float] | None],
                       approach_at: ApproachAt | None = None, *,
@@ -213,7 +214,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
     Parameters
     ----------
     track, ws, pose
-        Geometry and the pose the wheels were solved at (its roll is the start).
+        Geometry - one track and wheelset for both sides, or pairs (left, right) - and
+        the pose the wheels were solved at (its roll is the start).
     approaches
         Vertical approach of the left and right wheel beyond first contact at the pose's
         roll [m].
@@ -236,10 +238,13 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
         is formed (the previous steps' at their roots, extrapolated); None: the pose's
         roll and ``approaches``. Later guesses start from the last evaluation.
     """
+    tracks = track if isinstance(track, tuple) else (track, track)
+    wheelsets = ws if isinstance(ws, tuple) else (ws, ws)
     slope = 0.0
-    for side, c in zip(SIDES, contacts, strict=True):
+    for k, (side, c) in enumerate(zip(SIDES, contacts, strict=True)):
         if c is None:  # the taping line on a flat tread
-            lever, radius, angle = float(ws.axial_position(0.0)), ws.radius, 0.0
+            w = wheelsets[k]
+            lever, radius, angle = float(w.axial_position(0.0)), w.radius, 0.0
         else:
             lever, radius, angle = SIDES[side] * (c[0] - pose.lateral), c[1], c[2]
         slope += lever - radius * math.tan(angle)
@@ -269,8 +274,8 @@ def vertical_and_roll(track: Track, ws: Wheelset, pose: Pose,
                 rates = tuple((d - a) / (phi - ref[0])
                               for d, a in zip((dl, dr), ref[1], strict=True))
             last = base = (phi, (dl, dr))
-        hl = first_contact_gap(track, ws, p, "left") + dl
-        hr = first_contact_gap(track, ws, p, "right") + dr
+        hl = first_contact_gap(tracks[0], wheelsets[0], p, "left") + dl
+        hr = first_contact_gap(tracks[1], wheelsets[1], p, "right") + dr
         return hl - hr, -0.5 * (hl + hr)
 
     points: list[tuple[float, float, float]] = []  # (phi, G, v)
@@ -352,8 +357,8 @@ class RigidWheelset:
     ``approach_at`` gives the wheels' approaches carrying their loads at another roll (the
     step's solve of each wheel at that roll); None: the first-order answer."""
 
-    track: Track
-    wheelset: Wheelset
+    track: Track | tuple[Track, Track]
+    wheelset: Wheelset | tuple[Wheelset, Wheelset]
     pose: Pose
     approaches: tuple[float, float]
     contacts: tuple[tuple[float, float, float] | None, ...]

@@ -152,12 +152,18 @@ class Kinematics:
     spin_speed
         Angular speed Omega of the wheelset about its axle [rad/s] (V / r0 for pure
         rolling at the nominal radius).
+    curvature
+        Track curvature k [1/m], positive when the track turns left (towards +Y). The
+        track frame follows the curve: the rails turn relative to it with ``-V k`` about
+        the vertical, so a rail point at Y moves forward with ``V k Y`` (module
+        docstring); a wheelset following the curve has no yaw rate in this frame.
     """
 
     speed: float
     lateral_velocity: float = 0.0
     yaw_rate: float = 0.0
     spin_speed: float | None = None
+    curvature: float = 0.0
 
     def __post_init__(self) -> None:
         check_positive("speed", self.speed, "m/s")
@@ -165,6 +171,10 @@ class Kinematics:
         check_finite("yaw_rate", self.yaw_rate, "rad/s")
         if self.spin_speed is not None:
             check_finite("spin_speed", self.spin_speed, "rad/s")
+        if abs(check_finite("curvature", self.curvature, "1/m")) > MAX_CURVATURE:
+            raise RailContactError(f"curvature must be within +-{MAX_CURVATURE:g} 1/m (a "
+                                   f"radius of {1 / MAX_CURVATURE:g} m or more), got "
+                                   f"{self.curvature:g} 1/m")
 
     def creepage(self, cp: ContactPoint, pose: Pose, r0: float) -> tuple[float, float, float]:
         """(xi, eta, phi) of the patch ``cp`` in its contact frame (module docstring)."""
@@ -173,10 +183,80 @@ class Kinematics:
         s = SIDES[cp.side]
         g = cp.contact_angle
         d = cp.position[1] - pose.lateral
-        xi = (v - omega * cp.rolling_radius - self.yaw_rate * d) / v
+        k = self.curvature
+        if k == 0.0:
+            xi = (v - omega * cp.rolling_radius - self.yaw_rate * d) / v
+            phi = (-s * omega * math.sin(g) + self.yaw_rate * math.cos(g)) / v
+        else:  # the rail point at Y moves forward with V k Y, the rail turns with -V k
+            xi = (v - omega * cp.rolling_radius - self.yaw_rate * d
+                  - v * k * cp.position[1]) / v
+            phi = (-s * omega * math.sin(g) + (self.yaw_rate + v * k) * math.cos(g)) / v
         eta = (self.lateral_velocity - v * pose.yaw) / (v * math.cos(g))
-        phi = (-s * omega * math.sin(g) + self.yaw_rate * math.cos(g)) / v
         return xi, eta, phi
+
+
+@dataclass(frozen=True)
+class WheelSetup:
+    """One wheel's problem at a step, formed once: its side, its rail (placed with the
+    step's deviation), its wheelset (wheel profile) and its settings (with the step's
+    friction)."""
+
+    side: str
+    track: Track
+    wheelset: Wheelset
+    settings: ContactSettings
+
+
+SIDE_NAMES = ("left", "right")
+
+
+def _sides(name: str, value, kind: type) -> tuple:
+    """``value`` (one ``kind`` for both sides, or a pair (left, right)) as a pair."""
+    if isinstance(value, kind):
+        return value, value
+    if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, kind)
+                                                           for v in value):
+        return value
+    raise RailContactError(f"{name} must be a {kind.__name__} or a pair (left, right) of "
+                           f"them, got {value!r}")
+
+
+MAX_CURVATURE = 0.02
+"""Largest track curvature [1/m] a step takes (a 50 m radius: tighter than any running
+line; the kinematics assume the patch small against the radius)."""
+
+
+@dataclass(frozen=True)
+class RailDeviation:
+    """A rail's deviation from its place at one instant (track frame, SI units): an
+    irregularity, or a gauge change (a lateral offset).
+
+    Attributes
+    ----------
+    offset
+        (dY, dZ) [m]: the rail moved to the left (+Y) and up (+Z).
+    roll
+        Rotation of the rail about X [rad] (right-handed about the track's X, with Y to
+        the left and Z up), about the rail profile's origin after the rail is placed.
+    """
+
+    offset: tuple[float, float] = (0.0, 0.0)
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        try:
+            dy, dz = self.offset
+        except (TypeError, ValueError):
+            raise RailContactError(f"rail offset must be (dY, dZ) [m], got "
+                                   f"{self.offset!r}") from None
+        dy, dz = (float(check_finite(f"rail offset {n}", v, "m"))
+                  for n, v in (("dY", dy), ("dZ", dz)))
+        object.__setattr__(self, "offset", (dy, dz))
+        check_finite("rail roll", self.roll, "rad")
+
+
+NO_DEVIATION = RailDeviation()
+"""A rail where it is placed."""
 
 
 @dataclass
@@ -238,6 +318,15 @@ class WheelContact:
     """Vertical approach of the wheel into its rail beyond first contact [m]."""
     penetration: float = 0.0
     """Largest normal penetration of its patches [m]."""
+    frictional_power_per_speed: float = 0.0
+    """The creep forces' power per unit forward speed [N = W/(m/s)], summed over the
+    patches: ``F_x xi + F_y eta + M_z phi`` with each patch's forces on the wheel and the
+    creepages it was solved with (the traction times the slip integrated over the patch,
+    in steady rolling; negative: dissipated)."""
+    frictional_power: float | None = None
+    """Frictional power of the wheel [W]: the forward speed V times
+    :attr:`frictional_power_per_speed` when the step's kinematics give V; None when the
+    creepages were given."""
     moment: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Moment of the rail's forces on the wheel about the point (0, y, 0) of the track
     frame (under the wheelset centre, at rail-top height), track components (X, Y, Z)
@@ -335,7 +424,10 @@ class WheelsetContact:
     Parameters
     ----------
     track, wheelset
-        Geometry (:mod:`railcontact.geometry`).
+        Geometry (:mod:`railcontact.geometry`): one for both sides, or a pair (left,
+        right) for rails or wheels that differ (a worn wheelset, rails ground
+        differently). A pair of wheelsets shares the wheel radius and back-to-back
+        distance; their wheel profiles differ.
     pair
         Combined elastic parameters of wheel and rail.
     settings
@@ -357,10 +449,25 @@ class WheelsetContact:
         reference point.
     """
 
-    def __init__(self, track: Track, wheelset: Wheelset, pair: ElasticPair,
+    def __init__(self, track: Track | tuple[Track, Track],
+                 wheelset: Wheelset | tuple[Wheelset, Wheelset], pair: ElasticPair,
                  settings: ContactSettings | None = None, *,
                  convention: str = "railcontact", patch_frame: str | None = None) -> None:
-        self.track, self.wheelset, self.pair = track, wheelset, pair
+        self.tracks: tuple[Track, Track] = _sides("track", track, Track)
+        """The rails' tracks (left, right)."""
+        self.wheelsets: tuple[Wheelset, Wheelset] = _sides("wheelset", wheelset, Wheelset)
+        """The wheels' wheelsets (left, right)."""
+        a, b = self.wheelsets
+        if (a.radius, a.back_to_back) != (b.radius, b.back_to_back):
+            raise RailContactError("the left and right wheelsets must have one wheel radius "
+                                   f"and back-to-back distance, got {a.radius:g} / "
+                                   f"{b.radius:g} m and {a.back_to_back:g} / "
+                                   f"{b.back_to_back:g} m")
+        self.track, self.wheelset = self.tracks[0], self.wheelsets[0]
+        """The left side's track and wheelset (the only ones when both sides share them)."""
+        self.pair = pair
+        self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
+        self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
         settings = settings or ContactSettings()
         self.convention = check_convention(convention)
         if patch_frame is not None:
@@ -382,7 +489,9 @@ class WheelsetContact:
               vertical: float | None = None,
               creepages: tuple[tuple[float, float, float], tuple[float, float, float]]
               | None = None, kinematics: Kinematics | None = None,
-              time: float | None = None, remember: bool = True) -> WheelsetResult:
+              time: float | None = None, remember: bool = True,
+              rails: tuple[RailDeviation, RailDeviation] | None = None,
+              friction: tuple[float, float] | None = None) -> WheelsetResult:
         """Solve both wheels.
 
         Parameters
@@ -406,6 +515,12 @@ class WheelsetContact:
             warm start is extrapolated linearly (:mod:`railcontact.timestep.warmstart`).
         remember
             Keep this step's solution as the next step's warm start.
+        rails
+            The deviations (left, right) of the rails from their places at this step
+            (:class:`RailDeviation`: irregularities, gauge changes); None: none.
+        friction
+            The coefficients of friction (left, right) at this step [-] (wet, contaminated
+            or lubricated rail); None: the settings' ``friction`` on both.
         """
         t0 = perf_counter()
         if (loads is None) == (vertical is None):
@@ -427,15 +542,17 @@ class WheelsetContact:
                 creepages = tuple(wheel_frame_creepage(c) for c in creepages)
         if time is not None:
             time = check_finite("time", time, "s")
+        setups = self._setups(rails, friction)
         wheels = []
         new_memory: dict[str, tuple[PatchMemory, ...]] = {}
         off_track = ""
         for k, side in enumerate(("left", "right")):
             try:  # a wheel that cannot be solved has its own status; the other still is
                 control = Control(load=loads[k]) if loads is not None else Control(
-                    penetration=self._approach(pose, side, vertical))
+                    penetration=self._approach(pose, setups[k], vertical))
                 creep = None if creepages is None else creepages[k]
-                wheel, mem = self._solve_side(side, pose, control, creep, kinematics, time)
+                wheel, mem = self._solve_side(setups[k], pose, control, creep, kinematics,
+                                              time)
             except (CaseError, SolverError) as exc:  # the patch problem, the load loop
                 wheel = WheelContact(side=side, status=status_of(exc), message=str(exc))
                 mem = []
@@ -450,8 +567,8 @@ class WheelsetContact:
                       for s in ("left", "right")]
             new_memory = {"left": (), "right": ()}
         else:
-            for wheel in wheels:
-                self._check_validity(wheel)
+            for wheel, setup in zip(wheels, setups, strict=True):
+                self._check_validity(wheel, setup)
         keep = remember and self.settings.uses_previous  # (what the next step starts from)
         step = StepMemory(new_memory["left"], new_memory["right"]) if keep else EMPTY_MEMORY
         result = WheelsetResult(wheels[0], wheels[1], 0.0, self.wheelset.radius)
@@ -463,11 +580,11 @@ class WheelsetContact:
             # the rolled wheels start from this step's solves (the previous step's when
             # this one is not remembered) and from the previous step's at its root
             rigid = RigidWheelset(
-                self.track, self.wheelset, pose, (wheels[0].approach, wheels[1].approach),
+                *self._geometry(setups), pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
                 _RolledApproaches(self, pose, loads, creepages, kinematics, time,
-                                  step if remember else self.memory, last.rolled),
+                                  step if remember else self.memory, last.rolled, setups),
                 history=last.rigid, time=time)
             s = _rigid_stage(rigid)
             result.rigid_solution, result.rigid_work = s, s.work
@@ -492,21 +609,80 @@ class WheelsetContact:
         is. Each call solves both wheels (for studies and tests; a step forms its own)."""
         rolled = self.memory.rolled if self.settings.uses_previous else None
         return _RolledApproaches(self, pose, loads, creepages, kinematics, time, self.memory,
-                                 rolled)
+                                 rolled, self._setups(None, None))
 
-    def _check_validity(self, wheel: WheelContact) -> None:
+    def _check_validity(self, wheel: WheelContact, setup: WheelSetup) -> None:
         """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
         OUTSIDE_VALIDITY, its message naming each quantity and value."""
         if not wheel.patches:
             return
         wheel.mark_validity(check_validity(SIDES[wheel.side], wheel.track_force,
-                                           wheel.patches, self.wheelset.flange_flank,
-                                           self.settings))
+                                           wheel.patches, setup.wheelset.flange_flank,
+                                           setup.settings))
 
-    def _approach(self, pose: Pose, side: str, vertical: float) -> float:
+    def _setups(self, rails: tuple[RailDeviation, RailDeviation] | None,
+                friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
+        """Each wheel's rail (placed with its deviation), wheelset and settings (with its
+        friction) at a step."""
+        if rails is not None:
+            rails = _per_wheel("rails", rails, 1, "(left, right) RailDeviation")
+            for r in rails:
+                if not isinstance(r, RailDeviation):
+                    raise RailContactError(f"rails must be RailDeviation records, got {r!r}")
+        if friction is not None:
+            friction = tuple(check_positive(f"{s} friction", float(mu), "")
+                             for s, mu in zip(SIDE_NAMES,
+                                              _per_wheel("friction", friction, 1,
+                                                         "(left, right) [-]"), strict=True))
+        out = []
+        for k, side in enumerate(SIDE_NAMES):
+            track = self.tracks[k]
+            if rails is not None and rails[k] != NO_DEVIATION:
+                track = self._placed_rail(side, track, rails[k])
+            settings = self.settings
+            if friction is not None and friction[k] != settings.friction:
+                settings = self._with_friction(friction[k])
+            out.append(WheelSetup(side, track, self.wheelsets[k], settings))
+        return out[0], out[1]
+
+    def _placed_rail(self, side: str, track: Track, rail: RailDeviation) -> Track:
+        """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a
+        deviation held over steps places the rail once)."""
+        key = (side, id(track), rail.offset, rail.roll)
+        out = self._placed.get(key)
+        if out is None:
+            try:
+                out = track.deviated(side, rail.offset, rail.roll)
+                _ = out.side_rail  # (placed now: a rail that cannot be is an error here)
+            except RailContactError as exc:
+                raise RailContactError(f"{side} rail deviation {rail.offset} m, roll "
+                                       f"{rail.roll:g} rad: {exc}") from None
+            if len(self._placed) >= 8:
+                self._placed.pop(next(iter(self._placed)))
+            self._placed[key] = out
+        return out
+
+    def _with_friction(self, mu: float) -> ContactSettings:
+        """The settings with the coefficient of friction ``mu`` (the last few kept)."""
+        out = self._settings_of.get(mu)
+        if out is None:
+            out = replace(self.settings, friction=mu)
+            if len(self._settings_of) >= 8:
+                self._settings_of.pop(next(iter(self._settings_of)))
+            self._settings_of[mu] = out
+        return out
+
+    @staticmethod
+    def _geometry(setups: tuple[WheelSetup, WheelSetup]
+                  ) -> tuple[tuple[Track, Track], tuple[Wheelset, Wheelset]]:
+        """The (left, right) tracks and wheelsets of a step's wheels."""
+        return ((setups[0].track, setups[1].track),
+                (setups[0].wheelset, setups[1].wheelset))
+
+    def _approach(self, pose: Pose, setup: WheelSetup, vertical: float) -> float:
         """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
         ``-vertical``."""
-        g = vertical_gap(self.track, self.wheelset, pose, side)[4]
+        g = vertical_gap(setup.track, setup.wheelset, pose, setup.side)[4]
         approach = max(-(float(g.min()) + vertical), 0.0)
         if approach > MAX_PENETRATION:
             raise RailContactError(f"vertical = {vertical:g} m puts the wheel "
@@ -514,7 +690,7 @@ class WheelsetContact:
                                    f"approach is at most {MAX_PENETRATION * 1e3:g} mm")
         return approach
 
-    def _solve_side(self, side: str, pose: Pose, control: Control,
+    def _solve_side(self, setup: WheelSetup, pose: Pose, control: Control,
                     creep: tuple[float, float, float] | None, kin: Kinematics | None,
                     time: float | None, approach: float | None = None,
                     memory: tuple[tuple[PatchMemory, ...], ...] | None = None
@@ -525,6 +701,7 @@ class WheelsetContact:
         solution the first pass starts from, the step whose creep share starts the load
         loop), the rolled wheelset's (with a warm start); None: this contact's memory of
         the previous step for all three."""
+        side, settings = setup.side, setup.settings
         keep = self.settings.uses_previous  # remember this step for the next one
         own = previous = first = self.memory.wheel(side) if keep else ()
         if memory is not None and keep:
@@ -536,11 +713,11 @@ class WheelsetContact:
             wheel.message = f"no contact: {no_contact_load(control.load)}"
             return wheel, []
         tangential = creep is not None or kin is not None
-        if not (control.by_load and tangential and self.settings.load_includes_creep):
-            patches, creepages, mem = self._pass(side, pose, control, creep, kin, time,
+        if not (control.by_load and tangential and settings.load_includes_creep):
+            patches, creepages, mem = self._pass(setup, pose, control, creep, kin, time,
                                                  previous, first, approach)
-            self._finish(wheel, patches, creepages, pose)
-            _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous),
+            self._finish(wheel, patches, creepages, pose, kin and kin.speed)
+            _mark_uniqueness(wheel, patches, settings.friction, bool(previous),
                              creep_in_load=False)
             return wheel, mem if keep else []
         # The load counts the creep forces: secant on the normal share (module docstring).
@@ -549,7 +726,7 @@ class WheelsetContact:
 
         def wheel_pass(normal: Control) -> tuple[float, tuple]:
             source = passes[-1][2] if passes else first  # later passes: the one before
-            passes.append(self._pass(side, pose, normal, creep, kin, time, previous,
+            passes.append(self._pass(setup, pose, normal, creep, kin, time, previous,
                                      source, None if passes else approach))
             return vertical_force(passes[-1][0]) - q, passes[-1]
 
@@ -564,51 +741,61 @@ class WheelsetContact:
             share = sum(m.vertical_creep for m in own)
         else:  # cold: estimated on the Hertz ellipse where the normal solve forms its frame
             t0 = perf_counter()
-            cp = contact_points(self.track, self.wheelset, pose, side, 0.0)[0]
-            if (self.settings.patch_frame == "reference" and math.isfinite(cp.B)
+            cp = contact_points(setup.track, setup.wheelset, pose, side, 0.0)[0]
+            if (settings.patch_frame == "reference" and math.isfinite(cp.B)
                     and cp.B > 0 and cp.A > 0):
                 cosg = math.cos(cp.contact_angle)
                 approach = hertz(cp.A, cp.B, self.pair, load=q / cosg).penetration / cosg
-                cp = at_reference(cp, self.track, self.wheelset, pose, approach) or cp
-            c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
+                cp = at_reference(cp, setup.track, setup.wheelset, pose, approach) or cp
+            c = creep if creep is not None else kin.creepage(cp, pose, setup.wheelset.radius)
             sgn = SIDES[side]
             share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
-                                            self.settings.friction)
+                                            settings.friction)
             estimate_seconds = perf_counter() - t0
         start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
         (patches, creepages, mem), failure = creep_load_secant(
-            residual, q, start, self.settings.load_tolerance)
+            residual, q, start, settings.load_tolerance)
         if not patches:
             return wheel, []
         if not failure:  # the smallest approach of the load with its creep forces
             (patches, creepages, mem), other = first_root(
                 at_approach, (patches, creepages, mem), vertical_approach(patches),
-                merge_approaches(self.track, self.wheelset, pose, side, MIN_LOBE), q,
-                self.settings.load_tolerance, noisy=True)
+                merge_approaches(setup.track, setup.wheelset, pose, side, MIN_LOBE), q,
+                settings.load_tolerance, noisy=True)
             for p in patches:  # (the total's roots, not the normal share's of a pass)
                 p.load_other = other
-                p.load_unique = other is None and load_unique(patches, self.settings.friction)
-            if other is not None and not load_met(patches, q, self.settings.load_tolerance,
-                                                  self.settings.tangential_tolerance):
+                p.load_unique = other is None and load_unique(patches, settings.friction)
+            if other is not None and not load_met(patches, q, settings.load_tolerance,
+                                                  settings.tangential_tolerance):
                 failure = ("the vertical load with creep forces did not converge at the "
                            "smallest approach that carries it (vertical force "
                            f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
         count_passes(patches, [p for p, _, _ in passes])  # the work of every pass counts
         patches[0].work.seconds += estimate_seconds
-        self._finish(wheel, patches, creepages, pose)
-        if failure and not load_met(patches, q, self.settings.load_tolerance,
-                                    self.settings.tangential_tolerance):
+        self._finish(wheel, patches, creepages, pose, kin and kin.speed)
+        if failure and not load_met(patches, q, settings.load_tolerance,
+                                    settings.tangential_tolerance):
             wheel.status = NOT_CONVERGED
             wheel.message = failure
-        _mark_uniqueness(wheel, patches, self.settings.friction, bool(previous),
+        _mark_uniqueness(wheel, patches, settings.friction, bool(previous),
                          creep_in_load=True)
         return wheel, mem if keep else []
 
     def _finish(self, wheel: WheelContact, patches: list[PatchSolution], creepages: list,
-                pose: Pose) -> WheelContact:
+                pose: Pose, speed: float | None = None) -> WheelContact:
         if patches:
             wheel.creepages = creepages
             fill_resultants(wheel, patches, pose)
+            if creepages:  # (side frame: the lateral and spin components mirrored)
+                sgn = SIDES[wheel.side]
+                per = 0.0
+                for p, c in zip(patches, creepages, strict=True):
+                    t = p.tangential
+                    if t is not None:
+                        fx, fy = t.force
+                        per += fx * c[0] + sgn * (fy * c[1] + t.spin_moment * c[2])
+                wheel.frictional_power_per_speed = per
+                wheel.frictional_power = None if speed is None else speed * per
             if self.convention == "contact":  # the creepages and creep forces as CONTACT's
                 wheel.creepages = [wheel_frame_creepage(c) for c in creepages]
                 fx, fy = wheel.creep_force
@@ -617,7 +804,7 @@ class WheelsetContact:
                     p.convention = "contact"
         return wheel
 
-    def _pass(self, side: str, pose: Pose, control: Control,
+    def _pass(self, setup: WheelSetup, pose: Pose, control: Control,
               creep: tuple[float, float, float] | None, kin: Kinematics | None,
               time: float | None, previous: list[PatchMemory], source: list[PatchMemory],
               approach: float | None = None
@@ -626,8 +813,8 @@ class WheelsetContact:
         """One solve of a wheel's patches: the normal BEM under ``control``, then the
         tangential BEM; warm-started from ``source`` (the previous step's memory, or an
         earlier pass of this step), remembering ``previous`` as the older step."""
+        side, settings = setup.side, setup.settings
         sgn = SIDES[side]
-        settings = self.settings
         pair = self.pair
 
         def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: Control) -> WarmStart:
@@ -657,7 +844,7 @@ class WheelsetContact:
         start = _start(source, time) if source else None
         if start is not None and approach is not None and approach > 0:  # expected there
             start = (approach, start[1])
-        patches = solve_wheel_normal(self.track, self.wheelset, pose, side, control,
+        patches = solve_wheel_normal(setup.track, setup.wheelset, pose, side, control,
                                      settings.patch_settings, pair, estimate_for,
                                      reference=settings.patch_frame == "reference",
                                      start=start)
@@ -671,7 +858,7 @@ class WheelsetContact:
             u, z = cp.rail_u, cp.position[2]
             m = match(source, u, z)  # None without warm start
             if creep is not None or kin is not None:
-                c = creep if creep is not None else kin.creepage(cp, pose, self.wheelset.radius)
+                c = creep if creep is not None else kin.creepage(cp, pose, setup.wheelset.radius)
                 creepages.append(c)
                 side_creep = [c[0], sgn * c[1], sgn * c[2]]
                 t0 = perf_counter()
@@ -757,6 +944,8 @@ class _RolledApproaches:
     rolled: tuple[tuple[PatchMemory, ...], tuple[PatchMemory, ...]] | None = None
     """The previous step's memory of its wheels (left, right) at its root; None: none
     kept."""
+    setups: tuple[WheelSetup, WheelSetup] | None = None
+    """The wheels' rails, wheelsets and settings at the step (:class:`WheelSetup`)."""
     solved: dict = field(default_factory=dict, repr=False, compare=False)
     """The last call's roll [rad] and memory of its solves (``"roll"``, ``"memory"``)."""
     work: dict[str, Work] = field(
@@ -794,7 +983,8 @@ class _RolledApproaches:
             older = (self.rolled[k] if self.rolled else ()) or self.step.wheel(side)
             start = (last[k] if last else ()) or older
             creep = None if self.creepages is None else self.creepages[k]
-            wheel, mem = self.contact._solve_side(side, pose, Control(load=self.loads[k]),
+            wheel, mem = self.contact._solve_side(self.setups[k], pose,
+                                                  Control(load=self.loads[k]),
                                                   creep, self.kinematics, self.time,
                                                   None if guess is None else guess[k],
                                                   (older, start, self.step.wheel(side)))
