@@ -38,6 +38,7 @@ MODEL_IDENTIFIER = "RailContact"
 UNITS = {  # SI base-unit exponents
     "m": {"m": 1}, "rad": {"rad": 1}, "N": {"kg": 1, "m": 1, "s": -2},
     "Pa": {"kg": 1, "m": -1, "s": -2}, "N.m": {"kg": 1, "m": 2, "s": -2},
+    "W": {"kg": 1, "m": 2, "s": -3},
     "m/s": {"m": 1, "s": -1}, "rad/s": {"rad": 1, "s": -1}, "1/m": {"m": -1},
     "m2": {"m": 2}, "s": {"s": 1}, "1": {},
 }

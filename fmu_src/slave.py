@@ -28,9 +28,10 @@ from .geometry.track import Pose, Track, Wheelset
 from .settings import ContactSettings, FMUModes
 from .status import Status
 from .table import TableContact  # (xarray, zarr: imported when a table is opened)
-from .timestep import Kinematics, WheelsetContact, WheelsetResult
+from .timestep import Kinematics, RailDeviation, WheelsetContact, WheelsetResult
 from .timestep.memory import StepMemory
 from .timestep.wheelset import (
+    NO_DEVIATION,
     NOT_CONVERGED,
     OUT_OF_RANGE,
     OUTSIDE_VALIDITY,
@@ -283,13 +284,26 @@ class Slave:
             self.built = built
             return
         g = ps.geometry  # profile_unit: the String or its enumeration
-        wheel = self._profile("wheel_profile", "wheel", g.profile_unit)
-        rail = self._profile("rail_profile", "rail", g.profile_unit)
-        try:
-            track = Track(rail, g.inclination, g.gauge, g.gauge_depth)
-            ws = Wheelset(wheel, g.wheel_radius, g.back_to_back, g.flange_back)
-        except RailContactError as exc:
-            raise RailContactError(f"parameter error: {exc}") from None
+        made: dict[tuple[str, str], Track | Wheelset] = {}  # each profile read once
+        per_side = {"track": [], "wheelset": []}
+        for side in V.SIDES:  # a side's own profile where it is given, else the common one
+            for kind, of in (("wheel", "wheelset"), ("rail", "track")):
+                name = f"{kind}_profile_{side}" if self[f"{kind}_profile_{side}"] \
+                    else f"{kind}_profile"
+                key = (kind, self[name])
+                if key not in made:
+                    profile = self._profile(name, kind, g.profile_unit)
+                    try:
+                        made[key] = (Track(profile, g.inclination, g.gauge, g.gauge_depth)
+                                     if kind == "rail" else
+                                     Wheelset(profile, g.wheel_radius, g.back_to_back,
+                                              g.flange_back))
+                    except RailContactError as exc:
+                        raise RailContactError(f"parameter {name}: {exc}") from None
+                per_side[of].append(made[key])
+        tracks, wheelsets = per_side["track"], per_side["wheelset"]
+        track = tracks[0] if tracks[0] is tracks[1] else tuple(tracks)
+        ws = wheelsets[0] if wheelsets[0] is wheelsets[1] else tuple(wheelsets)
         self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact,
                                        convention=ps.modes.convention)
         self.built = built
@@ -394,8 +408,11 @@ class Slave:
         names += ["vertical_displacement", "roll"] if penetration else ["load_left",
                                                                         "load_right"]
         kinematic = self.modes.creepage_input == "kinematic"
-        names += (["speed", "lateral_velocity", "yaw_rate", "spin_speed"] if kinematic else
-                  [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
+        names += (["speed", "lateral_velocity", "yaw_rate", "spin_speed", "curvature"]
+                  if kinematic else [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
+        names += [f"{q}_{s}" for s in V.SIDES for q in ("rail_offset_lateral",
+                                                          "rail_offset_vertical", "rail_roll",
+                                                          "friction")]
         try:
             x = self._inputs(names)
         except RailContactError as exc:
@@ -410,14 +427,27 @@ class Slave:
             if kinematic:
                 spin = x["spin_speed"]
                 kw["kinematics"] = Kinematics(x["speed"], x["lateral_velocity"], x["yaw_rate"],
-                                              spin if spin > 0 else None)
+                                              spin if spin > 0 else None, x["curvature"])
             else:
                 kw["creepages"] = tuple(tuple(x[f"{c}_{s}"] for c in ("xi", "eta", "phi"))
                                         for s in V.SIDES)
+            rails = tuple(RailDeviation((x[f"rail_offset_lateral_{s}"],
+                                         x[f"rail_offset_vertical_{s}"]), x[f"rail_roll_{s}"])
+                          for s in V.SIDES)
+            if any(r != NO_DEVIATION for r in rails):
+                kw["rails"] = rails
+            mu = tuple(x[f"friction_{s}"] for s in V.SIDES)
+            if any(m > 0 for m in mu):  # (<= 0: the parameter's)
+                kw["friction"] = tuple(m if m > 0 else self.contact.settings.friction
+                                       for m in mu)
             res = self.contact.solve(pose, **kw)
         except RailContactError as exc:
             return self._discarded(f"input out of range: {exc}")
         self._write(res)  # (the rigid wheelset: a stage of the solve when asked for)
+        speed = float(self["speed"])  # the frictional power: per unit speed times V
+        for s in V.SIDES:
+            self[f"frictional_power_{s}"] *= speed if math.isfinite(speed) and speed > 0 \
+                else 0.0
         rigid = res.rigid_solution
         if rigid is not None and not rigid.converged:  # not found: the status says so
             self.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")

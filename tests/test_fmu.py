@@ -1040,3 +1040,40 @@ def test_rigid_wheelset_can_be_skipped(fmu, extracted, md):
     np.testing.assert_allclose(s.get("roll_moment", "pitch_moment", "normal_force_left"),
                                [r.moment[0], r.moment[1], r.left.normal_force], rtol=1e-9)
     s.free()
+
+
+def test_real_track_inputs_and_profiles_per_side(fmu, extracted, md):
+    """The real-track inputs (curvature, each rail's offsets and roll, friction per wheel)
+    and a rail profile on one side only: the FMU's step equals the API's with the same
+    values, and frictional_power is the speed times the API's power per unit speed."""
+    from railcontact.timestep.wheelset import Kinematics, RailDeviation
+
+    track = {"curvature": -1 / 800, "rail_offset_lateral_left": 1e-3,
+             "rail_offset_vertical_left": -2e-4, "rail_roll_left": 2e-3,
+             "rail_offset_lateral_right": 5e-4, "friction_left": 0.3, "friction_right": 0.0}
+    s = Slave(fmu, extracted, md, "track", warm_start="none", rigid_wheelset="skip",
+              creepage_input="kinematic", rail_profile_right="CN60")
+    try:
+        assert s.step(lateral_displacement=2e-3, speed=25.0, lateral_velocity=0.02,
+                      **track) == 0
+        got = s.get("normal_force_left", "creep_force_x_left", "creep_force_y_right",
+                    "spin_moment_right", "contact_angle_right", "frictional_power_left",
+                    "frictional_power_right", "status")
+    finally:
+        s.free()
+    mat = Material(206e9, 0.28)
+    wc = WheelsetContact(
+        (Track(read_profile("60E1", "rail"), math.atan(1 / 40), 1.435),
+         Track(read_profile("CN60", "rail"), math.atan(1 / 40), 1.435)),
+        Wheelset(read_profile("S1002", "wheel"), 0.46, 1.360), ElasticPair.of(mat, mat),
+        ContactSettings(friction=0.4, warm_start="none", rigid_wheelset="skip"))
+    r = wc.solve(Pose(2e-3), loads=(83.3e3, 83.3e3),
+                 kinematics=Kinematics(25.0, 0.02, curvature=-1 / 800),
+                 rails=(RailDeviation((1e-3, -2e-4), 2e-3), RailDeviation((5e-4, 0.0))),
+                 friction=(0.3, 0.4))
+    want = [r.left.normal_force, r.left.creep_force[0], r.right.creep_force[1],
+            r.right.spin_moment, r.right.contact_angle, r.left.frictional_power,
+            r.right.frictional_power]
+    np.testing.assert_allclose(got[:-1], want, rtol=1e-9, atol=1e-9)
+    assert got[-1] == r.status == 0 and got[5] < 0
+    assert got[5] == pytest.approx(25.0 * r.left.frictional_power_per_speed, rel=1e-12)

@@ -26,7 +26,8 @@ def test_variable_table_names_every_variable_with_its_unit_and_default():
         cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
         for name in re.findall(r"`([a-z_0-9]+)`", cells[0]):
             rows[name] = cells
-    everything = V.PARAMETERS + V.CHOICES + V.INPUTS + V.OUTPUTS + V.APPENDED_OUTPUTS
+    everything = (V.PARAMETERS + V.CHOICES + V.INPUTS + V.OUTPUTS + V.APPENDED_OUTPUTS
+                  + V.TRACK_INPUTS + V.TRACK_OUTPUTS)
     for v in everything:
         row = rows.get(v.name) or rows[v.name.removesuffix("_right") + "_left"]
         assert row[1] == v.causality and row[3] == v.unit, v.name

@@ -125,11 +125,20 @@ PARAMETER_SOURCES: tuple[tuple[str, type[Record], str], ...] = (
     ("contact_model", FMUModes, "contact_model"),
     ("table_file", FMUModes, "table_file"),
     ("patch_frame", ContactSettings, "patch_frame"),
+    ("wheel_profile_left", FMUModes, "wheel_profile_left"),
+    ("wheel_profile_right", FMUModes, "wheel_profile_right"),
+    ("rail_profile_left", FMUModes, "rail_profile_left"),
+    ("rail_profile_right", FMUModes, "rail_profile_right"),
 )
 """FMU parameter name, the settings record and the field it sets (wheel and rail share
 one material in the FMU)."""
 APPENDED = ("max_y_q", "max_penetration", "max_wheel_load", "convention", "rigid_wheelset",
             "contact_model", "table_file", "patch_frame")
+APPENDED_TRACK = ("wheel_profile_left", "wheel_profile_right", "rail_profile_left",
+                  "rail_profile_right")
+"""Parameters of the real track (profiles per side), numbered after
+:data:`APPENDED_OUTPUTS` with :data:`TRACK_INPUTS` and :data:`TRACK_OUTPUTS`, so that every
+earlier value reference stays."""
 """Parameters added after the first published interface (commit 039db95): :func:`table`
 numbers them after every variable of it, so that its value references stay (they are
 numbered per type). A new parameter goes at the end of :data:`PARAMETER_SOURCES` and of
@@ -487,6 +496,34 @@ APPENDED_OUTPUTS = [
 every other variable, so that the value references of the variables before them stay
 those that hosts already use (:data:`APPENDED`)."""
 
+TRACK_INPUTS = [
+    Variable("curvature", "Real", "input", 0.0, "1/m",
+             "track curvature, positive when the track turns left (creepage_input="
+             "kinematic: the rails turn with -speed * curvature relative to the track frame; "
+             "a radius of 50 m at most)"),
+    *[v for s in SIDES for v in (
+        Variable(f"rail_offset_lateral_{s}", "Real", "input", 0.0, "m",
+                 f"{s} rail's lateral offset from its place, positive to the left (an "
+                 "irregularity; a gauge change)"),
+        Variable(f"rail_offset_vertical_{s}", "Real", "input", 0.0, "m",
+                 f"{s} rail's vertical offset from its place, positive up"),
+        Variable(f"rail_roll_{s}", "Real", "input", 0.0, "rad",
+                 f"{s} rail's roll about the track X axis (right-handed, Y to the left, Z "
+                 "up), about the rail profile's origin"),
+        Variable(f"friction_{s}", "Real", "input", 0.0, "1",
+                 f"coefficient of friction on the {s} rail at this step (wet, contaminated, "
+                 "lubricated); <= 0 means the parameter friction"))],
+]
+"""Inputs of the real track, numbered after :data:`APPENDED_OUTPUTS`."""
+TRACK_OUTPUTS = [
+    *_wheel("frictional_power", "Real", "W", "frictional power of the wheel's creep forces, "
+            "speed * (F_x xi + F_y eta + M_z phi) over its patches (negative: dissipated; "
+            "the traction times the slip integrated, in steady rolling)",
+            value=lambda w: w.frictional_power_per_speed),
+]
+"""Outputs of the real track, numbered after :data:`TRACK_INPUTS`; the slave multiplies
+the per-speed power by the ``speed`` input."""
+
 
 def parameters_markdown() -> str:
     """The FMU parameters as a Markdown table: the setting behind each, default, unit."""
@@ -505,9 +542,11 @@ def table() -> list[Variable]:
     """All variables with their value references (numbered per type from 0)."""
     counters: dict[str, int] = {}
     out = []
-    first = [v for v in PARAMETERS if v.name not in APPENDED]
+    first = [v for v in PARAMETERS if v.name not in APPENDED + APPENDED_TRACK]
     appended = [next(v for v in PARAMETERS if v.name == name) for name in APPENDED]
-    for v in first + INPUTS + OUTPUTS + appended + CHOICES + APPENDED_OUTPUTS:
+    track = [next(v for v in PARAMETERS if v.name == name) for name in APPENDED_TRACK]
+    for v in (first + INPUTS + OUTPUTS + appended + CHOICES + APPENDED_OUTPUTS + track
+              + TRACK_INPUTS + TRACK_OUTPUTS):
         k = counters.get(v.type, 0)
         counters[v.type] = k + 1
         out.append(replace(v, vr=k))
@@ -533,7 +572,8 @@ def variables_markdown() -> str:
     meaning, in the order parameters, enumerations, inputs, outputs; a ``_left``/``_right``
     pair is one row. The table of docs/fmu.md is this (``scripts/fmu_variables_table.py``
     writes it; ``tests/test_readme_fmu.py`` checks it)."""
-    everything = PARAMETERS + CHOICES + INPUTS + OUTPUTS + APPENDED_OUTPUTS
+    everything = (PARAMETERS + CHOICES + INPUTS + TRACK_INPUTS + OUTPUTS + APPENDED_OUTPUTS
+                  + TRACK_OUTPUTS)
     names = {v.name for v in everything}
     out = ["| name | causality | type | unit | default | meaning |",
            "|---|---|---|---|---|---|"]

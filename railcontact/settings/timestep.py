@@ -177,3 +177,13 @@ class FMUModes(Record):
     table_file: str = setting("", "str?", "", "the contact table (a Zarr store of railcontact "
                               "table build) for contact_model = table: a folder in the FMU's "
                               "resources or a path")
+    wheel_profile_left: str = setting("", "str?", "", "the left wheel's profile when the "
+                                      "wheels differ (a worn wheelset), as wheel_profile; "
+                                      "empty: wheel_profile")
+    wheel_profile_right: str = setting("", "str?", "", "the right wheel's profile when the "
+                                       "wheels differ, as wheel_profile; empty: "
+                                       "wheel_profile")
+    rail_profile_left: str = setting("", "str?", "", "the left rail's profile when the rails "
+                                     "differ, as rail_profile; empty: rail_profile")
+    rail_profile_right: str = setting("", "str?", "", "the right rail's profile when the "
+                                      "rails differ, as rail_profile; empty: rail_profile")

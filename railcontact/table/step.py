@@ -135,10 +135,18 @@ class TableContact:
               vertical: float | None = None,
               creepages: tuple[tuple[float, float, float], tuple[float, float, float]]
               | None = None, kinematics: Kinematics | None = None,
-              time: float | None = None, remember: bool = True) -> WheelsetResult:
+              time: float | None = None, remember: bool = True,
+              rails: tuple | None = None, friction: tuple[float, float] | None = None
+              ) -> WheelsetResult:
         """Both wheels from the table (arguments as ``WheelsetContact.solve``; ``time`` and
         ``remember`` are accepted and unused). Without creepages and kinematics the
-        creepages are zero."""
+        creepages are zero. A table has no axes for rail deviations, a friction per step or
+        a track curvature: given, they are an error."""
+        if rails is not None or friction is not None or (
+                kinematics is not None and kinematics.curvature != 0.0):
+            raise RailContactError("a contact table has no axes for rail deviations, the "
+                                   "friction per step or the track curvature; solve with "
+                                   "the exact contact (contact_model = bem)")
         t0 = perf_counter()
         if vertical is not None or loads is None:
             raise RailContactError("a contact table is built by wheel load: give loads "
