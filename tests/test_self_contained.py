@@ -39,6 +39,10 @@ SHA256 = {  # the files as their sources have them, byte for byte
         "5a431b69bd7ae8418b641412da6fdf1d852f4d9865080875cf3f0f3e874e3588",
     CONTACT_REFERENCE / "wheelrail_dx0.5.csv":
         "d88f19eb00002a1d4c0a6cfecefb2cc1983dff9201a5288e6c760c7075460484",
+    CONTACT_REFERENCE / "varfric" / "mbench_a22_varfric.inp":
+        "6f2e8f3f8653ccdf3e970b770a669a171c17b7ecd4a3bc3f83bcc8f7b729b7f2",
+    CONTACT_REFERENCE / "varfric" / "mbench_a22_varfric.ref_out":
+        "d281079cc208bf069f3e884be66b16f41ddf0314a3eacf0235cf891259d08067",
 }
 
 

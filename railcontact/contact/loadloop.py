@@ -20,6 +20,7 @@ from ..geometry.search import ContactPoint
 from ..halfspace.hertz import hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import PatchSettings
+from ..settings.friction import FrictionTable, friction_at_point
 from ..tangential.kalker import creep_coefficients
 from .results import PatchSolution
 
@@ -138,10 +139,11 @@ def vertical_force(patches: list[PatchSolution]) -> float:
     return total
 
 
-def load_unique(patches: list[PatchSolution], friction: float) -> bool:
+def load_unique(patches: list[PatchSolution], friction: float | FrictionTable) -> bool:
     """Whether the wheel load has one solution: True unless the wheel has several patches
     and one of them, with a creep force across the track, is steeper than Nadal's angle
-    (``mu tan(gamma) >= 1``).
+    (``mu tan(gamma) >= 1``, ``mu`` the patch's own at its reference point when friction
+    varies across the profile).
 
     The argument, for patches that scale like Hertz's (the similarity the simplified
     theories rest on): a patch's creep force is ``F_s = -+ mu N f(s)`` with ``f`` a rising,
@@ -166,8 +168,16 @@ def load_unique(patches: list[PatchSolution], friction: float) -> bool:
     loaded = [p for p in patches if p.tangential is not None and p.geometry is not None]
     if len(loaded) <= 1:
         return True
-    return all(friction * math.tan(abs(p.geometry.contact_angle)) < 1.0
+    return all(_patch_mu(p, friction) * math.tan(abs(p.geometry.contact_angle)) < 1.0
                or p.tangential.force[1] == 0.0 for p in loaded)
+
+
+def _patch_mu(patch: PatchSolution, friction: float | FrictionTable) -> float:
+    """The coefficient of friction [-] a patch was solved with (at its reference point,
+    :attr:`~.results.PatchSolution.friction`), else ``friction``'s there."""
+    if patch.friction is not None:
+        return patch.friction
+    return friction_at_point(friction, patch.geometry)
 
 
 def load_met(patches: list[PatchSolution], load: float, rtol: float,

@@ -93,6 +93,10 @@ class PatchSolution:
     curvatures: tuple[float, float] | None = None
     geometry: ContactPoint | None = None
     work: Work = field(default_factory=Work)
+    friction: float | None = None
+    """The coefficient of friction [-] the tangential problem was solved with: with a
+    friction table the one at the patch's reference point (per element row where the table
+    says so, :class:`~railcontact.settings.friction.FrictionTable`); None without one."""
     load_unique: bool | None = None
     """Whether the wheel load has one solution: False when a steep patch's creep force
     (:func:`~.loadloop.load_unique`) or a merge of patches
@@ -182,6 +186,8 @@ class PatchSolution:
                 "wall_time": t.wall_time, "model": self.tangential_model,
                 "estimate": self.tangential_estimate,
             }
+            if self.friction is not None:
+                d["tangential"]["friction"] = self.friction
         if self.hertz is not None:
             h = self.hertz
             d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,

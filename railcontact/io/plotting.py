@@ -59,7 +59,7 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
     tangential = sol.case.tangential
     g = res.grid
     xmin, xmax, ymin, ymax = g.bounds
-    mu = tangential.friction
+    mu = tangential.friction if ps.friction is None else ps.friction  # (at the reference point)
     if ps.tangential_model == "bem":
         xe = np.linspace(xmin, xmax, g.nx + 1) * MM
         ye = np.linspace(ymin, ymax, g.ny + 1) * MM
