@@ -6,7 +6,9 @@ element, and a table equal everywhere giving exactly the constant coefficient's 
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
 import sys
 from pathlib import Path
 
@@ -199,3 +201,32 @@ def test_case_file_round_trip(flange_case):
     case = Case.from_dict(_with_friction(flange_case, table))
     assert case.to_dict()["tangential"]["friction"] == table
     assert Case.from_dict(case.to_dict()) == case
+
+
+def test_case_file_with_a_table_through_the_cli(varfric, tmp_path):
+    """A TOML case file with an inline friction table: ``railcontact solve --json --plot``
+    reports the patch's coefficient, CONTACT's for case 4 of its example."""
+    v, cases = varfric
+    case = cases[4]
+    d = v.case_dict(case, case["patches"][0], "row")
+    g, t = d["geometry"], d["tangential"]
+    text = "\n".join([
+        'convention = "contact"',
+        "[material]", "young = 209.92e9", "poisson = 0.28",
+        "[geometry]", 'type = "wheel-rail"', f'wheel = "{g["wheel"]}"', f'rail = "{g["rail"]}"',
+        "inclination = 0.0", f"lateral_displacement = {g['lateral_displacement']!r}",
+        f"yaw = {g['yaw']!r}", f"roll = {g['roll']!r}", 'side = "right"',
+        "[grid]", "dx = 2e-4", "dy = 2e-4",
+        "[normal]", "load = 1e4",
+        "[tangential]", f"creepage = {list(t['creepage'])!r}",
+        "friction = {angle = [-0.3490658504, -0.1745329252], mu = [0.2, 0.3]}", ""])
+    path = tmp_path / "varfric.toml"
+    path.write_text(text)
+    png = tmp_path / "patch.png"
+    r = subprocess.run([sys.executable, "-m", "railcontact", "solve", str(path), "--json",
+                        "--plot", str(png)], capture_output=True, text=True, timeout=300,
+                       cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    (patch,) = json.loads(r.stdout)["patches"]
+    assert abs(patch["tangential"]["friction"] - case["patches"][0]["mu"]) < 2e-3
+    assert png.stat().st_size > 10_000

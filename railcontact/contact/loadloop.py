@@ -56,14 +56,14 @@ def probe_settings(settings: PatchSettings) -> PatchSettings:
 
 
 def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float, float, float],
-                            pair: ElasticPair, friction: float) -> float:
+                            pair: ElasticPair, friction: float | FrictionTable) -> float:
     """An estimate of a patch's creep force share of a vertical wheel load [N],
     ``F_s sin(gamma)``: Kalker's linear theory on the Hertz ellipse of the contact point
     ``cp`` (its curvatures and contact angle) carrying the vertical ``load`` [N] by its normal
     force, with the patch's ``creepage`` (xi, eta, phi) [-, -, 1/m], saturated at
     ``friction`` mu as Shen, Hedrick & Elkins (1983) do (the force's magnitude ``F`` becomes
-    ``mu N (u - u^2/3 + u^3/27)``, ``u = F / (mu N)``, and ``mu N`` beyond ``u = 3``); 0 where
-    ``cp`` has no convex contact.
+    ``mu N (u - u^2/3 + u^3/27)``, ``u = F / (mu N)``, and ``mu N`` beyond ``u = 3``; a
+    friction table's mu at ``cp``); 0 where ``cp`` has no convex contact.
 
     The first normal share of a cold load loop (:func:`creep_load_secant`'s ``start``).
     With ``cp`` in the frame at the reference point that the normal solve forms first, on
@@ -84,7 +84,7 @@ def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float
     fx = -pair.shear * ab * c.c11 * xi
     fy = -pair.shear * ab * (c.c22 * eta + math.sqrt(ab) * c.c23 * phi)
     linear = math.hypot(fx, fy)
-    bound = friction * hz.load
+    bound = friction_at_point(friction, cp) * hz.load
     if linear == 0.0 or bound <= 0.0:
         return 0.0
     u = linear / bound
