@@ -20,8 +20,14 @@ rail profile coordinate of the rail profile file (the same on either side).
 row of elements of a patch its own coefficient, from the rail's surface inclination (or
 profile coordinate) at that row, so that a patch reaching from a dry top onto a
 lubricated gauge face sees both; ``"patch"`` gives a patch one coefficient, at its
-contact reference point, which is what CONTACT does for planar (non-conformal) contact
-(it interpolates per row only in its conformal approach).
+contact reference point, which is what CONTACT does for planar (non-conformal) contact:
+its ``m_wr_solvecp`` interpolates the table once per patch at the reference point's
+contact angle in the wheelset's frame (``deltcp_w``: the track-frame angle less the
+wheelset roll; railcontact reads the rail's, against the track plane), and per element row
+only in its conformal approach (at each row's surface inclination).
+
+Where one number stands for a patch (the load loop's uniqueness check, the output) it is
+the coefficient at the patch's reference point (:func:`friction_at_point`).
 """
 
 from __future__ import annotations
