@@ -23,6 +23,7 @@ from .errors import RailContactError, SolverError
 from .halfspace.hertz import MIN_LOAD
 from .settings import ContactSettings
 from .settings.choices import PROFILE_UNITS, WARM_STARTS
+from .settings.friction import FrictionTable
 
 
 def _summary(sol) -> str:
@@ -67,6 +68,11 @@ def _summary(sol) -> str:
             if ps.frictional_power is not None:
                 lines.append(f"  friction power {ps.frictional_power:12.6g} W   (at "
                              f"{ps.velocity:.6g} m/s)")
+            table = sol.case.tangential.friction
+            if isinstance(table, FrictionTable) and ps.friction is not None:
+                rows = ", per element row" if table.at == "row" else ""
+                lines.append(f"  friction       {ps.friction:12.6g}   (the table's at the "
+                             f"reference point{rows})")
             lines.append(f"  slip area      {t.slip_area_ratio:12.4f} of the contact area")
             lines.append(f"  max traction   {t.max_traction:12.6g} Pa")
             lines.append(f"  iterations     {t.iterations:12d}   ({t.message})")

@@ -61,6 +61,10 @@ SHA256 = {  # the files as their sources have them, byte for byte
         ("trk_C_C2_right_r300_wide.inp",
          "45d1b3e7593d86623368032bc92c105c7bd349db0cd8712c6916f0b81f13aab2"),
     )},
+    CONTACT_REFERENCE / "varfric" / "mbench_a22_varfric.inp":
+        "6f2e8f3f8653ccdf3e970b770a669a171c17b7ecd4a3bc3f83bcc8f7b729b7f2",
+    CONTACT_REFERENCE / "varfric" / "mbench_a22_varfric.ref_out":
+        "d281079cc208bf069f3e884be66b16f41ddf0314a3eacf0235cf891259d08067",
 }
 
 

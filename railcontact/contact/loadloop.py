@@ -20,6 +20,7 @@ from ..geometry.search import ContactPoint
 from ..halfspace.hertz import hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import PatchSettings
+from ..settings.friction import FrictionTable, friction_at_point
 from ..tangential.kalker import creep_coefficients
 from .results import PatchSolution
 
@@ -55,14 +56,14 @@ def probe_settings(settings: PatchSettings) -> PatchSettings:
 
 
 def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float, float, float],
-                            pair: ElasticPair, friction: float) -> float:
+                            pair: ElasticPair, friction: float | FrictionTable) -> float:
     """An estimate of a patch's creep force share of a vertical wheel load [N],
     ``F_s sin(gamma)``: Kalker's linear theory on the Hertz ellipse of the contact point
     ``cp`` (its curvatures and contact angle) carrying the vertical ``load`` [N] by its normal
     force, with the patch's ``creepage`` (xi, eta, phi) [-, -, 1/m], saturated at
     ``friction`` mu as Shen, Hedrick & Elkins (1983) do (the force's magnitude ``F`` becomes
-    ``mu N (u - u^2/3 + u^3/27)``, ``u = F / (mu N)``, and ``mu N`` beyond ``u = 3``); 0 where
-    ``cp`` has no convex contact.
+    ``mu N (u - u^2/3 + u^3/27)``, ``u = F / (mu N)``, and ``mu N`` beyond ``u = 3``; a
+    friction table's mu at ``cp``); 0 where ``cp`` has no convex contact.
 
     The first normal share of a cold load loop (:func:`creep_load_secant`'s ``start``).
     With ``cp`` in the frame at the reference point that the normal solve forms first, on
@@ -83,7 +84,7 @@ def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float
     fx = -pair.shear * ab * c.c11 * xi
     fy = -pair.shear * ab * (c.c22 * eta + math.sqrt(ab) * c.c23 * phi)
     linear = math.hypot(fx, fy)
-    bound = friction * hz.load
+    bound = friction_at_point(friction, cp) * hz.load
     if linear == 0.0 or bound <= 0.0:
         return 0.0
     u = linear / bound
@@ -138,10 +139,11 @@ def vertical_force(patches: list[PatchSolution]) -> float:
     return total
 
 
-def load_unique(patches: list[PatchSolution], friction: float) -> bool:
+def load_unique(patches: list[PatchSolution], friction: float | FrictionTable) -> bool:
     """Whether the wheel load has one solution: True unless the wheel has several patches
     and one of them, with a creep force across the track, is steeper than Nadal's angle
-    (``mu tan(gamma) >= 1``).
+    (``mu tan(gamma) >= 1``, ``mu`` the patch's own at its reference point when friction
+    varies across the profile).
 
     The argument, for patches that scale like Hertz's (the similarity the simplified
     theories rest on): a patch's creep force is ``F_s = -+ mu N f(s)`` with ``f`` a rising,
@@ -166,8 +168,16 @@ def load_unique(patches: list[PatchSolution], friction: float) -> bool:
     loaded = [p for p in patches if p.tangential is not None and p.geometry is not None]
     if len(loaded) <= 1:
         return True
-    return all(friction * math.tan(abs(p.geometry.contact_angle)) < 1.0
+    return all(_patch_mu(p, friction) * math.tan(abs(p.geometry.contact_angle)) < 1.0
                or p.tangential.force[1] == 0.0 for p in loaded)
+
+
+def _patch_mu(patch: PatchSolution, friction: float | FrictionTable) -> float:
+    """The coefficient of friction [-] a patch was solved with (at its reference point,
+    :attr:`~.results.PatchSolution.friction`), else ``friction``'s there."""
+    if patch.friction is not None:
+        return patch.friction
+    return friction_at_point(friction, patch.geometry)
 
 
 def load_met(patches: list[PatchSolution], load: float, rtol: float,

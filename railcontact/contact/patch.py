@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -360,16 +361,18 @@ def _grown(meshed: Bounds, asked: Bounds, automatic: tuple[bool, bool]) -> Bound
 
 def simplified_tangential(model: str, hz: HertzSolution, pair: ElasticPair,
                           settings: TangentialSettings, normal: NormalResult | None = None,
-                          creepage: tuple[float, float, float] | None = None) -> StripResult:
+                          creepage: tuple[float, float, float] | None = None,
+                          friction: float | None = None) -> StripResult:
     """FASTSIM or FaStrip (``model``) with the settings' friction, strips and bound.
 
     Without ``normal``: on the Hertz ellipse ``hz`` (elliptic or parabolic bound). With a
     normal solution: on the actual patch (strips along its contact rows, its pressure as the
     traction bound) with the coefficients of its equivalent ellipse - the adaptation for
-    non-elliptic wheel-rail patches. ``creepage`` (xi, eta, phi) replaces the settings'.
+    non-elliptic wheel-rail patches. ``creepage`` (xi, eta, phi) replaces the settings',
+    ``friction`` [-] the settings' coefficient (a patch's own, of a friction table).
     """
     nx, ny = settings.strips
-    mu = settings.friction
+    mu = settings.friction if friction is None else friction
     creepage = settings.creepage if creepage is None else creepage
     if normal is None:
         args = (hz.a, hz.b, hz.load, pair, mu, creepage)
@@ -408,18 +411,30 @@ def start_from(patch: PatchSolution, grid: Grid
 def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
                            pair: ElasticPair, fft: str,
                            creepage: tuple[float, float, float] | None = None,
-                           previous: tuple | None = None) -> None:
+                           previous: tuple | None = None,
+                           friction: float | PatchFriction | None = None) -> None:
     """Add the tangential solution to ``patch`` (same grid as its normal solution).
 
     ``creepage`` (xi [-], eta [-], phi [1/m]) replaces the settings' (a time step gives
     each patch its own); ``fft`` is the convolution backend. ``previous`` = (traction
     (2, nx, ny) [Pa], adhesion/slip map) on the patch's grid, e.g. the previous time
     step's: when it holds a traction it starts the BEM instead of the estimate asked for in
-    ``settings``. The sweeps and the time are added to ``patch.work``.
+    ``settings``. ``friction`` replaces the settings' coefficient (which must then be a
+    number): the patch's own [-], or (:class:`PatchFriction`) its coefficient at the
+    reference point and one per lateral element row. The coefficient at the reference point
+    is recorded in ``patch.friction``. The sweeps and the time are added to
+    ``patch.work``.
     """
     t0 = time.perf_counter()
+    if friction is None:
+        friction = settings.friction
+    if not isinstance(friction, (PatchFriction, int, float)):
+        raise CaseError("a friction table is read per patch: give solve_patch_tangential "
+                        "the patch's coefficient (friction=...)")
+    patch.friction = float(friction.reference if isinstance(friction, PatchFriction)
+                           else friction)
     try:
-        _tangential(patch, settings, pair, fft, creepage, previous)
+        _tangential(patch, settings, pair, fft, creepage, previous, friction)
     finally:
         patch.work.seconds += time.perf_counter() - t0
     t = patch.tangential
@@ -438,7 +453,7 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
 
 def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,
                 fft: str, creepage: tuple[float, float, float] | None,
-                previous: tuple | None) -> None:
+                previous: tuple | None, friction: float | PatchFriction) -> None:
     res = patch.normal
     A, B = patch.curvatures
     creepage = settings.creepage if creepage is None else tuple(creepage)
@@ -453,11 +468,15 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     if model != "bem":
         if hz is None:
             raise CaseError("no contact: the simplified tangential models need a load")
-        patch.tangential = simplified_tangential(model, hz, pair, settings, actual, creepage)
+        if isinstance(friction, PatchFriction):
+            raise CaseError(f"{model}: friction per element row needs the BEM")
+        patch.tangential = simplified_tangential(model, hz, pair, settings, actual, creepage,
+                                                 friction)
         return
     if p0 is None and estimate != "none" and hz is not None:
         p0, st0 = remesh_strips(
-            simplified_tangential(estimate, hz, pair, settings, actual, creepage), res.grid)
+            simplified_tangential(estimate, hz, pair, settings, actual, creepage,
+                                  patch.friction), res.grid)
     grid, pn = res.grid, res.pressure
     window = None if settings.solver == "convexgs" else contact_window(
         res.contact, box=res.contact_box or (-1, 0, -1, 0))
@@ -470,11 +489,23 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         st0 = None if st0 is None else np.asarray(st0)[sx, sy]
     # (on a window: the result on the patch's grid, zero outside the window)
     check_operator_memory(grid, "xy", fft)
+    mu = friction.rows(grid) if isinstance(friction, PatchFriction) else friction
     patch.tangential = SOLVERS[settings.solver](
-        grid, rolling_operator(grid, pair, fft), pn, settings.friction,
-        creepage, initial_traction=p0, initial_state=st0, tolerance=settings.tolerance,
+        grid, rolling_operator(grid, pair, fft), pn, mu, creepage, initial_traction=p0,
+        initial_state=st0, tolerance=settings.tolerance,
         max_iterations=settings.max_iterations, spin_offset=settings.spin_offset,
         embed=None if window is None else (res.grid, window))
+
+
+@dataclass(frozen=True)
+class PatchFriction:
+    """A patch's coefficient of friction when it varies across the patch: ``reference``
+    [-] at its reference point (what a single number stands for: the load loop's checks,
+    the output), ``rows(grid)`` one per lateral row of elements of a grid of the patch,
+    an array (1, ny) [-] (:func:`~railcontact.settings.friction.row_friction`)."""
+
+    reference: float
+    rows: Callable[[Grid], np.ndarray]
 
 
 WINDOW_QUANTUM = 8

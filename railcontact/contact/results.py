@@ -96,6 +96,10 @@ class PatchSolution:
     curvatures: tuple[float, float] | None = None
     geometry: ContactPoint | None = None
     work: Work = field(default_factory=Work)
+    friction: float | None = None
+    """The coefficient of friction [-] the tangential problem was solved with: with a
+    friction table the one at the patch's reference point (per element row where the table
+    says so, :class:`~railcontact.settings.friction.FrictionTable`); None without one."""
     load_unique: bool | None = None
     """Whether the wheel load has one solution: False when a steep patch's creep force
     (:func:`~.loadloop.load_unique`) or a merge of patches
@@ -248,6 +252,8 @@ class PatchSolution:
                 d["tangential"]["kinematic_radius"] = self.kinematic_radius
             if self.frictional_power is not None:
                 d["frictional_power"] = self.frictional_power
+            if self.friction is not None:
+                d["tangential"]["friction"] = self.friction
         if self.hertz is not None:
             h = self.hertz
             d["hertz"] = {"a": h.a, "b": h.b, "force": h.load, "penetration": h.penetration,

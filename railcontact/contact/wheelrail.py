@@ -73,6 +73,7 @@ from ..halfspace.hertz import (
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
+from ..settings.friction import FrictionTable, friction_at_point, row_friction, side_friction
 from .loadloop import (
     CREEP_LOAD_RTOL,
     approach_secant,
@@ -86,6 +87,7 @@ from .loadloop import (
 )
 from .patch import (
     UNCOVERED_MARGIN,
+    PatchFriction,
     normal_estimate,
     solve_patch_normal,
     solve_patch_tangential,
@@ -419,14 +421,31 @@ def wheel_kinematics(track: Track, ws: Wheelset, pose: Pose, side: str,
     return of
 
 
+def patch_friction(friction: float | FrictionTable, cp: ContactPoint, track: Track
+                   ) -> float | PatchFriction:
+    """The coefficient of friction of the patch at ``cp``: ``friction`` itself when it
+    is a number; of a friction table (in the side frame,
+    :func:`~railcontact.settings.friction.side_friction`) the one at the patch's reference
+    point, or with ``at = "row"`` that one and one per lateral element row."""
+    if not isinstance(friction, FrictionTable):
+        return friction
+    mu = friction_at_point(friction, cp)
+    if friction.at == "patch":
+        return mu
+    return PatchFriction(mu, row_friction(friction, cp, track))
+
+
 def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
                     pair: ElasticPair, previous: list[PatchSolution] | None = None,
-                    kinematics_of: KinematicsOf | None = None) -> list[PatchSolution]:
+                    kinematics_of: KinematicsOf | None = None, track: Track | None = None
+                    ) -> list[PatchSolution]:
     """The tangential solution of each loaded patch, started from the traction of the same
     patch in ``previous`` (the wheel's last load pass) where there is one, else from the
     patch's own start (:attr:`~.start.WarmStart.traction_on`). With ``kinematics_of`` each
     patch is solved with the creepages it gives at the patch (and keeps their reference
-    velocity), else with the settings' creepages."""
+    velocity), else with the settings' creepages; with a friction table, each patch's
+    coefficient read on ``track`` (:func:`patch_friction`)."""
+    mu = settings.tangential.friction
     for p in patches:
         if p.normal.force > 0:
             last = same_patch(previous, p.geometry)
@@ -441,7 +460,8 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
                 creepage, p.velocity = kin.creepage, kin.velocity
                 p.kinematic_radius = kin.rolling_radius
             solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft,
-                                   creepage=creepage, previous=start)
+                                   creepage=creepage, previous=start,
+                                   friction=patch_friction(mu, p.geometry, track))
     return patches
 
 
@@ -469,7 +489,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         return _add_tangential(
             solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
                                reference=reference),
-            settings, pair, kinematics_of=kinematics_of)
+            settings, pair, kinematics_of=kinematics_of, track=track)
     q = control.load
     passes: list[list[PatchSolution]] = []
 
@@ -480,7 +500,7 @@ def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Cont
         ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, normal, settings,
                                                 pair, estimate_for, last,
                                                 reference=reference),
-                             settings, pair, last, kinematics_of)
+                             settings, pair, last, kinematics_of, track)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -731,13 +751,15 @@ def _not_converged(patches: list[PatchSolution], why: str) -> list[PatchSolution
 
 
 def side_settings(settings: PatchSettings, side: str, convention: str) -> PatchSettings:
-    """``settings`` with the creepages read in ``convention`` and turned into the side
-    frame of the ``side`` wheel (:mod:`railcontact.settings.convention`)."""
+    """``settings`` with the creepages (and a friction table's angles) read in
+    ``convention`` and turned into the side frame of the ``side`` wheel
+    (:mod:`railcontact.settings.convention`, :mod:`railcontact.settings.friction`)."""
     t = settings.tangential
     if t is None or convention == "railcontact":
         return settings
     return replace(settings, tangential=replace(
-        t, creepage=side_creepage(t.creepage, side, convention)))
+        t, creepage=side_creepage(t.creepage, side, convention),
+        friction=side_friction(t.friction, side, convention)))
 
 
 def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,

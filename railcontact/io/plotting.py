@@ -59,7 +59,8 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
     tangential = sol.case.tangential
     g = res.grid
     xmin, xmax, ymin, ymax = g.bounds
-    mu = tangential.friction
+    # a friction table's mu at the patch's reference point
+    mu = tangential.friction if ps.friction is None else ps.friction
     if ps.tangential_model == "bem":
         xe = np.linspace(xmin, xmax, g.nx + 1) * MM
         ye = np.linspace(ymin, ymax, g.ny + 1) * MM
@@ -101,7 +102,7 @@ def _traction_panels(fig, ax0, ax1, sol: Solution, ps) -> None:
         hz = hertz(*ps.curvatures, pair, load=res.force)
         for model, style in (("fastsim", "--"), ("fastrip", "-.")):
             r = simplified_tangential(model, hz, pair, tangential,
-                                      res if ps.geometry is not None else None)
+                                      res if ps.geometry is not None else None, friction=mu)
             k = int(np.argmin(np.abs(r.strips.y)))
             ax1.plot(r.strips.x[k] * MM, r.traction[0, k] * MPA, style,
                      label=f"{'FASTSIM' if model == 'fastsim' else 'FaStrip'} $p_x$")

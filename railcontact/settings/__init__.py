@@ -5,6 +5,7 @@ they are declared.
 - :mod:`.timestep`: :class:`ContactSettings` of the time-step solver and the FMU's modes;
 - :mod:`.choices`: the words a setting can take;
 - :mod:`.convention`: CONTACT's creepages and forces beside railcontact's;
+- :mod:`.friction`: friction tables across the profile (CONTACT's VARFRC);
 - :mod:`.reference`: every setting in one list (``railcontact settings``).
 
 The solvers below this layer take plain keyword arguments; the patch and wheel-rail

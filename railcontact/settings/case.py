@@ -58,6 +58,7 @@ from .choices import (
     TRACTION_BOUNDS,
 )
 from .fields import Record, document, setting
+from .friction import MAX_MU, FrictionTable
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -331,8 +332,10 @@ class TangentialSettings(Record):
     creepage: tuple[float, float, float] = setting((0.0, 0.0, 0.0), "floats3", "-, -, 1/m",
                                                    "creepages [xi, eta, phi]", minimum=-1e3,
                                                    maximum=1e3, required=True)
-    friction: float = setting(0.4, "float", "-", "Coulomb coefficient mu", minimum=0.0,
-                              maximum=10.0, required=True)
+    friction: float | FrictionTable = setting(
+        0.4, "float|friction", "-", "Coulomb coefficient mu, or a table of mu across the "
+        "profile (against the rail's surface inclination or profile coordinate)", minimum=0.0,
+        maximum=MAX_MU, required=True)
     model: str = setting("bem", "choice", "", "tangential model", choices=TANGENTIAL_MODELS)
     estimate: str = setting("none", "choice", "", "initial estimate of the BEM",
                             choices=TANGENTIAL_ESTIMATES)
@@ -443,6 +446,15 @@ class Case:
             raise CaseError("[geometry] rail_offset and rail_roll deviate the rail of the "
                             "case's side: give side = 'left' or 'right' and a roll angle "
                             "(not 'rigid' or 'equal-loads', which place both wheels)")
+        t = self.tangential
+        if t is not None and isinstance(t.friction, FrictionTable):
+            if not isinstance(geo, WheelRailGeometry):
+                raise CaseError("[tangential] friction as a table (across the profile) needs "
+                                "a wheel-rail case; a quadratic case takes a number")
+            if t.friction.at == "row" and t.model != "bem":
+                raise CaseError(f"[tangential] friction varying per element row needs model "
+                                f"= 'bem' ({t.model!r} takes one coefficient per patch: set "
+                                "at = 'patch' in the friction table)")
         if isinstance(geo, WheelRailGeometry):
             if geo.roll == "equal-loads" and self.normal.load is None:
                 raise CaseError("[geometry] roll = 'equal-loads' needs [normal] load (the load "

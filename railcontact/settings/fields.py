@@ -16,6 +16,7 @@ from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any, ClassVar
 
 from ..errors import CaseError, RailContactError, check_count, check_finite
+from .friction import FrictionTable
 
 
 @dataclass(frozen=True)
@@ -29,8 +30,9 @@ class Spec:
         empty: not set), ``"choice"``, ``"ints2"`` (a pair of
         counts), ``"range"`` ([min, max], increasing), ``"floats2"`` (two numbers: a vector in a
         plane, e.g. [y, z]), ``"floats3"`` (three numbers),
-        ``"floats12"`` (one number, or one per body) or ``"float|choice"`` (a number or one
-        of ``choices``).
+        ``"floats12"`` (one number, or one per body), ``"float|choice"`` (a number or one
+        of ``choices``) or ``"float|friction"`` (a number, or a friction table:
+        :class:`~railcontact.settings.friction.FrictionTable`).
     unit
         SI unit, ``"-"`` for dimensionless numbers, ``""`` for words.
     doc
@@ -71,6 +73,11 @@ class Spec:
             return "one of " + ", ".join(map(repr, self.choices))
         if self.kind == "float|choice":
             return "one of " + ", ".join(map(repr, self.choices)) + ", or a number"
+        if self.kind == "float|friction":
+            return (Spec("float", minimum=self.minimum, maximum=self.maximum,
+                         open_min=self.open_min, open_max=self.open_max).bounds_text()
+                    + ", or a table {angle = [...], mu = [...]} or {rail_y = [...], mu = "
+                    "[...]} (docs/case-files.md)")
         parts = []
         if self.minimum is not None:
             parts.append(f"{'>' if self.open_min else '>='} {self.minimum:g}")
@@ -145,6 +152,15 @@ class Record:
         kind = spec.kind
         if kind == "float|choice":
             kind = "choice" if isinstance(value, str) else "float"
+        if kind == "float|friction":
+            if isinstance(value, FrictionTable):
+                return value
+            if isinstance(value, Mapping):
+                try:
+                    return FrictionTable.from_mapping(where, value)
+                except RailContactError as exc:
+                    cls._fail(str(exc))
+            kind = "float"
         if kind == "choice":
             if value not in spec.choices:
                 cls._fail(f"{where} must be {spec.bounds_text()}, got {value!r}")
@@ -250,7 +266,8 @@ class Record:
         for f in fields(self):  # type: ignore[arg-type]
             v = getattr(self, f.name)
             if spec_of(f).case and v is not None:
-                out[f.name] = list(v) if isinstance(v, tuple) else v
+                out[f.name] = (list(v) if isinstance(v, tuple) else
+                               v.to_dict() if isinstance(v, FrictionTable) else v)
         return out
 
 

@@ -58,7 +58,8 @@ class ContactSettings(Record):
     """
 
     ERROR: ClassVar[type[RailContactError]] = RailContactError
-    friction: float = inherit(TangentialSettings, "friction", 0.4, open_min=True)
+    friction: float = inherit(TangentialSettings, "friction", 0.4, open_min=True,
+                              kind="float", doc="Coulomb coefficient mu")
     element_size: float = setting(0.5e-3, "float", "m", "BEM element size dx = dy",
                                   minimum=MIN_ELEMENT_SIZE, maximum=MAX_ELEMENT_SIZE)
     margin: float = inherit(GridSettings, "margin", 1.0)

@@ -654,6 +654,25 @@ if HAVE_NUMBA:
     _embedded_fields = numba.njit(cache=True, nogil=True)(_embedded_fields)
 
 
+def _bound_of(friction, pressure: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """The traction bound ``mu p_n`` [Pa] of a coefficient of friction given per element
+    (an array broadcastable to the grid's ``shape`` (nx, ny), e.g. (1, ny): one per
+    lateral row), checked finite and non-negative; the pressure as it is when its shape
+    is not the grid's (the caller's check names it)."""
+    mu = np.asarray(friction, dtype=float)
+    try:
+        mu = np.broadcast_to(mu, shape)
+    except ValueError:
+        raise RailContactError(f"friction must be a number or an array broadcastable to the "
+                               f"grid {shape}, got shape {mu.shape}") from None
+    if not np.all(np.isfinite(mu)) or np.any(mu < 0):
+        raise RailContactError("friction must be finite and non-negative in every element")
+    if pressure.shape != shape or not (np.all(np.isfinite(pressure))
+                                       and pressure.min(initial=0.0) >= 0.0):
+        return pressure  # (refused as it is)
+    return mu * pressure
+
+
 @dataclass
 class SweepProblem:
     """A steady-rolling problem in the Gauss–Seidel solvers' layout, and their common loop.
@@ -703,7 +722,11 @@ class SweepProblem:
             raise RailContactError("operator must be the 'xy' steady-rolling operator of "
                                    "this grid")
         pn = np.asarray(pressure, dtype=float)
-        mu = check_positive("friction", friction, allow_zero=True)
+        if np.ndim(friction) == 0:
+            mu = check_positive("friction", friction, allow_zero=True)
+        else:  # per element: the bound mu p_n formed here, the layout's own mu 1 (exact)
+            pn = _bound_of(friction, pn, shape)
+            mu = 1.0
         if len(creepage) != 3:
             raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
         xi = check_finite("xi", creepage[0], "-")  # (rigid_slip_lines' checks)
@@ -855,7 +878,7 @@ def solve_tangential(
     grid: Grid,
     operator: InfluenceOperator,
     pressure: np.ndarray,
-    friction: float,
+    friction: float | np.ndarray,
     creepage: tuple[float, float, float],
     *,
     initial_traction: np.ndarray | None = None,
@@ -879,7 +902,9 @@ def solve_tangential(
     pressure
         Normal pressure [Pa], shape (nx, ny) (from the normal solution).
     friction
-        Coefficient of friction mu [-].
+        Coefficient of friction mu [-]: a number, or one per element (an array
+        broadcastable to the grid (nx, ny), e.g. (1, ny) for one per lateral row); the
+        traction bound of an element is ``mu p_n`` with its own mu.
     creepage
         (xi, eta, phi): longitudinal, lateral creepage [-] and spin [1/m].
     initial_traction

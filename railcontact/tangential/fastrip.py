@@ -34,7 +34,7 @@ import time
 import numba
 import numpy as np
 
-from ..errors import check_finite, check_positive
+from ..errors import RailContactError, check_finite, check_positive
 from ..halfspace.materials import ElasticPair
 from .fastsim import _march_strips, flexibilities, hertz_bound
 from .kalker import creep_coefficients
@@ -87,6 +87,9 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
     t0 = time.perf_counter()
     a = check_positive("a", a, "m")
     b = check_positive("b", b, "m")
+    if np.ndim(friction) != 0:
+        raise RailContactError("FaStrip takes one coefficient of friction per patch (a number); "
+                               "friction per element needs the BEM")
     mu = check_positive("friction", friction, allow_zero=True)
     xi, eta, phi = (check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage,
                                                           strict=True))

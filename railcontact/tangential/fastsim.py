@@ -127,6 +127,9 @@ def fastsim(
         (L1, L2, L3) [m/Pa], e.g. from :func:`flexibilities`.
     """
     t0 = time.perf_counter()
+    if np.ndim(friction) != 0:
+        raise RailContactError("FASTSIM takes one coefficient of friction per patch (a number); "
+                               "friction per element needs the BEM")
     mu = check_positive("friction", friction, allow_zero=True)
     cr = tuple(check_finite(n, v) for n, v in zip(("xi", "eta", "phi"), creepage, strict=True))
     flex = tuple(check_positive(f"L{i + 1}", v, "m/Pa") for i, v in enumerate(flexibility))

@@ -463,7 +463,7 @@ def solve_steadygs(
     grid: Grid,
     operator: InfluenceOperator,
     pressure: np.ndarray,
-    friction: float,
+    friction: float | np.ndarray,
     creepage: tuple[float, float, float],
     *,
     initial_traction: np.ndarray | None = None,
@@ -490,7 +490,9 @@ def solve_steadygs(
     pressure
         Normal pressure [Pa], shape (nx, ny) (from the normal solution).
     friction
-        Coefficient of friction mu [-].
+        Coefficient of friction mu [-]: a number, or one per element (an array
+        broadcastable to the grid (nx, ny), e.g. (1, ny) for one per lateral row); the
+        traction bound of an element is ``mu p_n`` with its own mu.
     creepage
         (xi, eta, phi): longitudinal, lateral creepage [-] and spin [1/m].
     initial_traction
