@@ -13,11 +13,14 @@ beyond. Each planar case is posed with the existing case keys and
   reference point, as CONTACT does in planar contact; the script also solves each case
   with ``at = "row"`` (a coefficient per lateral element row) and prints how much that
   changes;
-* the creepages CONTACT printed for the patch (``CKSI, CETA, CPHI``): CONTACT's own
-  kinematic creepages at its reference point, from the wheelset's velocities (VS = 2 m/s,
-  the pitch rate and the yaw). A case with two patches has one triple per patch; the case
-  keys take one, so such a case is solved here by the load loop of the wheel with each
-  patch's own creepages (:func:`solve_own_creepages`);
+* the wheelset's velocities as CONTACT was given them, in a ``[kinematics]`` table
+  (``speed = VX_WS``, ``spin_speed = -VPITCH_WS``, ``lateral_velocity = -VY_WS``,
+  ``yaw_rate = -VYAW_WS``, ``roll_rate = VROLL_WS``, SI units): each patch's creepages
+  follow from rigid-body kinematics at its reference point, as CONTACT forms them; the
+  script prints them beside CONTACT's (``CKSI, CETA, CPHI``). ``--creepages contact``
+  instead gives each patch the creepages CONTACT printed for it (a case with two patches
+  is then solved by the load loop of the wheel with each patch's own creepages,
+  :func:`solve_own_creepages`), which separates the friction from the kinematics;
 * the wheelset's lateral displacement, yaw and roll with railcontact's signs (Y to the
   left, Z up: ``lateral_displacement = -Y``, ``yaw = -YAW``, ``roll = ROLL``).
 
@@ -34,6 +37,7 @@ whether the patch meets its targets: forces within 2 % on the tread and 5 % in t
 patch's equivalent radius sqrt(area / pi)), p_max 1 %, area 3 %.
 
 Usage: python scripts/validate_varfric.py [--cases 1,3,4] [--no-rows]
+       [--creepages kinematics|contact]
 """
 
 from __future__ import annotations
@@ -101,6 +105,9 @@ def contact_cases(path: Path = OUTPUT) -> list[dict]:
         elif "S_WS" in line:
             s, y, _, roll, yaw, _ = nums(1)
             case.update(s=s, y=y, roll=roll, yaw=yaw)
+        elif "VPITCH_WS" in line:
+            vx, vy, _, vroll, vyaw, vpitch = nums(1)
+            case.update(vx=vx, vy=vy, vroll=vroll, vyaw=vyaw, vpitch=vpitch)
         elif "DATA FOR CONTACT PATCH" in line:
             patch = {}
             case["patches"].append(patch)
@@ -136,10 +143,11 @@ def friction_of(case: dict, at: str) -> float | dict:
     return {"angle": ALPHA, "mu": MU, "at": at}
 
 
-def case_dict(case: dict, creepage: dict, at: str = "patch") -> dict:
+def case_dict(case: dict, creepage: dict | None, at: str = "patch") -> dict:
     """The railcontact case of a CONTACT case with the creepages of ``creepage`` (a patch
-    of CONTACT's output)."""
-    return {
+    of CONTACT's output), or with None the wheelset's velocities as CONTACT was given them
+    (``[kinematics]``: each patch's creepages formed at its reference point)."""
+    out = {
         "name": f"mbench_a22_varfric case {case['case']}",
         "convention": "contact",
         "material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
@@ -151,10 +159,17 @@ def case_dict(case: dict, creepage: dict, at: str = "patch") -> dict:
                      "roll": case["roll"], "side": "right"},
         "grid": {"dx": DX, "dy": DX},
         "normal": {"load": LOAD, "tolerance": TOLERANCE, "estimate": "infcon"},
-        "tangential": {"creepage": [creepage["cksi"], creepage["ceta"], creepage["cphi"] * 1e3],
-                       "friction": friction_of(case, at), "tolerance": TOLERANCE,
+        "tangential": {"friction": friction_of(case, at), "tolerance": TOLERANCE,
                        "estimate": "fastrip"},
     }
+    if creepage is None:  # CONTACT's wheelset velocities [mm/s, rad/s] in railcontact's frame
+        out["kinematics"] = {"speed": case["vx"] * 1e-3, "spin_speed": -case["vpitch"],
+                             "lateral_velocity": -case["vy"] * 1e-3,
+                             "yaw_rate": -case["vyaw"], "roll_rate": case["vroll"]}
+    else:
+        out["tangential"]["creepage"] = [creepage["cksi"], creepage["ceta"],
+                                         creepage["cphi"] * 1e3]
+    return out
 
 
 def solve_own_creepages(case: dict, at: str = "patch", contact_mu: bool = False
@@ -223,8 +238,9 @@ def misses(ours: dict[str, float], theirs: dict[str, float]) -> list[str]:
 COLUMNS = ("mu", "FN", "FX", "FS", "MN", "pmax", "area", "xcp", "ycp", "zcp")
 
 
-def run(numbers: list[int] | None, rows: bool) -> list[dict]:
-    """Solve the planar cases (or those of ``numbers``); one row per patch."""
+def run(numbers: list[int] | None, rows: bool, kinematic: bool = True) -> list[dict]:
+    """Solve the planar cases (or those of ``numbers``); one row per patch; ``kinematic``:
+    the creepages from the wheelset's velocities, else CONTACT's printed ones."""
     out = []
     for case in contact_cases():
         if numbers and case["case"] not in numbers:
@@ -237,7 +253,9 @@ def run(numbers: list[int] | None, rows: bool) -> list[dict]:
         modes = ("patch", "row") if rows and case["varfrc"] == 1 else ("patch",)
         solved = {}
         for at in modes:
-            if len(case["patches"]) == 1:
+            if kinematic:
+                solved[at] = rc.solve(case_dict(case, None, at)).patches
+            elif len(case["patches"]) == 1:
                 solved[at] = rc.solve(case_dict(case, case["patches"][0], at)).patches
             else:
                 solved[at] = solve_own_creepages(case, at)
@@ -257,6 +275,7 @@ def run(numbers: list[int] | None, rows: bool) -> list[dict]:
                    "yaw": case["yaw"], "seconds": seconds, "ours": v, "theirs": q,
                    "misses": misses(v, q), "rows": None if r is None else values(r, q),
                    "angle": p.geometry.contact_angle,
+                   "creepage": p.reported_creepage,
                    "contact_mu": None if diagnosis is None else values(diagnosis[k], q)}
             out.append(row)
     return out
@@ -284,6 +303,15 @@ def print_table(rows: list[dict]) -> None:
     print("contact angle of the patch [rad], railcontact/CONTACT (CONTACT's sign): "
           + ", ".join(f"case {r['case']}{'abcd'[r['patch'] - 1]} {-r['angle']:.4f}/"
                       f"{r['theirs']['delta']:.4f}" for r in rows))
+    kin = [r for r in rows if r["creepage"] is not None]
+    if kin:
+        print("creepages (xi, eta [-], phi [1/mm]) railcontact/CONTACT, CONTACT's convention: "
+              + ", ".join(f"case {r['case']}{'abcd'[r['patch'] - 1]} "
+                          + " ".join(f"{a:.4g}/{b:.4g}" for a, b in zip(
+                              (r["creepage"][0], r["creepage"][1], r["creepage"][2] * 1e-3),
+                              (r["theirs"]["cksi"], r["theirs"]["ceta"],
+                               r["theirs"]["cphi"]), strict=True))
+                          for r in kin))
     diag = [r for r in rows if r["contact_mu"] is not None]
     if diag:
         print("with the coefficient CONTACT printed for each patch instead of the table's at "
@@ -309,9 +337,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default="", help="case numbers, e.g. 1,3,4 (default: all)")
     ap.add_argument("--no-rows", action="store_true", help="skip the at = 'row' solves")
+    ap.add_argument("--creepages", choices=("kinematics", "contact"), default="kinematics",
+                    help="each patch's creepages from the wheelset's velocities (default) "
+                         "or those CONTACT printed")
     args = ap.parse_args()
     numbers = [int(c) for c in args.cases.split(",") if c]
-    rows = run(numbers, not args.no_rows)
+    rows = run(numbers, not args.no_rows, args.creepages == "kinematics")
     print_table(rows)
     sys.exit(0 if all(not r["misses"] for r in rows) else 1)
 

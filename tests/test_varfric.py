@@ -44,20 +44,27 @@ def varfric():
     return v, {c["case"]: c for c in v.contact_cases()}
 
 
+@pytest.mark.parametrize("kinematic", [False, True], ids=["contact-creepages", "kinematics"])
 @pytest.mark.parametrize("number", [1, 2, 4])
-def test_contact_varfric_example(varfric, number):
+def test_contact_varfric_example(varfric, number, kinematic):
     """Cases 1 (tread, mu 0.3 beyond the table), 2 (tread, yawed) and 4 (flange, yawed, mu
     0.2076 interpolated) of CONTACT's example: mu read at the patch and the forces within
-    the targets."""
+    the targets, with the creepages CONTACT printed and with those formed from the
+    wheelset's velocities (``[kinematics]``, then within 1 % of CONTACT's, floor 1e-6)."""
     v, cases = varfric
     case = cases[number]
     (theirs,) = case["patches"]
-    sol = rc.solve(v.case_dict(case, theirs, "patch"))
+    sol = rc.solve(v.case_dict(case, None if kinematic else theirs, "patch"))
     assert sol.converged
     (p,) = sol.patches
     ours = v.values(p, theirs)
     assert abs(ours["mu"] - theirs["mu"]) < 2e-3  # CONTACT's at the wheel's angle
     assert v.misses(ours, theirs) == [], (ours, theirs)
+    if kinematic:
+        xi, eta, phi = p.reported_creepage
+        for a, b, floor in ((xi, theirs["cksi"], 1e-6), (eta, theirs["ceta"], 1e-6),
+                            (phi * 1e-3, theirs["cphi"], 1e-9)):
+            assert abs(a - b) <= max(0.01 * abs(b), floor), (a, b)
 
 
 @pytest.fixture(scope="module")
