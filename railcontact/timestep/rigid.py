@@ -255,7 +255,7 @@ def vertical_and_roll(track: Track | tuple[Track, Track],
 
     # the guesses: from the anchor (then the last evaluation) along the rates (the
     # previous step's, else the secant from the pose's roll, then the last two
-    # evaluations'); a wheel's solve checks its guess (:class:`_RolledApproaches`)
+    # evaluations'); a wheel's solve checks its guess (:class:`~.rolled.RolledApproaches`)
     rates, base = approach_slopes, anchor or (pose.roll, tuple(approaches))
     last: tuple[float, tuple[float, float]] | None = None  # the last full evaluation
 

@@ -1,0 +1,151 @@
+"""What a wheelset step is given besides its pose and loads: the wheelset's velocities
+(:class:`Kinematics`, with the track curvature) and the rails' deviations
+(:class:`RailDeviation`), in the track frame (X forward, Y left, Z up) and SI units."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import RailContactError, check_finite, check_positive
+from ..geometry.search import ContactPoint
+from ..geometry.track import SIDES, Pose, Track, Wheelset
+from ..settings import ContactSettings
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Wheelset velocities from which the creepages are computed.
+
+    Attributes
+    ----------
+    speed
+        Forward speed V [m/s] (> 0).
+    lateral_velocity
+        dy/dt [m/s].
+    yaw_rate
+        dpsi/dt [rad/s].
+    spin_speed
+        Angular speed Omega of the wheelset about its axle [rad/s] (V / r0 for pure
+        rolling at the nominal radius).
+    curvature
+        Track curvature k [1/m], positive when the track turns left (towards +Y). The
+        track frame follows the curve: the rails turn relative to it with ``-V k`` about
+        the vertical, so a rail point at Y moves forward with ``V k Y`` (module
+        docstring); a wheelset following the curve has no yaw rate in this frame.
+    """
+
+    speed: float
+    lateral_velocity: float = 0.0
+    yaw_rate: float = 0.0
+    spin_speed: float | None = None
+    curvature: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_positive("speed", self.speed, "m/s")
+        check_finite("lateral_velocity", self.lateral_velocity, "m/s")
+        check_finite("yaw_rate", self.yaw_rate, "rad/s")
+        if self.spin_speed is not None:
+            check_finite("spin_speed", self.spin_speed, "rad/s")
+        if abs(check_finite("curvature", self.curvature, "1/m")) > MAX_CURVATURE:
+            raise RailContactError(f"curvature must be within +-{MAX_CURVATURE:g} 1/m (a "
+                                   f"radius of {1 / MAX_CURVATURE:g} m or more), got "
+                                   f"{self.curvature:g} 1/m")
+
+    def creepage(self, cp: ContactPoint, pose: Pose, r0: float) -> tuple[float, float, float]:
+        """(xi, eta, phi) of the patch ``cp`` in its contact frame (module docstring)."""
+        v = self.speed
+        omega = v / r0 if self.spin_speed is None else self.spin_speed
+        s = SIDES[cp.side]
+        g = cp.contact_angle
+        d = cp.position[1] - pose.lateral
+        k = self.curvature
+        if k == 0.0:
+            xi = (v - omega * cp.rolling_radius - self.yaw_rate * d) / v
+            phi = (-s * omega * math.sin(g) + self.yaw_rate * math.cos(g)) / v
+        else:  # the rail point at Y moves forward with V k Y, the rail turns with -V k
+            xi = (v - omega * cp.rolling_radius - self.yaw_rate * d
+                  - v * k * cp.position[1]) / v
+            phi = (-s * omega * math.sin(g) + (self.yaw_rate + v * k) * math.cos(g)) / v
+        eta = (self.lateral_velocity - v * pose.yaw) / (v * math.cos(g))
+        return xi, eta, phi
+
+
+MAX_CURVATURE = 0.02
+"""Largest track curvature [1/m] a step takes (a 50 m radius: tighter than any running
+line; the kinematics assume the patch small against the radius)."""
+
+
+@dataclass(frozen=True)
+class RailDeviation:
+    """A rail's deviation from its place at one instant (track frame, SI units): an
+    irregularity, or a gauge change (a lateral offset).
+
+    Attributes
+    ----------
+    offset
+        (dY, dZ) [m]: the rail moved to the left (+Y) and up (+Z).
+    roll
+        Rotation of the rail about X [rad] (right-handed about the track's X, with Y to
+        the left and Z up), about the rail profile's origin after the rail is placed.
+    """
+
+    offset: tuple[float, float] = (0.0, 0.0)
+    roll: float = 0.0
+
+    def __post_init__(self) -> None:
+        try:
+            dy, dz = self.offset
+        except (TypeError, ValueError):
+            raise RailContactError(f"rail offset must be (dY, dZ) [m], got "
+                                   f"{self.offset!r}") from None
+        dy, dz = (float(check_finite(f"rail offset {n}", v, "m"))
+                  for n, v in (("dY", dy), ("dZ", dz)))
+        object.__setattr__(self, "offset", (dy, dz))
+        check_finite("rail roll", self.roll, "rad")
+
+
+NO_DEVIATION = RailDeviation()
+"""A rail where it is placed."""
+
+
+SIDE_NAMES = ("left", "right")
+
+
+def sides(name: str, value, kind: type) -> tuple:
+    """``value`` (one ``kind`` for both sides, or a pair (left, right)) as a pair."""
+    if isinstance(value, kind):
+        return value, value
+    if isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, kind)
+                                                           for v in value):
+        return value
+    raise RailContactError(f"{name} must be a {kind.__name__} or a pair (left, right) of "
+                           f"them, got {value!r}")
+
+
+def per_wheel(name: str, value, size: int, shape: str) -> tuple:
+    """``value`` as a pair (left, right) of numbers (``size`` 1) or of ``size``-tuples."""
+    try:
+        pair = tuple(value)
+        if len(pair) == 2 and size > 1:
+            pair = tuple(tuple(v) for v in pair)
+            ok = all(len(v) == size for v in pair)
+        else:
+            ok = len(pair) == 2 and all(not hasattr(v, "__len__") for v in pair)
+    except TypeError:
+        ok = False
+    if not ok:
+        raise RailContactError(f"{name} must be {shape}, got {value!r}")
+    return pair
+
+
+@dataclass(frozen=True)
+class WheelSetup:
+    """One wheel's problem at a step, formed once: its side, its rail (placed with the
+    step's deviation), its wheelset (wheel profile) and its settings (with the step's
+    friction)."""
+
+    side: str
+    track: Track
+    wheelset: Wheelset
+    settings: ContactSettings
