@@ -80,6 +80,8 @@ class BuildReport:
     workers: int = 0
     """The workers that computed this run's batches."""
     dashboard: str | None = None
+    check: Any = None
+    """The interpolation check made after the build (:class:`~.check.Check`), or None."""
 
     @property
     def rate(self) -> float:
@@ -124,7 +126,8 @@ def _solve_on_worker(case: dict[str, Any], sides: tuple[str, ...],
 
 def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = None,
                 workers: int | None = None, resume: bool = False, progress: bool = True,
-                client: Any = None, say=None, lost_timeout: float = LOST_TIMEOUT
+                client: Any = None, say=None, lost_timeout: float = LOST_TIMEOUT,
+                check: int = 0, check_seed: int = 0, check_method: str = "linear"
                 ) -> BuildReport:
     """Compute the points of ``spec`` missing from the store ``out`` (created if absent).
 
@@ -147,6 +150,10 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         Called with one-line messages (the dashboard address); default: print to stderr.
     lost_timeout
         Seconds the cluster may have no worker before the build stops with an error [s].
+    check, check_seed, check_method
+        When ``check`` > 0 and the table is complete: solve ``check`` random off-node
+        states exactly on the cluster and keep the interpolation error in the store
+        (:func:`~.check.check_table`; seeded by ``check_seed``, of ``check_method``).
 
     Returns
     -------
@@ -180,11 +187,18 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
     todo = [tuple(int(i) for i in ix) for ix in np.argwhere(~done)]
     report = BuildReport(points=spec.size)
     report.skipped = sum(len(spec.batch_points(tuple(ix))) for ix in np.argwhere(done))
+    own = client is None
     if not todo:
         store.finish(True)
         _statuses(report, store)
+        if check > 0:
+            c = connect(scheduler, workers) if own else client
+            try:
+                report.check = _check(out, check, check_seed, check_method, c, say, progress)
+            finally:
+                if own:
+                    _close(c)
         return report
-    own = client is None
     if progress:
         where = (f"the Dask scheduler at {scheduler}" if scheduler else
                  "a local Dask cluster of "
@@ -196,6 +210,7 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
     total = sum(len(spec.batch_points(ix)) for ix in todo)
     bar = _bar(total, progress)
     t0 = time.perf_counter()
+    finished = False
     try:
         if own:
             bar.set_postfix_str("starting the cluster" if not scheduler else "connecting",
@@ -208,19 +223,43 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                 store = Store(out, spec)
             _run(spec, out, store, client, todo, report, bar, say, progress, own,
                  lost_timeout)
+            report.seconds = time.perf_counter() - t0
+            complete = bool(store.done().all())
+            store.finish(complete)
+            _statuses(report, store)
+            finished = True
+            if check > 0 and complete and not report.failed_batches:
+                bar.close()
+                report.check = _check(out, check, check_seed, check_method, client, say,
+                                      progress)
         finally:
-            if store is not None:
+            if store is not None and not finished:
                 store.finish(bool(store.done().all()))
                 _statuses(report, store)
             if own:
-                cluster = getattr(client, "cluster", None)
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+                _close(client)
     finally:
         bar.close()
-    report.seconds = time.perf_counter() - t0
+    report.seconds = report.seconds or time.perf_counter() - t0
     return report
+
+
+def _close(client: Any) -> None:
+    """Close a client this build started, and its local cluster."""
+    cluster = getattr(client, "cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def _check(out: Path, n: int, seed: int, method: str, client: Any, say, progress: bool):
+    """:func:`~.check.check_table` of the finished table on ``client``."""
+    from .check import check_table
+
+    if progress:
+        say(f"table {out}: checking the interpolation at {n} random states (seed {seed}) "
+            "against the exact solver")
+    return check_table(out, n, seed, method, client)
 
 
 def _statuses(report: BuildReport, store: Store) -> None:

@@ -1,4 +1,5 @@
-"""A table's summary (axes, ranges, statuses, failed points) and plots (forces against each
+"""A table's summary (axes, ranges, statuses, failed points, the interpolation error of
+its check) and plots (forces against each
 axis, a heat map over two axes)."""
 
 from __future__ import annotations
@@ -9,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
+from .check import check_text
 from .spec import AXES
 from .store import IDENTITY, open_dataset, read_messages
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
@@ -51,6 +53,7 @@ def summary(path: str | Path) -> str:
         if x.size:
             lines.append(f"  {name:16s} [{ds[name].attrs.get('units', '')}] from "
                          f"{x.min():.6g} to {x.max():.6g}")
+    lines += check_text(path)
     msgs = read_messages(path)
     if msgs:
         lines.append(f"points not ok ({len(msgs)}; first {min(len(msgs), MAX_MESSAGES)}):")
