@@ -289,6 +289,33 @@ def _cmd_table_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_table_refine(args: argparse.Namespace) -> int:
+    from .table.refine import parse_targets, refine_table
+
+    if args.scheduler and args.workers is not None:
+        raise RailContactError("give --workers or --scheduler, not both")
+    targets = parse_targets(args.target, args.jump_angle)
+    rep = refine_table(args.table, targets, axes=tuple(args.axes) if args.axes else None,
+                       rounds=args.rounds, scheduler=args.scheduler, workers=args.workers,
+                       progress=not args.quiet)
+    for k, r in enumerate(rep.rounds, 1):
+        added = "; ".join(f"{n} +{len(v)}" for n, v in r["added"].items())
+        print(f"round {k}: {added} node(s) (by error: "
+              + (", ".join(f"{n} {len(v)}" for n, v in r["by_error"].items()) or "none")
+              + "; by contact jump: "
+              + (", ".join(f"{n} {len(v)}" for n, v in r["by_jump"].items()) or "none")
+              + f" interval(s)); {r['points']} points, {r['computed']} computed")
+    if not rep.rounds:
+        print(f"table {args.table}: nothing exceeds the targets; unchanged")
+    if rep.before is not None and rep.after is not None:
+        for m in ("normal_force", "creep_force", "contact_angle"):
+            b, a = rep.before[m], rep.after[m]
+            if b["n"] and a["n"]:
+                print(f"checked {m} error: max {b['max']:.3g} -> {a['max']:.3g}, median "
+                      f"{b['median']:.3g} -> {a['median']:.3g} (at the check's states)")
+    return 0
+
+
 def _cmd_table_show(args: argparse.Namespace) -> int:
     from .table.show import plot_table, summary
 
@@ -336,6 +363,27 @@ def _add_table(sub) -> None:
     c.add_argument("--workers", type=int,
                    help="local worker processes (default: the CPUs; 0: in this process)")
     c.set_defaults(func=_cmd_table_check)
+    r = tsub.add_parser("refine", help="add nodes where the checked error or a contact jump "
+                        "exceeds a target", description="Split the intervals of the axes "
+                        "where the kept check's error or a contact jump between neighbouring "
+                        "nodes exceeds its target at their middles, solve only the new points "
+                        "and rewrite the store (docs/tables.md).")
+    r.add_argument("table", help="the Zarr store (complete)")
+    r.add_argument("--target", action="append", metavar="MEASURE=VALUE",
+                   help="largest checked error accepted: normal_force (|dN|/max(N,Q), "
+                   "default 0.01), creep_force (|dF|/(mu max(N,Q)), 0.05), contact_angle "
+                   "(rad, 0.005); repeatable")
+    r.add_argument("--jump-angle", type=float, metavar="RAD",
+                   help="contact angle step between neighbouring nodes taken as a jump "
+                   "(default 0.05 rad)")
+    r.add_argument("--axes", nargs="+", metavar="AXIS",
+                   help="the axes to refine (default: every axis of more than one node)")
+    r.add_argument("--rounds", type=int, default=1, help="refinements at most (1)")
+    r.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
+    r.add_argument("--workers", type=int, help="local worker processes (default: the CPUs)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_table_refine)
     s = tsub.add_parser("show", help="summary of a table (axes, ranges, failed points)")
     s.add_argument("table", help="the Zarr store")
     s.add_argument("--plot", metavar="FILE",

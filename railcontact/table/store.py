@@ -218,7 +218,8 @@ class Store:
 
     def write_batches(self, batches: list[tuple[tuple[int, ...], dict[str, Any],
                                                 list[dict[str, Any]]]]) -> None:
-        """Write batches ``(index, result, messages)``: their arrays, each chunk they touch
+        """Write batches ``(index, result, messages)`` (a result with ``fast``: only its
+        points at those indices along the fastest axis): their arrays, each chunk they touch
         read, filled and written once; then the ``messages`` of their points that are not
         ok; then mark them done (the order that leaves a cut-off write incomplete)."""
         if not batches:
@@ -240,7 +241,10 @@ class Store:
                 for index, result, _ in items:
                     pts = self.spec.batch_points(index)
                     at = tuple(i - a for i, a in zip(index[:nslow], lo, strict=False))
-                    block[(*at, slice(pts[0][-1], pts[-1][-1] + 1))] = result[name]
+                    fast = result.get("fast")  # some of the batch's points (a refinement)
+                    where = (slice(pts[0][-1], pts[-1][-1] + 1) if fast is None else
+                             np.asarray(fast, dtype=np.intp))
+                    block[(*at, where)] = result[name]
                 arr[region] = block
         keys = [batch_key(ix) for ix, _, _ in batches]
         said = [m for _, _, msgs in batches for m in msgs]
