@@ -43,7 +43,7 @@ from ..errors import RailContactError
 from .check import MEASURES, measure, read_check, write_check
 from .interpolate import ContactTable
 from .spec import TableSpec, check_size
-from .store import IDENTITY, _zarr, create_store, read_messages, read_table
+from .store import IDENTITY, POLICY_ATTR, _zarr, create_store, read_messages, read_table
 from .variables import COUNTS, NO_CONTACT, OK, QUANTITIES
 
 MIN_FRACTION = 1.0 / 1024
@@ -92,7 +92,8 @@ def spec_of(path: str | Path) -> TableSpec:
     ident = json.loads(attrs[IDENTITY])
     return TableSpec(case=ident["case"], axes={n: np.asarray(v, dtype=float)
                                                 for n, v in ident["axes"].items()},
-                     sides=tuple(ident["sides"]), batch=int(ident["batch"]))
+                     sides=tuple(ident["sides"]), batch=int(ident["batch"]),
+                     out_of_range=json.loads(attrs.get(POLICY_ATTR, "{}")))
 
 
 def jumps(axes: dict[str, np.ndarray], status: np.ndarray, n_patches: np.ndarray,
@@ -208,7 +209,8 @@ def _with_nodes(spec: TableSpec, added: dict[str, np.ndarray]) -> TableSpec:
     check_size({n: len(v) for n, v in axes.items()}, len(spec.sides))
     fast_old, fast_new = len(spec.axes[spec.names[-1]]), len(axes[spec.names[-1]])
     batch = fast_new if spec.batch == fast_old else spec.batch
-    return TableSpec(case=spec.case, axes=axes, sides=spec.sides, batch=batch)
+    return TableSpec(case=spec.case, axes=axes, sides=spec.sides, batch=batch,
+                     out_of_range=spec.out_of_range)
 
 
 def _copy_into(old: str | Path, tmp: Path, spec: TableSpec, new: TableSpec
