@@ -4,9 +4,10 @@
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
 ``railcontact fmu build [-o dist/RailContact.fmu] [--python PATH]`` builds the FMU and
 ``railcontact fmu check FILE.fmu`` tells which Python it will run in; ``railcontact settings``
-prints the reference of every setting; ``railcontact table build|check|show`` makes, checks and
-summarises contact tables (docs/tables.md). Errors in the input are
-reported in one line (exit status 2), never as a traceback.
+prints the reference of every setting; ``railcontact table
+build|check|refine|show|export`` makes, checks, refines, summarises and exports contact
+tables (docs/tables.md). Errors in the input are reported in one line (exit status 2),
+never as a traceback.
 """
 
 from __future__ import annotations
@@ -316,6 +317,13 @@ def _cmd_table_refine(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_table_export(args: argparse.Namespace) -> int:
+    from .table.export import export_table
+
+    print(f"table {args.table} written to {export_table(args.table, args.output, args.format)}")
+    return 0
+
+
 def _cmd_table_show(args: argparse.Namespace) -> int:
     from .table.show import plot_table, summary
 
@@ -384,6 +392,15 @@ def _add_table(sub) -> None:
     r.add_argument("--workers", type=int, help="local worker processes (default: the CPUs)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=_cmd_table_refine)
+    e = tsub.add_parser("export", help="write a table as netCDF or CSV",
+                        description="Write the table as netCDF (xarray; the axes and side as "
+                        "coordinates) or as CSV (one row per node and wheel: the axes, side, "
+                        "every quantity, status, the work counters; SI units).")
+    e.add_argument("table", help="the Zarr store")
+    e.add_argument("output", help="the file: OUT.nc or OUT.csv")
+    e.add_argument("--format", choices=("netcdf", "csv"),
+                   help="the format (default: from the suffix, .nc or .csv)")
+    e.set_defaults(func=_cmd_table_export)
     s = tsub.add_parser("show", help="summary of a table (axes, ranges, failed points)")
     s.add_argument("table", help="the Zarr store")
     s.add_argument("--plot", metavar="FILE",
