@@ -270,7 +270,7 @@ def _print_check(chk) -> None:
 
 
 def _cmd_table_check(args: argparse.Namespace) -> int:
-    from .table.build import _close, connect
+    from .table.build import close_client, connect
     from .table.check import check_table
 
     if args.states < 1:
@@ -285,7 +285,7 @@ def _cmd_table_check(args: argparse.Namespace) -> int:
         chk = check_table(args.table, args.states, args.seed, args.method, client)
     finally:
         if client is not None:
-            _close(client)
+            close_client(client)
     _print_check(chk)
     return 0
 

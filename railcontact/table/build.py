@@ -202,7 +202,7 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                 report.check = _check(out, check, check_seed, check_method, c, say, progress)
             finally:
                 if own:
-                    _close(c)
+                    close_client(c)
         return report
     if progress:
         where = (f"the Dask scheduler at {scheduler}" if scheduler else
@@ -242,7 +242,7 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                 store.finish(bool(store.done().all()))
                 _statuses(report, store)
             if own:
-                _close(client)
+                close_client(client)
     finally:
         bar.close()
     report.seconds = report.seconds or time.perf_counter() - t0
@@ -259,7 +259,7 @@ def _points(spec: TableSpec, ix: tuple[int, ...], subset: dict[tuple[int, ...], 
     return [p for p in pts if p[-1] in keep]
 
 
-def _close(client: Any) -> None:
+def close_client(client: Any) -> None:
     """Close a client this build started, and its local cluster."""
     cluster = getattr(client, "cluster", None)
     client.close()

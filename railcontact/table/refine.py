@@ -58,11 +58,11 @@ class Targets:
     step between neighbouring nodes [rad]."""
 
     normal_force: float = 1e-2
-    """|dN| / max(N, Q)."""
+    """``|dN| / max(N, Q)``."""
     creep_force: float = 5e-2
-    """|dF| / (mu max(N, Q))."""
+    """``|dF| / (mu max(N, Q))``."""
     contact_angle: float = 5e-3
-    """|d gamma| [rad]."""
+    """``|d gamma|`` [rad]."""
     jump_angle: float = 0.05
     """Contact angle step between neighbouring nodes [rad] above which the contact
     jumps."""
@@ -99,7 +99,7 @@ def spec_of(path: str | Path) -> TableSpec:
 def jumps(axes: dict[str, np.ndarray], status: np.ndarray, n_patches: np.ndarray,
           angle: np.ndarray, jump_angle: float) -> dict[str, np.ndarray]:
     """Axis -> bool per interval: the contact jumps across it somewhere (module
-    docstring). Arrays (*axes, side)."""
+    docstring). Arrays ``(*axes, side)``."""
     out = {}
     for a, name in enumerate(axes):
         if len(axes[name]) < 2:
@@ -280,7 +280,7 @@ def refine_table(path: str | Path, targets: Targets | None = None, *,
         For an incomplete table, an unknown axis, bad targets, a table growing beyond
         :data:`~.spec.MAX_POINTS`.
     """
-    from .build import _close, build_table, connect
+    from .build import build_table, close_client, connect
 
     say = say or (lambda msg: print(msg, file=sys.stderr))
     targets = targets or Targets()
@@ -370,7 +370,7 @@ def refine_table(path: str | Path, targets: Targets | None = None, *,
                                   "points": new.size, "computed": rep.computed})
     finally:
         if own and client is not None:
-            _close(client)
+            close_client(client)
     if chk is not None:
         from .check import overall
 
