@@ -282,7 +282,9 @@ def _cmd_table_check(args: argparse.Namespace) -> int:
     open_dataset(args.table)  # a table there, before any cluster
     client = None if args.workers == 0 else connect(args.scheduler, args.workers)
     try:
-        chk = check_table(args.table, args.states, args.seed, args.method, client)
+        chk = check_table(args.table, args.states, args.seed, args.method, client,
+                          **({} if args.lost_timeout is None else
+                             {"lost_timeout": args.lost_timeout}))
     finally:
         if client is not None:
             close_client(client)
@@ -298,7 +300,7 @@ def _cmd_table_refine(args: argparse.Namespace) -> int:
     targets = parse_targets(args.target, args.jump_angle)
     rep = refine_table(args.table, targets, axes=tuple(args.axes) if args.axes else None,
                        rounds=args.rounds, scheduler=args.scheduler, workers=args.workers,
-                       progress=not args.quiet)
+                       progress=not args.quiet, lost_timeout=args.lost_timeout)
     for k, r in enumerate(rep.rounds, 1):
         added = "; ".join(f"{n} +{len(v)}" for n, v in r["added"].items())
         print(f"round {k}: {added} node(s) (by error: "
@@ -370,6 +372,9 @@ def _add_table(sub) -> None:
                    help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
     c.add_argument("--workers", type=int,
                    help="local worker processes (default: the CPUs; 0: in this process)")
+    c.add_argument("--lost-timeout", type=float, metavar="SECONDS",
+                   help="stop with an error when the cluster has had no worker this long "
+                   "(default 120 s)")
     c.set_defaults(func=_cmd_table_check)
     r = tsub.add_parser("refine", help="add nodes where the checked error or a contact jump "
                         "exceeds a target", description="Split the intervals of the axes "
@@ -391,6 +396,9 @@ def _add_table(sub) -> None:
                    help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
     r.add_argument("--workers", type=int, help="local worker processes (default: the CPUs)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--lost-timeout", type=float, metavar="SECONDS",
+                   help="stop with an error when the cluster has had no worker this long "
+                   "(default 120 s)")
     r.set_defaults(func=_cmd_table_refine)
     e = tsub.add_parser("export", help="write a table as netCDF or CSV",
                         description="Write the table as netCDF (xarray; the axes and side as "

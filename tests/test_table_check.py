@@ -315,3 +315,18 @@ def test_jumps_flag_the_intervals_where_the_contact_changes():
     status[0, 0, 0] = 2  # no contact at node 0: contact appears between 0 and 1
     assert jumps(axes, status, patches, angle, 0.05)["lateral_displacement"].tolist() == [
         True, True, True]
+
+
+def test_a_check_on_a_cluster_without_workers_is_an_error_after_the_timeout(checked, tmp_path,
+                                                                           capsys):
+    from distributed import LocalCluster
+
+    _, out = checked
+    copy = tmp_path / "c.zarr"
+    shutil.copytree(out, copy)
+    with LocalCluster(n_workers=0, processes=True, dashboard_address=":0") as cluster:
+        code = main(["table", "check", str(copy), "2", "--scheduler",
+                     cluster.scheduler_address, "--lost-timeout", "2"])
+    assert code == 2
+    assert "had no worker for 2 s during the check" in capsys.readouterr().err
+    assert read_check(copy).size == 5  # the kept check unchanged

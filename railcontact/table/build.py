@@ -199,7 +199,8 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         if check > 0:
             c = connect(scheduler, workers) if own else client
             try:
-                report.check = _check(out, check, check_seed, check_method, c, say, progress)
+                report.check = _check(out, check, check_seed, check_method, c, say, progress,
+                                      lost_timeout)
             finally:
                 if own:
                     close_client(c)
@@ -236,7 +237,7 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
             if check > 0 and complete and not report.failed_batches:
                 bar.close()
                 report.check = _check(out, check, check_seed, check_method, client, say,
-                                      progress)
+                                      progress, lost_timeout)
         finally:
             if store is not None and not finished:
                 store.finish(bool(store.done().all()))
@@ -267,14 +268,15 @@ def close_client(client: Any) -> None:
         cluster.close()
 
 
-def _check(out: Path, n: int, seed: int, method: str, client: Any, say, progress: bool):
+def _check(out: Path, n: int, seed: int, method: str, client: Any, say, progress: bool,
+           lost_timeout: float):
     """:func:`~.check.check_table` of the finished table on ``client``."""
     from .check import check_table
 
     if progress:
         say(f"table {out}: checking the interpolation at {n} random states (seed {seed}) "
             "against the exact solver")
-    return check_table(out, n, seed, method, client)
+    return check_table(out, n, seed, method, client, lost_timeout)
 
 
 def _statuses(report: BuildReport, store: Store) -> None:

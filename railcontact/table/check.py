@@ -61,6 +61,9 @@ EXACT = ("normal_force", "creep_force_x", "creep_force_y", "contact_angle", "n_p
 """The exact values kept per state and wheel."""
 CHUNK = 4
 """States per Dask task."""
+LOST_TIMEOUT = 120.0
+"""How long a check waits for a cluster without workers before it stops with an error
+[s] (as :data:`~.build.LOST_TIMEOUT`)."""
 
 
 @dataclass
@@ -158,18 +161,58 @@ def solve_states(case: dict[str, Any], sides: tuple[str, ...],
 
 
 def _solve_all(case: dict[str, Any], sides: tuple[str, ...], states: list[dict[str, float]],
-               client: Any = None) -> dict[str, np.ndarray]:
+               client: Any = None, lost_timeout: float = LOST_TIMEOUT
+               ) -> dict[str, np.ndarray]:
     """:func:`solve_states` in-process, or on a Dask ``client`` in tasks of
-    :data:`CHUNK` states."""
+    :data:`CHUNK` states; a cluster without workers for ``lost_timeout`` seconds is an
+    error (as a build's)."""
     if client is None:
         return solve_states(case, sides, states)
+    from distributed import as_completed
+
     parts = [states[k:k + CHUNK] for k in range(0, len(states), CHUNK)]
-    futures = [client.submit(solve_states, case, sides, p, pure=False,
-                             key=f"railcontact-check-{k}-{time.time_ns()}")
-               for k, p in enumerate(parts)]
-    results = client.gather(futures)
-    return {"values": np.concatenate([r["values"] for r in results]),
-            "status": np.concatenate([r["status"] for r in results])}
+    futures = {client.submit(solve_states, case, sides, p, pure=False,
+                             key=f"railcontact-check-{k}-{time.time_ns()}"): k
+               for k, p in enumerate(parts)}
+    results: dict[int, dict[str, np.ndarray]] = {}
+    arriving = as_completed(list(futures))
+    alone_since: float | None = None
+    last_look = time.perf_counter()
+    try:
+        while len(results) < len(parts):
+            if arriving.has_ready():
+                for fut in arriving.next_batch(block=False):
+                    try:
+                        results[futures[fut]] = fut.result()
+                    except Exception as exc:  # noqa: BLE001 - a worker's failure
+                        raise RailContactError(f"the check's exact solves failed on the "
+                                               f"cluster: {type(exc).__name__}: {exc}"
+                                               ) from None
+                continue
+            time.sleep(0.05)
+            if time.perf_counter() - last_look < 1.0:
+                continue
+            last_look = time.perf_counter()
+            try:
+                workers = len(client.scheduler_info(n_workers=-1).get("workers", {}))
+            except Exception as exc:  # noqa: BLE001 - the scheduler is gone
+                raise RailContactError(f"lost the Dask scheduler during the check "
+                                       f"({type(exc).__name__}: {exc})") from None
+            if workers:
+                alone_since = None
+            elif alone_since is None:
+                alone_since = time.perf_counter()
+            elif time.perf_counter() - alone_since > lost_timeout:
+                raise RailContactError(f"the Dask cluster has had no worker for "
+                                       f"{lost_timeout:g} s during the check (all workers "
+                                       "lost); the table is complete: run 'railcontact "
+                                       "table check' when workers are back")
+    finally:
+        for fut in futures:
+            fut.cancel()
+    ordered = [results[k] for k in range(len(parts))]
+    return {"values": np.concatenate([r["values"] for r in ordered]),
+            "status": np.concatenate([r["status"] for r in ordered])}
 
 
 def state_loads(case: dict[str, Any], names: tuple[str, ...], states: np.ndarray
@@ -273,14 +316,14 @@ def regions(chk: Check, axes: dict[str, np.ndarray]) -> list[dict[str, Any]]:
 
 
 def new_check(table: ContactTable, n: int, seed: int = 0, method: str = "linear",
-              client: Any = None) -> Check:
+              client: Any = None, lost_timeout: float = LOST_TIMEOUT) -> Check:
     """Solve ``n`` random off-node states of ``table`` exactly (:func:`sample_states`;
     in-process, or on the Dask ``client``) and measure the table there."""
     names = tuple(table.axes)
     states = sample_states(table.axes, n, seed)
     points = [{k: float(v) for k, v in zip(names, row, strict=True)} for row in states]
     t0 = time.perf_counter()
-    solved = _solve_all(table.case, table.sides, points, client)
+    solved = _solve_all(table.case, table.sides, points, client, lost_timeout)
     tangential = table.case.get("tangential") or {}
     chk = Check(names=names, sides=table.sides, states=states, exact=solved["values"],
                 exact_status=solved["status"], load=state_loads(table.case, names, states),
@@ -398,14 +441,15 @@ def check_text(path: str | Path) -> list[str]:
 
 
 def check_table(path: str | Path, n: int, seed: int = 0, method: str = "linear",
-                client: Any = None) -> Check:
-    """Check the table at ``path`` at ``n`` random states (:func:`new_check`) and keep the
-    check in the store (:func:`write_check`)."""
+                client: Any = None, lost_timeout: float = LOST_TIMEOUT) -> Check:
+    """Check the table at ``path`` at ``n`` random states (:func:`new_check`; on the Dask
+    ``client`` when given, which may have no worker for ``lost_timeout`` seconds) and keep
+    the check in the store (:func:`write_check`)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # holes: counted by the check
         table = ContactTable.open(path)
     if method not in METHODS:
         raise RailContactError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    chk = new_check(table, n, seed, method, client)
+    chk = new_check(table, n, seed, method, client, lost_timeout)
     write_check(path, chk, table.axes)
     return chk

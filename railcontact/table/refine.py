@@ -257,7 +257,8 @@ def _moved_messages(messages: list[dict[str, Any]], new: TableSpec) -> list[dict
 def refine_table(path: str | Path, targets: Targets | None = None, *,
                  axes: tuple[str, ...] | None = None, rounds: int = 1, client: Any = None,
                  scheduler: str | None = None, workers: int | None = None,
-                 progress: bool = True, say=None) -> RefineReport:
+                 progress: bool = True, say=None, lost_timeout: float | None = None
+                 ) -> RefineReport:
     """Refine the table at ``path`` (module docstring), ``rounds`` times or until nothing
     exceeds the targets; rewrites the store.
 
@@ -271,8 +272,9 @@ def refine_table(path: str | Path, targets: Targets | None = None, *,
         The axes to refine (default: all of more than one node).
     rounds
         At most this many refinements, each measured again before the next.
-    client, scheduler, workers
-        The Dask cluster solving the new points (as :func:`~.build.build_table`).
+    client, scheduler, workers, lost_timeout
+        The Dask cluster solving the new points and how long it may have no worker [s]
+        (as :func:`~.build.build_table`).
 
     Raises
     ------
@@ -338,7 +340,8 @@ def refine_table(path: str | Path, targets: Targets | None = None, *,
             create_store(tmp, new)
             subset = _copy_into(path, tmp, spec, new)
             rep = build_table(new, tmp, client=client, progress=progress, say=say,
-                              subset=subset)
+                              subset=subset, **({} if lost_timeout is None else
+                                                {"lost_timeout": lost_timeout}))
             if rep.failed_batches:
                 raise RailContactError(f"refining {path}: {len(rep.failed_batches)} batch(es) "
                                        f"failed ({rep.failed_batches[0]}); the table is "
