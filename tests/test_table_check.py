@@ -293,6 +293,7 @@ def test_refinement_across_the_flange_root_reduces_the_checked_error(order, sche
     assert main(["table", "show", str(out)]) == 0
     text = capsys.readouterr().out
     assert re.search(rf"lateral_displacement +\[m\] +{len(ys)} from 0.003 to 0.007", text)
+    assert "refined, round 2: lateral_displacement +" in text
 
 
 def test_jumps_flag_the_intervals_where_the_contact_changes():

@@ -53,6 +53,13 @@ def summary(path: str | Path) -> str:
         if x.size:
             lines.append(f"  {name:16s} [{ds[name].attrs.get('units', '')}] from "
                          f"{x.min():.6g} to {x.max():.6g}")
+    for k, r in enumerate(json.loads(ds.attrs.get("refinement", "[]")), 1):
+        lines.append(f"refined, round {k}: " + "; ".join(
+            f"{n} +{len(v)} node(s)" for n, v in r["added"].items()) + " (by error: "
+            + (", ".join(f"{n} {c}" for n, c in r["by_error"].items()) or "none")
+            + "; by contact jump: "
+            + (", ".join(f"{n} {c}" for n, c in r["by_jump"].items()) or "none")
+            + " interval(s))")
     lines += check_text(path)
     msgs = read_messages(path)
     if msgs:
