@@ -169,6 +169,9 @@ def test_table_check_on_an_existing_table_replaces_the_check(checked, scheduler,
     assert main(["table", "check", str(tmp_path / "none.zarr"), "3", "--workers", "0"]) == 2
     assert "table not found" in capsys.readouterr().err
     assert main(["table", "check", str(copy), "0", "--workers", "0"]) == 2
+    assert main(["table", "check", str(copy), "2", "--workers", "0", "--method",
+                 "cubic"]) == 2
+    assert "cubic interpolation needs at least 4 nodes" in capsys.readouterr().err
 
 
 def test_a_hole_is_the_whole_force_and_counted():
@@ -258,6 +261,7 @@ def test_refinement_across_the_flange_root_reduces_the_checked_error(order, sche
                  "--rounds", "2", "--scheduler", scheduler, "--quiet"]) == 0
     said = capsys.readouterr().out
     assert "round 1: lateral_displacement +2" in said and "round 2:" in said
+    assert "; 10 points, 4 computed" in said  # only the new points: 2 new nodes x 2 etas
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         table = ContactTable.open(out)

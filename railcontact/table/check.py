@@ -450,6 +450,10 @@ def check_table(path: str | Path, n: int, seed: int = 0, method: str = "linear",
         table = ContactTable.open(path)
     if method not in METHODS:
         raise RailContactError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    short = [f"{n} ({len(v)})" for n, v in table.axes.items() if len(v) < 4]
+    if method == "cubic" and short:  # before any solve
+        raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
+                               f"{', '.join(short)}; check method 'linear'")
     chk = new_check(table, n, seed, method, client, lost_timeout)
     write_check(path, chk, table.axes)
     return chk
