@@ -335,3 +335,23 @@ def test_a_check_on_a_cluster_without_workers_is_an_error_after_the_timeout(chec
     assert code == 2
     assert "had no worker for 2 s during the check" in capsys.readouterr().err
     assert read_check(copy).size == 5  # the kept check unchanged
+
+
+def test_refine_bad_input_and_nothing_to_do(checked, tmp_path, capsys):
+    """Bad refine options are errors before anything is solved; targets that nothing
+    exceeds (and no contact jump on the tread) leave the table unchanged."""
+    _, out = checked
+    copy = tmp_path / "c.zarr"
+    shutil.copytree(out, copy)
+    for extra, words in ((["--axes", "yaw"], "yaw not an axis of the table"),
+                         (["--target", "pressure=1"], "--target takes MEASURE=VALUE"),
+                         (["--target", "normal_force=-1"], "target normal_force must be > 0"),
+                         (["--target", "normal_force=x"], "not a number"),
+                         (["--rounds", "0"], "--rounds must be at least 1")):
+        assert main(["table", "refine", str(copy), *extra, "--workers", "1"]) == 2
+        assert words in capsys.readouterr().err
+    before = {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()}
+    assert main(["table", "refine", str(copy), "--target", "normal_force=10", "--target",
+                 "creep_force=10", "--target", "contact_angle=10", "--quiet"]) == 0
+    assert "nothing exceeds the targets; unchanged" in capsys.readouterr().out
+    assert {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()} == before
