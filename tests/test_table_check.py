@@ -172,6 +172,11 @@ def test_table_check_on_an_existing_table_replaces_the_check(checked, scheduler,
     assert main(["table", "check", str(copy), "2", "--workers", "0", "--method",
                  "cubic"]) == 2
     assert "cubic interpolation needs at least 4 nodes" in capsys.readouterr().err
+    spec_path, _ = checked
+    assert main(["table", "build", str(spec_path), "-o", str(tmp_path / "n.zarr"),
+                 "--check", "-1"]) == 2
+    assert "--check must be a number of states >= 0" in capsys.readouterr().err
+    assert not (tmp_path / "n.zarr").exists()
 
 
 def test_a_hole_is_the_whole_force_and_counted():

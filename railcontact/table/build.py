@@ -179,6 +179,8 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
             f"{scheduler} has its own workers: give one or the other")
     if not lost_timeout > 0:
         raise RailContactError(f"--lost-timeout must be > 0 s, got {lost_timeout}")
+    if check < 0:
+        raise RailContactError(f"--check must be a number of states >= 0, got {check}")
     out = Path(out)
     store = None
     if out.exists():
