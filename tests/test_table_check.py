@@ -262,6 +262,11 @@ def test_refinement_across_the_flange_root_reduces_the_checked_error(order, sche
 
     before = independent(out)
     capsys.readouterr()
+    assert main(["table", "show", str(out)]) == 0  # the jump, seen before any check
+    text = capsys.readouterr().out
+    assert "contact jumps between neighbouring nodes" in text
+    assert re.search(r"  lateral_displacement: [12] of 2 interval\(s\)", text)
+    assert "  creepage_y:" not in text
     assert main(["table", "refine", str(out), "--axes", "lateral_displacement",
                  "--rounds", "2", "--scheduler", scheduler, "--quiet"]) == 0
     said = capsys.readouterr().out

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .check import check_text
+from .refine import Targets, jumps
 from .spec import AXES
 from .store import IDENTITY, open_dataset, read_messages
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
@@ -46,6 +47,7 @@ def summary(path: str | Path) -> str:
         counts = {STATUS_MEANINGS[int(k)]: int(c)
                   for k, c in zip(*np.unique(status[..., j], return_counts=True), strict=True)}
         lines.append(f"  {side:6s} " + ", ".join(f"{k} {c}" for k, c in counts.items()))
+    lines += _jump_lines(ds, names, status)
     lines.append("values (ok points):")
     ok = status == 0
     for name in SHOWN:
@@ -69,6 +71,30 @@ def summary(path: str | Path) -> str:
             lines.append(f"  {at}, {m['side']}: {STATUS_MEANINGS.get(m['status'])}: "
                          f"{m['message']}")
     return "\n".join(lines)
+
+
+def _jump_lines(ds, names: list[str], status: np.ndarray) -> list[str]:
+    """Where the contact jumps between neighbouring nodes (:func:`~.refine.jumps` at the
+    default :class:`~.refine.Targets`): a line per axis, none without jumps."""
+    if "n_patches" not in ds or "contact_angle" not in ds:
+        return []
+    limit = Targets().jump_angle
+    found = jumps({n: ds[n].values for n in names}, status, ds["n_patches"].values,
+                  ds["contact_angle"].values, limit)
+    out = []
+    for n, flags in found.items():
+        k = np.flatnonzero(flags)
+        if k.size:
+            v = ds[n].values
+            where = ", ".join(f"{v[i]:.6g}..{v[i + 1]:.6g}" for i in k[:4])
+            out.append(f"  {n}: {k.size} of {flags.size} interval(s) ({where}"
+                       + (", ..." if k.size > 4 else "") + f") [{AXES[n].unit}]")
+    if out:
+        out.insert(0, f"contact jumps between neighbouring nodes (patch count, contact angle "
+                      f"step > {limit * 1e3:g} mrad, contact appearing): the interpolation "
+                      "there is coarse ('railcontact table check' measures it, 'railcontact "
+                      "table refine' adds nodes):")
+    return out
 
 
 def plot_table(path: str | Path, out: str | Path) -> Path:
