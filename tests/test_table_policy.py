@@ -76,7 +76,7 @@ def test_the_policy_is_parsed_per_axis_and_not_part_of_the_identity():
         parse_spec(_raw(3))
 
 
-def test_clamp_gives_the_end_node_and_says_so(clamped):
+def test_clamp_gives_the_end_node_and_says_so(clamped, capsys):
     """Lateral displacement 5 mm on a table of 2..4 mm clamped: both wheels have the
     exact solve at 4 mm (the batch's first point: ``railcontact solve`` bit for bit), status
     ok, a message naming the clamped input; a creepage outside its axis (policy status)
@@ -107,6 +107,12 @@ def test_clamp_gives_the_end_node_and_says_so(clamped):
     assert "creepage_y = 0.002 1 is outside the table [0, 0.001]" in res.left.message
     with pytest.raises(RailContactError, match="outside the table"):
         table({"lateral_displacement": float("nan"), "creepage_y": 0.0}, "left")
+    from railcontact.cli import main
+
+    assert main(["table", "show", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "from 0.002 to 0.004; out of range: clamp" in text
+    assert "from 0 to 0.001; out of range: status" in text
 
 
 def test_status_is_the_default_and_the_store_policy_can_be_overridden(clamped, tmp_path):

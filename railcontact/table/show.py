@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import RailContactError
 from .check import check_text
 from .refine import Targets, jumps
-from .spec import AXES
+from .spec import AXES, DEFAULT_POLICY
 from .store import IDENTITY, open_dataset, read_messages
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
 
@@ -38,10 +38,12 @@ def summary(path: str | Path) -> str:
     if failed:
         lines.append(f"WARNING: {failed_text(failed)}: holes of the table, where "
                      "interpolation returns the status, not a value (listed below)")
-    lines.append("axes:")
+    lines.append("axes (out of range: the policy of a value outside the axis):")
+    policies = json.loads(ds.attrs.get("out_of_range", "{}"))
     for n in names:
         v = ds[n].values
-        lines.append(f"  {n:22s} [{AXES[n].unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}")
+        lines.append(f"  {n:22s} [{AXES[n].unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}"
+                     f"; out of range: {policies.get(n, DEFAULT_POLICY)}")
     lines.append("status:")
     for j, side in enumerate(ds["side"].values.tolist()):
         counts = {STATUS_MEANINGS[int(k)]: int(c)
