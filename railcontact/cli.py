@@ -4,9 +4,10 @@
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
 ``railcontact fmu build [-o dist/RailContact.fmu] [--python PATH]`` builds the FMU and
 ``railcontact fmu check FILE.fmu`` tells which Python it will run in; ``railcontact settings``
-prints the reference of every setting; ``railcontact table build|show`` makes and
-summarises contact tables (docs/tables.md). Errors in the input are
-reported in one line (exit status 2), never as a traceback.
+prints the reference of every setting; ``railcontact table
+build|check|refine|show|export`` makes, checks, refines, summarises and exports contact
+tables (docs/tables.md). Errors in the input are reported in one line (exit status 2),
+never as a traceback.
 """
 
 from __future__ import annotations
@@ -240,6 +241,7 @@ def _cmd_table_build(args: argparse.Namespace) -> int:
     try:
         rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
                           resume=args.resume, progress=not args.quiet,
+                          check=args.check, check_seed=args.seed, check_method=args.method,
                           **({} if args.lost_timeout is None else
                              {"lost_timeout": args.lost_timeout}))
     except KeyboardInterrupt:
@@ -253,12 +255,87 @@ def _cmd_table_build(args: argparse.Namespace) -> int:
           + (f" ({kinds})" if kinds else "")
           + (f"; {rep.recovered} solved again from another start" if rep.recovered else "")
           + " (see 'railcontact table show')")
+    if rep.check is not None:
+        _print_check(rep.check)
     for f in rep.failed_batches:
         print(f"railcontact: error: {f}", file=sys.stderr)
     if rep.failed_batches:
         print(f"railcontact: error: {len(rep.failed_batches)} batch(es) failed; rerun with "
               "--resume to compute them", file=sys.stderr)
         return 1
+    return 0
+
+
+def _print_check(chk) -> None:
+    from .table.check import MEASURE_TEXT, MEASURES, overall
+
+    tot = overall(chk)
+    parts = []
+    for m in MEASURES:
+        st, scale = tot[m], 1e3 if m == "contact_angle" else 1.0
+        if st["n"]:
+            parts.append(f"{MEASURE_TEXT[m]} median {st['median'] * scale:.2e} max "
+                         f"{st['max'] * scale:.2e}")
+    print(f"check ({chk.method}) at {chk.size} random states x {len(chk.sides)} wheel(s) "
+          f"against the exact solver ({chk.seconds:.1f} s): " + "; ".join(parts)
+          + f"; {tot['holes']} in holes, {tot['unsolved']} not solved exactly "
+          "(per interval: 'railcontact table show')")
+
+
+def _cmd_table_check(args: argparse.Namespace) -> int:
+    from .table.build import close_client, connect
+    from .table.check import check_table
+
+    if args.states < 1:
+        raise RailContactError(f"the number of states must be at least 1, got {args.states}")
+    if args.scheduler and args.workers is not None:
+        raise RailContactError("give --workers or --scheduler, not both")
+    from .table.store import open_dataset
+
+    open_dataset(args.table)  # a table there, before any cluster
+    client = None if args.workers == 0 else connect(args.scheduler, args.workers)
+    try:
+        chk = check_table(args.table, args.states, args.seed, args.method, client,
+                          **({} if args.lost_timeout is None else
+                             {"lost_timeout": args.lost_timeout}))
+    finally:
+        if client is not None:
+            close_client(client)
+    _print_check(chk)
+    return 0
+
+
+def _cmd_table_refine(args: argparse.Namespace) -> int:
+    from .table.refine import parse_targets, refine_table
+
+    if args.scheduler and args.workers is not None:
+        raise RailContactError("give --workers or --scheduler, not both")
+    targets = parse_targets(args.target, args.jump_angle)
+    rep = refine_table(args.table, targets, axes=tuple(args.axes) if args.axes else None,
+                       rounds=args.rounds, scheduler=args.scheduler, workers=args.workers,
+                       progress=not args.quiet, lost_timeout=args.lost_timeout)
+    for k, r in enumerate(rep.rounds, 1):
+        added = "; ".join(f"{n} +{len(v)}" for n, v in r["added"].items())
+        print(f"round {k}: {added} node(s) (by error: "
+              + (", ".join(f"{n} {len(v)}" for n, v in r["by_error"].items()) or "none")
+              + "; by contact jump: "
+              + (", ".join(f"{n} {len(v)}" for n, v in r["by_jump"].items()) or "none")
+              + f" interval(s)); {r['points']} points, {r['computed']} computed")
+    if not rep.rounds:
+        print(f"table {args.table}: nothing exceeds the targets; unchanged")
+    if rep.before is not None and rep.after is not None:
+        for m in ("normal_force", "creep_force", "contact_angle"):
+            b, a = rep.before[m], rep.after[m]
+            if b["n"] and a["n"]:
+                print(f"checked {m} error: max {b['max']:.3g} -> {a['max']:.3g}, median "
+                      f"{b['median']:.3g} -> {a['median']:.3g} (at the check's states)")
+    return 0
+
+
+def _cmd_table_export(args: argparse.Namespace) -> int:
+    from .table.export import export_table
+
+    print(f"table {args.table} written to {export_table(args.table, args.output, args.format)}")
     return 0
 
 
@@ -290,12 +367,73 @@ def _add_table(sub) -> None:
     b.add_argument("--lost-timeout", type=float, metavar="SECONDS",
                    help="stop with an error when the cluster has had no worker this long "
                    "(default 120 s); the finished batches are kept: resume")
+    b.add_argument("--check", type=int, default=0, metavar="N",
+                   help="then solve N random off-node states exactly and keep the "
+                   "interpolation error per axis interval in the store (table show)")
+    _check_options(b)
     b.set_defaults(func=_cmd_table_build)
+    c = tsub.add_parser("check", help="measure a table's interpolation error at random "
+                        "states against the exact solver",
+                        description="Solve N random off-node states of the table exactly "
+                        "and keep the interpolation error per interval of each axis in the "
+                        "store (replacing an earlier check); 'railcontact table show' "
+                        "prints it.")
+    c.add_argument("table", help="the Zarr store")
+    c.add_argument("states", type=int, help="the number of random states N")
+    _check_options(c)
+    c.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
+    c.add_argument("--workers", type=int,
+                   help="local worker processes (default: the CPUs; 0: in this process)")
+    c.add_argument("--lost-timeout", type=float, metavar="SECONDS",
+                   help="stop with an error when the cluster has had no worker this long "
+                   "(default 120 s)")
+    c.set_defaults(func=_cmd_table_check)
+    r = tsub.add_parser("refine", help="add nodes where the checked error or a contact jump "
+                        "exceeds a target", description="Split the intervals of the axes "
+                        "where the kept check's error or a contact jump between neighbouring "
+                        "nodes exceeds its target at their middles, solve only the new points "
+                        "and rewrite the store (docs/tables.md).")
+    r.add_argument("table", help="the Zarr store (complete)")
+    r.add_argument("--target", action="append", metavar="MEASURE=VALUE",
+                   help="largest checked error accepted: normal_force (|dN|/max(N,Q), "
+                   "default 0.01), creep_force (|dF|/(mu max(N,Q)), 0.05), contact_angle "
+                   "(rad, 0.005); repeatable")
+    r.add_argument("--jump-angle", type=float, metavar="RAD",
+                   help="contact angle step between neighbouring nodes taken as a jump "
+                   "(default 0.05 rad)")
+    r.add_argument("--axes", nargs="+", metavar="AXIS",
+                   help="the axes to refine (default: every axis of more than one node)")
+    r.add_argument("--rounds", type=int, default=1, help="refinements at most (1)")
+    r.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
+    r.add_argument("--workers", type=int, help="local worker processes (default: the CPUs)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--lost-timeout", type=float, metavar="SECONDS",
+                   help="stop with an error when the cluster has had no worker this long "
+                   "(default 120 s)")
+    r.set_defaults(func=_cmd_table_refine)
+    e = tsub.add_parser("export", help="write a table as netCDF or CSV",
+                        description="Write the table as netCDF (xarray; the axes and side as "
+                        "coordinates) or as CSV (one row per node and wheel: the axes, side, "
+                        "every quantity, status, the work counters; SI units).")
+    e.add_argument("table", help="the Zarr store")
+    e.add_argument("output", help="the file: OUT.nc or OUT.csv")
+    e.add_argument("--format", choices=("netcdf", "csv"),
+                   help="the format (default: from the suffix, .nc or .csv)")
+    e.set_defaults(func=_cmd_table_export)
     s = tsub.add_parser("show", help="summary of a table (axes, ranges, failed points)")
     s.add_argument("table", help="the Zarr store")
     s.add_argument("--plot", metavar="FILE",
                    help="write the forces against each axis and a heat map to FILE")
     s.set_defaults(func=_cmd_table_show)
+
+
+def _check_options(p) -> None:
+    p.add_argument("--seed", type=int, default=0,
+                   help="random seed of the check's states (0)")
+    p.add_argument("--method", choices=("linear", "cubic"), default="linear",
+                   help="the interpolation checked (linear)")
 
 
 def build_parser() -> argparse.ArgumentParser:

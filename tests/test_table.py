@@ -489,6 +489,43 @@ def test_fmu_table_mode_reproduces_the_table_at_its_nodes(built, table_fmu):
     s.freeInstance()
 
 
+def test_fmu_table_mode_clamps_an_axis_whose_policy_is_clamp(built, table_fmu, tmp_path):
+    """The table's out-of-range policy, recorded in the store by a build of the same table
+    with ``[table] out_of_range = { lateral_displacement = "clamp" }``, is the FMU's: a
+    lateral displacement beyond the axis gives the end node's outputs exactly (status 0);
+    the load axis, left at status, is still out of range (status 3)."""
+    from railcontact.table.store import Store
+
+    spec_path, out = built
+    copy = tmp_path / "clamp.zarr"
+    shutil.copytree(out, copy)
+    clamped = tmp_path / "spec.toml"
+    clamped.write_text(spec_path.read_text().replace(
+        "[table]\n", '[table]\nout_of_range = { lateral_displacement = "clamp" }\n'))
+    Store(copy, load_spec(clamped))  # what a build (or a rerun) into the store does first
+    s, var = _table_slave(table_fmu, "table", str(copy.resolve()))
+    s.exitInitializationMode()
+    table = ContactTable.open(copy)
+    inputs = {"lateral_displacement": 0.003, "load_left": 80e3, "load_right": 80e3,
+              "eta_left": 0.002, "eta_right": -0.002}
+    s.setReal([var[k].valueReference for k in inputs], list(inputs.values()))
+    s.doStep(0.0, 1e-3)
+    for side in ("left", "right"):
+        node = table.node((2, 1, 1), side)  # y = 2 mm, eta = 2e-3, 80 kN
+        for name in ("normal_force", "creep_force_y", "contact_angle"):
+            assert s.getReal([var[f"{name}_{side}"].valueReference])[0] == node[name]
+        assert s.getInteger([var[f"status_{side}"].valueReference])[0] == 0
+    from fmpy.fmi1 import FMICallException
+
+    s.setReal([var["load_left"].valueReference, var["load_right"].valueReference],
+              [90e3, 90e3])
+    with pytest.raises(FMICallException):
+        s.doStep(1e-3, 1e-3)
+    assert s.getInteger([var["status"].valueReference])[0] == 3
+    s.terminate()
+    s.freeInstance()
+
+
 def _cubic_field_table(bad: dict[tuple[int, int], int]) -> tuple[ContactTable, object]:
     """A 6 x 5 table (lateral displacement, lateral creepage) whose every quantity is the
     bicubic ``f`` on both wheels, except the nodes ``bad`` (index -> status) of the left

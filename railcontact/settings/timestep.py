@@ -177,7 +177,10 @@ class FMUModes(Record):
                                  "and roll outputs 0)", choices=CONTACT_MODELS)
     table_file: str = setting("", "str?", "", "the contact table (a Zarr store of railcontact "
                               "table build) for contact_model = table: a folder in the FMU's "
-                              "resources or a path")
+                              "resources or a path; an input outside a table axis gives, by "
+                              "that axis's out_of_range policy kept in the table (railcontact "
+                              "table show), status 3 with zero outputs (status, the default) "
+                              "or the axis's end node (clamp)")
     wheel_profile_left: str = setting("", "str?", "", "the left wheel's profile when the "
                                       "wheels differ (a worn wheelset), as wheel_profile; "
                                       "empty: wheel_profile")

@@ -5,7 +5,9 @@ stored in Zarr (``railcontact table build``), and interpolated in a time loop
 Modules: ``spec`` (the ``[table]`` axes), ``solve`` (a batch of points, warm-started along
 the fastest axis), ``store`` (the Zarr layout, resume, completeness), ``build`` (Dask),
 ``interpolate`` (:class:`ContactTable`), ``show`` (summary, plots), ``step`` (a wheelset
-step from a table, as the FMU's ``contact_model = table``). Building needs the ``[tables]``
+step from a table, as the FMU's ``contact_model = table``), ``check`` (the interpolation
+error against the exact solver at random states), ``refine`` (nodes added where it errs or
+the contact jumps), ``export`` (netCDF, CSV). Building needs the ``[tables]``
 extra (dask[distributed], xarray, zarr, tqdm).
 """
 

@@ -80,6 +80,8 @@ class BuildReport:
     workers: int = 0
     """The workers that computed this run's batches."""
     dashboard: str | None = None
+    check: Any = None
+    """The interpolation check made after the build (:class:`~.check.Check`), or None."""
 
     @property
     def rate(self) -> float:
@@ -124,8 +126,9 @@ def _solve_on_worker(case: dict[str, Any], sides: tuple[str, ...],
 
 def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = None,
                 workers: int | None = None, resume: bool = False, progress: bool = True,
-                client: Any = None, say=None, lost_timeout: float = LOST_TIMEOUT
-                ) -> BuildReport:
+                client: Any = None, say=None, lost_timeout: float = LOST_TIMEOUT,
+                check: int = 0, check_seed: int = 0, check_method: str = "linear",
+                subset: dict[tuple[int, ...], list[int]] | None = None) -> BuildReport:
     """Compute the points of ``spec`` missing from the store ``out`` (created if absent).
 
     Parameters
@@ -147,6 +150,14 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         Called with one-line messages (the dashboard address); default: print to stderr.
     lost_timeout
         Seconds the cluster may have no worker before the build stops with an error [s].
+    check, check_seed, check_method
+        When ``check`` > 0 and the table is complete: solve ``check`` random off-node
+        states exactly on the cluster and keep the interpolation error in the store
+        (:func:`~.check.check_table`; seeded by ``check_seed``, of ``check_method``).
+    subset
+        Batch index -> the indices along the fastest axis of the points to compute in that
+        batch (the others are in the store already: a refined table,
+        :mod:`.refine`); a batch not named computes all its points.
 
     Returns
     -------
@@ -168,6 +179,8 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
             f"{scheduler} has its own workers: give one or the other")
     if not lost_timeout > 0:
         raise RailContactError(f"--lost-timeout must be > 0 s, got {lost_timeout}")
+    if check < 0:
+        raise RailContactError(f"--check must be a number of states >= 0, got {check}")
     out = Path(out)
     store = None
     if out.exists():
@@ -179,12 +192,21 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         done = np.zeros(spec.batch_shape, dtype=bool)
     todo = [tuple(int(i) for i in ix) for ix in np.argwhere(~done)]
     report = BuildReport(points=spec.size)
-    report.skipped = sum(len(spec.batch_points(tuple(ix))) for ix in np.argwhere(done))
+    subset = subset or {}
+    report.skipped = spec.size - sum(len(_points(spec, ix, subset)) for ix in todo)
+    own = client is None
     if not todo:
         store.finish(True)
         _statuses(report, store)
+        if check > 0:
+            c = connect(scheduler, workers) if own else client
+            try:
+                report.check = _check(out, check, check_seed, check_method, c, say, progress,
+                                      lost_timeout)
+            finally:
+                if own:
+                    close_client(c)
         return report
-    own = client is None
     if progress:
         where = (f"the Dask scheduler at {scheduler}" if scheduler else
                  "a local Dask cluster of "
@@ -193,9 +215,10 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         say(f"table {out}: {spec.size} points x {len(spec.sides)} wheel(s) in "
             f"{len(todo) + int(done.sum())} batches, {report.skipped} points already there; "
             f"{len(todo)} batches to compute on {where}")
-    total = sum(len(spec.batch_points(ix)) for ix in todo)
+    total = spec.size - report.skipped
     bar = _bar(total, progress)
     t0 = time.perf_counter()
+    finished = False
     try:
         if own:
             bar.set_postfix_str("starting the cluster" if not scheduler else "connecting",
@@ -207,20 +230,55 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
                 create_store(out, spec)
                 store = Store(out, spec)
             _run(spec, out, store, client, todo, report, bar, say, progress, own,
-                 lost_timeout)
+                 lost_timeout, subset)
+            report.seconds = time.perf_counter() - t0
+            complete = bool(store.done().all())
+            store.finish(complete)
+            _statuses(report, store)
+            finished = True
+            if check > 0 and complete and not report.failed_batches:
+                bar.close()
+                report.check = _check(out, check, check_seed, check_method, client, say,
+                                      progress, lost_timeout)
         finally:
-            if store is not None:
+            if store is not None and not finished:
                 store.finish(bool(store.done().all()))
                 _statuses(report, store)
             if own:
-                cluster = getattr(client, "cluster", None)
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+                close_client(client)
     finally:
         bar.close()
-    report.seconds = time.perf_counter() - t0
+    report.seconds = report.seconds or time.perf_counter() - t0
     return report
+
+
+def _points(spec: TableSpec, ix: tuple[int, ...], subset: dict[tuple[int, ...], list[int]]
+            ) -> list[tuple[int, ...]]:
+    """The grid indices of the points of batch ``ix`` to compute (all, or ``subset``'s)."""
+    pts = spec.batch_points(ix)
+    if ix not in subset:
+        return pts
+    keep = set(subset[ix])
+    return [p for p in pts if p[-1] in keep]
+
+
+def close_client(client: Any) -> None:
+    """Close a client this build started, and its local cluster."""
+    cluster = getattr(client, "cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def _check(out: Path, n: int, seed: int, method: str, client: Any, say, progress: bool,
+           lost_timeout: float):
+    """:func:`~.check.check_table` of the finished table on ``client``."""
+    from .check import check_table
+
+    if progress:
+        say(f"table {out}: checking the interpolation at {n} random states (seed {seed}) "
+            "against the exact solver")
+    return check_table(out, n, seed, method, client, lost_timeout)
 
 
 def _statuses(report: BuildReport, store: Store) -> None:
@@ -234,7 +292,8 @@ def _statuses(report: BuildReport, store: Store) -> None:
 
 
 def _run(spec: TableSpec, out: Path, store: Store, client: Any, todo: list, report: BuildReport,
-         bar, say, progress: bool, own: bool, lost_timeout: float) -> None:
+         bar, say, progress: bool, own: bool, lost_timeout: float,
+         subset: dict[tuple[int, ...], list[int]] | None = None) -> None:
     """Submit the batches ``todo``, write them as they finish (every
     :data:`WRITE_SECONDS`, and whatever finished when stopped), watch the cluster."""
     from distributed import as_completed
@@ -247,8 +306,9 @@ def _run(spec: TableSpec, out: Path, store: Store, client: Any, todo: list, repo
             note = " (its status page needs bokeh >= 3.1: pip install bokeh)"
         say(f"Dask dashboard: {dashboard}{note}")
     pending = {}
+    subset = subset or {}
     for ix in todo:
-        pts = spec.batch_points(ix)
+        pts = _points(spec, ix, subset)
         values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
                   for p in pts]
         fut = client.submit(_solve_on_worker, spec.case, spec.sides, values, pure=False,
@@ -272,12 +332,14 @@ def _run(spec: TableSpec, out: Path, store: Store, client: Any, todo: list, repo
                 except Exception as exc:  # noqa: BLE001 - a worker's failure, reported
                     report.failed_batches.append(f"batch {ix}: {type(exc).__name__}: {exc}")
                     continue
+                if ix in subset:  # where its points go along the fastest axis
+                    result["fast"] = [p[-1] for p in _points(spec, ix, subset)]
                 finished.append((ix, result, _messages(spec, ix, result)))
                 seen.add(result.get("worker", ""))
                 report.recovered += len(result.get("recovered", ()))
                 report.task_seconds += result["seconds"]
                 report.task_cpu_seconds += result["cpu_seconds"]
-                n = len(spec.batch_points(ix))
+                n = len(_points(spec, ix, subset))
                 report.computed += n
                 bar.update(n)
             if finished and (not pending or time.perf_counter() - last_write >= WRITE_SECONDS):
@@ -321,8 +383,10 @@ def _messages(spec: TableSpec, ix: tuple[int, ...], result: dict[str, Any]
     """The store's messages of a batch's points that are not ok."""
     slow = {n_: float(spec.axes[n_][k]) for n_, k in zip(spec.names[:-1], ix[:-1], strict=True)}
     fast = spec.axes[spec.names[-1]]
+    at = result.get("fast") or range(ix[-1] * spec.batch, ix[-1] * spec.batch + spec.batch)
+    at = list(at)
     return [{"batch": list(ix), "side": side, "status": status,
-             "point": {**slow, spec.names[-1]: float(fast[ix[-1] * spec.batch + i])},
+             "point": {**slow, spec.names[-1]: float(fast[at[i]])},
              "message": msg}
             for i, side, status, msg in result["messages"]]
 

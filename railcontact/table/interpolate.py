@@ -9,7 +9,10 @@ some node of that wheel is not ok (NaN values: no contact, out of range, not con
 computed) a spline, which depends on whole grid lines, cannot be fitted, so it is the local
 tensor-product cubic through the 4 nodes around the point on each axis when all of those are
 ok, else the multilinear value with the linear status. A point outside an axis is a
-:class:`~railcontact.errors.RailContactError` naming the axis and its range. The status of
+:class:`~railcontact.errors.RailContactError` naming the axis and its range, unless the
+axis's out-of-range policy (``out_of_range``: the spec's ``[table] out_of_range``, kept in
+the store) is ``clamp``: its value is then moved to the axis's nearest end (named in
+:attr:`Interpolated.clamped`). The status of
 an interpolated point is the largest status of the nodes it uses (ok only when all of them
 are; not computed when any is); a node not ok (or not computed) makes the values NaN with
 that status.
@@ -27,9 +30,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from ..errors import RailContactError
-from .spec import AXES
-from .store import FLANGE, IDENTITY, read_table, wheel_flange
+from ..errors import CaseError, RailContactError
+from .spec import AXES, DEFAULT_POLICY, parse_policies
+from .store import FLANGE, IDENTITY, POLICY_ATTR, read_table, wheel_flange
 from .variables import (
     NOT_COMPUTED,
     OK,
@@ -54,6 +57,9 @@ class Interpolated:
 
     values: dict[str, float]
     status: int
+    clamped: tuple[str, ...] = ()
+    """The axes whose value was outside and clamped to their nearest end (policy
+    ``clamp``)."""
 
     def __getitem__(self, name: str) -> float:
         return self.values[name]
@@ -153,7 +159,8 @@ class ContactTable:
     def __init__(self, axes: dict[str, np.ndarray], sides: tuple[str, ...],
                  values: np.ndarray, status: np.ndarray, case: dict, path: str = "",
                  flange: tuple[float, float] | None = None,
-                 missing: tuple[str, ...] = ()) -> None:
+                 missing: tuple[str, ...] = (),
+                 out_of_range: dict[str, str] | str | None = None) -> None:
         self.axes = {n: np.asarray(v, dtype=float) for n, v in axes.items()}
         self.sides = tuple(sides)
         self.names = tuple(q.name for q in QUANTITIES)
@@ -180,10 +187,24 @@ class ContactTable:
         self.failed = failed_counts(status)
         """Point-wheels of each failed status (:func:`~.variables.failed_counts`): empty
         for a table without holes."""
+        self.out_of_range = {n: DEFAULT_POLICY for n in self.axes}
+        """Axis -> what a value outside it gives: ``"status"`` (an error here, status 3 in
+        a table step) or ``"clamp"`` (the nearest end's value)."""
+        try:
+            self.out_of_range.update(parse_policies(out_of_range, tuple(self.axes)))
+        except CaseError as exc:
+            raise RailContactError(str(exc).replace("[table] ", "")) from None
+        self._clamp = [(k, n, nodes[0], nodes[-1]) for k, (n, nodes) in
+                       enumerate(zip(self.axes, self._nodes, strict=True))
+                       if self.out_of_range[n] == "clamp"]
 
     @classmethod
-    def open(cls, path: str | Path) -> ContactTable:
+    def open(cls, path: str | Path, out_of_range: dict[str, str] | str | None = None
+             ) -> ContactTable:
         """Read the table at ``path`` (a store of ``railcontact table build``).
+
+        ``out_of_range`` (a policy for every axis, or axis -> policy: ``"status"`` or
+        ``"clamp"``) overrides the store's (the spec's ``[table] out_of_range``).
 
         Warns (:class:`TableHolesWarning`) when some points failed: how many of each
         status (also in :attr:`failed`).
@@ -201,8 +222,12 @@ class ContactTable:
         values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
                            np.asarray(arrays[q.name], dtype=float) for q in QUANTITIES], axis=-1)
         flange = json.loads(attrs[FLANGE]) if FLANGE in attrs else None
+        policies = json.loads(attrs.get(POLICY_ATTR, "{}"))
+        if isinstance(out_of_range, str):
+            out_of_range = {n: out_of_range for n in axes}
+        policies.update(out_of_range or {})
         table = cls(axes, tuple(arrays["side"]), values, status, ident["case"],
-                    str(path), flange, missing)
+                    str(path), flange, missing, policies)
         if table.failed:
             warnings.warn(f"table {path}: {failed_text(table.failed)}; interpolation at a "
                           "state using one of them returns its status, not a value "
@@ -247,13 +272,27 @@ class ContactTable:
                 + (f"missing {', '.join(missing)}" if missing else "")
                 + ("; " if missing and extra else "")
                 + (f"not axes of this table: {', '.join(extra)}" if extra else ""))
-        x = []
-        for n, nodes in zip(self.axes, self._nodes, strict=True):
-            v = float(point[n])
+        x = [float(point[n]) for n in self.axes]
+        x, _ = self.clamp(x)
+        for n, nodes, v in zip(self.axes, self._nodes, x, strict=True):
             if not nodes[0] <= v <= nodes[-1]:  # NaN fails too
                 raise RailContactError(outside(n, v, nodes))
-            x.append(v)
         return x
+
+    def clamp(self, x: list[float]) -> tuple[list[float], tuple[str, ...]]:
+        """The coordinates ``x`` (in axis order) with each finite value of an axis whose
+        policy is ``clamp`` moved to the nearest end of the axis when outside it, and the
+        names of those axes."""
+        if not self._clamp:
+            return x, ()
+        x = list(x)
+        moved = []
+        for k, name, lo, hi in self._clamp:
+            v = x[k]
+            if v < lo or v > hi:  # (NaN neither: left for the range check)
+                x[k] = lo if v < lo else hi
+                moved.append(name)
+        return x, tuple(moved)
 
     def __call__(self, point: dict[str, float], side: str = "left",
                  method: str = "linear") -> Interpolated:
@@ -266,6 +305,7 @@ class ContactTable:
         """
         j = self._side(side)
         x = self._coordinates(point)
+        clamped = tuple(n for n, v in zip(self.axes, x, strict=True) if v != float(point[n]))
         if method == "linear":
             vals, status = self.linear(x, j)
         elif method == "cubic":
@@ -273,7 +313,8 @@ class ContactTable:
         else:
             raise RailContactError(f"method must be one of {', '.join(METHODS)}, got "
                                    f"{method!r}")
-        return Interpolated(dict(zip(self.names, vals.tolist(), strict=True)), status)
+        return Interpolated(dict(zip(self.names, vals.tolist(), strict=True)), status,
+                            clamped)
 
     def linear(self, x: list[float], j: int) -> tuple[np.ndarray, int]:
         """Multilinear values (quantities in :attr:`names` order) and status at the

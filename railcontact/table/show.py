@@ -1,4 +1,5 @@
-"""A table's summary (axes, ranges, statuses, failed points) and plots (forces against each
+"""A table's summary (axes, ranges, statuses, failed points, the interpolation error of
+its check) and plots (forces against each
 axis, a heat map over two axes)."""
 
 from __future__ import annotations
@@ -9,7 +10,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .spec import AXES
+from .check import check_text
+from .refine import Targets, jumps
+from .spec import AXES, DEFAULT_POLICY
 from .store import IDENTITY, open_dataset, read_messages
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
 
@@ -35,15 +38,18 @@ def summary(path: str | Path) -> str:
     if failed:
         lines.append(f"WARNING: {failed_text(failed)}: holes of the table, where "
                      "interpolation returns the status, not a value (listed below)")
-    lines.append("axes:")
+    lines.append("axes (out of range: the policy of a value outside the axis):")
+    policies = json.loads(ds.attrs.get("out_of_range", "{}"))
     for n in names:
         v = ds[n].values
-        lines.append(f"  {n:22s} [{AXES[n].unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}")
+        lines.append(f"  {n:22s} [{AXES[n].unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}"
+                     f"; out of range: {policies.get(n, DEFAULT_POLICY)}")
     lines.append("status:")
     for j, side in enumerate(ds["side"].values.tolist()):
         counts = {STATUS_MEANINGS[int(k)]: int(c)
                   for k, c in zip(*np.unique(status[..., j], return_counts=True), strict=True)}
         lines.append(f"  {side:6s} " + ", ".join(f"{k} {c}" for k, c in counts.items()))
+    lines += _jump_lines(ds, names, status)
     lines.append("values (ok points):")
     ok = status == 0
     for name in SHOWN:
@@ -51,6 +57,14 @@ def summary(path: str | Path) -> str:
         if x.size:
             lines.append(f"  {name:16s} [{ds[name].attrs.get('units', '')}] from "
                          f"{x.min():.6g} to {x.max():.6g}")
+    for k, r in enumerate(json.loads(ds.attrs.get("refinement", "[]")), 1):
+        lines.append(f"refined, round {k}: " + "; ".join(
+            f"{n} +{len(v)} node(s)" for n, v in r["added"].items()) + " (by error: "
+            + (", ".join(f"{n} {c}" for n, c in r["by_error"].items()) or "none")
+            + "; by contact jump: "
+            + (", ".join(f"{n} {c}" for n, c in r["by_jump"].items()) or "none")
+            + " interval(s))")
+    lines += check_text(path)
     msgs = read_messages(path)
     if msgs:
         lines.append(f"points not ok ({len(msgs)}; first {min(len(msgs), MAX_MESSAGES)}):")
@@ -59,6 +73,30 @@ def summary(path: str | Path) -> str:
             lines.append(f"  {at}, {m['side']}: {STATUS_MEANINGS.get(m['status'])}: "
                          f"{m['message']}")
     return "\n".join(lines)
+
+
+def _jump_lines(ds, names: list[str], status: np.ndarray) -> list[str]:
+    """Where the contact jumps between neighbouring nodes (:func:`~.refine.jumps` at the
+    default :class:`~.refine.Targets`): a line per axis, none without jumps."""
+    if "n_patches" not in ds or "contact_angle" not in ds:
+        return []
+    limit = Targets().jump_angle
+    found = jumps({n: ds[n].values for n in names}, status, ds["n_patches"].values,
+                  ds["contact_angle"].values, limit)
+    out = []
+    for n, flags in found.items():
+        k = np.flatnonzero(flags)
+        if k.size:
+            v = ds[n].values
+            where = ", ".join(f"{v[i]:.6g}..{v[i + 1]:.6g}" for i in k[:4])
+            out.append(f"  {n}: {k.size} of {flags.size} interval(s) ({where}"
+                       + (", ..." if k.size > 4 else "") + f") [{AXES[n].unit}]")
+    if out:
+        out.insert(0, f"contact jumps between neighbouring nodes (patch count, contact angle "
+                      f"step > {limit * 1e3:g} mrad, contact appearing): the interpolation "
+                      "there is coarse ('railcontact table check' measures it, 'railcontact "
+                      "table refine' adds nodes):")
+    return out
 
 
 def plot_table(path: str | Path, out: str | Path) -> Path:

@@ -14,7 +14,11 @@ An axis absent from ``[table]`` keeps the case's value. The axes are stored in t
 written; the last one is the fastest: a batch of work runs along it, each point started
 from the previous one's solution (:mod:`railcontact.table.build`). ``batch`` (an integer,
 optional) cuts the fastest axis into runs of at most that many points (default: the whole
-axis). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
+axis). ``out_of_range`` (optional) says what a value outside an axis gives, ``"status"``
+(the default) or ``"clamp"`` (:data:`POLICIES`), for every axis or per axis
+(``out_of_range = { load = "clamp" }``); it is kept in the store (not part of the table's
+identity: it does not change the values). Both wheels are solved unless the case's
+``[geometry]`` sets ``side``.
 
 All values in SI units; see :data:`AXES`.
 """
@@ -24,7 +28,7 @@ from __future__ import annotations
 import hashlib
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -61,8 +65,13 @@ AXES: dict[str, Axis] = {
     "load": Axis("normal", "load", None, "N", "vertical wheel load"),
 }
 """The axes a table may have."""
-OPTIONS = ("batch",)
+OPTIONS = ("batch", "out_of_range")
 """Keys of ``[table]`` that are not axes."""
+POLICIES = ("status", "clamp")
+"""What a value outside an axis gives (``out_of_range``): ``status`` (out of range: the
+table step's status 3 with zero outputs, an error from :class:`~.interpolate.ContactTable`)
+or ``clamp`` (the axis's nearest end node's value, the step's message saying so)."""
+DEFAULT_POLICY = "status"
 MAX_POINTS = 10_000_000
 """Largest number of grid points of a table."""
 
@@ -82,12 +91,21 @@ class TableSpec:
         The wheels solved: ``("left", "right")`` or one of them.
     batch
         Points per batch along the fastest axis.
+    out_of_range
+        Axis -> what a value outside it gives (``"status"`` or ``"clamp"``).
     """
 
     case: dict[str, Any]
     axes: dict[str, np.ndarray]
     sides: tuple[str, ...]
     batch: int
+    out_of_range: dict[str, str] = field(default_factory=dict)
+    """Axis -> policy (:data:`POLICIES`) of the axes given one; the others
+    :data:`DEFAULT_POLICY` (:meth:`policies`)."""
+
+    def policies(self) -> dict[str, str]:
+        """Every axis's out-of-range policy."""
+        return {n: self.out_of_range.get(n, DEFAULT_POLICY) for n in self.axes}
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -302,7 +320,36 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     batch = table.get("batch", shape[-1])
     if not isinstance(batch, int) or isinstance(batch, bool) or batch < 1:
         raise CaseError(f"[table] batch must be an integer >= 1, got {batch!r}")
-    return TableSpec(case=d, axes=axes, sides=sides, batch=min(batch, shape[-1]))
+    return TableSpec(case=d, axes=axes, sides=sides, batch=min(batch, shape[-1]),
+                     out_of_range=parse_policies(table.get("out_of_range"), names))
+
+
+def parse_policies(value: Any, names: list[str] | tuple[str, ...]) -> dict[str, str]:
+    """Axis -> out-of-range policy from ``[table] out_of_range`` (a policy for every axis,
+    or a table axis -> policy; None: none given).
+
+    Raises
+    ------
+    CaseError
+        For an unknown policy or an axis the table does not have.
+    """
+    if value is None:
+        return {}
+    if isinstance(value, str):
+        value = {n: value for n in names}
+    if not isinstance(value, dict):
+        raise CaseError(f"[table] out_of_range must be one of {', '.join(POLICIES)} or a "
+                        f"table axis -> policy, got {value!r}")
+    out = {}
+    for n, p in value.items():
+        if n not in names:
+            raise CaseError(f"[table] out_of_range: {n} is not an axis of the table "
+                            f"({', '.join(names)})")
+        if p not in POLICIES:
+            raise CaseError(f"[table] out_of_range {n}: the policy must be one of "
+                            f"{', '.join(POLICIES)}, got {p!r}")
+        out[n] = p
+    return out
 
 
 def load_spec(path: str | Path) -> TableSpec:

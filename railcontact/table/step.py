@@ -13,12 +13,15 @@ frames, as ``railcontact solve`` does). With ``kinematics`` the creepages are th
 contact point the table gives at the wheel's pose and load (first looked up at the middle of
 the creepage axes, then at the creepages found).
 
-Statuses: those of the table's nodes (the largest of the nodes used); a state outside the
-table's axes, or different from the case's value on an axis the table does not have, is
-out of range (all outputs of that wheel zero, the message says which input and the
-table's range: never clamped to the nearest node); a node not computed is out of range
-too. Penetration control (``vertical``) is not in a table (it is built by load), nor is a
-negative load: errors, as for bad input.
+Statuses: those of the table's nodes (the largest of the nodes used); a state outside an
+axis of the table whose out-of-range policy is ``status`` (the default), or different
+from the case's value on an axis the table does not have, is out of range (all outputs of
+that wheel zero, the message says which input and the table's range); on an axis whose
+policy is ``clamp`` (``[table] out_of_range``, kept in the store; or
+``ContactTable.open(path, out_of_range=...)``) the value is moved to the axis's nearest
+end and the wheel has that node's status, its message naming the axis clamped; a node
+not computed is out of range too. Penetration control (``vertical``) is not in a table
+(it is built by load), nor is a negative load: errors, as for bad input.
 
 Validity: a wheel with forces has its Y/Q (``derailment_quotient``), its ``penetration``
 and its ``validity`` bits checked against the limits as the exact step does
@@ -123,9 +126,12 @@ class TableContact:
 
     @classmethod
     def open(cls, path: str | Path, method: str = "linear",
-             settings: ContactSettings | None = None) -> TableContact:
-        """The table step of the store at ``path`` (arguments as the class's)."""
-        return cls(ContactTable.open(path), method, settings)
+             settings: ContactSettings | None = None,
+             out_of_range: dict[str, str] | str | None = None) -> TableContact:
+        """The table step of the store at ``path`` (arguments as the class's;
+        ``out_of_range`` overrides the store's policies, as
+        :meth:`ContactTable.open`)."""
+        return cls(ContactTable.open(path, out_of_range), method, settings)
 
     def reset(self) -> None:
         """Nothing to forget: a table has no memory between steps."""
@@ -179,7 +185,7 @@ class TableContact:
                 return None, OUT_OF_RANGE, (f"{name} = {v:g} {AXES[name].unit}: the "
                                             f"table has no {name} axis; it holds "
                                             f"{name} = {fixed} only")
-        x = [state[k] for k in self._take]
+        x, clamped = self.table.clamp([state[k] for k in self._take])
         if self.method == "linear":
             try:
                 vals, status = self.table.linear(x, j)
@@ -194,7 +200,12 @@ class TableContact:
             vals, status = np.array([r.values[n] for n in self.table.names]), r.status
         if status == NOT_COMPUTED:
             return None, OUT_OF_RANGE, "the table's nodes around this state are not computed"
-        return vals, status, ""
+        if not clamped:
+            return vals, status, ""
+        return vals, status, "; ".join(
+            f"{n} = {state[k]:g} {AXES[n].unit} clamped to {v:g}"
+            for n, k, v in ((n, self._take[a], x[a]) for a, n in enumerate(self.table.axes))
+            if n in clamped)
 
     def _wheel(self, side: str, pose: Pose, load: float, creep: tuple[float, float, float],
                kin: Kinematics | None) -> WheelContact:
@@ -224,7 +235,10 @@ class TableContact:
         vals, status, msg = self._lookup(j, (pose.lateral, pose.yaw, load, *creep))
         if vals is None:
             return WheelContact(side=side, status=status, message=msg)
-        return self._fill(side, vals, status, creep)
+        wheel = self._fill(side, vals, status, creep)
+        if msg:  # clamped (out_of_range = clamp)
+            wheel.message = f"{wheel.message}; {msg} (the table's out_of_range policy)"
+        return wheel
 
     def _fill(self, side: str, vals: np.ndarray, status: int, creep) -> WheelContact:
         (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl,

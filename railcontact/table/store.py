@@ -17,7 +17,8 @@ Layout (``railcontact table build``)::
              not complete and is computed again
     attrs    ``railcontact_table`` (the identity: case, axes, sides, batch, as JSON),
              ``flange_flank`` (S [m] and angle [rad] of the wheel flange's steepest
-             point, JSON), ``railcontact_version``, ``case_name``, ``complete`` (all batches done),
+             point, JSON), ``out_of_range`` (each axis's policy, JSON: the spec's),
+             ``railcontact_version``, ``case_name``, ``complete`` (all batches done),
              ``failed`` (JSON: point-wheels of each failed status, when a build ends),
              ``messages`` (JSON: the message of every point that is not ok, gathered
              when a build ends)
@@ -57,6 +58,8 @@ FLANGE = "flange_flank"
 """The attribute holding the wheel's flange (:func:`wheel_flange`, JSON)."""
 MESSAGES = "messages"
 """The group of the message groups (and the root attribute that gathers them)."""
+POLICY_ATTR = "out_of_range"
+"""The root attribute holding each axis's out-of-range policy (JSON)."""
 FAILED_ATTR = "failed"
 """The root attribute counting the failed point-wheels by status (JSON)."""
 CHUNK_VALUES = 1 << 17
@@ -169,7 +172,8 @@ def create_store(path: str | Path, spec: TableSpec) -> None:
         root.attrs.update({
             IDENTITY: json.dumps(spec.identity()), "railcontact_version": __version__,
             FLANGE: json.dumps(wheel_flange(spec.case)),
-            "case_name": spec.case.get("name", "case"), "complete": 0, "messages": "[]"})
+            "case_name": spec.case.get("name", "case"), "complete": 0, "messages": "[]",
+            POLICY_ATTR: json.dumps(spec.policies())})
 
 
 def batch_key(index) -> str:
@@ -199,6 +203,8 @@ class Store:
                                    f"{', '.join(lacking)}: it cannot be resumed; build the "
                                    "table anew (another output, or remove it)")
         self.arrays = {n: self.group[n] for n in names}  # opened once: metadata read once
+        if self.group.attrs.get(POLICY_ATTR) != json.dumps(spec.policies()):
+            self.group.attrs[POLICY_ATTR] = json.dumps(spec.policies())  # the spec's now
         self.written = False
         self.messages = self.group.require_group(MESSAGES)
         # the batches that have messages somewhere: a write of one of them must say it
@@ -218,7 +224,8 @@ class Store:
 
     def write_batches(self, batches: list[tuple[tuple[int, ...], dict[str, Any],
                                                 list[dict[str, Any]]]]) -> None:
-        """Write batches ``(index, result, messages)``: their arrays, each chunk they touch
+        """Write batches ``(index, result, messages)`` (a result with ``fast``: only its
+        points at those indices along the fastest axis): their arrays, each chunk they touch
         read, filled and written once; then the ``messages`` of their points that are not
         ok; then mark them done (the order that leaves a cut-off write incomplete)."""
         if not batches:
@@ -240,7 +247,10 @@ class Store:
                 for index, result, _ in items:
                     pts = self.spec.batch_points(index)
                     at = tuple(i - a for i, a in zip(index[:nslow], lo, strict=False))
-                    block[(*at, slice(pts[0][-1], pts[-1][-1] + 1))] = result[name]
+                    fast = result.get("fast")  # some of the batch's points (a refinement)
+                    where = (slice(pts[0][-1], pts[-1][-1] + 1) if fast is None else
+                             np.asarray(fast, dtype=np.intp))
+                    block[(*at, where)] = result[name]
                 arr[region] = block
         keys = [batch_key(ix) for ix, _, _ in batches]
         said = [m for _, _, msgs in batches for m in msgs]

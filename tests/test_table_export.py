@@ -1,0 +1,117 @@
+"""``railcontact table export``: a table as netCDF (read back by xarray) and as CSV (read
+back by the standard library's csv module), value for value against the store (read by
+zarr, as :class:`ContactTable` reads it)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("xarray")
+pytest.importorskip("zarr")
+
+from railcontact.cli import main  # noqa: E402
+from railcontact.table import ContactTable, parse_spec  # noqa: E402
+from railcontact.table.solve import solve_batch  # noqa: E402
+from railcontact.table.store import Store, create_store  # noqa: E402
+from railcontact.table.variables import COUNTS, QUANTITIES  # noqa: E402
+
+RAW = {"name": "export", "material": {"young": 206e9, "poisson": 0.28},
+       "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                    "inclination": 0.024994793618920156},
+       "grid": {"dx": 0.002, "dy": 0.002}, "normal": {"load": 80e3},
+       "tangential": {"creepage": [0.0, 0.0, 0.0], "friction": 0.3},
+       "table": {"lateral_displacement": {"values": [0.0, 0.003]},
+                 "creepage_y": [0.0, 0.001, 2], "out_of_range": {"creepage_y": "clamp"}}}
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    """The 2 x 2 table (both wheels) built in this process; one value made NaN (as a
+    point without contact has its geometry)."""
+    import zarr
+
+    spec = parse_spec(RAW)
+    out = tmp_path_factory.mktemp("export") / "t.zarr"
+    create_store(out, spec)
+    store = Store(out, spec)
+    for ix in np.ndindex(*spec.batch_shape):
+        values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
+                  for p in spec.batch_points(ix)]
+        store.write_batches([(ix, solve_batch(spec.case, spec.sides, values), [])])
+    store.finish(True)
+    arr = zarr.open_group(str(out), mode="r+")["contact_angle"]
+    a = arr[...]
+    a[1, 0, 1] = np.nan
+    arr[...] = a
+    return spec, out
+
+
+def test_netcdf_reads_back_in_xarray(table, tmp_path, capsys):
+    import xarray as xr
+
+    spec, out = table
+    nc = tmp_path / "t.nc"
+    assert main(["table", "export", str(out), str(nc)]) == 0
+    assert f"written to {nc}" in capsys.readouterr().out
+    t = ContactTable.open(out)
+    with xr.open_dataset(nc) as ds:
+        assert list(ds["normal_force"].dims) == ["lateral_displacement", "creepage_y", "side"]
+        assert ds["side"].values.tolist() == ["left", "right"]
+        for n in spec.names:
+            assert ds[n].values.tolist() == spec.axes[n].tolist()
+        assert ds["normal_force"].attrs["units"] == "N"
+        assert json.loads(ds.attrs["out_of_range"]) == {"lateral_displacement": "status",
+                                                        "creepage_y": "clamp"}
+        assert json.loads(ds.attrs["railcontact_table"])["axes"]["creepage_y"] == [0.0, 0.001]
+        assert ds["status"].dtype == np.int8 and "batch_done" not in ds
+        for index in np.ndindex(*spec.shape):
+            for j, side in enumerate(spec.sides):
+                node = t.node(index, side)
+                for q in QUANTITIES:
+                    got = float(ds[q.name].values[(*index, j)])
+                    want = node[q.name]
+                    assert got == want or (math.isnan(got) and math.isnan(want)), q.name
+                assert int(ds["status"].values[(*index, j)]) == node.status
+        assert math.isnan(float(ds["contact_angle"].values[1, 0, 1]))
+        assert ds["n_patches"].values.min() >= 1
+
+
+def test_csv_is_one_row_per_node_and_wheel(table, tmp_path):
+    spec, out = table
+    path = tmp_path / "t.csv"
+    assert main(["table", "export", str(out), str(path)]) == 0
+    t = ContactTable.open(out)
+    with path.open(newline="") as f:
+        rows = list(csv.reader(f))
+    head = rows[0]
+    assert head[:3] == ["lateral_displacement", "creepage_y", "side"]
+    assert head[3:] == [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS]
+    assert len(rows) == 1 + spec.size * 2
+    seen = set()
+    for row in rows[1:]:
+        rec = dict(zip(head, row, strict=True))
+        index = tuple(int(np.flatnonzero(spec.axes[n] == float(rec[n]))[0])
+                      for n in spec.names)
+        seen.add((index, rec["side"]))
+        node = t.node(index, rec["side"])
+        for q in QUANTITIES:
+            got, want = float(rec[q.name]), node[q.name]
+            assert got == want or (math.isnan(got) and math.isnan(want)), q.name
+        assert int(rec["status"]) == node.status
+    assert len(seen) == spec.size * 2
+    assert rows[1 + 2 * 2 + 1][head.index("contact_angle")] == "nan"  # node (1, 0), right
+
+
+def test_bad_export_is_an_error(table, tmp_path, capsys):
+    _, out = table
+    assert main(["table", "export", str(out), str(tmp_path / "t.txt")]) == 2
+    assert "cannot tell the format" in capsys.readouterr().err
+    assert main(["table", "export", str(out), str(tmp_path / "no" / "t.nc")]) == 2
+    assert main(["table", "export", str(tmp_path / "none.zarr"), str(tmp_path / "t.nc")]) == 2
+    assert main(["table", "export", str(out), str(tmp_path / "t.txt"), "--format",
+                 "csv"]) == 0
