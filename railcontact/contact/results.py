@@ -134,7 +134,11 @@ class PatchSolution:
     start: WarmStart | None = field(default=None, repr=False, compare=False)
     """The start the last normal solve was given (:class:`~.start.WarmStart`); its
     traction starts the patch's tangential BEM when no earlier load pass does. Not
-    reported."""
+    reported, and not pickled (a start holds the functions of its solve: a pickled
+    solution is its values)."""
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if k != "start"}
 
     @property
     def estimate_error(self) -> EstimateError | None:
