@@ -59,6 +59,7 @@ import numba
 import numpy as np
 
 from ..errors import RailContactError, check_positive
+from ..halfspace.ellipse import hertz_penetration, lateral_factor, shape_table
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz, semi_axes
 from ..halfspace.influence import _zz_antiderivative, zz_displacement_centred
@@ -72,6 +73,10 @@ SCALED_LOAD = 1e-4
 """INFCON's load secant stops when an evaluation carries the load within this share, and
 its pressure is scaled to the load (the strips' equations then hold for the interpenetration
 scaled by as much; each further evaluation solves them again)."""
+START_PASSES = 3
+"""Passes of INFCON's start of the load secant: Hertz's penetration for the curvature
+``A(0)`` along and, across, the parabola's ``B_e = delta / w^2`` through the ends of the
+rigid overlap at the penetration before (:func:`_equivalent_hertz`)."""
 SEARCH_SAMPLES = 801
 """Points from one end of the virtual patch to the other at which its largest half
 length is sought (the estimate grid's extent along x)."""
@@ -269,9 +274,10 @@ def _strip_influence(shape, dx, dy):  # pragma: no cover - compiled
         for i in range((nx + 1) // 2):
             mirror = nx - 1 - i
             w = shape[i, k] + shape[mirror, k] if mirror != i else shape[i, k]
-            if w != 0.0:
+            if w != 0.0:  # (a slice: a loop on its plain index runs vectorised)
+                c = coef[i, ny - 1 - k:2 * ny - 1 - k]
                 for j in range(ny):
-                    column[j] += w * coef[i, j - k + ny - 1]
+                    column[j] += w * c[j]
         for j in range(ny):
             out[j, k] = column[j]
     return out
@@ -295,11 +301,13 @@ def _solved(a, b):  # pragma: no cover - compiled
                 a[k, j], a[piv, j] = a[piv, j], a[k, j]
             b[k], b[piv] = b[piv], b[k]
         d = a[k, k]
+        pivot_row = a[k, k + 1:]
         for i in range(k + 1, n):
             m = a[i, k] / d
             if m != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= m * a[k, j]
+                row = a[i, k + 1:]  # (slices: the loop on their plain index vectorised)
+                for j in range(n - k - 1):
+                    row[j] -= m * pivot_row[j]
                 b[i] -= m * b[k]
     x = np.empty(n)
     for k in range(n - 1, -1, -1):
@@ -482,9 +490,14 @@ def _shape(method: str, samples: tuple, a0: float, delta: float
            ) -> tuple[float, np.ndarray, np.ndarray]:
     """The virtual-penetration factor, and the virtual penetrations [m] and stretches of
     the half lengths on the two sides (s < 0, s >= 0) at the penetration ``delta`` [m]
-    (KP: 0.55, 0.55 delta and 1 on both; INFCON: see the module doc)."""
+    (KP: 0.55, 0.55 delta and 1 on both; INFCON: see the module doc, in one compiled
+    pass, :func:`_infcon_shape`; where that gives no factor, the same with
+    :func:`infcon_factor`, which raises or searches beyond the compiled table)."""
     if method == "kp":
         return KP_FACTOR, np.full(2, KP_FACTOR * delta), np.ones(2)
+    factor, d0, stretch = _infcon_shape(samples[0], samples[1], a0, delta, *shape_table())
+    if factor == factor:  # (not NaN)
+        return factor, d0, stretch
     lo, hi = _half_width_at(samples[0], samples[1], delta)
     w = 0.5 * (hi - lo)
     if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
@@ -497,6 +510,54 @@ def _shape(method: str, samples: tuple, a0: float, delta: float
         sides = np.full(2, factor)
     d0 = sides * delta
     return factor, d0, (1 - factor) * delta / d0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _infcon_shape(s, f, a0, delta, v_nodes, w_nodes, slopes):  # pragma: no cover - compiled
+    """INFCON's :func:`_shape` (factor, d0, stretch) with the compiled
+    :func:`~railcontact.halfspace.ellipse.lateral_factor` (the table of
+    :func:`~railcontact.halfspace.ellipse.shape_table`); the factor NaN where the rigid
+    overlap has no width or a factor is not found."""
+    lo, hi = _half_width_at(s, f, delta)
+    w = 0.5 * (hi - lo)
+    d0 = np.empty(2)
+    stretch = np.empty(2)
+    if not w > 0.0:
+        return math.nan, d0, stretch
+    factor = lateral_factor(a0, delta / (w * w), v_nodes, w_nodes, slopes)
+    if lo < 0.0 < hi:
+        d0[0] = lateral_factor(a0, delta / (lo * lo), v_nodes, w_nodes, slopes)
+        d0[1] = lateral_factor(a0, delta / (hi * hi), v_nodes, w_nodes, slopes)
+    else:
+        d0[0] = factor
+        d0[1] = factor
+    if math.isnan(d0[0]) or math.isnan(d0[1]):
+        factor = math.nan
+    for k in range(2):
+        d0[k] *= delta
+        stretch[k] = (1.0 - factor) * delta / d0[k]
+    return factor, d0, stretch
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _equivalent_hertz(s, f, a0, e_star, load, delta, passes, v_nodes, w_nodes, slopes
+                      ):  # pragma: no cover - compiled
+    """Hertz's penetration [m] under ``load`` [N] for the curvatures ``a0`` along and
+    ``B_e = delta / w^2`` across (``w`` the half width of the rigid overlap ``f <=
+    delta``, :func:`_half_width_at`; the curvatures of INFCON's factor), ``passes`` times
+    from the penetration ``delta`` [m] (the last finite one where the overlap has no
+    width or Hertz no solution): the penetration at which INFCON, exact for a quadratic
+    gap, carries about the load (its load secant's start)."""
+    for _ in range(passes):
+        lo, hi = _half_width_at(s, f, delta)
+        w = 0.5 * (hi - lo)
+        if not w > 0.0:
+            break
+        d = hertz_penetration(a0, delta / (w * w), e_star, load, v_nodes, w_nodes, slopes)
+        if not (d > 0.0 and d < math.inf):
+            break
+        delta = d
+    return delta
 
 
 def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float, nx: int,
@@ -594,6 +655,8 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     k = min(k0 + 5, len(s) - 1) if k0 + 1 < len(s) else max(k0 - 5, 0)
     b0 = max(float(f[k] / s[k] ** 2), 1e-9) if s[k] != 0 else 1.0
     d1 = hertz(a0, b0, pair, load=load).penetration
+    if method == "infcon":  # (KP's secant starts as it did)
+        d1 = _equivalent_hertz(s, f, a0, pair.e_star, load, d1, START_PASSES, *shape_table())
     e1 = _evaluate(method, samples, a0, d1, scale, nx, ny)
     d2 = d1 * (load / e1[force]) ** (2 / 3)
     for _ in range(30):
