@@ -1,9 +1,12 @@
 """Virtual-penetration estimates of the normal contact: Kik–Piotrowski and INFCON.
 
 Both work on the gap ``h(x, s) = f(s) + A(s) x^2`` of a patch (``f`` the lateral gap with
-minimum 0 at ``s = 0``, ``A(s)`` the longitudinal curvature) and a normal penetration
-``delta``. The patch is the region of *virtual* interpenetration: strip ``s`` is in
-contact for ``|x| <= x_l(s)``, with the pressure semi-elliptic along x,
+minimum 0, ``A(s)`` the longitudinal curvature) and a normal penetration ``delta``, with
+``s`` measured from the gap's minimum, the point of maximum interpenetration (samples given
+in another frame, e.g. from CONTACT's reference point, are read from the zero of the gap
+nearest their origin: :attr:`NormalEstimate.offset`). The patch is the region of
+*virtual* interpenetration: strip ``s`` is in contact for ``|x| <= x_l(s)``, with the
+pressure semi-elliptic along x,
 
     p(x, s) = c(s) sqrt(x_l(s)^2 - x^2),
 
@@ -113,6 +116,10 @@ class NormalEstimate:
     message: str
     wall_time: float
     half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
+    offset: float = 0.0
+    """The lateral coordinate [m] of the gap's minimum in the frame of the samples given,
+    the model's ``s = 0`` (:func:`_offset`: 0 where the gap at the sample nearest ``s =
+    0`` is 0). The grid, the pressure and the half lengths are in the samples' frame."""
     amplitude: np.ndarray = field(repr=False, default=None)
     """The pressure's amplitude [Pa/m] on each strip (row) of the estimate grid, (ny,):
     ``p(x, y_j) = amplitude[j] sqrt(x_l(y_j)^2 - x^2)`` (one value for all strips in
@@ -137,8 +144,10 @@ class NormalEstimate:
         if self.shape_data is None:
             return self.pressure_at(*grid.mesh())
         _, _, ylo, yhi = self.grid.bounds
-        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.grid.y,
-                            self.amplitude, slopes_of(self.grid.y, self.amplitude))
+        o = self.offset  # (the compiled pass in the model's frame)
+        ys = self.grid.y - o
+        return _pressure_on(grid.x, grid.y - o, *self.shape_data, ylo - o, yhi - o, ys,
+                            self.amplitude, slopes_of(ys, self.amplitude))
 
 
 _UNIT_PAIR = ElasticPair(shear=1.0, poisson=0.0)
@@ -588,23 +597,53 @@ def _scaled(evaluation: tuple, ratio: float) -> tuple:
 
 
 def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: int, ny: int,
-              t0: float) -> NormalEstimate:
-    """The :class:`NormalEstimate` of an :func:`_evaluate` at ``delta`` [m]."""
+              t0: float, offset: float = 0.0) -> NormalEstimate:
+    """The :class:`NormalEstimate` of an :func:`_evaluate` at ``delta`` [m] (``samples`` in
+    the model's frame, ``offset`` [m] its origin in the samples' frame)."""
     factor, d0, stretch, lo, hi, xmax, p, amplitude, force, pmax, count = evaluation
     s, f, a_of_s = samples[:3]
 
     def x_half(sv):
-        k = (np.asarray(sv) >= 0).astype(int)
+        sv = np.asarray(sv) - offset
+        k = (sv >= 0).astype(int)
         g = d0[k] - np.interp(sv, s, f)
         return np.sqrt(np.clip(stretch[k] * g / np.interp(sv, s, a_of_s), 0, None))
 
-    grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
+    grid = Grid.from_bounds(-xmax, xmax, lo + offset, hi + offset, nx, ny)
     return NormalEstimate(grid=grid, pressure=p, contact=p > 0, force=float(force),
                           penetration=delta, max_pressure=float(pmax),
                           area=float(count * grid.element_area), factor=factor,
                           method=method, message=f"{method}: factor {factor:.4f}",
                           wall_time=time.perf_counter() - t0, half_length=x_half,
-                          amplitude=amplitude, shape_data=(*samples, d0, stretch))
+                          amplitude=amplitude, shape_data=(*samples, d0, stretch),
+                          offset=offset)
+
+
+def _offset(s: np.ndarray, f: np.ndarray) -> float:
+    """Where [m] the virtual patch is centred: the patch's smallest gap, the sample nearest
+    ``s = 0`` whose gap is 0 or less (the lower ``s`` of two as near; 0 where the sample
+    nearest ``s = 0`` is one, or none is). The samples of a patch solved in the frame at
+    CONTACT's reference point (the weighted centre of its own run of interpenetration) have
+    their gap shifted to 0 at the run's lowest sample, which need not be at ``s = 0``;
+    those of one of several patches may be below 0 in another patch's run, further out."""
+    k = _nearest_floor(f, int(np.argmin(np.abs(s))))
+    return float(s[k]) if k >= 0 else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_floor(f, k0):  # pragma: no cover - compiled
+    """The index nearest ``k0`` with ``f <= 0`` (the lower of two as near); -1 where it is
+    ``k0`` itself or there is none."""
+    if f[k0] <= 0.0:
+        return -1
+    for step in range(1, f.size):
+        if k0 - step >= 0 and f[k0 - step] <= 0.0:
+            return k0 - step
+        if k0 + step < f.size and f[k0 + step] <= 0.0:
+            return k0 + step
+        if k0 - step < 0 and k0 + step >= f.size:
+            break
+    return -1
 
 
 def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray,
@@ -618,8 +657,10 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     method
         "kp" or "infcon".
     s, f, a_of_s
-        Lateral coordinate [m] (increasing, through 0), lateral gap f(s) [m] (minimum 0 at
-        s = 0) and longitudinal curvature A(s) [1/m] of the patch.
+        Lateral coordinate [m] (increasing), lateral gap f(s) [m] (minimum 0) and
+        longitudinal curvature A(s) [1/m] of the patch; the model is centred on the
+        gap's zero nearest ``s = 0`` (:attr:`NormalEstimate.offset`), its grid and
+        pressure are in the frame of ``s``.
     pair
         Combined elastic parameters.
     penetration, load
@@ -640,13 +681,17 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
         if isinstance(n, bool) or not (float(n).is_integer() and n >= 1):
             raise RailContactError(f"estimate grid {name} must be a positive integer, got {n!r}")
     nx, ny = int(nx), int(ny)
+    offset = _offset(s, f)
+    if offset != 0.0:  # (the model's frame: s from the gap's minimum)
+        s = s - offset
     samples = (s, f, a_of_s, slopes_of(s, f), slopes_of(s, a_of_s))
     a0 = float(np.interp(0.0, s, a_of_s))
     scale = (1 - pair.poisson) / (math.pi * pair.shear)
     if penetration is not None:
         delta = check_positive("penetration", penetration, "m")
         return _estimate(method, samples, delta,
-                         _evaluate(method, samples, a0, delta, scale, nx, ny), nx, ny, t0)
+                         _evaluate(method, samples, a0, delta, scale, nx, ny), nx, ny, t0,
+                         offset)
     load = check_positive("load", load, "N")
     # secant on delta, started from Hertz with the curvatures at s = 0 (each step's
     # patch evaluated; the estimate formed of the last)
@@ -673,4 +718,4 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
         d2 = d2 * (load / e2[force]) ** (1 / max(slope, 0.5))
     else:  # not met in 30 steps: the last evaluation (the step after it not evaluated)
         d2 = d1
-    return _estimate(method, samples, d2, e2, nx, ny, t0)
+    return _estimate(method, samples, d2, e2, nx, ny, t0, offset)
