@@ -699,9 +699,14 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     k0 = int(np.argmin(np.abs(s)))
     k = min(k0 + 5, len(s) - 1) if k0 + 1 < len(s) else max(k0 - 5, 0)
     b0 = max(float(f[k] / s[k] ** 2), 1e-9) if s[k] != 0 else 1.0
-    d1 = hertz(a0, b0, pair, load=load).penetration
     if method == "infcon":  # (KP's secant starts as it did)
-        d1 = _equivalent_hertz(s, f, a0, pair.e_star, load, d1, START_PASSES, *shape_table())
+        table = shape_table()
+        d1 = hertz_penetration(a0, b0, pair.e_star, load, *table)  # (compiled: NaN where
+        if not d1 > 0:  # hertz() raises or searches beyond the table)
+            d1 = hertz(a0, b0, pair, load=load).penetration
+        d1 = _equivalent_hertz(s, f, a0, pair.e_star, load, d1, START_PASSES, *table)
+    else:
+        d1 = hertz(a0, b0, pair, load=load).penetration
     e1 = _evaluate(method, samples, a0, d1, scale, nx, ny)
     d2 = d1 * (load / e1[force]) ** (2 / 3)
     for _ in range(30):
