@@ -277,9 +277,11 @@ def test_an_unconverged_load_secant_gives_its_last_evaluation_whole(monkeypatch)
     calls = []
     evaluate = virtual._evaluate
 
-    def off(method, samples, a0, delta, *args):  # a force always 0.1 % off the model's
+    off_by = 10 * virtual.SCALED_LOAD  # (more than the secant's stop accepts)
+
+    def off(method, samples, a0, delta, *args):  # a force always off the model's
         out = list(evaluate(method, samples, a0, delta, *args))
-        out[8] *= 1.001 if len(calls) % 2 else 0.999
+        out[8] *= 1 + off_by if len(calls) % 2 else 1 - off_by
         calls.append((delta, out[8]))
         return tuple(out)
 

@@ -72,10 +72,12 @@ from ..halfspace.sums import numpy_sum
 
 KP_FACTOR = 0.55
 METHODS = ("kp", "infcon")
-SCALED_LOAD = 1e-4
+SCALED_LOAD = 1e-3
 """INFCON's load secant stops when an evaluation carries the load within this share, and
 its pressure is scaled to the load (the strips' equations then hold for the interpenetration
-scaled by as much; each further evaluation solves them again)."""
+scaled by as much, the outline for a penetration 2/3 as much off; each further evaluation
+solves them again): the share of the normal BEM's default tolerance ε_n, below which the
+start's load error is lost in the BEM's own."""
 START_PASSES = 3
 """Passes of INFCON's start of the load secant: Hertz's penetration for the curvature
 ``A(0)`` along and, across, the parabola's ``B_e = delta / w^2`` through the ends of the
