@@ -5,10 +5,11 @@ the warm (``previous+estimate``) and cold (``none``) starts and writes, per step
 wheelset's status and for each wheel its status, normal and tangential iterations, load
 passes, forces, moments, area, peak pressure, approach, slip-area ratio, Y/Q and each
 patch's normal force, penetration, iterations, pressure sum, creep forces, spin moment and
-traction sum. ``compare A.npz B.npz`` prints, per start, how many values differ and the
-largest relative difference (0 for a change that keeps every bit).
+traction sum. ``--modes`` chooses the starts (e.g. ``estimate``, every step from the
+normal estimate alone). ``compare A.npz B.npz`` prints, per start in both, how many values
+differ and the largest relative difference (0 for a change that keeps every bit).
 
-Usage: python scripts/step_fingerprint.py dump OUT.npz [--steps 80]
+Usage: python scripts/step_fingerprint.py dump OUT.npz [--steps 80] [--modes a,b]
        python scripts/step_fingerprint.py compare A.npz B.npz
 """
 
@@ -59,7 +60,7 @@ def fingerprint(mode: str, steps: int) -> np.ndarray:
 
 
 def compare(a: dict, b: dict) -> None:
-    for mode in MODES:
+    for mode in [m for m in a if m in b]:
         x, y = a[mode], b[mode]
         if x.shape != y.shape:
             print(f"{mode}: different shapes {x.shape} and {y.shape}")
@@ -76,12 +77,13 @@ def main() -> None:
     d = sub.add_parser("dump")
     d.add_argument("out", type=Path)
     d.add_argument("--steps", type=int, default=80)
+    d.add_argument("--modes", default=",".join(MODES), help="starts, comma-separated")
     c = sub.add_parser("compare")
     c.add_argument("a", type=Path)
     c.add_argument("b", type=Path)
     args = ap.parse_args()
     if args.command == "dump":
-        np.savez(args.out, **{m: fingerprint(m, args.steps) for m in MODES})
+        np.savez(args.out, **{m: fingerprint(m, args.steps) for m in args.modes.split(",")})
     else:
         compare(dict(np.load(args.a)), dict(np.load(args.b)))
 

@@ -277,9 +277,11 @@ def test_an_unconverged_load_secant_gives_its_last_evaluation_whole(monkeypatch)
     calls = []
     evaluate = virtual._evaluate
 
-    def off(method, samples, a0, delta, *args):  # a force always 0.1 % off the model's
+    off_by = 10 * virtual.SCALED_LOAD  # (more than the secant's stop accepts)
+
+    def off(method, samples, a0, delta, *args):  # a force always off the model's
         out = list(evaluate(method, samples, a0, delta, *args))
-        out[8] *= 1.001 if len(calls) % 2 else 0.999
+        out[8] *= 1 + off_by if len(calls) % 2 else 1 - off_by
         calls.append((delta, out[8]))
         return tuple(out)
 
@@ -288,3 +290,56 @@ def test_an_unconverged_load_secant_gives_its_last_evaluation_whole(monkeypatch)
     est = virtual_penetration("infcon", s, 5 * s**2, np.full_like(s, 2.0), PAIR, load=5e4)
     assert len(calls) == 31  # the first and 30 secant steps, none converged
     assert (est.penetration, est.force) == calls[-1], (est.penetration, calls[-1][0])
+
+
+def test_compiled_elliptic_integrals_are_scipys():
+    """K(m) and (K - E)/K by the arithmetic-geometric mean against scipy's integrals (an
+    independent implementation), from a circle to a slender ellipse; the shape equation
+    against hertz's (Carlson's integrals)."""
+    from scipy.special import ellipe, ellipk
+
+    from railcontact.halfspace.ellipse import elliptic_k_excess, shape_ratio
+    from railcontact.halfspace.hertz import _shape_ratio
+
+    assert elliptic_k_excess(0.0) == (math.pi / 2, 0.0)
+    for m in (1e-14, 1e-8, 1e-3, 0.1, 0.5, 0.9, 0.999, 1 - 1e-8):
+        k, excess = elliptic_k_excess(m)
+        assert k == pytest.approx(ellipk(m), rel=1e-14)
+        assert excess == pytest.approx((ellipk(m) - ellipe(m)) / ellipk(m), rel=1e-12)
+        assert shape_ratio(m) == pytest.approx(_shape_ratio(m), rel=1e-12)
+
+
+def test_compiled_lateral_factor_and_penetration_are_hertzs():
+    """INFCON's factor chi = B b^2 / delta and Hertz's penetration under a load, compiled,
+    against hertz() (scipy's integrals) over curvature ratios 1e-4 .. 1e4, both ways
+    round; a circle's chi is 1/2; no value (NaN) for curvatures that are not positive."""
+    from railcontact.halfspace.ellipse import hertz_penetration, lateral_factor, shape_table
+
+    table = shape_table()
+    unit = ElasticPair(shear=1.0, poisson=0.0)
+    for A in (0.5, 2.2, 10.0):
+        for B in A * np.geomspace(1e-4, 1e4, 97):
+            h = hertz(A, B, unit, penetration=1.0)
+            assert lateral_factor(A, B, *table) == pytest.approx(B * h.b**2, rel=1e-12)
+            for load in (10.0, 8e4):
+                d = hertz(A, B, PAIR, load=load).penetration
+                assert hertz_penetration(A, B, PAIR.e_star, load, *table) == pytest.approx(
+                    d, rel=1e-12)
+    assert lateral_factor(3.0, 3.0, *table) == pytest.approx(0.5, rel=1e-14)
+    for A, B in ((0.0, 1.0), (1.0, -1.0), (math.inf, 1.0), (math.nan, 1.0)):
+        assert math.isnan(lateral_factor(A, B, *table))
+        assert math.isnan(hertz_penetration(A, B, PAIR.e_star, 1e4, *table))
+
+
+def test_equivalent_hertz_start_is_hertz_for_a_quadratic_gap():
+    """INFCON's secant start: for f = B s^2 the rigid overlap's parabola is the gap itself
+    (B_e = B), so one pass from any penetration gives Hertz's penetration under the load."""
+    from railcontact.halfspace.ellipse import shape_table
+    from railcontact.normal.virtual import _equivalent_hertz
+
+    s = np.linspace(-0.02, 0.02, 4001)
+    for A, B in ((1.0, 5.0), (5.0, 1.0), (2.0, 2.0)):
+        hz = hertz(A, B, PAIR, load=6e4)
+        d = _equivalent_hertz(s, B * s**2, A, PAIR.e_star, 6e4, 3 * hz.penetration, 1,
+                              *shape_table())
+        assert d == pytest.approx(hz.penetration, rel=1e-5)  # (w read off the samples)

@@ -1,6 +1,7 @@
 """Kik–Piotrowski and INFCON normal estimates, and re-meshing."""
 
 import copy
+import math
 
 import numpy as np
 import pytest
@@ -37,6 +38,40 @@ def test_infcon_is_hertz_for_quadratic_gaps(A, B):
     x = np.linspace(-hz.a, hz.a, 41)
     assert np.allclose(e.pressure_at(x, 0.0 * x), hz.pressure(x, 0.0 * x),
                        atol=5e-3 * hz.max_pressure)
+
+
+@pytest.mark.parametrize("method", ["infcon", "kp"])
+def test_estimate_centred_on_the_gaps_minimum_off_the_samples_origin(method):
+    """Samples whose origin is not at the gap's minimum (a patch in the frame at CONTACT's
+    reference point): the model is centred on the smallest gap, so for a quadratic gap
+    B (s - c)^2 whose rigid overlap at the origin is less than the virtual penetration
+    (B c^2 = 1.5 delta) INFCON is Hertz's pressure about (0, c), and KP the same estimate
+    as for the gap centred on the origin, moved by c; its grid and pressure are in the
+    samples' frame."""
+    A, B, delta, c = 1.0, 5.0, 1e-4, math.sqrt(1.5e-4 / 5.0)
+    s, f, a = quadratic(A, B, half=0.03, n=6001)
+    f_off = B * (s - c) ** 2
+    f_off -= f_off.min()  # (minimum 0, at the sample nearest c)
+    e = virtual_penetration(method, s, f_off, a, PAIR, penetration=delta, nx=60, ny=60)
+    assert e.offset == pytest.approx(c, abs=1e-5)  # (the sample nearest c)
+    centred = virtual_penetration(method, s - e.offset, f_off, a, PAIR, penetration=delta,
+                                  nx=60, ny=60)
+    assert e.force == pytest.approx(centred.force, rel=1e-12)
+    lo, hi = e.grid.bounds[2:]
+    assert (lo - e.offset, hi - e.offset) == pytest.approx(centred.grid.bounds[2:], abs=1e-12)
+    g = Grid.from_bounds(-0.01, 0.01, -0.01, 0.02, 48, 72)
+    moved = Grid.from_bounds(-0.01, 0.01, -0.01 - e.offset, 0.02 - e.offset, 48, 72)
+    np.testing.assert_allclose(e.pressure_on(g), centred.pressure_on(moved), rtol=1e-9,
+                               atol=1e-9 * e.max_pressure)
+    if method == "infcon":  # Hertz about (0, c)
+        hz = hertz(A, B, PAIR, penetration=delta)
+        assert e.force == pytest.approx(hz.load, rel=5e-3)
+        X, Y = g.mesh()
+        np.testing.assert_allclose(e.pressure_on(g), hz.pressure(X, Y - e.offset),
+                                   atol=0.02 * hz.max_pressure)
+    e_load = virtual_penetration(method, s, f_off, a, PAIR, load=e.force, nx=60, ny=60)
+    assert e_load.offset == e.offset
+    assert e_load.penetration == pytest.approx(delta, rel=1e-3)
 
 
 def test_infcon_strips_solve_the_strip_wise_boussinesq_equations():
@@ -273,3 +308,20 @@ def test_remesh_on_a_shared_lattice_is_the_interpolation():
         assert both.shape == (2, *dst.shape) and not np.shares_memory(both, v2)
         for k in range(2):
             np.testing.assert_array_equal(both[k], remesh(v2[k], src, dst))
+
+
+def test_infcon_in_the_reference_frame_between_two_lobes(root):
+    """S1002/60E1 at +5.48 mm, 83.3 kN, in the frame at CONTACT's reference point: the
+    tread and the flange root have joined into one patch of two lobes, its reference point
+    (the weighted centre) on the gap's hump between them, 68 um above the patch's smallest
+    gap, more than INFCON's virtual penetration. The estimate is centred on the gap's
+    minimum (4.2 mm away) and starts the BEM within 5 % L1 of its converged pressure."""
+    c = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
+    c["geometry"].update(lateral_displacement=5.48e-3, patch_frame="reference")
+    c["grid"] = {"nx": 64, "ny": 64}
+    c["normal"] = {"load": 83.3e3, "tolerance": 1e-3, "estimate": "infcon"}
+    (p,) = rc.solve(c).patches
+    cp = p.geometry
+    assert cp.f[np.argmin(np.abs(cp.s))] > 5e-5
+    assert p.estimate == "infcon"
+    assert p.estimate_error.l1 < 0.05

@@ -1,9 +1,12 @@
 """Virtual-penetration estimates of the normal contact: Kik–Piotrowski and INFCON.
 
 Both work on the gap ``h(x, s) = f(s) + A(s) x^2`` of a patch (``f`` the lateral gap with
-minimum 0 at ``s = 0``, ``A(s)`` the longitudinal curvature) and a normal penetration
-``delta``. The patch is the region of *virtual* interpenetration: strip ``s`` is in
-contact for ``|x| <= x_l(s)``, with the pressure semi-elliptic along x,
+minimum 0, ``A(s)`` the longitudinal curvature) and a normal penetration ``delta``, with
+``s`` measured from the gap's minimum, the point of maximum interpenetration (samples given
+in another frame, e.g. from CONTACT's reference point, are read from the zero of the gap
+nearest their origin: :attr:`NormalEstimate.offset`). The patch is the region of
+*virtual* interpenetration: strip ``s`` is in contact for ``|x| <= x_l(s)``, with the
+pressure semi-elliptic along x,
 
     p(x, s) = c(s) sqrt(x_l(s)^2 - x^2),
 
@@ -59,6 +62,7 @@ import numba
 import numpy as np
 
 from ..errors import RailContactError, check_positive
+from ..halfspace.ellipse import hertz_penetration, lateral_factor, shape_table
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import hertz, semi_axes
 from ..halfspace.influence import _zz_antiderivative, zz_displacement_centred
@@ -68,10 +72,16 @@ from ..halfspace.sums import numpy_sum
 
 KP_FACTOR = 0.55
 METHODS = ("kp", "infcon")
-SCALED_LOAD = 1e-4
+SCALED_LOAD = 1e-3
 """INFCON's load secant stops when an evaluation carries the load within this share, and
 its pressure is scaled to the load (the strips' equations then hold for the interpenetration
-scaled by as much; each further evaluation solves them again)."""
+scaled by as much, the outline for a penetration 2/3 as much off; each further evaluation
+solves them again): the share of the normal BEM's default tolerance ε_n, below which the
+start's load error is lost in the BEM's own."""
+START_PASSES = 3
+"""Passes of INFCON's start of the load secant: Hertz's penetration for the curvature
+``A(0)`` along and, across, the parabola's ``B_e = delta / w^2`` through the ends of the
+rigid overlap at the penetration before (:func:`_equivalent_hertz`)."""
 SEARCH_SAMPLES = 801
 """Points from one end of the virtual patch to the other at which its largest half
 length is sought (the estimate grid's extent along x)."""
@@ -108,6 +118,10 @@ class NormalEstimate:
     message: str
     wall_time: float
     half_length: Callable[[np.ndarray], np.ndarray] = field(repr=False, default=None)
+    offset: float = 0.0
+    """The lateral coordinate [m] of the gap's minimum in the frame of the samples given,
+    the model's ``s = 0`` (:func:`_offset`: 0 where the gap at the sample nearest ``s =
+    0`` is 0). The grid, the pressure and the half lengths are in the samples' frame."""
     amplitude: np.ndarray = field(repr=False, default=None)
     """The pressure's amplitude [Pa/m] on each strip (row) of the estimate grid, (ny,):
     ``p(x, y_j) = amplitude[j] sqrt(x_l(y_j)^2 - x^2)`` (one value for all strips in
@@ -132,8 +146,10 @@ class NormalEstimate:
         if self.shape_data is None:
             return self.pressure_at(*grid.mesh())
         _, _, ylo, yhi = self.grid.bounds
-        return _pressure_on(grid.x, grid.y, *self.shape_data, ylo, yhi, self.grid.y,
-                            self.amplitude, slopes_of(self.grid.y, self.amplitude))
+        o = self.offset  # (the compiled pass in the model's frame)
+        ys = self.grid.y - o
+        return _pressure_on(grid.x, grid.y - o, *self.shape_data, ylo - o, yhi - o, ys,
+                            self.amplitude, slopes_of(ys, self.amplitude))
 
 
 _UNIT_PAIR = ElasticPair(shear=1.0, poisson=0.0)
@@ -269,9 +285,10 @@ def _strip_influence(shape, dx, dy):  # pragma: no cover - compiled
         for i in range((nx + 1) // 2):
             mirror = nx - 1 - i
             w = shape[i, k] + shape[mirror, k] if mirror != i else shape[i, k]
-            if w != 0.0:
+            if w != 0.0:  # (a slice: a loop on its plain index runs vectorised)
+                c = coef[i, ny - 1 - k:2 * ny - 1 - k]
                 for j in range(ny):
-                    column[j] += w * coef[i, j - k + ny - 1]
+                    column[j] += w * c[j]
         for j in range(ny):
             out[j, k] = column[j]
     return out
@@ -295,11 +312,13 @@ def _solved(a, b):  # pragma: no cover - compiled
                 a[k, j], a[piv, j] = a[piv, j], a[k, j]
             b[k], b[piv] = b[piv], b[k]
         d = a[k, k]
+        pivot_row = a[k, k + 1:]
         for i in range(k + 1, n):
             m = a[i, k] / d
             if m != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= m * a[k, j]
+                row = a[i, k + 1:]  # (slices: the loop on their plain index vectorised)
+                for j in range(n - k - 1):
+                    row[j] -= m * pivot_row[j]
                 b[i] -= m * b[k]
     x = np.empty(n)
     for k in range(n - 1, -1, -1):
@@ -482,9 +501,14 @@ def _shape(method: str, samples: tuple, a0: float, delta: float
            ) -> tuple[float, np.ndarray, np.ndarray]:
     """The virtual-penetration factor, and the virtual penetrations [m] and stretches of
     the half lengths on the two sides (s < 0, s >= 0) at the penetration ``delta`` [m]
-    (KP: 0.55, 0.55 delta and 1 on both; INFCON: see the module doc)."""
+    (KP: 0.55, 0.55 delta and 1 on both; INFCON: see the module doc, in one compiled
+    pass, :func:`_infcon_shape`; where that gives no factor, the same with
+    :func:`infcon_factor`, which raises or searches beyond the compiled table)."""
     if method == "kp":
         return KP_FACTOR, np.full(2, KP_FACTOR * delta), np.ones(2)
+    factor, d0, stretch = _infcon_shape(samples[0], samples[1], a0, delta, *shape_table())
+    if factor == factor:  # (not NaN)
+        return factor, d0, stretch
     lo, hi = _half_width_at(samples[0], samples[1], delta)
     w = 0.5 * (hi - lo)
     if not w > 0:  # (it raised the same error for B_e = inf, with a numpy warning)
@@ -497,6 +521,54 @@ def _shape(method: str, samples: tuple, a0: float, delta: float
         sides = np.full(2, factor)
     d0 = sides * delta
     return factor, d0, (1 - factor) * delta / d0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _infcon_shape(s, f, a0, delta, v_nodes, w_nodes, slopes):  # pragma: no cover - compiled
+    """INFCON's :func:`_shape` (factor, d0, stretch) with the compiled
+    :func:`~railcontact.halfspace.ellipse.lateral_factor` (the table of
+    :func:`~railcontact.halfspace.ellipse.shape_table`); the factor NaN where the rigid
+    overlap has no width or a factor is not found."""
+    lo, hi = _half_width_at(s, f, delta)
+    w = 0.5 * (hi - lo)
+    d0 = np.empty(2)
+    stretch = np.empty(2)
+    if not w > 0.0:
+        return math.nan, d0, stretch
+    factor = lateral_factor(a0, delta / (w * w), v_nodes, w_nodes, slopes)
+    if lo < 0.0 < hi:
+        d0[0] = lateral_factor(a0, delta / (lo * lo), v_nodes, w_nodes, slopes)
+        d0[1] = lateral_factor(a0, delta / (hi * hi), v_nodes, w_nodes, slopes)
+    else:
+        d0[0] = factor
+        d0[1] = factor
+    if math.isnan(d0[0]) or math.isnan(d0[1]):
+        factor = math.nan
+    for k in range(2):
+        d0[k] *= delta
+        stretch[k] = (1.0 - factor) * delta / d0[k]
+    return factor, d0, stretch
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _equivalent_hertz(s, f, a0, e_star, load, delta, passes, v_nodes, w_nodes, slopes
+                      ):  # pragma: no cover - compiled
+    """Hertz's penetration [m] under ``load`` [N] for the curvatures ``a0`` along and
+    ``B_e = delta / w^2`` across (``w`` the half width of the rigid overlap ``f <=
+    delta``, :func:`_half_width_at`; the curvatures of INFCON's factor), ``passes`` times
+    from the penetration ``delta`` [m] (the last finite one where the overlap has no
+    width or Hertz no solution): the penetration at which INFCON, exact for a quadratic
+    gap, carries about the load (its load secant's start)."""
+    for _ in range(passes):
+        lo, hi = _half_width_at(s, f, delta)
+        w = 0.5 * (hi - lo)
+        if not w > 0.0:
+            break
+        d = hertz_penetration(a0, delta / (w * w), e_star, load, v_nodes, w_nodes, slopes)
+        if not (d > 0.0 and d < math.inf):
+            break
+        delta = d
+    return delta
 
 
 def _evaluate(method: str, samples: tuple, a0: float, delta: float, scale: float, nx: int,
@@ -527,23 +599,53 @@ def _scaled(evaluation: tuple, ratio: float) -> tuple:
 
 
 def _estimate(method: str, samples: tuple, delta: float, evaluation: tuple, nx: int, ny: int,
-              t0: float) -> NormalEstimate:
-    """The :class:`NormalEstimate` of an :func:`_evaluate` at ``delta`` [m]."""
+              t0: float, offset: float = 0.0) -> NormalEstimate:
+    """The :class:`NormalEstimate` of an :func:`_evaluate` at ``delta`` [m] (``samples`` in
+    the model's frame, ``offset`` [m] its origin in the samples' frame)."""
     factor, d0, stretch, lo, hi, xmax, p, amplitude, force, pmax, count = evaluation
     s, f, a_of_s = samples[:3]
 
     def x_half(sv):
-        k = (np.asarray(sv) >= 0).astype(int)
+        sv = np.asarray(sv) - offset
+        k = (sv >= 0).astype(int)
         g = d0[k] - np.interp(sv, s, f)
         return np.sqrt(np.clip(stretch[k] * g / np.interp(sv, s, a_of_s), 0, None))
 
-    grid = Grid.from_bounds(-xmax, xmax, lo, hi, nx, ny)
+    grid = Grid.from_bounds(-xmax, xmax, lo + offset, hi + offset, nx, ny)
     return NormalEstimate(grid=grid, pressure=p, contact=p > 0, force=float(force),
                           penetration=delta, max_pressure=float(pmax),
                           area=float(count * grid.element_area), factor=factor,
                           method=method, message=f"{method}: factor {factor:.4f}",
                           wall_time=time.perf_counter() - t0, half_length=x_half,
-                          amplitude=amplitude, shape_data=(*samples, d0, stretch))
+                          amplitude=amplitude, shape_data=(*samples, d0, stretch),
+                          offset=offset)
+
+
+def _offset(s: np.ndarray, f: np.ndarray) -> float:
+    """Where [m] the virtual patch is centred: the patch's smallest gap, the sample nearest
+    ``s = 0`` whose gap is 0 or less (the lower ``s`` of two as near; 0 where the sample
+    nearest ``s = 0`` is one, or none is). The samples of a patch solved in the frame at
+    CONTACT's reference point (the weighted centre of its own run of interpenetration) have
+    their gap shifted to 0 at the run's lowest sample, which need not be at ``s = 0``;
+    those of one of several patches may be below 0 in another patch's run, further out."""
+    k = _nearest_floor(f, int(np.argmin(np.abs(s))))
+    return float(s[k]) if k >= 0 else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_floor(f, k0):  # pragma: no cover - compiled
+    """The index nearest ``k0`` with ``f <= 0`` (the lower of two as near); -1 where it is
+    ``k0`` itself or there is none."""
+    if f[k0] <= 0.0:
+        return -1
+    for step in range(1, f.size):
+        if k0 - step >= 0 and f[k0 - step] <= 0.0:
+            return k0 - step
+        if k0 + step < f.size and f[k0 + step] <= 0.0:
+            return k0 + step
+        if k0 - step < 0 and k0 + step >= f.size:
+            break
+    return -1
 
 
 def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray,
@@ -557,8 +659,10 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     method
         "kp" or "infcon".
     s, f, a_of_s
-        Lateral coordinate [m] (increasing, through 0), lateral gap f(s) [m] (minimum 0 at
-        s = 0) and longitudinal curvature A(s) [1/m] of the patch.
+        Lateral coordinate [m] (increasing), lateral gap f(s) [m] (minimum 0) and
+        longitudinal curvature A(s) [1/m] of the patch; the model is centred on the
+        gap's zero nearest ``s = 0`` (:attr:`NormalEstimate.offset`), its grid and
+        pressure are in the frame of ``s``.
     pair
         Combined elastic parameters.
     penetration, load
@@ -579,13 +683,17 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
         if isinstance(n, bool) or not (float(n).is_integer() and n >= 1):
             raise RailContactError(f"estimate grid {name} must be a positive integer, got {n!r}")
     nx, ny = int(nx), int(ny)
+    offset = _offset(s, f)
+    if offset != 0.0:  # (the model's frame: s from the gap's minimum)
+        s = s - offset
     samples = (s, f, a_of_s, slopes_of(s, f), slopes_of(s, a_of_s))
     a0 = float(np.interp(0.0, s, a_of_s))
     scale = (1 - pair.poisson) / (math.pi * pair.shear)
     if penetration is not None:
         delta = check_positive("penetration", penetration, "m")
         return _estimate(method, samples, delta,
-                         _evaluate(method, samples, a0, delta, scale, nx, ny), nx, ny, t0)
+                         _evaluate(method, samples, a0, delta, scale, nx, ny), nx, ny, t0,
+                         offset)
     load = check_positive("load", load, "N")
     # secant on delta, started from Hertz with the curvatures at s = 0 (each step's
     # patch evaluated; the estimate formed of the last)
@@ -593,7 +701,14 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     k0 = int(np.argmin(np.abs(s)))
     k = min(k0 + 5, len(s) - 1) if k0 + 1 < len(s) else max(k0 - 5, 0)
     b0 = max(float(f[k] / s[k] ** 2), 1e-9) if s[k] != 0 else 1.0
-    d1 = hertz(a0, b0, pair, load=load).penetration
+    if method == "infcon":  # (KP's secant starts as it did)
+        table = shape_table()
+        d1 = hertz_penetration(a0, b0, pair.e_star, load, *table)  # (compiled: NaN where
+        if not d1 > 0:  # hertz() raises or searches beyond the table)
+            d1 = hertz(a0, b0, pair, load=load).penetration
+        d1 = _equivalent_hertz(s, f, a0, pair.e_star, load, d1, START_PASSES, *table)
+    else:
+        d1 = hertz(a0, b0, pair, load=load).penetration
     e1 = _evaluate(method, samples, a0, d1, scale, nx, ny)
     d2 = d1 * (load / e1[force]) ** (2 / 3)
     for _ in range(30):
@@ -610,4 +725,4 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
         d2 = d2 * (load / e2[force]) ** (1 / max(slope, 0.5))
     else:  # not met in 30 steps: the last evaluation (the step after it not evaluated)
         d2 = d1
-    return _estimate(method, samples, d2, e2, nx, ny, t0)
+    return _estimate(method, samples, d2, e2, nx, ny, t0, offset)
