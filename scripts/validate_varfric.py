@@ -22,7 +22,11 @@ beyond. Each planar case is posed with the existing case keys and
   is then solved by the load loop of the wheel with each patch's own creepages,
   :func:`solve_own_creepages`), which separates the friction from the kinematics;
 * the wheelset's lateral displacement, yaw and roll with railcontact's signs (Y to the
-  left, Z up: ``lateral_displacement = -Y``, ``yaw = -YAW``, ``roll = ROLL``).
+  left, Z up: ``lateral_displacement = -Y``, ``yaw = -YAW``, ``roll = ROLL``);
+* the input's patch separation (``A_SEP`` 90 deg, ``D_SEP`` 6 mm, ``D_COMB`` 3 mm):
+  ``[geometry] separation_distance``, ``combine_distance``, so that case 3's two patches,
+  6.8 mm apart, have their contact angles turned towards each other as CONTACT turns them
+  (:mod:`railcontact.geometry.separation`).
 
 Case 6 varies friction along the track (CONTACT's ``VARFRC = 2``), which at one position
 is one coefficient (0.26 at s = 60 mm): it is posed with that number. Cases 5 and 7 use
@@ -76,6 +80,9 @@ MU = [0.2, 0.3]
 SVF = ([0.0, 100.0], [0.2, 0.3])
 """Case 6's friction along the track: ``SVF`` [mm] and mu (``VARFRC = 2``)."""
 LOAD = 10e3
+D_SEP, D_COMB = 6e-3, 3e-3
+"""The input's ``D_SEP``, ``D_COMB`` [m] (``A_SEP`` = 90 deg; ``D_TURN`` by default
+``2 D_SEP - D_COMB`` = 9 mm): two patches 6-9 mm apart have their angles turned."""
 DX = 0.2e-3
 TOLERANCE = 1e-5
 FLANGE_ANGLE = 0.2
@@ -156,7 +163,9 @@ def case_dict(case: dict, creepage: dict | None, at: str = "patch") -> dict:
                      "gauge": 1.435, "gauge_depth": 0.014, "back_to_back": 1.360,
                      "flange_back": -0.07, "wheel_radius": 0.46,
                      "lateral_displacement": -case["y"] * 1e-3, "yaw": -case["yaw"],
-                     "roll": case["roll"], "side": "right"},
+                     "roll": case["roll"], "side": "right",
+                     "separation_angle": math.radians(90.0),
+                     "separation_distance": D_SEP, "combine_distance": D_COMB},
         "grid": {"dx": DX, "dy": DX},
         "normal": {"load": LOAD, "tolerance": TOLERANCE, "estimate": "infcon"},
         "tangential": {"friction": friction_of(case, at), "tolerance": TOLERANCE,

@@ -1,8 +1,9 @@
 """Friction that varies across the profile (``[tangential] friction`` as a table, CONTACT's
-VARFRC): CONTACT's own example ``mbench_a22_varfric`` within the targets of
-``scripts/validate_varfric.py`` (forces 2 % on the tread, 5 % in the flange, floor 0.2 % of
-mu F_N; p_max 1 %, area 3 %), the traction bound ``mu p_n`` element by element with mu per
-element, and a table equal everywhere giving exactly the constant coefficient's solution."""
+VARFRC): CONTACT's own example ``mbench_a22_varfric`` (its planar cases 1-4) within the
+targets of ``scripts/validate_varfric.py`` (forces 2 % on the tread, 5 % in the flange,
+floor 0.2 % of mu F_N; p_max 1 %, area 3 %), the traction bound ``mu p_n`` element by
+element with mu per element, and a table equal everywhere giving exactly the constant
+coefficient's solution."""
 
 from __future__ import annotations
 
@@ -65,6 +66,22 @@ def test_contact_varfric_example(varfric, number, kinematic):
         for a, b, floor in ((xi, theirs["cksi"], 1e-6), (eta, theirs["ceta"], 1e-6),
                             (phi * 1e-3, theirs["cphi"], 1e-9)):
             assert abs(a - b) <= max(0.01 * abs(b), floor), (a, b)
+
+
+def test_contact_varfric_two_patches_with_contacts_creepages(varfric):
+    """Case 3 (two patches 6.8 mm apart, within CONTACT's D_SEP 6 mm and D_TURN 9 mm: their
+    angles turned towards each other as CONTACT turns them) with the creepages CONTACT
+    printed for each patch: both patches within the targets, mu CONTACT's within 2e-3
+    (the kinematic run: ``tests/test_separation.py``)."""
+    v, cases = varfric
+    case = cases[3]
+    theirs = sorted(case["patches"], key=lambda p: abs(p["delta"]))
+    ours = sorted(v.solve_own_creepages(case), key=lambda p: abs(p.geometry.contact_angle))
+    assert len(ours) == 2
+    for p, q in zip(ours, theirs, strict=True):
+        got = v.values(p, q)
+        assert abs(got["mu"] - q["mu"]) < 2e-3
+        assert v.misses(got, q) == [], (got, q)
 
 
 @pytest.fixture(scope="module")

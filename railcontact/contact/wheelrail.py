@@ -58,9 +58,11 @@ from ..geometry.search import (
     least_gap,
     merge_approaches,
     overlap_box,
+    patch_run,
     reference_point,
     run_on_rail,
 )
+from ..geometry.separation import PatchSeparation, turned_angles
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import (
@@ -558,7 +560,7 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     not given: a single patch's frame is first formed at that approach scaled to
     ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`.
     """
-    points = referenced if reference else _rigid
+    points = partial(referenced, separation=settings.separation) if reference else _rigid
     run_of = partial(run_on_rail, track, ws, pose, side)
     if not control.by_load:
         approach = control.penetration
@@ -627,13 +629,25 @@ def _rigid(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float
     return contact_points(track, ws, pose, side, approach)
 
 
-def referenced(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float
-               ) -> list[ContactPoint]:
+def referenced(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float,
+               separation: PatchSeparation | None = None) -> list[ContactPoint]:
     """The contact points of a wheel at the vertical ``approach`` [m], each with its frame
     at the reference point (:func:`~railcontact.geometry.search.at_reference`) where it
-    overlaps the rail, else at the rigid point."""
-    return [at_reference(cp, track, ws, pose, approach) or cp
-            for cp in contact_points(track, ws, pose, side, approach)]
+    overlaps the rail, else at the rigid point. With ``separation`` (CONTACT's patch
+    separation parameters) the planes of neighbouring patches that lie between its
+    ``D_SEP`` and ``D_TURN`` apart are inclined at CONTACT's turned angles
+    (:func:`~railcontact.geometry.separation.turned_angles`), their points kept."""
+    points = [at_reference(cp, track, ws, pose, approach) or cp
+              for cp in contact_points(track, ws, pose, side, approach)]
+    if separation is None or len(points) < 2:
+        return points
+    at = [k for k, cp in enumerate(points) if patch_run(cp) is not None]
+    runs = [patch_run(points[k]) for k in at]
+    for k, run, angle in zip(at, runs, turned_angles(runs, separation), strict=True):
+        if angle != run.angle:
+            points[k] = at_reference(points[k].rigid, track, ws, pose, approach,
+                                     turn=angle - run.angle) or points[k]
+    return points
 
 
 def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q: float,

@@ -417,7 +417,7 @@ FRAME_GROW = 32
 
 @numba.njit(cache=True, nogil=True)
 def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx,
-                    wc, radius, half_bb, flange_back, s, k0, power, out):
+                    wc, radius, half_bb, flange_back, s, k0, power, turn, out):
     """CONTACT's reference point of the patch around the rigid point at ``u_rigid``, the
     wheel lowered by ``approach`` beyond first contact, and its tangent frame
     (:func:`~.search.at_reference`), the frame written to ``out`` with ``f`` shifted so
@@ -426,11 +426,15 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
     ``k0 +- 5`` (:func:`extend_frame` forms others, the same values as over all).
 
     ``tr``: the trace (5, n) of :func:`trace_gap`, with its least gap and whether its u
-    increase. Returns (ok, u, Z, gamma, overlap [m], wheel profile coordinate S above the
-    point, lo, hi (the overlap's samples of ``s``), i0, i1, the trace's and the rail's
-    samples nearest the point, the trace's eta there, the least gap, the wheel's radius
-    increment at the S of sample ``k0`` (or above the point where that is NaN)); ``ok``
-    False where the wheel does not overlap the rail there."""
+    increase. ``turn`` [rad] is added to the weighted angle before the plane is formed
+    (0: the plane at the weighted angle; :func:`~.separation.turned_angles`). Returns
+    (ok, u, Z, gamma, overlap [m], wheel profile coordinate S above the point, lo, hi
+    (the overlap's samples of ``s``), i0, i1, the trace's and the rail's samples nearest
+    the point, the trace's eta there, the least gap, the wheel's radius increment at the
+    S of sample ``k0`` (or above the point where that is NaN), the run's weight
+    integrated across the rail [m^3.5 for ``power`` 2.5] and its two ends on the rail
+    (u, Z) where the interpenetration is zero, the end of least u first); ``ok`` False
+    where the wheel does not overlap the rail there."""
     nan = math.nan
     eta, u, z, g = tr[0], tr[2], tr[3], tr[4]
     n = g.size
@@ -440,7 +444,8 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
     g_min = g_min_trace if not math.isnan(g[0]) else nan
     k = nearest_first(u, u_rigid, increasing)
     if not approach - (g[k] - g_min) > 0:
-        return False, nan, nan, nan, nan, nan, 0, 0, 0, 0, 0, 0, nan, g_min, nan
+        return (False, nan, nan, nan, nan, nan, 0, 0, 0, 0, 0, 0, nan, g_min, nan, nan, nan,
+                nan, nan, nan)
     lo = k
     while lo > 0 and approach - (g[lo - 1] - g_min) > 0:
         lo -= 1
@@ -471,7 +476,27 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
         if i > lo and not u[i] > u[i - 1]:
             inc = False
     u_ref = su / total
-    gamma = sgam / total
+    gamma = sgam / total + turn
+    # the run's weight integrated across the rail (each sample's weight times its share
+    # of the rail, half the distance between its neighbours) and its ends: where the
+    # interpenetration, linear between the last sample in and the first out, is zero
+    weight = 0.0
+    for i in range(lo, hi):
+        e = approach - (g[i] - g_min)
+        w = e * e * math.sqrt(e) if power == 2.5 else e**power
+        weight += w * 0.5 * abs(u[min(i + 1, n - 1)] - u[max(i - 1, 0)])
+    u_a = u[lo]
+    if lo > 0:
+        e_in, e_out = approach - (g[lo] - g_min), approach - (g[lo - 1] - g_min)
+        if math.isfinite(u[lo - 1]) and math.isfinite(e_out):
+            u_a = u[lo] + e_in / (e_in - e_out) * (u[lo - 1] - u[lo])
+    u_b = u[hi - 1]
+    if hi < n:
+        e_in, e_out = approach - (g[hi - 1] - g_min), approach - (g[hi] - g_min)
+        if math.isfinite(u[hi]) and math.isfinite(e_out):
+            u_b = u[hi - 1] + e_in / (e_in - e_out) * (u[hi] - u[hi - 1])
+    u_a, u_b = min(u_a, u_b), max(u_a, u_b)
+    z_a, z_b = spline_at(rx, rc, u_a, 0), spline_at(rx, rc, u_b, 0)
     z_ref = spline_at(rx, rc, u_ref, 0)
     # the wheel above the point: the trace's eta at u_ref (ordered by u)
     if inc:
@@ -501,7 +526,8 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
     # the patch's own overlap: the run through the origin, more samples formed where it
     # reaches the edge of those formed
     if not _own(f, ru_s, u_lo, u_hi, k0):
-        return False, nan, nan, nan, nan, nan, 0, 0, 0, 0, 0, 0, nan, g_min, nan
+        return (False, nan, nan, nan, nan, nan, 0, 0, 0, 0, 0, 0, nan, g_min, nan, nan, nan,
+                nan, nan, nan)
     lo = k0
     while True:
         while lo > i0 and _own(f, ru_s, u_lo, u_hi, lo - 1):
@@ -530,7 +556,7 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
     s_normal = out[WHEEL_S, k0]
     height = spline_at(wx, wc, s_normal if math.isfinite(s_normal) else wheel_s, 0)
     return (True, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c,
-            g_min, height)
+            g_min, height, weight, u_a, z_a, u_b, z_b)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

@@ -36,6 +36,7 @@ import numpy as np
 from ..errors import RailContactError, check_positive
 from ..halfspace.grid import Grid
 from . import kernels
+from .separation import PatchRun
 from .track import SIDES, Pose, Track, Wheelset
 
 N_TRACE = 6001
@@ -482,7 +483,7 @@ def _lateral_curvature(s: np.ndarray, f: np.ndarray) -> float:
 
 
 def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
-                 approach: float) -> ContactPoint | None:
+                 approach: float, turn: float = 0.0) -> ContactPoint | None:
     """The patch of the rigid contact point ``cp`` with its frame at CONTACT's contact
     reference point, for the wheel's vertical approach ``approach`` [m] beyond first
     contact, formed as CONTACT's ``m_wr_locatecp`` does (None when the wheel does not
@@ -498,6 +499,10 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     :meth:`ContactPoint.normal_penetration` of ``approach`` is the overlap there. The wheel
     moves vertically, not along the new normal, so the frame holds for that approach; the
     load loops form it again as the approach changes.
+
+    ``turn`` [rad] is added to the weighted angle before the plane is formed: CONTACT's
+    turning of neighbouring patches (:func:`~.separation.turned_angles`; the point stays).
+    :func:`patch_run` gives what that turning reads of the point.
     """
     approach = float(approach)  # plain floats in the point: numpy's scalars cost more
     d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
@@ -513,8 +518,9 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
     frame = np.empty((5, N_S))
     rail, wheel = _rail_arrays(track), _wheel_arrays(ws)
     (ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
-     height) = kernels.reference_frame(trace, g_min, increasing, approach, float(cp.rail_u),
-                                       *rail[:4], *wheel, _S_SAMPLES, K0, WEIGHT_POWER, frame)
+     height, weight, u_a, z_a, u_b, z_b) = kernels.reference_frame(
+        trace, g_min, increasing, approach, float(cp.rail_u), *rail[:4], *wheel, _S_SAMPLES,
+        K0, WEIGHT_POWER, float(turn), frame)
     if not ok:
         return None
     s = _S_SAMPLES
@@ -546,7 +552,17 @@ def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
         rolling_radius=ws.radius + height, A=float(frame[1, K0]),
         B=B if math.isfinite(B) else cp.B, s=s, approach=approach, rigid=cp)
     ref.__dict__["_part"] = part
+    ref.__dict__["_run"] = PatchRun(u=u_ref, angle=gamma - float(turn), weight=weight,
+                                    low_end=(u_a, z_a), high_end=(u_b, z_b))
     return ref
+
+
+def patch_run(cp: ContactPoint) -> PatchRun | None:
+    """What CONTACT's turning of neighbouring patches reads of a point formed by
+    :func:`at_reference` (its reference point's lateral position, its weighted angle
+    before any turn, its weight and the ends of its interpenetration on the rail); None
+    for a rigid contact point."""
+    return cp.__dict__.get("_run")
 
 
 def _extended(part: tuple, a: int, b: int) -> tuple:

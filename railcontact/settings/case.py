@@ -32,6 +32,7 @@ Example::
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, fields
@@ -40,6 +41,7 @@ from typing import Any, ClassVar
 
 from ..errors import CaseError
 from ..geometry.kinematics import WheelsetMotion
+from ..geometry.separation import PatchSeparation
 from ..geometry.track import Track, Wheelset
 from ..halfspace.materials import ElasticPair, Material
 from .choices import (
@@ -138,6 +140,7 @@ on both sides); the wheelset's flange-back distance is a little less than its ga
 
 _TRACK = {f.name: f.default for f in fields(Track)}
 _WHEELSET = {f.name: f.default for f in fields(Wheelset)}
+_SEPARATION = {f.name: f.default for f in fields(PatchSeparation)}
 """The track and wheelset defaults, declared once by the geometry's own records."""
 
 
@@ -202,9 +205,33 @@ class WheelRailGeometry(Record):
                                "radius, spin and moments are taken): 'reference' = CONTACT's "
                                "reference point, the overlap's weighted centre; 'rigid' = the "
                                "rigid contact point", choices=PATCH_FRAMES)
+    separation_angle: float = setting(_SEPARATION["angle"], "float", "rad",
+                                      "CONTACT's A_SEP: neighbouring patches whose contact "
+                                      "angles differ by more are never turned",
+                                      minimum=0.0, maximum=math.pi)
+    separation_distance: float = setting(_SEPARATION["distance"], "float", "m",
+                                         "CONTACT's D_SEP: neighbouring patches from this "
+                                         "far apart up to turn_distance have their contact "
+                                         "angles turned towards their combined angle "
+                                         "(CONTACT combines closer ones; railcontact keeps "
+                                         "them apart)", minimum=0.0, maximum=0.1)
+    combine_distance: float = setting(_SEPARATION["combine"], "float", "m",
+                                      "CONTACT's D_COMB: sets the default turn_distance",
+                                      minimum=0.0, maximum=0.1)
+    turn_distance: float | None = setting(None, "float", "m",
+                                          "CONTACT's D_TURN: how far apart neighbouring "
+                                          "patches still turn (default 2 "
+                                          "separation_distance - combine_distance)",
+                                          minimum=0.0, maximum=0.1)
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.TYPE, **super().to_dict()}
+
+    @property
+    def separation(self) -> PatchSeparation:
+        """CONTACT's patch separation parameters of the case."""
+        return PatchSeparation(self.separation_angle, self.separation_distance,
+                               self.combine_distance, self.turn_distance)
 
     @property
     def rail_deviated(self) -> bool:
@@ -400,6 +427,7 @@ class PatchSettings:
     normal: NormalSettings
     tangential: TangentialSettings | None = None
     kinematics: WheelsetMotion | None = None
+    separation: PatchSeparation | None = PatchSeparation()
 
 
 CASE_TABLES: dict[str, tuple[type[Record], ...]] = {
@@ -477,7 +505,8 @@ class Case:
     @property
     def patch_settings(self) -> PatchSettings:
         """The grid, normal and tangential settings of the case's patches."""
-        return PatchSettings(self.grid, self.normal, self.tangential, self.motion)
+        separation = self.geometry.separation if self.wheel_rail else None
+        return PatchSettings(self.grid, self.normal, self.tangential, self.motion, separation)
 
     @property
     def motion(self) -> WheelsetMotion | None:
