@@ -477,9 +477,13 @@ matched to 0.01 mm and 0.001 rad, with 2 or 3 not)."""
 
 
 def _lateral_curvature(s: np.ndarray, f: np.ndarray) -> float:
-    """B = f''(0) / 2 [1/m] from samples 5 apart; NaN where it is not positive."""
-    B = float((f[K0 - 5] - 2 * f[K0] + f[K0 + 5]) / (2 * (s[5] - s[0]) ** 2))
-    return B if np.isfinite(B) and B > 0 else float("nan")
+    """B = f''(0) / 2 [1/m] from samples 5 apart; NaN where it is not positive or the
+    gap is not finite there (a profile's end: no convex contact, which the caller says)."""
+    lo, mid, hi = float(f[K0 - 5]), float(f[K0]), float(f[K0 + 5])
+    if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
+        return float("nan")
+    B = (lo - 2 * mid + hi) / (2 * float(s[5] - s[0]) ** 2)
+    return B if math.isfinite(B) and B > 0 else float("nan")
 
 
 def at_reference(cp: ContactPoint, track: Track, ws: Wheelset, pose: Pose,
