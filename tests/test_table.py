@@ -291,6 +291,11 @@ def test_table_mode_step_gives_the_fmu_outputs_of_the_nodes(built):
         assert outputs[f"contact_angle_{side}"] == node["contact_angle"]
         assert outputs[f"contact_lateral_position_{side}"] == node["contact_y"]
         assert outputs[f"status_{side}"] == 0
+        # the creep forces' power per unit speed from the node's forces and the creepages
+        w = getattr(res, side)
+        assert w.frictional_power_per_speed == pytest.approx(
+            node["creep_force_y"] * w.creepages[0][1], rel=1e-12) and w.creepages[0][1] != 0
+        assert w.frictional_power_per_speed < 0  # (dissipated)
     # the two wheels push the wheelset opposite ways along the creepage
     assert outputs["creep_force_y_left"] * outputs["creep_force_y_right"] < 0
     # outside the load axis on the right wheel: that wheel out of range, the left solved

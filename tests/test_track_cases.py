@@ -267,6 +267,11 @@ def test_kinematics_and_creepage_exclude_each_other():
     case["geometry"]["side"] = "both"
     with pytest.raises(rc.CaseError, match="rail of the case's side"):
         rc.solve(case)
+    case = _case()  # a rail's velocities, too, are of the case's side's rail
+    case["geometry"]["side"] = "both"
+    case["kinematics"]["rail_velocity"] = [0.02, 0.0]
+    with pytest.raises(rc.CaseError, match="rail_velocity and rail_roll_rate move the rail"):
+        rc.solve(case)
 
 
 def test_example_case_file_is_contacts_curve_case(root):

@@ -187,4 +187,20 @@ def test_bad_rail_deviations_are_errors(value, words):
 
 def test_a_curvature_beyond_any_track_is_an_error():
     with pytest.raises(RailContactError, match="curvature"):
-        Kinematics(V, curvature=0.1)
+        Kinematics(V, curvature=0.2)
+
+
+def test_friction_per_step_follows_replaced_settings():
+    """A step's friction is applied to the contact's current settings: replacing them
+    between steps (a finer element size) is not hidden by the settings kept for a
+    friction."""
+    from dataclasses import replace
+
+    kin = Kinematics(V, 0.02)
+    c = contact(warm_start="none", element_size=1e-3)
+    c.solve(rc.Pose(2e-3), loads=(Q, Q), kinematics=kin, friction=(0.3, 0.3))
+    c.settings = replace(c.settings, element_size=0.5e-3)
+    a = c.solve(rc.Pose(2e-3), loads=(Q, Q), kinematics=kin, friction=(0.3, 0.3))
+    b = contact(warm_start="none", element_size=0.5e-3).solve(
+        rc.Pose(2e-3), loads=(Q, Q), kinematics=kin, friction=(0.3, 0.3))
+    np.testing.assert_array_equal(forces(a), forces(b))

@@ -7,6 +7,7 @@ coefficient's solution."""
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import subprocess
@@ -254,3 +255,14 @@ def test_case_file_with_a_table_through_the_cli(varfric, tmp_path):
     (patch,) = json.loads(r.stdout)["patches"]
     assert abs(patch["tangential"]["friction"] - case["patches"][0]["mu"]) < 2e-3
     assert png.stat().st_size > 10_000
+
+
+def test_a_contact_table_refuses_a_friction_table(flange_case):
+    """A contact table takes one coefficient of friction: a spec with a friction table is
+    refused when it is read, before anything is solved."""
+    from railcontact.table.spec import parse_spec
+
+    spec = copy.deepcopy(flange_case)
+    spec["table"] = {"lateral_displacement": [0.0, 0.001]}
+    with pytest.raises(rc.CaseError, match="one coefficient of friction"):
+        parse_spec(spec)

@@ -500,7 +500,7 @@ TRACK_INPUTS = [
     Variable("curvature", "Real", "input", 0.0, "1/m",
              "track curvature, positive when the track turns left (creepage_input="
              "kinematic: the rails turn with -speed * curvature relative to the track frame; "
-             "a radius of 50 m at most)"),
+             "a radius of 10 m or more)"),
     *[v for s in SIDES for v in (
         Variable(f"rail_offset_lateral_{s}", "Real", "input", 0.0, "m",
                  f"{s} rail's lateral offset from its place, positive to the left (an "

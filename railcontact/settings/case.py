@@ -474,6 +474,11 @@ class Case:
             raise CaseError("[geometry] rail_offset and rail_roll deviate the rail of the "
                             "case's side: give side = 'left' or 'right' and a roll angle "
                             "(not 'rigid' or 'equal-loads', which place both wheels)")
+        k = self.kinematics
+        if (k is not None and isinstance(geo, WheelRailGeometry) and geo.side == "both"
+                and (tuple(k.rail_velocity) != (0.0, 0.0) or k.rail_roll_rate != 0.0)):
+            raise CaseError("[kinematics] rail_velocity and rail_roll_rate move the rail of "
+                            "the case's side: give side = 'left' or 'right'")
         t = self.tangential
         if t is not None and isinstance(t.friction, FrictionTable):
             if not isinstance(geo, WheelRailGeometry):

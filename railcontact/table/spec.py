@@ -306,6 +306,12 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     if any(AXES[n].table == "tangential" for n in names) and "tangential" not in raw:
         raise CaseError("[table]: a creepage or spin axis needs a [tangential] table in the "
                         "case")
+    friction = raw.get("tangential", {}).get("friction") if isinstance(
+        raw.get("tangential"), dict) else None
+    if isinstance(friction, dict):
+        raise CaseError("[tangential] friction: a contact table takes one coefficient of "
+                        "friction (a number); a friction table across the profile is for "
+                        "railcontact solve and the exact step")
     if "load" in names and "penetration" in raw.get("normal", {}):
         raise CaseError("[table] load: the case controls the penetration ([normal] "
                         "penetration); a load axis needs [normal] load")

@@ -262,6 +262,8 @@ class TableContact:
             rolling_radius=rr, area=ar, max_pressure=pm, slip_area_ratio=sl,
             contact_point=(cx, cy, cz), penetration=pen)
         wheel.derailment_quotient = derailment_quotient(s, wheel.track_force)
+        c = wheel.creepages[0]  # the creep forces' power per unit speed, as an exact step's
+        wheel.frictional_power_per_speed = fx * c[0] + fy * c[1] + mz * c[2]
         if fn > 0.0:
             wheel.mark_validity(check_limits(s, wheel.track_force, [(ts, ta)], pen,
                                              self.flange, self.limits))

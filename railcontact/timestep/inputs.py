@@ -71,9 +71,9 @@ class Kinematics:
         return xi, eta, phi
 
 
-MAX_CURVATURE = 0.02
-"""Largest track curvature [1/m] a step takes (a 50 m radius: tighter than any running
-line; the kinematics assume the patch small against the radius)."""
+MAX_CURVATURE = 0.1
+"""Largest track curvature [1/m] a step takes, as a case file's ``[geometry] curvature``
+(a 10 m radius: tighter than any running line)."""
 
 
 @dataclass(frozen=True)

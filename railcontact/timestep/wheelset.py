@@ -23,11 +23,20 @@ Frames and signs (SI units):
 
 Kinematic creepages (``Kinematics``; wheelset spin speed Omega about the axle, rolling
 forward when positive; roll rate neglected), for a patch at lateral position Y_c, rolling
-radius r and contact angle gamma, with side sign s = +1 left, -1 right::
+radius r and contact angle gamma, with side sign s = +1 left, -1 right, on a track of
+curvature k (the rails turn with -V k relative to the track frame)::
 
-    xi  = (V - Omega r - psi_dot (Y_c - y)) / V
+    xi  = (V - Omega r - psi_dot (Y_c - y) - V k Y_c) / V
     eta = (y_dot - V psi) / (V cos gamma)
-    phi = (-s Omega sin gamma + psi_dot cos gamma) / V
+    phi = (-s Omega sin gamma + (psi_dot + V k) cos gamma) / V
+
+The lateral creepage takes the wheel as following its rail's surface at the patch (its
+vertical velocity ``y_dot tan gamma`` there: the constraint of a wheel in contact), where a
+case file's ``[kinematics]`` (:mod:`railcontact.geometry.kinematics`, CONTACT's rigid
+slip) takes the wheelset's vertical velocity as given: with ``vertical_velocity = 0`` a
+flange patch's eta differs by ``1 / cos^2 gamma``. The rails' deviations
+(:class:`RailDeviation`) are positions at the step: their rates do not enter the
+creepages (rails moving alike: fold their lateral rate into ``lateral_velocity``).
 
 A wheel load Q [N] is the rail's total vertical force on the wheel, as CONTACT's FZ and
 :func:`railcontact.solve`: ``sum (N cos(gamma) + F_y sin(gamma)) = Q`` over the patches.
@@ -196,6 +205,7 @@ class WheelsetContact:
         self.pair = pair
         self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
         self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
+        self._friction_base: ContactSettings | None = None  # (what they were made from)
         settings = settings or ContactSettings()
         self.convention = check_convention(convention)
         if patch_frame is not None:
@@ -377,7 +387,8 @@ class WheelsetContact:
         """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a
         deviation held over steps places the rail once)."""
         key = (side, id(track), rail.offset, rail.roll)
-        out = self._placed.get(key)
+        held = self._placed.get(key)
+        out = held[1] if held is not None and held[0] is track else None
         if out is None:
             try:
                 out = track.deviated(side, rail.offset, rail.roll)
@@ -387,11 +398,13 @@ class WheelsetContact:
                                        f"{rail.roll:g} rad: {exc}") from None
             if len(self._placed) >= 8:
                 self._placed.pop(next(iter(self._placed)))
-            self._placed[key] = out
+            self._placed[key] = (track, out)  # (the track kept: its id is not reused)
         return out
 
     def _with_friction(self, mu: float) -> ContactSettings:
         """The settings with the coefficient of friction ``mu`` (the last few kept)."""
+        if self._friction_base is not self.settings:  # (the settings were replaced)
+            self._friction_base, self._settings_of = self.settings, {}
         out = self._settings_of.get(mu)
         if out is None:
             out = replace(self.settings, friction=mu)
