@@ -328,12 +328,21 @@ class Slave:
                                    "(a store of railcontact table build)")
         path = self.resources / value
         try:
-            return TableContact.open(path if path.exists() else value, settings=contact)
+            table = TableContact.open(path if path.exists() else value, settings=contact)
         except RailContactError as exc:
             raise RailContactError(f"parameter table_file = {value!r}: {exc}") from None
         except Exception as exc:  # a folder that is no Zarr store, a damaged store
             raise RailContactError(f"parameter table_file = {value!r}: not a contact table "
                                    f"({type(exc).__name__}: {exc})") from None
+        mu = table.table.axes.get("friction")  # the parameter: a wheel's input <= 0
+        if mu is not None and table.table.out_of_range.get("friction") != "clamp" and \
+                not mu[0] <= contact.friction <= mu[-1]:
+            raise RailContactError(
+                f"parameter friction = {contact.friction:g} is outside the friction axis "
+                f"[{mu[0]:g}, {mu[-1]:g}] of table_file = {value!r}: it is the coefficient of "
+                "friction of a wheel whose input friction_left/right is <= 0; set it within "
+                "the axis")
+        return table
 
     def _exit_initialization(self) -> int:
         try:

@@ -12,7 +12,8 @@ there as a table step reads it (:func:`table_values`). Per state and wheel
     state's wheel load Q (the load axis, else the case's ``[normal] load``).
 ``creep_force``
     ``|F_table - F| / (mu max(N, Q))``: the creep force error vector (longitudinal and
-    lateral, contact frame) over the saturation force, with the same floor (F/muN).
+    lateral, contact frame) over the saturation force, with the same floor (F/muN); mu is
+    the state's own on a friction axis.
 ``contact_angle``
     ``|gamma_table - gamma|`` [rad] of the main patch; undefined (NaN) when either has no
     contact.
@@ -85,7 +86,8 @@ class Check:
     load
         (n,) the wheel load Q of each state [N] (the floor of the relative errors).
     friction
-        The case's friction coefficient (NaN without ``[tangential]``).
+        The case's friction coefficient (NaN without ``[tangential]``); on a table with
+        a friction axis each state has its own (:meth:`state_friction`).
     seed, method
         The random seed of the states; the interpolation measured (``linear``/``cubic``).
     errors
@@ -112,6 +114,13 @@ class Check:
     @property
     def size(self) -> int:
         return int(self.states.shape[0])
+
+    def state_friction(self) -> np.ndarray:
+        """(n,) the coefficient of friction of each state: its friction axis value, else
+        :attr:`friction` (the scale of the creep force error)."""
+        if "friction" in self.names:
+            return np.asarray(self.states[:, self.names.index("friction")], dtype=float)
+        return np.full(self.size, float(self.friction))
 
     def point(self, i: int) -> dict[str, float]:
         """The state ``i`` as axis name -> value [SI]."""
@@ -254,6 +263,7 @@ def measure(table: ContactTable, chk: Check, method: str | None = None) -> Check
     n, s = chk.size, len(chk.sides)
     errs = {m: np.full((n, s), np.nan) for m in MEASURES}
     tstat = np.zeros((n, s), dtype=np.int8)
+    mus = chk.state_friction()
     for i in range(n):
         point = chk.point(i)
         for j, side in enumerate(chk.sides):
@@ -265,9 +275,9 @@ def measure(table: ContactTable, chk: Check, method: str | None = None) -> Check
             if not scale > 0:
                 continue
             errs["normal_force"][i, j] = abs(got[0] - ex[0]) / scale
-            if math.isfinite(chk.friction) and chk.friction > 0:
+            if math.isfinite(mus[i]) and mus[i] > 0:
                 errs["creep_force"][i, j] = math.hypot(got[1] - ex[1], got[2] - ex[2]) / (
-                    chk.friction * scale)
+                    mus[i] * scale)
             errs["contact_angle"][i, j] = abs(got[3] - ex[3])  # NaN without contact
     chk.errors, chk.table_status = errs, tstat
     return chk

@@ -168,7 +168,7 @@ def blame(table: ContactTable, chk: Any, targets: Targets) -> dict[str, set[int]
                 e = e.reshape(-1, 4)
                 per = {"normal_force": np.nanmax(e[:, 0]) / scale,
                        "creep_force": np.nanmax(np.hypot(e[:, 1], e[:, 2]))
-                       / (chk.friction * scale),
+                       / (chk.state_friction()[s] * scale),
                        "contact_angle": np.nanmax(e[:, 3])}
             est[name] = max((per[m] / getattr(targets, m) for m in over
                              if np.isfinite(per[m])), default=np.nan)

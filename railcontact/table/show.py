@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import RailContactError
 from .check import check_text
 from .refine import Targets, jumps
-from .spec import AXES, DEFAULT_POLICY
+from .spec import AXES, CREEPAGE_AXES, DEFAULT_POLICY
 from .store import IDENTITY, open_dataset, read_messages
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
 
@@ -133,7 +133,7 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
         ax.grid(alpha=0.3)
     axs[0, 0].legend(fontsize=7)
     if len(multi) >= 2:
-        creep = [n for n in multi if AXES[n].table == "tangential"]
+        creep = [n for n in multi if n in CREEPAGE_AXES]
         a, b = (creep[0], creep[1]) if len(creep) >= 2 else (multi[0], multi[1])
         mid = {m: ds.sizes[m] // 2 for m in names if m not in (a, b)}
         cut = ds.where(ok).isel(mid).sel(side=side)

@@ -9,16 +9,18 @@ three)::
     lateral_displacement = [-0.004, 0.004, 9]   # m
     creepage_y = { values = [-0.002, 0.0, 0.002] }
     load = [60e3, 100e3, 3]                      # N
+    friction = [0.2, 0.4]                        # coefficient of friction mu [-]
 
-An axis absent from ``[table]`` keeps the case's value. The axes are stored in the order
-written; the last one is the fastest: a batch of work runs along it, each point started
-from the previous one's solution (:mod:`railcontact.table.build`). ``batch`` (an integer,
-optional) cuts the fastest axis into runs of at most that many points (default: the whole
-axis). ``out_of_range`` (optional) says what a value outside an axis gives, ``"status"``
-(the default) or ``"clamp"`` (:data:`POLICIES`), for every axis or per axis
-(``out_of_range = { load = "clamp" }``); it is kept in the store (not part of the table's
-identity: it does not change the values). Both wheels are solved unless the case's
-``[geometry]`` sets ``side``.
+A ``friction`` axis sets the case's ``[tangential] friction`` (a number: each value above 0
+and within the case's limits) at each point. An axis absent from ``[table]`` keeps the
+case's value. The axes are stored in the order written; the last one is the fastest: a
+batch of work runs along it, each point started from the previous one's solution
+(:mod:`railcontact.table.build`). ``batch`` (an integer, optional) cuts the fastest axis
+into runs of at most that many points (default: the whole axis). ``out_of_range``
+(optional) says what a value outside an axis gives, ``"status"`` (the default) or
+``"clamp"`` (:data:`POLICIES`), for every axis or per axis (``out_of_range = { load =
+"clamp" }``); it is kept in the store (not part of the table's identity: it does not change
+the values). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
 
 All values in SI units; see :data:`AXES`.
 """
@@ -35,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import CaseError
-from ..settings import Case
+from ..settings import Case, TangentialSettings
 from .variables import QUANTITIES
 
 if sys.version_info >= (3, 11):
@@ -63,8 +65,11 @@ AXES: dict[str, Axis] = {
     "creepage_y": Axis("tangential", "creepage", 1, "1", "lateral creepage eta"),
     "spin": Axis("tangential", "creepage", 2, "1/m", "spin creepage phi"),
     "load": Axis("normal", "load", None, "N", "vertical wheel load"),
+    "friction": Axis("tangential", "friction", None, "1", "coefficient of friction mu"),
 }
 """The axes a table may have."""
+CREEPAGE_AXES = ("creepage_x", "creepage_y", "spin")
+"""The axes of a wheel's creepages (in its side frame)."""
 OPTIONS = ("batch", "out_of_range")
 """Keys of ``[table]`` that are not axes."""
 POLICIES = ("status", "clamp")
@@ -312,6 +317,12 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
         raise CaseError("[tangential] friction: a contact table takes one coefficient of "
                         "friction (a number); a friction table across the profile is for "
                         "railcontact solve and the exact step")
+    if "friction" in names:
+        for mu in axes["friction"]:
+            TangentialSettings.check_value("friction", float(mu), "[table] friction")
+            if not mu > 0.0:
+                raise CaseError(f"[table] friction: each coefficient of friction must be "
+                                f"above 0, got {mu:g}")
     if "load" in names and "penetration" in raw.get("normal", {}):
         raise CaseError("[table] load: the case controls the penetration ([normal] "
                         "penetration); a load axis needs [normal] load")

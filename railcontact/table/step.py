@@ -13,6 +13,13 @@ frames, as ``railcontact solve`` does). With ``kinematics`` the creepages are th
 contact point the table gives at the wheel's pose and load (first looked up at the middle of
 the creepage axes, then at the creepages found).
 
+Friction: a table with a ``friction`` axis (``[table] friction``) is looked up at each
+wheel's own coefficient of friction, ``solve(..., friction=(mu_left, mu_right))``, or
+``settings.friction`` for both without it (the FMU: the inputs ``friction_left/right``, a
+wheel whose input is <= 0 the parameter ``friction``); a value outside the axis follows its
+out-of-range policy, as any axis. A table without a friction axis holds its case's
+coefficient only: a friction per step is an error naming the axis.
+
 Statuses: those of the table's nodes (the largest of the nodes used); a state outside an
 axis of the table whose out-of-range policy is ``status`` (the default), or different
 from the case's value on an axis the table does not have, is out of range (all outputs of
@@ -26,7 +33,8 @@ not computed is out of range too. Penetration control (``vertical``) is not in a
 Validity: a wheel with forces has its Y/Q (``derailment_quotient``), its ``penetration``
 and its ``validity`` bits checked against the limits as the exact step does
 (:func:`~railcontact.timestep.validity.check_limits`, the same function): Y/Q above
-``max_y_q`` or beyond Nadal's limit (with the table's friction coefficient), flange climb,
+``max_y_q`` or beyond Nadal's limit (with the wheel's coefficient of friction: the table's,
+or the one looked up on its friction axis), flange climb,
 penetration above ``max_penetration``, wheel load above ``max_wheel_load``; an ok wheel
 beyond one is outside validity (status 4). All from the interpolated values: the rail's
 force on the wheel, the largest penetration of the patches and the profile coordinate and
@@ -49,6 +57,7 @@ import numpy as np
 from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.track import SIDES, Pose
 from ..settings import ContactSettings
+from ..timestep.inputs import per_wheel
 from ..timestep.memory import EMPTY as EMPTY_MEMORY
 from ..timestep.memory import StepMemory
 from ..timestep.validity import check_limits, derailment_quotient
@@ -61,7 +70,7 @@ from ..timestep.wheelset import (
     WheelsetResult,
 )
 from .interpolate import ContactTable
-from .spec import AXES
+from .spec import AXES, CREEPAGE_AXES
 from .variables import NOT_COMPUTED, VALIDITY_QUANTITIES
 
 ABSENT_RTOL = 1e-9
@@ -81,8 +90,10 @@ class TableContact:
     settings
         The validity limits read from it: ``max_y_q`` [-], ``max_penetration`` [m],
         ``max_wheel_load`` [N] (None: :class:`~railcontact.settings.ContactSettings`'s
-        defaults). The friction coefficient of Nadal's limit is always the table's (its
-        forces were solved with it), whatever ``settings.friction`` says.
+        defaults); and, on a table with a friction axis, ``friction``: the coefficient of
+        friction of a step given none. The friction coefficient of Nadal's limit is the
+        one the wheel's forces were solved with (the table's, or the wheel's on the
+        friction axis), whatever ``settings.friction`` says.
 
     Raises
     ------
@@ -105,6 +116,9 @@ class TableContact:
         case = table.case
         tangential = case.get("tangential") or {}
         settings = ContactSettings() if settings is None else settings
+        self.settings = settings
+        """The settings given (their ``friction``: a step's without one, on a table with a
+        friction axis)."""
         self.limits = replace(settings, friction=tangential.get("friction", settings.friction))
         """The validity limits (with the table's friction coefficient)."""
         self.flange = table.flange
@@ -112,7 +126,8 @@ class TableContact:
         creep = tangential.get("creepage", (0.0, 0.0, 0.0))
         fixed = {"lateral_displacement": case["geometry"]["lateral_displacement"],
                  "yaw": case["geometry"]["yaw"], "load": case["normal"].get("load"),
-                 "creepage_x": creep[0], "creepage_y": creep[1], "spin": creep[2]}
+                 "creepage_x": creep[0], "creepage_y": creep[1], "spin": creep[2],
+                 "friction": tangential.get("friction")}
         self.fixed = fixed
         order = list(_STATE)
         self._take = [order.index(n) for n in table.axes]
@@ -147,12 +162,14 @@ class TableContact:
         """Both wheels from the table (arguments as ``WheelsetContact.solve``; ``time`` and
         ``remember`` are accepted and unused). Without creepages and kinematics the
         creepages are zero. A table has no axes for rail deviations, a friction per step or
-        a track curvature: given, they are an error."""
-        if rails is not None or friction is not None or (
-                kinematics is not None and kinematics.curvature != 0.0):
-            raise RailContactError("a contact table has no axes for rail deviations, the "
-                                   "friction per step or the track curvature; solve with "
-                                   "the exact contact (contact_model = bem)")
+        a track curvature: given, they are an error. ``friction`` (left, right) [-] is
+        looked up on the table's friction axis (None: ``settings.friction`` on both); a
+        table without one refuses it."""
+        if rails is not None or (kinematics is not None and kinematics.curvature != 0.0):
+            raise RailContactError("a contact table has no axes for rail deviations or the "
+                                   "track curvature; solve with the exact contact "
+                                   "(contact_model = bem)")
+        mus = self._friction(friction)
         t0 = perf_counter()
         if vertical is not None or loads is None:
             raise RailContactError("a contact table is built by wheel load: give loads "
@@ -171,9 +188,26 @@ class TableContact:
         for side, q in (("left", ql), ("right", qr)):  # as WheelsetContact
             check_positive(f"{side} wheel load", q, "N", allow_zero=True)
         kin = kinematics if creepages is None else None
-        left = self._wheel("left", pose, ql, (xl, el, pl), kin)
-        right = self._wheel("right", pose, qr, (xr, -er, -pr), kin)
+        left = self._wheel("left", pose, ql, (xl, el, pl), kin, mus[0])
+        right = self._wheel("right", pose, qr, (xr, -er, -pr), kin, mus[1])
         return WheelsetResult(left, right, perf_counter() - t0)
+
+    def _friction(self, friction: tuple[float, float] | None) -> tuple:
+        """Each wheel's coefficient of friction at a step: ``friction`` (checked), else
+        ``settings.friction`` on a table with a friction axis, else the table's."""
+        if "friction" not in self.table.axes:
+            if friction is not None:
+                raise RailContactError(
+                    f"the table has no friction axis ([table] friction = [...]): it holds "
+                    f"friction = {self.fixed['friction']} only; build a table with a "
+                    "friction axis for a friction per step, or solve with the exact contact "
+                    "(contact_model = bem)")
+            return (self.fixed["friction"],) * 2
+        if friction is None:
+            return (float(self.settings.friction),) * 2
+        return tuple(check_positive(f"{s} friction", float(mu), "")
+                     for s, mu in zip(SIDES, per_wheel("friction", friction, 1,
+                                                       "(left, right) [-]"), strict=True))
 
     def _lookup(self, j: int, state: tuple[float, ...]):
         """(values, status, message) at ``state`` (in :data:`_STATE` order); values None
@@ -208,8 +242,8 @@ class TableContact:
             if n in clamped)
 
     def _wheel(self, side: str, pose: Pose, load: float, creep: tuple[float, float, float],
-               kin: Kinematics | None) -> WheelContact:
-        """One wheel; ``creep`` in its side frame."""
+               kin: Kinematics | None, mu: float | None) -> WheelContact:
+        """One wheel; ``creep`` in its side frame, ``mu`` its coefficient of friction."""
         j = self._j.get(side)
         if j is None:
             return WheelContact(side=side, status=OUT_OF_RANGE,
@@ -218,10 +252,10 @@ class TableContact:
             return WheelContact(side=side)
         if kin is not None:  # the creepages of the table's contact point
             mid = {n: 0.5 * (v[0] + v[-1]) for n, v in self.table.axes.items()
-                   if AXES[n].table == "tangential"}
+                   if n in CREEPAGE_AXES}
             state = (pose.lateral, pose.yaw, load, mid.get("creepage_x", self.fixed[
                 "creepage_x"]), mid.get("creepage_y", self.fixed["creepage_y"]),
-                mid.get("spin", self.fixed["spin"]))
+                mid.get("spin", self.fixed["spin"]), mu)
             vals, status, msg = self._lookup(j, state)
             if vals is None:
                 return WheelContact(side=side, status=status, message=msg)
@@ -232,15 +266,21 @@ class TableContact:
             xi, eta, phi = kin.creepage(cp, pose, self.table.case["geometry"]["wheel_radius"])
             s = SIDES[side]
             creep = (xi, s * eta, s * phi)
-        vals, status, msg = self._lookup(j, (pose.lateral, pose.yaw, load, *creep))
+        vals, status, msg = self._lookup(j, (pose.lateral, pose.yaw, load, *creep, mu))
         if vals is None:
             return WheelContact(side=side, status=status, message=msg)
-        wheel = self._fill(side, vals, status, creep)
+        limits = self.limits
+        if "friction" in self.table.axes:  # Nadal's limit with the value looked up
+            x, _ = self.table.clamp([mu if n == "friction" else self.table.axes[n][0]
+                                     for n in self.table.axes])
+            limits = replace(limits, friction=x[list(self.table.axes).index("friction")])
+        wheel = self._fill(side, vals, status, creep, limits)
         if msg:  # clamped (out_of_range = clamp)
             wheel.message = f"{wheel.message}; {msg} (the table's out_of_range policy)"
         return wheel
 
-    def _fill(self, side: str, vals: np.ndarray, status: int, creep) -> WheelContact:
+    def _fill(self, side: str, vals: np.ndarray, status: int, creep, limits: ContactSettings
+              ) -> WheelContact:
         (fn, fx, fy, mz, tx, ty, tz, ym, cx, cy, cz, ws, rs, ga, rr, ar, pm, sl,
          pen, ts, ta) = vals.tolist()
         if status != OK:
@@ -266,11 +306,12 @@ class TableContact:
         wheel.frictional_power_per_speed = fx * c[0] + fy * c[1] + mz * c[2]
         if fn > 0.0:
             wheel.mark_validity(check_limits(s, wheel.track_force, [(ts, ta)], pen,
-                                             self.flange, self.limits))
+                                             self.flange, limits))
         return wheel
 
 
-_STATE = ("lateral_displacement", "yaw", "load", "creepage_x", "creepage_y", "spin")
+_STATE = ("lateral_displacement", "yaw", "load", "creepage_x", "creepage_y", "spin",
+          "friction")
 """The order of a wheel's state in :meth:`TableContact._lookup`."""
 _FIELDS = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment",
            "force_longitudinal", "force_lateral", "force_vertical", "yaw_moment",
