@@ -235,3 +235,30 @@ def test_show_check_and_export_read_the_friction_axis(table, tmp_path, capsys):
     csv = tmp_path / "t.csv"
     assert main(["table", "export", str(out), str(csv)]) == 0
     assert csv.read_text().splitlines()[0].startswith("creepage_x,friction,side")
+
+
+def test_refine_splits_the_friction_axis_and_its_new_nodes_are_railcontact_solve(
+        table, tmp_path, capsys):
+    """``table refine --axes friction`` on a copy of the checked table: the friction axis
+    gains its middle node, which equals ``railcontact solve`` at that friction."""
+    import shutil
+
+    spec, out = table
+    copy = tmp_path / "r.zarr"
+    shutil.copytree(out, copy)
+    if not (copy / "check").exists():
+        assert main(["table", "check", str(copy), "2", "--workers", "0"]) == 0
+    assert main(["table", "refine", str(copy), "--axes", "friction", "--target",
+                 "creep_force=1e-9", "--workers", "1", "--quiet"]) == 0
+    capsys.readouterr()
+    t = ContactTable.open(copy)
+    mu = t.axes["friction"]
+    assert list(mu) == pytest.approx([0.2, 0.3, 0.4], rel=1e-15)
+    assert list(t.axes["creepage_x"]) == list(XI)
+    for k, xi in enumerate(XI):
+        sol = solve(spec.case_at_values({"creepage_x": xi, "friction": float(mu[1])}))
+        for side in spec.sides:
+            node = t.node((k, 1), side)
+            for name, value in _wheel(sol, side).items():
+                assert node[name] == pytest.approx(value, rel=1e-9,
+                                                   abs=1e-9 * abs(value) + 1e-12), (k, side)
