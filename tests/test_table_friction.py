@@ -177,6 +177,17 @@ def test_a_table_without_a_friction_axis_refuses_a_friction_per_step(tmp_path):
                                                               rel=1e-3)
     with pytest.raises(RailContactError, match=r"no friction axis \(\[table\] friction"):
         step.solve(Pose(0.0, 0.0), loads=(LOAD, LOAD), creepages=creep, friction=(0.3, 0.3))
+    # the FMU: inputs <= 0 the table's own friction; an input above 0 discards the step
+    s = _slave(tmp_path, table_file=str(tmp_path / "one.zarr"))
+    for k, v in {"load_left": LOAD, "load_right": LOAD, "xi_left": XI[1],
+                 "xi_right": XI[1]}.items():
+        s[k] = v
+    assert s.exit_initialization() == 0, s.pop_log()
+    assert s["creep_force_x_left"] == res.left.creep_force[0]
+    s["friction_left"] = 0.3
+    s.control[:] = (0.0, 1e-3)
+    assert s.do_step() == 2  # fmi2Discard
+    assert "no friction axis" in s.pop_log() and s["status_left"] == 3
 
 
 def _slave(resources: Path, **parameters):
