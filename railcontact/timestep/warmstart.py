@@ -120,6 +120,15 @@ class PatchMemory:
             object.__setattr__(self, "element_box", box)
         object.__setattr__(self, "contact_box", box_edges(box, self.grid))
 
+    def without_older(self) -> PatchMemory:
+        """This memory without its ``older`` step and traction rate: what a newer step
+        keeps of it (its traction and time for the extrapolation; the newer step's rate
+        has taken in the rest). ``dataclasses.replace(m, older=None, traction_rate=None)``,
+        made directly (a per-pass path: ``replace`` reads the fields' descriptions)."""
+        return PatchMemory(self.grid, self.pressure, self.traction, self.state, self.u,
+                           self.z, self.time, None, self.vertical_creep, self.approach,
+                           self.vertical_normal, None, self.displacement, self.element_box)
+
     def extrapolation(self, time: float | None) -> float:
         """The factor ``(t - t_k) / (t_k - t_{k-1})`` for a step at ``time`` [s]; 0 when
         it cannot be formed."""

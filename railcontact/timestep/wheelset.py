@@ -621,7 +621,7 @@ class WheelsetContact:
             # what a newer step keeps of the older one: its traction and time for the
             # extrapolation, not its own older step or traction rate, which this step's
             # rate has taken in (the memory, and an FMU's saved state, stay two steps deep)
-            older = None if last is None else replace(last, older=None, traction_rate=None)
+            older = None if last is None else last.without_older()
             n = patch.normal
             memory.append(PatchMemory(
                 grid=n.grid, pressure=n.pressure,
