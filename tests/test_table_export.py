@@ -14,10 +14,10 @@ import pytest
 pytest.importorskip("xarray")
 pytest.importorskip("zarr")
 
+from _tables import build_here  # noqa: E402
+
 from railcontact.cli import main  # noqa: E402
 from railcontact.table import ContactTable, parse_spec  # noqa: E402
-from railcontact.table.solve import solve_batch  # noqa: E402
-from railcontact.table.store import Store, create_store  # noqa: E402
 from railcontact.table.variables import COUNTS, QUANTITIES  # noqa: E402
 
 RAW = {"name": "export", "material": {"young": 206e9, "poisson": 0.28},
@@ -37,13 +37,7 @@ def table(tmp_path_factory):
 
     spec = parse_spec(RAW)
     out = tmp_path_factory.mktemp("export") / "t.zarr"
-    create_store(out, spec)
-    store = Store(out, spec)
-    for ix in np.ndindex(*spec.batch_shape):
-        values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
-                  for p in spec.batch_points(ix)]
-        store.write_batches([(ix, solve_batch(spec.case, spec.sides, values), [])])
-    store.finish(True)
+    build_here(spec, out)
     arr = zarr.open_group(str(out), mode="r+")["contact_angle"]
     a = arr[...]
     a[1, 0, 1] = np.nan

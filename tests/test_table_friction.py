@@ -19,14 +19,15 @@ import pytest
 pytest.importorskip("xarray")
 pytest.importorskip("zarr")
 
+from _tables import build_here  # noqa: E402
+
 from railcontact import solve  # noqa: E402
 from railcontact.cli import main  # noqa: E402
 from railcontact.errors import CaseError, RailContactError  # noqa: E402
 from railcontact.geometry.track import Pose  # noqa: E402
 from railcontact.settings import ContactSettings  # noqa: E402
 from railcontact.table import ContactTable, TableContact, parse_spec  # noqa: E402
-from railcontact.table.solve import solve_batch  # noqa: E402
-from railcontact.table.store import Store, create_store, open_dataset  # noqa: E402
+from railcontact.table.store import open_dataset  # noqa: E402
 
 LOAD = 80e3
 XI = (0.001, 0.02)  # partial slip, full slip
@@ -49,14 +50,7 @@ def _raw(**table) -> dict:
 
 def _build(spec, out: Path) -> Path:
     """The table of ``spec`` built in this process (through the build's point solve)."""
-    create_store(out, spec)
-    store = Store(out, spec)
-    for ix in np.ndindex(*spec.batch_shape):
-        values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
-                  for p in spec.batch_points(ix)]
-        store.write_batches([(ix, solve_batch(spec.case, spec.sides, values), [])])
-    store.finish(True)
-    return out
+    return build_here(spec, out)
 
 
 @pytest.fixture(scope="module")

@@ -11,19 +11,19 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 
 pytest.importorskip("xarray")
 pytest.importorskip("zarr")
 
+from _tables import build_here  # noqa: E402
+
 from railcontact import solve  # noqa: E402
 from railcontact.errors import CaseError, RailContactError  # noqa: E402
 from railcontact.geometry.track import Pose  # noqa: E402
 from railcontact.table import ContactTable, parse_spec  # noqa: E402
-from railcontact.table.solve import solve_batch  # noqa: E402
 from railcontact.table.step import TableContact  # noqa: E402
-from railcontact.table.store import Store, create_store  # noqa: E402
+from railcontact.table.store import Store  # noqa: E402
 
 
 def _raw(out_of_range=None) -> dict:
@@ -42,13 +42,7 @@ def _raw(out_of_range=None) -> dict:
 def _build_here(spec, out) -> None:
     """The table of ``spec`` into ``out`` in this process (the build's solver and
     writer)."""
-    create_store(out, spec)
-    store = Store(out, spec)
-    for ix in np.ndindex(*spec.batch_shape):
-        values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
-                  for p in spec.batch_points(ix)]
-        store.write_batches([(ix, solve_batch(spec.case, spec.sides, values), [])])
-    store.finish(True)
+    build_here(spec, out)
 
 
 @pytest.fixture(scope="module")
