@@ -234,10 +234,12 @@ def _add_demo(sub) -> None:
 
 
 def _cmd_table_build(args: argparse.Namespace) -> int:
-    from .table import load_spec
     from .table.build import build_table
+    from .table.kinds import load_any_spec
 
-    spec = load_spec(args.spec)
+    spec = load_any_spec(args.spec)
+    if getattr(spec, "kind", "contact") == "creep":
+        return _build_creep(spec, args)
     try:
         rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
                           resume=args.resume, progress=not args.quiet,
@@ -263,6 +265,31 @@ def _cmd_table_build(args: argparse.Namespace) -> int:
         print(f"railcontact: error: {len(rep.failed_batches)} batch(es) failed; rerun with "
               "--resume to compute them", file=sys.stderr)
         return 1
+    return 0
+
+
+def _build_creep(spec, args: argparse.Namespace) -> int:
+    """``table build`` of a creep table: in this process with ``--workers 0``, else on a
+    Dask cluster (local or ``--scheduler``)."""
+    from .table.build import close_client, connect
+    from .table.creep import build_creep_table
+
+    if args.resume or args.check:
+        raise RailContactError("a creep table is built whole: --resume and --check are for "
+                               "contact tables")
+    if args.scheduler and args.workers is not None:
+        raise RailContactError("give --workers or --scheduler, not both")
+    client = None if args.workers == 0 else connect(args.scheduler, args.workers)
+    try:
+        rep = build_creep_table(spec, args.output, client=client, progress=not args.quiet)
+    finally:
+        if client is not None:
+            close_client(client)
+    print(f"creep table {args.output}: {rep.points} points in {rep.seconds:.3g} s "
+          f"({rep.rate:.3g} points/s); {rep.not_converged} not converged (see 'railcontact "
+          "table show')")
+    for m in rep.messages[:10]:
+        print(f"railcontact: warning: {m}", file=sys.stderr)
     return 0
 
 
@@ -355,12 +382,15 @@ def _add_table(sub) -> None:
                         description="Solve a case file at every point of the axes of its "
                         "[table] (docs/tables.md) on a Dask cluster, writing an xarray "
                         "Dataset to a Zarr store. Points already in the store are not "
-                        "computed again.")
-    b.add_argument("spec", help="the table spec: a wheel-rail case file with a [table]")
+                        "computed again. A [table] kind = 'creep' spec builds a "
+                        "normalised creep table (Hertzian patches; docs/tables.md).")
+    b.add_argument("spec", help="the table spec: a wheel-rail case file with a [table], or "
+                   "a creep table's spec")
     b.add_argument("-o", "--output", required=True, help="the Zarr store (OUT.zarr)")
     b.add_argument("--scheduler", metavar="ADDRESS",
                    help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
-    b.add_argument("--workers", type=int, help="local worker processes (default: the CPUs)")
+    b.add_argument("--workers", type=int, help="local worker processes (default: the CPUs; "
+                   "0: a creep table in this process)")
     b.add_argument("--resume", action="store_true",
                    help="complete an existing store (error when there is none)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")

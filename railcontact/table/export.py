@@ -11,6 +11,10 @@
     (in the table's order), then ``side``, every quantity, ``status`` and the work
     counters; SI units as in the store; floats as the shortest decimal that reads back to
     the same value; ``nan`` where a quantity is undefined (no contact, a failed point).
+
+A creep table (``kind = "creep"``) is written by :func:`~.creepread.export_creep`: its
+Dataset as netCDF, or a CSV row per node (the axes, the normalised values, status and the
+creep coefficients of the node's ellipse ratio).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
+from .creepread import export_creep, is_creep_table
 from .store import IDENTITY, open_dataset
 from .variables import COUNTS, QUANTITIES
 
@@ -56,6 +61,8 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
     if not out.parent.is_dir():
         raise RailContactError(f"folder {out.parent} does not exist")
     ds = open_dataset(path)
+    if is_creep_table(ds):
+        return export_creep(path, out, fmt)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     data = [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS]
     data = [n for n in data if n in ds]

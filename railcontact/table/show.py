@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .check import check_text
+from .creepread import creep_summary, is_creep_table, plot_creep
 from .refine import Targets, jumps
 from .spec import AXES, CREEPAGE_AXES, DEFAULT_POLICY
 from .store import IDENTITY, open_dataset, read_messages
@@ -24,6 +25,8 @@ MAX_MESSAGES = 10
 def summary(path: str | Path) -> str:
     """The text of ``railcontact table show``."""
     ds = open_dataset(path)
+    if is_creep_table(ds):
+        return creep_summary(path)
     ident = json.loads(ds.attrs[IDENTITY])
     names = list(ident["axes"])
     done = ds["batch_done"].values
@@ -103,13 +106,16 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
     """Write the forces of the left (first) wheel against each axis (the other axes at
     their middle nodes) and a heat map over two axes (the first two creepage axes, else the
     first two axes) of the creep force's magnitude (of the normal force without
-    creepages) to ``out``."""
+    creepages) to ``out``; of a creep table, its creep curves
+    (:func:`~.creepread.plot_creep`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     ds = open_dataset(path)
+    if is_creep_table(ds):
+        return plot_creep(path, out)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     out = Path(out)
     if not out.parent.is_dir():

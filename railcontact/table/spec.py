@@ -70,8 +70,11 @@ AXES: dict[str, Axis] = {
 """The axes a table may have."""
 CREEPAGE_AXES = ("creepage_x", "creepage_y", "spin")
 """The axes of a wheel's creepages (in its side frame)."""
-OPTIONS = ("batch", "out_of_range")
+OPTIONS = ("batch", "out_of_range", "kind")
 """Keys of ``[table]`` that are not axes."""
+KINDS = ("contact", "creep")
+"""The kinds of table (``[table] kind``; absent: ``contact``, the table of this module;
+``creep``: :mod:`.creepspec`)."""
 POLICIES = ("status", "clamp")
 """What a value outside an axis gives (``out_of_range``): ``status`` (out of range: the
 table step's status 3 with zero outputs, an error from :class:`~.interpolate.ContactTable`)
@@ -294,6 +297,12 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     if not isinstance(table, dict) or not table:
         raise CaseError("a table spec needs a [table] with at least one axis (known: "
                         f"{', '.join(AXES)})")
+    kind = table.get("kind", KINDS[0])
+    if kind not in KINDS:
+        raise CaseError(f"[table] kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    if kind != KINDS[0]:
+        raise CaseError(f"[table] kind = {kind!r} is not a contact table: read the spec with "
+                        "railcontact.table.load_any_spec")
     unknown = sorted(set(table) - set(AXES) - set(OPTIONS))
     if unknown:
         raise CaseError(f"[table]: unknown axis {', '.join(unknown)}; known: "
