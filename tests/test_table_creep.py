@@ -68,7 +68,7 @@ def test_creep_coefficients_against_kalkers_table(table):
     32 x 32 elements. The tolerance is the discretisation error measured by refinement:
     the piecewise-constant BEM converges to Kalker's values from above, slowly (the
     no-slip traction is singular at the trailing edge); at 32, 64, 128 elements the
-    differences at these ratios are 1.9-4.8 %, 0.7-2.6 %, 0.5-1.5 % (Kalker's numbers
+    differences at these ratios are 1.8-4.8 %, 0.7-2.6 %, 0.5-1.5 % (Kalker's numbers
     have three digits). C32 equals C23 by reciprocity, to the same discretisation."""
     import xarray as xr
 

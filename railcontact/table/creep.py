@@ -196,8 +196,16 @@ def build_creep_table(spec: CreepSpec, out: str | Path, *, client: Any = None,
             if progress:
                 say(f"  a/b = {r:g}: {results[-1]['seconds']:.2f} s")
     else:
-        futures = [client.submit(solve_ratio, spec, r, pure=False) for r in ratios]
-        results = client.gather(futures)
+        from distributed import as_completed
+
+        futures = {client.submit(solve_ratio, spec, r, pure=False): k
+                   for k, r in enumerate(ratios)}
+        results = [None] * len(ratios)
+        for fut in as_completed(list(futures)):
+            k = futures[fut]
+            results[k] = fut.result()
+            if progress:
+                say(f"  a/b = {ratios[k]:g}: {results[k]['seconds']:.2f} s (on a worker)")
     report.seconds = time.perf_counter() - t0
     for r, res in zip(ratios, results, strict=True):
         report.not_converged += int(np.count_nonzero(res["status"]))

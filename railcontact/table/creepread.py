@@ -302,7 +302,7 @@ def plot_creep(path: str | Path, out: str | Path, ratios: int = 5) -> Path:
         ax.set_ylabel(f"{q} = F/(mu N) [-]")
         ax.set_title(at or "creep curve", fontsize=8)
         ax.grid(alpha=0.3)
-    axs[0, 0].legend(fontsize=7)
+    axs[0, 0].legend(fontsize=7, loc="lower left")
     fig.suptitle(f"creep curves, Poisson's ratio {float(ds.attrs['poisson']):g}", fontsize=9)
     fig.tight_layout()
     try:

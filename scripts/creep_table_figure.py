@@ -1,0 +1,107 @@
+"""A normalised creep table (``[table] kind = "creep"``, docs/tables.md): build it (unless
+the store exists), print its creep coefficients beside Kalker's Table E.3, the build's
+points per second, the full-slip values, the interpolation error of ``CreepTable`` at
+random states between the nodes against the exact solve there (``--check N``), the time
+of a ``CreepTable.forces`` call (median), and draw its creep curves (F/(mu N) against the
+normalised creepages for a few ellipse ratios, with the linear theory) to a PNG.
+
+Usage: python scripts/creep_table_figure.py [--spec models/tables/creep_nu028.toml]
+       [--table OUT.zarr] [--figure docs/table_creep_curves.png] [--workers N]
+       [--check N] [--seed S]
+       (``--workers 0``, the default: in this process)
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from railcontact.contact.dispatch import solve  # noqa: E402
+from railcontact.table.build import close_client, connect  # noqa: E402
+from railcontact.table.creep import build_creep_table  # noqa: E402
+from railcontact.table.creepread import CreepTable, creep_summary, plot_creep  # noqa: E402
+from railcontact.table.creepspec import CREEPAGES, RATIO, case_scales  # noqa: E402
+from railcontact.table.kinds import load_any_spec  # noqa: E402
+from railcontact.table.store import open_dataset  # noqa: E402
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--spec", default=str(ROOT / "models" / "tables" / "creep_nu028.toml"))
+    ap.add_argument("--table", default=None, help="the store (default: a temporary one)")
+    ap.add_argument("--figure", default=str(ROOT / "docs" / "table_creep_curves.png"))
+    ap.add_argument("--workers", type=int, default=0)
+    ap.add_argument("--check", type=int, default=40, help="random off-node states")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args()
+    spec = load_any_spec(args.spec)
+    table = Path(args.table) if args.table else Path(tempfile.mkdtemp()) / "creep.zarr"
+    if not table.exists():
+        client = connect(None, args.workers) if args.workers else None
+        try:
+            rep = build_creep_table(spec, table, client=client)
+        finally:
+            if client is not None:
+                close_client(client)
+        print(f"built {table}: {rep.points} points in {rep.seconds:.1f} s "
+              f"({rep.rate:.0f} points/s, {args.workers or 'this'} "
+              f"{'worker(s)' if args.workers else 'process'}); {rep.not_converged} not "
+              "converged")
+    print(creep_summary(table))
+    ds = open_dataset(table)
+    err = {n: 100 * (ds[n].values / ds[f"kalker_{n}"].values - 1) for n in ("c11", "c22",
+                                                                              "c23")}
+    print("exact linear limit vs Kalker's Table E.3 [%]: "
+          + "; ".join(f"{n} {v.min():+.2f} .. {v.max():+.2f}" for n, v in err.items()))
+    full = ds["force_x"].isel(creepage_x=-1)
+    sel = {n: int(np.argmin(np.abs(ds[n].values))) for n in ("creepage_y", "spin")
+           if n in ds.dims}
+    print(f"F_x/(mu N) at nu_x = {float(ds['creepage_x'].values[-1]):g} (others 0), per "
+          f"a/b: {np.round(full.isel(sel).values, 5).tolist()}")
+    if args.check:
+        check(spec, table, args.check, args.seed)
+    print(f"figure written to {plot_creep(table, args.figure)}")
+    return 0
+
+
+def check(spec, table: Path, n: int, seed: int) -> None:
+    """The table's F/(mu N) at ``n`` random states (uniform in ln(a/b) and the creepage
+    axes, inside the table) against the exact solve of each state's case; the time of a
+    ``CreepTable.forces`` call."""
+    tab = CreepTable(table)
+    rng = np.random.default_rng(seed)
+    errs, times = [], []
+    for _ in range(n):
+        state = {}
+        for name, x in spec.axes.items():
+            lo, hi = (np.log(x[0]), np.log(x[-1])) if name == RATIO else (x[0], x[-1])
+            v = rng.uniform(lo, hi)
+            state[name] = float(np.exp(v) if name == RATIO else v)
+        sc = case_scales(spec.case_at(state[RATIO]))
+        cr = sc.physical([state.get(c, 0.0) for c in CREEPAGES])
+        t = solve(spec.case_at(state[RATIO], tuple(cr))).patches[0].tangential
+        exact = np.array([t.force[0], t.force[1]]) / sc.mu_n
+        got = tab.normalised(state)[0][:2]
+        errs.append(float(np.max(np.abs(got - exact))))
+        t0 = time.perf_counter()
+        tab.forces(sc.a, sc.b, sc.mu_n / float(spec.case["tangential"]["friction"]),
+                   float(spec.case["tangential"]["friction"]), sc.shear, *cr)
+        times.append(time.perf_counter() - t0)
+    e = np.array(errs)
+    print(f"interpolation error of F/(mu N) (max over x, y) at {n} random states (seed "
+          f"{seed}) against the exact solve: median {np.median(e):.3g}, 90 % "
+          f"{np.quantile(e, 0.9):.3g}, max {e.max():.3g}")
+    print(f"CreepTable.forces: median {statistics.median(times) * 1e6:.0f} us per call")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
