@@ -15,7 +15,7 @@ The store is an xarray Dataset in a Zarr store (format 2)::
             slip_area (the slipping fraction of the contact area [-]), status (int8: 0 ok,
             1 not converged: the values NaN); over ellipse_ratio alone the creep
             coefficients c11, c22, c23, c32, c33 of the exact solver and kalker_c11,
-            kalker_c22, kalker_c23 (Table E.3, the normalisation's)
+            kalker_c22, kalker_c23 (Table E.3, the normalisation's), kalker_c33
     attrs   railcontact_table (the identity, JSON), kind = "creep", poisson,
             out_of_range (JSON), railcontact_version, case_name, complete, seconds
 """
@@ -35,6 +35,7 @@ import numpy as np
 from .. import __version__
 from ..contact.dispatch import solve
 from ..errors import RailContactError
+from ..tangential.kalker import creep_coefficients
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, CreepSpec, case_scales
 from .store import IDENTITY, POLICY_ATTR
 
@@ -58,6 +59,7 @@ COEFFICIENTS: dict[str, str] = {
     "kalker_c11": "Kalker's C11 (Table E.3) of the normalisation of creepage_x",
     "kalker_c22": "Kalker's C22 (Table E.3) of the normalisation of creepage_y",
     "kalker_c23": "Kalker's C23 (Table E.3) of the normalisation of spin",
+    "kalker_c33": "Kalker's C33 (the literature's column beside Table E.3; for comparison)",
 }
 """The values per ellipse ratio: name -> long name (all dimensionless)."""
 STATUS_TEXT = {0: "ok", 1: "not converged"}
@@ -119,6 +121,7 @@ def linear_coefficients(spec: CreepSpec, ratio: float) -> dict[str, float]:
             out["c33"] = -mz / (g * c**4 * phi)
     out.update(zip(("kalker_c11", "kalker_c22", "kalker_c23"), sc.coefficients,
                    strict=True))
+    out["kalker_c33"] = creep_coefficients(sc.a, sc.b, spec.poisson).c33
     return out
 
 

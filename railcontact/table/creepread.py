@@ -215,12 +215,12 @@ def creep_summary(path: str | Path) -> str:
                      f"{v[-1]:.6g}; out of range: {pol.get(n, DEFAULT_POLICY)}")
     lines.append("creep coefficients (exact linear limit; Kalker's Table E.3 in brackets):")
     lines.append(f"  {'a/b':>8s} {'C11':>16s} {'C22':>16s} {'C23':>16s} {'C32':>8s} "
-                 f"{'C33':>8s}")
+                 f"{'C33':>16s}")
     for k, r in enumerate(ds[RATIO].values):
         c = {n: float(ds[n].values[k]) for n in COEFFICIENTS}
         lines.append(f"  {r:8.4g} " + " ".join(
             f"{c[n]:7.4f} ({c['kalker_' + n]:6.4f})" for n in ("c11", "c22", "c23"))
-            + f" {c['c32']:8.4f} {c['c33']:8.4f}")
+            + f" {c['c32']:8.4f} {c['c33']:7.4f} ({c['kalker_c33']:6.4f})")
     ok = status == 0
     lines.append("values (ok nodes):")
     for n in OUTPUTS:
