@@ -21,6 +21,8 @@ into runs of at most that many points (default: the whole axis). ``out_of_range`
 ``"clamp"`` (:data:`POLICIES`), for every axis or per axis (``out_of_range = { load =
 "clamp" }``); it is kept in the store (not part of the table's identity: it does not change
 the values). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
+``kind`` (optional) is ``"contact"``, this module's table (the default); ``"creep"`` is a
+normalised creep table (:mod:`.creepspec`), whose spec :func:`~.kinds.load_any_spec` reads.
 
 All values in SI units; see :data:`AXES`.
 """
