@@ -21,8 +21,9 @@ import scipy.linalg
 import scipy.optimize
 
 from ..errors import RailContactError, check_positive
+from .dynamics import WheelsetModel
 from .linear_contact import LinearWheelsetContact
-from .vehicle import DOFS, POSITIONS, WHEELSETS, vehicle_matrices
+from .vehicle import CARBODY, DOFS, POSITIONS, WHEELSETS, vehicle_matrices
 from .vehicle_data import VehicleParameters
 
 OSCILLATORY = 1e-3
@@ -162,5 +163,38 @@ def critical_speed(p: VehicleParameters, contact: LinearWheelsetContact,
     return CriticalSpeed(vc, least_damped(p, contact, vc), scan)
 
 
-__all__ = ["CriticalSpeed", "Mode", "contact_matrices", "critical_speed", "least_damped",
-           "modes", "state_matrix"]
+
+
+def hunting_mode(p: VehicleParameters, contact: LinearWheelsetContact, speed: float) -> Mode:
+    """The least damped mode in which the wheelsets move more than the car body (the
+    car body's lateral displacement over the bogie centres, ``|y_c| + l_2 |psi_c|``, below
+    the largest wheelset's): the bogies' hunting, not the car body's low-frequency sway
+    and yaw."""
+    pos = list(POSITIONS)
+    y, psi = pos.index(CARBODY[0]), pos.index(CARBODY[1])
+    for m in modes(p, contact, speed):
+        if abs(m.vector[y]) + p.semi_bogie_distance * abs(m.vector[psi]) < 1.0:
+            return m
+    raise RailContactError(f"no wheelset mode at {speed:g} m/s")
+
+
+def wheelset_eigenvalues(model: WheelsetModel, contact: LinearWheelsetContact,
+                         speed: float) -> np.ndarray:
+    """Eigenvalues [1/s] of one wheelset (:class:`~railcontact.sim.dynamics.WheelsetModel`:
+    lateral, yaw, spin; suspension to a frame moving at V) with the linearised contact,
+    state (y, psi, y_dot, psi_dot, omega); the oscillatory ones (imaginary part > 0),
+    least damped first."""
+    kc, cc = contact.stiffness()[:, :2], contact.damping(speed)
+    a = np.zeros((5, 5))
+    a[0, 2] = a[1, 3] = 1.0
+    minv = np.linalg.inv(model.inertia)
+    a[2:, :2] = -minv @ (model.stiffness[:, :2] + kc)
+    a[2:, 2:] = -minv @ (model.damping + cc)
+    lam = np.linalg.eigvals(a)
+    lam = lam[lam.imag > OSCILLATORY]
+    return lam[np.argsort(-lam.real)]
+
+
+__all__ = ["CriticalSpeed", "Mode", "contact_matrices", "critical_speed", "hunting_mode",
+           "least_damped", "modes", "state_matrix",
+           "wheelset_eigenvalues"]
