@@ -223,3 +223,21 @@ def test_in_process_contact_agrees_with_kalker_at_small_creepages():
     for k, dof in enumerate((0, 1, 2)):  # F_Y from y_dot, M_Z from psi_dot, T_y from Omega
         assert change[k, dof] == pytest.approx(kalker[k, dof], rel=0.08)
     np.testing.assert_allclose(bem.normal, P.wheel_load, rtol=0.01)
+
+
+def test_demo_vehicle_command(capsys, tmp_path):
+    """``railcontact demo --vehicle``: two steps of the vehicle with the BEM contact print
+    each wheelset's motion, the wheel forces and the real-time factor; bad input is one
+    line and exit status 2."""
+    from railcontact.cli import main
+
+    rc = main(["demo", "--vehicle", "--duration", "0.004", "--step", "0.002",
+               "--element-size", "2e-3", "--no-plots", "--no-progress",
+               "--output-dir", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    for text in ("wheelset 4: peak |y| 3.00 mm", "wheelset 1 wheels: left |Y|", "Y/Q max",
+                 "real-time factor"):
+        assert text in out
+    assert main(["demo", "--vehicle", "--speed", "-1", "--no-progress"]) == 2
+    assert "speed" in capsys.readouterr().err

@@ -143,14 +143,15 @@ def contact_angle_parameter(track: Track, wheelset: Wheelset, amplitude: float,
 
 
 def linear_contact(track: Track, wheelset: Wheelset, pair: ElasticPair, wheel_load: float,
-                   amplitude: float) -> LinearWheelsetContact:
+                   amplitude: float, samples: int = 201) -> LinearWheelsetContact:
     """The linearised contact of a wheelset on ``track`` carrying ``wheel_load`` [N] per
     wheel, its conicity and contact-angle parameter taken at ``amplitude`` [m].
 
     The nominal patch is Hertz's at the centred wheelset's contact point (its curvatures
     from railcontact's contact search, the normal force ``Q / cos(gamma0)``); Kalker's
     coefficients for its axis ratio and the pair's Poisson's ratio
-    (:func:`~railcontact.tangential.kalker.creep_coefficients`).
+    (:func:`~railcontact.tangential.kalker.creep_coefficients`). ``samples``: lateral
+    displacements in [-A, A] the conicity and the contact-angle parameter sample.
     """
     q = check_positive("wheel_load", wheel_load, "N")
     centre = centred_contact(track, wheelset)
@@ -163,8 +164,8 @@ def linear_contact(track: Track, wheelset: Wheelset, pair: ElasticPair, wheel_lo
     return LinearWheelsetContact(
         f11=g * c * c * k.c11, f22=g * c * c * k.c22, f23=g * c**3 * k.c23,
         f33=g * c**4 * k.c33,
-        conicity=equivalent_conicity(track, wheelset, amplitude),
-        contact_angle_parameter=contact_angle_parameter(track, wheelset, amplitude),
+        conicity=equivalent_conicity(track, wheelset, amplitude, samples),
+        contact_angle_parameter=contact_angle_parameter(track, wheelset, amplitude, samples),
         radius=centre.radius, half_distance=centre.half_distance, normal_force=normal,
         semi_axes=(hz.a, hz.b), amplitude=amplitude)
 

@@ -4,8 +4,9 @@ The default is *Vehicle 1* of the Manchester benchmarks for rail vehicle simulat
 conventional passenger coach with two two-axle bogies and air-spring secondary suspension:
 S. Iwnicki, "The Manchester Benchmarks for Rail Vehicle Simulation", Vehicle System
 Dynamics 30 (1998) 295-313, doi:10.1080/00423119808969454 (and the book of the same
-title, Swets & Zeitlinger 1999). The benchmark paper's table was not at hand; the values
-are those of two independent public transcriptions of it that agree where they overlap:
+title, Swets & Zeitlinger 1999). The benchmark paper's table itself was not consulted; the
+values are those of two independent public transcriptions of it that agree where they
+overlap:
 
 * [T1] the TTB-2D train-track-bridge toolbox (D. Cantero, NTNU),
   ``TrainProp_Manchester_BenchMark.m``: masses, pitch inertias, vertical primary and
