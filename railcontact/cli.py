@@ -209,7 +209,7 @@ def _cmd_demo_vehicle(args: argparse.Namespace) -> int:
         wheel_profile=args.wheel_profile, rail_profile=args.rail_profile,
         profile_unit=args.profile_unit, element_size=args.element_size,
         warm_start=args.warm_start, quick=args.quick, output_dir=args.output_dir,
-        plots=not args.no_plots)
+        plots=not args.no_plots, contact=args.contact, fmu=args.fmu)
     res = run_vehicle_demo(opts, progress=not args.no_progress)
     print(res.text)
     for f in res.files:
@@ -230,6 +230,10 @@ def _add_demo(sub) -> None:
                    help="a bogie passenger vehicle (Manchester benchmark Vehicle 1: car body, "
                    "two bogies, four wheelsets), its contact solved in-process; --quick: "
                    "0.3 s, 2 ms steps, 1.5 mm elements (defaults 1 s, 1 ms, 1 mm)")
+    d.add_argument("--contact", default="in-process", choices=("in-process", "fmu"),
+                   help="--vehicle: the wheelsets' contact in this process, or through the "
+                   "FMU (--fmu; one instance per wheelset of a one-wheelset FMU, one of an "
+                   "FMU of four wheelsets) by fmpy (in-process)")
     d.add_argument("--speed", type=float, help="forward speed [m/s] (30; --vehicle: 60)")
     d.add_argument("--duration", type=float, help="simulated time [s] (1.5)")
     d.add_argument("--step", type=float, help="communication step [s] (0.001)")

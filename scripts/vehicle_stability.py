@@ -44,7 +44,7 @@ from railcontact.sim.vehicle import VehicleRun, measure_decay, simulate_vehicle 
 from railcontact.sim.vehicle_contact import InProcessContact, LinearContact  # noqa: E402
 from railcontact.sim.vehicle_data import VehicleParameters  # noqa: E402
 
-QUICK = {"element_size": 1.5e-3, "step": 2e-3, "duration": 0.5, "iterations": 2}
+QUICK = {"element_size": 1.5e-3, "step": 2e-3, "duration": 0.8, "iterations": 2}
 
 
 def nonlinear_growth(p, lin, track, ws, pair, speed, args):

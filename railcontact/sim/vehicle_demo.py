@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import RailContactError, check_positive
+from ..fmu import DEFAULT_OUTPUT
 from ..geometry.profiles import read_profile
 from ..geometry.track import Track, Wheelset
 from ..io.plotting import _pyplot
@@ -43,6 +44,7 @@ MM, KN = 1e3, 1e-3
 QUICK = {"duration": 0.5, "step": 2e-3, "element_size": 1.5e-3}
 DEFAULT = {"duration": 1.0, "step": 1e-3, "element_size": 1e-3}
 SIDES = ("left", "right")
+CONTACTS = ("in-process", "fmu")
 
 
 @dataclass
@@ -62,6 +64,11 @@ class VehicleDemoOptions:
     quick: bool = False
     output_dir: str = "railcontact_demo"
     plots: bool = True
+    contact: str = "in-process"
+    """"in-process" (four WheelsetContacts) or "fmu" (the FMU at :attr:`fmu` through fmpy,
+    built when missing or stale: one instance per wheelset of a one-wheelset FMU, or one
+    instance of an FMU of four wheelsets)."""
+    fmu: str = DEFAULT_OUTPUT
 
     def resolved(self) -> dict[str, float]:
         base = QUICK if self.quick else DEFAULT
@@ -69,6 +76,9 @@ class VehicleDemoOptions:
                for k, v in base.items()}
         check_positive("speed", self.speed, "m/s")
         check_positive("initial_lateral", self.initial_lateral, "m")
+        if self.contact not in CONTACTS:
+            raise RailContactError(f"contact must be one of {', '.join(CONTACTS)}, got "
+                                   f"{self.contact!r}")
         for k, v in out.items():
             check_positive(k, v, "m" if k == "element_size" else "s")
         return out
@@ -92,14 +102,22 @@ def run_vehicle_demo(opts: VehicleDemoOptions, progress: bool = True) -> Vehicle
     pair = MaterialSettings().elastic_pair()
     p = VehicleParameters()
     lin = linear_contact(track, ws, pair, p.wheel_load, opts.initial_lateral, samples=41)
-    settings = ContactSettings(element_size=cfg["element_size"], warm_start=opts.warm_start)
-    contact = InProcessContact(track, ws, pair, settings)
+    if opts.contact == "fmu":
+        contact = _fmu_contact(opts, cfg, progress)
+    else:
+        settings = ContactSettings(element_size=cfg["element_size"],
+                                   warm_start=opts.warm_start)
+        contact = InProcessContact(track, ws, pair, settings)
     q = np.zeros(DOFS)
     for i in range(4):
         q[wheelset_dofs(i)[0]] = opts.initial_lateral
     run = VehicleRun(opts.speed, cfg["duration"], cfg["step"], q, np.zeros(DOFS),
                      -lin.damping(opts.speed), lin.radius)
-    sim = simulate_vehicle(p, contact, run, print_progress if progress else None)
+    try:
+        sim = simulate_vehicle(p, contact, run, print_progress if progress else None)
+    finally:
+        if hasattr(contact, "close"):
+            contact.close()
     if not sim.forces:
         raise RailContactError(f"the vehicle did not run: {sim.message}")
     summary = summarise(sim, lin)
@@ -108,6 +126,20 @@ def run_vehicle_demo(opts: VehicleDemoOptions, progress: bool = True) -> Vehicle
     if opts.plots:
         res.files.append(plot_vehicle(sim, Path(opts.output_dir) / "demo_vehicle.png"))
     return res
+
+
+def _fmu_contact(opts: VehicleDemoOptions, cfg: dict[str, float], progress: bool):
+    """The FMU contact of ``--contact fmu`` (load control, kinematic creepages, no rigid
+    wheelset search: as the in-process contact)."""
+    from ..fmu import ensure_fmu
+    from .demo import _note, _profile_files
+    from .vehicle_fmu import FMUContact
+
+    files, params = _profile_files(opts)
+    fmu, _ = ensure_fmu(opts.fmu, files, log=_note if progress else None)
+    params.update(element_size=cfg["element_size"], warm_start=opts.warm_start,
+                  rigid_wheelset="skip")
+    return FMUContact(fmu, 4, cfg["step"], params)
 
 
 def summarise(sim: VehicleResult, lin) -> dict[str, Any]:
@@ -148,8 +180,10 @@ def describe(sim: VehicleResult, s: dict[str, Any], opts: VehicleDemoOptions,
         f"{run.speed:g} m/s ({run.speed * 3.6:.0f} km/h), {cfg['duration']:g} s in "
         f"{run.steps} steps of {run.step * 1e3:g} ms, element size "
         f"{cfg['element_size'] * MM:g} mm, {p.wheel_load * KN:.2f} kN per wheel",
-        f"contact: four in-process WheelsetContacts ({opts.warm_start}), one after the "
-        f"other; start: all wheelsets at y = {opts.initial_lateral * MM:g} mm (equivalent "
+        (f"contact: four in-process WheelsetContacts ({opts.warm_start}), one after the other"
+         if opts.contact == "in-process" else
+         f"contact: the FMU {opts.fmu} through fmpy ({opts.warm_start})")
+        + f"; start: all wheelsets at y = {opts.initial_lateral * MM:g} mm (equivalent "
         f"conicity {s['conicity']:.3f} there)",
     ]
     if not sim.completed:
