@@ -180,16 +180,37 @@ def _cmd_wisdom(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    if args.vehicle:
+        return _cmd_demo_vehicle(args)
     from .sim.demo import DemoOptions, run_demo
 
     opts = DemoOptions(
-        speed=args.speed, duration=args.duration, step=args.step,
-        initial_lateral=args.initial_lateral, wheel_profile=args.wheel_profile,
+        speed=30.0 if args.speed is None else args.speed, duration=args.duration, step=args.step,
+        initial_lateral=4e-3 if args.initial_lateral is None else args.initial_lateral,
+        wheel_profile=args.wheel_profile,
         rail_profile=args.rail_profile, profile_unit=args.profile_unit,
         element_size=args.element_size, warm_start=args.warm_start, free=args.free,
         cold_every=args.cold_every, quick=args.quick, fmu=args.fmu,
         output_dir=args.output_dir, plots=not args.no_plots)
     res = run_demo(opts, progress=not args.no_progress)
+    print(res.text)
+    for f in res.files:
+        print(f"plot written to {f}")
+    return 0 if res.sim.completed else 1
+
+
+def _cmd_demo_vehicle(args: argparse.Namespace) -> int:
+    from .sim.vehicle_demo import VehicleDemoOptions, run_vehicle_demo
+
+    opts = VehicleDemoOptions(
+        speed=60.0 if args.speed is None else args.speed, duration=args.duration,
+        step=args.step,
+        initial_lateral=3e-3 if args.initial_lateral is None else args.initial_lateral,
+        wheel_profile=args.wheel_profile, rail_profile=args.rail_profile,
+        profile_unit=args.profile_unit, element_size=args.element_size,
+        warm_start=args.warm_start, quick=args.quick, output_dir=args.output_dir,
+        plots=not args.no_plots, contact=args.contact, fmu=args.fmu)
+    res = run_vehicle_demo(opts, progress=not args.no_progress)
     print(res.text)
     for f in res.files:
         print(f"plot written to {f}")
@@ -205,11 +226,20 @@ def _add_demo(sub) -> None:
                        "plots.")
     d.add_argument("--quick", action="store_true",
                    help="short run: 0.6 s, 2 ms steps, 0.8 mm elements (under a minute)")
-    d.add_argument("--speed", type=float, default=30.0, help="forward speed [m/s] (30)")
+    d.add_argument("--vehicle", action="store_true",
+                   help="a bogie passenger vehicle (Manchester benchmark Vehicle 1: car body, "
+                   "two bogies, four wheelsets), its contact solved in-process; --quick: "
+                   "0.3 s, 2 ms steps, 1.5 mm elements (defaults 1 s, 1 ms, 1 mm)")
+    d.add_argument("--contact", default="in-process", choices=("in-process", "fmu"),
+                   help="--vehicle: the wheelsets' contact in this process, or through the "
+                   "FMU (--fmu; one instance per wheelset of a one-wheelset FMU, one of an "
+                   "FMU of four wheelsets) by fmpy (in-process)")
+    d.add_argument("--speed", type=float, help="forward speed [m/s] (30; --vehicle: 60)")
     d.add_argument("--duration", type=float, help="simulated time [s] (1.5)")
     d.add_argument("--step", type=float, help="communication step [s] (0.001)")
-    d.add_argument("--initial-lateral", type=float, default=4e-3,
-                   help="initial lateral displacement [m] (0.004)")
+    d.add_argument("--initial-lateral", type=float,
+                   help="initial lateral displacement [m] (0.004; --vehicle: 0.003, every "
+                   "wheelset)")
     d.add_argument("--wheel-profile", default="S1002",
                    help="built-in wheel profile or a profile file (S1002)")
     d.add_argument("--rail-profile", default="60E1",

@@ -317,3 +317,42 @@ def test_a_discarded_step_is_reported_not_raised():
     inst.fmu.status = 3
     with pytest.raises(FMICallException):
         inst.step(2e-3, 1e-3, [0.0])
+
+
+def test_vehicle_contact_through_the_fmu_equals_the_in_process_one(fmu):
+    """FMUContact (one one-wheelset FMU instance per wheelset, through fmpy) gives the
+    vehicle the same wheel forces as InProcessContact with the FMU's settings, step for
+    step (cold: the FMU's initialisation solves a state of its own, from which a warm
+    step would start)."""
+    from railcontact.fmu.variables import parameter_settings
+    from railcontact.sim.vehicle_contact import InProcessContact, WheelsetStates
+    from railcontact.sim.vehicle_fmu import FMUContact
+
+    params = {"element_size": 2e-3, "rigid_wheelset": "skip", "warm_start": "none"}
+    through = FMUContact(fmu, 2, 1e-3, params)
+    try:
+        ps = parameter_settings({**{v.name: v.start for v in _parameters(fmu)}, **params,
+                                 "creepage_input": "kinematic"})
+        track, ws = s1002_60e1()
+        here = InProcessContact(track, ws, ps.material.elastic_pair(), ps.contact, count=2)
+        v, r0 = 40.0, 0.46
+        for k, y in enumerate((2e-3, 2.2e-3)):
+            states = WheelsetStates(k * 1e-3, v, np.array([y, -y]), np.array([1e-4, 0.0]),
+                                    np.array([0.01, -0.02]), np.array([0.0, 0.003]),
+                                    np.array([v / r0, v / r0 * 1.0001]),
+                                    np.full((2, 2), 60e3))
+            a, b = through(states), here(states)
+            assert a.ok and b.ok
+            np.testing.assert_allclose(a.generalized, b.generalized, rtol=1e-9, atol=1e-6)
+            np.testing.assert_allclose(a.derailment_quotient, b.derailment_quotient,
+                                       rtol=1e-9, atol=1e-12)
+            np.testing.assert_array_equal(a.status, b.status)
+    finally:
+        through.close()
+
+
+def _parameters(fmu):
+    from fmpy.model_description import read_model_description
+
+    return [v for v in read_model_description(str(fmu)).modelVariables
+            if v.causality == "parameter"]

@@ -183,10 +183,12 @@ class CoSimResult:
 
 
 class _Instance:
-    """One FMU2Slave with named Real/Integer access."""
+    """One FMU2Slave with named Real/Integer access; ``inputs`` names the Real inputs
+    :meth:`step` sets, in its order."""
 
     def __init__(self, unzipdir: str, md, name: str,
-                 parameters: Mapping[str, float | str]) -> None:
+                 parameters: Mapping[str, float | str],
+                 inputs: tuple[str, ...] = INPUTS) -> None:
         from fmpy.fmi2 import FMU2Slave
 
         self.vars = {v.name: v for v in md.modelVariables}
@@ -212,7 +214,7 @@ class _Instance:
                 self.fmu.setInteger([v.valueReference], [int(value)])
         self.fmu.exitInitializationMode()
         self.startup = {"instantiate": t1 - t0, "initialise": time.perf_counter() - t1}
-        self.inputs = [self.vars[n].valueReference for n in INPUTS]
+        self.inputs = [self.vars[n].valueReference for n in inputs]
         self.real_out = [n for n, v in self.vars.items()
                          if v.causality == "output" and v.type == "Real"]
         self.int_out = [n for n, v in self.vars.items()

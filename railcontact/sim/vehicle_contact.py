@@ -1,0 +1,183 @@
+"""The vehicle's contact: one call per vehicle step, the wheelsets' states in, their wheel
+forces out.
+
+:class:`VehicleContact` is the interface the vehicle (:mod:`railcontact.sim.vehicle`)
+integrates against. Two implementations:
+
+* :class:`InProcessContact`: one :class:`~railcontact.timestep.WheelsetContact` per
+  wheelset (the exact BEM, warm-started step after step), called one after the other;
+* :class:`LinearContact`: the linearised contact of
+  :mod:`railcontact.sim.linear_contact` (Kalker's linear creep forces), for the checks
+  against the eigenvalue analysis.
+
+Another host of the same wheelsets (a multi-wheelset FMU driven through fmpy) is an
+adapter of the same shape: set the per-wheelset inputs from :class:`WheelsetStates`, one
+``doStep``, read the outputs into :class:`WheelForces`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from ..errors import RailContactError
+from ..geometry.track import Pose, Track, Wheelset
+from ..halfspace.materials import ElasticPair
+from ..settings import ContactSettings
+from ..status import Status
+from ..timestep import Kinematics, WheelsetContact
+from .linear_contact import LinearWheelsetContact
+
+
+@dataclass(frozen=True)
+class WheelsetStates:
+    """The wheelsets' states at one step (track frame, SI units); arrays of one value per
+    wheelset (front to back) unless stated.
+
+    Attributes
+    ----------
+    time
+        t [s].
+    speed
+        Forward speed V [m/s] (all wheelsets).
+    lateral, yaw
+        y [m] (positive to the left), psi [rad] (nose left).
+    lateral_velocity, yaw_rate
+        dy/dt [m/s], dpsi/dt [rad/s].
+    spin_speed
+        Omega [rad/s] about the axle.
+    loads
+        Wheel loads (left, right) [N], shape (n, 2).
+    """
+
+    time: float
+    speed: float
+    lateral: np.ndarray
+    yaw: np.ndarray
+    lateral_velocity: np.ndarray
+    yaw_rate: np.ndarray
+    spin_speed: np.ndarray
+    loads: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return len(self.lateral)
+
+
+@dataclass
+class WheelForces:
+    """The rails' forces on the wheelsets at one step (SI units).
+
+    Attributes
+    ----------
+    generalized
+        (F_Y [N], M_Z [N m], T_y [N m]) per wheelset, (n, 3): the total lateral force,
+        the yaw moment about the wheelset centre and the moment about the axle
+        ``-(r_l F_X,l + r_r F_X,r)``.
+    lateral, vertical, normal
+        Per wheel (left, right), (n, 2): the rail's force on the wheel along track Y and Z
+        and the normal force [N].
+    derailment_quotient
+        Y/Q per wheel, (n, 2) [-].
+    status
+        Per wheelset (:class:`~railcontact.status.Status` values), (n,).
+    solve_time
+        Wall time of each wheelset's solve [s], (n,).
+    ok, message
+        False when a wheelset could not be solved (off its rail, a solver error).
+    """
+
+    generalized: np.ndarray
+    lateral: np.ndarray
+    vertical: np.ndarray
+    normal: np.ndarray
+    derailment_quotient: np.ndarray
+    status: np.ndarray
+    solve_time: np.ndarray
+    ok: bool = True
+    message: str = "ok"
+    iterations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Normal + tangential BEM iterations per wheelset (in-process contact), (n,)."""
+
+
+class VehicleContact(Protocol):
+    """Wheelset states in, wheel forces out, once per vehicle step."""
+
+    def __call__(self, states: WheelsetStates) -> WheelForces: ...
+
+
+@dataclass
+class LinearContact:
+    """Kalker's linear contact (:class:`~.linear_contact.LinearWheelsetContact`) on every
+    wheelset. Its per-wheel forces split the linear totals: lateral ``F_Y / 2`` on each
+    wheel, the normal force and vertical force the wheel load."""
+
+    model: LinearWheelsetContact
+
+    def __call__(self, states: WheelsetStates) -> WheelForces:
+        n = states.count
+        q = np.stack([states.lateral, states.yaw, np.zeros(n)], axis=1)
+        v = np.stack([states.lateral_velocity, states.yaw_rate, states.spin_speed], axis=1)
+        g = self.model.force(q, v, states.speed)
+        loads = np.asarray(states.loads, dtype=float)
+        lat = np.repeat(g[:, :1] / 2, 2, axis=1)
+        yq = np.stack([-lat[:, 0], lat[:, 1]], axis=1) / loads
+        return WheelForces(g, lat, loads.copy(), loads.copy(), yq, np.zeros(n, dtype=int),
+                           np.zeros(n))
+
+
+class InProcessContact:
+    """One :class:`~railcontact.timestep.WheelsetContact` per wheelset, in this process.
+
+    Parameters
+    ----------
+    track, wheelset, pair, settings
+        As :class:`~railcontact.timestep.WheelsetContact` (the same for all wheelsets).
+    count
+        Number of wheelsets.
+    """
+
+    def __init__(self, track: Track, wheelset: Wheelset, pair: ElasticPair,
+                 settings: ContactSettings | None = None, count: int = 4) -> None:
+        self.solvers = [WheelsetContact(track, wheelset, pair, settings) for _ in range(count)]
+
+    def __call__(self, states: WheelsetStates) -> WheelForces:
+        n = states.count
+        if n != len(self.solvers):
+            raise RailContactError(f"{len(self.solvers)} wheelsets expected, got {n}")
+        gen = np.zeros((n, 3))
+        lat, vert, nor, yq = (np.zeros((n, 2)) for _ in range(4))
+        status = np.zeros(n, dtype=int)
+        secs, its = np.zeros(n), np.zeros(n)
+        ok, message = True, "ok"
+        for i, solver in enumerate(self.solvers):
+            t0 = time.perf_counter()
+            r = solver.solve(Pose(float(states.lateral[i]), float(states.yaw[i])),
+                             loads=(float(states.loads[i, 0]), float(states.loads[i, 1])),
+                             kinematics=Kinematics(states.speed,
+                                                   float(states.lateral_velocity[i]),
+                                                   float(states.yaw_rate[i]),
+                                                   float(states.spin_speed[i])),
+                             time=states.time)
+            secs[i] = time.perf_counter() - t0
+            status[i] = int(r.status)
+            if r.status in (Status.OUT_OF_RANGE, Status.NO_CONTACT):
+                ok = False
+                message = f"wheelset {i + 1}: " + "; ".join(
+                    w.message for w in r.wheels if w.status == r.status)
+            wl, wr = r.wheels
+            gen[i] = (r.force[1], r.yaw_moment,
+                      -(wl.rolling_radius * wl.track_force[0]
+                        + wr.rolling_radius * wr.track_force[0]))
+            for k, w in enumerate(r.wheels):
+                lat[i, k], vert[i, k] = w.track_force[1], w.track_force[2]
+                nor[i, k], yq[i, k] = w.normal_force, w.derailment_quotient
+            its[i] = sum(w.normal_iterations + w.tangential_iterations for w in r.wheels)
+        return WheelForces(gen, lat, vert, nor, yq, status, secs, ok, message, its)
+
+
+__all__ = ["InProcessContact", "LinearContact", "VehicleContact", "WheelForces",
+           "WheelsetStates"]
