@@ -7,13 +7,15 @@ the fastest axis), ``store`` (the Zarr layout, resume, completeness), ``build`` 
 ``interpolate`` (:class:`ContactTable`), ``show`` (summary, plots), ``step`` (a wheelset
 step from a table, as the FMU's ``contact_model = table``), ``check`` (the interpolation
 error against the exact solver at random states), ``refine`` (nodes added where it errs or
-the contact jumps), ``export`` (netCDF, CSV). Building needs the ``[tables]``
+the contact jumps), ``export`` (netCDF, CSV), ``geometry`` and ``geometry_table`` (geometry
+tables, ``[table] kind = "geometry"``: :class:`GeometryTable`). Building needs the ``[tables]``
 extra (dask[distributed], xarray, zarr, tqdm).
 """
 
+from .geometry_table import GeometryTable
 from .interpolate import ContactTable, Interpolated
 from .spec import AXES, TableSpec, load_spec, parse_spec
 from .step import TableContact
 
-__all__ = ["AXES", "ContactTable", "Interpolated", "TableContact", "TableSpec", "load_spec",
-           "parse_spec"]
+__all__ = ["AXES", "ContactTable", "GeometryTable", "Interpolated", "TableContact", "TableSpec",
+           "load_spec", "parse_spec"]

@@ -11,6 +11,8 @@
     (in the table's order), then ``side``, every quantity, ``status`` and the work
     counters; SI units as in the store; floats as the shortest decimal that reads back to
     the same value; ``nan`` where a quantity is undefined (no contact, a failed point).
+    A geometry table (:mod:`.geometry`): its wheelset's quantities on both rows of a node,
+    each patch's as ``<name>_<k>`` (:func:`~.geometry_table.export_csv`).
 """
 
 from __future__ import annotations
@@ -22,7 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .store import IDENTITY, open_dataset
+from .geometry import KIND
+from .geometry_table import data_names, export_csv
+from .store import IDENTITY, kind_of, open_dataset
 from .variables import COUNTS, QUANTITIES
 
 FORMATS = {".nc": "netcdf", ".csv": "csv"}
@@ -57,7 +61,9 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
         raise RailContactError(f"folder {out.parent} does not exist")
     ds = open_dataset(path)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
-    data = [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS]
+    geometry = kind_of(ds.attrs) == KIND
+    data = (data_names() if geometry else
+            [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS])
     data = [n for n in data if n in ds]
     if fmt == "netcdf":
         keep = ds[data].load()
@@ -70,6 +76,8 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
         except (OSError, ValueError) as exc:
             raise RailContactError(f"cannot write {out}: {exc}") from None
         return out
+    if geometry:
+        return export_csv(ds, names, out)
     order = [*names, "side"]
     arrays = {n: ds[n].transpose(*order).values for n in data}
     grids = np.meshgrid(*[ds[n].values for n in names], indexing="ij")

@@ -21,6 +21,9 @@ into runs of at most that many points (default: the whole axis). ``out_of_range`
 ``"clamp"`` (:data:`POLICIES`), for every axis or per axis (``out_of_range = { load =
 "clamp" }``); it is kept in the store (not part of the table's identity: it does not change
 the values). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
+``kind`` (optional) says what the table holds: ``"creep-force"`` (the default, this
+module's table of exact solves) or another kind of :data:`KINDS` (``"geometry"``:
+:mod:`.geometry`), which parses its own ``[table]``.
 
 All values in SI units; see :data:`AXES`.
 """
@@ -70,7 +73,24 @@ AXES: dict[str, Axis] = {
 """The axes a table may have."""
 CREEPAGE_AXES = ("creepage_x", "creepage_y", "spin")
 """The axes of a wheel's creepages (in its side frame)."""
-OPTIONS = ("batch", "out_of_range")
+OTHER_AXES: dict[str, Axis] = {
+    "roll": Axis("geometry", "roll", None, "rad", "roll angle of the wheelset (left side up)"),
+}
+"""Axes of the other kinds of table (:data:`KINDS`) only."""
+
+
+def axis_info(name: str) -> Axis:
+    """The :class:`Axis` of any kind of table (:data:`AXES`, :data:`OTHER_AXES`)."""
+    return AXES[name] if name in AXES else OTHER_AXES[name]
+
+
+DEFAULT_KIND = "creep-force"
+"""``[table] kind`` of a spec that gives none: the table of exact solves of this module."""
+KINDS: dict[str, Any] = {}
+"""The other kinds of table: ``[table] kind`` -> ``parse(raw, table)``, the parser of its
+spec (the case's tables without ``[table]``, and ``[table]``), registered by its module
+when the package is imported (:mod:`.geometry`)."""
+OPTIONS = ("batch", "out_of_range", "kind")
 """Keys of ``[table]`` that are not axes."""
 POLICIES = ("status", "clamp")
 """What a value outside an axis gives (``out_of_range``): ``status`` (out of range: the
@@ -294,6 +314,12 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     if not isinstance(table, dict) or not table:
         raise CaseError("a table spec needs a [table] with at least one axis (known: "
                         f"{', '.join(AXES)})")
+    kind = table.get("kind", DEFAULT_KIND)
+    if kind != DEFAULT_KIND:
+        if kind not in KINDS:
+            raise CaseError(f"[table] kind must be one of {', '.join([DEFAULT_KIND, *KINDS])}"
+                            f", got {kind!r}")
+        return KINDS[kind](raw, table)
     unknown = sorted(set(table) - set(AXES) - set(OPTIONS))
     if unknown:
         raise CaseError(f"[table]: unknown axis {', '.join(unknown)}; known: "
