@@ -2,7 +2,8 @@
 quantities at any pose inside the axes, multilinear (a pose on a node returns the node's
 values exactly), and gives the equivalent conicity of its rolling radius difference.
 
-A quantity is interpolated from the nodes of the pose's cell that have a weight; a node
+A quantity is interpolated from the nodes of the pose's cell that have a weight (a pose
+within :data:`SNAP` of a cell's width from a node is on it); a node
 whose wheel is not ok (status out of range, not converged, not computed) makes that
 wheel's values (and the wheelset's) NaN with its status, as a patch that a node used does
 not have makes that patch's values NaN: a patch is interpolated only where every node used
@@ -30,6 +31,9 @@ from .store import IDENTITY, POLICY_ATTR, kind_of, read_table
 from .variables import NOT_COMPUTED, OK, failed_counts, failed_text
 
 SIDES = ("left", "right")
+SNAP = 1e-9
+"""A pose within this fraction of a cell from a node is on the node (a value written as
+the node's, e.g. 0.0045 for ``linspace(-0.01, 0.01, 201)[145]``, uses that node alone)."""
 
 
 @dataclass(frozen=True)
@@ -143,6 +147,7 @@ class GeometryTable:
                 continue
             lo = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, len(nodes) - 2)
             t = (x - nodes[lo]) / (nodes[lo + 1] - nodes[lo])
+            t = np.where(t < SNAP, 0.0, np.where(t > 1.0 - SNAP, 1.0, t))
             cells.append((lo, lo + 1, t))
         return cells, tuple(clamped)
 
@@ -163,6 +168,17 @@ class GeometryTable:
                                    f"{', '.join(q.name for q in QUANTITIES)}")
         cells, _ = self._cells(state)
         return self._interpolate(self._masked(name), cells)
+
+    def stored(self, name: str) -> np.ndarray:
+        """The node values of ``name`` over the axes (then the sides, then the patches):
+        NaN where their wheel (a wheelset's quantity: a wheel) is not ok; ``n_patches`` as
+        stored (0 where not ok)."""
+        if name == N_PATCHES.name:
+            return np.asarray(self._arrays[name]).copy()
+        if name not in self._arrays or name in ("status", "side"):
+            raise RailContactError(f"no quantity {name!r}; the quantities: "
+                                   f"{', '.join(q.name for q in QUANTITIES)}, n_patches")
+        return self._masked(name)
 
     def _masked(self, name: str) -> np.ndarray:
         """The stored values of ``name``, NaN where their wheel (or a wheel, for the
