@@ -296,3 +296,13 @@ def test_show_and_export(rigid, tmp_path, capsys):
                 got = float(row[f"{q.name}_{k + 1}"])
                 assert got == want or (math.isnan(got) and math.isnan(want))
         assert int(row["n_patches"]) == node.n_patches[row["side"]]
+    import xarray as xr
+
+    nc = tmp_path / "g.nc"
+    assert main(["table", "export", str(out), str(nc)]) == 0
+    with xr.open_dataset(nc) as ds:
+        assert ds["patch_contact_angle"].dims == (*spec.names, "side", "patch")
+        assert ds["rolling_radius_difference"].dims == tuple(spec.names)
+        assert ds["patch_contact_angle"].attrs["units"] == "rad"
+        got = ds["patch_contact_angle"].values[3, 0, 0, 1]  # 4.5 mm, left: the flange root
+        assert got == table.node((3, 0)).wheels["left"]["patch_contact_angle"][1]

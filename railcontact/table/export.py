@@ -11,8 +11,9 @@
     (in the table's order), then ``side``, every quantity, ``status`` and the work
     counters; SI units as in the store; floats as the shortest decimal that reads back to
     the same value; ``nan`` where a quantity is undefined (no contact, a failed point).
-    A geometry table (:mod:`.geometry`): its wheelset's quantities on both rows of a node,
-    each patch's as ``<name>_<k>`` (:func:`~.geometry_table.export_csv`).
+    A geometry table (:mod:`railcontact.table.geometry`): its wheelset's quantities on
+    both rows of a node, each patch's as ``<name>_<k>``
+    (:func:`~.geometry_table.export_csv`).
 """
 
 from __future__ import annotations

@@ -71,7 +71,8 @@ OPTIONS = ("batch", "out_of_range", "kind")
 PATCHES = 3
 """Most patches of a wheel a geometry table holds."""
 MAX_ANGLE = 0.1
-"""Largest |yaw| and |roll| of a pose [rad] (:class:`~railcontact.geometry.track.Pose`)."""
+"""Largest yaw and roll of a pose, either sign [rad]
+(:class:`~railcontact.geometry.track.Pose`)."""
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,7 @@
-"""Using a geometry table (:mod:`.geometry`): :class:`GeometryTable` interpolates its
-quantities at any pose inside the axes, multilinear (a pose on a node returns the node's
-values exactly), and gives the equivalent conicity of its rolling radius difference.
+"""Using a geometry table (:mod:`railcontact.table.geometry`): :class:`GeometryTable`
+interpolates its quantities at any pose inside the axes, multilinear (a pose on a node
+returns the node's values exactly), and gives the equivalent conicity of its rolling radius
+difference.
 
 A quantity is interpolated from the nodes of the pose's cell that have a weight (a pose
 within :data:`SNAP` of a cell's width from a node is on it); a node

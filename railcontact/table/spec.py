@@ -23,7 +23,7 @@ into runs of at most that many points (default: the whole axis). ``out_of_range`
 the values). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
 ``kind`` (optional) says what the table holds: ``"creep-force"`` (the default, this
 module's table of exact solves) or another kind of :data:`KINDS` (``"geometry"``:
-:mod:`.geometry`), which parses its own ``[table]``.
+:mod:`railcontact.table.geometry`), which parses its own ``[table]``.
 
 All values in SI units; see :data:`AXES`.
 """
@@ -89,7 +89,7 @@ DEFAULT_KIND = "creep-force"
 KINDS: dict[str, Any] = {}
 """The other kinds of table: ``[table] kind`` -> ``parse(raw, table)``, the parser of its
 spec (the case's tables without ``[table]``, and ``[table]``), registered by its module
-when the package is imported (:mod:`.geometry`)."""
+when the package is imported (:mod:`railcontact.table.geometry`)."""
 OPTIONS = ("batch", "out_of_range", "kind")
 """Keys of ``[table]`` that are not axes."""
 POLICIES = ("status", "clamp")

@@ -133,7 +133,7 @@ def data_arrays(spec: TableSpec) -> list[tuple[str, str, Any, dict[str, Any], tu
     """The data arrays of ``spec``'s table but ``status``: ``(name, dtype, fill value,
     attributes, trailing dims)``, each over the axes and then its trailing dims, each dim a
     name and a size (``("side", 2)``); another kind of table gives its own
-    (``spec.data_arrays()``, :mod:`.geometry`)."""
+    (``spec.data_arrays()``, :mod:`railcontact.table.geometry`)."""
     own = getattr(spec, "data_arrays", None)
     if own is not None:
         return own()
