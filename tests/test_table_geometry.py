@@ -223,6 +223,8 @@ def test_equivalent_conicity_of_the_table(tmp_path):
     ({"table": {"kind": "geometry", "roll": "floating", "lateral_displacement": [0, 0.001, 2]}},
      "roll must be one of 'rigid', 'equal-loads' or an axis"),
     ({"table": {"kind": "geometry", "roll": "rigid"}}, "needs at least one axis"),
+    ({"table": {"kind": "geometry", "roll": 0.001, "yaw": [0, 0.001, 2]}},
+     "one roll angle for the whole table is \\[geometry\\] roll"),
     ({"table": {"kind": "geometry", "yaw": [0.0, 0.2, 2]}}, "small angle"),
     ({"table": {"kind": "geometry", "roll": [0.001, -0.001, 2]}}, "start 0.001 > stop"),
     ({"tangential": {"creepage": [0, 0, 0], "friction": 0.3}}, r"\[tangential\]: a geometry"),

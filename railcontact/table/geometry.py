@@ -391,6 +391,10 @@ def parse_geometry_spec(raw: dict[str, Any], table: dict[str, Any]) -> GeometryS
     if isinstance(roll, str) and roll not in ROLL_MODES:
         raise CaseError(f"[table] roll must be one of {', '.join(map(repr, ROLL_MODES))} or "
                         f"an axis of roll angles [rad], got {roll!r}")
+    if isinstance(table.get("roll"), (int, float)):
+        raise CaseError(f"[table] roll = {table['roll']!r}: give 'rigid', 'equal-loads' or an "
+                        "axis ([start, stop, count] or a list of values [rad]); one roll angle "
+                        "for the whole table is [geometry] roll")
     names = [n for n in table if n in AXIS_NAMES and not (n == "roll" and mode != "given")]
     if not names:
         raise CaseError("[table] kind = 'geometry' needs at least one axis: "
@@ -415,8 +419,8 @@ def parse_geometry_spec(raw: dict[str, Any], table: dict[str, Any]) -> GeometryS
     case = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
     case["normal"] = dict(normal) if isinstance(normal, dict) else {"penetration": 0.0}
     case["geometry"] = {**geo, "side": "both",
-                        "roll": mode if mode != "given" else float(
-                            axes["roll"][0] if "roll" in axes else roll)}
+                        "roll": mode if mode != "given" else (
+                            float(axes["roll"][0]) if "roll" in axes else roll)}
     for n in ("lateral_displacement", "yaw"):
         if n in axes:
             case["geometry"][n] = float(axes[n][0])
