@@ -19,6 +19,7 @@ def build_here(spec, out: Path) -> Path:
     for ix in np.ndindex(*spec.batch_shape):
         values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
                   for p in spec.batch_points(ix)]
-        store.write_batches([(ix, solve_batch(spec.case, spec.sides, values), [])])
+        solve = getattr(spec, "solver", solve_batch)  # (another kind of table's)
+        store.write_batches([(ix, solve(spec.case, spec.sides, values), [])])
     store.finish(True)
     return out

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .solve import solve_batch
-from .spec import TableSpec
+from .spec import DEFAULT_KIND, TableSpec
 from .store import Store, create_store
 from .variables import NOT_COMPUTED, STATUS_MEANINGS
 
@@ -112,9 +112,10 @@ def connect(scheduler: str | None, workers: int | None):
 
 
 def _solve_on_worker(case: dict[str, Any], sides: tuple[str, ...],
-                     points: list[dict[str, float]]) -> dict[str, Any]:
-    """:func:`~.solve.solve_batch`, with the address of the worker that ran it."""
-    out = solve_batch(case, sides, points)
+                     points: list[dict[str, float]], solver=solve_batch) -> dict[str, Any]:
+    """``solver`` (:func:`~.solve.solve_batch`, or another kind of table's,
+    ``spec.solver``), with the address of the worker that ran it."""
+    out = solver(case, sides, points)
     try:
         from distributed import get_worker
 
@@ -181,6 +182,9 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         raise RailContactError(f"--lost-timeout must be > 0 s, got {lost_timeout}")
     if check < 0:
         raise RailContactError(f"--check must be a number of states >= 0, got {check}")
+    if check > 0 and getattr(spec, "kind", DEFAULT_KIND) != DEFAULT_KIND:
+        raise RailContactError(f"--check measures a {DEFAULT_KIND} table's interpolation "
+                               f"error; this is a {spec.kind} table")
     out = Path(out)
     store = None
     if out.exists():
@@ -311,7 +315,8 @@ def _run(spec: TableSpec, out: Path, store: Store, client: Any, todo: list, repo
         pts = _points(spec, ix, subset)
         values = [{n: float(spec.axes[n][k]) for n, k in zip(spec.names, p, strict=True)}
                   for p in pts]
-        fut = client.submit(_solve_on_worker, spec.case, spec.sides, values, pure=False,
+        fut = client.submit(_solve_on_worker, spec.case, spec.sides, values,
+                            getattr(spec, "solver", solve_batch), pure=False,
                             key=f"railcontact-batch-{'-'.join(map(str, ix))}-"
                                 f"{time.time_ns()}")
         pending[fut] = ix

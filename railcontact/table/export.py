@@ -11,6 +11,9 @@
     (in the table's order), then ``side``, every quantity, ``status`` and the work
     counters; SI units as in the store; floats as the shortest decimal that reads back to
     the same value; ``nan`` where a quantity is undefined (no contact, a failed point).
+    A geometry table (:mod:`railcontact.table.geometry`): its wheelset's quantities on
+    both rows of a node, each patch's as ``<name>_<k>``
+    (:func:`~.geometry_table.export_csv`).
 
 A creep table (``kind = "creep"``) is written by :func:`~.creepread.export_creep`: its
 Dataset as netCDF, or a CSV row per node (the axes, the normalised values, status and the
@@ -27,7 +30,9 @@ import numpy as np
 
 from ..errors import RailContactError
 from .creepread import export_creep, is_creep_table
-from .store import IDENTITY, open_dataset
+from .geometry import KIND
+from .geometry_table import data_names, export_csv
+from .store import IDENTITY, kind_of, open_dataset
 from .variables import COUNTS, QUANTITIES
 
 FORMATS = {".nc": "netcdf", ".csv": "csv"}
@@ -64,7 +69,9 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
     if is_creep_table(ds):
         return export_creep(path, out, fmt)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
-    data = [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS]
+    geometry = kind_of(ds.attrs) == KIND
+    data = (data_names() if geometry else
+            [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS])
     data = [n for n in data if n in ds]
     if fmt == "netcdf":
         keep = ds[data].load()
@@ -77,6 +84,8 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
         except (OSError, ValueError) as exc:
             raise RailContactError(f"cannot write {out}: {exc}") from None
         return out
+    if geometry:
+        return export_csv(ds, names, out)
     order = [*names, "side"]
     arrays = {n: ds[n].transpose(*order).values for n in data}
     grids = np.meshgrid(*[ds[n].values for n in names], indexing="ij")

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import CaseError, RailContactError
 from .spec import AXES, DEFAULT_POLICY, parse_policies
-from .store import FLANGE, IDENTITY, POLICY_ATTR, read_table, wheel_flange
+from .store import FLANGE, IDENTITY, POLICY_ATTR, read_table, refuse_kind, wheel_flange
 from .variables import (
     NOT_COMPUTED,
     OK,
@@ -215,6 +215,7 @@ class ContactTable:
             When there is no table at ``path``.
         """
         attrs, arrays = read_table(path, ["status"] + [q.name for q in QUANTITIES])
+        refuse_kind(path, attrs, "ContactTable (table check, the FMU's table mode)")
         ident = json.loads(attrs[IDENTITY])
         axes = {n: np.asarray(v, dtype=float) for n, v in ident["axes"].items()}
         missing = tuple(q.name for q in QUANTITIES if q.name not in arrays)

@@ -1,5 +1,6 @@
 """A table spec of any kind (``[table] kind``): a contact table (:mod:`.spec`, the
-default) or a normalised creep table (:mod:`.creepspec`)."""
+default), a geometry table (:mod:`.geometry`, through :func:`~.spec.load_spec`) or a
+normalised creep table (:mod:`.creepspec`)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 from ..errors import CaseError
 from .creepspec import KIND as CREEP
 from .creepspec import CreepSpec, parse_creep_spec
-from .spec import KINDS, TableSpec, load_spec
+from .spec import DEFAULT_KIND, TableSpec, load_spec
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -35,7 +36,7 @@ def load_any_spec(path: str | Path) -> TableSpec | CreepSpec:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as exc:
         raise CaseError(f"table spec {p} is not valid TOML: {exc}") from None
     table = raw.get("table")
-    kind = table.get("kind", KINDS[0]) if isinstance(table, dict) else KINDS[0]
+    kind = table.get("kind", DEFAULT_KIND) if isinstance(table, dict) else DEFAULT_KIND
     if kind == CREEP:
         raw.setdefault("name", p.stem)
         return parse_creep_spec(raw)

@@ -43,7 +43,15 @@ from ..errors import RailContactError
 from .check import MEASURES, measure, read_check, write_check
 from .interpolate import ContactTable
 from .spec import TableSpec, check_size
-from .store import IDENTITY, POLICY_ATTR, _zarr, create_store, read_messages, read_table
+from .store import (
+    IDENTITY,
+    POLICY_ATTR,
+    _zarr,
+    create_store,
+    read_messages,
+    read_table,
+    refuse_kind,
+)
 from .variables import COUNTS, NO_CONTACT, OK, QUANTITIES
 
 MIN_FRACTION = 1.0 / 1024
@@ -89,6 +97,7 @@ class RefineReport:
 def spec_of(path: str | Path) -> TableSpec:
     """The :class:`TableSpec` a store was built for (its identity)."""
     attrs, _ = read_table(path, [])
+    refuse_kind(path, attrs, "table refine")
     ident = json.loads(attrs[IDENTITY])
     return TableSpec(case=ident["case"], axes={n: np.asarray(v, dtype=float)
                                                 for n, v in ident["axes"].items()},

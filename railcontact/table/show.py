@@ -12,13 +12,17 @@ import numpy as np
 from ..errors import RailContactError
 from .check import check_text
 from .creepread import creep_summary, is_creep_table, plot_creep
+from .geometry import KIND
+from .geometry_table import plot_geometry, summary_lines
 from .refine import Targets, jumps
-from .spec import AXES, CREEPAGE_AXES, DEFAULT_POLICY
-from .store import IDENTITY, open_dataset, read_messages
+from .spec import CREEPAGE_AXES, DEFAULT_POLICY, axis_info
+from .store import IDENTITY, kind_of, open_dataset, read_messages
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
 
 SHOWN = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment", "contact_angle",
          "max_pressure")
+GEOMETRY_SHOWN = ("rolling_radius", "contact_angle", "wheel_position", "rail_position")
+"""The per-wheel quantities a geometry table's summary shows."""
 MAX_MESSAGES = 10
 
 
@@ -45,7 +49,7 @@ def summary(path: str | Path) -> str:
     policies = json.loads(ds.attrs.get("out_of_range", "{}"))
     for n in names:
         v = ds[n].values
-        lines.append(f"  {n:22s} [{AXES[n].unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}"
+        lines.append(f"  {n:22s} [{axis_info(n).unit}] {len(v):5d} from {v[0]:.6g} to {v[-1]:.6g}"
                      f"; out of range: {policies.get(n, DEFAULT_POLICY)}")
     lines.append("status:")
     for j, side in enumerate(ds["side"].values.tolist()):
@@ -53,9 +57,12 @@ def summary(path: str | Path) -> str:
                   for k, c in zip(*np.unique(status[..., j], return_counts=True), strict=True)}
         lines.append(f"  {side:6s} " + ", ".join(f"{k} {c}" for k, c in counts.items()))
     lines += _jump_lines(ds, names, status)
-    lines.append("values (ok points):")
+    if kind_of(ds.attrs) == KIND:
+        lines += summary_lines(ds)
+    lines.append("values (ok points):" if kind_of(ds.attrs) != KIND else
+                 "values of the first contacts (ok wheels):")
     ok = status == 0
-    for name in SHOWN:
+    for name in SHOWN if kind_of(ds.attrs) != KIND else GEOMETRY_SHOWN:
         x = ds[name].values[ok]
         if x.size:
             lines.append(f"  {name:16s} [{ds[name].attrs.get('units', '')}] from "
@@ -93,12 +100,15 @@ def _jump_lines(ds, names: list[str], status: np.ndarray) -> list[str]:
             v = ds[n].values
             where = ", ".join(f"{v[i]:.6g}..{v[i + 1]:.6g}" for i in k[:4])
             out.append(f"  {n}: {k.size} of {flags.size} interval(s) ({where}"
-                       + (", ..." if k.size > 4 else "") + f") [{AXES[n].unit}]")
+                       + (", ..." if k.size > 4 else "") + f") [{axis_info(n).unit}]")
     if out:
         out.insert(0, f"contact jumps between neighbouring nodes (patch count, contact angle "
                       f"step > {limit * 1e3:g} mrad, contact appearing): the interpolation "
-                      "there is coarse ('railcontact table check' measures it, 'railcontact "
-                      "table refine' adds nodes):")
+                      "there is coarse " + (
+                          "(more nodes there: a finer axis in the spec):"
+                          if kind_of(ds.attrs) == KIND else
+                          "('railcontact table check' measures it, 'railcontact "
+                          "table refine' adds nodes):"))
     return out
 
 
@@ -120,6 +130,9 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
     out = Path(out)
     if not out.parent.is_dir():
         raise RailContactError(f"--plot: folder {out.parent} does not exist")
+    if kind_of(ds.attrs) == KIND:
+        fig = plot_geometry(ds, names, out)
+        return _save(fig, out, plt)
     ok = ds["status"] == 0
     side = ds["side"].values[0]
     multi = [n for n in names if ds.sizes[n] > 1]
@@ -133,7 +146,7 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
         for q in ("normal_force", "creep_force_x", "creep_force_y"):
             y = ds[q].where(ok).isel(mid).sel(side=side)
             ax.plot(ds[n].values, y.values, "o-", ms=3, label=q)
-        ax.set_xlabel(f"{n} [{AXES[n].unit}]")
+        ax.set_xlabel(f"{n} [{axis_info(n).unit}]")
         ax.set_ylabel("force [N]")
         ax.set_title(f"{side} wheel; others at middle", fontsize=8)
         ax.grid(alpha=0.3)
@@ -151,10 +164,14 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
         ax = axs[0, -1]
         m = ax.pcolormesh(ds[a].values, ds[b].values, z.values, shading="nearest")
         fig.colorbar(m, ax=ax, label=f"{q} [N]")
-        ax.set_xlabel(f"{a} [{AXES[a].unit}]")
-        ax.set_ylabel(f"{b} [{AXES[b].unit}]")
+        ax.set_xlabel(f"{a} [{axis_info(a).unit}]")
+        ax.set_ylabel(f"{b} [{axis_info(b).unit}]")
         ax.set_title(f"{q}, {side} wheel; others at middle", fontsize=8)
     fig.tight_layout()
+    return _save(fig, out, plt)
+
+
+def _save(fig, out: Path, plt) -> Path:
     try:
         fig.savefig(out, dpi=90)
     except (ValueError, OSError) as exc:

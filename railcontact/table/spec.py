@@ -21,8 +21,11 @@ into runs of at most that many points (default: the whole axis). ``out_of_range`
 ``"clamp"`` (:data:`POLICIES`), for every axis or per axis (``out_of_range = { load =
 "clamp" }``); it is kept in the store (not part of the table's identity: it does not change
 the values). Both wheels are solved unless the case's ``[geometry]`` sets ``side``.
-``kind`` (optional) is ``"contact"``, this module's table (the default); ``"creep"`` is a
-normalised creep table (:mod:`.creepspec`), whose spec :func:`~.kinds.load_any_spec` reads.
+``kind`` (optional) says what the table holds: ``"contact"`` (the default, this module's
+table of exact solves: creep forces and patches), another kind of :data:`KINDS`
+(``"geometry"``: :mod:`railcontact.table.geometry`), which parses its own ``[table]``, or
+``"creep"``, a normalised creep table (:mod:`.creepspec`), whose spec
+:func:`~.kinds.load_any_spec` reads.
 
 All values in SI units; see :data:`AXES`.
 """
@@ -72,11 +75,28 @@ AXES: dict[str, Axis] = {
 """The axes a table may have."""
 CREEPAGE_AXES = ("creepage_x", "creepage_y", "spin")
 """The axes of a wheel's creepages (in its side frame)."""
+OTHER_AXES: dict[str, Axis] = {
+    "roll": Axis("geometry", "roll", None, "rad", "roll angle of the wheelset (left side up)"),
+}
+"""Axes of the other kinds of table (:data:`KINDS`) only."""
+
+
+def axis_info(name: str) -> Axis:
+    """The :class:`Axis` of any kind of table (:data:`AXES`, :data:`OTHER_AXES`)."""
+    return AXES[name] if name in AXES else OTHER_AXES[name]
+
+
+DEFAULT_KIND = "contact"
+"""``[table] kind`` of a spec that gives none: the table of exact solves of this module."""
+CREEP_KIND = "creep"
+"""``[table] kind`` of a normalised creep table (:mod:`.creepspec`, read by
+:func:`~.kinds.load_any_spec`)."""
+KINDS: dict[str, Any] = {}
+"""The other kinds of table: ``[table] kind`` -> ``parse(raw, table)``, the parser of its
+spec (the case's tables without ``[table]``, and ``[table]``), registered by its module
+when the package is imported (:mod:`railcontact.table.geometry`)."""
 OPTIONS = ("batch", "out_of_range", "kind")
 """Keys of ``[table]`` that are not axes."""
-KINDS = ("contact", "creep")
-"""The kinds of table (``[table] kind``; absent: ``contact``, the table of this module;
-``creep``: :mod:`.creepspec`)."""
 POLICIES = ("status", "clamp")
 """What a value outside an axis gives (``out_of_range``): ``status`` (out of range: the
 table step's status 3 with zero outputs, an error from :class:`~.interpolate.ContactTable`)
@@ -299,12 +319,15 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
     if not isinstance(table, dict) or not table:
         raise CaseError("a table spec needs a [table] with at least one axis (known: "
                         f"{', '.join(AXES)})")
-    kind = table.get("kind", KINDS[0])
-    if kind not in KINDS:
-        raise CaseError(f"[table] kind must be one of {', '.join(KINDS)}, got {kind!r}")
-    if kind != KINDS[0]:
+    kind = table.get("kind", DEFAULT_KIND)
+    if kind == CREEP_KIND:
         raise CaseError(f"[table] kind = {kind!r} is not a contact table: read the spec with "
                         "railcontact.table.load_any_spec")
+    if kind != DEFAULT_KIND:
+        if kind not in KINDS:
+            raise CaseError("[table] kind must be one of "
+                            f"{', '.join([DEFAULT_KIND, *KINDS, CREEP_KIND])}, got {kind!r}")
+        return KINDS[kind](raw, table)
     unknown = sorted(set(table) - set(AXES) - set(OPTIONS))
     if unknown:
         raise CaseError(f"[table]: unknown axis {', '.join(unknown)}; known: "

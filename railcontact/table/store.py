@@ -50,7 +50,7 @@ from .. import __version__
 from ..contact.wheelrail import build_geometry
 from ..errors import RailContactError
 from ..settings import Case
-from .spec import AXES, TableSpec, comparable
+from .spec import DEFAULT_KIND, TableSpec, axis_info, comparable
 from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS, failed_counts
 
 IDENTITY = "railcontact_table"
@@ -129,13 +129,40 @@ def chunk_shape(spec: TableSpec) -> tuple[int, ...]:
     return block_chunks((*spec.shape, len(spec.sides)), CHUNK_VALUES, whole=2)
 
 
+def data_arrays(spec: TableSpec) -> list[tuple[str, str, Any, dict[str, Any], tuple]]:
+    """The data arrays of ``spec``'s table but ``status``: ``(name, dtype, fill value,
+    attributes, trailing dims)``, each over the axes and then its trailing dims, each dim a
+    name and a size (``("side", 2)``); another kind of table gives its own
+    (``spec.data_arrays()``, :mod:`railcontact.table.geometry`)."""
+    own = getattr(spec, "data_arrays", None)
+    if own is not None:
+        return own()
+    side = (("side", len(spec.sides)),)
+    return ([(q.name, "f8", np.nan, {"units": q.unit, "long_name": q.long_name}, side)
+             for q in QUANTITIES]
+            + [(q.name, "i4", 0, {"units": q.unit, "long_name": q.long_name}, side)
+               for q in COUNTS])
+
+
+def kind_of(attrs: dict[str, Any]) -> str:
+    """The kind of the table whose root attributes are ``attrs`` (``[table] kind``)."""
+    return json.loads(attrs.get(IDENTITY, "{}")).get("kind", DEFAULT_KIND)
+
+
+def refuse_kind(path: str | Path, attrs: dict[str, Any], what: str) -> None:
+    """Raise unless the table at ``path`` (root attributes ``attrs``) is a creep-force
+    table, which ``what`` needs."""
+    kind = kind_of(attrs)
+    if kind != DEFAULT_KIND:
+        raise RailContactError(f"{path} is a {kind} table ([table] kind = {kind!r}), not a "
+                               f"{DEFAULT_KIND} table, which {what} needs")
+
+
 def create_store(path: str | Path, spec: TableSpec) -> None:
     """Write an empty table (metadata and the axes; every point not computed) for
     ``spec``: the data's chunks are not written (each reads its fill value until a batch
     is), so this takes no time and no cluster."""
     zarr = _zarr()
-    dims = [*spec.names, "side"]
-    shape = (*spec.shape, len(spec.sides))
     chunks = chunk_shape(spec)
     flags = {"flag_values": list(STATUS_MEANINGS),
              "flag_meanings": " ".join(m.replace(" ", "_") for m in STATUS_MEANINGS.values())}
@@ -148,21 +175,24 @@ def create_store(path: str | Path, spec: TableSpec) -> None:
         for n, v in spec.axes.items():
             a = root.create_array(n, shape=(len(v),), dtype="f8", chunks=(len(v),),
                                   fill_value=np.nan, attributes={
-                                      "units": AXES[n].unit, "long_name": AXES[n].long_name,
+                                      "units": axis_info(n).unit,
+                                      "long_name": axis_info(n).long_name,
                                       "_ARRAY_DIMENSIONS": [n]})
             a[...] = np.asarray(v, dtype=float)
         side = np.array(list(spec.sides))
         a = root.create_array("side", shape=side.shape, dtype=side.dtype, chunks=side.shape,
                               attributes={"_ARRAY_DIMENSIONS": ["side"]})
         a[...] = side
-        data = ([(q.name, "f8", np.nan, {"units": q.unit, "long_name": q.long_name})
-                 for q in QUANTITIES]
-                + [(q.name, "i4", 0, {"units": q.unit, "long_name": q.long_name})
-                   for q in COUNTS]
-                + [("status", "i1", NOT_COMPUTED, {"long_name": "status of the point", **flags})])
-        for name, dtype, fill, attrs in data:
-            root.create_array(name, shape=shape, dtype=dtype, chunks=chunks, fill_value=fill,
-                              attributes={**attrs, "_ARRAY_DIMENSIONS": dims})
+        data = (data_arrays(spec)
+                + [("status", "i1", NOT_COMPUTED, {"long_name": "status of the point", **flags},
+                    (("side", len(spec.sides)),))])
+        for name, dtype, fill, attrs, trailing in data:
+            # the axes chunked as status's, whatever the trailing dims (a batch in one chunk)
+            root.create_array(name, shape=(*spec.shape, *(n for _, n in trailing)),
+                              dtype=dtype, chunks=(*chunks[:-1], *(n for _, n in trailing)),
+                              fill_value=fill, attributes={
+                                  **attrs, "_ARRAY_DIMENSIONS": [*spec.names,
+                                                                 *(d for d, _ in trailing)]})
         bshape = spec.batch_shape
         root.create_array("batch_done", shape=bshape, dtype=bool,
                           chunks=block_chunks(bshape, DONE_CHUNK), fill_value=False,
@@ -196,7 +226,8 @@ class Store:
             raise RailContactError(f"{path} is not a railcontact table store (no "
                                    f"{IDENTITY} attribute)")
         check_identity(path, json.loads(found), spec.identity())
-        names = [q.name for q in QUANTITIES + COUNTS] + ["status", "batch_done"]
+        self.data = [a[0] for a in data_arrays(spec)] + ["status"]
+        names = [*self.data, "batch_done"]
         lacking = [n for n in names if n not in self.group]
         if lacking:
             raise RailContactError(f"{path} was written by an earlier railcontact without "
@@ -237,7 +268,7 @@ class Store:
             slow = item[0][:nslow]
             by_chunk.setdefault(tuple(i // c for i, c in zip(slow, chunks, strict=False)),
                                 []).append(item)
-        for name in [q.name for q in QUANTITIES + COUNTS] + ["status"]:
+        for name in self.data:
             arr = self.arrays[name]
             for c, items in by_chunk.items():
                 lo = [k * n for k, n in zip(c, chunks, strict=False)]
