@@ -659,3 +659,24 @@ def variables_markdown() -> str:
         out.append(f"| {name} | {v.causality} | {_cell(kind)} | {v.unit} | "
                    f"{_cell(_default(v))} | {_cell(meaning)} |")
     return "\n".join(out) + "\n"
+
+
+def wheelsets_markdown() -> str:
+    """The variables of an FMU of N wheelsets (``railcontact fmu build --wheelsets N``)
+    beyond the parameters of the one-wheelset FMU, as a Markdown table: ``wheelsets``, the
+    outputs about all wheelsets, and a row for every input and output repeated per
+    wheelset. The table of docs/fmu.md's section on it is this
+    (``scripts/fmu_variables_table.py`` writes it; ``tests/test_readme_fmu.py`` checks
+    it)."""
+    out = ["| name | causality | type | unit | default | meaning |",
+           "|---|---|---|---|---|---|"]
+    for v in [wheelset_count_parameter(2), *VEHICLE_OUTPUTS]:
+        start = "N" if v.name == "wheelsets" else ""
+        out.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit} | {start} | "
+                   f"{_cell(v.description)} |")
+    out.append("| `<name>_1` ... `<name>_N` | input, output | as `<name>` | as `<name>` | as "
+               "`<name>` | every input and output `<name>` of the one-wheelset FMU (the "
+               "table above), of wheelset k: `lateral_displacement_2`, "
+               "`normal_force_left_2`, `status_2`, `status_left_2`, `solve_time_2` |")
+    return "\n".join(out) + "\n"
+
