@@ -183,7 +183,7 @@ class Slave:
 
     def close(self) -> None:
         """Stop the wheelsets' threads (they are made again when needed)."""
-        threads, self._threads = self._threads, []
+        threads, self._threads = getattr(self, "_threads", []), []  # (__init__ may have failed)
         for t in threads:
             t.shutdown(wait=False)
 
