@@ -7,8 +7,9 @@ buffers (``buffers()``), and calls the methods below, each of which returns an F
 
 An FMU built with ``--wheelsets N`` (``resources/wheelsets.txt`` holds N) solves N
 wheelsets, each with its own solver and its own variables (``_k`` appended to the names of
-the one-wheelset FMU, :func:`railcontact.fmu.variables.table`), in one ``fmi2DoStep``: each
-wheelset on a thread of its own (:class:`_Wheelset`; the kernels release the GIL, and
+the one-wheelset FMU, :func:`railcontact.fmu.variables.table`), in one ``fmi2DoStep``: the
+wheelsets shared among as many threads as the process has cores, each wheelset always on
+the same thread (:class:`_Wheelset`; the kernels release the GIL, and
 distinct solvers stepping on threads give the results of stepping them one after the other,
 bit for bit: the thread-safety contract of ``docs/performance.md``), the step's FMI status
 the worst of the wheelsets'.
@@ -20,6 +21,7 @@ railcontact package, hence the relative imports.
 from __future__ import annotations
 
 import math
+import os
 import re
 import time
 import traceback
@@ -544,13 +546,15 @@ class Slave:
             return self._step(self.units[0])
         t0 = time.perf_counter()
         if len(self.units) > 1 and self.modes.contact_model == "bem":
-            if not self._threads:  # each wheelset on its own thread, step after step:
-                self._threads = [  # its FFT plans and search memory stay with it
-                    ThreadPoolExecutor(1, f"railcontact-{self.instance_name}-wheelset{u.k}")
-                    for u in self.units]
-            running = [t.submit(self._guarded_step, u)
-                       for t, u in zip(self._threads, self.units, strict=True)]
-            statuses = [r.result() for r in running]
+            if not self._threads:  # as many threads as cores; each wheelset on the same
+                self._threads = [  # thread step after step (its FFT plans and search
+                    ThreadPoolExecutor(1, f"railcontact-{self.instance_name}-{j}")  # memory
+                    for j in range(min(len(self.units), _cores()))]  # stay with it)
+            n = len(self._threads)
+            running = [t.submit(self._step_group, self.units[j::n])
+                       for j, t in enumerate(self._threads)]
+            by_thread = [r.result() for r in running]
+            statuses = [by_thread[k % n][k // n] for k in range(len(self.units))]
         else:
             statuses = [self._guarded_step(u) for u in self.units]
         for u in self.units:
@@ -559,6 +563,10 @@ class Slave:
         self["status"] = Status.worst(u["status"] for u in self.units)
         self["solve_time"] = time.perf_counter() - t0
         return max(statuses)
+
+    def _step_group(self, units: list[_Wheelset]) -> list[int]:
+        """The steps of ``units`` one after the other (one thread's share)."""
+        return [self._guarded_step(u) for u in units]
 
     def _guarded_step(self, u: _Wheelset) -> int:
         """:meth:`_step` of wheelset ``u``; an unexpected error discards its step (nothing
@@ -647,6 +655,14 @@ class Slave:
             return FMI_DISCARD
         unfound = rigid is not None and not rigid.converged
         return FMI_WARNING if failed or unfound else FMI_OK
+
+
+def _cores() -> int:
+    """The cores this process may run on (the threads that can overlap)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
 
 
 def _write(u: _Wheelset, res: WheelsetResult | None) -> None:
