@@ -55,17 +55,19 @@ def _fmt(value) -> str:
 
 
 def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
-                      version: str = "") -> str:
-    """The modelDescription.xml text."""
+                      version: str = "", wheelsets: int | None = None) -> str:
+    """The modelDescription.xml text (``wheelsets``: the FMU of that many wheelsets,
+    :func:`railcontact.fmu.variables.table`)."""
     from railcontact.fmu.variables import item_name, table
 
-    variables = table()
+    variables = table(wheelsets)
+    what = "a wheelset" if wheelsets is None else f"{wheelsets} wheelsets, solved in parallel"
     used = sorted({v.unit for v in variables if v.unit})
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<fmiModelDescription fmiVersion="2.0" modelName="{model_identifier}" '
         f'guid="{guid}" description="railcontact: exact wheel-rail rolling contact '
-        f'(half-space BEM) of a wheelset, warm-started" generationTool="railcontact '
+        f'(half-space BEM) of {what}, warm-started" generationTool="railcontact '
         f'{version}" generationDateAndTime="'
         f'{datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")}" '
         'variableNamingConvention="flat" numberOfEventIndicators="0">',
@@ -192,15 +194,18 @@ def _copy_package(dst: Path, package: str) -> None:
 
 
 def source_digest(profiles: list[str | Path] = (),
-                  model_identifier: str = MODEL_IDENTIFIER, python: str | None = None) -> str:
+                  model_identifier: str = MODEL_IDENTIFIER, python: str | None = None,
+                  wheelsets: int | None = None) -> str:
     """SHA-1 of everything an FMU is built from: the railcontact package, ``fmu_src/``,
-    the Python it runs in (``python``: the one named by ``--python``) and the profile files.
-    A built FMU stores it in ``resources/source.sha1``; a different digest means the FMU is
-    stale."""
+    the Python it runs in (``python``: the one named by ``--python``), the number of
+    wheelsets (None: the one-wheelset FMU) and the profile files. A built FMU stores it in
+    ``resources/source.sha1``; a different digest means the FMU is stale."""
     import railcontact
 
     digest = hashlib.sha1()
     digest.update(f"{model_identifier}\n{sys.executable}\n{sys.version}\n".encode())
+    if wheelsets is not None:
+        digest.update(f"wheelsets={wheelsets}\n".encode())
     if python is not None:
         digest.update(f"python.txt={python}\n".encode())
     pkg = Path(railcontact.__file__).resolve().parent
@@ -273,7 +278,7 @@ def _files(root: Path) -> list[Path]:
 
 def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path] = (),
           model_identifier: str = MODEL_IDENTIFIER, python: str | Path | None = None,
-          warm: bool = True, log=None) -> Path:
+          warm: bool = True, log=None, wheelsets: int | None = None) -> Path:
     """Build the FMU and return its path.
 
     Parameters
@@ -294,9 +299,20 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
         not fail when that is not possible: ``log`` says why.
     log
         Called with a line of text for the user (what the warm-up did), or None.
+    wheelsets
+        None: the FMU of one wheelset. 1 to 8: the FMU of that many wheelsets (their
+        variables repeated with ``_k`` appended, solved in parallel), the number written to
+        ``resources/wheelsets.txt`` and fixed in the modelDescription.
     """
     import railcontact
+    from railcontact.errors import RailContactError
+    from railcontact.fmu.variables import check_wheelsets
 
+    if wheelsets is not None:
+        try:
+            wheelsets = check_wheelsets(wheelsets)
+        except RailContactError as exc:
+            raise BuildError(str(exc)) from None
     output = Path(output).resolve()
     package = f"railcontact_fmu_{model_identifier}"
     named = named_python(python) if python is not None else None
@@ -321,7 +337,10 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
             **requirements(),
         }
         (res / "source.sha1").write_text(
-            source_digest(profiles, model_identifier, named) + "\n", encoding="utf-8")
+            source_digest(profiles, model_identifier, named, wheelsets) + "\n",
+            encoding="utf-8")
+        if wheelsets is not None:  # (the slave's variables: fmu_src/slave.py, wheelsets_of)
+            (res / "wheelsets.txt").write_text(f"{wheelsets}\n", encoding="utf-8")
         (res / "python.cfg").write_text("".join(f"{k}={v}\n" for k, v in cfg.items()),
                                         encoding="utf-8")
         if named is not None:
@@ -348,7 +367,8 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
         h = digest.hexdigest()
         guid = f"{{{h[:8]}-{h[8:12]}-{h[12:16]}-{h[16:20]}-{h[20:32]}}}"
         (root / "modelDescription.xml").write_text(
-            model_description(guid, model_identifier, cfg["railcontact"]), encoding="utf-8")
+            model_description(guid, model_identifier, cfg["railcontact"], wheelsets),
+            encoding="utf-8")
         output.parent.mkdir(parents=True, exist_ok=True)
         with zipfile.ZipFile(output, "w", zipfile.ZIP_DEFLATED) as z:
             for f in _files(root):

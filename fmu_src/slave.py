@@ -5,6 +5,15 @@ pointers: it reads and writes the Real and Integer variables directly in this ob
 buffers (``buffers()``), and calls the methods below, each of which returns an FMI status
 (0 OK, 1 Warning, 2 Discard, 3 Error) and never raises; what went wrong is kept for ``pop_log()``.
 
+An FMU built with ``--wheelsets N`` (``resources/wheelsets.txt`` holds N) solves N
+wheelsets, each with its own solver and its own variables (``_k`` appended to the names of
+the one-wheelset FMU, :func:`railcontact.fmu.variables.table`), in one ``fmi2DoStep``: the
+wheelsets shared among as many threads as the process has cores, each wheelset always on
+the same thread (:class:`_Wheelset`; the kernels release the GIL, and
+distinct solvers stepping on threads give the results of stepping them one after the other,
+bit for bit: the thread-safety contract of ``docs/performance.md``), the step's FMI status
+the worst of the wheelsets'.
+
 This file is copied into the FMU as ``<package>/_fmu_slave.py`` next to a copy of the
 railcontact package, hence the relative imports.
 """
@@ -12,9 +21,11 @@ railcontact package, hence the relative imports.
 from __future__ import annotations
 
 import math
+import os
 import re
 import time
 import traceback
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +52,65 @@ from .timestep.wheelset import (
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
 _CAUSALITY = {"output": OUTPUT, "input": INPUT, "parameter": PARAMETER}
+WHEELSETS_FILE = "wheelsets.txt"
+"""The resources file of an FMU of several wheelsets: their number N (absent: the
+one-wheelset FMU)."""
+
+
+def wheelsets_of(resources: Path) -> int | None:
+    """The number of wheelsets of the FMU whose resources folder this is
+    (:data:`WHEELSETS_FILE`), None for the one-wheelset FMU."""
+    try:
+        text = (Path(resources) / WHEELSETS_FILE).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return None
+    try:
+        return V.check_wheelsets(int(text.strip()))
+    except (ValueError, RailContactError):
+        raise RailContactError(f"{WHEELSETS_FILE} of the FMU's resources holds {text!r}, not "
+                               f"a number of wheelsets from 1 to {V.MAX_WHEELSETS}") from None
+
+
+class _Wheelset:
+    """One wheelset of an instance: the slots of its inputs and outputs in the instance's
+    buffers (by the one-wheelset FMU's names), its solver and its messages.
+
+    Parameters
+    ----------
+    slots
+        (buffer, value reference) of every variable by name, the instance's.
+    k
+        The wheelset's number from 1 (its variables' suffix ``_k``), or None in the
+        one-wheelset FMU (no suffix).
+    variables
+        The one-wheelset FMU's variables (their names, types and output functions).
+    """
+
+    def __init__(self, slots: dict, k: int | None, variables: list[V.Variable]) -> None:
+        self.k = k
+        suffix = "" if k is None else f"_{k}"
+        own = [v for v in variables if v.causality != "parameter"]
+        self.slots = {**slots, **{v.name: slots[v.name + suffix] for v in own}}
+        outputs = [v for v in own if v.causality == "output"]
+        self.zeroed = []  # (buffer, value references) of the Real and the Integer outputs
+        self.outputs = []  # ... and their functions of a result
+        for t in ("Real", "Integer"):
+            mine = [v for v in outputs if v.type == t]
+            buffer = slots[mine[0].name + suffix][0]
+            vrs = np.array([slots[v.name + suffix][1] for v in mine], dtype=int)
+            self.zeroed.append((buffer, vrs))
+            self.outputs.append((buffer, vrs, [v.value for v in mine]))  # one assignment
+        self.real_outputs = self.zeroed[0][1]
+        self.contact: WheelsetContact | TableContact | None = None
+        self.log: list[str] = []
+
+    def __getitem__(self, name: str):
+        buffer, vr = self.slots[name]
+        return buffer[vr]
+
+    def __setitem__(self, name: str, value) -> None:
+        buffer, vr = self.slots[name]
+        buffer[vr] = value
 
 
 class Slave:
@@ -52,12 +122,18 @@ class Slave:
         The FMU's resources folder (profile files are looked up there).
     instance_name
         For messages.
+    wheelsets
+        The number of wheelsets (their variables, :func:`railcontact.fmu.variables.table`);
+        default: the FMU's (:func:`wheelsets_of` its resources).
     """
 
-    def __init__(self, resources: str, instance_name: str = "railcontact") -> None:
+    def __init__(self, resources: str, instance_name: str = "railcontact",
+                 wheelsets: int | None | str = "resources") -> None:
         self.resources = Path(resources)
         self.instance_name = instance_name
-        self.variables = V.table()
+        self.wheelsets = wheelsets_of(self.resources) if wheelsets == "resources" \
+            else wheelsets
+        self.variables = V.table(self.wheelsets)
         self.by_name = {v.name: v for v in self.variables}
         reals = [v for v in self.variables if v.type == "Real"]
         ints = [v for v in self.variables if v.type == "Integer"]
@@ -68,22 +144,22 @@ class Slave:
         self.strings = [""] * len(strs)
         self.string_flags = bytes(_CAUSALITY[v.causality] for v in strs)
         self.real_flags = bytes(_CAUSALITY[v.causality] for v in reals)
-        self.real_outputs = np.array([v.vr for v in reals if v.causality == "output"],
-                                     dtype=int)
         self.integer_flags = bytes(_CAUSALITY[v.causality] for v in ints)
         # each variable's buffer (a stable object: states are restored in place) and slot
         buffer = {"Real": self.real, "Integer": self.integer, "String": self.strings}
         self._slots = {v.name: (buffer[v.type], v.vr) for v in self.variables}
         outputs = [v for v in self.variables if v.causality == "output"]
-        self._zeroed = [(buffer[t], np.array([v.vr for v in outputs if v.type == t],
-                                             dtype=int)) for t in ("Real", "Integer")]
-        # the Real and the Integer outputs each written by one assignment of their values
-        self._outputs = [(buffer[t], vrs, [v.value for v in outputs if v.type == t])
-                         for t, (_, vrs) in zip(("Real", "Integer"), self._zeroed, strict=True)]
         if not all(v.type in ("Real", "Integer") for v in outputs):
             raise TypeError("the FMU's outputs are Real or Integer variables")
         self.log: list[str] = []
-        self.contact: WheelsetContact | None = None
+        single = V.table()
+        if self.wheelsets is None:
+            self.units = [_Wheelset(self._slots, None, single)]
+            self.units[0].log = self.log  # one wheelset: its messages are the instance's
+        else:
+            self.units = [_Wheelset(self._slots, k, single)
+                          for k in range(1, self.wheelsets + 1)]
+        self._threads: list[ThreadPoolExecutor] = []  # one a wheelset, made at the first step
         self.modes: FMUModes | None = None
         self.built: dict | None = None  # the parameters self.contact was built with
         self.guid, self.model = _identity(self.resources)
@@ -98,8 +174,23 @@ class Slave:
 
     def pop_log(self) -> str:
         """The messages since the last call, one per line."""
-        text, self.log = "\n".join(self.log), []
+        text = "\n".join(self.log)
+        self.log.clear()
         return text
+
+    @property
+    def contact(self) -> WheelsetContact | TableContact | None:
+        """The (first) wheelset's solver; None before initialisation."""
+        return self.units[0].contact
+
+    def close(self) -> None:
+        """Stop the wheelsets' threads (they are made again when needed)."""
+        threads, self._threads = getattr(self, "_threads", []), []  # (__init__ may have failed)
+        for t in threads:
+            t.shutdown(wait=False)
+
+    def __del__(self) -> None:
+        self.close()
 
     def _guard(self, what: str, fail: int, fn, *args):
         try:
@@ -145,13 +236,14 @@ class Slave:
     def do_step(self) -> int:
         status = self._guard("doStep", None, self._communication_step)
         if status is None:  # an unexpected error: nothing of the step is to be trusted
-            self._discard()
+            self._discard_all()
             return FMI_DISCARD
         return status
 
     def reset(self) -> int:
         self._start_values()
-        self.contact = None
+        for u in self.units:
+            u.contact = None
         self.built = None
         return FMI_OK
 
@@ -166,12 +258,20 @@ class Slave:
                 parameters=self.built if self.built is not None else self._parameters(
                     self.real, self.integer, self.strings),
                 real=self.real, integer=self.integer, control=self.control,
-                strings=list(self.strings),
-                memory=None if self.contact is None else self.contact.memory,
+                strings=list(self.strings), memory=self._memory(),
                 railcontact=__version__))
         except Exception as exc:
             self.log.append(f"getFMUstate: {type(exc).__name__}: {exc}")
             raise
+
+    def _memory(self):
+        """The solvers' memory of the previous steps: the wheelset's (one wheelset), a list
+        of the wheelsets' (several), None before initialisation."""
+        if self.contact is None:
+            return None
+        if self.wheelsets is None:
+            return self.contact.memory
+        return [u.contact.memory for u in self.units]
 
     def set_state(self, data: bytes) -> int:
         """Restore a state of :meth:`get_state`: fmi2Error, the instance unchanged, for
@@ -210,10 +310,12 @@ class Slave:
         self.strings[:] = state.strings
         if self.contact is None:  # not initialised: the solver is built from the
             return FMI_OK         # parameters just restored at initialisation
-        if state.initialised:
-            self.contact.memory = state.memory
-        else:
-            self.contact.reset()
+        memories = [state.memory] if self.wheelsets is None else state.memory
+        for k, u in enumerate(self.units):
+            if state.initialised:
+                u.contact.memory = memories[k]
+            else:
+                u.contact.reset()
         return FMI_OK
 
     def _check_state(self, state: S.State) -> None:
@@ -236,9 +338,15 @@ class Slave:
             raise S.StateError(f"a state of another FMU (model {state.model!r}, GUID "
                                f"{state.guid}; this one: model {self.model!r}, GUID "
                                f"{self.guid})")
-        if state.initialised and not isinstance(state.memory, StepMemory):
-            raise S.StateError(f"the state's memory is a {type(state.memory).__name__}, "
-                               "not a time step's memory (StepMemory)")
+        if state.initialised:
+            memories = [state.memory] if self.wheelsets is None else state.memory
+            if not isinstance(memories, list) or len(memories) != len(self.units):
+                raise S.StateError(f"the state's memory is a {type(state.memory).__name__}, "
+                                   f"not the memory of {len(self.units)} wheelsets")
+            for m in memories:
+                if not isinstance(m, StepMemory):
+                    raise S.StateError(f"the state's memory is a {type(m).__name__}, not a "
+                                       "time step's memory (StepMemory)")
         shapes = [(state.real.shape, self.real.shape), (state.integer.shape,
                                                         self.integer.shape),
                   (state.control.shape, self.control.shape),
@@ -259,6 +367,8 @@ class Slave:
         for v in V.PARAMETERS + V.CHOICES:
             buffer, kind = held[v.type]
             out[v.name] = kind(buffer[self._slots[v.name][1]])
+        if self.wheelsets is not None:
+            out["wheelsets"] = int(integer[self._slots["wheelsets"][1]])
         return out
 
     # -- the model ------------------------------------------------------------------------
@@ -272,15 +382,26 @@ class Slave:
             raise RailContactError(f"parameter {parameter} = {value!r}: {exc}") from None
 
     def _build(self) -> None:
-        self.contact = self.built = None
+        """Each wheelset's solver from the parameters (the wheelsets share the profiles,
+        the material and the settings, and in table mode the table)."""
+        self.built = None
+        for u in self.units:
+            u.contact = None
         for v in V.PARAMETERS:
             if v.type == "Real" and not math.isfinite(self[v.name]):
                 raise RailContactError(f"parameter {v.name} = {self[v.name]}: not finite")
+        if self.wheelsets is not None and self["wheelsets"] != self.wheelsets:
+            raise RailContactError(
+                f"parameter wheelsets = {self['wheelsets']}: this FMU was built for "
+                f"{self.wheelsets} wheelsets, fixed in its modelDescription (build another "
+                f"with railcontact fmu build --wheelsets {self['wheelsets']})")
         built = self._parameters(self.real, self.integer, self.strings)
         ps = V.parameter_settings(built)
         self.modes = ps.modes
         if ps.modes.contact_model == "table":
-            self.contact = self._table(ps.modes, ps.contact)
+            table = self._table(ps.modes, ps.contact)  # no memory: one for all wheelsets
+            for u in self.units:
+                u.contact = table
             self.built = built
             return
         g = ps.geometry  # profile_unit: the String or its enumeration
@@ -304,8 +425,10 @@ class Slave:
         tracks, wheelsets = per_side["track"], per_side["wheelset"]
         track = tracks[0] if tracks[0] is tracks[1] else tuple(tracks)
         ws = wheelsets[0] if wheelsets[0] is wheelsets[1] else tuple(wheelsets)
-        self.contact = WheelsetContact(track, ws, ps.material.elastic_pair(), ps.contact,
-                                       convention=ps.modes.convention)
+        pair = ps.material.elastic_pair()
+        for u in self.units:
+            u.contact = WheelsetContact(track, ws, pair, ps.contact,
+                                        convention=ps.modes.convention)
         self.built = built
 
     def _table(self, modes: FMUModes, contact: ContactSettings):
@@ -355,12 +478,13 @@ class Slave:
         # logged, the outputs and statuses saying so)
         return FMI_WARNING if status == FMI_DISCARD else status
 
-    def _inputs(self, names: list[str]) -> dict[str, float]:
-        """The inputs ``names`` [SI units]; a :class:`RailContactError` naming each one
-        not finite, and each load or direct creepage beyond its range
+    @staticmethod
+    def _inputs(u: _Wheelset, names: list[str]) -> dict[str, float]:
+        """The inputs ``names`` of wheelset ``u`` [SI units]; a :class:`RailContactError`
+        naming each one not finite, and each load or direct creepage beyond its range
         (:data:`~railcontact.fmu.variables.LOAD_LIMITS`,
         :data:`~railcontact.fmu.variables.CREEPAGE_LIMITS`)."""
-        values = {n: float(self[n]) for n in names}
+        values = {n: float(u[n]) for n in names}
         bad = [f"{n} = {x}" for n, x in values.items() if not math.isfinite(x)]
         if bad:
             raise RailContactError("inputs not finite: " + ", ".join(bad))
@@ -377,16 +501,17 @@ class Slave:
             raise RailContactError("inputs out of range: " + "; ".join(bad))
         return values
 
-    def _discard(self) -> None:
-        """Every output zero, the wheelset's and each wheel's status out of range: what a
-        discarded step shows (nothing solved)."""
-        self._write(None)
+    @staticmethod
+    def _discard(u: _Wheelset) -> None:
+        """Every output of wheelset ``u`` zero, its status and each wheel's out of range:
+        what a discarded step shows (nothing solved)."""
+        _write(u, None)
         for name in ("status", "status_left", "status_right"):
-            self[name] = OUT_OF_RANGE
+            u[name] = OUT_OF_RANGE
 
-    def _discarded(self, message: str) -> int:
-        self.log.append(message)
-        self._discard()
+    def _discarded(self, u: _Wheelset, message: str) -> int:
+        u.log.append(message)
+        self._discard(u)
         return FMI_DISCARD
 
     def _communication_step(self) -> int:
@@ -402,15 +527,64 @@ class Slave:
             return FMI_ERROR
         return self._do_step()
 
+    def _discard_all(self) -> None:
+        """Every wheelset's step discarded (:meth:`_discard`), and the outputs about all of
+        them saying so."""
+        for u in self.units:
+            self._discard(u)
+        if self.wheelsets is not None:
+            self["status"], self["solve_time"] = OUT_OF_RANGE, 0.0
+
     def _do_step(self) -> int:
-        """Solve the step of the inputs. fmi2Discard when nothing could be solved for a
-        wheel in contact (the outputs and statuses say what was: a wheel not solved has
-        zero forces and its own status 3 or 1, the wheelset's status 3 or 1; an input not
-        finite or beyond its range zeroes every output, each status 3); fmi2Warning for a
-        wheel not ok but solved; fmi2OK otherwise."""
+        """Solve the step of the inputs: each wheelset's (:meth:`_step`), on a thread of
+        its own when there are several (in BEM mode); the FMI status the worst of theirs,
+        each wheelset's messages named by its number."""
         if self.contact is None:
             self.log.append("doStep before initialization")
             return FMI_ERROR
+        if self.wheelsets is None:
+            return self._step(self.units[0])
+        t0 = time.perf_counter()
+        if len(self.units) > 1 and self.modes.contact_model == "bem":
+            if not self._threads:  # as many threads as cores; each wheelset on the same
+                self._threads = [  # thread step after step (its FFT plans and search
+                    ThreadPoolExecutor(1, f"railcontact-{self.instance_name}-{j}")  # memory
+                    for j in range(min(len(self.units), _cores()))]  # stay with it)
+            n = len(self._threads)
+            running = [t.submit(self._step_group, self.units[j::n])
+                       for j, t in enumerate(self._threads)]
+            by_thread = [r.result() for r in running]
+            statuses = [by_thread[k % n][k // n] for k in range(len(self.units))]
+        else:
+            statuses = [self._guarded_step(u) for u in self.units]
+        for u in self.units:
+            self.log.extend(f"wheelset {u.k}: {line}" for line in u.log)
+            u.log.clear()
+        self["status"] = Status.worst(u["status"] for u in self.units)
+        self["solve_time"] = time.perf_counter() - t0
+        return max(statuses)
+
+    def _step_group(self, units: list[_Wheelset]) -> list[int]:
+        """The steps of ``units`` one after the other (one thread's share)."""
+        return [self._guarded_step(u) for u in units]
+
+    def _guarded_step(self, u: _Wheelset) -> int:
+        """:meth:`_step` of wheelset ``u``; an unexpected error discards its step (nothing
+        of it is to be trusted) with the traceback in its messages."""
+        try:
+            return self._step(u)
+        except Exception as exc:  # never let an exception reach the simulator
+            u.log.append(f"doStep: {type(exc).__name__}: {exc}\n{traceback.format_exc()}")
+            self._discard(u)
+            return FMI_DISCARD
+
+    def _step(self, u: _Wheelset) -> int:
+        """Solve wheelset ``u``'s step of its inputs. fmi2Discard when nothing could be
+        solved for a wheel in contact (the outputs and statuses say what was: a wheel not
+        solved has zero forces and its own status 3 or 1, the wheelset's status 3 or 1; an
+        input not finite or beyond its range zeroes every output, each status 3);
+        fmi2Warning for a wheel not ok but solved; fmi2OK otherwise."""
+        contact = u.contact
         # only the inputs the modes use are read: a NaN elsewhere is no concern of ours
         names = ["lateral_displacement", "yaw"]
         penetration = self.modes.control == "penetration"
@@ -423,9 +597,9 @@ class Slave:
                                                           "rail_offset_vertical", "rail_roll",
                                                           "friction")]
         try:
-            x = self._inputs(names)
+            x = self._inputs(u, names)
         except RailContactError as exc:
-            return self._discarded(str(exc))
+            return self._discarded(u, str(exc))
         try:
             pose = Pose(x["lateral_displacement"], x["yaw"], x.get("roll", 0.0))
             kw: dict = {"time": float(self.control[0])}
@@ -447,49 +621,58 @@ class Slave:
                 kw["rails"] = rails
             mu = tuple(x[f"friction_{s}"] for s in V.SIDES)
             if any(m > 0 for m in mu):  # (<= 0: the parameter's)
-                kw["friction"] = tuple(m if m > 0 else self.contact.settings.friction
+                kw["friction"] = tuple(m if m > 0 else contact.settings.friction
                                        for m in mu)
-            res = self.contact.solve(pose, **kw)
+            res = contact.solve(pose, **kw)
         except RailContactError as exc:
-            return self._discarded(f"input out of range: {exc}")
-        self._write(res)  # (the rigid wheelset: a stage of the solve when asked for)
-        speed = float(self["speed"])  # the frictional power: per unit speed times V
+            return self._discarded(u, f"input out of range: {exc}")
+        _write(u, res)  # (the rigid wheelset: a stage of the solve when asked for)
+        speed = float(u["speed"])  # the frictional power: per unit speed times V
         for s in V.SIDES:
-            self[f"frictional_power_{s}"] *= speed if math.isfinite(speed) and speed > 0 \
+            u[f"frictional_power_{s}"] *= speed if math.isfinite(speed) and speed > 0 \
                 else 0.0
         rigid = res.rigid_solution
         if rigid is not None and not rigid.converged:  # not found: the status says so
-            self.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")
-            self["status"] = Status.worst((NOT_CONVERGED, int(self["status"])))
-        if not np.all(np.isfinite(self.real[self.real_outputs])):  # (inputs may be NaN)
-            return self._discarded("non-finite result; outputs set to zero")
+            u.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")
+            u["status"] = Status.worst((NOT_CONVERGED, int(u["status"])))
+        if not np.all(np.isfinite(self.real[u.real_outputs])):  # (inputs may be NaN)
+            return self._discarded(u, "non-finite result; outputs set to zero")
         if kinematic:  # the creepages the velocities formed, as direct ones
             beyond = [f"{w.side} wheel: (xi, eta, phi) = ({c[0]:g}, {c[1]:g}, {c[2]:g} 1/m)"
                       for w in res.wheels for c in w.creepages
                       if not all(abs(v) <= V.CREEPAGE_LIMITS[1] for v in c)]
             if beyond:
-                return self._discarded("inputs out of range: the kinematic inputs (speed = "
-                                       f"{x['speed']:g} m/s) give creepages beyond the "
+                return self._discarded(u, "inputs out of range: the kinematic inputs (speed "
+                                       f"= {x['speed']:g} m/s) give creepages beyond the "
                                        f"range, {'; '.join(beyond)}: {_CREEPAGE_RANGE}")
         failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
                                                         OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
             name = STATUS_NAMES[w.status]  # (a message may name its status already)
             text = w.message if w.message.startswith(name) else f"{name}: {w.message}"
-            self.log.append(f"{w.side} wheel: {text}")
+            u.log.append(f"{w.side} wheel: {text}")
         if any(_unsolved(w) for w in res.wheels):  # zero forces are no contact's only
             return FMI_DISCARD
         unfound = rigid is not None and not rigid.converged
         return FMI_WARNING if failed or unfound else FMI_OK
 
-    def _write(self, res: WheelsetResult | None) -> None:
-        """Outputs from ``res``; all zero (and no patches) for None."""
-        if res is None:
-            for buffer, vrs in self._zeroed:
-                buffer[vrs] = 0
-            return
-        for buffer, vrs, values in self._outputs:
-            buffer[vrs] = [value(res) for value in values]
+
+def _cores() -> int:
+    """The cores this process may run on (the threads that can overlap)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def _write(u: _Wheelset, res: WheelsetResult | None) -> None:
+    """Wheelset ``u``'s outputs from ``res``; all zero (and no patches) for None."""
+    if res is None:
+        for buffer, vrs in u.zeroed:
+            buffer[vrs] = 0
+        return
+    for buffer, vrs, values in u.outputs:
+        buffer[vrs] = [value(res) for value in values]
 
 
 _CREEPAGE_RANGE = (f"creepages must be within {V.CREEPAGE_LIMITS[0]:g} to "
@@ -575,7 +758,7 @@ def warm(resources: str) -> tuple[int, int, float]:
 
     t0 = time.perf_counter()
     for parameters, steps in WARM_RUNS:
-        s = Slave(resources, "warm")
+        s = Slave(resources, "warm", wheelsets=None)  # (the kernels of any FMU)
         for name, value in parameters.items():
             s[name] = value
         if s.exit_initialization() not in (FMI_OK, FMI_WARNING):

@@ -2,9 +2,9 @@
 
 ``railcontact demo [--quick]`` co-simulates a wheelset with the FMU through fmpy;
 ``railcontact solve CASE.toml [--json] [--plot FILE]`` solves a case file;
-``railcontact fmu build [-o dist/RailContact.fmu] [--python PATH]`` builds the FMU and
-``railcontact fmu check FILE.fmu`` tells which Python it will run in; ``railcontact settings``
-prints the reference of every setting; ``railcontact table
+``railcontact fmu build [-o dist/RailContact.fmu] [--python PATH] [--wheelsets N]`` builds
+the FMU and ``railcontact fmu check FILE.fmu`` tells which Python it will run in;
+``railcontact settings`` prints the reference of every setting; ``railcontact table
 build|check|refine|show|export`` makes, checks, refines, summarises and exports contact
 tables (docs/tables.md). Errors in the input are reported in one line (exit status 2),
 never as a traceback.
@@ -156,7 +156,7 @@ def _cmd_fmu_build(args: argparse.Namespace) -> int:
     from .fmu import build_fmu
 
     out = build_fmu(args.output, args.profile or [], python=args.python,
-                    warm=not args.no_warm, log=print)
+                    warm=not args.no_warm, log=print, wheelsets=args.wheelsets)
     print(f"FMU written to {out}")
     return 0
 
@@ -542,6 +542,11 @@ def build_parser() -> argparse.ArgumentParser:
     fb.add_argument("--no-warm", action="store_true",
                     help="do not compile the FMU's kernels into the per-user cache now "
                     "(the FMU's first run in an environment then compiles them: 40-100 s)")
+    fb.add_argument("--wheelsets", type=int, metavar="N",
+                    help="an FMU of N wheelsets (1 to 8), solved in parallel in each step: "
+                    "every input and output repeated with _1 ... _N appended, the "
+                    "parameters once, the Integer parameter wheelsets = N (default: the "
+                    "one-wheelset FMU, its variables without a suffix)")
     fb.set_defaults(func=_cmd_fmu_build)
     fc = fsub.add_parser("check", help="which Python an FMU will run in, and whether it can",
                          description="Asks the FMU which Python it chooses here "

@@ -16,7 +16,27 @@ Real variables (no Python involved) and a Python round trip through the shim (a
 fmi2GetString call: taking the GIL, calling the slave, returning), against a whole
 set + doStep + get.
 
-Usage: python scripts/bench_fmu.py [--duration 2.0] [--csv FILE]
+Under ``control = penetration`` (``--part penetration``; the host gives the vertical
+displacement and roll, as a multibody code does) it compares the FMU's step with the
+in-process step it wraps: the same wheelset motion (lateral 3 mm sine at 1.5 Hz, kinematic
+creepages at 30 m/s, warm starts), its vertical displacement and roll those of a
+load-controlled run (83.3 kN a wheel, the rigid wheelset solved, computed first), stepped
+by :meth:`railcontact.WheelsetContact.solve` in this process and by the FMU through fmpy
+(set the inputs, doStep, get the forces and moments), the two alternating step by step (so
+that both meet the machine's load alike) over ``--repeats`` runs; it prints the median
+per-step times, their ratio (FMU / in-process; the goal is at most 1.2) and the median of
+the per-step ratios.
+
+``--part wheelsets`` builds the FMU of ``--wheelsets`` N wheelsets and steps it, under
+``control = penetration``, against N one-wheelset FMU instances stepped one after the other
+with the same inputs (N lateral sines of different amplitude and phase): the median time of
+the N-wheelset step, of the N single steps together, their ratio (the parallel ratio: 1 no
+gain, 1/N perfectly parallel; this machine has 2 cores), and whether every wheelset's
+outputs equal its single instance's bit for bit.
+
+Usage: python scripts/bench_fmu.py [--part all|modes|penetration|wheelsets]
+                                   [--duration 2.0] [--csv FILE] [--steps 400]
+                                   [--repeats 3] [--wheelsets 4]
 """
 
 from __future__ import annotations
@@ -98,23 +118,202 @@ def shim_overhead(fmu_dir: Path, md) -> str:
     return (r.stdout + r.stderr[-500:]).strip()
 
 
+PENETRATION_OUTPUTS = ("force_longitudinal", "force_lateral", "force_vertical", "yaw_moment",
+                       "roll_moment", "pitch_moment", "force_vertical_left",
+                       "force_vertical_right")
+"""What the host reads after each step of the penetration-control runs."""
+
+
+def _motion(steps: int, amplitude: float = 3e-3, phase: float = 0.0,
+            step: float = 1e-3) -> list[dict]:
+    """Per step the kinematic inputs of a lateral sine at 1.5 Hz (30 m/s) and the vertical
+    displacement and roll at which a rigid wheelset carries 83.3 kN a wheel there (a
+    load-controlled in-process run, the rigid wheelset solved)."""
+    import railcontact as rc
+
+    wc = _contact("solve")
+    w = 2 * math.pi * 1.5
+    out = []
+    for k in range(steps):
+        t = k * step
+        y, v = amplitude * math.sin(w * t + phase), amplitude * w * math.cos(w * t + phase)
+        r = wc.solve(rc.Pose(y), loads=(83.3e3, 83.3e3), kinematics=rc.Kinematics(30.0, v),
+                     time=t)
+        out.append({"time": t, "lateral_displacement": y, "lateral_velocity": v,
+                    "speed": 30.0, "vertical_displacement": r.vertical, "roll": r.roll})
+    return out
+
+
+def _contact(rigid: str = "skip"):
+    """The in-process wheelset with the FMU's default parameters."""
+    import railcontact as rc
+
+    mat = rc.Material(206e9, 0.28)
+    return rc.WheelsetContact(
+        rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40), 1.435),
+        rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46, 1.360), rc.ElasticPair.of(mat, mat),
+        rc.ContactSettings(friction=0.4, warm_start="previous+estimate", rigid_wheelset=rigid))
+
+
+def _in_process_step(wc, m: dict) -> float:
+    """Wall time [s] of the in-process step of motion ``m`` under penetration control."""
+    import railcontact as rc
+
+    t0 = time.perf_counter()
+    r = wc.solve(rc.Pose(m["lateral_displacement"], 0.0, m["roll"]),
+                 vertical=m["vertical_displacement"],
+                 kinematics=rc.Kinematics(m["speed"], m["lateral_velocity"]), time=m["time"])
+    _read = (r.force, r.moment, r.yaw_moment, r.left.track_force, r.right.track_force)
+    return time.perf_counter() - t0
+
+
+INPUT_NAMES = ("lateral_displacement", "lateral_velocity", "speed", "vertical_displacement",
+               "roll")
+
+
+class _Instance:
+    """An FMU instance through fmpy under control = penetration, kinematic creepages."""
+
+    def __init__(self, fmu_dir: Path, md, name: str, wheelsets: int | None = None) -> None:
+        from fmpy.fmi2 import FMU2Slave
+
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.s = FMU2Slave(guid=md.guid, unzipDirectory=str(fmu_dir),
+                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.s.instantiate()
+        self.s.setupExperiment(startTime=0.0)
+        self.s.enterInitializationMode()
+        self.s.setString([self.vr["control"], self.vr["creepage_input"]],
+                         ["penetration", "kinematic"])
+        self.s.exitInitializationMode()
+        suffixes = [""] if wheelsets is None else [f"_{k}" for k in range(1, wheelsets + 1)]
+        self.ins = [self.vr[n + x] for x in suffixes for n in INPUT_NAMES]
+        self.outs = [self.vr[n + x] for x in suffixes for n in PENETRATION_OUTPUTS]
+        self.all_outs = [[v.valueReference for v in md.modelVariables
+                          if v.causality == "output" and v.type == "Real"
+                          and v.name.endswith(x) and not v.name.startswith("solve_time")]
+                         for x in suffixes]
+
+    def step(self, motions: list[dict]) -> tuple[float, list[float]]:
+        """Set the inputs (one motion per wheelset), doStep, get the outputs: the wall time
+        [s] and the outputs read."""
+        t0 = time.perf_counter()
+        self.s.setReal(self.ins, [m[n] for m in motions for n in INPUT_NAMES])
+        self.s.doStep(motions[0]["time"], 1e-3)
+        out = self.s.getReal(self.outs)
+        return time.perf_counter() - t0, out
+
+    def free(self) -> None:
+        self.s.terminate()
+        self.s.freeInstance()
+
+
+def _unpacked(fmu: Path, where: Path):
+    from fmpy.model_description import read_model_description
+
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(where)
+    return where, read_model_description(str(fmu))
+
+
+def penetration_ratio(fmu_dir: Path, md, steps: int, repeats: int) -> dict:
+    """Median per-step wall times [s] of the in-process step and of the FMU's under
+    penetration control over the same motion, the two stepped alternately (step k
+    in-process, then step k through the FMU: both see the machine's load alike), over
+    ``repeats`` runs from new instances; and the median of the per-step ratios."""
+    motion = _motion(steps)
+    api, fmu = [], []
+    for k in range(repeats):
+        wc = _contact()
+        inst = _Instance(fmu_dir, md, f"penetration{k}")
+        for i, m in enumerate(motion):
+            a, f = _in_process_step(wc, m), inst.step([m])[0]
+            if i:  # (the first step is cold)
+                api.append(a)
+                fmu.append(f)
+        inst.free()
+    return {"api": float(np.median(api)), "fmu": float(np.median(fmu)), "steps": len(api),
+            "paired": float(np.median(np.array(fmu) / np.array(api)))}
+
+
+def parallel_ratio(single: tuple, multi: tuple, wheelsets: int, steps: int,
+                   repeats: int) -> dict:
+    """Median wall time [s] of the N-wheelset FMU's step and of N single-wheelset instances
+    stepped one after the other, over the same motions; and whether each wheelset's Real
+    outputs equal its single instance's bit for bit (solve_time apart)."""
+    motions = [_motion(steps, 3e-3 - 0.4e-3 * j, 0.9 * j) for j in range(wheelsets)]
+    many, ones, equal = [], [], True
+    for k in range(repeats):
+        m = _Instance(*multi, f"multi{k}", wheelsets)
+        singles = [_Instance(*single, f"single{k}-{j}") for j in range(wheelsets)]
+        for i in range(steps):
+            t_multi, _ = m.step([mo[i] for mo in motions])
+            t_single = sum(s.step([mo[i]])[0] for s, mo in zip(singles, motions, strict=True))
+            if i:  # (the first step is cold)
+                many.append(t_multi)
+                ones.append(t_single)
+            for j, s in enumerate(singles):
+                equal &= m.s.getReal(m.all_outs[j]) == s.s.getReal(s.all_outs[0])
+        m.free()
+        for s in singles:
+            s.free()
+    return {"multi": float(np.median(many)), "singles": float(np.median(ones)),
+            "equal": equal, "steps": len(many)}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=2.0, help="simulated time [s]")
     ap.add_argument("--step", type=float, default=1e-3, help="communication step [s]")
     ap.add_argument("--csv", default="", help="per-step CSV output (optional)")
+    ap.add_argument("--part", default="all",
+                    choices=("all", "modes", "penetration", "wheelsets"),
+                    help="what to run: the warm_start modes and the C host's overhead, the "
+                    "penetration-control FMU / in-process ratio, the N-wheelset FMU's "
+                    "parallel ratio, or all")
+    ap.add_argument("--steps", type=int, default=400,
+                    help="steps of each penetration-control run (penetration, wheelsets)")
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="repetitions of the penetration-control runs, interleaved")
+    ap.add_argument("--wheelsets", type=int, default=4,
+                    help="wheelsets of the FMU of --part wheelsets")
     args = ap.parse_args()
-
-    from fmpy.model_description import read_model_description
 
     from railcontact.fmu import build_fmu
 
     with tempfile.TemporaryDirectory() as tmp:
         fmu = build_fmu(Path(tmp) / "RailContact.fmu")
-        d = Path(tmp) / "x"
-        with zipfile.ZipFile(fmu) as z:
-            z.extractall(d)
-        md = read_model_description(str(fmu))
+        d, md = _unpacked(fmu, Path(tmp) / "x")
+        if args.part in ("all", "penetration"):
+            ref = fixed_workload()
+            p = penetration_ratio(d, md, args.steps, args.repeats)
+            ref = 0.5 * (ref + fixed_workload())
+            print(f"control = penetration, {p['steps']} warm steps (lateral 3 mm sine at "
+                  f"1.5 Hz, 30 m/s, kinematic creepages), medians; fixed workload "
+                  f"{ref * 1e3:.1f} ms")
+            print(f"  in-process WheelsetContact.solve: {p['api'] * 1e3:.3f} ms "
+                  f"({p['api'] / ref:.4f} of the workload)")
+            print(f"  FMU through fmpy (set, doStep, get): {p['fmu'] * 1e3:.3f} ms "
+                  f"({p['fmu'] / ref:.4f} of the workload)")
+            print(f"  ratio FMU / in-process: {p['fmu'] / p['api']:.3f} (goal <= 1.2); median "
+                  f"of the per-step ratios {p['paired']:.3f}")
+        if args.part in ("all", "wheelsets"):
+            n = args.wheelsets
+            multi = build_fmu(Path(tmp) / f"RailContact{n}.fmu", warm=False, wheelsets=n)
+            q = parallel_ratio((d, md), _unpacked(multi, Path(tmp) / f"x{n}"), n,
+                               args.steps, args.repeats)
+            print(f"{n}-wheelset FMU under control = penetration, {q['steps']} warm steps, "
+                  f"medians (2-core machine)")
+            print(f"  one step of the {n}-wheelset FMU: {q['multi'] * 1e3:.3f} ms")
+            print(f"  {n} one-wheelset FMU steps one after the other: "
+                  f"{q['singles'] * 1e3:.3f} ms")
+            print(f"  parallel ratio ({n}-wheelset / {n} single): "
+                  f"{q['multi'] / q['singles']:.3f} (1: no gain; {1 / n:.2f}: perfectly "
+                  f"parallel)")
+            print(f"  every wheelset's outputs equal its single instance's bit for bit: "
+                  f"{q['equal']}")
+        if args.part not in ("all", "modes"):
+            return
         ref = fixed_workload()
         results = [run_mode(d, md, m, args.duration, args.step) for m in MODES]
         ref = 0.5 * (ref + fixed_workload())  # (before and after the runs)

@@ -1,8 +1,10 @@
-"""Write the FMU's variable table into docs/fmu.md (between the ``fmu-variables`` markers).
+"""Write the FMU's variable tables into docs/fmu.md (between the ``fmu-variables`` and the
+``fmu-wheelsets`` markers).
 
-The table is :func:`railcontact.fmu.variables.variables_markdown`, from the one table the
-slave and the modelDescription share; ``tests/test_readme_fmu.py`` fails when the page's
-copy is stale. Usage: ``python scripts/fmu_variables_table.py [--check]``.
+The tables are :func:`railcontact.fmu.variables.variables_markdown` and
+:func:`~railcontact.fmu.variables.wheelsets_markdown` (the FMU of several wheelsets), from the
+one table the slave and the modelDescription share; ``tests/test_readme_fmu.py`` fails when
+the page's copy is stale. Usage: ``python scripts/fmu_variables_table.py [--check]``.
 """
 
 from __future__ import annotations
@@ -12,18 +14,23 @@ import re
 import sys
 from pathlib import Path
 
-from railcontact.fmu.variables import variables_markdown
+from railcontact.fmu.variables import variables_markdown, wheelsets_markdown
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "fmu.md"
-BLOCK = re.compile(r"(<!-- fmu-variables[^>]*-->\n)(.*?)(<!-- /fmu-variables -->)", re.S)
+TABLES = {"fmu-variables": variables_markdown, "fmu-wheelsets": wheelsets_markdown}
+"""Each block's marker and the function of its table."""
 
 
 def with_table(text: str) -> str:
-    """``text`` with the block between the markers replaced by the current table."""
-    if not BLOCK.search(text):
-        raise SystemExit("docs/fmu.md has no <!-- fmu-variables --> ... "
-                         "<!-- /fmu-variables --> block")
-    return BLOCK.sub(lambda m: m.group(1) + variables_markdown() + m.group(3), text, count=1)
+    """``text`` with the blocks between the markers replaced by the current tables."""
+    for marker, table in TABLES.items():
+        block = re.compile(rf"(<!-- {marker}[^>]*-->\n)(.*?)(<!-- /{marker} -->)", re.S)
+        if not block.search(text):
+            raise SystemExit(f"docs/fmu.md has no <!-- {marker} --> ... <!-- /{marker} --> "
+                             "block")
+        text = block.sub(lambda m, table=table: m.group(1) + table() + m.group(3), text,
+                         count=1)
+    return text
 
 
 def main(argv: list[str] | None = None) -> int:

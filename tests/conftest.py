@@ -1,3 +1,4 @@
+import shutil
 from pathlib import Path
 
 import pytest
@@ -15,3 +16,17 @@ RELIABILITY = ROOT / "tests" / "data" / "reliability"
 @pytest.fixture
 def root() -> Path:
     return ROOT
+
+
+@pytest.fixture(scope="session")
+def default_fmu(tmp_path_factory) -> Path:
+    """The default (one-wheelset) FMU, built once per session with a profile file in its
+    resources (``tests/test_fmu.py`` runs it; ``tests/test_fmu_wheelsets.py`` compares the
+    FMU of several wheelsets with it)."""
+    pytest.importorskip("fmpy")
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    from railcontact.fmu import build_fmu
+
+    return build_fmu(tmp_path_factory.mktemp("fmu") / "RailContact.fmu",
+                     [PROFILES / "S1002.txt"])

@@ -8,7 +8,6 @@ verified elsewhere (test_wheel_rail, test_tangential, test_wheelset).
 from __future__ import annotations
 
 import math
-import shutil
 import subprocess
 import zipfile
 from pathlib import Path
@@ -22,7 +21,6 @@ from fmpy.fmi2 import FMU2Slave  # noqa: E402
 from fmpy.model_description import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-from railcontact.fmu import build_fmu  # noqa: E402
 from railcontact.geometry.profiles import read_profile  # noqa: E402
 from railcontact.geometry.track import Pose, Track, Wheelset  # noqa: E402
 from railcontact.halfspace.materials import ElasticPair, Material  # noqa: E402
@@ -34,11 +32,8 @@ CREEP = {"xi_left": 1e-3, "eta_left": -5e-4, "phi_left": 0.3,
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory) -> Path:
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc not available")
-    profile = Path(__file__).resolve().parents[1] / "models" / "profiles" / "S1002.txt"
-    return build_fmu(tmp_path_factory.mktemp("fmu") / "RailContact.fmu", [profile])
+def fmu(default_fmu) -> Path:
+    return default_fmu  # (conftest.py: built once, with models/profiles/S1002.txt)
 
 
 @pytest.fixture(scope="module")

@@ -8,15 +8,15 @@ import re
 from railcontact.fmu import variables as V
 
 
-def _block(page: str) -> str:
-    return page.split("<!-- fmu-variables")[1].split("-->", 1)[1].split(
-        "<!-- /fmu-variables -->")[0]
+def _block(page: str, marker: str = "fmu-variables") -> str:
+    return page.split(f"<!-- {marker}")[1].split("-->", 1)[1].split(f"<!-- /{marker} -->")[0]
 
 
 def test_docs_variable_table_is_current(root):
     """Regenerate with ``python scripts/fmu_variables_table.py``."""
     page = (root / "docs" / "fmu.md").read_text(encoding="utf-8")
     assert _block(page).strip() == V.variables_markdown().strip()
+    assert _block(page, "fmu-wheelsets").strip() == V.wheelsets_markdown().strip()
 
 
 def test_variable_table_names_every_variable_with_its_unit_and_default():

@@ -48,7 +48,7 @@ def _builder():
 
 def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = (),
               python: str | Path | None = None, warm: bool = True,
-              log: Callable[[str], None] | None = None) -> Path:
+              log: Callable[[str], None] | None = None, wheelsets: int | None = None) -> Path:
     """Build the FMU (gcc + fmpy's FMI 2 headers) and return its path.
 
     Parameters
@@ -67,17 +67,26 @@ def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = 
         why.
     log
         Called with lines for the user (the warm-up's outcome); None: silent.
+    wheelsets
+        None (default): the FMU of one wheelset. N from 1 to 8: the FMU of N wheelsets,
+        every input and output repeated per wheelset with ``_k`` appended
+        (``normal_force_left_2``), the parameters once, the Integer parameter ``wheelsets``
+        = N; the wheelsets are solved in parallel within each step
+        (:func:`railcontact.fmu.variables.table`, ``docs/fmu.md``).
     """
     b = _builder()
     try:
-        return b.build(output, list(profiles), python=python, warm=warm, log=log)
+        return b.build(output, list(profiles), python=python, warm=warm, log=log,
+                       wheelsets=wheelsets)
     except b.BuildError as exc:
         raise RailContactError(f"cannot build the FMU: {exc}") from None
 
 
-def fmu_is_current(path: str | Path, profiles: list[str | Path] = ()) -> bool:
-    """Whether the FMU at ``path`` exists and was built from the present sources, Python and
-    profile files (its ``resources/source.sha1``, see ``fmu_src/build.py``)."""
+def fmu_is_current(path: str | Path, profiles: list[str | Path] = (),
+                   wheelsets: int | None = None) -> bool:
+    """Whether the FMU at ``path`` exists and was built from the present sources, Python,
+    profile files and number of wheelsets (its ``resources/source.sha1``, see
+    ``fmu_src/build.py``)."""
     import zipfile
 
     path = Path(path)
@@ -88,13 +97,15 @@ def fmu_is_current(path: str | Path, profiles: list[str | Path] = ()) -> bool:
             stored = z.read("resources/source.sha1").decode().strip()
     except (KeyError, OSError, zipfile.BadZipFile):
         return False
-    return stored == _builder().source_digest(list(profiles))
+    return stored == _builder().source_digest(list(profiles), wheelsets=wheelsets)
 
 
 def ensure_fmu(path: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = (),
-               log: Callable[[str], None] | None = None) -> tuple[Path, bool]:
-    """Build the FMU at ``path`` if it is missing or stale (its kernels warmed, see
-    :func:`build_fmu`; ``log`` gets the build's lines); returns (path, built)."""
-    if fmu_is_current(path, profiles):
+               log: Callable[[str], None] | None = None,
+               wheelsets: int | None = None) -> tuple[Path, bool]:
+    """Build the FMU at ``path`` (of ``wheelsets`` wheelsets, see :func:`build_fmu`) if it
+    is missing or stale (its kernels warmed; ``log`` gets the build's lines); returns
+    (path, built)."""
+    if fmu_is_current(path, profiles, wheelsets):
         return Path(path).resolve(), False
-    return build_fmu(path, profiles, log=log), True
+    return build_fmu(path, profiles, log=log, wheelsets=wheelsets), True

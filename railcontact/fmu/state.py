@@ -36,7 +36,8 @@ The header is an object with
     The String variables' values, by value reference.
 ``memory``
     The solver's memory of the previous steps (the warm start), or null before
-    initialisation, as a tree (below).
+    initialisation, as a tree (below); in an FMU of several wheelsets a list of their
+    memories, wheelset 1 first.
 
 and the archive holds ``real`` (float64, the Real variables by value reference),
 ``integer`` (int32, the Integer variables), ``control`` (float64, (time [s], step
@@ -108,7 +109,8 @@ class State:
     strings
         The String variables by value reference.
     memory
-        The solver's memory (the warm start), or None before initialisation.
+        The solver's memory (the warm start), a list of the wheelsets' in an FMU of
+        several, or None before initialisation.
     railcontact
         The package version that saved it.
     """

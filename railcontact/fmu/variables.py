@@ -538,15 +538,82 @@ def parameters_markdown() -> str:
     return "\n".join(out) + "\n"
 
 
-def table() -> list[Variable]:
-    """All variables with their value references (numbered per type from 0)."""
-    counters: dict[str, int] = {}
-    out = []
+def _single_table() -> list[Variable]:
+    """The variables of the one-wheelset FMU, numbered (:func:`table`)."""
     first = [v for v in PARAMETERS if v.name not in APPENDED + APPENDED_TRACK]
     appended = [next(v for v in PARAMETERS if v.name == name) for name in APPENDED]
     track = [next(v for v in PARAMETERS if v.name == name) for name in APPENDED_TRACK]
-    for v in (first + INPUTS + OUTPUTS + appended + CHOICES + APPENDED_OUTPUTS + track
-              + TRACK_INPUTS + TRACK_OUTPUTS):
+    return _numbered(first + INPUTS + OUTPUTS + appended + CHOICES + APPENDED_OUTPUTS + track
+                     + TRACK_INPUTS + TRACK_OUTPUTS)
+
+
+MAX_WHEELSETS = 8
+"""The most wheelsets one FMU solves (``railcontact fmu build --wheelsets N``)."""
+
+
+def _of_wheelset(v: Variable, k: int) -> Variable:
+    """Wheelset ``k``'s copy of an input or output of the one-wheelset table: the name
+    with ``_k`` appended (``normal_force_left_2``), the description naming the wheelset."""
+    return replace(v, name=f"{v.name}_{k}", description=f"{v.description} (wheelset {k})")
+
+
+def wheelset_count_parameter(wheelsets: int) -> Variable:
+    """The Integer parameter ``wheelsets`` of an FMU of ``wheelsets`` wheelsets."""
+    return Variable("wheelsets", "Integer", "parameter", wheelsets, "",
+                    f"number of wheelsets this FMU solves, fixed when it was built (railcontact "
+                    f"fmu build --wheelsets N, 1 to {MAX_WHEELSETS}); any other value is an "
+                    f"error at initialisation")
+
+
+VEHICLE_OUTPUTS = [
+    Variable("status", "Integer", "output", None, "",
+             "the most severe of the wheelsets' status_k (3 > 1 > 4 > 2 > 0); the step's FMI "
+             "status is the worst of the wheelsets' steps"),
+    Variable("solve_time", "Real", "output", None, "s",
+             "wall time of the last step's solves of all wheelsets (in parallel)"),
+]
+"""The outputs of an FMU of several wheelsets about all of them (the slave writes them)."""
+
+
+def check_wheelsets(wheelsets: int) -> int:
+    """``wheelsets`` as an int from 1 to :data:`MAX_WHEELSETS`; a
+    :class:`~railcontact.errors.RailContactError` otherwise."""
+    if isinstance(wheelsets, bool) or not isinstance(wheelsets, int) or \
+            not 1 <= wheelsets <= MAX_WHEELSETS:
+        raise RailContactError(f"wheelsets must be an integer from 1 to {MAX_WHEELSETS}, got "
+                               f"{wheelsets!r}")
+    return wheelsets
+
+
+def table(wheelsets: int | None = None) -> list[Variable]:
+    """All variables with their value references (numbered per type from 0).
+
+    Parameters
+    ----------
+    wheelsets
+        None: the FMU of one wheelset (the default build; its value references are a
+        published interface). 1 to :data:`MAX_WHEELSETS`: the FMU of that many wheelsets.
+        Its parameters are the default build's, once and shared by the wheelsets, and the
+        Integer parameter ``wheelsets``; then the outputs about all wheelsets
+        (:data:`VEHICLE_OUTPUTS`); then, per wheelset k = 1..N, every input and output of
+        the default build with ``_k`` appended, in the default build's order. A variable's
+        value reference does not depend on N.
+    """
+    single = _single_table()
+    if wheelsets is None:
+        return single
+    n = check_wheelsets(wheelsets)
+    own = [v for v in single if v.causality != "parameter"]
+    layout = ([v for v in single if v.causality == "parameter"]
+              + [wheelset_count_parameter(n)] + VEHICLE_OUTPUTS
+              + [_of_wheelset(v, k) for k in range(1, n + 1) for v in own])
+    return _numbered(layout)
+
+
+def _numbered(variables: list[Variable]) -> list[Variable]:
+    counters: dict[str, int] = {}
+    out = []
+    for v in variables:
         k = counters.get(v.type, 0)
         counters[v.type] = k + 1
         out.append(replace(v, vr=k))
@@ -592,3 +659,24 @@ def variables_markdown() -> str:
         out.append(f"| {name} | {v.causality} | {_cell(kind)} | {v.unit} | "
                    f"{_cell(_default(v))} | {_cell(meaning)} |")
     return "\n".join(out) + "\n"
+
+
+def wheelsets_markdown() -> str:
+    """The variables of an FMU of N wheelsets (``railcontact fmu build --wheelsets N``)
+    beyond the parameters of the one-wheelset FMU, as a Markdown table: ``wheelsets``, the
+    outputs about all wheelsets, and a row for every input and output repeated per
+    wheelset. The table of docs/fmu.md's section on it is this
+    (``scripts/fmu_variables_table.py`` writes it; ``tests/test_readme_fmu.py`` checks
+    it)."""
+    out = ["| name | causality | type | unit | default | meaning |",
+           "|---|---|---|---|---|---|"]
+    for v in [wheelset_count_parameter(2), *VEHICLE_OUTPUTS]:
+        start = "N" if v.name == "wheelsets" else ""
+        out.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit} | {start} | "
+                   f"{_cell(v.description)} |")
+    out.append("| `<name>_1` ... `<name>_N` | input, output | as `<name>` | as `<name>` | as "
+               "`<name>` | every input and output `<name>` of the one-wheelset FMU (the "
+               "table above), of wheelset k: `lateral_displacement_2`, "
+               "`normal_force_left_2`, `status_2`, `status_left_2`, `solve_time_2` |")
+    return "\n".join(out) + "\n"
+

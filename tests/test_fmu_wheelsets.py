@@ -1,0 +1,245 @@
+"""The FMU of several wheelsets (``railcontact fmu build --wheelsets N``), run by fmpy.
+
+Its truth is the one-wheelset FMU (the default build, ``conftest.default_fmu``, itself
+checked against the Python API in ``tests/test_fmu.py``): each wheelset of the N-wheelset
+FMU has its own solver with the parameters shared, so its outputs must be those of a
+one-wheelset instance given the same inputs, bit for bit. They are stepped on threads of
+their own, and distinct solvers stepping at the same time give the results of stepping them
+one after the other bit for bit (``tests/test_threads.py``, the thread-safety contract of
+``docs/performance.md``): no round-off is allowed. Two builds (N = 1 and N = 2, without
+warming the kernels: the default build has them cached).
+"""
+
+from __future__ import annotations
+
+import math
+import zipfile
+from pathlib import Path
+
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+from fmpy.fmi1 import FMICallException  # noqa: E402
+from fmpy.fmi2 import FMU2Slave  # noqa: E402
+from fmpy.model_description import read_model_description  # noqa: E402
+from fmpy.validation import validate_fmu  # noqa: E402
+
+from railcontact.errors import RailContactError  # noqa: E402
+from railcontact.fmu import build_fmu  # noqa: E402
+from railcontact.fmu import variables as V  # noqa: E402
+
+STEP = 1e-3
+
+
+class Instance:
+    """An fmpy instance of an unpacked FMU, its variables by name."""
+
+    def __init__(self, fmu: Path, name: str, **start) -> None:
+        where = fmu.parent / f"{fmu.stem}-unpacked"
+        if not where.exists():
+            with zipfile.ZipFile(fmu) as z:
+                z.extractall(where)
+        md = read_model_description(str(fmu))
+        self.md = md
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.type = {v.name: v.type for v in md.modelVariables}
+        self.outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+        self.s = FMU2Slave(guid=md.guid, unzipDirectory=str(where),
+                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.s.instantiate()
+        self.s.setupExperiment(startTime=0.0)
+        self.s.enterInitializationMode()
+        self.set(**start)
+        self.s.exitInitializationMode()
+        self.t = 0.0
+
+    def set(self, **values) -> None:
+        for k, v in values.items():
+            if self.type[k] == "String":
+                self.s.setString([self.vr[k]], [v])
+            elif self.type[k] in ("Integer", "Enumeration"):
+                self.s.setInteger([self.vr[k]], [int(v)])
+            else:
+                self.s.setReal([self.vr[k]], [float(v)])
+
+    def get(self, name: str):
+        if self.type[name] in ("Integer", "Enumeration"):
+            return self.s.getInteger([self.vr[name]])[0]
+        return self.s.getReal([self.vr[name]])[0]
+
+    def step(self, **inputs) -> int:
+        """doStep; its FMI status (fmpy raises for Discard and worse)."""
+        self.set(**inputs)
+        try:
+            self.s.doStep(self.t, STEP)
+        except FMICallException as exc:
+            return exc.status
+        self.t += STEP
+        return 0
+
+    def outputs_of(self, suffix: str = "") -> dict:
+        """Every output of the one-wheelset FMU's names read with ``suffix`` (the wall
+        time apart)."""
+        return {n: self.get(n + suffix) for n in SINGLE_OUTPUTS if n != "solve_time"}
+
+    def free(self) -> None:
+        self.s.terminate()
+        self.s.freeInstance()
+
+
+SINGLE_OUTPUTS = [v.name for v in V.table() if v.causality == "output"]
+SINGLE_INPUTS = [v.name for v in V.table() if v.causality == "input"]
+
+
+@pytest.fixture(scope="module")
+def fmu1(default_fmu) -> Path:
+    return build_fmu(default_fmu.parent.parent / "wheelsets1" / "RailContact1.fmu",
+                     warm=False, wheelsets=1)
+
+
+@pytest.fixture(scope="module")
+def fmu2(default_fmu) -> Path:
+    return build_fmu(default_fmu.parent.parent / "wheelsets2" / "RailContact2.fmu",
+                     warm=False, wheelsets=2)
+
+
+def _motion(k: int, amplitude: float, phase: float) -> dict:
+    """Step ``k``'s kinematic inputs of a lateral sine at 1.5 Hz, 30 m/s."""
+    w, t = 2 * math.pi * 1.5, k * STEP
+    return {"lateral_displacement": amplitude * math.sin(w * t + phase),
+            "lateral_velocity": amplitude * w * math.cos(w * t + phase),
+            "yaw": 1e-3 * math.cos(w * t + phase), "speed": 30.0}
+
+
+def test_variables_are_repeated_per_wheelset_and_the_parameters_shared(fmu2):
+    """The N = 2 FMU: fmpy's validation clean; the default build's parameters once, the
+    Integer parameter wheelsets = 2, each input and output of the default build with _1 and
+    _2 (the issue's names: lateral_displacement_1, normal_force_left_1), the worst status;
+    a variable's value reference does not depend on N."""
+    assert validate_fmu(str(fmu2)) == []
+    md = read_model_description(str(fmu2))
+    names = {v.name: v for v in md.modelVariables}
+    single = V.table()
+    parameters = [v.name for v in single if v.causality == "parameter"]
+    own = [v.name for v in single if v.causality != "parameter"]
+    assert set(names) == ({*parameters, "wheelsets", "status", "solve_time"}
+                          | {f"{n}_{k}" for n in own for k in (1, 2)})
+    n = names["wheelsets"]
+    assert (n.type, n.causality, n.variability, n.start) == ("Integer", "parameter",
+                                                             "fixed", "2")
+    assert {"lateral_displacement_1", "normal_force_left_1", "status_right_2"} <= set(names)
+    for k in range(1, V.MAX_WHEELSETS):  # wheelset k's references, whatever N
+        a = {v.name: (v.type, v.vr) for v in V.table(k)}
+        b = {v.name: (v.type, v.vr) for v in V.table(V.MAX_WHEELSETS)}
+        assert all(b[name] == ref for name, ref in a.items())
+    for bad in (0, 9, 2.0, True):
+        with pytest.raises(RailContactError, match="1 to 8"):
+            V.table(bad)
+
+
+def test_one_wheelset_equals_the_default_fmu_output_for_output(default_fmu, fmu1):
+    """wheelsets = 1: every output x_1 equals the default FMU's x on the same steps (load
+    control with the rigid wheelset solved, direct creepages, warm starts), bit for bit;
+    status equals status_1."""
+    one = Instance(default_fmu, "default")
+    multi = Instance(fmu1, "wheelsets1")
+    assert multi.get("wheelsets") == 1
+    for k, y in enumerate((0.0, 1e-3, 1.5e-3, 2e-3)):
+        inputs = {"lateral_displacement": y, "xi_left": 1e-3, "eta_right": -5e-4,
+                  "phi_left": 0.3, "load_right": 80e3 + 1e3 * k}
+        assert one.step(**inputs) == multi.step(**{f"{n}_1": x for n, x in inputs.items()})
+        got = multi.outputs_of("_1")
+        assert got == one.outputs_of()
+        assert multi.get("status") == got["status"]
+    assert got["normal_iterations"] > 0 and got["normal_force_left"] > 50e3
+    one.free()
+    multi.free()
+
+
+def test_two_wheelsets_equal_two_single_runs(default_fmu, fmu2):
+    """Two wheelsets on two lateral sines (kinematic creepages) in one FMU equal two
+    one-wheelset instances given the same inputs, every output bit for bit, step after step
+    (the wheelsets run on two threads at once)."""
+    multi = Instance(fmu2, "two", creepage_input="kinematic")
+    singles = [Instance(default_fmu, f"single{j}", creepage_input="kinematic")
+               for j in (1, 2)]
+    for k in range(5):
+        motions = [_motion(k, 3e-3, 0.0), _motion(k, 2e-3, 0.9)]
+        inputs = {f"{n}_{j}": x for j, m in enumerate(motions, start=1) for n, x in m.items()}
+        assert multi.step(**inputs) == 0
+        for j, (s, m) in enumerate(zip(singles, motions, strict=True), start=1):
+            assert s.step(**m) == 0
+            assert multi.outputs_of(f"_{j}") == s.outputs_of(), (k, j)
+    assert multi.outputs_of("_1") != multi.outputs_of("_2")
+    multi.free()
+    for s in singles:
+        s.free()
+
+
+def test_a_bad_input_on_one_wheelset_is_its_status(default_fmu, fmu2, capsys):
+    """A NaN and an out-of-range yaw on wheelset 2: the step is fmi2Discard (the worst of
+    the wheelsets'), wheelset 2's outputs zero with its statuses 3 and its message named,
+    wheelset 1 solved as a single instance solves it (status 0); status 3. The next good
+    step solves both again."""
+    multi = Instance(fmu2, "bad", warm_start="none")
+    single = Instance(default_fmu, "bad-single", warm_start="none")
+    good = {"lateral_displacement": 2e-3, "xi_left": 1e-3, "xi_right": 1e-3}
+    for bad, words in (({"lateral_displacement": float("nan")}, "lateral_displacement = nan"),
+                       ({"yaw": 0.5}, "small angles")):
+        inputs = {**{f"{n}_1": x for n, x in good.items()},
+                  **{f"{n}_2": x for n, x in {**good, **bad}.items()}}
+        assert multi.step(**inputs) == 2  # fmi2Discard
+        assert single.step(**good) == 0
+        assert multi.outputs_of("_1") == single.outputs_of()
+        assert multi.get("status_1") == 0
+        second = multi.outputs_of("_2")
+        assert [second[n] for n in ("status", "status_left", "status_right")] == [3, 3, 3]
+        assert all(second[n] == 0 for n in SINGLE_OUTPUTS
+                   if n in second and not n.startswith("status"))
+        assert multi.get("status") == 3
+        log = capsys.readouterr().out
+        assert "wheelset 2: " in log and words in log and "wheelset 1: " not in log, log
+        multi.set(yaw_2=0.0, lateral_displacement_2=2e-3)
+    assert multi.step() == 0
+    assert multi.outputs_of("_2") == multi.outputs_of("_1") == single.outputs_of()
+    assert multi.get("status") == 0
+    multi.free()
+    single.free()
+
+
+def test_state_of_all_wheelsets_round_trips(fmu2):
+    """fmi2GetFMUstate after two steps, three steps more, the state set again (kept and
+    serialized): the three steps repeat every output of both wheelsets bit for bit,
+    iterations included (the warm start of both wheelsets is in the state)."""
+    s = Instance(fmu2, "state", creepage_input="kinematic")
+    for k in range(2):
+        s.step(**{f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
+                  for n, x in _motion(k, a, j).items()})
+    state = s.s.getFMUstate()
+    serial = s.s.serializeFMUstate(state)
+    t0 = s.t
+
+    def run() -> list:
+        out = []
+        for k in range(2, 5):
+            s.step(**{f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
+                      for n, x in _motion(k, a, j).items()})
+            out.append([s.outputs_of(f"_{j}") for j in (1, 2)])
+        return out
+
+    first = run()
+    for restore in (state, s.s.deSerializeFMUstate(serial)):
+        s.s.setFMUstate(restore)
+        s.t = t0
+        assert run() == first
+    assert first[0][1]["normal_iterations"] < 20  # warm, as the original
+    s.s.freeFMUstate(state)
+    s.free()
+
+
+def test_the_wheelsets_parameter_is_fixed(fmu2, capsys):
+    """wheelsets set to another number than the build's is an error at initialisation
+    naming it."""
+    with pytest.raises(FMICallException):
+        Instance(fmu2, "three", wheelsets=3)
+    assert "this FMU was built for 2 wheelsets" in capsys.readouterr().out
