@@ -182,6 +182,7 @@ def _cmd_wisdom(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     if args.vehicle:
         return _cmd_demo_vehicle(args)
+    from .fmu import DEFAULT_OUTPUT
     from .sim.demo import DemoOptions, run_demo
 
     opts = DemoOptions(
@@ -190,7 +191,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         wheel_profile=args.wheel_profile,
         rail_profile=args.rail_profile, profile_unit=args.profile_unit,
         element_size=args.element_size, warm_start=args.warm_start, free=args.free,
-        cold_every=args.cold_every, quick=args.quick, fmu=args.fmu,
+        cold_every=args.cold_every, quick=args.quick,
+        fmu=DEFAULT_OUTPUT if args.fmu is None else args.fmu,
         output_dir=args.output_dir, plots=not args.no_plots)
     res = run_demo(opts, progress=not args.no_progress)
     print(res.text)
@@ -200,7 +202,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo_vehicle(args: argparse.Namespace) -> int:
-    from .sim.vehicle_demo import VehicleDemoOptions, run_vehicle_demo
+    from .sim.vehicle_demo import VEHICLE_FMU, VehicleDemoOptions, run_vehicle_demo
 
     opts = VehicleDemoOptions(
         speed=60.0 if args.speed is None else args.speed, duration=args.duration,
@@ -209,7 +211,8 @@ def _cmd_demo_vehicle(args: argparse.Namespace) -> int:
         wheel_profile=args.wheel_profile, rail_profile=args.rail_profile,
         profile_unit=args.profile_unit, element_size=args.element_size,
         warm_start=args.warm_start, quick=args.quick, output_dir=args.output_dir,
-        plots=not args.no_plots, contact=args.contact, fmu=args.fmu)
+        plots=not args.no_plots, contact=args.contact,
+        fmu=VEHICLE_FMU if args.fmu is None else args.fmu)
     res = run_vehicle_demo(opts, progress=not args.no_progress)
     print(res.text)
     for f in res.files:
@@ -228,12 +231,13 @@ def _add_demo(sub) -> None:
                    help="short run: 0.6 s, 2 ms steps, 0.8 mm elements (under a minute)")
     d.add_argument("--vehicle", action="store_true",
                    help="a bogie passenger vehicle (Manchester benchmark Vehicle 1: car body, "
-                   "two bogies, four wheelsets), its contact solved in-process; --quick: "
+                   "two bogies, four wheelsets), its contact from an FMU of four wheelsets "
+                   "(--contact); --quick: "
                    "0.3 s, 2 ms steps, 1.5 mm elements (defaults 1 s, 1 ms, 1 mm)")
-    d.add_argument("--contact", default="in-process", choices=("in-process", "fmu"),
-                   help="--vehicle: the wheelsets' contact in this process, or through the "
-                   "FMU (--fmu; one instance per wheelset of a one-wheelset FMU, one of an "
-                   "FMU of four wheelsets) by fmpy (in-process)")
+    d.add_argument("--contact", default="fmu", choices=("fmu", "in-process"),
+                   help="--vehicle: the wheelsets' contact through one instance of an FMU "
+                   "of four wheelsets (--fmu) by fmpy, or four WheelsetContacts in this "
+                   "process (fmu)")
     d.add_argument("--speed", type=float, help="forward speed [m/s] (30; --vehicle: 60)")
     d.add_argument("--duration", type=float, help="simulated time [s] (1.5)")
     d.add_argument("--step", type=float, help="communication step [s] (0.001)")
@@ -254,8 +258,9 @@ def _add_demo(sub) -> None:
                    help="no suspension: Klingel's free wheelset (use a low speed)")
     d.add_argument("--cold-every", type=int, default=10,
                    help="solve every N-th state also cold, for comparison (0: never; 10)")
-    d.add_argument("--fmu", default="dist/RailContact.fmu",
-                   help="the FMU to use, built if missing or stale (dist/RailContact.fmu)")
+    d.add_argument("--fmu", default=None,
+                   help="the FMU to use, built if missing or stale (dist/RailContact.fmu; "
+                   "--vehicle: an FMU of four wheelsets, dist/RailContact_4wheelsets.fmu)")
     d.add_argument("--output-dir", default="railcontact_demo",
                    help="folder for the plots (railcontact_demo)")
     d.add_argument("--no-plots", action="store_true", help="do not write plots")

@@ -271,7 +271,8 @@ def test_kinds_in_a_contact_spec(tmp_path, capsys):
     plain = parse_spec(raw)
     named = parse_spec({**raw, "table": {**raw["table"], "kind": "contact"}})
     assert named.identity() == plain.identity()
-    with pytest.raises(CaseError, match="kind must be one of contact, geometry, creep, got 'usetab'"):
+    with pytest.raises(CaseError,
+                       match="kind must be one of contact, geometry, creep, got 'usetab'"):
         parse_spec({**raw, "table": {**raw["table"], "kind": "usetab"}})
     with pytest.raises(CaseError, match="load_any_spec"):
         parse_spec({**raw, "table": {**raw["table"], "kind": "creep"}})

@@ -231,8 +231,8 @@ def test_demo_vehicle_command(capsys, tmp_path):
     line and exit status 2."""
     from railcontact.cli import main
 
-    rc = main(["demo", "--vehicle", "--duration", "0.004", "--step", "0.002",
-               "--element-size", "2e-3", "--no-plots", "--no-progress",
+    rc = main(["demo", "--vehicle", "--contact", "in-process", "--duration", "0.004",
+               "--step", "0.002", "--element-size", "2e-3", "--no-plots", "--no-progress",
                "--output-dir", str(tmp_path)])
     out = capsys.readouterr().out
     assert rc == 0, out

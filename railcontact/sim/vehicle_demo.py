@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 
 from ..errors import RailContactError, check_positive
-from ..fmu import DEFAULT_OUTPUT
 from ..geometry.profiles import read_profile
 from ..geometry.track import Track, Wheelset
 from ..io.plotting import _pyplot
@@ -44,7 +43,9 @@ MM, KN = 1e3, 1e-3
 QUICK = {"duration": 0.5, "step": 2e-3, "element_size": 1.5e-3}
 DEFAULT = {"duration": 1.0, "step": 1e-3, "element_size": 1e-3}
 SIDES = ("left", "right")
-CONTACTS = ("in-process", "fmu")
+CONTACTS = ("fmu", "in-process")
+VEHICLE_FMU = "dist/RailContact_4wheelsets.fmu"
+"""Where ``railcontact demo --vehicle`` keeps its FMU of four wheelsets."""
 
 
 @dataclass
@@ -64,11 +65,10 @@ class VehicleDemoOptions:
     quick: bool = False
     output_dir: str = "railcontact_demo"
     plots: bool = True
-    contact: str = "in-process"
-    """"in-process" (four WheelsetContacts) or "fmu" (the FMU at :attr:`fmu` through fmpy,
-    built when missing or stale: one instance per wheelset of a one-wheelset FMU, or one
-    instance of an FMU of four wheelsets)."""
-    fmu: str = DEFAULT_OUTPUT
+    contact: str = "fmu"
+    """"fmu" (one instance of the FMU of four wheelsets at :attr:`fmu` through fmpy, built
+    when missing or stale) or "in-process" (four WheelsetContacts in this process)."""
+    fmu: str = VEHICLE_FMU
 
     def resolved(self) -> dict[str, float]:
         base = QUICK if self.quick else DEFAULT
@@ -136,7 +136,7 @@ def _fmu_contact(opts: VehicleDemoOptions, cfg: dict[str, float], progress: bool
     from .vehicle_fmu import FMUContact
 
     files, params = _profile_files(opts)
-    fmu, _ = ensure_fmu(opts.fmu, files, log=_note if progress else None)
+    fmu, _ = ensure_fmu(opts.fmu, files, log=_note if progress else None, wheelsets=4)
     params.update(element_size=cfg["element_size"], warm_start=opts.warm_start,
                   rigid_wheelset="skip")
     return FMUContact(fmu, 4, cfg["step"], params)

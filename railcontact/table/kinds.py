@@ -1,6 +1,6 @@
 """A table spec of any kind (``[table] kind``): a contact table (:mod:`.spec`, the
-default), a geometry table (:mod:`railcontact.table.geometry`, through :func:`~.spec.load_spec`) or a
-normalised creep table (:mod:`.creepspec`)."""
+default), a geometry table (:mod:`railcontact.table.geometry`, through
+:func:`~.spec.load_spec`) or a normalised creep table (:mod:`.creepspec`)."""
 
 from __future__ import annotations
 
