@@ -16,7 +16,7 @@ import pytest
 
 import railcontact as rc
 import railcontact.contact.wheelrail as wheelrail
-import railcontact.timestep.wheelset as wheelset
+import railcontact.timestep.wheel as wheel
 from railcontact.timestep.wheelset import WheelContact, WheelsetContact, WheelsetResult
 
 STEEL = rc.Material(206e9, 0.28)
@@ -43,8 +43,8 @@ def solves(monkeypatch):
 
     monkeypatch.setattr(wheelrail, "solve_patch_normal",
                         counted("normal", wheelrail.solve_patch_normal))
-    monkeypatch.setattr(wheelset, "solve_patch_tangential",
-                        counted("tangential", wheelset.solve_patch_tangential))
+    monkeypatch.setattr(wheel, "solve_patch_tangential",
+                        counted("tangential", wheel.solve_patch_tangential))
     return count
 
 

@@ -149,3 +149,35 @@ class WheelSetup:
     track: Track
     wheelset: Wheelset
     settings: ContactSettings
+
+
+@dataclass(frozen=True, slots=True)
+class StepInputs:
+    """A step's inputs, checked (:meth:`~railcontact.timestep.WheelsetContact.solve`'s
+    parameters), with each wheel's setup.
+
+    Attributes
+    ----------
+    pose
+        The wheelset's pose.
+    loads, vertical
+        The wheel loads (left, right) [N], or the vertical displacement [m]; the other None.
+    creepages, kinematics
+        Each wheel's creepages (railcontact's), or the wheelset's velocities; or neither.
+    time
+        The step's time [s], or None.
+    setups
+        Each wheel's rail, wheelset and settings at the step (:class:`WheelSetup`).
+    """
+
+    pose: Pose
+    loads: tuple[float, float] | None
+    vertical: float | None
+    creepages: tuple | None
+    kinematics: Kinematics | None
+    time: float | None
+    setups: tuple[WheelSetup, WheelSetup]
+
+    def creep(self, k: int) -> tuple[float, float, float] | None:
+        """The creepages of wheel ``k`` (0 left, 1 right), None without them."""
+        return None if self.creepages is None else self.creepages[k]
