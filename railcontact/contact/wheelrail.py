@@ -68,10 +68,8 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import (
     HertzSolution,
     hertz,
-    hertz_when_read,
     negligible_load,
     no_contact_load,
-    semi_axis_bound,
 )
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
@@ -98,7 +96,7 @@ from .patch import (
     start_pressure,
     uncovered,
 )
-from .results import PatchSolution
+from .results import PatchSolution, set_frictional_power
 from .start import NormalStart, WarmStart
 from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
 
@@ -253,19 +251,14 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         control = Control(load=loads[k]) if loads is not None else Control(penetration=dn)
         kwargs = control.kwargs()
         limit = MAX_PATCH_SHARE * cp.rolling_radius
-        # Hertz's solution formed when first read (a warm step reads none of it) where a
-        # bound of its semi-axes shows the patch within the limit; else solved here
-        if semi_axis_bound(cp.A, cp.B, pair, **kwargs) < limit:
-            hz = hertz_when_read(cp.A, cp.B, pair, **kwargs)
-        else:
-            hz = hertz(cp.A, cp.B, pair, **kwargs)
-            if max(hz.a, hz.b) > limit:
-                raise CaseError(
-                    f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
-                    f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
-                    f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more "
-                    f"than {MAX_PATCH_SHARE:g} of the radius); check [material] young and "
-                    "the load or penetration")
+        hz = hertz(cp.A, cp.B, pair, **kwargs)
+        if max(hz.a, hz.b) > limit:
+            raise CaseError(
+                f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
+                f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
+                f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more "
+                f"than {MAX_PATCH_SHARE:g} of the radius); check [material] young and "
+                "the load or penetration")
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
         if last is not None:  # (its traction start that of the pass's own start)
@@ -905,6 +898,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
                                 convention, starts)
     patches = [p for side in sides for p in per_side[side]]
     for p in patches:
+        set_frictional_power(p)
         p.convention = convention
         n, cp = p.normal, p.geometry
         if cp.rigid is not None:  # solved in the frame at its reference point
