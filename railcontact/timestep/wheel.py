@@ -23,13 +23,14 @@ from ..contact.start import NormalStart, WarmStart
 from ..contact.wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution
 from ..contact.wheelrail import solve_wheel, solve_wheel_normal, wheel_problem
 from ..errors import RailContactError, SolverError
-from ..geometry.search import ContactPoint, at_reference
+from ..geometry.search import ContactPoint, at_reference, vertical_gap
 from ..geometry.track import SIDES, Pose
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import array_sum
 from ..settings import Control
+from ..settings.case import MAX_PENETRATION
 from ..settings.convention import wheel_frame_creepage
 from ..status import Status
 from .inputs import Kinematics, WheelSetup
@@ -294,6 +295,18 @@ def _mark_uniqueness(wheel: WheelContact, solution: WheelSolution, warm: bool,
     wheel.message = "ok; the load has more than one solution: " + "; ".join(why)
 
 
+def penetration_approach(pose: Pose, setup: WheelSetup, vertical: float) -> float:
+    """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
+    ``-vertical`` [m] (penetration control)."""
+    g = vertical_gap(setup.track, setup.wheelset, pose, setup.side)[4]
+    approach = max(-(float(g.min()) + vertical), 0.0)
+    if approach > MAX_PENETRATION:
+        raise RailContactError(f"vertical = {vertical:g} m puts the wheel "
+                               f"{approach * 1e3:.4g} mm into its rail; a contact's "
+                               f"approach is at most {MAX_PENETRATION * 1e3:g} mm")
+    return approach
+
+
 def _start(source: Memory, time: float | None) -> tuple[float, float]:
     """The vertical approach [m] of a wheel and the vertical load [N] of its normal forces
     in the step ``source`` remembers, extrapolated linearly to ``time`` [s] from the step
@@ -307,4 +320,5 @@ def _start(source: Memory, time: float | None) -> tuple[float, float]:
     return a, q
 
 
-__all__ = ["StepStart", "solve_step_wheel", "wheel_contact", "wheel_settings"]
+__all__ = ["StepStart", "penetration_approach", "solve_step_wheel", "wheel_contact",
+           "wheel_settings"]

@@ -60,19 +60,11 @@ from __future__ import annotations
 from dataclasses import replace
 from time import perf_counter
 
-from ..errors import (
-    CaseError,
-    RailContactError,
-    SolverError,
-    check_finite,
-    check_positive,
-)
-from ..geometry.search import vertical_gap
+from ..errors import CaseError, RailContactError, SolverError
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
-from ..settings.case import MAX_PENETRATION, check_convention
-from ..settings.convention import wheel_frame_creepage
+from ..settings.case import check_convention
 from ..status import status_of
 from .inputs import (  # noqa: F401  (the step's records, importable from here too)
     MAX_CURVATURE,
@@ -80,10 +72,12 @@ from .inputs import (  # noqa: F401  (the step's records, importable from here t
     SIDE_NAMES,
     Kinematics,
     RailDeviation,
+    Setups,
     StepInputs,
     WheelSetup,
     per_wheel,
     sides,
+    step_inputs,
 )
 from .memory import EMPTY as EMPTY_MEMORY
 from .memory import StepMemory
@@ -103,7 +97,7 @@ from .rigid import RigidSolution, RigidWheelset
 from .rolled import RolledApproaches, rigid_stage
 from .validity import check_validity
 from .warmstart import PatchMemory
-from .wheel import solve_step_wheel
+from .wheel import penetration_approach, solve_step_wheel
 
 WARM_PROMISE = (0.01, 0.02)
 """What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
@@ -173,9 +167,7 @@ class WheelsetContact:
         self.track, self.wheelset = self.tracks[0], self.wheelsets[0]
         """The left side's track and wheelset (the only ones when both sides share them)."""
         self.pair = pair
-        self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
-        self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
-        self._friction_base: ContactSettings | None = None  # (what they were made from)
+        self._setups = Setups(self.tracks, self.wheelsets)
         settings = settings or ContactSettings()
         self.convention = check_convention(convention)
         if patch_frame is not None:
@@ -247,27 +239,8 @@ class WheelsetContact:
                 friction: tuple[float, float] | None) -> StepInputs:
         """The step's inputs checked (:meth:`solve`'s parameters), with each wheel's
         setup (:class:`WheelSetup`)."""
-        if (loads is None) == (vertical is None):
-            raise RailContactError("give exactly one of loads [N] and vertical [m]")
-        if loads is not None:
-            loads = per_wheel("loads", loads, 1, "(left, right) [N]")
-        if creepages is not None:
-            creepages = per_wheel("creepages", creepages, 3,
-                                   "((xi, eta, phi) left, (xi, eta, phi) right)")
-        if loads is not None:
-            loads = tuple(check_positive(f"{s} wheel load", q, "N", allow_zero=True)
-                          for s, q in zip(("left", "right"), loads, strict=True))
-        else:
-            check_finite("vertical", vertical, "m")
-        if creepages is not None:
-            creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
-                              for s, cs in zip(("left", "right"), creepages, strict=True))
-            if self.convention == "contact":
-                creepages = tuple(wheel_frame_creepage(c) for c in creepages)
-        if time is not None:
-            time = check_finite("time", time, "s")
-        return StepInputs(pose, loads, vertical, creepages, kinematics, time,
-                          self._setups(rails, friction))
+        return step_inputs(pose, loads, vertical, creepages, kinematics, time,
+                           self._setups.at(self.settings, rails, friction), self.convention)
 
     def _wheels(self, step: StepInputs) -> tuple[list[WheelContact], StepMemory, bool]:
         """Both wheels solved (:func:`~.wheel.solve_step_wheel`), each warm-started from
@@ -281,8 +254,8 @@ class WheelsetContact:
         for k, (side, setup) in enumerate(zip(SIDE_NAMES, step.setups, strict=True)):
             try:
                 control = (Control(load=step.loads[k]) if step.loads is not None else
-                           Control(penetration=self._approach(step.pose, setup,
-                                                              step.vertical)))
+                           Control(penetration=penetration_approach(step.pose, setup,
+                                                                    step.vertical)))
                 own = self.memory.wheel(side)
                 wheel, kept[side], _ = solve_step_wheel(
                     setup, step.pose, control, step.creep(k), step.kinematics, step.time,
@@ -320,7 +293,7 @@ class WheelsetContact:
             # the rolled wheels start from this step's solves (the previous step's when
             # this one is not remembered) and from the previous step's at its root
             rigid = RigidWheelset(
-                *self._geometry(step.setups), pose, (wheels[0].approach, wheels[1].approach),
+                *step.geometry(), pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
                 RolledApproaches(pose, step.loads, step.creepages, step.kinematics,
@@ -348,7 +321,7 @@ class WheelsetContact:
         rolled = self.memory.rolled if self.settings.uses_previous else None
         return RolledApproaches(pose, loads, creepages, kinematics, time, self.pair,
                                 self.convention, self.memory, rolled,
-                                self._setups(None, None))
+                                self._setups.at(self.settings, None, None))
 
     def _check_validity(self, wheel: WheelContact, setup: WheelSetup) -> None:
         """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
@@ -358,79 +331,6 @@ class WheelsetContact:
         wheel.mark_validity(check_validity(SIDES[wheel.side], wheel.track_force,
                                            wheel.patches, setup.wheelset.flange_flank,
                                            setup.settings))
-
-    def _setups(self, rails: tuple[RailDeviation, RailDeviation] | None,
-                friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
-        """Each wheel's rail (placed with its deviation), wheelset and settings (with its
-        friction) at a step."""
-        if rails is not None:
-            rails = per_wheel("rails", rails, 1, "(left, right) RailDeviation")
-            for r in rails:
-                if not isinstance(r, RailDeviation):
-                    raise RailContactError(f"rails must be RailDeviation records, got {r!r}")
-        if friction is not None:
-            friction = tuple(check_positive(f"{s} friction", float(mu), "")
-                             for s, mu in zip(SIDE_NAMES,
-                                              per_wheel("friction", friction, 1,
-                                                         "(left, right) [-]"), strict=True))
-        out = []
-        for k, side in enumerate(SIDE_NAMES):
-            track = self.tracks[k]
-            if rails is not None and rails[k] != NO_DEVIATION:
-                track = self._placed_rail(side, track, rails[k])
-            settings = self.settings
-            if friction is not None and friction[k] != settings.friction:
-                settings = self._with_friction(friction[k])
-            out.append(WheelSetup(side, track, self.wheelsets[k], settings))
-        return out[0], out[1]
-
-    def _placed_rail(self, side: str, track: Track, rail: RailDeviation) -> Track:
-        """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a
-        deviation held over steps places the rail once)."""
-        key = (side, id(track), rail.offset, rail.roll)
-        held = self._placed.get(key)
-        out = held[1] if held is not None and held[0] is track else None
-        if out is None:
-            try:
-                out = track.deviated(side, rail.offset, rail.roll)
-                _ = out.side_rail  # (placed now: a rail that cannot be is an error here)
-            except RailContactError as exc:
-                raise RailContactError(f"{side} rail deviation {rail.offset} m, roll "
-                                       f"{rail.roll:g} rad: {exc}") from None
-            if len(self._placed) >= 8:
-                self._placed.pop(next(iter(self._placed)))
-            self._placed[key] = (track, out)  # (the track kept: its id is not reused)
-        return out
-
-    def _with_friction(self, mu: float) -> ContactSettings:
-        """The settings with the coefficient of friction ``mu`` (the last few kept)."""
-        if self._friction_base is not self.settings:  # (the settings were replaced)
-            self._friction_base, self._settings_of = self.settings, {}
-        out = self._settings_of.get(mu)
-        if out is None:
-            out = replace(self.settings, friction=mu)
-            if len(self._settings_of) >= 8:
-                self._settings_of.pop(next(iter(self._settings_of)))
-            self._settings_of[mu] = out
-        return out
-
-    @staticmethod
-    def _geometry(setups: tuple[WheelSetup, WheelSetup]
-                  ) -> tuple[tuple[Track, Track], tuple[Wheelset, Wheelset]]:
-        """The (left, right) tracks and wheelsets of a step's wheels."""
-        return ((setups[0].track, setups[1].track),
-                (setups[0].wheelset, setups[1].wheelset))
-
-    def _approach(self, pose: Pose, setup: WheelSetup, vertical: float) -> float:
-        """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
-        ``-vertical``."""
-        g = vertical_gap(setup.track, setup.wheelset, pose, setup.side)[4]
-        approach = max(-(float(g.min()) + vertical), 0.0)
-        if approach > MAX_PENETRATION:
-            raise RailContactError(f"vertical = {vertical:g} m puts the wheel "
-                                   f"{approach * 1e3:.4g} mm into its rail; a contact's "
-                                   f"approach is at most {MAX_PENETRATION * 1e3:g} mm")
-        return approach
 
 
 __all__ = ["WARM_PROMISE", "WheelsetContact"]
