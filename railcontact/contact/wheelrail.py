@@ -108,7 +108,7 @@ RunOf = Callable[[float, float], tuple[float, float]]
 overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
 (:func:`~railcontact.geometry.search.run_on_rail` at a pose)."""
 Starts = Callable[[str], EstimateFor | None]
-"""``starts(side)``: the ``estimate_for`` of a wheel (see :func:`solve_wheel`), or None."""
+"""``starts(side)``: the ``estimate_for`` of a wheel (its :class:`CaseStart`), or None."""
 LOAD_RTOL = 1e-6
 """Relative tolerance on the vertical load carried by the normal forces of several patches."""
 ROLL_TOL = 1e-8
