@@ -55,7 +55,7 @@ class WheelProblem:
     first
         The wheel's first rigid contact point (at approach 0; :func:`~railcontact.geometry.
         search.contact_points`): where a single patch's frame and a cold start's estimates
-        are formed.
+        are formed; None without a load or an approach (no contact: nothing searched).
     merges
         The vertical approaches [m] at which two of the wheel's contact regions join into
         one patch (:func:`~railcontact.geometry.search.merge_approaches`, the saddles of
@@ -69,7 +69,7 @@ class WheelProblem:
     side: str
     pair: ElasticPair
     control: Control
-    first: ContactPoint
+    first: ContactPoint | None
     merges: np.ndarray
 
 

@@ -466,8 +466,11 @@ def wheel_problem(track: Track, ws: Wheelset, pose: Pose, side: str, pair: Elast
                   control: Control) -> WheelProblem:
     """The ``side`` wheel's problem at ``pose`` under ``control``, formed once for its
     passes: its first rigid contact point and, under load control, the approaches where
-    two of its contact regions join (:class:`~.wheel.WheelProblem`). Raises a
-    :class:`RailContactError` for a pose beyond the profiles."""
+    two of its contact regions join (:class:`~.wheel.WheelProblem`; none of it without a
+    load or an approach: nothing to solve). Raises a :class:`RailContactError` for a pose
+    beyond the profiles."""
+    if control.value == 0.0 or (control.by_load and negligible_load(control.load)):
+        return WheelProblem(track, ws, pose, side, pair, control, None, _NO_MERGES)
     first = contact_points(track, ws, pose, side, 0.0)[0]
     merges = (merge_approaches(track, ws, pose, side, MIN_LOBE) if control.by_load
               else _NO_MERGES)
