@@ -1,14 +1,54 @@
-"""What a warm wheelset step does outside its solvers: the step's contact points freed
-without the garbage collector."""
+"""What a warm wheelset step does outside its solvers: no Hertz solution where a bound shows
+the patch within the model, and the step's contact points freed without the garbage
+collector."""
 
 import gc
+import math
 import weakref
 
 import numpy as np
+import pytest
 
+from railcontact import ElasticPair, Material, hertz
 from railcontact.geometry.profiles import builtin_profile
 from railcontact.geometry.search import at_reference, contact_points
 from railcontact.geometry.track import Pose, Track, Wheelset
+from railcontact.halfspace.hertz import semi_axis_bound
+
+PAIR = ElasticPair.of(Material(210e9, 0.28))
+
+
+def test_semi_axis_bound_is_above_hertzs_larger_semi_axis():
+    """The bound that lets a warm step skip Hertz's solution holds for curvature ratios
+    over 1 ... 1e6, loads over 10 N ... 10 MN and the penetrations they give, and it is
+    not loose by more than a small factor (it decides nothing where it is huge)."""
+    rng = np.random.default_rng(18)
+    ratios = []
+    for _ in range(3000):
+        A = 10 ** rng.uniform(-2, 3)
+        r = 10 ** rng.uniform(0, 6) if rng.random() < 0.9 else 1 + 10 ** rng.uniform(-12, -1)
+        B = A * r if rng.random() < 0.5 else A / r
+        q = 10 ** rng.uniform(1, 7)
+        h = hertz(A, B, PAIR, load=q)
+        bound = semi_axis_bound(A, B, PAIR, load=q)
+        assert bound >= max(h.a, h.b)
+        d = hertz(A, B, PAIR, penetration=h.penetration)
+        bound_d = semi_axis_bound(A, B, PAIR, penetration=h.penetration)
+        assert bound_d >= max(d.a, d.b)
+        ratios.append(bound / max(h.a, h.b))
+    assert max(ratios) < 6.0
+
+
+@pytest.mark.parametrize("args", [(0.0, 1.0, {"load": 1.0}), (1.0, math.inf, {"load": 1.0}),
+                                  (1.0, 2.0, {"load": math.nan}), (1.0, 2.0, {}),
+                                  (1.0, 2.0, {"load": 1.0, "penetration": 1e-4}),
+                                  (1.0, 2e7, {"load": 1.0}),
+                                  (1.0, 2.0, {"penetration": -1e-4})])
+def test_semi_axis_bound_is_infinite_where_hertz_is_to_be_solved_at_once(args):
+    """Arguments :func:`hertz` might reject (or a ratio beyond the bound's range) give no
+    bound: the caller then solves at once, and an error is raised where it was."""
+    A, B, kw = args
+    assert semi_axis_bound(A, B, PAIR, **kw) == math.inf
 
 
 def test_a_steps_contact_points_are_freed_without_the_garbage_collector():

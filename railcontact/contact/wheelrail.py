@@ -70,6 +70,7 @@ from ..halfspace.hertz import (
     hertz,
     negligible_load,
     no_contact_load,
+    semi_axis_bound,
 )
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
@@ -100,9 +101,11 @@ from .results import PatchSolution, set_frictional_power
 from .start import NormalStart, WarmStart
 from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
 
-EstimateFor = Callable[[ContactPoint, HertzSolution, Control], WarmStart]
+EstimateFor = Callable[[ContactPoint, HertzSolution | None, Control], WarmStart]
 """``estimate_for(contact point, hertz, control)``: the start of a patch's solves (e.g. the
-previous time step's, or a table's previous point), instead of the settings' estimate."""
+previous time step's, or a table's previous point), instead of the settings' estimate;
+``hertz`` is None where the settings do not form it (:attr:`PatchSettings.hertz`: a time
+step's; ``hertz(cp.A, cp.B, pair, **control.kwargs())`` forms it)."""
 RunOf = Callable[[float, float], tuple[float, float]]
 """``run_of(approach, rail_u)``: the rail positions [m] spanned by a wheel's run of vertical
 overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
@@ -251,14 +254,19 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         control = Control(load=loads[k]) if loads is not None else Control(penetration=dn)
         kwargs = control.kwargs()
         limit = MAX_PATCH_SHARE * cp.rolling_radius
-        hz = hertz(cp.A, cp.B, pair, **kwargs)
-        if max(hz.a, hz.b) > limit:
-            raise CaseError(
-                f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
-                f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
-                f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more "
-                f"than {MAX_PATCH_SHARE:g} of the radius); check [material] young and "
-                "the load or penetration")
+        # Hertz's solution: for the patch's result when the settings ask for it, else only
+        # where a bound of its semi-axes does not show the patch within the model (and
+        # below, where the solve needs it)
+        hz = None
+        if settings.hertz or not semi_axis_bound(cp.A, cp.B, pair, **kwargs) < limit:
+            hz = hertz(cp.A, cp.B, pair, **kwargs)
+            if max(hz.a, hz.b) > limit:
+                raise CaseError(
+                    f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
+                    f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
+                    f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model "
+                    f"(more than {MAX_PATCH_SHARE:g} of the radius); check [material] "
+                    "young and the load or penetration")
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
         if last is not None:  # (its traction start that of the pass's own start)
@@ -266,6 +274,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                             lambda g, last=last: NormalStart(start_pressure(last, g)),
                             traction_on=last.start.traction_on)
         elif estimate_for is None:
+            hz = hz or hertz(cp.A, cp.B, pair, **kwargs)
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
@@ -274,6 +283,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         bounds = est.bounds
         given = bool(bounds)  # (a time step's: where the contact was, checked after)
         if not bounds:
+            if loads is not None:
+                hz = hz or hertz(cp.A, cp.B, pair, **kwargs)
             d0 = hz.penetration if loads is not None else dn
             if loads is not None and cp.approach is not None:  # formed at one: its own
                 d0 = max(d0, cp.normal_penetration(cp.approach))

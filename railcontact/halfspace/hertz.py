@@ -175,6 +175,41 @@ class HertzSolution:
         return self.max_pressure * np.sqrt(np.clip(s, 0.0, None))
 
 
+SHAPE_BOUND_RATIO = 1e6
+"""Largest curvature ratio for which :func:`semi_axis_bound` gives a bound (its axis ratio
+``g`` is then above 1e-4, inside the Newton table of :func:`axis_ratio`)."""
+
+
+def semi_axis_bound(A: float, B: float, pair: ElasticPair, *, load: float | None = None,
+                    penetration: float | None = None) -> float:
+    """An upper bound [m] of the larger semi-axis ``max(a, b)`` of :func:`hertz`, without
+    solving the shape equation (infinite where :func:`hertz` might reject the arguments -
+    ``A``, ``B`` finite and positive, one of ``load`` and ``penetration``, finite and
+    non-negative - or the curvature ratio ``r = B_max/B_min`` exceeds
+    :data:`SHAPE_BOUND_RATIO`): a wheel's patch within the model by it needs no Hertz
+    solution (:attr:`~railcontact.settings.PatchSettings.hertz`).
+
+    With ``g`` the axis ratio, ``a_max^3 = 3 N rho E(e) / (4 pi E* g^2)`` (module
+    docstring) and ``a_max = b_min / g``, ``b_min^2 = delta E(e) / ((A + B) K(e))``;
+    ``E(e) <= pi/2``, ``E(e) <= K(e)``, and the shape equation gives
+    ``g >= r^(-2/3)`` (equal to first order at ``r = 1``, ``g ~ r^(-1/2)`` for slender
+    ellipses; checked over 1 <= r <= 1e12); the bound takes ``g >= r^(-2/3) / 2``:
+    ``a_max^3 <= 1.5 N rho r^(4/3) / E*``, ``a_max <= 2 r^(2/3) sqrt(delta / (A + B))``.
+    """
+    if not (0.0 < A < math.inf and 0.0 < B < math.inf):
+        return math.inf
+    r = max(A, B) / min(A, B)
+    if not r <= SHAPE_BOUND_RATIO or (load is None) == (penetration is None):
+        return math.inf
+    if load is not None:
+        if not 0.0 <= load < math.inf:
+            return math.inf
+        return (1.5 * load * (2.0 / (A + B)) * r ** (4.0 / 3.0) / pair.e_star) ** (1.0 / 3.0)
+    if not 0.0 <= penetration < math.inf:
+        return math.inf
+    return 2.0 * r ** (2.0 / 3.0) * math.sqrt(penetration / (A + B))
+
+
 MIN_LOAD = 1e-6
 """Smallest normal load [N] whose contact is solved. Hertz's patch grows as the cube root
 of the load: at 1e-6 N that of steel wheels on rails (A = 1, B = 5 1/m) is 4 um long, less

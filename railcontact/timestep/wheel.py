@@ -119,10 +119,14 @@ class StepStart:
         previous = self.previous
         sgn = SIDES[problem.side]
 
-        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: Control) -> WarmStart:
+        def estimate_for(cp: ContactPoint, hz: HertzSolution | None, ctrl: Control
+                         ) -> WarmStart:
+            def hertz_of() -> HertzSolution:  # (formed here only where it is needed)
+                return hz or hertz(cp.A, cp.B, pair, **ctrl.kwargs())
+
             def estimate() -> WarmStart:  # KP/INFCON cost a solve of their own: when needed
-                return normal_estimate(s.normal_settings, hz, cp.s, cp.f, cp.a_of_s,
-                                       pair, ctrl)
+                return normal_estimate(s.normal_settings, hertz_of(), cp.s, cp.f,
+                                       cp.a_of_s, pair, ctrl)
 
             m = match(source, cp.rail_u, cp.position[2])
             if m is None:
@@ -137,7 +141,8 @@ class StepStart:
             # took in another remembered patch (two patches merged): then the rigid
             # overlap's, as from cold (the other's area lies outside this one's, and the
             # contact inside would not reach its edge); Hertz's penetration read only then
-            bounds = (None if len(source) > 1 and merged(cp, m, source, hz.penetration)
+            bounds = (None if len(source) > 1 and merged(cp, m, source,
+                                                         hertz_of().penetration)
                       else previous_bounds(m))
             return WarmStart("previous", pressure_on, bounds)
 
