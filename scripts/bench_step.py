@@ -43,9 +43,14 @@ import railcontact.tangential as tangential
 import railcontact.timestep.warmstart as warmstart_module
 import railcontact.timestep.wheelset as wheelset_module
 
+try:
+    import railcontact.timestep.wheel as step_wheel_module  # (a wheel of the step)
+except ImportError:  # an older package: the step's wheels solved in its wheelset module
+    step_wheel_module = wheelset_module
+
 STAGES = {  # stage: (module, function name) pairs timed as that stage
     "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
-               (wheelset_module, "vertical_gap")],
+               (step_wheel_module, "vertical_gap")],
     "meshing": [(patch_module, "make_grid"), (geometry_search.ContactPoint, "gap_on_grid"),
                 (warmstart_module, "remesh")],
     "reach check": [(wheelrail_module, "uncovered"), (wheelrail_module, "overlap_box")],

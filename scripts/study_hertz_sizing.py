@@ -20,7 +20,8 @@ import numpy as np
 from _sweep import approach_for_load, displacements, paper_case, run_sweep
 
 from railcontact.contact import NormalStart, WarmStart
-from railcontact.contact.wheelrail import build_geometry, solve_wheel
+from railcontact.contact.wheel import WheelSettings
+from railcontact.contact.wheelrail import CaseStart, build_geometry, solve_wheel, wheel_problem
 from railcontact.halfspace.hertz import hertz
 from railcontact.settings import validate_case
 
@@ -50,8 +51,10 @@ def one_case(dy: float, preconditioner: str) -> list[dict]:
         c = validate_case(c)
         pair = c.pair
         track, ws, pose = build_geometry(c.geometry)
-        patches = solve_wheel(track, ws, pose, "left", c.normal.control, c.patch_settings, pair,
-                              hertz_by_load(pair) if column == "hertz_load" else None)
+        problem = wheel_problem(track, ws, pose, "left", pair, c.normal.control)
+        start = CaseStart(hertz_by_load(pair) if column == "hertz_load" else None)
+        patches = solve_wheel(problem, WheelSettings(c.patch_settings, reference=False),
+                              start).check("left").patches
         its[column] = patches[0].normal.iterations
     return [{"dy_mm": dy * 1e3, **its}]
 

@@ -108,13 +108,13 @@ def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):
     wheel's ``seconds`` (the sum of its patches' work), here made to take 50 ms."""
     import time
 
-    import railcontact.timestep.wheelset as wheelset_module
+    import railcontact.timestep.wheel as wheel_module
 
     def slow(*args, **kwargs):
         time.sleep(0.05)
         return vertical_creep_estimate(*args, **kwargs)
 
-    monkeypatch.setattr(wheelset_module, "vertical_creep_estimate", slow)
+    monkeypatch.setattr(wheel_module, "vertical_creep_estimate", slow)
     r = wheelset(warm_start="none").solve(rc.Pose(1e-3), loads=(Q, Q),
                                           creepages=((1e-3, 1e-3, 0.0),) * 2)
     assert all(w.status == 0 and w.seconds >= 0.05 for w in r.wheels)

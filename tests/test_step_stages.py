@@ -10,15 +10,20 @@ was.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
 
 import pytest
 
 import railcontact as rc
 import railcontact.contact.wheelrail as wheelrail
-import railcontact.timestep.wheelset as wheelset
-from railcontact.timestep.wheelset import WheelContact, WheelsetContact, WheelsetResult
+import railcontact.timestep.wheel as wheel
+from railcontact.geometry.search import ContactPoint
+from railcontact.halfspace.operator import InfluenceOperator
+from railcontact.timestep.wheelset import WheelContact, WheelsetContact
 
+hertz_module = importlib.import_module("railcontact.halfspace.hertz")  # (the package's
+# name hertz is the function)
 STEEL = rc.Material(206e9, 0.28)
 CREEP = ((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3))
 
@@ -32,8 +37,10 @@ def _contact(**settings) -> WheelsetContact:
 
 @pytest.fixture
 def solves(monkeypatch):
-    """The number of normal and tangential patch solves run since the fixture was made."""
-    count = {"normal": 0, "tangential": 0}
+    """The number of solves run since the fixture was made: normal and tangential patch
+    solves (BEM), Hertz's solutions, and products with an influence operator (the BEM's
+    work, and a tangential result's slip)."""
+    count = {"normal": 0, "tangential": 0, "hertz": 0, "operator": 0}
 
     def counted(kind, f):
         def wrapper(*args, **kwargs):
@@ -43,22 +50,35 @@ def solves(monkeypatch):
 
     monkeypatch.setattr(wheelrail, "solve_patch_normal",
                         counted("normal", wheelrail.solve_patch_normal))
-    monkeypatch.setattr(wheelset, "solve_patch_tangential",
-                        counted("tangential", wheelset.solve_patch_tangential))
+    monkeypatch.setattr(wheel, "solve_patch_tangential",
+                        counted("tangential", wheel.solve_patch_tangential))
+    monkeypatch.setattr(hertz_module, "semi_axes", counted("hertz", hertz_module.semi_axes))
+    for cls in (InfluenceOperator, *InfluenceOperator.__subclasses__()):
+        if "apply" in vars(cls):
+            monkeypatch.setattr(cls, "apply", counted("operator", cls.apply))
     return count
 
 
-def _read_everything(obj) -> list:
-    """Every dataclass field and every public property of ``obj`` (and of its wheels)."""
+def _read_everything(obj, seen=None) -> list:
+    """Every dataclass field and every public property of ``obj``, and of every record
+    it holds (its wheels, their patches, each patch's normal and tangential solutions,
+    Hertz's, its grids), read once each."""
+    seen = set() if seen is None else seen
+    if id(obj) in seen:
+        return []
+    seen.add(id(obj))
     out = []
     names = {f.name for f in dataclasses.fields(obj)}
-    names |= {n for n, v in vars(type(obj)).items()
+    names |= {n for cls in type(obj).__mro__ for n, v in vars(cls).items()
               if isinstance(v, property) and not n.startswith("_")}
     for n in sorted(names):
-        out.append(getattr(obj, n))
-    if isinstance(obj, WheelsetResult):
-        for w in obj.wheels:
-            out.extend(_read_everything(w))
+        value = getattr(obj, n)
+        out.append(value)
+        for v in value if isinstance(value, (list, tuple)) else (value,):
+            if (dataclasses.is_dataclass(v) and not isinstance(v, type)
+                    and type(v).__module__.startswith("railcontact")
+                    and not isinstance(v, ContactPoint)):
+                out.extend(_read_everything(v, seen))
     return out
 
 
@@ -73,7 +93,7 @@ def test_reading_a_result_solves_nothing(solves, rigid):
     values = _read_everything(r)
     assert dict(solves) == before
     assert contact.memory is memory  # (a frozen value: replaced only by a step)
-    assert len(values) > 40
+    assert len(values) > 150  # (the wheels, their patches, solutions and grids)
     if rigid == "solve":  # a stage of the step: found, and its work counted apart
         assert r.rigid_solution.converged and r.vertical is not None and r.roll > 0
         assert sum(w.normal_iterations for w in r.rigid_work) > 0
@@ -101,3 +121,23 @@ def test_a_wheel_contact_is_a_record_of_values():
     w = WheelContact(side="left")
     assert _read_everything(w)
     assert not any(callable(getattr(w, f.name)) for f in dataclasses.fields(w))
+
+
+def test_reading_a_case_solution_solves_nothing(solves):
+    """The same for a case's solution (``railcontact solve``): its patches' frictional
+    power is formed with the solution, and reading every attribute solves nothing."""
+    d = {"material": {"young": 206e9, "poisson": 0.28},
+         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                      "inclination": 0.025, "lateral_displacement": 2e-3, "side": "left"},
+         "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 80e3},
+         "tangential": {"friction": 0.3},
+         "kinematics": {"speed": 20.0, "spin_speed": 20.0 / 0.4595}}
+    sol = rc.solve(d)
+    before = dict(solves)
+    assert before["normal"] > 0 and before["operator"] > 0
+    values = _read_everything(sol)
+    assert dict(solves) == before
+    assert len(values) > 60
+    p = sol.patches[0]
+    assert p.frictional_power_per_speed < 0 and p.frictional_power == pytest.approx(
+        p.velocity * p.frictional_power_per_speed, rel=1e-15)

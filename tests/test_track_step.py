@@ -131,7 +131,8 @@ def test_frictional_power_is_the_traction_times_the_slip():
             rc.Pose(3e-3, 2e-3), loads=(Q, Q), kinematics=Kinematics(V, 0.05, curvature=1 / 600))
         for w in r.wheels:
             assert w.status == OK and w.frictional_power < 0
-            integral = sum(float(np.sum(np.asarray(p.tangential.traction) * p.tangential.slip))
+            integral = sum(float(np.sum(np.asarray(p.tangential.traction)
+                                        * p.tangential.relative_slip()))
                            * p.tangential.grid.dx * p.tangential.grid.dy for p in w.patches)
             diff[h, w.side] = abs(w.frictional_power - V * integral)
             power[h, w.side] = w.frictional_power

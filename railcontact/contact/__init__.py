@@ -4,7 +4,8 @@ result types. Modules import downwards only::
 
     dispatch    solve(case): the quadratic or the wheel-rail solver
     quadratic   wheelrail   the two kinds of case
-    loadloop                vertical force, the creep-load secant
+    loadloop                vertical force, the creep-load loop of every wheel solve
+    wheel                   WheelProblem, WheelSettings, WheelSolution: one wheel's records
     patch                   one patch: grid, estimate, normal and tangential solve
     results                 PatchSolution, Solution
     start                   WarmStart: how a patch's solves start

@@ -13,22 +13,23 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import replace
+from time import perf_counter
 from typing import TypeVar
 
 from ..errors import RailContactError, SolverError
 from ..geometry.search import ContactPoint
 from ..halfspace.hertz import hertz
 from ..halfspace.materials import ElasticPair
-from ..settings import PatchSettings
+from ..settings import Control, PatchSettings
 from ..settings.friction import FrictionTable, friction_at_point
+from ..status import Status
 from ..tangential.kalker import creep_coefficients
 from .results import PatchSolution
+from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
 
 T = TypeVar("T")
 MAX_SECANT = 30
 """Secant steps at most, of the approach and of the normal share."""
-CREEP_LOAD_RTOL = 1e-5
-"""Relative tolerance on the total vertical force when creep forces carry part of it."""
 MAX_STALLED = 3
 """Passes in a row that do not halve the smallest residual, after which the creep-load
 iteration stops."""
@@ -126,6 +127,20 @@ def _nearest(patches: list[PatchSolution], p: PatchSolution) -> PatchSolution:
     u, z = p.geometry.rail_u, p.geometry.position[2]
     return min(patches, key=lambda f: math.inf if f.geometry is None else
                math.hypot(f.geometry.rail_u - u, f.geometry.position[2] - z))
+
+
+def vertical_approach(patches: list[PatchSolution]) -> float:
+    """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
+    if not patches:
+        return 0.0
+    p = patches[0] if len(patches) == 1 else min(patches, key=lambda q: q.geometry.gap)
+    return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
+
+
+def other_root(patches: list[PatchSolution]) -> float | None:
+    """The approach [m] of another root of the wheel's load its patches name
+    (:attr:`~.results.PatchSolution.load_other`), None when none does."""
+    return next((p.load_other for p in patches if p.load_other is not None), None)
 
 
 def vertical_force(patches: list[PatchSolution]) -> float:
@@ -354,3 +369,59 @@ def first_root(residual: Callable[[float], tuple[float, T]], solution: T, approa
     except (RailContactError, SolverError):  # a probe beyond the model: none checked
         return solution, None
     return solution, None
+
+
+def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
+               ) -> WheelSolution:
+    """The wheel ``problem`` carrying its vertical load with normal and creep forces: the
+    creep-load loop of every wheel solve (:func:`~.wheelrail.solve_wheel`).
+
+    A secant iteration on the normal forces' share (:func:`creep_load_secant`, from the
+    share ``start`` expects: :meth:`~.wheel.WheelStart.share`) until the vertical force
+    meets the load to ``settings.load_tolerance``, then the smallest approach that carries
+    it (:func:`first_root`, the problem's merges). Each pass is ``start``'s
+    (:meth:`~.wheel.WheelStart.solve_pass`, started from the pass before); the work of
+    every pass, and the time of the share's estimate, are charged to the patches
+    returned. The solution is not converged, with the loop's message, when the load is
+    missed by more than ``settings.load_acceptance`` (and by more than the accuracy of
+    the creep forces, :func:`load_met`); its patches say whether the load has another
+    root (``load_other``, ``load_unique``)."""
+    q = problem.control.load
+    passes: list[WheelPass] = []
+
+    def wheel_pass(normal: Control) -> tuple[float, WheelPass]:
+        passes.append(start.solve_pass(problem, settings, normal,
+                                       passes[-1] if passes else None))
+        return vertical_force(passes[-1].patches) - q, passes[-1]
+
+    t0 = perf_counter()
+    share = start.share(problem, settings, q)
+    seconds = perf_counter() - t0
+    first = min(max(q - share, 0.05 * q), MAX_SHARE * q)
+    rtol, t = settings.load_tolerance, settings.tangential
+    final, failure = creep_load_secant(lambda qn: wheel_pass(Control(load=qn)), q, first,
+                                       rtol)
+    patches = final.patches
+    if not patches:
+        return WheelSolution(memory=final.memory)
+    if not failure:  # the smallest approach of the load with its creep forces
+        final, other = first_root(lambda a: wheel_pass(Control(penetration=a)), final,
+                                  vertical_approach(patches), problem.merges, q, rtol,
+                                  noisy=True)
+        patches = final.patches
+        unique = other is None and load_unique(patches, t.friction)
+        for p in patches:  # (the total's roots, not the normal share's of a pass)
+            p.load_other, p.load_unique = other, unique
+        if other is not None and not load_met(patches, q, rtol, t.tolerance):
+            failure = ("the vertical load with creep forces did not converge at the "
+                       "smallest approach that carries it (vertical force "
+                       f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
+    count_passes(patches, [p.patches for p in passes])  # the work of every pass counts
+    patches[0].work.seconds += seconds
+    accept = max(settings.load_acceptance, rtol)
+    status, message = Status.OK, "ok"
+    if failure and not load_met(patches, q, accept, t.tolerance):
+        status, message = Status.NOT_CONVERGED, failure
+    return WheelSolution(patches, status, message, final.creepages, final.memory,
+                         load_other=other_root(patches),
+                         steep=not load_unique(patches, t.friction))

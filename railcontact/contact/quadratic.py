@@ -16,7 +16,7 @@ from .patch import (
     solve_patch_normal,
     solve_patch_tangential,
 )
-from .results import PatchSolution
+from .results import PatchSolution, set_frictional_power
 
 
 def solve_quadratic(case: Case) -> PatchSolution:
@@ -51,4 +51,5 @@ def solve_quadratic(case: Case) -> PatchSolution:
                           work=work, start=est)
     if case.tangential is not None and res.force > 0:
         solve_patch_tangential(patch, case.tangential, pair, settings.fft)
+        set_frictional_power(patch)
     return patch

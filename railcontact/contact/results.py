@@ -131,6 +131,21 @@ class PatchSolution:
     """The rolling radius [m] where the ``[kinematics]`` creepages were taken: the distance
     of the wheel's point below the reference point from the axle (CONTACT's ``r(cp)``); None
     when the case gives creepages."""
+    frictional_power_per_speed: float | None = None
+    """The traction times the relative slip (slip velocity over the rolling speed)
+    integrated over the patch [N = W per m/s]: the frictional power at unit rolling speed,
+    negative (the traction opposes the slip); formed where a case's solution is made
+    (:func:`set_frictional_power`). None without a BEM tangential solution (the strip
+    models have no slip field) and in a time step's patches (its wheels sum the power from
+    the energy balance: :attr:`~railcontact.timestep.WheelContact.frictional_power`)."""
+    frictional_power: float | None = None
+    """Frictional power of the patch [W]: the traction times the local slip velocity
+    integrated over the patch, ``V_ref`` (:attr:`velocity`) times
+    :attr:`frictional_power_per_speed`; negative, the power dissipated (CONTACT's sign; the
+    same in both conventions). None without a rolling speed (creepages given) or without a
+    slip field. In steady rolling it equals ``V_ref (F_x xi + F_y eta + M_z phi)`` with the
+    forces and creepages of one convention (the energy balance; on a grid to the
+    discretisation's accuracy)."""
     start: WarmStart | None = field(default=None, repr=False, compare=False)
     """The start the last normal solve was given (:class:`~.start.WarmStart`); its
     traction starts the patch's tangential BEM when no earlier load pass does. Not
@@ -170,32 +185,6 @@ class PatchSolution:
         if self.geometry is None:
             return self.creepage
         return side_creepage(self.creepage, self.geometry.side, self.convention)
-
-    @property
-    def frictional_power_per_speed(self) -> float | None:
-        """The traction times the relative slip (slip velocity over the rolling speed)
-        integrated over the patch [N = W per m/s]: the frictional power at unit rolling
-        speed, negative (the traction opposes the slip). None without a BEM tangential
-        solution (the strip models have no slip field)."""
-        t = self.tangential
-        if t is None or not hasattr(t, "slip"):
-            return None
-        g = t.grid
-        return float(np.sum(np.asarray(t.traction) * np.asarray(t.slip))) * g.dx * g.dy
-
-    @property
-    def frictional_power(self) -> float | None:
-        """Frictional power of the patch [W]: the traction times the local slip velocity
-        integrated over the patch, ``V_ref`` (:attr:`velocity`) times
-        :attr:`frictional_power_per_speed`; negative, the power dissipated (CONTACT's
-        sign; the same in both conventions). None without a rolling speed (creepages
-        given) or without a slip field. In steady rolling it equals
-        ``V_ref (F_x xi + F_y eta + M_z phi)`` with the forces and creepages of one
-        convention (the energy balance; on a grid to the discretisation's accuracy)."""
-        per = self.frictional_power_per_speed
-        if per is None or self.velocity is None:
-            return None
-        return self.velocity * per
 
     def _estimate_error_dict(self) -> dict[str, Any] | None:
         e = self.estimate_error
@@ -268,6 +257,20 @@ class PatchSolution:
             d["load_other_approach"] = self.load_other
         d["work"] = self.work.to_dict()
         return d
+
+
+def set_frictional_power(patch: PatchSolution) -> None:
+    """Form ``patch``'s :attr:`~PatchSolution.frictional_power_per_speed` and
+    :attr:`~PatchSolution.frictional_power` from its BEM tangential solution's slip (one
+    product with the operator, :meth:`~railcontact.tangential.TangentialResult.
+    relative_slip`); left None without one."""
+    t = patch.tangential
+    if t is None or not hasattr(t, "relative_slip"):
+        return
+    g = t.grid
+    per = float(np.sum(np.asarray(t.traction) * t.relative_slip())) * g.dx * g.dy
+    patch.frictional_power_per_speed = per
+    patch.frictional_power = None if patch.velocity is None else patch.velocity * per
 
 
 @dataclass

@@ -10,14 +10,14 @@ zero without a ``[tangential]`` table. For the normal forces' share: one patch, 
 control with ``N = Q / cos(gamma)``, exact in one solve, started from Hertz's penetration
 when an estimate is asked for; several patches, a secant iteration on the approach from
 Hertz's value. With creep forces an outer secant iteration on that share (normal and
-tangential BEM solved at each pass, :func:`~.loadloop.creep_load_secant`) makes the total
-vertical force Q to :data:`~.loadloop.CREEP_LOAD_RTOL`, or as close as the tangential
-tolerance lets it (an error beyond 1e-3 and beyond ``eps_tau`` of the creep forces' share,
-:func:`~.loadloop.load_met`); on a flange the creep force carries a large part of the load
-(``mu tan(gamma)`` ~ 0.8 at 70 deg with mu = 0.3), and beyond Nadal's limit
-(``mu tan(gamma) > 1``, sliding up) no normal force carries it: an error. Where two of the
-wheel's contact regions join into one patch, a load may be carried at two approaches; the
-wheel takes the smallest (:func:`~.loadloop.first_root`, the merges from
+tangential BEM solved at each pass, :func:`~.loadloop.creep_load`) makes the total
+vertical force Q to :data:`~.wheel.CREEP_LOAD_RTOL`, or as close as the tangential
+tolerance lets it (an error beyond :data:`~.wheel.LOAD_ACCEPT_RTOL` and beyond ``eps_tau``
+of the creep forces' share, :func:`~.loadloop.load_met`); on a flange the creep force
+carries a large part of the load (``mu tan(gamma)`` ~ 0.8 at 70 deg with mu = 0.3), and
+beyond Nadal's limit (``mu tan(gamma) > 1``, sliding up) no normal force carries it: an
+error. Where two of the wheel's contact regions join into one patch, a load may be carried
+at two approaches; the wheel takes the smallest (:func:`~.loadloop.first_root`, the merges from
 :func:`~railcontact.geometry.search.merge_approaches`) and says that another exists.
 
 ``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
@@ -38,14 +38,14 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import CaseError, ConvergenceError, RailContactError
+from ..errors import CaseError, ConvergenceError, RailContactError, SolverError
 from ..geometry.kinematics import PatchKinematics, WheelsetMotion, patch_kinematics
 from ..geometry.profiles import read_profile
 from ..geometry.roll import contact_roll, first_contact_gap
@@ -68,23 +68,23 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import (
     HertzSolution,
     hertz,
-    hertz_when_read,
     negligible_load,
+    no_contact_load,
     semi_axis_bound,
 )
 from ..halfspace.materials import ElasticPair
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
 from ..settings.friction import FrictionTable, friction_at_point, row_friction, side_friction
+from ..status import Status, status_of
 from .loadloop import (
-    CREEP_LOAD_RTOL,
     approach_secant,
     count_passes,
-    creep_load_secant,
+    creep_load,
     first_root,
-    load_met,
-    load_unique,
+    other_root,
     probe_settings,
+    vertical_approach,
     vertical_force,
 )
 from .patch import (
@@ -97,18 +97,21 @@ from .patch import (
     start_pressure,
     uncovered,
 )
-from .results import PatchSolution
+from .results import PatchSolution, set_frictional_power
 from .start import NormalStart, WarmStart
+from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
 
-EstimateFor = Callable[[ContactPoint, HertzSolution, Control], WarmStart]
+EstimateFor = Callable[[ContactPoint, HertzSolution | None, Control], WarmStart]
 """``estimate_for(contact point, hertz, control)``: the start of a patch's solves (e.g. the
-previous time step's, or a table's previous point), instead of the settings' estimate."""
+previous time step's, or a table's previous point), instead of the settings' estimate;
+``hertz`` is None where the settings do not form it (:attr:`PatchSettings.hertz`: a time
+step's; ``hertz(cp.A, cp.B, pair, **control.kwargs())`` forms it)."""
 RunOf = Callable[[float, float], tuple[float, float]]
 """``run_of(approach, rail_u)``: the rail positions [m] spanned by a wheel's run of vertical
 overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
 (:func:`~railcontact.geometry.search.run_on_rail` at a pose)."""
 Starts = Callable[[str], EstimateFor | None]
-"""``starts(side)``: the ``estimate_for`` of a wheel (see :func:`solve_wheel`), or None."""
+"""``starts(side)``: the ``estimate_for`` of a wheel (its :class:`CaseStart`), or None."""
 LOAD_RTOL = 1e-6
 """Relative tolerance on the vertical load carried by the normal forces of several patches."""
 ROLL_TOL = 1e-8
@@ -251,19 +254,19 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         control = Control(load=loads[k]) if loads is not None else Control(penetration=dn)
         kwargs = control.kwargs()
         limit = MAX_PATCH_SHARE * cp.rolling_radius
-        # Hertz's solution formed when first read (a warm step reads none of it) where a
-        # bound of its semi-axes shows the patch within the limit; else solved here
-        if semi_axis_bound(cp.A, cp.B, pair, **kwargs) < limit:
-            hz = hertz_when_read(cp.A, cp.B, pair, **kwargs)
-        else:
+        # Hertz's solution: for the patch's result when the settings ask for it, else only
+        # where a bound of its semi-axes does not show the patch within the model (and
+        # below, where the solve needs it)
+        hz = None
+        if settings.hertz or not semi_axis_bound(cp.A, cp.B, pair, **kwargs) < limit:
             hz = hertz(cp.A, cp.B, pair, **kwargs)
             if max(hz.a, hz.b) > limit:
                 raise CaseError(
                     f"{cp.side} wheel: a contact patch of {2 * hz.a * 1e3:.4g} x "
                     f"{2 * hz.b * 1e3:.4g} mm (Hertz) on a wheel of radius "
-                    f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model (more "
-                    f"than {MAX_PATCH_SHARE:g} of the radius); check [material] young and "
-                    "the load or penetration")
+                    f"{cp.rolling_radius * 1e3:.4g} mm is beyond the half-space model "
+                    f"(more than {MAX_PATCH_SHARE:g} of the radius); check [material] "
+                    "young and the load or penetration")
         t0 = time.perf_counter()
         last = same_patch(previous, cp)
         if last is not None:  # (its traction start that of the pass's own start)
@@ -271,6 +274,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                             lambda g, last=last: NormalStart(start_pressure(last, g)),
                             traction_on=last.start.traction_on)
         elif estimate_for is None:
+            hz = hz or hertz(cp.A, cp.B, pair, **kwargs)
             est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
         else:
             est = estimate_for(cp, hz, control)
@@ -279,6 +283,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         bounds = est.bounds
         given = bool(bounds)  # (a time step's: where the contact was, checked after)
         if not bounds:
+            if loads is not None:
+                hz = hz or hertz(cp.A, cp.B, pair, **kwargs)
             d0 = hz.penetration if loads is not None else dn
             if loads is not None and cp.approach is not None:  # formed at one: its own
                 d0 = max(d0, cp.normal_penetration(cp.approach))
@@ -467,75 +473,92 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
     return patches
 
 
-def solve_wheel(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
-                settings: PatchSettings, pair: ElasticPair,
-                estimate_for: EstimateFor | None = None, reference: bool = False
-                ) -> list[PatchSolution]:
-    """The BEM solutions of one wheel's contact patches.
+def wheel_problem(track: Track, ws: Wheelset, pose: Pose, side: str, pair: ElasticPair,
+                  control: Control) -> WheelProblem:
+    """The ``side`` wheel's problem at ``pose`` under ``control``, formed once for its
+    passes: its first rigid contact point and, under load control, the approaches where
+    two of its contact regions join (:class:`~.wheel.WheelProblem`; none of it without a
+    load or an approach: nothing to solve). Raises a :class:`RailContactError` for a pose
+    beyond the profiles."""
+    if control.value == 0.0 or (control.by_load and negligible_load(control.load)):
+        return WheelProblem(track, ws, pose, side, pair, control, None, _NO_MERGES)
+    first = contact_points(track, ws, pose, side, 0.0)[0]
+    merges = (merge_approaches(track, ws, pose, side, MIN_LOBE) if control.by_load
+              else _NO_MERGES)
+    return WheelProblem(track, ws, pose, side, pair, control, first, merges)
 
-    ``control`` is the vertical wheel load [N] or the vertical approach [m]; with
-    ``settings.tangential`` the patches are solved for it too and the load includes the
-    creep forces' vertical components (module docstring). ``estimate_for(cp, hertz,
-    control)`` replaces the settings' estimate: it returns the patch's
-    :class:`~.start.WarmStart` (e.g. the previous time step's), whose traction starts the
-    tangential BEM of a patch that no earlier load pass of this solve starts.
-    ``reference``: each patch is solved in the frame at its reference point
-    (:func:`solve_wheel_normal`).
+
+_NO_MERGES = np.empty(0)
+_NO_MERGES.flags.writeable = False
+
+
+@dataclass(frozen=True, slots=True)
+class CaseStart:
+    """The passes of a case's wheel (``railcontact solve``, a table's point): each patch
+    starts from the settings' estimate, or from ``estimate_for`` (e.g. a table's previous
+    point, :mod:`railcontact.table.solve`), and a later load pass from the pass before
+    (grid and pressure, traction: :func:`_patches`, :func:`_add_tangential`); the first
+    normal share of a creep-load loop is the load itself. With the case's
+    ``[kinematics]`` each patch's creepages follow from the velocities
+    (:func:`wheel_kinematics`), else the tangential settings' creepages."""
+
+    estimate_for: EstimateFor | None = None
+
+    def share(self, problem: WheelProblem, settings: WheelSettings, load: float) -> float:
+        return 0.0
+
+    def solve_pass(self, problem: WheelProblem, settings: WheelSettings, control: Control,
+                   before: WheelPass | None) -> WheelPass:
+        last = None if before is None else before.patches
+        ps = solve_wheel_normal(problem.track, problem.wheelset, problem.pose, problem.side,
+                                control, settings.patch, problem.pair, self.estimate_for,
+                                last, reference=settings.reference, problem=problem)
+        if settings.patch.tangential is not None:
+            motion = settings.patch.kinematics
+            kinematics_of = None if motion is None else wheel_kinematics(
+                problem.track, problem.wheelset, problem.pose, problem.side, motion)
+            ps = _add_tangential(ps, settings.patch, problem.pair, last, kinematics_of,
+                                 problem.track)
+        return WheelPass(ps)
+
+
+def solve_wheel(problem: WheelProblem, settings: WheelSettings,
+                start: WheelStart | None = None) -> WheelSolution:
+    """The BEM solution of one wheel's contact patches: the one wheel solver of a case,
+    a table's point and a time step.
+
+    ``problem.control`` is the vertical wheel load [N] or the vertical approach [m]; with
+    ``settings.tangential`` the patches are solved for it too, and under load control
+    with ``settings.load_includes_creep`` the load includes the creep forces' vertical
+    components: the creep-load loop (:func:`~.loadloop.creep_load`, to
+    ``settings.load_tolerance``), else one pass. ``start`` says how each pass starts
+    (:class:`~.wheel.WheelStart`; None: :class:`CaseStart`, the case's estimates).
+
+    A load not met, or a solve that raises a :class:`~railcontact.errors.CaseError` (a
+    patch beyond the half-space model) or a :class:`~railcontact.errors.SolverError`, is
+    the solution's status and message (:meth:`~.wheel.WheelSolution.check` raises it); a
+    pose beyond the profiles or off the rail raises its :class:`RailContactError`.
     """
-    if settings.tangential is None:
-        return solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
-                                  reference=reference)
-    kinematics_of = None if settings.kinematics is None else wheel_kinematics(
-        track, ws, pose, side, settings.kinematics)
-    if not control.by_load or negligible_load(control.load):
-        return _add_tangential(
-            solve_wheel_normal(track, ws, pose, side, control, settings, pair, estimate_for,
-                               reference=reference),
-            settings, pair, kinematics_of=kinematics_of, track=track)
-    q = control.load
-    passes: list[list[PatchSolution]] = []
-
-    def wheel_pass(normal: Control) -> tuple[float, list[PatchSolution]]:
-        """The wheel solved with its normal problem under ``normal`` (a normal share or
-        an approach), then the tangential one: (vertical force - q [N], patches)."""
-        last = passes[-1] if passes else None  # each pass starts from the one before
-        ps = _add_tangential(solve_wheel_normal(track, ws, pose, side, normal, settings,
-                                                pair, estimate_for, last,
-                                                reference=reference),
-                             settings, pair, last, kinematics_of, track)
-        passes.append(ps)
-        return vertical_force(ps) - q, ps
-
-    def residual(qn: float) -> tuple[float, list[PatchSolution]]:
-        return wheel_pass(Control(load=qn))
-
-    def at_approach(a: float) -> tuple[float, list[PatchSolution]]:
-        return wheel_pass(Control(penetration=a))
-
-    ps, failure = creep_load_secant(residual, q, q, CREEP_LOAD_RTOL)
-    other = None
-    if not failure:  # the smallest approach of the load with its creep forces
-        ps, other = first_root(at_approach, ps, vertical_approach(ps),
-                               merge_approaches(track, ws, pose, side, MIN_LOBE), q,
-                               CREEP_LOAD_RTOL, noisy=True)
-        failure = "" if other is None else _first_root_failure(ps, q)
-    if failure and not load_met(ps, q, 1e-3, settings.tangential.tolerance):
-        raise ConvergenceError(f"{side} wheel: {failure}", ps)
-    unique = load_unique(ps, settings.tangential.friction) and other is None
-    for p in ps:
-        p.load_unique, p.load_other = unique, other
-    return count_passes(ps, passes)
+    start = start or _CASE_START
+    control = problem.control
+    if control.value == 0.0:
+        return WheelSolution()
+    if control.by_load and negligible_load(control.load):
+        return WheelSolution(message=f"no contact: {no_contact_load(control.load)}")
+    try:
+        if (control.by_load and settings.tangential is not None
+                and settings.load_includes_creep):
+            return creep_load(problem, settings, start)
+        one = start.solve_pass(problem, settings, control, None)
+    except (CaseError, SolverError) as exc:  # a patch beyond the model, a load loop
+        return WheelSolution(status=status_of(exc), message=str(exc), error=exc)
+    if not one.patches:
+        return WheelSolution(memory=one.memory)
+    return WheelSolution(one.patches, Status.OK, "ok", one.creepages, one.memory,
+                         load_other=other_root(one.patches))
 
 
-def _first_root_failure(ps: list[PatchSolution], q: float) -> str:
-    """Why the root :func:`~.loadloop.first_root` returned misses the load ``q`` [N]
-    (checked by :func:`~.loadloop.load_met`), or ""."""
-    r = vertical_force(ps) - q
-    if abs(r) <= CREEP_LOAD_RTOL * q:
-        return ""
-    return (f"the vertical load with creep forces did not converge at the smallest "
-            f"approach that carries it (vertical force off by {abs(r):.6g} N for load "
-            f"{q:.6g} N)")
+_CASE_START = CaseStart()
 
 
 def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, control: Control,
@@ -543,7 +566,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
                        estimate_for: EstimateFor | None = None,
                        previous: list[PatchSolution] | None = None,
                        reference: bool = False,
-                       start: tuple[float, float] | None = None) -> list[PatchSolution]:
+                       start: tuple[float, float] | None = None,
+                       problem: WheelProblem | None = None) -> list[PatchSolution]:
     """The BEM normal solutions of one wheel's patches (creep forces not counted).
 
     ``control``: the vertical approach [m] beyond first contact, or the vertical load [N]
@@ -558,7 +582,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     ``start``: the vertical approach [m] and the vertical load [N] its normal forces carried
     in an earlier solve of the wheel (e.g. the previous time step) when ``previous`` is
     not given: a single patch's frame is first formed at that approach scaled to
-    ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`.
+    ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`. ``problem``: the
+    wheel's problem at this pose (its first contact point and merges: not searched again).
     """
     points = partial(referenced, separation=settings.separation) if reference else _rigid
     run_of = partial(run_on_rail, track, ws, pose, side)
@@ -574,7 +599,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         return []
     # one patch: force control (exact) in the frame at the reference point, formed at the
     # approach of the pass before (or Hertz's) and again until the approach holds
-    first = contact_points(track, ws, pose, side, 0.0)[0]
+    first = (contact_points(track, ws, pose, side, 0.0)[0] if problem is None
+             else problem.first)
     single, passes = _single_patch(track, ws, pose, first, q, settings, pair, estimate_for,
                                    previous, reference, start, run_of)
 
@@ -590,8 +616,9 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     else:  # several patches: secant on the vertical approach
         ps, r = approach_secant(residual, approach, q, LOAD_RTOL)
         _check_load(ps, r, q, side)
-    ps, other = first_root(residual, ps, vertical_approach(ps),
-                           merge_approaches(track, ws, pose, side, MIN_LOBE), q, LOAD_RTOL)
+    merges = (merge_approaches(track, ws, pose, side, MIN_LOBE) if problem is None
+              else problem.merges)
+    ps, other = first_root(residual, ps, vertical_approach(ps), merges, q, LOAD_RTOL)
     if other is not None:
         _check_load(ps, vertical_force(ps) - q, q, side)
     mark_other(ps, other)
@@ -722,26 +749,18 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     return passes[-1], passes
 
 
-def vertical_approach(patches: list[PatchSolution]) -> float:
-    """Vertical approach [m] of a wheel beyond first contact, from its solved patches."""
-    if not patches:
-        return 0.0
-    p = patches[0] if len(patches) == 1 else min(patches, key=lambda q: q.geometry.gap)
-    return p.normal.penetration / math.cos(p.geometry.contact_angle) + p.geometry.gap
-
-
-
 def _solve_sides(track: Track, ws: Wheelset, pose: Pose, sides: list[str], control: Control,
                  settings: PatchSettings, pair: ElasticPair, reference: bool = True,
                  convention: str = "railcontact", starts: Starts | None = None
                  ) -> dict[str, list[PatchSolution]]:
     out = {}
     for side in sides:
-        estimate_for = None if starts is None else starts(side)
+        start = _CASE_START if starts is None else CaseStart(starts(side))
+        ps = side_settings(settings, side, convention)
         try:
-            out[side] = solve_wheel(track, ws, pose, side, control,
-                                    side_settings(settings, side, convention), pair,
-                                    estimate_for, reference)
+            solution = solve_wheel(wheel_problem(track, ws, pose, side, pair, control),
+                                   WheelSettings(ps, ps.tangential, reference), start)
+            out[side] = solution.check(side).patches
         except ConvergenceError as exc:
             if len(sides) == 1 or not exc.partial:
                 raise
@@ -893,6 +912,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
                                 convention, starts)
     patches = [p for side in sides for p in per_side[side]]
     for p in patches:
+        set_frictional_power(p)
         p.convention = convention
         n, cp = p.normal, p.geometry
         if cp.rigid is not None:  # solved in the frame at its reference point

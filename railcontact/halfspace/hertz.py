@@ -164,27 +164,6 @@ class HertzSolution:
     max_pressure: float
     e_star: float
 
-    def __getattr__(self, name: str):
-        # called only for an attribute not set: the fields of a solution formed when first
-        # read (:func:`hertz_when_read`)
-        if name not in _FIELDS or "_deferred" not in self.__dict__:
-            raise AttributeError(f"'HertzSolution' object has no attribute {name!r}")
-        self._form()
-        return self.__dict__[name]
-
-    def _form(self) -> None:
-        """Solve a solution made by :func:`hertz_when_read` (its fields set; another
-        reader may have solved it meanwhile: the same values)."""
-        args = self.__dict__.get("_deferred")
-        if args is not None:
-            self.__dict__.update(hertz(*args[0], **args[1]).__dict__)
-            self.__dict__.pop("_deferred", None)
-
-    def __getstate__(self) -> dict:
-        if "_deferred" in self.__dict__:  # pickled with its fields formed
-            self._form()
-        return self.__dict__
-
     @property
     def area(self) -> float:
         """Contact area pi a b [m^2]."""
@@ -196,22 +175,6 @@ class HertzSolution:
         return self.max_pressure * np.sqrt(np.clip(s, 0.0, None))
 
 
-_FIELDS = frozenset(("A", "B", "a", "b", "load", "penetration", "max_pressure", "e_star"))
-
-
-def hertz_when_read(A: float, B: float, pair: ElasticPair, *, load: float | None = None,
-                    penetration: float | None = None) -> HertzSolution:
-    """:func:`hertz` of the same arguments, solved when a field is first read (the same
-    values): a time step keeps each patch's Hertz solution for its result, and a warm step
-    reads none of it. The arguments are those :func:`hertz` accepts without an error
-    (``A``, ``B`` finite and positive, one of ``load`` and ``penetration``, finite and
-    non-negative, a curvature ratio :func:`axis_ratio` solves): pass others to
-    :func:`hertz`, which raises where they enter."""
-    out = object.__new__(HertzSolution)
-    out.__dict__["_deferred"] = ((A, B, pair), {"load": load, "penetration": penetration})
-    return out
-
-
 SHAPE_BOUND_RATIO = 1e6
 """Largest curvature ratio for which :func:`semi_axis_bound` gives a bound (its axis ratio
 ``g`` is then above 1e-4, inside the Newton table of :func:`axis_ratio`)."""
@@ -220,9 +183,11 @@ SHAPE_BOUND_RATIO = 1e6
 def semi_axis_bound(A: float, B: float, pair: ElasticPair, *, load: float | None = None,
                     penetration: float | None = None) -> float:
     """An upper bound [m] of the larger semi-axis ``max(a, b)`` of :func:`hertz`, without
-    solving the shape equation (infinite where the arguments are not those of
-    :func:`hertz_when_read`, or the curvature ratio ``r = B_max/B_min`` exceeds
-    :data:`SHAPE_BOUND_RATIO`).
+    solving the shape equation (infinite where :func:`hertz` might reject the arguments -
+    ``A``, ``B`` finite and positive, one of ``load`` and ``penetration``, finite and
+    non-negative - or the curvature ratio ``r = B_max/B_min`` exceeds
+    :data:`SHAPE_BOUND_RATIO`): a wheel's patch within the model by it needs no Hertz
+    solution (:attr:`~railcontact.settings.PatchSettings.hertz`).
 
     With ``g`` the axis ratio, ``a_max^3 = 3 N rho E(e) / (4 pi E* g^2)`` (module
     docstring) and ``a_max = b_min / g``, ``b_min^2 = delta E(e) / ((A + B) K(e))``;

@@ -428,6 +428,11 @@ class PatchSettings:
     tangential: TangentialSettings | None = None
     kinematics: WheelsetMotion | None = None
     separation: PatchSeparation | None = PatchSeparation()
+    hertz: bool = True
+    """Each patch carries Hertz's solution for its curvatures and load or penetration (a
+    case reports it); False: formed only where the solve needs it (an estimate, a
+    potential area, a patch that a bound does not show within the half-space model), as
+    a time step does."""
 
 
 CASE_TABLES: dict[str, tuple[type[Record], ...]] = {

@@ -138,8 +138,9 @@ class ContactSettings(Record):
     @cached_property
     def patch_settings(self) -> PatchSettings:
         """The grid and normal settings of a wheel's normal solve (the time step solves the
-        tangential problem itself, patch by patch)."""
-        return PatchSettings(self.grid_settings, self.normal_settings)
+        tangential problem itself, patch by patch; Hertz's solution formed only where the
+        solve needs it)."""
+        return PatchSettings(self.grid_settings, self.normal_settings, hertz=False)
 
 
 @document

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -481,11 +481,11 @@ class TangentialResult:
         Tangential traction (p_x, p_y) on body 1 [Pa], shape (2, nx, ny).
     state
         0 exterior, 1 adhesion, 2 slip, shape (nx, ny).
-    slip
-        Relative slip ``S/dx`` (slip velocity divided by rolling speed) [-], (2, nx, ny).
-        It costs one more product with the operator, which a time step never reads: the
-        solvers give a function that forms it, called when ``slip`` is first read (any
-        zero-argument callable passed as ``slip`` is taken so; the value is then kept).
+    slip_of
+        ``slip_of()`` forms the relative slip ``S/dx`` (slip velocity divided by rolling
+        speed) [-], (2, nx, ny), of the solve: it costs one more product with the operator,
+        which a time step never needs, so it is formed only by an explicit call
+        (:meth:`relative_slip`), each time anew; None after unpickling (:attr:`slip`).
     force
         (F_x, F_y) [N].
     spin_moment
@@ -496,12 +496,15 @@ class TangentialResult:
         Largest ``|p|`` [Pa].
     iterations, converged, message, wall_time, error, history
         As for the normal solver; ``error`` is ``||dp|| / ||p||`` of the last sweep.
+    slip
+        The relative slip as a value when the result holds it (a pickled result: formed
+        when pickled, the function of its solve not being picklable); else None.
     """
 
     grid: Grid
     traction: np.ndarray
     state: np.ndarray
-    slip: np.ndarray
+    slip_of: Callable[[], np.ndarray] | None = field(repr=False, compare=False)
     force: tuple[float, float]
     spin_moment: float
     slip_area_ratio: float
@@ -512,44 +515,22 @@ class TangentialResult:
     wall_time: float
     error: float
     history: np.ndarray = field(repr=False)
+    slip: np.ndarray | None = field(default=None, repr=False, compare=False)
 
-    def __post_init__(self) -> None:
-        if callable(self.slip):  # formed when first read (see ``slip``)
-            self.__dict__["_slip_of"] = self.__dict__.pop("slip")
-
-    def __getattr__(self, name: str):
-        of = self.__dict__.get("_slip_of") if name == "slip" else None
-        if of is None:
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-        self.__dict__["slip"] = slip = np.asarray(of())
-        del self.__dict__["_slip_of"]
-        return slip
+    def relative_slip(self) -> np.ndarray:
+        """The relative slip ``S/dx`` [-], (2, nx, ny): zero outside the slip area, in it
+        opposite to the traction (formed by this call: a product with the operator)."""
+        if self.slip is not None:
+            return self.slip
+        return np.asarray(self.slip_of())
 
     def __getstate__(self) -> dict:
         """Pickled with its slip formed (the function that forms it is a closure)."""
-        _ = self.slip
-        return self.__dict__
-
-    def replaced(self, **changes) -> TangentialResult:
-        """``dataclasses.replace(self, **changes)`` as a copy of the fields (a per-pass
-        path: ``replace`` reads and passes every field); a callable ``slip`` is formed
-        when first read, as in the constructor."""
-        unknown = changes.keys() - _RESULT_FIELDS
-        if unknown:
-            raise TypeError(f"TangentialResult has no fields {sorted(unknown)}")
-        out = object.__new__(type(self))
-        d = out.__dict__
-        d.update(self.__dict__)
-        if "slip" in changes:
-            d.pop("slip", None)
-            d.pop("_slip_of", None)
-            slip = changes.pop("slip")
-            d["_slip_of" if callable(slip) else "slip"] = slip
-        d.update(changes)
-        return out
-
-
-_RESULT_FIELDS = frozenset(f.name for f in fields(TangentialResult))
+        state = dict(self.__dict__)
+        if state.get("slip") is None:
+            state["slip"] = self.relative_slip()
+        state["slip_of"] = None
+        return state
 
 
 def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
@@ -579,7 +560,7 @@ def _summarised(grid: Grid, sx, sy, sm, ncon, nslip, pmax
 def _embedded_slip(slip_of: Callable[[], np.ndarray], shape: tuple[int, int], sx: slice,
                    sy: slice) -> Callable[[], np.ndarray]:
     """The slip (2, nx, ny) on a larger grid of shape ``shape`` of a solve on its window
-    ``(sx, sy)`` (``slip_of``: the window's), zero outside it: formed when first read."""
+    ``(sx, sy)`` (``slip_of``: the window's), zero outside it: formed when called."""
     def slip() -> np.ndarray:
         out = np.zeros((2, *shape))
         out[:, sx, sy] = slip_of()
@@ -840,7 +821,7 @@ class SweepProblem:
                 message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
                             f"in {stall_sweeps} sweeps")
         return TangentialResult(
-            grid=grid, traction=traction, state=st, slip=slip, force=force,
+            grid=grid, traction=traction, state=st, slip_of=slip, force=force,
             spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
             converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
             history=np.asarray(hist))

@@ -5,12 +5,13 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.search import ContactPoint
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..settings import ContactSettings
+from ..settings.convention import wheel_frame_creepage
 
 
 @dataclass(frozen=True)
@@ -149,3 +150,136 @@ class WheelSetup:
     track: Track
     wheelset: Wheelset
     settings: ContactSettings
+
+
+@dataclass(frozen=True, slots=True)
+class StepInputs:
+    """A step's inputs, checked (:meth:`~railcontact.timestep.WheelsetContact.solve`'s
+    parameters), with each wheel's setup.
+
+    Attributes
+    ----------
+    pose
+        The wheelset's pose.
+    loads, vertical
+        The wheel loads (left, right) [N], or the vertical displacement [m]; the other None.
+    creepages, kinematics
+        Each wheel's creepages (railcontact's), or the wheelset's velocities; or neither.
+    time
+        The step's time [s], or None.
+    setups
+        Each wheel's rail, wheelset and settings at the step (:class:`WheelSetup`).
+    """
+
+    pose: Pose
+    loads: tuple[float, float] | None
+    vertical: float | None
+    creepages: tuple | None
+    kinematics: Kinematics | None
+    time: float | None
+    setups: tuple[WheelSetup, WheelSetup]
+
+    def creep(self, k: int) -> tuple[float, float, float] | None:
+        """The creepages of wheel ``k`` (0 left, 1 right), None without them."""
+        return None if self.creepages is None else self.creepages[k]
+
+    def geometry(self) -> tuple[tuple[Track, Track], tuple[Wheelset, Wheelset]]:
+        """The (left, right) tracks and wheelsets of the step's wheels."""
+        return ((self.setups[0].track, self.setups[1].track),
+                (self.setups[0].wheelset, self.setups[1].wheelset))
+
+
+def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics | None,
+                time: float | None, setups: tuple[WheelSetup, WheelSetup],
+                convention: str) -> StepInputs:
+    """A step's inputs checked (:meth:`~railcontact.timestep.WheelsetContact.solve`'s
+    parameters; creepages given in CONTACT's ``convention`` turned into railcontact's)."""
+    if (loads is None) == (vertical is None):
+        raise RailContactError("give exactly one of loads [N] and vertical [m]")
+    if loads is not None:
+        loads = per_wheel("loads", loads, 1, "(left, right) [N]")
+    if creepages is not None:
+        creepages = per_wheel("creepages", creepages, 3,
+                               "((xi, eta, phi) left, (xi, eta, phi) right)")
+    if loads is not None:
+        loads = tuple(check_positive(f"{s} wheel load", q, "N", allow_zero=True)
+                      for s, q in zip(SIDE_NAMES, loads, strict=True))
+    else:
+        check_finite("vertical", vertical, "m")
+    if creepages is not None:
+        creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
+                          for s, cs in zip(SIDE_NAMES, creepages, strict=True))
+        if convention == "contact":
+            creepages = tuple(wheel_frame_creepage(c) for c in creepages)
+    if time is not None:
+        time = check_finite("time", time, "s")
+    return StepInputs(pose, loads, vertical, creepages, kinematics, time, setups)
+
+
+class Setups:
+    """Each wheel's :class:`WheelSetup` at a step, from a contact's tracks and wheelsets
+    (left, right): its rail placed with the step's deviation, its settings with the step's
+    friction (the last few of each kept: a deviation or a friction held over steps is
+    formed once)."""
+
+    def __init__(self, tracks: tuple[Track, Track], wheelsets: tuple[Wheelset, Wheelset]
+                 ) -> None:
+        self.tracks, self.wheelsets = tracks, wheelsets
+        self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
+        self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
+        self._friction_base: ContactSettings | None = None  # (what they were made from)
+
+    def at(self, settings: ContactSettings, rails: tuple[RailDeviation, RailDeviation] | None,
+           friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
+        """Each wheel's rail (placed with its deviation), wheelset and ``settings`` (with
+        its friction) at a step."""
+        if rails is not None:
+            rails = per_wheel("rails", rails, 1, "(left, right) RailDeviation")
+            for r in rails:
+                if not isinstance(r, RailDeviation):
+                    raise RailContactError(f"rails must be RailDeviation records, got {r!r}")
+        if friction is not None:
+            friction = tuple(check_positive(f"{s} friction", float(mu), "")
+                             for s, mu in zip(SIDE_NAMES,
+                                              per_wheel("friction", friction, 1,
+                                                         "(left, right) [-]"), strict=True))
+        out = []
+        for k, side in enumerate(SIDE_NAMES):
+            track = self.tracks[k]
+            if rails is not None and rails[k] != NO_DEVIATION:
+                track = self._placed_rail(side, track, rails[k])
+            s = settings
+            if friction is not None and friction[k] != settings.friction:
+                s = self._with_friction(settings, friction[k])
+            out.append(WheelSetup(side, track, self.wheelsets[k], s))
+        return out[0], out[1]
+
+    def _placed_rail(self, side: str, track: Track, rail: RailDeviation) -> Track:
+        """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a
+        deviation held over steps places the rail once)."""
+        key = (side, id(track), rail.offset, rail.roll)
+        held = self._placed.get(key)
+        out = held[1] if held is not None and held[0] is track else None
+        if out is None:
+            try:
+                out = track.deviated(side, rail.offset, rail.roll)
+                _ = out.side_rail  # (placed now: a rail that cannot be is an error here)
+            except RailContactError as exc:
+                raise RailContactError(f"{side} rail deviation {rail.offset} m, roll "
+                                       f"{rail.roll:g} rad: {exc}") from None
+            if len(self._placed) >= 8:
+                self._placed.pop(next(iter(self._placed)))
+            self._placed[key] = (track, out)  # (the track kept: its id is not reused)
+        return out
+
+    def _with_friction(self, settings: ContactSettings, mu: float) -> ContactSettings:
+        """``settings`` with the coefficient of friction ``mu`` (the last few kept)."""
+        if self._friction_base is not settings:  # (the settings were replaced)
+            self._friction_base, self._settings_of = settings, {}
+        out = self._settings_of.get(mu)
+        if out is None:
+            out = replace(settings, friction=mu)
+            if len(self._settings_of) >= 8:
+                self._settings_of.pop(next(iter(self._settings_of)))
+            self._settings_of[mu] = out
+        return out

@@ -4,13 +4,13 @@ stage itself (:func:`rigid_stage`)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from ..contact.results import Work
 from ..errors import RailContactError, SolverError
 from ..geometry.track import Pose
 from ..halfspace.hertz import negligible_load
+from ..halfspace.materials import ElasticPair
 from ..settings import Control
 from .inputs import Kinematics, WheelSetup
 from .memory import EMPTY as EMPTY_MEMORY
@@ -18,13 +18,15 @@ from .memory import StepMemory
 from .results import NOT_CONVERGED, WheelContact
 from .rigid import RigidSolution, RigidWheelset
 from .warmstart import PatchMemory
+from .wheel import solve_step_wheel
 
 
 @dataclass(frozen=True)
 class RolledApproaches:
     """``phi -> (delta_L, delta_R)``: the vertical approaches [m] at which the wheels,
     the wheelset rolled to ``phi``, carry the step's loads with its creepages (the step's
-    solve of each wheel, which leaves the contact's memory as it is; :mod:`.rigid`).
+    solve of each wheel, :func:`~.wheel.solve_step_wheel`, which leaves the contact's
+    memory as it is; :mod:`.rigid`).
 
     With a warm start each wheel's solve starts from the solution nearest in pose: this
     step's last rolled solve of the wheel, else the previous step's at its root
@@ -33,15 +35,14 @@ class RolledApproaches:
     (else this step's). The solves at the root found are what the next step keeps
     (:meth:`memory_at`)."""
 
-    solve_side: Callable[..., tuple[WheelContact, list[PatchMemory]]]
-    """The step's solve of one wheel (``WheelsetContact._solve_side``: its setup, pose,
-    control, creepages, kinematics, time, expected approach and memory), which leaves the
-    contact's memory as it is."""
     pose: Pose
     loads: tuple[float, float]
     creepages: tuple | None
     kinematics: Kinematics | None
     time: float | None
+    pair: ElasticPair
+    convention: str
+    """The contact's convention (:class:`~railcontact.timestep.WheelsetContact`)."""
     step: StepMemory = EMPTY_MEMORY
     """The memory of the wheels' solves at the step's own roll (the step's, or the
     previous step's when the step is not remembered)."""
@@ -87,11 +88,12 @@ class RolledApproaches:
             older = (self.rolled[k] if self.rolled else ()) or self.step.wheel(side)
             start = (last[k] if last else ()) or older
             creep = None if self.creepages is None else self.creepages[k]
-            wheel, mem = self.solve_side(self.setups[k], pose,
-                                                  Control(load=self.loads[k]),
-                                                  creep, self.kinematics, self.time,
-                                                  None if guess is None else guess[k],
-                                                  (older, start, self.step.wheel(side)))
+            wheel, mem, error = solve_step_wheel(
+                self.setups[k], pose, Control(load=self.loads[k]), creep, self.kinematics,
+                self.time, self.pair, self.convention, (older, start, self.step.wheel(side)),
+                None if guess is None else guess[k])
+            if error is not None:  # (a patch beyond the model, a load loop that raised)
+                raise error
             count_work(self.work[side], wheel)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "

@@ -57,46 +57,14 @@ right wheel is mirrored; lateral components and the spin change sign there.
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from time import perf_counter
 
-from ..contact.loadloop import (
-    MAX_SHARE,
-    charge,
-    count_passes,
-    creep_load_secant,
-    first_root,
-    load_met,
-    load_unique,
-    vertical_creep_estimate,
-    vertical_force,
-)
-from ..contact.patch import normal_estimate, solve_patch_tangential
-from ..contact.results import PatchSolution
-from ..contact.start import NormalStart, WarmStart
-from ..contact.wheelrail import (
-    MIN_LOBE,
-    contact_points,
-    solve_wheel_normal,
-    vertical_approach,
-)
-from ..errors import (
-    CaseError,
-    RailContactError,
-    SolverError,
-    check_finite,
-    check_positive,
-)
-from ..geometry.search import ContactPoint, at_reference, merge_approaches, vertical_gap
+from ..errors import CaseError, RailContactError, SolverError
 from ..geometry.track import SIDES, Pose, Track, Wheelset
-from ..halfspace.grid import Grid
-from ..halfspace.hertz import HertzSolution, hertz, negligible_load, no_contact_load
 from ..halfspace.materials import ElasticPair
-from ..halfspace.sums import array_sum
 from ..settings import ContactSettings, Control
-from ..settings.case import MAX_PENETRATION, check_convention
-from ..settings.convention import wheel_frame_creepage
+from ..settings.case import check_convention
 from ..status import status_of
 from .inputs import (  # noqa: F401  (the step's records, importable from here too)
     MAX_CURVATURE,
@@ -104,9 +72,12 @@ from .inputs import (  # noqa: F401  (the step's records, importable from here t
     SIDE_NAMES,
     Kinematics,
     RailDeviation,
+    Setups,
+    StepInputs,
     WheelSetup,
     per_wheel,
     sides,
+    step_inputs,
 )
 from .memory import EMPTY as EMPTY_MEMORY
 from .memory import StepMemory
@@ -125,15 +96,8 @@ from .results import (  # noqa: F401  (the step's records, importable from here 
 from .rigid import RigidSolution, RigidWheelset
 from .rolled import RolledApproaches, rigid_stage
 from .validity import check_validity
-from .warmstart import (
-    PatchMemory,
-    match,
-    merged,
-    previous_bounds,
-    previous_start,
-    previous_tangential,
-    traction_rate,
-)
+from .warmstart import PatchMemory
+from .wheel import penetration_approach, solve_step_wheel
 
 WARM_PROMISE = (0.01, 0.02)
 """What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
@@ -203,9 +167,7 @@ class WheelsetContact:
         self.track, self.wheelset = self.tracks[0], self.wheelsets[0]
         """The left side's track and wheelset (the only ones when both sides share them)."""
         self.pair = pair
-        self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
-        self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
-        self._friction_base: ContactSettings | None = None  # (what they were made from)
+        self._setups = Setups(self.tracks, self.wheelsets)
         settings = settings or ContactSettings()
         self.convention = check_convention(convention)
         if patch_frame is not None:
@@ -261,80 +223,91 @@ class WheelsetContact:
             or lubricated rail); None: the settings' ``friction`` on both.
         """
         t0 = perf_counter()
-        if (loads is None) == (vertical is None):
-            raise RailContactError("give exactly one of loads [N] and vertical [m]")
-        if loads is not None:
-            loads = per_wheel("loads", loads, 1, "(left, right) [N]")
-        if creepages is not None:
-            creepages = per_wheel("creepages", creepages, 3,
-                                   "((xi, eta, phi) left, (xi, eta, phi) right)")
-        if loads is not None:
-            loads = tuple(check_positive(f"{s} wheel load", q, "N", allow_zero=True)
-                          for s, q in zip(("left", "right"), loads, strict=True))
-        else:
-            check_finite("vertical", vertical, "m")
-        if creepages is not None:
-            creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
-                              for s, cs in zip(("left", "right"), creepages, strict=True))
-            if self.convention == "contact":
-                creepages = tuple(wheel_frame_creepage(c) for c in creepages)
-        if time is not None:
-            time = check_finite("time", time, "s")
-        setups = self._setups(rails, friction)
+        step = self._inputs(pose, loads, vertical, creepages, kinematics, time, rails,
+                            friction)
+        wheels, memory, off_track = self._wheels(step)
+        result, memory = self._rigid_stage(step, wheels, memory, remember, off_track)
+        if remember:
+            self.memory = memory
+        result.wall_time = perf_counter() - t0
+        return result
+
+    # -- its stages --------------------------------------------------------------------
+    def _inputs(self, pose: Pose, loads: tuple[float, float] | None, vertical: float | None,
+                creepages: tuple | None, kinematics: Kinematics | None, time: float | None,
+                rails: tuple[RailDeviation, RailDeviation] | None,
+                friction: tuple[float, float] | None) -> StepInputs:
+        """The step's inputs checked (:meth:`solve`'s parameters), with each wheel's
+        setup (:class:`WheelSetup`)."""
+        return step_inputs(pose, loads, vertical, creepages, kinematics, time,
+                           self._setups.at(self.settings, rails, friction), self.convention)
+
+    def _wheels(self, step: StepInputs) -> tuple[list[WheelContact], StepMemory, bool]:
+        """Both wheels solved (:func:`~.wheel.solve_step_wheel`), each warm-started from
+        this contact's memory, their validity checked, what the next step keeps of them,
+        and whether a wheel is off its rail. A wheel that cannot be solved has its own
+        status (the other still is); a wheel off its rail puts the whole wheelset out of
+        range."""
         wheels = []
-        new_memory: dict[str, tuple[PatchMemory, ...]] = {}
+        kept: dict[str, tuple[PatchMemory, ...]] = {}
         off_track = ""
-        for k, side in enumerate(("left", "right")):
-            try:  # a wheel that cannot be solved has its own status; the other still is
-                control = Control(load=loads[k]) if loads is not None else Control(
-                    penetration=self._approach(pose, setups[k], vertical))
-                creep = None if creepages is None else creepages[k]
-                wheel, mem = self._solve_side(setups[k], pose, control, creep, kinematics,
-                                              time)
-            except (CaseError, SolverError) as exc:  # the patch problem, the load loop
-                wheel = WheelContact(side=side, status=status_of(exc), message=str(exc))
-                mem = []
+        for k, (side, setup) in enumerate(zip(SIDE_NAMES, step.setups, strict=True)):
+            try:
+                control = (Control(load=step.loads[k]) if step.loads is not None else
+                           Control(penetration=penetration_approach(step.pose, setup,
+                                                                    step.vertical)))
+                own = self.memory.wheel(side)
+                wheel, kept[side], _ = solve_step_wheel(
+                    setup, step.pose, control, step.creep(k), step.kinematics, step.time,
+                    self.pair, self.convention, (own, own, own))
+            except (CaseError, SolverError) as exc:  # (the penetration's control)
+                wheel, kept[side] = WheelContact(side, status_of(exc), str(exc)), ()
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
                 off_track = off_track or f"{side} wheel: {exc}"
-                wheel, mem = WheelContact(side=side), []
+                wheel, kept[side] = WheelContact(side=side), ()
             wheels.append(wheel)
-            new_memory[side] = tuple(mem)
         if off_track:  # a wheelset with a wheel off its rail has no contact forces to give
             msg = f"wheelset out of range: {off_track}"
-            wheels = [WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
-                      for s in ("left", "right")]
-            new_memory = {"left": (), "right": ()}
-        else:
-            for wheel, setup in zip(wheels, setups, strict=True):
-                self._check_validity(wheel, setup)
+            return ([WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
+                     for s in SIDE_NAMES], EMPTY_MEMORY, True)
+        for wheel, setup in zip(wheels, step.setups, strict=True):
+            self._check_validity(wheel, setup)
+        return wheels, StepMemory(kept["left"], kept["right"]), False
+
+    def _rigid_stage(self, step: StepInputs, wheels: list[WheelContact],
+                     memory: StepMemory, remember: bool, off_track: bool
+                     ) -> tuple[WheelsetResult, StepMemory]:
+        """The step's result, under load control with the rigid wheelset's vertical
+        displacement and roll when the settings ask for them (:func:`~.rolled.
+        rigid_stage`), and the memory the next step starts from (empty when it is not
+        remembered or the warm start does not use it)."""
         keep = remember and self.settings.uses_previous  # (what the next step starts from)
-        step = StepMemory(new_memory["left"], new_memory["right"]) if keep else EMPTY_MEMORY
+        out = memory if keep else EMPTY_MEMORY
         result = WheelsetResult(wheels[0], wheels[1], 0.0, self.wheelset.radius)
-        if vertical is not None:
-            result.vertical, result.roll = vertical, pose.roll
-            result.rigid_solution = RigidSolution(vertical, pose.roll)
+        pose = step.pose
+        if step.vertical is not None:
+            result.vertical, result.roll = step.vertical, pose.roll
+            result.rigid_solution = RigidSolution(step.vertical, pose.roll)
         elif not off_track and self.settings.rigid_wheelset == "solve":
             last = self.memory if self.settings.uses_previous else EMPTY_MEMORY
             # the rolled wheels start from this step's solves (the previous step's when
             # this one is not remembered) and from the previous step's at its root
             rigid = RigidWheelset(
-                *self._geometry(setups), pose, (wheels[0].approach, wheels[1].approach),
+                *step.geometry(), pose, (wheels[0].approach, wheels[1].approach),
                 tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
                       if w.patches else None for w in wheels),
-                RolledApproaches(self._solve_side, pose, loads, creepages, kinematics, time,
-                                  step if remember else self.memory, last.rolled, setups),
-                history=last.rigid, time=time)
+                RolledApproaches(pose, step.loads, step.creepages, step.kinematics,
+                                 step.time, self.pair, self.convention,
+                                 out if remember else self.memory, last.rolled, step.setups),
+                history=last.rigid, time=step.time)
             s = rigid_stage(rigid)
             result.rigid_solution, result.rigid_work = s, s.work
             if s.evaluations:  # (found, or its best estimate; none when the search raised)
                 result.vertical, result.roll = s.vertical, s.roll
             if keep:
                 roots, rolled = rigid.remembered(s)
-                step = replace(step, rigid=roots, rolled=rolled)
-        if remember:
-            self.memory = step
-        result.wall_time = perf_counter() - t0
-        return result
+                out = replace(out, rigid=roots, rolled=rolled)
+        return result, out
 
     def rolled_approaches(self, pose: Pose, *, loads: tuple[float, float],
                           creepages: tuple | None = None,
@@ -346,8 +319,9 @@ class WheelsetContact:
         (:class:`RolledApproaches`), started from this contact's memory as that stage's
         is. Each call solves both wheels (for studies and tests; a step forms its own)."""
         rolled = self.memory.rolled if self.settings.uses_previous else None
-        return RolledApproaches(self._solve_side, pose, loads, creepages, kinematics, time,
-                                self.memory, rolled, self._setups(None, None))
+        return RolledApproaches(pose, loads, creepages, kinematics, time, self.pair,
+                                self.convention, self.memory, rolled,
+                                self._setups.at(self.settings, None, None))
 
     def _check_validity(self, wheel: WheelContact, setup: WheelSetup) -> None:
         """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
@@ -357,320 +331,6 @@ class WheelsetContact:
         wheel.mark_validity(check_validity(SIDES[wheel.side], wheel.track_force,
                                            wheel.patches, setup.wheelset.flange_flank,
                                            setup.settings))
-
-    def _setups(self, rails: tuple[RailDeviation, RailDeviation] | None,
-                friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
-        """Each wheel's rail (placed with its deviation), wheelset and settings (with its
-        friction) at a step."""
-        if rails is not None:
-            rails = per_wheel("rails", rails, 1, "(left, right) RailDeviation")
-            for r in rails:
-                if not isinstance(r, RailDeviation):
-                    raise RailContactError(f"rails must be RailDeviation records, got {r!r}")
-        if friction is not None:
-            friction = tuple(check_positive(f"{s} friction", float(mu), "")
-                             for s, mu in zip(SIDE_NAMES,
-                                              per_wheel("friction", friction, 1,
-                                                         "(left, right) [-]"), strict=True))
-        out = []
-        for k, side in enumerate(SIDE_NAMES):
-            track = self.tracks[k]
-            if rails is not None and rails[k] != NO_DEVIATION:
-                track = self._placed_rail(side, track, rails[k])
-            settings = self.settings
-            if friction is not None and friction[k] != settings.friction:
-                settings = self._with_friction(friction[k])
-            out.append(WheelSetup(side, track, self.wheelsets[k], settings))
-        return out[0], out[1]
-
-    def _placed_rail(self, side: str, track: Track, rail: RailDeviation) -> Track:
-        """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a
-        deviation held over steps places the rail once)."""
-        key = (side, id(track), rail.offset, rail.roll)
-        held = self._placed.get(key)
-        out = held[1] if held is not None and held[0] is track else None
-        if out is None:
-            try:
-                out = track.deviated(side, rail.offset, rail.roll)
-                _ = out.side_rail  # (placed now: a rail that cannot be is an error here)
-            except RailContactError as exc:
-                raise RailContactError(f"{side} rail deviation {rail.offset} m, roll "
-                                       f"{rail.roll:g} rad: {exc}") from None
-            if len(self._placed) >= 8:
-                self._placed.pop(next(iter(self._placed)))
-            self._placed[key] = (track, out)  # (the track kept: its id is not reused)
-        return out
-
-    def _with_friction(self, mu: float) -> ContactSettings:
-        """The settings with the coefficient of friction ``mu`` (the last few kept)."""
-        if self._friction_base is not self.settings:  # (the settings were replaced)
-            self._friction_base, self._settings_of = self.settings, {}
-        out = self._settings_of.get(mu)
-        if out is None:
-            out = replace(self.settings, friction=mu)
-            if len(self._settings_of) >= 8:
-                self._settings_of.pop(next(iter(self._settings_of)))
-            self._settings_of[mu] = out
-        return out
-
-    @staticmethod
-    def _geometry(setups: tuple[WheelSetup, WheelSetup]
-                  ) -> tuple[tuple[Track, Track], tuple[Wheelset, Wheelset]]:
-        """The (left, right) tracks and wheelsets of a step's wheels."""
-        return ((setups[0].track, setups[1].track),
-                (setups[0].wheelset, setups[1].wheelset))
-
-    def _approach(self, pose: Pose, setup: WheelSetup, vertical: float) -> float:
-        """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
-        ``-vertical``."""
-        g = vertical_gap(setup.track, setup.wheelset, pose, setup.side)[4]
-        approach = max(-(float(g.min()) + vertical), 0.0)
-        if approach > MAX_PENETRATION:
-            raise RailContactError(f"vertical = {vertical:g} m puts the wheel "
-                                   f"{approach * 1e3:.4g} mm into its rail; a contact's "
-                                   f"approach is at most {MAX_PENETRATION * 1e3:g} mm")
-        return approach
-
-    def _solve_side(self, setup: WheelSetup, pose: Pose, control: Control,
-                    creep: tuple[float, float, float] | None, kin: Kinematics | None,
-                    time: float | None, approach: float | None = None,
-                    memory: tuple[tuple[PatchMemory, ...], ...] | None = None
-                    ) -> tuple[WheelContact, list[PatchMemory]]:
-        """``approach``: the vertical approach [m] expected, at which the first pass forms
-        its frame (instead of the remembered step's, extrapolated: the rolled wheelset's
-        solves, :class:`RolledApproaches`). ``memory``: (the older step remembered, the
-        solution the first pass starts from, the step whose creep share starts the load
-        loop), the rolled wheelset's (with a warm start); None: this contact's memory of
-        the previous step for all three."""
-        side, settings = setup.side, setup.settings
-        keep = self.settings.uses_previous  # remember this step for the next one
-        own = previous = first = self.memory.wheel(side) if keep else ()
-        if memory is not None and keep:
-            previous, first, own = memory
-        wheel = WheelContact(side=side)
-        if control.value == 0.0:
-            return wheel, []
-        if control.by_load and negligible_load(control.load):
-            wheel.message = f"no contact: {no_contact_load(control.load)}"
-            return wheel, []
-        tangential = creep is not None or kin is not None
-        if not (control.by_load and tangential and settings.load_includes_creep):
-            patches, creepages, mem = self._pass(setup, pose, control, creep, kin, time,
-                                                 previous, first, approach)
-            self._finish(wheel, patches, creepages, pose, kin and kin.speed)
-            _mark_uniqueness(wheel, patches, settings.friction, bool(previous),
-                             creep_in_load=False)
-            return wheel, mem if keep else []
-        # The load counts the creep forces: secant on the normal share (module docstring).
-        q = control.load
-        passes: list[tuple[list[PatchSolution], list, list[PatchMemory]]] = []
-
-        def wheel_pass(normal: Control) -> tuple[float, tuple]:
-            source = passes[-1][2] if passes else first  # later passes: the one before
-            passes.append(self._pass(setup, pose, normal, creep, kin, time, previous,
-                                     source, None if passes else approach))
-            return vertical_force(passes[-1][0]) - q, passes[-1]
-
-        def residual(qn: float) -> tuple[float, tuple]:
-            return wheel_pass(Control(load=qn))
-
-        def at_approach(a: float) -> tuple[float, tuple]:  # (after the load loop's passes)
-            return wheel_pass(Control(penetration=a))
-
-        estimate_seconds = 0.0  # the cold estimate's time, charged to the wheel's work
-        if own:  # the previous step's creep share (the rolled solves: this step's)
-            share = sum(m.vertical_creep for m in own)
-        else:  # cold: estimated on the Hertz ellipse where the normal solve forms its frame
-            t0 = perf_counter()
-            cp = contact_points(setup.track, setup.wheelset, pose, side, 0.0)[0]
-            if (settings.patch_frame == "reference" and math.isfinite(cp.B)
-                    and cp.B > 0 and cp.A > 0):
-                cosg = math.cos(cp.contact_angle)
-                approach = hertz(cp.A, cp.B, self.pair, load=q / cosg).penetration / cosg
-                cp = at_reference(cp, setup.track, setup.wheelset, pose, approach) or cp
-            c = creep if creep is not None else kin.creepage(cp, pose, setup.wheelset.radius)
-            sgn = SIDES[side]
-            share = vertical_creep_estimate(cp, q, (c[0], sgn * c[1], sgn * c[2]), self.pair,
-                                            settings.friction)
-            estimate_seconds = perf_counter() - t0
-        start = min(max(q - share, 0.05 * q), MAX_SHARE * q)
-        (patches, creepages, mem), failure = creep_load_secant(
-            residual, q, start, settings.load_tolerance)
-        if not patches:
-            return wheel, []
-        if not failure:  # the smallest approach of the load with its creep forces
-            (patches, creepages, mem), other = first_root(
-                at_approach, (patches, creepages, mem), vertical_approach(patches),
-                merge_approaches(setup.track, setup.wheelset, pose, side, MIN_LOBE), q,
-                settings.load_tolerance, noisy=True)
-            for p in patches:  # (the total's roots, not the normal share's of a pass)
-                p.load_other = other
-                p.load_unique = other is None and load_unique(patches, settings.friction)
-            if other is not None and not load_met(patches, q, settings.load_tolerance,
-                                                  settings.tangential_tolerance):
-                failure = ("the vertical load with creep forces did not converge at the "
-                           "smallest approach that carries it (vertical force "
-                           f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
-        count_passes(patches, [p for p, _, _ in passes])  # the work of every pass counts
-        patches[0].work.seconds += estimate_seconds
-        self._finish(wheel, patches, creepages, pose, kin and kin.speed)
-        if failure and not load_met(patches, q, settings.load_tolerance,
-                                    settings.tangential_tolerance):
-            wheel.status = NOT_CONVERGED
-            wheel.message = failure
-        _mark_uniqueness(wheel, patches, settings.friction, bool(previous),
-                         creep_in_load=True)
-        return wheel, mem if keep else []
-
-    def _finish(self, wheel: WheelContact, patches: list[PatchSolution], creepages: list,
-                pose: Pose, speed: float | None = None) -> WheelContact:
-        if patches:
-            wheel.creepages = creepages
-            fill_resultants(wheel, patches, pose)
-            if creepages:  # (side frame: the lateral and spin components mirrored)
-                sgn = SIDES[wheel.side]
-                per = 0.0
-                for p, c in zip(patches, creepages, strict=True):
-                    t = p.tangential
-                    if t is not None:
-                        fx, fy = t.force
-                        per += fx * c[0] + sgn * (fy * c[1] + t.spin_moment * c[2])
-                wheel.frictional_power_per_speed = per
-                wheel.frictional_power = None if speed is None else speed * per
-            if self.convention == "contact":  # the creepages and creep forces as CONTACT's
-                wheel.creepages = [wheel_frame_creepage(c) for c in creepages]
-                fx, fy = wheel.creep_force
-                wheel.creep_force = (-fx, fy)
-                for p in patches:
-                    p.convention = "contact"
-        return wheel
-
-    def _pass(self, setup: WheelSetup, pose: Pose, control: Control,
-              creep: tuple[float, float, float] | None, kin: Kinematics | None,
-              time: float | None, previous: list[PatchMemory], source: list[PatchMemory],
-              approach: float | None = None
-              ) -> tuple[list[PatchSolution], list[tuple[float, float, float]],
-                         list[PatchMemory]]:
-        """One solve of a wheel's patches: the normal BEM under ``control``, then the
-        tangential BEM; warm-started from ``source`` (the previous step's memory, or an
-        earlier pass of this step), remembering ``previous`` as the older step."""
-        side, settings = setup.side, setup.settings
-        sgn = SIDES[side]
-        pair = self.pair
-
-        def estimate_for(cp: ContactPoint, hz: HertzSolution, ctrl: Control) -> WarmStart:
-            def estimate() -> WarmStart:  # KP/INFCON cost a solve of their own: when needed
-                return normal_estimate(settings.normal_settings, hz, cp.s, cp.f, cp.a_of_s,
-                                       pair, ctrl)
-
-            m = match(source, cp.rail_u, cp.position[2])
-            if m is None:
-                return estimate()
-
-            def pressure_on(grid: Grid) -> NormalStart:  # (with A p, when the memory has it)
-                p, shown = previous_start(m, grid, time)
-                if shown is not None:  # (then p has pressure)
-                    return NormalStart(p, shown)
-                return NormalStart(p) if array_sum(p) > 0 else estimate().pressure_on(grid)
-            # the potential area: where the contact was - unless the patch's rigid overlap
-            # took in another remembered patch (two patches merged): then the rigid
-            # overlap's, as from cold (the other's area lies outside this one's, and the
-            # contact inside would not reach its edge); Hertz's penetration read only then
-            bounds = (None if len(source) > 1 and merged(cp, m, source, hz.penetration)
-                      else previous_bounds(m))
-            return WarmStart("previous", pressure_on, bounds)
-
-        # the frame at the reference point formed first at the approach of the step (or
-        # pass) that starts this one, extrapolated in time: one pass in the common case
-        start = _start(source, time) if source else None
-        if start is not None and approach is not None and approach > 0:  # expected there
-            start = (approach, start[1])
-        patches = solve_wheel_normal(setup.track, setup.wheelset, pose, side, control,
-                                     settings.patch_settings, pair, estimate_for,
-                                     reference=settings.patch_frame == "reference",
-                                     start=start)
-        kept = [p for p in patches if p.normal.force > 0]
-        charge(kept, [p for p in patches if p.normal.force <= 0])  # their work counts
-        patches = kept
-        creepages, memory = [], []
-        approach = vertical_approach(patches)
-        for patch in patches:
-            cp = patch.geometry
-            u, z = cp.rail_u, cp.position[2]
-            m = match(source, u, z)  # None without warm start
-            if creep is not None or kin is not None:
-                c = creep if creep is not None else kin.creepage(cp, pose, setup.wheelset.radius)
-                creepages.append(c)
-                side_creep = [c[0], sgn * c[1], sgn * c[2]]
-                t0 = perf_counter()
-                # the traction extrapolated in time for SteadyGS only (previous_tangential)
-                at = time if settings.tangential_solver != "convexgs" else None
-                prev = previous_tangential(m, patch.normal.grid, at) if m else None
-                patch.work.seconds += perf_counter() - t0
-                solve_patch_tangential(patch, settings.tangential_settings, pair, settings.fft,
-                                       creepage=side_creep, previous=prev)
-            t = patch.tangential
-            last = m if previous is source else match(previous, u, z)
-            # the traction's rate smoothed over the steps (SteadyGS's extrapolation only;
-            # its time is the patch's work, as the start it serves)
-            rate = None
-            if t is not None and settings.tangential_solver != "convexgs":
-                t1 = perf_counter()
-                rate = traction_rate(t.traction, patch.normal.grid, time, last)
-                patch.work.seconds += perf_counter() - t1
-            # what a newer step keeps of the older one: its traction and time for the
-            # extrapolation, not its own older step or traction rate, which this step's
-            # rate has taken in (the memory, and an FMU's saved state, stay two steps deep)
-            older = None if last is None else last.without_older()
-            n = patch.normal
-            memory.append(PatchMemory(
-                grid=n.grid, pressure=n.pressure,
-                traction=None if t is None else t.traction,
-                state=None if t is None else t.state, u=u, z=z, time=time, older=older,
-                vertical_creep=0.0 if t is None else
-                float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
-                vertical_normal=n.force * math.cos(cp.contact_angle), traction_rate=rate,
-                displacement=n.displacement, element_box=n.contact_box))
-        return patches, creepages, memory
-
-
-def _mark_uniqueness(wheel: WheelContact, patches: list[PatchSolution], friction: float,
-                     warm: bool, creep_in_load: bool) -> None:
-    """Set the wheel's :attr:`~WheelContact.load_unique`, and say in an ok wheel's message
-    why its load may have another solution: a merge of patches
-    (:attr:`~railcontact.contact.results.PatchSolution.load_other`; the smallest approach
-    is returned, from warm and cold starts alike) or a steep patch's creep force
-    (:func:`~railcontact.contact.loadloop.load_unique`; the root the start leads to), the
-    latter only where the creep forces are in the load (``creep_in_load``: load control
-    with :attr:`ContactSettings.load_includes_creep`)."""
-    steep = creep_in_load and not load_unique(patches, friction)
-    other = next((p.load_other for p in patches if p.load_other is not None), None)
-    wheel.load_unique = not steep and other is None
-    if wheel.load_unique or wheel.status != OK:
-        return
-    why = []
-    if other is not None:
-        why.append("two of its contact regions join into one patch between this "
-                   f"solution and another (approach {other * 1e6:.4g} um): the smallest "
-                   "approach that carries the load is returned")
-    if steep:
-        which = ("the one continuous with the previous step" if warm else
-                 "the one reached from the normal share Q (cold start)")
-        why.append(f"several patches with mu tan(gamma) >= 1 on one: {which}")
-    wheel.message = "ok; the load has more than one solution: " + "; ".join(why)
-
-
-def _start(source: list[PatchMemory], time: float | None) -> tuple[float, float]:
-    """The vertical approach [m] of a wheel and the vertical load [N] of its normal forces
-    in the step ``source`` remembers, extrapolated linearly to ``time`` [s] from the step
-    before it when both are known (:meth:`PatchMemory.extrapolation`)."""
-    a, q = source[0].approach, sum([m.vertical_normal for m in source])
-    older = [m.older for m in source]
-    f = source[0].extrapolation(time)
-    if f > 0 and None not in older and older[0].approach > 0:
-        a_o, q_o = older[0].approach, sum([o.vertical_normal for o in older])
-        a, q = max(a + f * (a - a_o), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
-    return a, q
 
 
 __all__ = ["WARM_PROMISE", "WheelsetContact"]
