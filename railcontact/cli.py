@@ -548,8 +548,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="do not compile the FMU's kernels into the per-user cache now "
                     "(the FMU's first run in an environment then compiles them: 40-100 s)")
     fb.add_argument("--wheelsets", type=int, metavar="N",
-                    help="an FMU of N wheelsets (1 to 8), solved in parallel in each step: "
-                    "every input and output repeated with _1 ... _N appended, the "
+                    help="an FMU of N wheelsets (1 to 8), solved on worker threads in each "
+                    "step: every input and output repeated with _1 ... _N appended, the "
                     "parameters once, the Integer parameter wheelsets = N (default: the "
                     "one-wheelset FMU, its variables without a suffix)")
     fb.set_defaults(func=_cmd_fmu_build)

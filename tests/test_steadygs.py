@@ -262,7 +262,8 @@ def test_slip_formed_when_asked_obeys_coulomb(sphere, solver):
         r = solver(g, op, nr.pressure, 0.3, creepage, tolerance=1e-9, max_iterations=5000)
         n = len(products)
         fields = [getattr(r, f.name) for f in dataclasses.fields(r)]
-        assert len(products) == n and r.slip is None and len(fields) > 10
+        assert len(products) == n and len(fields) > 10
+        assert not hasattr(r, "slip")  # the slip is a call, not an attribute
         s = r.relative_slip()
         assert len(products) == n + 1
     finally:
@@ -278,7 +279,6 @@ def test_slip_formed_when_asked_obeys_coulomb(sphere, solver):
     cos = -np.sum(p * s[:, slipping], axis=0) / (np.hypot(*p) * np.hypot(*s[:, slipping]))
     assert cos.min() > 1 - 1e-6
     np.testing.assert_allclose(np.hypot(*p), 0.3 * nr.pressure[slipping], rtol=1e-12)
-    np.testing.assert_array_equal(pickle.loads(pickle.dumps(r)).slip, s)
     np.testing.assert_array_equal(pickle.loads(pickle.dumps(r)).relative_slip(), s)
 
 

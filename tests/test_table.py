@@ -598,10 +598,10 @@ def test_a_solver_exception_loses_only_its_point(tmp_path, monkeypatch):
     spec = load_spec(spec_path)
     real = table_solve.solve_wheel_rail
 
-    def flaky(case, starts=None):
+    def flaky(case, starts=None, **kwargs):
         if case.tangential.creepage[1] == 0.002:
             raise ZeroDivisionError("float division by zero")
-        return real(case, starts)
+        return real(case, starts, **kwargs)
 
     monkeypatch.setattr(table_solve, "solve_wheel_rail", flaky)
     points = [{"creepage_y": 0.0}, {"creepage_y": 0.002}]

@@ -25,7 +25,14 @@ from ..settings.friction import FrictionTable, friction_at_point
 from ..status import Status
 from ..tangential.kalker import creep_coefficients
 from .results import PatchSolution
-from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
+from .wheel import (
+    CREEP_LOAD_RTOL,  # noqa: F401  (its home is .wheel; read here too)
+    WheelPass,
+    WheelProblem,
+    WheelSettings,
+    WheelSolution,
+    WheelStart,
+)
 
 T = TypeVar("T")
 MAX_SECANT = 30

@@ -866,8 +866,8 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
     return Pose(pose.lateral, pose.yaw, phi), final
 
 
-def solve_wheel_rail(case: Case, starts: Starts | None = None
-                     ) -> tuple[list[PatchSolution], Pose]:
+def solve_wheel_rail(case: Case, starts: Starts | None = None, *,
+                     frictional_power: bool = True) -> tuple[list[PatchSolution], Pose]:
     """All contact patches of the case's wheel(s), each with its BEM normal (and tangential)
     solution, and the wheelset pose they were solved at (its roll resolved when the case
     asks for ``"rigid"`` or ``"equal-loads"``).
@@ -880,6 +880,8 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
     ``starts(side)`` gives the ``estimate_for`` of each wheel (or None),
     e.g. a neighbouring solution's start (:mod:`railcontact.table.solve`); without it every
     patch starts as the case's estimates say, as ``railcontact solve`` does.
+    ``frictional_power=False`` leaves each patch's frictional power unformed (None; forming
+    it costs a product with the operator per patch, which a table does not store).
     """
     geo = case.geometry
     if not isinstance(geo, WheelRailGeometry):
@@ -912,7 +914,8 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None
                                 convention, starts)
     patches = [p for side in sides for p in per_side[side]]
     for p in patches:
-        set_frictional_power(p)
+        if frictional_power:
+            set_frictional_power(p)
         p.convention = convention
         n, cp = p.normal, p.geometry
         if cp.rigid is not None:  # solved in the frame at its reference point

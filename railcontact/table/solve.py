@@ -96,7 +96,8 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
     wheel = WheelContact(side=side)
     try:
         c = Case.from_dict(case_with(case, {}, side))
-        patches, pose = solve_wheel_rail(c, _starts(c, memory) if memory else None)
+        patches, pose = solve_wheel_rail(c, _starts(c, memory) if memory else None,
+                                          frictional_power=False)
     except (RailContactError, SolverError) as exc:  # a load loop, a case, the geometry
         wheel.status = status_of(exc)
         text = str(exc)  # (a case's and a load loop's messages name the wheel already)

@@ -485,7 +485,7 @@ class TangentialResult:
         ``slip_of()`` forms the relative slip ``S/dx`` (slip velocity divided by rolling
         speed) [-], (2, nx, ny), of the solve: it costs one more product with the operator,
         which a time step never needs, so it is formed only by an explicit call
-        (:meth:`relative_slip`), each time anew; None after unpickling (:attr:`slip`).
+        (:meth:`relative_slip`), each time anew; None after unpickling.
     force
         (F_x, F_y) [N].
     spin_moment
@@ -496,9 +496,9 @@ class TangentialResult:
         Largest ``|p|`` [Pa].
     iterations, converged, message, wall_time, error, history
         As for the normal solver; ``error`` is ``||dp|| / ||p||`` of the last sweep.
-    slip
-        The relative slip as a value when the result holds it (a pickled result: formed
-        when pickled, the function of its solve not being picklable); else None.
+
+    A pickled result carries its relative slip formed (the function of its solve is not
+    picklable), which :meth:`relative_slip` then returns.
     """
 
     grid: Grid
@@ -515,20 +515,20 @@ class TangentialResult:
     wall_time: float
     error: float
     history: np.ndarray = field(repr=False)
-    slip: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _formed_slip: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def relative_slip(self) -> np.ndarray:
         """The relative slip ``S/dx`` [-], (2, nx, ny): zero outside the slip area, in it
         opposite to the traction (formed by this call: a product with the operator)."""
-        if self.slip is not None:
-            return self.slip
+        if self._formed_slip is not None:
+            return self._formed_slip
         return np.asarray(self.slip_of())
 
     def __getstate__(self) -> dict:
         """Pickled with its slip formed (the function that forms it is a closure)."""
         state = dict(self.__dict__)
-        if state.get("slip") is None:
-            state["slip"] = self.relative_slip()
+        if state.get("_formed_slip") is None:
+            state["_formed_slip"] = self.relative_slip()
         state["slip_of"] = None
         return state
 
