@@ -1,0 +1,232 @@
+"""Benchmark of a vehicle step: four wheelsets, one after the other or on worker threads.
+
+Four :class:`railcontact.WheelsetContact` instances (S1002 on 60E1 at 1:40, 0.5 mm
+elements, mu = 0.4, load control with the creep forces counted, 30 m/s, kinematic
+creepages, 1 ms steps) follow the lateral motion of a hunting two-bogie coach: a sine of
+1.5 Hz (a 20 m wavelength at 30 m/s) that reaches each wheelset later by its distance
+behind the leading one over the speed (wheelsets at 0, 2.5, 19 and 21.5 m: a bogie
+wheelbase of 2.5 m, bogie centres 19 m apart), with amplitudes 3, 2.4, 2 and 1.6 mm, a
+yaw of half the kinematic one (``psi = 0.5 dy/dx``, its rate from it) and wheel loads
+that shift between the sides by 4 % with the motion (83.3 kN mean). A *vehicle step*
+solves all four for one time.
+
+Each repetition runs the same steps from new instances in two ways, the order alternating
+(on a shared machine the load of other processes changes over minutes):
+
+* ``sequential``: one worker thread steps the four wheelsets one after the other;
+* ``threaded``: ``--threads`` worker threads (2), wheelset ``i`` on thread ``i mod N``,
+  all started on a step at once and waited for (as a co-simulation host steps its
+  wheelsets).
+
+The worker threads live for the whole run and are warmed up first (numba kernels, each
+thread's FFTW plans). For the warm (``previous+estimate``) and cold (``none``) starts it
+prints, per way, the wall time of a vehicle step (median, mean, 99th percentile over the
+steps of every repetition, each run's first step left out), each as a ratio to the fixed
+numpy workload of ``scripts/bench_step.py`` (timed before every repetition, its median),
+the real-time factor at 1 kHz (the median vehicle step over the 1 ms it simulates: below
+1 is faster than real time), the process's CPU time over the wall time (below 1: other
+processes take the core; the threaded way reaches 2 only with two cores free), and the
+ratio threaded / sequential of the medians. It checks that the threaded results equal the
+sequential ones bit for bit (forces, moments, iterations, pressures, tractions).
+
+Goal (issue: a vehicle in real time): a warm vehicle step <= 0.03 of the workload.
+
+Usage: python scripts/bench_vehicle.py [--steps 150] [--cold-steps 30] [--repeats 3]
+                                       [--threads 2] [--modes previous+estimate,none]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import queue
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+import railcontact as rc
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_step import fixed_workload  # noqa: E402
+
+SPEED = 30.0
+"""Forward speed [m/s]."""
+FREQUENCY = 1.5
+"""Hunting frequency [Hz]."""
+POSITIONS = (0.0, 2.5, 19.0, 21.5)
+"""Distance of each wheelset behind the leading one [m]."""
+AMPLITUDES = (3e-3, 2.4e-3, 2e-3, 1.6e-3)
+"""Lateral amplitude of each wheelset [m]."""
+LOAD = 83.3e3
+"""Mean wheel load [N]."""
+LOAD_SHIFT = 0.04
+"""Share of the wheel load that moves between the sides with the lateral motion."""
+YAW_SHARE = 0.5
+"""Yaw as this share of the kinematic yaw dy/dx."""
+
+
+def wheelset(mode: str) -> rc.WheelsetContact:
+    """A new wheelset (its own track, profiles and settings, as FMU instances have)."""
+    return rc.WheelsetContact(
+        rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+        rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+        rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+
+
+def inputs(i: int, k: int, step: float = 1e-3) -> dict:
+    """The keyword arguments of :meth:`WheelsetContact.solve` for wheelset ``i`` at step
+    ``k``."""
+    t = k * step
+    w = 2 * math.pi * FREQUENCY
+    a = AMPLITUDES[i]
+    phase = w * (t - POSITIONS[i] / SPEED)
+    y, y_dot = a * math.sin(phase), a * w * math.cos(phase)
+    psi = YAW_SHARE * y_dot / SPEED  # (dy/dx = y_dot / V)
+    psi_dot = -YAW_SHARE * a * w * w * math.sin(phase) / SPEED
+    shift = LOAD_SHIFT * LOAD * math.sin(phase)
+    return dict(pose=rc.Pose(y, psi), loads=(LOAD + shift, LOAD - shift),
+                kinematics=rc.Kinematics(SPEED, y_dot, psi_dot), time=t)
+
+
+def fingerprint(result) -> tuple:
+    """The values of a step that must not depend on the thread (bit for bit)."""
+    wheels = []
+    for w in (result.left, result.right):
+        patches = tuple((p.normal.pressure.tobytes(),
+                         None if p.tangential is None else
+                         np.asarray(p.tangential.traction).tobytes()) for p in w.patches)
+        wheels.append((w.status, w.message, w.normal_force, w.creep_force, w.spin_moment,
+                       w.track_force, w.yaw_moment, w.approach, w.moment,
+                       w.normal_iterations, w.tangential_iterations, w.load_passes,
+                       patches))
+    return tuple(wheels)
+
+
+class Worker:
+    """A thread that runs the jobs given to it, one after the other."""
+
+    def __init__(self, name: str) -> None:
+        self.jobs: queue.SimpleQueue = queue.SimpleQueue()
+        self.done: queue.SimpleQueue = queue.SimpleQueue()
+        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self.thread.start()
+
+    def _loop(self) -> None:
+        while True:
+            job = self.jobs.get()
+            if job is None:
+                return
+            try:
+                self.done.put((True, job()))
+            except BaseException as exc:  # reported in the main thread
+                self.done.put((False, exc))
+
+    def submit(self, job) -> None:
+        self.jobs.put(job)
+
+    def result(self):
+        ok, value = self.done.get()
+        if not ok:
+            raise value
+        return value
+
+    def stop(self) -> None:
+        self.jobs.put(None)
+        self.thread.join()
+
+
+def _stepper(contacts: list, which: list[int], k: int):
+    """A job: step the wheelsets ``which`` of ``contacts`` at step ``k``."""
+    def job():
+        return [(i, fingerprint(contacts[i].solve(**inputs(i, k)))) for i in which]
+    return job
+
+
+def run(workers: list[Worker], mode: str, steps: int) -> tuple[list[float], float, list]:
+    """The vehicle's ``steps`` steps from new wheelsets, wheelset ``i`` on worker ``i mod
+    len(workers)``; the wall time of each vehicle step [s], the process CPU time over the
+    wall time of the run, and each step's fingerprints (wheelset order)."""
+    contacts = [wheelset(mode) for _ in POSITIONS]
+    n = len(workers)
+    share = [[i for i in range(len(POSITIONS)) if i % n == j] for j in range(n)]
+    times, results = [], []
+    c0, t_run = time.process_time(), time.perf_counter()
+    for k in range(steps):
+        t0 = time.perf_counter()
+        for worker, which in zip(workers, share, strict=True):
+            worker.submit(_stepper(contacts, which, k))
+        out = [x for worker in workers for x in worker.result()]
+        times.append(time.perf_counter() - t0)
+        results.append(tuple(f for _, f in sorted(out, key=lambda x: x[0])))
+    cpu = (time.process_time() - c0) / (time.perf_counter() - t_run)
+    return times, cpu, results
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=150, help="vehicle steps of a warm run")
+    ap.add_argument("--cold-steps", type=int, default=30, help="vehicle steps of a cold run")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--modes", default="previous+estimate,none")
+    args = ap.parse_args()
+    modes = args.modes.split(",")
+    workers = [Worker(f"wheelsets-{j}") for j in range(max(args.threads, 1))]
+    ways = {"sequential": workers[:1], "threaded": workers}
+    try:
+        for mode in modes:  # numba kernels, each worker thread's FFTW plans
+            for j in range(len(workers)):
+                run(workers[j:j + 1], mode, 5)
+        print(f"{os.cpu_count()} cores; four wheelsets (at {', '.join(f'{x:g}' for x in POSITIONS)}"
+              f" m), {args.threads} worker threads in the threaded way")
+        for mode in modes:
+            steps = args.steps if mode != "none" else args.cold_steps
+            times = {w: [] for w in ways}
+            medians = {w: [] for w in ways}
+            cpu = {w: [] for w in ways}
+            workloads = []
+            reference = None
+            for r in range(args.repeats):
+                workloads.append(fixed_workload())
+                for way in (ways if r % 2 == 0 else list(ways)[::-1]):
+                    t, c, results = run(ways[way], mode, steps)
+                    if reference is None:
+                        reference = results
+                    elif results != reference:
+                        raise SystemExit(f"{mode}, repeat {r}: the {way} results differ "
+                                         "from the first run's")
+                    times[way] += t[1:]
+                    medians[way].append(float(np.median(t[1:])))
+                    cpu[way].append(c)
+            ref = float(np.median(workloads))
+            print(f"\n{mode}: {args.repeats} repeats of {steps} vehicle steps of 1 ms, "
+                  f"workload median {ref * 1e3:.1f} ms (min {min(workloads) * 1e3:.1f})")
+            print(f"{'way':<11} {'median [ms]':>11} {'/ workload':>10} {'mean [ms]':>9} "
+                  f"{'/ workload':>10} {'p99 [ms]':>8} {'/ workload':>10} {'RTF 1 kHz':>9} "
+                  f"{'CPU/wall':>8}")
+            for way in ways:
+                x = np.array(times[way])
+                med, mean, p99 = float(np.median(x)), float(x.mean()), \
+                    float(np.percentile(x, 99))
+                print(f"{way:<11} {med * 1e3:11.2f} {med / ref:10.4f} {mean * 1e3:9.2f} "
+                      f"{mean / ref:10.4f} {p99 * 1e3:8.2f} {p99 / ref:10.4f} "
+                      f"{med / 1e-3:9.2f} {float(np.median(cpu[way])):8.2f}")
+            ratios = np.array(medians["threaded"]) / np.array(medians["sequential"])
+            print(f"ratio threaded / sequential: "
+                  f"{np.median(times['threaded']) / np.median(times['sequential']):.3f} "
+                  f"(of the medians); per repeat {', '.join(f'{q:.3f}' for q in ratios)}")
+            print("threaded results equal the sequential ones bit for bit")
+    finally:
+        for worker in workers:
+            worker.stop()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
+    print(f"\nload average (1 min) at the end: {load:.1f}")
+
+
+if __name__ == "__main__":
+    main()
