@@ -349,9 +349,11 @@ def contact_points(track: Track, ws: Wheelset, pose: Pose, side: str,
 
 _memo = threading.local()
 """This thread's memory of the search: ``points``, the last call of :func:`contact_points`
-(its arguments and points), and ``traces``, the last trace of :func:`_trace_of_pose` of
-each side (track, wheelset, pose, trace). Per thread, so that wheelsets stepping on
-several threads neither share nor evict each other's memory."""
+(its arguments and points), ``traces``, the last trace of :func:`_trace_of_pose` of
+each side (track, wheelset, pose, trace), and ``merges``, the last
+:func:`merge_approaches` of each side (the trace, ``min_lobe``, the approaches). Per
+thread, so that wheelsets stepping on several threads neither share nor evict each
+other's memory."""
 
 
 def forget(traces: bool = True) -> None:
@@ -360,6 +362,7 @@ def forget(traces: bool = True) -> None:
     _memo.points = None
     if traces:
         _memo.traces = {}
+        _memo.merges = {}
 
 
 def count_contacts(track: Track, ws: Wheelset, pose: Pose, side: str,
@@ -393,11 +396,22 @@ def merge_approaches(track: Track, ws: Wheelset, pose: Pose, side: str,
     contact regions (runs of :func:`contact_points`) join into one patch, increasing: the
     saddles of the trace's gap (:func:`~.kernels.saddles`) whose shallower lobe is at least
     ``min_lobe`` times the saddle's approach deep (a lobe shallower than that is a ripple
-    of the profiles: its run carries little of the load)."""
-    trace, g_min, _, _, _ = _trace_of_pose(track, ws, pose, side)
+    of the profiles: its run carries little of the load). Remembered, read-only, for the
+last trace of each side (:data:`_memo`)."""
+    traced = _trace_of_pose(track, ws, pose, side)
+    merges = getattr(_memo, "merges", None)
+    if merges is None:
+        merges = _memo.merges = {}
+    last = merges.get(side)  # (a step asks once in the wheel's solve and once after it)
+    if last is not None and last[0] is traced and last[1] == min_lobe:
+        return last[2]
+    trace, g_min, _, _, _ = traced
     s = kernels.saddles(trace[4], g_min)
     keep = s[:, 1] >= min_lobe * s[:, 0]
-    return np.sort(s[keep, 0])
+    out = np.sort(s[keep, 0])
+    out.flags.writeable = False
+    merges[side] = (traced, min_lobe, out)
+    return out
 
 
 def least_gap(track: Track, ws: Wheelset, pose: Pose, side: str) -> float:
