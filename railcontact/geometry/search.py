@@ -397,7 +397,7 @@ def merge_approaches(track: Track, ws: Wheelset, pose: Pose, side: str,
     saddles of the trace's gap (:func:`~.kernels.saddles`) whose shallower lobe is at least
     ``min_lobe`` times the saddle's approach deep (a lobe shallower than that is a ripple
     of the profiles: its run carries little of the load). Remembered, read-only, for the
-last trace of each side (:data:`_memo`)."""
+    last trace of each side (:data:`_memo`)."""
     traced = _trace_of_pose(track, ws, pose, side)
     merges = getattr(_memo, "merges", None)
     if merges is None:
