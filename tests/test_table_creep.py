@@ -184,6 +184,16 @@ def test_out_of_range_policies_and_bad_states(table):
         tab.normalised({"ellipse_ratio": 7.0})
     with pytest.raises(RailContactError, match="spin = 0.6 is outside"):
         tab.normalised({"ellipse_ratio": 1.0, "spin": 0.6})
+    for bad in (math.nan, math.inf, -math.inf):  # rejected even on an axis to clamp
+        with pytest.raises(RailContactError, match=r"creepage_x must be finite, got "
+                                                   rf"{bad!r}"):
+            tab.normalised({"ellipse_ratio": 1.0, "creepage_x": bad})
+    with pytest.raises(RailContactError, match="ellipse_ratio must be finite, got nan"):
+        tab.normalised({"ellipse_ratio": math.nan})
+    for bad in (0.0, -1.0):
+        with pytest.raises(RailContactError, match=r"ellipse_ratio \(a/b\) must be > 0, "
+                                                   rf"got {bad!r}"):
+            tab.normalised({"ellipse_ratio": bad})
     with pytest.raises(RailContactError, match="no creepage_y axis"):
         tab.normalised({"ellipse_ratio": 1.0, "creepage_y": 0.1})
     with pytest.raises(RailContactError, match="Poisson's ratio 0.25; the state has 0.28"):

@@ -99,9 +99,17 @@ class CreepTable:
         Raises
         ------
         RailContactError
-            For a value outside an axis of policy ``status``, a creepage the table has no
-            axis for, or a node not ok around the state.
+            For a value not finite or an ellipse ratio not > 0 (whatever the policy), a
+            value outside an axis of policy ``status``, a creepage the table has no axis
+            for, or a node not ok around the state.
         """
+        for n, v in state.items():
+            if not np.isfinite(v):
+                raise RailContactError(f"creep table {self.path}: {n} must be finite, "
+                                       f"got {v!r}")
+        if RATIO in state and not state[RATIO] > 0.0:
+            raise RailContactError(f"creep table {self.path}: {RATIO} (a/b) must be > 0, "
+                                   f"got {state[RATIO]!r}")
         for n, v in state.items():
             if n not in self.axes and v != 0.0:
                 raise RailContactError(f"creep table {self.path}: no {n} axis (its value "
