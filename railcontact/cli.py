@@ -321,8 +321,9 @@ def _build_creep(spec, args: argparse.Namespace) -> int:
         if client is not None:
             close_client(client)
     print(f"creep table {args.output}: {rep.points} points in {rep.seconds:.3g} s "
-          f"({rep.rate:.3g} points/s); {rep.not_converged} not converged (see 'railcontact "
-          "table show')")
+          f"({rep.rate:.3g} points/s); {rep.not_converged} not converged"
+          + (f", the creep coefficients of {rep.coefficients_failed} ellipse ratio(s) NaN"
+             if rep.coefficients_failed else "") + " (see 'railcontact table show')")
     for m in rep.messages[:10]:
         print(f"railcontact: warning: {m}", file=sys.stderr)
     return 0

@@ -295,3 +295,46 @@ def test_kinds_in_a_contact_spec(tmp_path, capsys):
     assert "creep table" in capsys.readouterr().out
     assert math.isclose(CreepTable(tmp_path / "c.zarr").normalised(
         {"ellipse_ratio": 1.0, "creepage_x": 2.0})[0][0], -1.0, abs_tol=1e-3)
+
+
+def test_a_failed_linear_limit_keeps_the_table(tmp_path, monkeypatch, capsys):
+    """A linear-limit solve that does not converge (forced at a/b = 2) leaves that ratio's
+    exact creep coefficients NaN with status 1, warns, and keeps every node; the nodes
+    still read (full slip), and Kalker's coefficients stay."""
+    from railcontact.table import creep
+    from railcontact.table.interpolate import TableHolesWarning
+
+    real = creep.linear_coefficients
+
+    def failing(spec, ratio):
+        if ratio == 2.0:
+            raise RailContactError(f"creep table, a/b = {ratio:g}: the linear-limit solve "
+                                   "did not converge: forced")
+        return real(spec, ratio)
+
+    monkeypatch.setattr(creep, "linear_coefficients", failing)
+    spec = parse_creep_spec(_raw({"ellipse_ratio": {"values": [0.5, 2.0]},
+                                  "creepage_x": {"values": [0.0, 4.0]},
+                                  "spin": {"values": [0.0]}}, n=16))
+    out = tmp_path / "creep.zarr"
+    with pytest.warns(TableHolesWarning, match="coefficients of 1 ellipse ratio"):
+        rep = build_creep_table(spec, out, progress=False)
+    assert rep.not_converged == 0 and rep.coefficients_failed == 1
+    assert any("forced: its creep coefficients are NaN" in m for m in rep.messages)
+    import xarray as xr
+
+    ds = xr.open_zarr(str(out), consolidated=False)
+    assert list(ds["coefficient_status"].values) == [0, 1]
+    assert np.isfinite(ds["c11"].values[0]) and np.isnan(ds["c11"].values[1])
+    k = creep_coefficients(2.0, 1.0, NU)
+    assert ds["kalker_c11"].values[1] == pytest.approx(k.c11, rel=1e-12)
+    assert (ds["status"].values == 0).all()
+    # full slip at nu_x = 4 (> 3): |F_x| = mu N at the ratio without coefficients too
+    f, _ = CreepTable(out).normalised({"ellipse_ratio": 2.0, "creepage_x": 4.0})
+    assert f[0] == pytest.approx(-1.0, abs=1e-3)
+    assert main(["table", "show", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "WARNING: the creep coefficients of 1 ellipse ratio(s) are NaN" in text
+    row = next(line for line in text.splitlines() if line.split()[:1] == ["2"])
+    assert row.count("nan") == 5 and row.endswith("not converged")
+    assert "a/b = 2: the linear-limit solve did not converge: forced" in text

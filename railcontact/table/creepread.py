@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .creep import COEFFICIENTS, KIND_ATTR, OUTPUTS
+from .creep import COEFFICIENT_STATUS, COEFFICIENTS, KIND_ATTR, OUTPUTS
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, scales
 from .spec import DEFAULT_POLICY
 from .store import IDENTITY, POLICY_ATTR, open_dataset
@@ -221,6 +221,12 @@ def creep_summary(path: str | Path) -> str:
         v = ds[n].values
         lines.append(f"  {n:14s} [{CREEP_AXES[n][0]}] {len(v):4d} from {v[0]:.6g} to "
                      f"{v[-1]:.6g}; out of range: {pol.get(n, DEFAULT_POLICY)}")
+    cstatus = (ds[COEFFICIENT_STATUS].values if COEFFICIENT_STATUS in ds
+               else np.zeros(ds.sizes[RATIO], dtype=np.int8))
+    cbad = int(np.count_nonzero(cstatus))
+    if cbad:
+        lines.append(f"WARNING: the creep coefficients of {cbad} ellipse ratio(s) are NaN: "
+                     "a linear-limit solve did not converge (the nodes are kept)")
     lines.append("creep coefficients (exact linear limit; Kalker's Table E.3 in brackets):")
     lines.append(f"  {'a/b':>8s} {'C11':>16s} {'C22':>16s} {'C23':>16s} {'C32':>8s} "
                  f"{'C33':>16s}")
@@ -228,7 +234,10 @@ def creep_summary(path: str | Path) -> str:
         c = {n: float(ds[n].values[k]) for n in COEFFICIENTS}
         lines.append(f"  {r:8.4g} " + " ".join(
             f"{c[n]:7.4f} ({c['kalker_' + n]:6.4f})" for n in ("c11", "c22", "c23"))
-            + f" {c['c32']:8.4f} {c['c33']:7.4f} ({c['kalker_c33']:6.4f})")
+            + f" {c['c32']:8.4f} {c['c33']:7.4f} ({c['kalker_c33']:6.4f})"
+            + ("  not converged" if cstatus[k] else ""))
+    for m in json.loads(ds.attrs.get("coefficient_messages", "[]")):
+        lines.append(f"  {m}")
     ok = status == 0
     lines.append("values (ok nodes):")
     for n in OUTPUTS:
