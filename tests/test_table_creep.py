@@ -20,7 +20,7 @@ from railcontact.contact.dispatch import solve  # noqa: E402
 from railcontact.errors import CaseError, RailContactError  # noqa: E402
 from railcontact.halfspace.hertz import hertz  # noqa: E402
 from railcontact.halfspace.materials import ElasticPair, Material  # noqa: E402
-from railcontact.table import ContactTable, CreepTable, parse_spec  # noqa: E402
+from railcontact.table import ContactTable, CreepTable, GeometryTable, parse_spec  # noqa: E402
 from railcontact.table.creep import build_creep_table, linear_coefficients  # noqa: E402
 from railcontact.table.creepspec import curvatures, parse_creep_spec, scales  # noqa: E402
 from railcontact.tangential.kalker import creep_coefficients  # noqa: E402
@@ -202,18 +202,24 @@ def test_out_of_range_policies_and_bad_states(table):
         tab.forces(0.006, 0.006, 1e5, 0.0, 8e10, 0.0, 0.0, 0.0)
     with pytest.raises(RailContactError, match="not a contact table"):
         ContactTable.open(out)
-    with pytest.raises(RailContactError, match="not a creep table"):
-        CreepTable(_contact_store(out.parent))
+    with pytest.raises(RailContactError, match=r"is a contact table, not a creep table: "
+                                               r"read it with railcontact.table.ContactTable"):
+        CreepTable(_store(out.parent, "{}"))
+    with pytest.raises(RailContactError, match=r"is a geometry table, not a creep table: "
+                                               r"read it with railcontact.table.GeometryTable"):
+        CreepTable(_store(out.parent, '{"kind": "geometry"}'))
+    with pytest.raises(RailContactError, match=r"is a creep table.*railcontact.table.CreepTable"):
+        GeometryTable.open(out)
 
 
-def _contact_store(folder):
-    """A store that is a contact table by its attributes (no kind), without values."""
+def _store(folder, identity):
+    """A store whose identity (JSON) is ``identity``, without values."""
     import zarr
 
     from railcontact.table.store import IDENTITY
 
-    out = folder / "contact.zarr"
-    zarr.open_group(str(out), mode="w", zarr_format=2).attrs[IDENTITY] = "{}"
+    out = folder / f"store{abs(hash(identity))}.zarr"
+    zarr.open_group(str(out), mode="w", zarr_format=2).attrs[IDENTITY] = identity
     return out
 
 

@@ -64,7 +64,6 @@ COEFFICIENTS: dict[str, str] = {
     "kalker_c33": "Kalker's C33 (the literature's column beside Table E.3; for comparison)",
 }
 """The values per ellipse ratio: name -> long name (all dimensionless)."""
-STATUS_TEXT = {0: "ok", 1: "not converged"}
 COEFFICIENT_STATUS = "coefficient_status"
 """The status of an ellipse ratio's exact creep coefficients (int8: 0 ok, 1 a linear-limit
 solve not converged: the exact coefficients NaN)."""

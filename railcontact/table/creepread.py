@@ -21,7 +21,7 @@ from ..errors import RailContactError
 from .creep import COEFFICIENT_STATUS, COEFFICIENTS, KIND_ATTR, OUTPUTS
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, scales
 from .spec import DEFAULT_POLICY
-from .store import IDENTITY, POLICY_ATTR, open_dataset
+from .store import IDENTITY, POLICY_ATTR, kind_of, open_dataset, reader_of
 
 POISSON_TOLERANCE = 1e-6
 """Largest difference between a state's Poisson's ratio and the table's [-]."""
@@ -78,8 +78,9 @@ class CreepTable:
     def __init__(self, path: str | Path):
         ds = open_dataset(path)
         if not is_creep_table(ds):
-            raise RailContactError(f"{path} is a contact table, not a creep table: read it "
-                                   "with railcontact.table.ContactTable")
+            kind = kind_of(ds.attrs)
+            raise RailContactError(f"{path} is a {kind} table, not a creep table: read it "
+                                   f"with {reader_of(kind)}")
         self.path = Path(path)
         self.names = list(json.loads(ds.attrs[IDENTITY])["axes"])
         self.axes = {n: np.asarray(ds[n].values, dtype=float) for n in self.names}

@@ -50,7 +50,8 @@ from .. import __version__
 from ..contact.wheelrail import build_geometry
 from ..errors import RailContactError
 from ..settings import Case
-from .spec import DEFAULT_KIND, TableSpec, axis_info, comparable
+from .geometry import KIND as GEOMETRY_KIND
+from .spec import CREEP_KIND, DEFAULT_KIND, TableSpec, axis_info, comparable
 from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS, failed_counts
 
 IDENTITY = "railcontact_table"
@@ -142,6 +143,17 @@ def data_arrays(spec: TableSpec) -> list[tuple[str, str, Any, dict[str, Any], tu
              for q in QUANTITIES]
             + [(q.name, "i4", 0, {"units": q.unit, "long_name": q.long_name}, side)
                for q in COUNTS])
+
+
+READERS = {DEFAULT_KIND: "ContactTable", GEOMETRY_KIND: "GeometryTable",
+           CREEP_KIND: "CreepTable"}
+"""The class of :mod:`railcontact.table` that reads each kind of table."""
+
+
+def reader_of(kind: str) -> str:
+    """The class that reads a table of kind ``kind`` (``railcontact.table.ContactTable``
+    ...)."""
+    return f"railcontact.table.{READERS.get(kind, READERS[DEFAULT_KIND])}"
 
 
 def kind_of(attrs: dict[str, Any]) -> str:
