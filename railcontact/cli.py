@@ -271,9 +271,10 @@ def _add_demo(sub) -> None:
 def _cmd_table_build(args: argparse.Namespace) -> int:
     from .table.build import build_table
     from .table.kinds import load_any_spec
+    from .table.spec import CREEP_KIND, DEFAULT_KIND
 
     spec = load_any_spec(args.spec)
-    if getattr(spec, "kind", "contact") == "creep":
+    if getattr(spec, "kind", DEFAULT_KIND) == CREEP_KIND:
         return _build_creep(spec, args)
     try:
         rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,

@@ -210,6 +210,9 @@ def test_out_of_range_policies_and_bad_states(table):
         CreepTable(_store(out.parent, '{"kind": "geometry"}'))
     with pytest.raises(RailContactError, match=r"is a creep table.*railcontact.table.CreepTable"):
         GeometryTable.open(out)
+    # the kind is the identity's (store.kind_of), not a root attribute
+    with pytest.raises(RailContactError, match="is a creep table, not a contact table"):
+        ContactTable.open(_store(out.parent, '{"kind": "creep"}'))
 
 
 def _store(folder, identity):

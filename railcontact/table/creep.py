@@ -42,7 +42,9 @@ from .interpolate import TableHolesWarning
 from .store import IDENTITY, POLICY_ATTR
 
 KIND_ATTR = "kind"
-"""The root attribute naming a table's kind (absent: a contact table)."""
+"""A root attribute repeating the kind for readers of the store or its netCDF export
+outside railcontact; railcontact reads a table's kind from its identity
+(:func:`~.store.kind_of`)."""
 LINEAR_CREEPAGE = 1e-4
 """The normalised creepage [-] of the linear-limit solves giving the creep coefficients."""
 OUTPUTS: dict[str, tuple[str, str]] = {

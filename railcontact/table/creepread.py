@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .creep import COEFFICIENT_STATUS, COEFFICIENTS, KIND_ATTR, OUTPUTS
+from .creep import COEFFICIENT_STATUS, COEFFICIENTS, OUTPUTS
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, scales
 from .spec import DEFAULT_POLICY
 from .store import IDENTITY, POLICY_ATTR, kind_of, open_dataset, reader_of
@@ -32,7 +32,7 @@ EDGE = 1e-12
 
 def is_creep_table(ds) -> bool:
     """Whether an opened table (xarray Dataset) is a creep table."""
-    return ds.attrs.get(KIND_ATTR) == KIND
+    return kind_of(ds.attrs) == KIND
 
 
 @dataclass(frozen=True)

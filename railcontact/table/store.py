@@ -426,9 +426,9 @@ def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict
         raise RailContactError(f"{p} is not a readable table store: {exc}") from None
     if IDENTITY not in attrs:
         raise RailContactError(f"{p} is not a railcontact table store")
-    if attrs.get("kind", "contact") != "contact":
-        raise RailContactError(f"{p} is a {attrs['kind']} table, not a contact table (a "
-                               "creep table is read by railcontact.table.CreepTable)")
+    if kind_of(attrs) == CREEP_KIND:
+        raise RailContactError(f"{p} is a {CREEP_KIND} table, not a contact table (a "
+                               f"{CREEP_KIND} table is read by {reader_of(CREEP_KIND)})")
     arrays = {n: group[n][...] for n in names if n in group}
     arrays["side"] = [str(x) for x in np.asarray(group["side"][...]).tolist()]
     return attrs, arrays
