@@ -28,9 +28,10 @@ sys.path.insert(0, str(ROOT))
 from railcontact.contact.dispatch import solve  # noqa: E402
 from railcontact.table.build import close_client, connect  # noqa: E402
 from railcontact.table.creep import build_creep_table  # noqa: E402
-from railcontact.table.creepread import CreepTable, creep_summary, plot_creep  # noqa: E402
+from railcontact.table.creepread import CreepTable, creep_summary  # noqa: E402
 from railcontact.table.creepspec import CREEPAGES, RATIO, case_scales  # noqa: E402
 from railcontact.table.kinds import load_any_spec  # noqa: E402
+from railcontact.table.show import plot_table  # noqa: E402
 from railcontact.table.store import open_dataset  # noqa: E402
 
 
@@ -69,7 +70,7 @@ def main() -> int:
           f"a/b: {np.round(full.isel(sel).values, 5).tolist()}")
     if args.check:
         check(spec, table, args.check, args.seed)
-    print(f"figure written to {plot_creep(table, args.figure)}")
+    print(f"figure written to {plot_table(table, args.figure)}")
     return 0
 
 

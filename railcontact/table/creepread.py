@@ -253,22 +253,10 @@ def creep_summary(path: str | Path) -> str:
     return "\n".join(lines)
 
 
-def export_creep(path: str | Path, out: Path, fmt: str) -> Path:
-    """Write the creep table at ``path`` to ``out`` as ``netcdf`` (the Dataset) or ``csv``
-    (a row per node: the axes, the values, status, then the creep coefficients of its
-    ellipse ratio)."""
-    ds = open_dataset(path)
+def export_creep_csv(ds, out: Path) -> Path:
+    """Write the creep table ``ds`` (xarray Dataset) to ``out`` as CSV: a row per node, the
+    axes, the values, status, then the creep coefficients of its ellipse ratio."""
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
-    if fmt == "netcdf":
-        keep = ds.load()
-        for v in keep.variables.values():
-            v.encoding = {}
-            v.attrs.pop("_FillValue", None)
-        try:
-            keep.to_netcdf(out)
-        except (OSError, ValueError) as exc:
-            raise RailContactError(f"cannot write {out}: {exc}") from None
-        return out
     values = {n: ds[n].transpose(*names).values for n in [*OUTPUTS, "status"]}
     coefs = {n: ds[n].values for n in COEFFICIENTS}
     with out.open("w", newline="") as f:
@@ -283,20 +271,14 @@ def export_creep(path: str | Path, out: Path, fmt: str) -> Path:
     return out
 
 
-def plot_creep(path: str | Path, out: str | Path, ratios: int = 5) -> Path:
-    """Write the creep curves of a creep table to ``out``: F_x/(mu N) against nu_x,
-    F_y/(mu N) against nu_y and against psi (a panel per creepage axis, the other creepages
-    at their nodes nearest 0), one line per ellipse ratio (at most ``ratios``, spread over
-    the axis), with the linear theory's ``-3 nu`` dashed."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+def creep_figure(ds, ratios: int = 5):
+    """The creep curves of the creep table ``ds`` (xarray Dataset; a matplotlib figure, the
+    Agg backend chosen by the caller): F_x/(mu N) against nu_x, F_y/(mu N) against nu_y and
+    against psi (a panel per creepage axis, the other creepages at their nodes nearest 0),
+    one line per ellipse ratio (at most ``ratios``, spread over the axis), with the linear
+    theory's ``-3 nu`` dashed."""
     import matplotlib.pyplot as plt
 
-    ds = open_dataset(path)
-    out = Path(out)
-    if not out.parent.is_dir():
-        raise RailContactError(f"--plot: folder {out.parent} does not exist")
     panels = [(n, q) for n, q in (("creepage_x", "force_x"), ("creepage_y", "force_y"),
                                   ("spin", "force_y")) if n in ds.dims and ds.sizes[n] > 1]
     if not panels:
@@ -323,10 +305,4 @@ def plot_creep(path: str | Path, out: str | Path, ratios: int = 5) -> Path:
     axs[0, 0].legend(fontsize=7, loc="lower left")
     fig.suptitle(f"creep curves, Poisson's ratio {float(ds.attrs['poisson']):g}", fontsize=9)
     fig.tight_layout()
-    try:
-        fig.savefig(out, dpi=90)
-    except (ValueError, OSError) as exc:
-        raise RailContactError(f"--plot: cannot write {out}: {exc}") from None
-    finally:
-        plt.close(fig)
-    return out
+    return fig
