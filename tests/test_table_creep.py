@@ -190,6 +190,8 @@ def test_out_of_range_policies_and_bad_states(table):
             tab.normalised({"ellipse_ratio": 1.0, "creepage_x": bad})
     with pytest.raises(RailContactError, match="ellipse_ratio must be finite, got nan"):
         tab.normalised({"ellipse_ratio": math.nan})
+    with pytest.raises(RailContactError, match=r"give ellipse_ratio \(a/b\)"):
+        tab.normalised({"creepage_x": 0.1})
     for bad in (0.0, -1.0):
         with pytest.raises(RailContactError, match=r"ellipse_ratio \(a/b\) must be > 0, "
                                                    rf"got {bad!r}"):

@@ -108,7 +108,9 @@ class CreepTable:
             if not np.isfinite(v):
                 raise RailContactError(f"creep table {self.path}: {n} must be finite, "
                                        f"got {v!r}")
-        if RATIO in state and not state[RATIO] > 0.0:
+        if RATIO not in state:
+            raise RailContactError(f"creep table {self.path}: give {RATIO} (a/b)")
+        if not state[RATIO] > 0.0:
             raise RailContactError(f"creep table {self.path}: {RATIO} (a/b) must be > 0, "
                                    f"got {state[RATIO]!r}")
         for n, v in state.items():
