@@ -271,9 +271,10 @@ def _add_demo(sub) -> None:
 def _cmd_table_build(args: argparse.Namespace) -> int:
     from .table.build import build_table
     from .table.kinds import load_any_spec
+    from .table.spec import CREEP_KIND, DEFAULT_KIND
 
     spec = load_any_spec(args.spec)
-    if getattr(spec, "kind", "contact") == "creep":
+    if getattr(spec, "kind", DEFAULT_KIND) == CREEP_KIND:
         return _build_creep(spec, args)
     try:
         rep = build_table(spec, args.output, scheduler=args.scheduler, workers=args.workers,
@@ -321,8 +322,9 @@ def _build_creep(spec, args: argparse.Namespace) -> int:
         if client is not None:
             close_client(client)
     print(f"creep table {args.output}: {rep.points} points in {rep.seconds:.3g} s "
-          f"({rep.rate:.3g} points/s); {rep.not_converged} not converged (see 'railcontact "
-          "table show')")
+          f"({rep.rate:.3g} points/s); {rep.not_converged} not converged"
+          + (f", the creep coefficients of {rep.coefficients_failed} ellipse ratio(s) NaN"
+             if rep.coefficients_failed else "") + " (see 'railcontact table show')")
     for m in rep.messages[:10]:
         print(f"railcontact: warning: {m}", file=sys.stderr)
     return 0

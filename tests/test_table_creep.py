@@ -20,7 +20,7 @@ from railcontact.contact.dispatch import solve  # noqa: E402
 from railcontact.errors import CaseError, RailContactError  # noqa: E402
 from railcontact.halfspace.hertz import hertz  # noqa: E402
 from railcontact.halfspace.materials import ElasticPair, Material  # noqa: E402
-from railcontact.table import ContactTable, CreepTable, parse_spec  # noqa: E402
+from railcontact.table import ContactTable, CreepTable, GeometryTable, parse_spec  # noqa: E402
 from railcontact.table.creep import build_creep_table, linear_coefficients  # noqa: E402
 from railcontact.table.creepspec import curvatures, parse_creep_spec, scales  # noqa: E402
 from railcontact.tangential.kalker import creep_coefficients  # noqa: E402
@@ -184,6 +184,18 @@ def test_out_of_range_policies_and_bad_states(table):
         tab.normalised({"ellipse_ratio": 7.0})
     with pytest.raises(RailContactError, match="spin = 0.6 is outside"):
         tab.normalised({"ellipse_ratio": 1.0, "spin": 0.6})
+    for bad in (math.nan, math.inf, -math.inf):  # rejected even on an axis to clamp
+        with pytest.raises(RailContactError, match=r"creepage_x must be finite, got "
+                                                   rf"{bad!r}"):
+            tab.normalised({"ellipse_ratio": 1.0, "creepage_x": bad})
+    with pytest.raises(RailContactError, match="ellipse_ratio must be finite, got nan"):
+        tab.normalised({"ellipse_ratio": math.nan})
+    with pytest.raises(RailContactError, match=r"give ellipse_ratio \(a/b\)"):
+        tab.normalised({"creepage_x": 0.1})
+    for bad in (0.0, -1.0):
+        with pytest.raises(RailContactError, match=r"ellipse_ratio \(a/b\) must be > 0, "
+                                                   rf"got {bad!r}"):
+            tab.normalised({"ellipse_ratio": bad})
     with pytest.raises(RailContactError, match="no creepage_y axis"):
         tab.normalised({"ellipse_ratio": 1.0, "creepage_y": 0.1})
     with pytest.raises(RailContactError, match="Poisson's ratio 0.25; the state has 0.28"):
@@ -192,18 +204,27 @@ def test_out_of_range_policies_and_bad_states(table):
         tab.forces(0.006, 0.006, 1e5, 0.0, 8e10, 0.0, 0.0, 0.0)
     with pytest.raises(RailContactError, match="not a contact table"):
         ContactTable.open(out)
-    with pytest.raises(RailContactError, match="not a creep table"):
-        CreepTable(_contact_store(out.parent))
+    with pytest.raises(RailContactError, match=r"is a contact table, not a creep table: "
+                                               r"read it with railcontact.table.ContactTable"):
+        CreepTable(_store(out.parent, "{}"))
+    with pytest.raises(RailContactError, match=r"is a geometry table, not a creep table: "
+                                               r"read it with railcontact.table.GeometryTable"):
+        CreepTable(_store(out.parent, '{"kind": "geometry"}'))
+    with pytest.raises(RailContactError, match=r"is a creep table.*railcontact.table.CreepTable"):
+        GeometryTable.open(out)
+    # the kind is the identity's (store.kind_of), not a root attribute
+    with pytest.raises(RailContactError, match="is a creep table, not a contact table"):
+        ContactTable.open(_store(out.parent, '{"kind": "creep"}'))
 
 
-def _contact_store(folder):
-    """A store that is a contact table by its attributes (no kind), without values."""
+def _store(folder, identity):
+    """A store whose identity (JSON) is ``identity``, without values."""
     import zarr
 
     from railcontact.table.store import IDENTITY
 
-    out = folder / "contact.zarr"
-    zarr.open_group(str(out), mode="w", zarr_format=2).attrs[IDENTITY] = "{}"
+    out = folder / f"store{abs(hash(identity))}.zarr"
+    zarr.open_group(str(out), mode="w", zarr_format=2).attrs[IDENTITY] = identity
     return out
 
 
@@ -285,3 +306,46 @@ def test_kinds_in_a_contact_spec(tmp_path, capsys):
     assert "creep table" in capsys.readouterr().out
     assert math.isclose(CreepTable(tmp_path / "c.zarr").normalised(
         {"ellipse_ratio": 1.0, "creepage_x": 2.0})[0][0], -1.0, abs_tol=1e-3)
+
+
+def test_a_failed_linear_limit_keeps_the_table(tmp_path, monkeypatch, capsys):
+    """A linear-limit solve that does not converge (forced at a/b = 2) leaves that ratio's
+    exact creep coefficients NaN with status 1, warns, and keeps every node; the nodes
+    still read (full slip), and Kalker's coefficients stay."""
+    from railcontact.table import creep
+    from railcontact.table.interpolate import TableHolesWarning
+
+    real = creep.linear_coefficients
+
+    def failing(spec, ratio):
+        if ratio == 2.0:
+            raise RailContactError(f"creep table, a/b = {ratio:g}: the linear-limit solve "
+                                   "did not converge: forced")
+        return real(spec, ratio)
+
+    monkeypatch.setattr(creep, "linear_coefficients", failing)
+    spec = parse_creep_spec(_raw({"ellipse_ratio": {"values": [0.5, 2.0]},
+                                  "creepage_x": {"values": [0.0, 4.0]},
+                                  "spin": {"values": [0.0]}}, n=16))
+    out = tmp_path / "creep.zarr"
+    with pytest.warns(TableHolesWarning, match="coefficients of 1 ellipse ratio"):
+        rep = build_creep_table(spec, out, progress=False)
+    assert rep.not_converged == 0 and rep.coefficients_failed == 1
+    assert any("forced: its creep coefficients are NaN" in m for m in rep.messages)
+    import xarray as xr
+
+    ds = xr.open_zarr(str(out), consolidated=False)
+    assert list(ds["coefficient_status"].values) == [0, 1]
+    assert np.isfinite(ds["c11"].values[0]) and np.isnan(ds["c11"].values[1])
+    k = creep_coefficients(2.0, 1.0, NU)
+    assert ds["kalker_c11"].values[1] == pytest.approx(k.c11, rel=1e-12)
+    assert (ds["status"].values == 0).all()
+    # full slip at nu_x = 4 (> 3): |F_x| = mu N at the ratio without coefficients too
+    f, _ = CreepTable(out).normalised({"ellipse_ratio": 2.0, "creepage_x": 4.0})
+    assert f[0] == pytest.approx(-1.0, abs=1e-3)
+    assert main(["table", "show", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "WARNING: the creep coefficients of 1 ellipse ratio(s) are NaN" in text
+    row = next(line for line in text.splitlines() if line.split()[:1] == ["2"])
+    assert row.count("nan") == 5 and row.endswith("not converged")
+    assert "a/b = 2: the linear-limit solve did not converge: forced" in text

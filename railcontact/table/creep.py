@@ -14,7 +14,8 @@ The store is an xarray Dataset in a Zarr store (format 2)::
     data    force_x = F_x/(mu N), force_y = F_y/(mu N), moment_z = M_z/(mu N c) [-],
             slip_area (the slipping fraction of the contact area [-]), status (int8: 0 ok,
             1 not converged: the values NaN); over ellipse_ratio alone the creep
-            coefficients c11, c22, c23, c32, c33 of the exact solver and kalker_c11,
+            coefficients c11, c22, c23, c32, c33 of the exact solver (NaN where its
+            coefficient_status is 1: a linear-limit solve did not converge), kalker_c11,
             kalker_c22, kalker_c23 (Table E.3, the normalisation's), kalker_c33
     attrs   railcontact_table (the identity, JSON), kind = "creep", poisson,
             out_of_range (JSON), railcontact_version, case_name, complete, seconds
@@ -37,10 +38,13 @@ from ..contact.dispatch import solve
 from ..errors import RailContactError
 from ..tangential.kalker import creep_coefficients
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, CreepSpec, case_scales
+from .interpolate import TableHolesWarning
 from .store import IDENTITY, POLICY_ATTR
 
 KIND_ATTR = "kind"
-"""The root attribute naming a table's kind (absent: a contact table)."""
+"""A root attribute repeating the kind for readers of the store or its netCDF export
+outside railcontact; railcontact reads a table's kind from its identity
+(:func:`~.store.kind_of`)."""
 LINEAR_CREEPAGE = 1e-4
 """The normalised creepage [-] of the linear-limit solves giving the creep coefficients."""
 OUTPUTS: dict[str, tuple[str, str]] = {
@@ -62,7 +66,11 @@ COEFFICIENTS: dict[str, str] = {
     "kalker_c33": "Kalker's C33 (the literature's column beside Table E.3; for comparison)",
 }
 """The values per ellipse ratio: name -> long name (all dimensionless)."""
-STATUS_TEXT = {0: "ok", 1: "not converged"}
+COEFFICIENT_STATUS = "coefficient_status"
+"""The status of an ellipse ratio's exact creep coefficients (int8: 0 ok, 1 a linear-limit
+solve not converged: the exact coefficients NaN)."""
+EXACT = ("c11", "c22", "c23", "c32", "c33")
+"""The creep coefficients of the exact solver among :data:`COEFFICIENTS`."""
 
 
 @dataclass
@@ -71,6 +79,7 @@ class CreepReport:
 
     points: int
     not_converged: int = 0
+    coefficients_failed: int = 0
     seconds: float = 0.0
     messages: list[str] = field(default_factory=list)
 
@@ -119,7 +128,14 @@ def linear_coefficients(spec: CreepSpec, ratio: float) -> dict[str, float]:
         else:
             out["c23"] = -fy / (g * c**3 * phi)
             out["c33"] = -mz / (g * c**4 * phi)
-    out.update(zip(("kalker_c11", "kalker_c22", "kalker_c23"), sc.coefficients,
+    return {**out, **kalker_coefficients(spec, ratio)}
+
+
+def kalker_coefficients(spec: CreepSpec, ratio: float) -> dict[str, float]:
+    """Kalker's C11, C22, C23 (Table E.3, the normalisation's) and C33 at the ellipse ratio
+    ``ratio`` (a/b) and the spec's Poisson's ratio (the ``kalker_`` :data:`COEFFICIENTS`)."""
+    sc = case_scales(spec.case_at(ratio))
+    out = dict(zip(("kalker_c11", "kalker_c22", "kalker_c23"), sc.coefficients,
                    strict=True))
     out["kalker_c33"] = creep_coefficients(sc.a, sc.b, spec.poisson).c33
     return out
@@ -128,7 +144,9 @@ def linear_coefficients(spec: CreepSpec, ratio: float) -> dict[str, float]:
 def solve_ratio(spec: CreepSpec, ratio: float) -> dict[str, Any]:
     """Every node of the creepage axes at the ellipse ratio ``ratio``, and its creep
     coefficients: the arrays of :data:`OUTPUTS` and ``status`` over the creepage axes,
-    the :data:`COEFFICIENTS`, ``messages`` (node index, text) and ``seconds``."""
+    the :data:`COEFFICIENTS` (the exact ones NaN when a linear-limit solve does not
+    converge) and their :data:`COEFFICIENT_STATUS` with its ``coefficient_message``,
+    ``messages`` (node index, text) and ``seconds``."""
     t0 = time.perf_counter()
     names = [n for n in spec.names if n != RATIO]
     shape = tuple(len(spec.axes[n]) for n in names)
@@ -149,7 +167,13 @@ def solve_ratio(spec: CreepSpec, ratio: float) -> dict[str, Any]:
         out["force_y"][index] = t.force[1] / sc.mu_n
         out["moment_z"][index] = t.spin_moment / (sc.mu_n * sc.c)
         out["slip_area"][index] = t.slip_area_ratio
-    out["coefficients"] = linear_coefficients(spec, ratio)
+    try:
+        out["coefficients"] = linear_coefficients(spec, ratio)
+        out[COEFFICIENT_STATUS], out["coefficient_message"] = 0, ""
+    except RailContactError as exc:
+        out["coefficients"] = {**dict.fromkeys(EXACT, np.nan),
+                               **kalker_coefficients(spec, ratio)}
+        out[COEFFICIENT_STATUS], out["coefficient_message"] = 1, str(exc)
     out["seconds"] = time.perf_counter() - t0
     return out
 
@@ -175,8 +199,13 @@ def build_creep_table(spec: CreepSpec, out: str | Path, *, client: Any = None,
     Raises
     ------
     RailContactError
-        When ``out`` exists or its folder does not, or a linear-limit solve does not
-        converge.
+        When ``out`` exists or its folder does not.
+
+    Warns
+    -----
+    TableHolesWarning
+        When a linear-limit solve does not converge: that ratio's exact creep coefficients
+        are NaN (its nodes are kept).
     """
     say = say or (lambda msg: print(msg, file=sys.stderr))
     out = Path(out)
@@ -213,7 +242,16 @@ def build_creep_table(spec: CreepSpec, out: str | Path, *, client: Any = None,
     for r, res in zip(ratios, results, strict=True):
         report.not_converged += int(np.count_nonzero(res["status"]))
         report.messages += [f"a/b = {r:g}, node {ix}: {m}" for ix, m in res["messages"]]
+        if res[COEFFICIENT_STATUS]:
+            report.coefficients_failed += 1
+            report.messages.append(f"{res['coefficient_message']}: its creep coefficients "
+                                   "are NaN")
     write_store(spec, out, results, report.seconds)
+    if report.coefficients_failed:
+        warnings.warn(f"creep table {out}: the creep coefficients of "
+                      f"{report.coefficients_failed} ellipse ratio(s) are NaN (a linear-limit "
+                      "solve did not converge; 'railcontact table show' lists them)",
+                      TableHolesWarning, stacklevel=2)
     return report
 
 
@@ -236,13 +274,20 @@ def write_store(spec: CreepSpec, out: Path, results: list[dict[str, Any]],
     for n, long_name in COEFFICIENTS.items():
         data[n] = ([RATIO], np.array([r["coefficients"][n] for r in results]),
                    {"units": "1", "long_name": long_name})
+    data[COEFFICIENT_STATUS] = (
+        [RATIO], np.array([r[COEFFICIENT_STATUS] for r in results], dtype=np.int8),
+        {"long_name": "status of the exact creep coefficients", "flag_values": [0, 1],
+         "flag_meanings": "ok linear_limit_not_converged"})
     messages = [f"{RATIO} = {float(spec.axes[RATIO][k]):g}, node {ix}: {m}"
                 for k, r in enumerate(results) for ix, m in r["messages"]]
+    coefficient_messages = [r["coefficient_message"] for r in results
+                            if r[COEFFICIENT_STATUS]]
     ds = xr.Dataset(data, coords=coords, attrs={
         IDENTITY: json.dumps(spec.identity()), KIND_ATTR: KIND,
         "poisson": spec.poisson, POLICY_ATTR: json.dumps(spec.policies()),
         "railcontact_version": __version__, "case_name": spec.case.get("name", "case"),
         "complete": 1, "seconds": seconds, "messages": json.dumps(messages),
+        "coefficient_messages": json.dumps(coefficient_messages),
         "normalisation": "nu_x = G c^2 C11 xi/(3 mu N), nu_y = G c^2 C22 eta/(3 mu N), "
                          "psi = G c^3 C23 phi/(3 mu N), c = sqrt(a b), C from Kalker's "
                          "Table E.3 at a/b and poisson; force_x = F_x/(mu N), force_y = "

@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .creep import COEFFICIENTS, KIND_ATTR, OUTPUTS
+from .creep import COEFFICIENT_STATUS, COEFFICIENTS, OUTPUTS
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, scales
 from .spec import DEFAULT_POLICY
-from .store import IDENTITY, POLICY_ATTR, open_dataset
+from .store import IDENTITY, POLICY_ATTR, kind_of, open_dataset, reader_of
 
 POISSON_TOLERANCE = 1e-6
 """Largest difference between a state's Poisson's ratio and the table's [-]."""
@@ -32,7 +32,7 @@ EDGE = 1e-12
 
 def is_creep_table(ds) -> bool:
     """Whether an opened table (xarray Dataset) is a creep table."""
-    return ds.attrs.get(KIND_ATTR) == KIND
+    return kind_of(ds.attrs) == KIND
 
 
 @dataclass(frozen=True)
@@ -78,8 +78,9 @@ class CreepTable:
     def __init__(self, path: str | Path):
         ds = open_dataset(path)
         if not is_creep_table(ds):
-            raise RailContactError(f"{path} is a contact table, not a creep table: read it "
-                                   "with railcontact.table.ContactTable")
+            kind = kind_of(ds.attrs)
+            raise RailContactError(f"{path} is a {kind} table, not a creep table: read it "
+                                   f"with {reader_of(kind)}")
         self.path = Path(path)
         self.names = list(json.loads(ds.attrs[IDENTITY])["axes"])
         self.axes = {n: np.asarray(ds[n].values, dtype=float) for n in self.names}
@@ -99,9 +100,19 @@ class CreepTable:
         Raises
         ------
         RailContactError
-            For a value outside an axis of policy ``status``, a creepage the table has no
-            axis for, or a node not ok around the state.
+            For a value not finite or an ellipse ratio not > 0 (whatever the policy), a
+            value outside an axis of policy ``status``, a creepage the table has no axis
+            for, or a node not ok around the state.
         """
+        for n, v in state.items():
+            if not np.isfinite(v):
+                raise RailContactError(f"creep table {self.path}: {n} must be finite, "
+                                       f"got {v!r}")
+        if RATIO not in state:
+            raise RailContactError(f"creep table {self.path}: give {RATIO} (a/b)")
+        if not state[RATIO] > 0.0:
+            raise RailContactError(f"creep table {self.path}: {RATIO} (a/b) must be > 0, "
+                                   f"got {state[RATIO]!r}")
         for n, v in state.items():
             if n not in self.axes and v != 0.0:
                 raise RailContactError(f"creep table {self.path}: no {n} axis (its value "
@@ -213,6 +224,12 @@ def creep_summary(path: str | Path) -> str:
         v = ds[n].values
         lines.append(f"  {n:14s} [{CREEP_AXES[n][0]}] {len(v):4d} from {v[0]:.6g} to "
                      f"{v[-1]:.6g}; out of range: {pol.get(n, DEFAULT_POLICY)}")
+    cstatus = (ds[COEFFICIENT_STATUS].values if COEFFICIENT_STATUS in ds
+               else np.zeros(ds.sizes[RATIO], dtype=np.int8))
+    cbad = int(np.count_nonzero(cstatus))
+    if cbad:
+        lines.append(f"WARNING: the creep coefficients of {cbad} ellipse ratio(s) are NaN: "
+                     "a linear-limit solve did not converge (the nodes are kept)")
     lines.append("creep coefficients (exact linear limit; Kalker's Table E.3 in brackets):")
     lines.append(f"  {'a/b':>8s} {'C11':>16s} {'C22':>16s} {'C23':>16s} {'C32':>8s} "
                  f"{'C33':>16s}")
@@ -220,7 +237,10 @@ def creep_summary(path: str | Path) -> str:
         c = {n: float(ds[n].values[k]) for n in COEFFICIENTS}
         lines.append(f"  {r:8.4g} " + " ".join(
             f"{c[n]:7.4f} ({c['kalker_' + n]:6.4f})" for n in ("c11", "c22", "c23"))
-            + f" {c['c32']:8.4f} {c['c33']:7.4f} ({c['kalker_c33']:6.4f})")
+            + f" {c['c32']:8.4f} {c['c33']:7.4f} ({c['kalker_c33']:6.4f})"
+            + ("  not converged" if cstatus[k] else ""))
+    for m in json.loads(ds.attrs.get("coefficient_messages", "[]")):
+        lines.append(f"  {m}")
     ok = status == 0
     lines.append("values (ok nodes):")
     for n in OUTPUTS:
@@ -235,22 +255,10 @@ def creep_summary(path: str | Path) -> str:
     return "\n".join(lines)
 
 
-def export_creep(path: str | Path, out: Path, fmt: str) -> Path:
-    """Write the creep table at ``path`` to ``out`` as ``netcdf`` (the Dataset) or ``csv``
-    (a row per node: the axes, the values, status, then the creep coefficients of its
-    ellipse ratio)."""
-    ds = open_dataset(path)
+def export_creep_csv(ds, out: Path) -> Path:
+    """Write the creep table ``ds`` (xarray Dataset) to ``out`` as CSV: a row per node, the
+    axes, the values, status, then the creep coefficients of its ellipse ratio."""
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
-    if fmt == "netcdf":
-        keep = ds.load()
-        for v in keep.variables.values():
-            v.encoding = {}
-            v.attrs.pop("_FillValue", None)
-        try:
-            keep.to_netcdf(out)
-        except (OSError, ValueError) as exc:
-            raise RailContactError(f"cannot write {out}: {exc}") from None
-        return out
     values = {n: ds[n].transpose(*names).values for n in [*OUTPUTS, "status"]}
     coefs = {n: ds[n].values for n in COEFFICIENTS}
     with out.open("w", newline="") as f:
@@ -265,20 +273,14 @@ def export_creep(path: str | Path, out: Path, fmt: str) -> Path:
     return out
 
 
-def plot_creep(path: str | Path, out: str | Path, ratios: int = 5) -> Path:
-    """Write the creep curves of a creep table to ``out``: F_x/(mu N) against nu_x,
-    F_y/(mu N) against nu_y and against psi (a panel per creepage axis, the other creepages
-    at their nodes nearest 0), one line per ellipse ratio (at most ``ratios``, spread over
-    the axis), with the linear theory's ``-3 nu`` dashed."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+def creep_figure(ds, ratios: int = 5):
+    """The creep curves of the creep table ``ds`` (xarray Dataset; a matplotlib figure, the
+    Agg backend chosen by the caller): F_x/(mu N) against nu_x, F_y/(mu N) against nu_y and
+    against psi (a panel per creepage axis, the other creepages at their nodes nearest 0),
+    one line per ellipse ratio (at most ``ratios``, spread over the axis), with the linear
+    theory's ``-3 nu`` dashed."""
     import matplotlib.pyplot as plt
 
-    ds = open_dataset(path)
-    out = Path(out)
-    if not out.parent.is_dir():
-        raise RailContactError(f"--plot: folder {out.parent} does not exist")
     panels = [(n, q) for n, q in (("creepage_x", "force_x"), ("creepage_y", "force_y"),
                                   ("spin", "force_y")) if n in ds.dims and ds.sizes[n] > 1]
     if not panels:
@@ -305,10 +307,4 @@ def plot_creep(path: str | Path, out: str | Path, ratios: int = 5) -> Path:
     axs[0, 0].legend(fontsize=7, loc="lower left")
     fig.suptitle(f"creep curves, Poisson's ratio {float(ds.attrs['poisson']):g}", fontsize=9)
     fig.tight_layout()
-    try:
-        fig.savefig(out, dpi=90)
-    except (ValueError, OSError) as exc:
-        raise RailContactError(f"--plot: cannot write {out}: {exc}") from None
-    finally:
-        plt.close(fig)
-    return out
+    return fig

@@ -56,9 +56,17 @@ from ..halfspace.hertz import curvature_ratio, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import Case
 from ..tangential.kalker import creep_coefficients
-from .spec import DEFAULT_POLICY, MAX_POINTS, axis_count, axis_values, parse_policies
+from .spec import (
+    CREEP_KIND,
+    DEFAULT_POLICY,
+    MAX_POINTS,
+    axis_count,
+    axis_values,
+    parse_policies,
+)
 
-KIND = "creep"
+KIND = CREEP_KIND
+"""``[table] kind`` of a creep table (:data:`.spec.CREEP_KIND`)."""
 RATIO = "ellipse_ratio"
 CREEP_AXES: dict[str, tuple[str, str]] = {
     RATIO: ("1", "ellipse ratio a/b (a along the rolling direction)"),

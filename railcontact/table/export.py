@@ -15,9 +15,9 @@
     both rows of a node, each patch's as ``<name>_<k>``
     (:func:`~.geometry_table.export_csv`).
 
-A creep table (``kind = "creep"``) is written by :func:`~.creepread.export_creep`: its
-Dataset as netCDF, or a CSV row per node (the axes, the normalised values, status and the
-creep coefficients of the node's ellipse ratio).
+A creep table (``kind = "creep"``): its Dataset as netCDF, or a CSV row per node (the
+axes, the normalised values, status and the creep coefficients of the node's ellipse
+ratio; :func:`~.creepread.export_creep_csv`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .creepread import export_creep, is_creep_table
+from .creepread import export_creep_csv, is_creep_table
 from .geometry import KIND
 from .geometry_table import data_names, export_csv
 from .store import IDENTITY, kind_of, open_dataset
@@ -66,11 +66,12 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
     if not out.parent.is_dir():
         raise RailContactError(f"folder {out.parent} does not exist")
     ds = open_dataset(path)
-    if is_creep_table(ds):
-        return export_creep(path, out, fmt)
+    creep = is_creep_table(ds)
+    if creep and fmt == "csv":
+        return export_creep_csv(ds, out)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     geometry = kind_of(ds.attrs) == KIND
-    data = (data_names() if geometry else
+    data = (list(ds.data_vars) if creep else data_names() if geometry else
             [q.name for q in QUANTITIES] + ["status"] + [q.name for q in COUNTS])
     data = [n for n in data if n in ds]
     if fmt == "netcdf":

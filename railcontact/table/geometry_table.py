@@ -28,7 +28,7 @@ from ..errors import CaseError, RailContactError
 from .geometry import KIND, N_PATCHES, PATCH, PATCHES, QUANTITIES, WHEEL, WHEELSET
 from .interpolate import TableHolesWarning
 from .spec import DEFAULT_POLICY, axis_info, parse_policies
-from .store import IDENTITY, POLICY_ATTR, kind_of, read_table
+from .store import IDENTITY, POLICY_ATTR, kind_of, read_table, reader_of
 from .variables import NOT_COMPUTED, OK, failed_counts, failed_text
 
 SIDES = ("left", "right")
@@ -62,7 +62,7 @@ def _require_geometry(path: str | Path, attrs: dict) -> None:
     kind = kind_of(attrs)
     if kind != KIND:
         raise RailContactError(f"{path} is a {kind} table, not a geometry table ([table] "
-                               "kind = 'geometry'): open it with ContactTable")
+                               f"kind = 'geometry'): open it with {reader_of(kind)}")
 
 
 class GeometryTable:

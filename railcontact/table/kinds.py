@@ -8,9 +8,8 @@ import sys
 from pathlib import Path
 
 from ..errors import CaseError
-from .creepspec import KIND as CREEP
 from .creepspec import CreepSpec, parse_creep_spec
-from .spec import DEFAULT_KIND, TableSpec, load_spec
+from .spec import CREEP_KIND, DEFAULT_KIND, TableSpec, load_spec
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -37,7 +36,7 @@ def load_any_spec(path: str | Path) -> TableSpec | CreepSpec:
         raise CaseError(f"table spec {p} is not valid TOML: {exc}") from None
     table = raw.get("table")
     kind = table.get("kind", DEFAULT_KIND) if isinstance(table, dict) else DEFAULT_KIND
-    if kind == CREEP:
+    if kind == CREEP_KIND:
         raw.setdefault("name", p.stem)
         return parse_creep_spec(raw)
     return load_spec(p)

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import RailContactError
 from .check import check_text
-from .creepread import creep_summary, is_creep_table, plot_creep
+from .creepread import creep_figure, creep_summary, is_creep_table
 from .geometry import KIND
 from .geometry_table import plot_geometry, summary_lines
 from .refine import Targets, jumps
@@ -117,19 +117,19 @@ def plot_table(path: str | Path, out: str | Path) -> Path:
     their middle nodes) and a heat map over two axes (the first two creepage axes, else the
     first two axes) of the creep force's magnitude (of the normal force without
     creepages) to ``out``; of a creep table, its creep curves
-    (:func:`~.creepread.plot_creep`)."""
+    (:func:`~.creepread.creep_figure`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     ds = open_dataset(path)
-    if is_creep_table(ds):
-        return plot_creep(path, out)
-    names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     out = Path(out)
     if not out.parent.is_dir():
         raise RailContactError(f"--plot: folder {out.parent} does not exist")
+    if is_creep_table(ds):
+        return _save(creep_figure(ds), out, plt)
+    names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     if kind_of(ds.attrs) == KIND:
         fig = plot_geometry(ds, names, out)
         return _save(fig, out, plt)

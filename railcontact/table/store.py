@@ -50,7 +50,8 @@ from .. import __version__
 from ..contact.wheelrail import build_geometry
 from ..errors import RailContactError
 from ..settings import Case
-from .spec import DEFAULT_KIND, TableSpec, axis_info, comparable
+from .geometry import KIND as GEOMETRY_KIND
+from .spec import CREEP_KIND, DEFAULT_KIND, TableSpec, axis_info, comparable
 from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS, failed_counts
 
 IDENTITY = "railcontact_table"
@@ -142,6 +143,17 @@ def data_arrays(spec: TableSpec) -> list[tuple[str, str, Any, dict[str, Any], tu
              for q in QUANTITIES]
             + [(q.name, "i4", 0, {"units": q.unit, "long_name": q.long_name}, side)
                for q in COUNTS])
+
+
+READERS = {DEFAULT_KIND: "ContactTable", GEOMETRY_KIND: "GeometryTable",
+           CREEP_KIND: "CreepTable"}
+"""The class of :mod:`railcontact.table` that reads each kind of table."""
+
+
+def reader_of(kind: str) -> str:
+    """The class that reads a table of kind ``kind`` (``railcontact.table.ContactTable``
+    ...)."""
+    return f"railcontact.table.{READERS.get(kind, READERS[DEFAULT_KIND])}"
 
 
 def kind_of(attrs: dict[str, Any]) -> str:
@@ -414,9 +426,9 @@ def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict
         raise RailContactError(f"{p} is not a readable table store: {exc}") from None
     if IDENTITY not in attrs:
         raise RailContactError(f"{p} is not a railcontact table store")
-    if attrs.get("kind", "contact") != "contact":
-        raise RailContactError(f"{p} is a {attrs['kind']} table, not a contact table (a "
-                               "creep table is read by railcontact.table.CreepTable)")
+    if kind_of(attrs) == CREEP_KIND:
+        raise RailContactError(f"{p} is a {CREEP_KIND} table, not a contact table (a "
+                               f"{CREEP_KIND} table is read by {reader_of(CREEP_KIND)})")
     arrays = {n: group[n][...] for n in names if n in group}
     arrays["side"] = [str(x) for x in np.asarray(group["side"][...]).tolist()]
     return attrs, arrays
