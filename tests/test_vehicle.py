@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -241,3 +242,27 @@ def test_demo_vehicle_command(capsys, tmp_path):
         assert text in out
     assert main(["demo", "--vehicle", "--speed", "-1", "--no-progress"]) == 2
     assert "speed" in capsys.readouterr().err
+
+
+def test_demo_vehicle_uses_an_fmu_the_user_names_as_it_is(tmp_path, monkeypatch):
+    """``--fmu`` naming an FMU that exists: the vehicle's contact is that FMU, never
+    rebuilt (a one-wheelset FMU is not overwritten by one of four); the default path and a
+    path that does not exist are built (ensure_fmu) as an FMU of four wheelsets."""
+    import railcontact.fmu
+    import railcontact.sim.vehicle_fmu
+    from railcontact.sim.vehicle_demo import VEHICLE_FMU, VehicleDemoOptions, _fmu_contact
+
+    built, used = [], []
+    monkeypatch.setattr(railcontact.fmu, "ensure_fmu",
+                        lambda path, files, log=None, wheelsets=None:
+                        built.append((str(path), wheelsets)) or (Path(path), True))
+    monkeypatch.setattr(railcontact.sim.vehicle_fmu, "FMUContact",
+                        lambda fmu, count, step, params: used.append((Path(fmu), count)))
+    mine = tmp_path / "RailContact.fmu"
+    mine.write_bytes(b"an FMU")
+    cfg = {"element_size": 1e-3, "step": 1e-3}
+    _fmu_contact(VehicleDemoOptions(fmu=str(mine)), cfg, False)
+    assert built == [] and used == [(mine.resolve(), 4)] and mine.read_bytes() == b"an FMU"
+    for path in (VEHICLE_FMU, str(tmp_path / "new.fmu")):
+        _fmu_contact(VehicleDemoOptions(fmu=path), cfg, False)
+        assert built[-1] == (path, 4)
