@@ -167,17 +167,48 @@ def test_integrator_with_the_linear_contact_follows_the_eigenvalue(speed):
     print(f"rate error at 1 ms {errors[0]:+.4f}, 0.25 ms {errors[1]:+.4f}, extrapolated "
           f"{extrapolated:+.4f} 1/s (eigenvalue {mode.eigenvalue.real:+.4f})")
     assert abs(extrapolated) < 0.01
-    assert (mode.eigenvalue.real < 0) == (speed < 78.0)
+    cs = critical_speed(P, LIN, np.arange(60.0, 95.0, 5.0))
+    assert (mode.eigenvalue.real < 0) == (speed < cs.speed)
 
 
 def test_linear_critical_speed_is_a_root_of_the_least_damped_real_part():
+    """The vehicle's critical speed: the least damped real part is zero there, negative
+    1 m/s below, positive 1 m/s above (its value is checked on a case with a closed form,
+    :func:`test_critical_speed_of_a_suspended_wheelset_is_wickens_closed_form`)."""
     cs = critical_speed(P, LIN, np.arange(60.0, 95.0, 5.0))
-    assert 60 < cs.speed < 95
     assert abs(cs.mode.eigenvalue.real) < 1e-3
     assert least_damped(P, LIN, cs.speed - 1).eigenvalue.real < 0
     assert least_damped(P, LIN, cs.speed + 1).eigenvalue.real > 0
     with pytest.raises(RailContactError, match="speeds"):
         critical_speed(P, LIN, [50.0])
+
+
+def test_critical_speed_of_a_suspended_wheelset_is_wickens_closed_form():
+    """One wheelset on a lateral spring k_y and a yaw spring k_psi to a frame moving at V,
+    Kalker's longitudinal and lateral creep (f11, f22; no spin, no gravitational stiffness):
+    the characteristic quartic a4 s^4 + ... + a0 with a3, a1 ~ 1/V and a2 = C0 + D / V^2
+    loses stability where Hurwitz's a1 a2 a3 - a1^2 a4 - a3^2 a0 = 0 (Wickens' analysis of
+    the suspended wheelset), i.e. at 1/V_c^2 = (A^2 m I + B^2 a0 - A B C0) / (A B D) with
+    A = 2 f22 k_psi + 2 e^2 f11 k_y, B = 2 m e^2 f11 + 2 I f22, C0 = m k_psi + I k_y,
+    D = 4 e^2 f11 f22, a0 = k_y k_psi + 4 e f11 f22 lambda / r0. The largest real part of
+    wheelset_eigenvalues changes sign there."""
+    import scipy.optimize
+
+    m, iz, ky, kx, b = 1250.0, 700.0, 2.0e6, 4.0e6, 1.0
+    f11, f22, lam, r0, e = 8.0e6, 7.0e6, 0.2, 0.46, 0.75
+    model = WheelsetModel(m, iz, ky, kx, b)
+    kpsi = model.yaw_stiffness
+    lin = LinearWheelsetContact(f11=f11, f22=f22, f23=0.0, f33=0.0, conicity=lam,
+                                contact_angle_parameter=0.0, radius=r0, half_distance=e,
+                                normal_force=80e3)
+    a = 2 * f22 * kpsi + 2 * e**2 * f11 * ky
+    bb = 2 * m * e**2 * f11 + 2 * iz * f22
+    c0, d = m * kpsi + iz * ky, 4 * e**2 * f11 * f22
+    a0 = ky * kpsi + 4 * e * f11 * f22 * lam / r0
+    closed = 1 / math.sqrt((a**2 * m * iz + bb**2 * a0 - a * bb * c0) / (a * bb * d))
+    vc = scipy.optimize.brentq(lambda v: wheelset_eigenvalues(model, lin, v)[0].real,
+                               20.0, 400.0, xtol=1e-9)
+    assert vc == pytest.approx(closed, rel=1e-6)
 
 
 def test_measure_decay_of_a_damped_sine():
