@@ -229,9 +229,14 @@ def test_harmonic_parameter_of_a_linear_and_a_cubic_difference():
 # -- the in-process BEM contact against Kalker --------------------------------------------
 def test_in_process_contact_agrees_with_kalker_at_small_creepages():
     """Four centred wheelsets through InProcessContact (the BEM, 1 mm elements), three of
-    them with one small velocity each (lateral, yaw rate, spin: creepage 1e-4): the change
-    of their forces from the unperturbed one is Kalker's linear theory at the nominal
-    Hertz patch within 8 %."""
+    them with one small velocity each (lateral, yaw rate, spin: creepage 1e-4), one more at
+    y = 0.3 mm: the change of their forces from the unperturbed one is Kalker's linear
+    theory at the nominal Hertz patch within 8 % on the diagonal terms (F_Y from y_dot,
+    M_Z from psi_dot, T_y from Omega). The cross terms (F_Y and M_Z from y, M_Z from
+    y_dot, F_Y from psi_dot) have the linear model's signs and its magnitude within a
+    factor 2, M_Z from y_dot within a factor 5: they come from the spin coefficients f23
+    and the contact angles' change, where the S1002/60E1 patches depart from the
+    centred Hertz ellipse and its linear change with y."""
     from railcontact.geometry.profiles import builtin_profile
     from railcontact.geometry.track import Track, Wheelset
     from railcontact.settings import ContactSettings
@@ -241,19 +246,26 @@ def test_in_process_contact_agrees_with_kalker_at_small_creepages():
     contact = InProcessContact(Track(builtin_profile("60E1")),
                                Wheelset(builtin_profile("S1002")),
                                MaterialSettings().elastic_pair(),
-                               ContactSettings(element_size=1e-3))
+                               ContactSettings(element_size=1e-3), count=5)
     v, e = 50.0, LIN.half_distance
     omega = v / LIN.radius
     states = WheelsetStates(
-        0.0, v, np.zeros(4), np.zeros(4), np.array([0.0, 1e-4 * v, 0.0, 0.0]),
-        np.array([0.0, 0.0, 1e-4 * v / e, 0.0]),
-        np.array([omega, omega, omega, omega * (1 + 1e-4)]), np.full((4, 2), P.wheel_load))
+        0.0, v, np.array([0.0, 0.0, 0.0, 0.0, 3e-4]), np.zeros(5),
+        np.array([0.0, 1e-4 * v, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 1e-4 * v / e, 0.0, 0.0]),
+        np.array([omega, omega, omega, omega * (1 + 1e-4), omega]),
+        np.full((5, 2), P.wheel_load))
     bem = contact(states)
     assert bem.ok and np.all(bem.status == 0)
     change = bem.generalized[1:] - bem.generalized[0]
     kalker = LinearContact(LIN)(states).generalized[1:]
     for k, dof in enumerate((0, 1, 2)):  # F_Y from y_dot, M_Z from psi_dot, T_y from Omega
         assert change[k, dof] == pytest.approx(kalker[k, dof], rel=0.08)
+    # (row of change: 0 y_dot, 1 psi_dot, 3 y; column: 0 F_Y, 1 M_Z)
+    for (k, dof), factor in (((3, 0), 2.0), ((3, 1), 2.0), ((1, 0), 2.0), ((0, 1), 5.0)):
+        ratio = change[k, dof] / kalker[k, dof]
+        print(f"cross term {(k, dof)}: BEM {change[k, dof]:+.4g}, linear "
+              f"{kalker[k, dof]:+.4g}, ratio {ratio:.3f}")
+        assert 1 / factor < ratio < factor, (k, dof, change[k, dof], kalker[k, dof])
     np.testing.assert_allclose(bem.normal, P.wheel_load, rtol=0.01)
 
 
