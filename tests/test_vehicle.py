@@ -294,6 +294,7 @@ def test_demo_vehicle_uses_an_fmu_the_user_names_as_it_is(tmp_path, monkeypatch)
     rebuilt (a one-wheelset FMU is not overwritten by one of four); the default path and a
     path that does not exist are built (ensure_fmu) as an FMU of four wheelsets."""
     import railcontact.fmu
+    import railcontact.sim.demo  # noqa: F401 - imported before ensure_fmu is replaced
     import railcontact.sim.vehicle_fmu
     from railcontact.sim.vehicle_demo import VEHICLE_FMU, VehicleDemoOptions, _fmu_contact
 
