@@ -546,10 +546,10 @@ class Slave:
             return self._step(self.units[0])
         t0 = time.perf_counter()
         if len(self.units) > 1 and self.modes.contact_model == "bem":
-            if not self._threads:  # as many threads as cores; each wheelset on the same
+            if not self._threads:  # as many threads as cores (_threads); each wheelset on its
                 self._threads = [  # thread step after step (its FFT plans and search
                     ThreadPoolExecutor(1, f"railcontact-{self.instance_name}-{j}")  # memory
-                    for j in range(min(len(self.units), _cores()))]  # stay with it)
+                    for j in range(min(len(self.units), _threads()))]  # stay with it)
             n = len(self._threads)
             running = [t.submit(self._step_group, self.units[j::n])
                        for j, t in enumerate(self._threads)]
@@ -655,6 +655,25 @@ class Slave:
             return FMI_DISCARD
         unfound = rigid is not None and not rigid.converged
         return FMI_WARNING if failed or unfound else FMI_OK
+
+
+THREADS_ENV = "RAILCONTACT_FMU_THREADS"
+"""The environment variable that sets the number of threads the wheelsets of an FMU of
+several wheelsets are stepped on (default: the cores, :func:`_cores`)."""
+
+
+def _threads() -> int:
+    """The threads of a multi-wheelset step: ``$RAILCONTACT_FMU_THREADS`` (a positive
+    integer), else the cores this process may run on."""
+    given = os.environ.get(THREADS_ENV, "").strip()
+    if given:
+        try:
+            n = int(given)
+        except ValueError:
+            n = 0
+        if n >= 1:
+            return n
+    return _cores()
 
 
 def _cores() -> int:

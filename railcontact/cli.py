@@ -235,9 +235,8 @@ def _add_demo(sub) -> None:
                    "(--contact); --quick: "
                    "0.3 s, 2 ms steps, 1.5 mm elements (defaults 1 s, 1 ms, 1 mm)")
     d.add_argument("--contact", default="fmu", choices=("fmu", "in-process"),
-                   help="--vehicle: the wheelsets' contact through one instance of an FMU "
-                   "of four wheelsets (--fmu) by fmpy, or four WheelsetContacts in this "
-                   "process (fmu)")
+                   help="--vehicle: the wheelsets' contact: fmu, the FMU of --fmu run by "
+                   "fmpy; in-process, four WheelsetContacts in this process (default: fmu)")
     d.add_argument("--speed", type=float, help="forward speed [m/s] (30; --vehicle: 60)")
     d.add_argument("--duration", type=float, help="simulated time [s] (1.5)")
     d.add_argument("--step", type=float, help="communication step [s] (0.001)")
@@ -260,7 +259,9 @@ def _add_demo(sub) -> None:
                    help="solve every N-th state also cold, for comparison (0: never; 10)")
     d.add_argument("--fmu", default=None,
                    help="the FMU to use, built if missing or stale (dist/RailContact.fmu; "
-                   "--vehicle: an FMU of four wheelsets, dist/RailContact_4wheelsets.fmu)")
+                   "--vehicle: an FMU of four wheelsets, dist/RailContact_4wheelsets.fmu, "
+                   "built if missing or stale; another FMU that exists, of four wheelsets "
+                   "or of one, is used as it is)")
     d.add_argument("--output-dir", default="railcontact_demo",
                    help="folder for the plots (railcontact_demo)")
     d.add_argument("--no-plots", action="store_true", help="do not write plots")

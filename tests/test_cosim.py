@@ -356,3 +356,28 @@ def _parameters(fmu):
 
     return [v for v in read_model_description(str(fmu)).modelVariables
             if v.causality == "parameter"]
+
+
+def test_vehicle_contact_through_the_fmu_stops_as_the_in_process_one(fmu):
+    """A wheelset without load (no contact) and one at a yaw beyond the small angles (the
+    FMU discards the step, status out of range): FMUContact stops the run as InProcessContact
+    does on no contact, and names both wheelsets; the good wheelset between them is not
+    named."""
+    from railcontact.sim.vehicle_contact import WheelsetStates
+    from railcontact.sim.vehicle_fmu import FMUContact
+
+    v, r0 = 40.0, 0.46
+    through = FMUContact(fmu, 3, 1e-3, {"element_size": 2e-3, "warm_start": "none"})
+    try:
+        states = WheelsetStates(0.0, v, np.array([0.0, 1e-3, 0.0]), np.array([0.0, 0.0, 0.5]),
+                                np.zeros(3), np.zeros(3), np.full(3, v / r0),
+                                np.array([[0.0, 0.0], [60e3, 60e3], [60e3, 60e3]]))
+        out = through(states)
+        assert through.instances[2][0].discarded and not through.instances[1][0].discarded
+    finally:
+        through.close()
+    assert not out.ok
+    assert list(out.status) == [2, 0, 3]
+    assert out.message.startswith("wheelset 1: no contact; wheelset 3: out of range"), \
+        out.message
+    assert "wheelset 2" not in out.message

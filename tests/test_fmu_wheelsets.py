@@ -156,10 +156,15 @@ def test_one_wheelset_equals_the_default_fmu_output_for_output(default_fmu, fmu1
     multi.free()
 
 
-def test_two_wheelsets_equal_two_single_runs(default_fmu, fmu2):
+def test_two_wheelsets_equal_two_single_runs(default_fmu, fmu2, monkeypatch):
     """Two wheelsets on two lateral sines (kinematic creepages) in one FMU equal two
     one-wheelset instances given the same inputs, every output bit for bit, step after step
-    (the wheelsets run on two threads at once)."""
+    (the wheelsets run on two threads at once: RAILCONTACT_FMU_THREADS = 2 whatever the
+    cores; the slave runs in this process's Python, fmpy's host, and reads this
+    environment)."""
+    import threading
+
+    monkeypatch.setenv("RAILCONTACT_FMU_THREADS", "2")
     multi = Instance(fmu2, "two", creepage_input="kinematic")
     singles = [Instance(default_fmu, f"single{j}", creepage_input="kinematic")
                for j in (1, 2)]
@@ -167,6 +172,8 @@ def test_two_wheelsets_equal_two_single_runs(default_fmu, fmu2):
         motions = [_motion(k, 3e-3, 0.0), _motion(k, 2e-3, 0.9)]
         inputs = {f"{n}_{j}": x for j, m in enumerate(motions, start=1) for n, x in m.items()}
         assert multi.step(**inputs) == 0
+        names = {t.name for t in threading.enumerate()}
+        assert {"railcontact-two-0_0", "railcontact-two-1_0"} <= names, names
         for j, (s, m) in enumerate(zip(singles, motions, strict=True), start=1):
             assert s.step(**m) == 0
             assert multi.outputs_of(f"_{j}") == s.outputs_of(), (k, j)

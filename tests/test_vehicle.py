@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -166,17 +167,48 @@ def test_integrator_with_the_linear_contact_follows_the_eigenvalue(speed):
     print(f"rate error at 1 ms {errors[0]:+.4f}, 0.25 ms {errors[1]:+.4f}, extrapolated "
           f"{extrapolated:+.4f} 1/s (eigenvalue {mode.eigenvalue.real:+.4f})")
     assert abs(extrapolated) < 0.01
-    assert (mode.eigenvalue.real < 0) == (speed < 78.0)
+    cs = critical_speed(P, LIN, np.arange(60.0, 95.0, 5.0))
+    assert (mode.eigenvalue.real < 0) == (speed < cs.speed)
 
 
 def test_linear_critical_speed_is_a_root_of_the_least_damped_real_part():
+    """The vehicle's critical speed: the least damped real part is zero there, negative
+    1 m/s below, positive 1 m/s above (its value is checked on a case with a closed form,
+    :func:`test_critical_speed_of_a_suspended_wheelset_is_wickens_closed_form`)."""
     cs = critical_speed(P, LIN, np.arange(60.0, 95.0, 5.0))
-    assert 60 < cs.speed < 95
     assert abs(cs.mode.eigenvalue.real) < 1e-3
     assert least_damped(P, LIN, cs.speed - 1).eigenvalue.real < 0
     assert least_damped(P, LIN, cs.speed + 1).eigenvalue.real > 0
     with pytest.raises(RailContactError, match="speeds"):
         critical_speed(P, LIN, [50.0])
+
+
+def test_critical_speed_of_a_suspended_wheelset_is_wickens_closed_form():
+    """One wheelset on a lateral spring k_y and a yaw spring k_psi to a frame moving at V,
+    Kalker's longitudinal and lateral creep (f11, f22; no spin, no gravitational stiffness):
+    the characteristic quartic a4 s^4 + ... + a0 with a3, a1 ~ 1/V and a2 = C0 + D / V^2
+    loses stability where Hurwitz's a1 a2 a3 - a1^2 a4 - a3^2 a0 = 0 (Wickens' analysis of
+    the suspended wheelset), i.e. at 1/V_c^2 = (A^2 m I + B^2 a0 - A B C0) / (A B D) with
+    A = 2 f22 k_psi + 2 e^2 f11 k_y, B = 2 m e^2 f11 + 2 I f22, C0 = m k_psi + I k_y,
+    D = 4 e^2 f11 f22, a0 = k_y k_psi + 4 e f11 f22 lambda / r0. The largest real part of
+    wheelset_eigenvalues changes sign there."""
+    import scipy.optimize
+
+    m, iz, ky, kx, b = 1250.0, 700.0, 2.0e6, 4.0e6, 1.0
+    f11, f22, lam, r0, e = 8.0e6, 7.0e6, 0.2, 0.46, 0.75
+    model = WheelsetModel(m, iz, ky, kx, b)
+    kpsi = model.yaw_stiffness
+    lin = LinearWheelsetContact(f11=f11, f22=f22, f23=0.0, f33=0.0, conicity=lam,
+                                contact_angle_parameter=0.0, radius=r0, half_distance=e,
+                                normal_force=80e3)
+    a = 2 * f22 * kpsi + 2 * e**2 * f11 * ky
+    bb = 2 * m * e**2 * f11 + 2 * iz * f22
+    c0, d = m * kpsi + iz * ky, 4 * e**2 * f11 * f22
+    a0 = ky * kpsi + 4 * e * f11 * f22 * lam / r0
+    closed = 1 / math.sqrt((a**2 * m * iz + bb**2 * a0 - a * bb * c0) / (a * bb * d))
+    vc = scipy.optimize.brentq(lambda v: wheelset_eigenvalues(model, lin, v)[0].real,
+                               20.0, 400.0, xtol=1e-9)
+    assert vc == pytest.approx(closed, rel=1e-6)
 
 
 def test_measure_decay_of_a_damped_sine():
@@ -197,9 +229,14 @@ def test_harmonic_parameter_of_a_linear_and_a_cubic_difference():
 # -- the in-process BEM contact against Kalker --------------------------------------------
 def test_in_process_contact_agrees_with_kalker_at_small_creepages():
     """Four centred wheelsets through InProcessContact (the BEM, 1 mm elements), three of
-    them with one small velocity each (lateral, yaw rate, spin: creepage 1e-4): the change
-    of their forces from the unperturbed one is Kalker's linear theory at the nominal
-    Hertz patch within 8 %."""
+    them with one small velocity each (lateral, yaw rate, spin: creepage 1e-4), one more at
+    y = 0.3 mm: the change of their forces from the unperturbed one is Kalker's linear
+    theory at the nominal Hertz patch within 8 % on the diagonal terms (F_Y from y_dot,
+    M_Z from psi_dot, T_y from Omega). The cross terms (F_Y and M_Z from y, M_Z from
+    y_dot, F_Y from psi_dot) have the linear model's signs and its magnitude within a
+    factor 2, M_Z from y_dot within a factor 5: they come from the spin coefficients f23
+    and the contact angles' change, where the S1002/60E1 patches depart from the
+    centred Hertz ellipse and its linear change with y."""
     from railcontact.geometry.profiles import builtin_profile
     from railcontact.geometry.track import Track, Wheelset
     from railcontact.settings import ContactSettings
@@ -209,19 +246,28 @@ def test_in_process_contact_agrees_with_kalker_at_small_creepages():
     contact = InProcessContact(Track(builtin_profile("60E1")),
                                Wheelset(builtin_profile("S1002")),
                                MaterialSettings().elastic_pair(),
-                               ContactSettings(element_size=1e-3))
+                               ContactSettings(element_size=1e-3), count=5)
     v, e = 50.0, LIN.half_distance
     omega = v / LIN.radius
     states = WheelsetStates(
-        0.0, v, np.zeros(4), np.zeros(4), np.array([0.0, 1e-4 * v, 0.0, 0.0]),
-        np.array([0.0, 0.0, 1e-4 * v / e, 0.0]),
-        np.array([omega, omega, omega, omega * (1 + 1e-4)]), np.full((4, 2), P.wheel_load))
+        0.0, v, np.array([0.0, 0.0, 0.0, 0.0, 3e-4]), np.zeros(5),
+        np.array([0.0, 1e-4 * v, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 1e-4 * v / e, 0.0, 0.0]),
+        np.array([omega, omega, omega, omega * (1 + 1e-4), omega]),
+        np.full((5, 2), P.wheel_load))
     bem = contact(states)
     assert bem.ok and np.all(bem.status == 0)
     change = bem.generalized[1:] - bem.generalized[0]
     kalker = LinearContact(LIN)(states).generalized[1:]
     for k, dof in enumerate((0, 1, 2)):  # F_Y from y_dot, M_Z from psi_dot, T_y from Omega
+        print(f"diagonal term {(k, dof)}: BEM {change[k, dof]:+.4g}, linear "
+              f"{kalker[k, dof]:+.4g}, ratio {change[k, dof] / kalker[k, dof]:.3f}")
         assert change[k, dof] == pytest.approx(kalker[k, dof], rel=0.08)
+    # (row of change: 0 y_dot, 1 psi_dot, 3 y; column: 0 F_Y, 1 M_Z)
+    for (k, dof), factor in (((3, 0), 2.0), ((3, 1), 2.0), ((1, 0), 2.0), ((0, 1), 5.0)):
+        ratio = change[k, dof] / kalker[k, dof]
+        print(f"cross term {(k, dof)}: BEM {change[k, dof]:+.4g}, linear "
+              f"{kalker[k, dof]:+.4g}, ratio {ratio:.3f}")
+        assert 1 / factor < ratio < factor, (k, dof, change[k, dof], kalker[k, dof])
     np.testing.assert_allclose(bem.normal, P.wheel_load, rtol=0.01)
 
 
@@ -241,3 +287,28 @@ def test_demo_vehicle_command(capsys, tmp_path):
         assert text in out
     assert main(["demo", "--vehicle", "--speed", "-1", "--no-progress"]) == 2
     assert "speed" in capsys.readouterr().err
+
+
+def test_demo_vehicle_uses_an_fmu_the_user_names_as_it_is(tmp_path, monkeypatch):
+    """``--fmu`` naming an FMU that exists: the vehicle's contact is that FMU, never
+    rebuilt (a one-wheelset FMU is not overwritten by one of four); the default path and a
+    path that does not exist are built (ensure_fmu) as an FMU of four wheelsets."""
+    import railcontact.fmu
+    import railcontact.sim.demo  # noqa: F401 - imported before ensure_fmu is replaced
+    import railcontact.sim.vehicle_fmu
+    from railcontact.sim.vehicle_demo import VEHICLE_FMU, VehicleDemoOptions, _fmu_contact
+
+    built, used = [], []
+    monkeypatch.setattr(railcontact.fmu, "ensure_fmu",
+                        lambda path, files, log=None, wheelsets=None:
+                        built.append((str(path), wheelsets)) or (Path(path), True))
+    monkeypatch.setattr(railcontact.sim.vehicle_fmu, "FMUContact",
+                        lambda fmu, count, step, params: used.append((Path(fmu), count)))
+    mine = tmp_path / "RailContact.fmu"
+    mine.write_bytes(b"an FMU")
+    cfg = {"element_size": 1e-3, "step": 1e-3}
+    _fmu_contact(VehicleDemoOptions(fmu=str(mine)), cfg, False)
+    assert built == [] and used == [(mine.resolve(), 4)] and mine.read_bytes() == b"an FMU"
+    for path in (VEHICLE_FMU, str(tmp_path / "new.fmu")):
+        _fmu_contact(VehicleDemoOptions(fmu=path), cfg, False)
+        assert built[-1] == (path, 4)

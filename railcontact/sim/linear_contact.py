@@ -7,12 +7,15 @@ A wheelset with lateral displacement ``y`` (to the left), yaw ``psi`` and spin s
 ``gamma_l,r = gamma0 +- Gamma y`` (``Gamma`` the same harmonic linearisation of
 ``gamma_l - gamma_r``, :func:`contact_angle_parameter`) and the contact points at
 ``+-e`` from the wheelset centre, the creepages of :class:`~railcontact.timestep.Kinematics`
-are to first order
+are to first order (track frame)
 
     xi_l,r  = -+ lambda y / r0 - omega r0 / V -+ e psi_dot / V
     eta     = y_dot / V - psi
-    phi_l,r = -+ Gamma y / r0 + psi_dot / V      (less the centred wheelset's spin)
+    phi_l,r = psi_dot / V - Gamma y / r0      (less the centred wheelset's spin)
 
+(the centred spins, of opposite signs on the two wheels, cancel in the sums; the contact
+angles' change gives both wheels ``-Gamma y / r0``: ``phi_l + phi_r = 2 psi_dot / V -
+2 Gamma y / r0``)
 and Kalker's linear theory gives on each wheel (contact frame, on the wheel)
 ``F_x = -f11 xi``, ``F_y = -f22 eta - f23 phi``, ``M_z = f23 eta - f33 phi`` with
 ``f11 = G c^2 C11``, ``f22 = G c^2 C22``, ``f23 = G c^3 C23``, ``f33 = G c^4 C33``,

@@ -103,6 +103,13 @@ class WheelForces:
     """Normal + tangential BEM iterations per wheelset (in-process contact), (n,)."""
 
 
+STOPPING = (Status.OUT_OF_RANGE, Status.NO_CONTACT)
+"""The wheelset statuses that stop a vehicle run (``WheelForces.ok`` False): a pose
+beyond the model, and no contact (the wheelset off its rails). A contact names every
+wheelset of such a status in ``WheelForces.message``; an FMU contact stops as well on a
+step the FMU discards."""
+
+
 class VehicleContact(Protocol):
     """Wheelset states in, wheel forces out, once per vehicle step."""
 
@@ -152,7 +159,7 @@ class InProcessContact:
         lat, vert, nor, yq = (np.zeros((n, 2)) for _ in range(4))
         status = np.zeros(n, dtype=int)
         secs, its = np.zeros(n), np.zeros(n)
-        ok, message = True, "ok"
+        bad: list[str] = []
         for i, solver in enumerate(self.solvers):
             t0 = time.perf_counter()
             r = solver.solve(Pose(float(states.lateral[i]), float(states.yaw[i])),
@@ -164,10 +171,9 @@ class InProcessContact:
                              time=states.time)
             secs[i] = time.perf_counter() - t0
             status[i] = int(r.status)
-            if r.status in (Status.OUT_OF_RANGE, Status.NO_CONTACT):
-                ok = False
-                message = f"wheelset {i + 1}: " + "; ".join(
-                    w.message for w in r.wheels if w.status == r.status)
+            if r.status in STOPPING:
+                bad.append(f"wheelset {i + 1}: " + "; ".join(
+                    w.message for w in r.wheels if w.status == r.status))
             wl, wr = r.wheels
             gen[i] = (r.force[1], r.yaw_moment,
                       -(wl.rolling_radius * wl.track_force[0]
@@ -176,8 +182,9 @@ class InProcessContact:
                 lat[i, k], vert[i, k] = w.track_force[1], w.track_force[2]
                 nor[i, k], yq[i, k] = w.normal_force, w.derailment_quotient
             its[i] = sum(w.normal_iterations + w.tangential_iterations for w in r.wheels)
-        return WheelForces(gen, lat, vert, nor, yq, status, secs, ok, message, its)
+        return WheelForces(gen, lat, vert, nor, yq, status, secs, not bad,
+                           "; ".join(bad) or "ok", its)
 
 
-__all__ = ["InProcessContact", "LinearContact", "VehicleContact", "WheelForces",
+__all__ = ["STOPPING", "InProcessContact", "LinearContact", "VehicleContact", "WheelForces",
            "WheelsetStates"]

@@ -66,9 +66,12 @@ class VehicleDemoOptions:
     output_dir: str = "railcontact_demo"
     plots: bool = True
     contact: str = "fmu"
-    """"fmu" (one instance of the FMU of four wheelsets at :attr:`fmu` through fmpy, built
-    when missing or stale) or "in-process" (four WheelsetContacts in this process)."""
+    """"fmu" (the FMU at :attr:`fmu` through fmpy) or "in-process" (four WheelsetContacts
+    in this process)."""
     fmu: str = VEHICLE_FMU
+    """The FMU of ``contact = "fmu"``: at :data:`VEHICLE_FMU` or a path that does not exist,
+    one of four wheelsets built when missing or stale (one instance); another FMU that
+    exists is used as it is, of four wheelsets or of one (one instance per wheelset)."""
 
     def resolved(self) -> dict[str, float]:
         base = QUICK if self.quick else DEFAULT
@@ -130,13 +133,19 @@ def run_vehicle_demo(opts: VehicleDemoOptions, progress: bool = True) -> Vehicle
 
 def _fmu_contact(opts: VehicleDemoOptions, cfg: dict[str, float], progress: bool):
     """The FMU contact of ``--contact fmu`` (load control, kinematic creepages, no rigid
-    wheelset search: as the in-process contact)."""
+    wheelset search: as the in-process contact). The FMU at :attr:`~VehicleDemoOptions.fmu`:
+    at :data:`VEHICLE_FMU`, or at a path that does not exist, one of four wheelsets built
+    when missing or stale; an FMU the user names that exists is used as it is, of four
+    wheelsets or one (then one instance per wheelset, :class:`~.vehicle_fmu.FMUContact`)."""
     from ..fmu import ensure_fmu
     from .demo import _note, _profile_files
     from .vehicle_fmu import FMUContact
 
     files, params = _profile_files(opts)
-    fmu, _ = ensure_fmu(opts.fmu, files, log=_note if progress else None, wheelsets=4)
+    if Path(opts.fmu) != Path(VEHICLE_FMU) and Path(opts.fmu).is_file():
+        fmu = Path(opts.fmu).resolve()
+    else:
+        fmu, _ = ensure_fmu(opts.fmu, files, log=_note if progress else None, wheelsets=4)
     params.update(element_size=cfg["element_size"], warm_start=opts.warm_start,
                   rigid_wheelset="skip")
     return FMUContact(fmu, 4, cfg["step"], params)

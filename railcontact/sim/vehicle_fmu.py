@@ -7,7 +7,9 @@ inputs and outputs with the wheelset's number appended, ``lateral_displacement_2
 per vehicle step; a one-wheelset FMU is one instance per wheelset, stepped one after the
 other. The inputs are those of :mod:`railcontact.sim.cosim` (``creepage_input =
 kinematic``, wheel loads given); the wheel forces are read from the outputs of the same
-names as :class:`~railcontact.sim.vehicle_contact.InProcessContact` fills.
+names as :class:`~railcontact.sim.vehicle_contact.InProcessContact` fills. A run stops
+as it does with that contact (a wheelset status in
+:data:`~railcontact.sim.vehicle_contact.STOPPING`), and on a step the FMU discards.
 """
 
 from __future__ import annotations
@@ -19,8 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RailContactError
-from .cosim import INPUTS, STATUS_OUT_OF_RANGE, _Instance
-from .vehicle_contact import WheelForces, WheelsetStates
+from ..status import Status
+from .cosim import INPUTS, _Instance
+from .vehicle_contact import STOPPING, WheelForces, WheelsetStates
 
 SIDES = ("left", "right")
 
@@ -76,7 +79,7 @@ class FMUContact:
         gen = np.zeros((n, 3))
         lat, vert, nor, yq = (np.zeros((n, 2)) for _ in range(4))
         status, secs, its = np.zeros(n, dtype=int), np.zeros(n), np.zeros(n)
-        ok, message = True, "ok"
+        bad: list[str] = []
         k = 0
         for inst, suffixes in self.instances:
             inputs = []
@@ -86,10 +89,12 @@ class FMUContact:
                            states.yaw_rate[i], states.speed, states.spin_speed[i],
                            states.loads[i, 0], states.loads[i, 1]]
             out = inst.step(states.time, self.step, [float(x) for x in inputs])
+            named = len(bad)
             for s in suffixes:
                 status[k] = int(out[f"status{s}"])
-                if status[k] == STATUS_OUT_OF_RANGE:
-                    ok, message = False, f"wheelset {k + 1}: out of range (the FMU's status)"
+                if status[k] in STOPPING:
+                    discard = " (the FMU discarded the step)" if inst.discarded else ""
+                    bad.append(f"wheelset {k + 1}: {Status(int(status[k])).label}{discard}")
                 gen[k] = (out[f"force_lateral{s}"], out[f"yaw_moment{s}"],
                           -sum(out[f"rolling_radius_{side}{s}"]
                                * out[f"force_longitudinal_{side}{s}"] for side in SIDES))
@@ -101,7 +106,11 @@ class FMUContact:
                 secs[k] = out[f"solve_time{s}"]
                 its[k] = out[f"normal_iterations{s}"] + out[f"tangential_iterations{s}"]
                 k += 1
-        return WheelForces(gen, lat, vert, nor, yq, status, secs, ok, message, its)
+            if inst.discarded and len(bad) == named:  # discarded, no wheelset's status says why
+                bad += [f"wheelset {k - len(suffixes) + j + 1}: the FMU discarded the step"
+                        for j in range(len(suffixes))]
+        return WheelForces(gen, lat, vert, nor, yq, status, secs, not bad,
+                           "; ".join(bad) or "ok", its)
 
     def close(self) -> None:
         """Terminate and free the instances; remove the unpacked FMU."""
