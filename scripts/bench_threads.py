@@ -79,14 +79,14 @@ def run(name: str, steps: int, step: float = 1e-3) -> list[tuple]:
 
 def fingerprint(result) -> tuple:
     """The values of a step that must not depend on the thread: per wheel its status,
-    forces, moments, approach and iteration counts, and each patch's pressure and
+    message, forces, moments, approach and iteration counts, and each patch's pressure and
     traction (as bytes: compared bit for bit)."""
     wheels = []
     for w in (result.left, result.right):
         patches = tuple((p.normal.pressure.tobytes(),
                          None if p.tangential is None else
                          np.asarray(p.tangential.traction).tobytes()) for p in w.patches)
-        wheels.append((w.status, w.normal_force, w.creep_force, w.spin_moment,
+        wheels.append((w.status, w.message, w.normal_force, w.creep_force, w.spin_moment,
                        w.track_force, w.yaw_moment, w.approach, w.moment,
                        w.normal_iterations, w.tangential_iterations, w.load_passes,
                        patches))

@@ -40,9 +40,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import queue
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -52,6 +50,7 @@ import railcontact as rc
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_step import fixed_workload  # noqa: E402
+from bench_threads import Worker, fingerprint  # noqa: E402
 
 SPEED = 30.0
 """Forward speed [m/s]."""
@@ -91,53 +90,6 @@ def inputs(i: int, k: int, step: float = 1e-3) -> dict:
     shift = LOAD_SHIFT * LOAD * math.sin(phase)
     return dict(pose=rc.Pose(y, psi), loads=(LOAD + shift, LOAD - shift),
                 kinematics=rc.Kinematics(SPEED, y_dot, psi_dot), time=t)
-
-
-def fingerprint(result) -> tuple:
-    """The values of a step that must not depend on the thread (bit for bit)."""
-    wheels = []
-    for w in (result.left, result.right):
-        patches = tuple((p.normal.pressure.tobytes(),
-                         None if p.tangential is None else
-                         np.asarray(p.tangential.traction).tobytes()) for p in w.patches)
-        wheels.append((w.status, w.message, w.normal_force, w.creep_force, w.spin_moment,
-                       w.track_force, w.yaw_moment, w.approach, w.moment,
-                       w.normal_iterations, w.tangential_iterations, w.load_passes,
-                       patches))
-    return tuple(wheels)
-
-
-class Worker:
-    """A thread that runs the jobs given to it, one after the other."""
-
-    def __init__(self, name: str) -> None:
-        self.jobs: queue.SimpleQueue = queue.SimpleQueue()
-        self.done: queue.SimpleQueue = queue.SimpleQueue()
-        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
-        self.thread.start()
-
-    def _loop(self) -> None:
-        while True:
-            job = self.jobs.get()
-            if job is None:
-                return
-            try:
-                self.done.put((True, job()))
-            except BaseException as exc:  # reported in the main thread
-                self.done.put((False, exc))
-
-    def submit(self, job) -> None:
-        self.jobs.put(job)
-
-    def result(self):
-        ok, value = self.done.get()
-        if not ok:
-            raise value
-        return value
-
-    def stop(self) -> None:
-        self.jobs.put(None)
-        self.thread.join()
 
 
 def _stepper(contacts: list, which: list[int], k: int):

@@ -60,6 +60,7 @@ from .spec import (
     CREEP_KIND,
     DEFAULT_POLICY,
     MAX_POINTS,
+    AxisGrid,
     axis_count,
     axis_values,
     parse_policies,
@@ -89,7 +90,7 @@ potential area, resolves the short axis poorly beyond)."""
 
 
 @dataclass(frozen=True)
-class CreepSpec:
+class CreepSpec(AxisGrid):
     """A validated creep table specification.
 
     Attributes
@@ -109,18 +110,6 @@ class CreepSpec:
     out_of_range: dict[str, str] = field(default_factory=dict)
 
     kind = KIND
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(self.axes)
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(len(v) for v in self.axes.values())
-
-    @property
-    def size(self) -> int:
-        return math.prod(self.shape)
 
     @property
     def poisson(self) -> float:

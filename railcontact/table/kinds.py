@@ -4,17 +4,10 @@ default), a geometry table (:mod:`railcontact.table.geometry`, through
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-from ..errors import CaseError
 from .creepspec import CreepSpec, parse_creep_spec
-from .spec import CREEP_KIND, DEFAULT_KIND, TableSpec, load_spec
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .spec import CREEP_KIND, DEFAULT_KIND, TableSpec, read_spec_file, spec_of_file
 
 
 def load_any_spec(path: str | Path) -> TableSpec | CreepSpec:
@@ -26,17 +19,9 @@ def load_any_spec(path: str | Path) -> TableSpec | CreepSpec:
     CaseError
         When the file does not exist, does not parse or is not a valid spec.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise CaseError(f"table spec not found: {p}")
-    try:
-        with p.open("rb") as f:
-            raw = tomllib.load(f)
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as exc:
-        raise CaseError(f"table spec {p} is not valid TOML: {exc}") from None
+    p, raw = read_spec_file(path)
     table = raw.get("table")
     kind = table.get("kind", DEFAULT_KIND) if isinstance(table, dict) else DEFAULT_KIND
     if kind == CREEP_KIND:
-        raw.setdefault("name", p.stem)
         return parse_creep_spec(raw)
-    return load_spec(p)
+    return spec_of_file(p, raw)

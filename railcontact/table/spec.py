@@ -106,8 +106,27 @@ MAX_POINTS = 10_000_000
 """Largest number of grid points of a table."""
 
 
+class AxisGrid:
+    """The grid of a spec's ``axes`` (name -> strictly increasing nodes): its names, shape
+    and number of points."""
+
+    axes: dict[str, np.ndarray]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(self.axes)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.axes.values())
+
+    @property
+    def size(self) -> int:
+        return math.prod(self.shape)
+
+
 @dataclass(frozen=True)
-class TableSpec:
+class TableSpec(AxisGrid):
     """A validated table specification.
 
     Attributes
@@ -136,18 +155,6 @@ class TableSpec:
     def policies(self) -> dict[str, str]:
         """Every axis's out-of-range policy."""
         return {n: self.out_of_range.get(n, DEFAULT_POLICY) for n in self.axes}
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(self.axes)
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return tuple(len(v) for v in self.axes.values())
-
-    @property
-    def size(self) -> int:
-        return math.prod(self.shape)
 
     @property
     def batch_shape(self) -> tuple[int, ...]:
@@ -403,15 +410,14 @@ def parse_policies(value: Any, names: list[str] | tuple[str, ...]) -> dict[str, 
     return out
 
 
-def load_spec(path: str | Path) -> TableSpec:
-    """Read a TOML table spec (a case file plus ``[table]``; SI units).
-
-    Profile files named by a relative path are looked up beside the spec first.
+def read_spec_file(path: str | Path) -> tuple[Path, dict[str, Any]]:
+    """The path and the tables of a TOML table spec of any kind (``name`` defaults to the
+    file's stem).
 
     Raises
     ------
     CaseError
-        When the file does not exist, does not parse or is not a valid spec.
+        When the file does not exist or does not parse.
     """
     p = Path(path)
     if not p.is_file():
@@ -422,6 +428,25 @@ def load_spec(path: str | Path) -> TableSpec:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as exc:
         raise CaseError(f"table spec {p} is not valid TOML: {exc}") from None
     raw.setdefault("name", p.stem)
+    return p, raw
+
+
+def load_spec(path: str | Path) -> TableSpec:
+    """Read a TOML table spec (a case file plus ``[table]``; SI units).
+
+    Profile files named by a relative path are looked up beside the spec first.
+
+    Raises
+    ------
+    CaseError
+        When the file does not exist, does not parse or is not a valid spec.
+    """
+    return spec_of_file(*read_spec_file(path))
+
+
+def spec_of_file(p: Path, raw: dict[str, Any]) -> TableSpec:
+    """:func:`parse_spec` of the tables ``raw`` read from the file ``p`` (its relative
+    profile paths looked up beside it first)."""
     geo = raw.get("geometry")
     if isinstance(geo, dict):
         for key in ("wheel", "rail"):
