@@ -6,14 +6,22 @@ Runs ``--warm`` warm steps (5) of :mod:`bench_step`'s hunting-like run (S1002 on
 profiles one more step with :func:`sys.setprofile` and prints:
 
 * entries into the contact search: calls of a function of
-  :mod:`railcontact.geometry.search` (its functions and :class:`ContactPoint`'s methods)
-  from outside that module, per wheel, and by function;
+  :mod:`railcontact.geometry.search` (the search of a wheel at a pose and the functions
+  of a wheel given by track, wheelset, pose and side) from outside that module, per
+  wheel, and by function;
+* for the record, the calls of :mod:`railcontact.geometry.points` from outside it: the
+  contact points and patch frames formed from the search's record
+  (:class:`~railcontact.geometry.points.WheelSearch`) at the approaches the load loops
+  try, and the gaps, boxes and samples read of them (:class:`ContactPoint`'s methods
+  included) - pure functions of the record's arrays, not searches;
 * climbs to the top level: returns of Python functions into the frame of
   :meth:`WheelsetContact.solve` (each a stage, or a helper, the step calls itself).
 
 ``--rigid`` solves the rigid wheelset's stage too; ``--cold`` profiles a cold step.
 
 Usage: python scripts/step_walk.py [--warm 5] [--rigid] [--cold]
+(with ``PYTHONPATH`` at the tree to measure when the environment's ``railcontact`` is
+another's)
 """
 
 from __future__ import annotations
@@ -28,21 +36,25 @@ import railcontact as rc
 from railcontact.timestep import wheelset as wheelset_module
 
 SEARCH = str(Path(rc.__file__).parent / "geometry" / "search.py")
+POINTS = str(Path(rc.__file__).parent / "geometry" / "points.py")
 STEP = wheelset_module.WheelsetContact.solve.__code__
 
 
-def walk(contact: rc.WheelsetContact, **step) -> tuple[Counter, int, Counter]:
+def walk(contact: rc.WheelsetContact, **step) -> tuple[Counter, int, Counter, Counter]:
     """(entries into the search by function, climbs to the step's top level, climbs by
-    function) of ``contact.solve(**step)``."""
+    function, calls of :mod:`railcontact.geometry.points` by function) of
+    ``contact.solve(**step)``."""
     entries: Counter = Counter()
     climbs: Counter = Counter()
+    formed: Counter = Counter()
 
     def profile(frame, event, arg) -> None:
         if event == "call":
-            if frame.f_code.co_filename == SEARCH:
+            name = frame.f_code.co_filename
+            if name == SEARCH or name == POINTS:
                 back = frame.f_back
-                if back is None or back.f_code.co_filename != SEARCH:
-                    entries[frame.f_code.co_name] += 1
+                if back is None or back.f_code.co_filename != name:
+                    (entries if name == SEARCH else formed)[frame.f_code.co_name] += 1
         elif event == "return":
             back = frame.f_back
             if back is not None and back.f_code is STEP:
@@ -53,7 +65,7 @@ def walk(contact: rc.WheelsetContact, **step) -> tuple[Counter, int, Counter]:
         contact.solve(**step)
     finally:
         sys.setprofile(None)
-    return entries, sum(climbs.values()), climbs
+    return entries, sum(climbs.values()), climbs, formed
 
 
 def main() -> None:
@@ -77,13 +89,15 @@ def main() -> None:
 
     for k in range(args.warm):
         wc.solve(**step(k))
-    entries, climbs, by = walk(wc, **step(args.warm))
+    entries, climbs, by, formed = walk(wc, **step(args.warm))
     kind = "cold" if args.cold else "warm"
     print(f"{kind} step{' with the rigid stage' if args.rigid else ''}: "
           f"{sum(entries.values())} entries into the contact search "
           f"({sum(entries.values()) / 2:g} per wheel), {climbs} climbs to the step's top level")
     print("  entries: " + ", ".join(f"{n} {c}" for n, c in entries.most_common()))
     print("  climbs:  " + ", ".join(f"{n} {c}" for n, c in by.most_common()))
+    print(f"  calls of the points formed from the search's record: {sum(formed.values())}: "
+          + ", ".join(f"{n} {c}" for n, c in formed.most_common()))
 
 
 if __name__ == "__main__":

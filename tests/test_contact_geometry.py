@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from railcontact import RailContactError
+from railcontact.geometry.points import reference_offset, samples
 from railcontact.geometry.profiles import builtin_profile
 from railcontact.geometry.search import contact_points, vertical_gap
 from railcontact.geometry.track import Pose, Track, Wheelset
@@ -77,7 +78,8 @@ def test_gap_curvature_is_the_profiles_curvature(y):
     assert c.B == pytest.approx(-(kw + kr) / 2, rel=0.02)
     s = c.s
     k0 = int(np.argmin(np.abs(s)))
-    even = 0.5 * (c.f[k0 + 1:k0 + 6] + c.f[k0 - 1:k0 - 6:-1])
+    f = samples(c).f
+    even = 0.5 * (f[k0 + 1:k0 + 6] + f[k0 - 1:k0 - 6:-1])
     assert np.allclose(even, c.B * s[k0 + 1:k0 + 6] ** 2, rtol=0.03)
     assert c.A == pytest.approx(math.cos(math.atan(WS.wheel.slope(c.wheel_s)))
                                 / (2 * c.rolling_radius), rel=1e-3)
@@ -124,22 +126,26 @@ def test_lateral_extent_is_the_run_of_gap_below_delta_through_the_contact_point(
     from railcontact.halfspace.grid import Grid
 
     cp = contact_points(TRACK, WS, Pose(y), "left")[0]
+    f, a_of_s = samples(cp).f, samples(cp).a_of_s
     for delta in (2e-5, 1e-4, 5e-4):
         lo, hi = cp.lateral_extent(delta)
         ds = cp.s[1] - cp.s[0]
         inside = (cp.s > lo + 0.5 * ds) & (cp.s < hi - 0.5 * ds)
-        assert np.all(cp.f[inside] <= delta) and np.any(np.abs(cp.s[inside]) < ds)
+        assert np.all(f[inside] <= delta) and np.any(np.abs(cp.s[inside]) < ds)
         for edge, out in ((lo + ds, -1), (hi - ds, 1)):  # the next sample out: above delta
             k = int(np.argmin(np.abs(cp.s - edge))) + out
-            assert cp.f[k] > delta
+            assert f[k] > delta
         assert cp.lateral_extent(delta, 1.5) == pytest.approx((1.5 * lo, 1.5 * hi))
     g = Grid(6, 5, 1e-3, 2e-3, -2.5e-3, -4e-3)
     X, Y = g.mesh()
-    want = np.interp(Y, cp.s, cp.f) + np.interp(Y, cp.s, cp.a_of_s) * X**2
+    want = np.interp(Y, cp.s, f) + np.interp(Y, cp.s, a_of_s) * X**2
     np.testing.assert_allclose(cp.gap_on_grid(g), want, rtol=1e-14, atol=0)
 
 
-def test_fields_formed_on_first_read_survive_pickling():
+def test_points_with_samples_formed_in_part_survive_pickling():
+    """A frame at the reference point pickled with its samples formed over its overlap
+    only (and its rigid point with none formed) forms the others after unpickling: the
+    same values as the original's."""
     import pickle
 
     from railcontact.geometry import search
@@ -147,10 +153,13 @@ def test_fields_formed_on_first_read_survive_pickling():
     pose = Pose(lateral=3e-3, yaw=2e-3, roll=1e-3)
     cp = contact_points(TRACK, WS, pose, "left")[0]
     ref = search.at_reference(cp, TRACK, WS, pose, 8e-5)
-    copy = pickle.loads(pickle.dumps(ref))  # forms the reference point's offset, its rigid frame
-    assert copy.offset == ref.offset and abs(ref.offset[1]) < 5e-3
-    np.testing.assert_array_equal(copy.rigid.f, cp.f)
-    assert cp.f[np.argmin(np.abs(cp.s))] == 0.0 and np.isfinite(cp.B) and cp.B > 0
+    copy = pickle.loads(pickle.dumps(ref))
+    assert reference_offset(copy) == reference_offset(ref) and abs(reference_offset(ref)[1]) < 5e-3
+    for a, b in zip(samples(copy), samples(ref), strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(samples(copy.rigid).f, samples(cp).f)
+    f = samples(cp).f
+    assert f[np.argmin(np.abs(cp.s))] == 0.0 and np.isfinite(cp.B) and cp.B > 0
     with pytest.raises(AttributeError):
         cp.no_such_field  # noqa: B018
 
@@ -196,20 +205,20 @@ def test_frame_at_the_reference_point_formed_in_part_is_the_full_frame(pose):
     grid's gap read from that part, and the samples formed in full later, equal the
     frame formed over all samples at once (the frame at the same point, formed in one
     pass by the rigid point's kernel at the same plane and lowered wheel)."""
-    from railcontact.geometry import kernels, search
+    from railcontact.geometry import kernels, points, search
     from railcontact.halfspace.grid import Grid
 
     for side in ("left", "right"):
         cp = contact_points(TRACK, WS, pose, side, 0.0)[0]
         ref = search.at_reference(cp, TRACK, WS, pose, 8e-5)
-        frame, i0, i1, what = ref.__dict__["_part"]
+        i0, i1, what = ref.plane.i0, ref.plane.i1, ref.plane.what
         assert 0 < i0 and i1 < search.N_S  # part of the samples
         grids = [Grid.from_bounds(-4e-3, 4e-3, y0, y1, nx=9, ny=ny)
                  for y0, y1, ny in ((-3e-3, 3e-3, 13), (-14e-3, 15e-3, 59), (-3e-2, 3e-2, 99))]
         gaps = [ref.gap_on_grid(g) for g in grids]  # the last one forms all samples
         # the same frame formed over all samples in one pass
         eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c, gamma, \
-            eta_c, kw, kr, s, overlap = search._frame_arguments(what)
+            eta_c, kw, kr, s, overlap = points._frame_arguments(what)
         full = np.empty((5, search.N_S))
         kernels.frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back,
                               u_c, z_c, gamma, eta_c, kw, kr, s, 0, search.N_S, full)
@@ -217,11 +226,12 @@ def test_frame_at_the_reference_point_formed_in_part_is_the_full_frame(pose):
         full[0] = np.where(np.isfinite(f), f + overlap, np.inf)
         for name, row in zip(("f", "a_of_s", "wheel_s_of_s", "rail_u_of_s", "rail_z_of_s"),
                              full, strict=True):
-            np.testing.assert_array_equal(getattr(ref, name), row)
-        assert ref.A == full[1, search.K0] and ref.f[search.K0] >= 0.0
+            np.testing.assert_array_equal(getattr(samples(ref), name), row)
+        assert ref.A == full[1, search.K0] and samples(ref).f[search.K0] >= 0.0
         for g, gap in zip(grids, gaps, strict=True):
             want = np.empty((g.nx, g.ny))
-            kernels.gap_on_grid(s, ref.f, ref.a_of_s, float(g.x0), float(g.dx), g.nx,
+            kernels.gap_on_grid(s, samples(ref).f, samples(ref).a_of_s, float(g.x0),
+                                float(g.dx), g.nx,
                                 float(g.y0), float(g.dy), g.ny, search.FAR, want)
             np.testing.assert_array_equal(gap, want)
         assert search.count_contacts(TRACK, WS, pose, side, 3e-4) == len(

@@ -20,6 +20,7 @@ from railcontact.contact import WarmStart
 from railcontact.contact.loadloop import vertical_force
 from railcontact.contact.patch import solve_patch_normal
 from railcontact.contact.wheelrail import solve_wheel_normal
+from railcontact.geometry.points import samples
 from railcontact.geometry.search import contact_points, merge_approaches, run_on_rail
 from railcontact.settings import Control
 from railcontact.timestep.wheelset import OK, WheelsetContact
@@ -67,8 +68,9 @@ def test_a_merged_patch_carries_both_lobes_of_its_run(geometry):
     force, (patch,) = _vertical(geometry, approach, "rigid")
     cp = patch.geometry
     u_lo, u_hi = run_on_rail(*geometry, POSE, "left", approach, cp.rail_u)
-    lobe = (cp.f <= patch.normal.penetration) & (cp.rail_u_of_s >= u_lo) & \
-        (cp.rail_u_of_s <= u_hi)
+    full = samples(cp)
+    lobe = (full.f <= patch.normal.penetration) & (full.rail_u_of_s >= u_lo) & \
+        (full.rail_u_of_s <= u_hi)
     s_lobes = cp.s[lobe]
     assert np.any(np.diff(np.flatnonzero(lobe)) > 1)  # two lobes in this plane
     xl = 1.5 * math.sqrt(patch.normal.penetration / cp.A)

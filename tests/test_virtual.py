@@ -8,6 +8,7 @@ import pytest
 
 import railcontact as rc
 from railcontact import ElasticPair, Grid, Material, hertz
+from railcontact.geometry.points import samples
 from railcontact.halfspace.grid import remesh
 from railcontact.normal.virtual import infcon_factor, virtual_penetration
 
@@ -126,7 +127,7 @@ def test_infcon_pressure_against_the_converged_bem(root, rail, lateral, bound):
     assert n.converged
     error = {}
     for method in ("infcon", "kp"):
-        est = normal_estimate(NormalSettings(estimate=method), None, cp.s, cp.f, cp.a_of_s,
+        est = normal_estimate(NormalSettings(estimate=method), None, *samples(cp)[:3],
                               PAIR, Control(penetration=n.penetration)).pressure_on(n.grid).pressure
         error[method] = float(np.abs(est - n.pressure).sum() / n.pressure.sum())
     print(rail, lateral, error)
@@ -246,7 +247,7 @@ def test_two_patch_estimates_land_on_their_bem_patches(root):
         dn = cp.normal_penetration(5e-5)
         hz = hertz_solution(cp.A, cp.B, PAIR, penetration=dn)
         est = normal_estimate(NormalSettings(estimate="infcon", estimate_grid=(40, 40)), hz,
-                              cp.s, cp.f, cp.a_of_s, PAIR, Control(penetration=dn)
+                              *samples(cp)[:3], PAIR, Control(penetration=dn)
                               ).pressure_on(n.grid).pressure
         overlap = np.logical_and(est > 0, n.contact).sum()
         assert overlap >= 0.8 * n.contact.sum()
@@ -322,6 +323,6 @@ def test_infcon_in_the_reference_frame_between_two_lobes(root):
     c["normal"] = {"load": 83.3e3, "tolerance": 1e-3, "estimate": "infcon"}
     (p,) = rc.solve(c).patches
     cp = p.geometry
-    assert cp.f[np.argmin(np.abs(cp.s))] > 5e-5
+    assert samples(cp).f[np.argmin(np.abs(cp.s))] > 5e-5
     assert p.estimate == "infcon"
     assert p.estimate_error.l1 < 0.05

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from railcontact import ElasticPair, Material, hertz
+from railcontact.geometry.points import reference_offset, samples
 from railcontact.geometry.profiles import builtin_profile
 from railcontact.geometry.search import at_reference, contact_points
 from railcontact.geometry.track import Pose, Track, Wheelset
@@ -55,13 +56,14 @@ def test_a_steps_contact_points_are_freed_without_the_garbage_collector():
     """A rigid contact point and its frame at the reference point hold their arrays (the
     trace, the frame) until they are dropped: not kept in a reference cycle, which only a
     collection frees (as the points' lazily formed fields did, ~59 objects and their
-    arrays a warm step, and a young collection every ~16 steps)."""
+    arrays a warm step, and a young collection every ~16 steps), with their samples
+    formed in part or in full."""
     track, ws = Track(builtin_profile("60E1")), Wheelset(builtin_profile("S1002"))
     pose = Pose(lateral=2e-3)
     # a first call compiles the kernels (numba keeps what its compilation raised, and with
     # it the calling frames and their points, once a process): done before the check
     cp = contact_points(track, ws, pose, "left")[0]
-    at_reference(cp, track, ws, pose, 8e-5).f, cp.f, cp.rail_y  # noqa: B018
+    samples(at_reference(cp, track, ws, pose, 8e-5)), samples(cp)
     del cp
     gc.collect()
     gc.disable()
@@ -69,9 +71,9 @@ def test_a_steps_contact_points_are_freed_without_the_garbage_collector():
         for read in (False, True):
             cp = contact_points(track, ws, pose, "left")[0]
             ref = at_reference(cp, track, ws, pose, 8e-5)
-            if read:  # every lazily formed field formed
-                assert np.isfinite(cp.f).any() and np.isfinite(ref.f).any()
-                assert ref.offset is not None and cp.rail_y is not None
+            if read:  # every sample formed
+                assert np.isfinite(samples(cp).f).any() and np.isfinite(samples(ref).f).any()
+                assert reference_offset(ref) is not None
             alive = weakref.ref(ref), weakref.ref(cp)
             contact_points(track, ws, Pose(lateral=1e-3), "left")  # (the last call is kept)
             del cp, ref
@@ -89,7 +91,7 @@ def test_first_contact_of_one_least_sample_is_the_scans_point():
 
     track, ws = Track(builtin_profile("60E1")), Wheelset(builtin_profile("S1002"))
     rng = np.random.default_rng(7)
-    wheel, rail = search._wheel_arrays(ws), search._rail_arrays(track)[2:4]
+    wheel, rail = search.wheel_arrays(ws), search.rail_arrays(track)[2:4]
     for _ in range(100):
         pose = Pose(lateral=rng.uniform(-9e-3, 9e-3), yaw=rng.uniform(-8e-3, 8e-3),
                     roll=rng.uniform(-3e-3, 3e-3) if rng.random() < 0.7 else 0.0)

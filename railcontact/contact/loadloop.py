@@ -17,7 +17,7 @@ from time import perf_counter
 from typing import TypeVar
 
 from ..errors import RailContactError, SolverError
-from ..geometry.search import ContactPoint
+from ..geometry.points import ContactPoint
 from ..halfspace.hertz import hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import Control, PatchSettings
@@ -279,7 +279,7 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
 
 
 MERGE_WINDOW = 1.3
-"""Merges of a wheel's patches (:func:`~railcontact.geometry.search.merge_approaches`)
+"""Merges of a wheel's patches (:func:`~railcontact.geometry.points.merge_approaches`)
 checked for another solution of its load (:func:`first_root`): those within this factor
 of the root's vertical approach. The vertical force grows at least as the approach to the
 power 3/2 (Hertz; faster where further patches join in), so a merge 1.3 times the

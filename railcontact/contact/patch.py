@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from ..errors import CaseError, RailContactError
-from ..geometry.search import FAR
+from ..geometry.points import FAR
 from ..halfspace.grid import Grid, nonzero_box, remesh
 from ..halfspace.hertz import MIN_LOAD, HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
@@ -34,7 +34,7 @@ from .start import Bounds, NormalStart, WarmStart, no_start
 
 UNDEFINED_GAP = 0.5 * FAR
 """Gaps [m] from this up mark elements where the profiles give no gap (the search's
-:data:`~railcontact.geometry.search.FAR`); a contact that reaches them is cut off."""
+:data:`~railcontact.geometry.points.FAR`); a contact that reaches them is cut off."""
 GROW_FACTOR = 1.5
 """Factor by which an automatic potential area grows when the contact reaches its edge."""
 MAX_GROW = 4

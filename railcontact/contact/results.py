@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.search import ContactPoint, ReferencePoint
+from ..geometry.points import ContactPoint, ReferencePoint
 from ..halfspace.hertz import HertzSolution
 from ..normal import NormalResult
 from ..normal.starterror import EstimateError, estimate_error

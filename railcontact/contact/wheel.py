@@ -20,7 +20,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..errors import ConvergenceError, RailContactError, SolverError
-from ..geometry.search import ContactPoint
+from ..geometry.points import ContactPoint, WheelSearch
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
 from ..settings import Control, PatchSettings, TangentialSettings
@@ -54,13 +54,17 @@ class WheelProblem:
         The vertical wheel load [N] or the vertical approach [m] beyond first contact.
     first
         The wheel's first rigid contact point (at approach 0; :func:`~railcontact.geometry.
-        search.contact_points`): where a single patch's frame and a cold start's estimates
+        points.contact_points`): where a single patch's frame and a cold start's estimates
         are formed; None without a load or an approach (no contact: nothing searched).
     merges
         The vertical approaches [m] at which two of the wheel's contact regions join into
-        one patch (:func:`~railcontact.geometry.search.merge_approaches`, the saddles of
+        one patch (:func:`~railcontact.geometry.points.merge_approaches`, the saddles of
         at least :data:`~.wheelrail.MIN_LOBE`), increasing; checked for another root of a
         load (:func:`~.loadloop.first_root`).
+    found
+        The wheel searched at the pose (:func:`~railcontact.geometry.search.search_wheel`):
+        what its contact points and patch frames are formed from; None without a load or
+        an approach.
     """
 
     track: Track
@@ -71,6 +75,7 @@ class WheelProblem:
     control: Control
     first: ContactPoint | None
     merges: np.ndarray
+    found: WheelSearch | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -18,7 +18,7 @@ carries a large part of the load (``mu tan(gamma)`` ~ 0.8 at 70 deg with mu = 0.
 beyond Nadal's limit (``mu tan(gamma) > 1``, sliding up) no normal force carries it: an
 error. Where two of the wheel's contact regions join into one patch, a load may be carried
 at two approaches; the wheel takes the smallest (:func:`~.loadloop.first_root`, the merges from
-:func:`~railcontact.geometry.search.merge_approaches`) and says that another exists.
+:func:`~railcontact.geometry.points.merge_approaches`) and says that another exists.
 
 ``[geometry] roll`` is a number [rad], ``"rigid"`` (the roll at which both wheels of the rigid
 wheelset touch their rails, :func:`railcontact.geometry.roll.contact_roll`) or
@@ -47,21 +47,24 @@ from scipy.optimize import brentq
 
 from ..errors import CaseError, ConvergenceError, RailContactError, SolverError
 from ..geometry.kinematics import PatchKinematics, WheelsetMotion, patch_kinematics
-from ..geometry.profiles import read_profile
-from ..geometry.roll import contact_roll, first_contact_gap
-from ..geometry.search import (
+from ..geometry.points import (
     ContactPoint,
     ReferencePoint,
+    WheelSearch,
     at_reference,
     contact_points,
     count_contacts,
-    least_gap,
     merge_approaches,
     overlap_box,
     patch_run,
+    reference_offset,
     reference_point,
     run_on_rail,
+    samples,
 )
+from ..geometry.profiles import read_profile
+from ..geometry.roll import contact_roll, first_contact_gap
+from ..geometry.search import search_wheel
 from ..geometry.separation import PatchSeparation, turned_angles
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..halfspace.grid import Grid
@@ -109,7 +112,7 @@ step's; ``hertz(cp.A, cp.B, pair, **control.kwargs())`` forms it)."""
 RunOf = Callable[[float, float], tuple[float, float]]
 """``run_of(approach, rail_u)``: the rail positions [m] spanned by a wheel's run of vertical
 overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
-(:func:`~railcontact.geometry.search.run_on_rail` at a pose)."""
+(:func:`~railcontact.geometry.points.run_on_rail` of a searched wheel)."""
 Starts = Callable[[str], EstimateFor | None]
 """``starts(side)``: the ``estimate_for`` of a wheel (its :class:`CaseStart`), or None."""
 LOAD_RTOL = 1e-6
@@ -229,7 +232,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
     Each solution is checked against the patch's rigid overlap (:func:`_overlap_covered`):
     on a potential area an estimate gave (a time step's), and with ``run_of`` (the rail
     positions spanned by the wheel's run of vertical overlap at an approach around a rail
-    position, :func:`~railcontact.geometry.search.run_on_rail`) on every area, so that
+    position, :func:`~railcontact.geometry.points.run_on_rail`) on every area, so that
     a second lobe of the run that the patch's plane shows apart is not left out.
 
     A patch of ``previous`` (the wheel's last load pass) at the same contact point starts
@@ -275,7 +278,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                             traction_on=last.start.traction_on)
         elif estimate_for is None:
             hz = hz or hertz(cp.A, cp.B, pair, **kwargs)
-            est = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
+            est = normal_estimate(normal, hz, *samples(cp)[:3], pair, control)
         else:
             est = estimate_for(cp, hz, control)
         # a start may know a tighter area (a time step: where the contact was); else the
@@ -317,8 +320,8 @@ mark where the profiles end (:data:`~.patch.UNDEFINED_GAP`)."""
 
 
 def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], Any]:
-    """The undeformed gap of the patch ``cp`` on a grid [m] (:meth:`~railcontact.geometry.
-    search.ContactPoint.gap_on_grid`) with the columns beyond the watershed towards each
+    """The undeformed gap of the patch ``cp`` on a grid [m] (:func:`~railcontact.geometry.
+    points.gap_on_grid`) with the columns beyond the watershed towards each
     of the wheel's ``others`` patches raised to :data:`OTHER_PATCH_GAP`.
 
     The gap in a patch's plane also shows the lobes of the other patches' overlaps (the
@@ -329,8 +332,9 @@ def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], An
     read in this plane): it does not depend on the approach, so the load loops'
     residuals stay continuous, and up to it the gap rises, so no contact of this patch's
     own lobe is cut."""
-    s, f = cp.s, cp.f
-    u = cp.rail_u_of_s
+    full = samples(cp)
+    s, f = full.s, full.f
+    u = full.rail_u_of_s
     ok = np.isfinite(u) & np.isfinite(f)
     k0 = int(np.argmin(np.abs(s)))
     lo, hi = -math.inf, math.inf
@@ -364,7 +368,7 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
     """The normal solution ``res`` of the patch ``cp`` on a potential area ``bounds``
     [m] (a time step's: the previous contact's box with a margin; or the cold one),
     checked against the patch's rigid overlap at the penetration it found
-    (:func:`~railcontact.geometry.search.overlap_box`, with every lobe of the wheel's
+    (:func:`~railcontact.geometry.points.overlap_box`, with every lobe of the wheel's
     run of vertical overlap at the approach it found when ``run_of`` gives the run;
     :func:`~.patch.uncovered`): while
     the overlap beyond the grid holds places where the solution's deformed gap may be
@@ -408,21 +412,21 @@ KinematicsOf = Callable[[PatchSolution, list[PatchSolution]], PatchKinematics]
 whose pass solved ``patches`` (:func:`wheel_kinematics`)."""
 
 
-def wheel_kinematics(track: Track, ws: Wheelset, pose: Pose, side: str,
-                     motion: WheelsetMotion) -> KinematicsOf:
-    """The creepages of the ``side`` wheel's patches from the velocities ``motion``
+def wheel_kinematics(found: WheelSearch, motion: WheelsetMotion) -> KinematicsOf:
+    """The creepages of the searched wheel's patches from the velocities ``motion``
     (:func:`~railcontact.geometry.kinematics.patch_kinematics`): at each patch's origin
     (its reference point), with the wheel's point at its normal approach below it, and the
     wheelset centre where the pass's vertical approach puts it (the wheel lowered from
     first contact by that approach). The rail's origin is that of ``track``'s rail (with
     its deviation)."""
+    track, ws, pose, side = found.track, found.wheelset, found.pose, found.side
     sgn = SIDES[side]
     u0, z0 = track.rail_origin
     origin = (sgn * u0, z0)
 
     def of(patch: PatchSolution, patches: list[PatchSolution]) -> PatchKinematics:
         cp = patch.geometry
-        height = ws.radius - least_gap(track, ws, pose, side) - vertical_approach(patches)
+        height = ws.radius - found.least_gap - vertical_approach(patches)
         return patch_kinematics(side, cp.position, cp.contact_angle, patch.normal.penetration,
                                 (0.0, pose.lateral, height), pose.roll, pose.yaw, origin,
                                 motion)
@@ -474,18 +478,19 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
 
 
 def wheel_problem(track: Track, ws: Wheelset, pose: Pose, side: str, pair: ElasticPair,
-                  control: Control) -> WheelProblem:
+                  control: Control, found: WheelSearch | None = None) -> WheelProblem:
     """The ``side`` wheel's problem at ``pose`` under ``control``, formed once for its
-    passes: its first rigid contact point and, under load control, the approaches where
-    two of its contact regions join (:class:`~.wheel.WheelProblem`; none of it without a
-    load or an approach: nothing to solve). Raises a :class:`RailContactError` for a pose
-    beyond the profiles."""
+    passes: the wheel searched at the pose (``found``, when the caller searched it:
+    :func:`~railcontact.geometry.search.search_wheel`), its first rigid contact point
+    and, under load control, the approaches where two of its contact regions join
+    (:class:`~.wheel.WheelProblem`; none of it without a load or an approach: nothing to
+    solve). Raises a :class:`RailContactError` for a pose beyond the profiles."""
     if control.value == 0.0 or (control.by_load and negligible_load(control.load)):
         return WheelProblem(track, ws, pose, side, pair, control, None, _NO_MERGES)
-    first = contact_points(track, ws, pose, side, 0.0)[0]
-    merges = (merge_approaches(track, ws, pose, side, MIN_LOBE) if control.by_load
-              else _NO_MERGES)
-    return WheelProblem(track, ws, pose, side, pair, control, first, merges)
+    found = found or search_wheel(track, ws, pose, side)
+    first = contact_points(found, 0.0)[0]
+    merges = merge_approaches(found, MIN_LOBE) if control.by_load else _NO_MERGES
+    return WheelProblem(track, ws, pose, side, pair, control, first, merges, found)
 
 
 _NO_MERGES = np.empty(0)
@@ -515,8 +520,8 @@ class CaseStart:
                                 last, reference=settings.reference, problem=problem)
         if settings.patch.tangential is not None:
             motion = settings.patch.kinematics
-            kinematics_of = None if motion is None else wheel_kinematics(
-                problem.track, problem.wheelset, problem.pose, problem.side, motion)
+            kinematics_of = None if motion is None else wheel_kinematics(problem.found,
+                                                                         motion)
             ps = _add_tangential(ps, settings.patch, problem.pair, last, kinematics_of,
                                  problem.track)
         return WheelPass(ps)
@@ -576,22 +581,25 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     started from the one before). ``previous``: an earlier solve of the wheel whose patches
     start those at the same contact points (grid and pressure, see :func:`_patches`).
     ``reference``: each patch is solved in the frame at its reference point
-    (:func:`~railcontact.geometry.search.at_reference`, formed at the approach; under load
+    (:func:`~railcontact.geometry.points.at_reference`, formed at the approach; under load
     control a single patch is solved again until the approach it gives is the one its
     frame was formed at, :func:`_single_patch`), else at its rigid contact point.
     ``start``: the vertical approach [m] and the vertical load [N] its normal forces carried
     in an earlier solve of the wheel (e.g. the previous time step) when ``previous`` is
     not given: a single patch's frame is first formed at that approach scaled to
     ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`. ``problem``: the
-    wheel's problem at this pose (its first contact point and merges: not searched again).
+    wheel's problem at this pose (the wheel searched, its first contact point and merges:
+    not searched again).
     """
+    found = (problem.found if problem is not None and problem.found is not None
+             else search_wheel(track, ws, pose, side))
     points = partial(referenced, separation=settings.separation) if reference else _rigid
-    run_of = partial(run_on_rail, track, ws, pose, side)
+    run_of = partial(run_on_rail, found)
     if not control.by_load:
         approach = control.penetration
         if approach <= 0:
             return []
-        return _patches(points(track, ws, pose, side, approach), ws, approach,
+        return _patches(points(found, approach), ws, approach,
                         settings, pair, estimate_for=estimate_for, previous=previous,
                         run_of=run_of)
     q = control.load
@@ -599,25 +607,23 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
         return []
     # one patch: force control (exact) in the frame at the reference point, formed at the
     # approach of the pass before (or Hertz's) and again until the approach holds
-    first = (contact_points(track, ws, pose, side, 0.0)[0] if problem is None
-             else problem.first)
-    single, passes = _single_patch(track, ws, pose, first, q, settings, pair, estimate_for,
+    first = contact_points(found, 0.0)[0] if problem is None else problem.first
+    single, passes = _single_patch(found, first, q, settings, pair, estimate_for,
                                    previous, reference, start, run_of)
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
-        ps = _patches(points(track, ws, pose, side, a), ws, a, settings, pair,
+        ps = _patches(points(found, a), ws, a, settings, pair,
                       estimate_for=estimate_for, previous=passes[-1], run_of=run_of)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
     approach = vertical_approach(single)
-    if count_contacts(track, ws, pose, side, approach) == 1:
+    if count_contacts(found, approach) == 1:
         ps = single
     else:  # several patches: secant on the vertical approach
         ps, r = approach_secant(residual, approach, q, LOAD_RTOL)
         _check_load(ps, r, q, side)
-    merges = (merge_approaches(track, ws, pose, side, MIN_LOBE) if problem is None
-              else problem.merges)
+    merges = merge_approaches(found, MIN_LOBE) if problem is None else problem.merges
     ps, other = first_root(residual, ps, vertical_approach(ps), merges, q, LOAD_RTOL)
     if other is not None:
         _check_load(ps, vertical_force(ps) - q, q, side)
@@ -650,34 +656,33 @@ def mark_other(ps: list[PatchSolution], other: float | None) -> None:
             p.load_unique = True
 
 
-def _rigid(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float
-           ) -> list[ContactPoint]:
-    """The rigid contact points of a wheel at the vertical ``approach`` [m]."""
-    return contact_points(track, ws, pose, side, approach)
+def _rigid(found: WheelSearch, approach: float) -> list[ContactPoint]:
+    """The rigid contact points of a searched wheel at the vertical ``approach`` [m]."""
+    return contact_points(found, approach)
 
 
-def referenced(track: Track, ws: Wheelset, pose: Pose, side: str, approach: float,
+def referenced(found: WheelSearch, approach: float,
                separation: PatchSeparation | None = None) -> list[ContactPoint]:
-    """The contact points of a wheel at the vertical ``approach`` [m], each with its frame
-    at the reference point (:func:`~railcontact.geometry.search.at_reference`) where it
+    """The contact points of a searched wheel at the vertical ``approach`` [m], each with its frame
+    at the reference point (:func:`~railcontact.geometry.points.at_reference`) where it
     overlaps the rail, else at the rigid point. With ``separation`` (CONTACT's patch
     separation parameters) the planes of neighbouring patches that lie between its
     ``D_SEP`` and ``D_TURN`` apart are inclined at CONTACT's turned angles
     (:func:`~railcontact.geometry.separation.turned_angles`), their points kept."""
-    points = [at_reference(cp, track, ws, pose, approach) or cp
-              for cp in contact_points(track, ws, pose, side, approach)]
+    points = [at_reference(found, cp, approach) or cp
+              for cp in contact_points(found, approach)]
     if separation is None or len(points) < 2:
         return points
     at = [k for k, cp in enumerate(points) if patch_run(cp) is not None]
     runs = [patch_run(points[k]) for k in at]
     for k, run, angle in zip(at, runs, turned_angles(runs, separation), strict=True):
         if angle != run.angle:
-            points[k] = at_reference(points[k].rigid, track, ws, pose, approach,
+            points[k] = at_reference(found, points[k].rigid, approach,
                                      turn=angle - run.angle) or points[k]
     return points
 
 
-def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q: float,
+def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
                   settings: PatchSettings, pair: ElasticPair,
                   estimate_for: EstimateFor | None,
                   previous: list[PatchSolution] | None, reference: bool = True,
@@ -703,7 +708,7 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     one. Without ``reference``: one force-controlled solve at the rigid point."""
     if not reference:
         cosg = math.cos(first.contact_angle)
-        single = _patches([first], ws, 0.0, settings, pair, loads=[q / cosg],
+        single = _patches([first], found.wheelset, 0.0, settings, pair, loads=[q / cosg],
                           estimate_for=estimate_for, previous=previous, run_of=run_of)
         return single, [single]
     if previous:  # the pass before, its approach scaled to this load as Hertz's
@@ -724,15 +729,15 @@ def _single_patch(track: Track, ws: Wheelset, pose: Pose, first: ContactPoint, q
     # tolerance (its frame is formed again at the approach it gives: 1-60 % from Hertz's)
     probe = approach > 0 and not previous and start is None
     for _ in range(MAX_REFERENCE_PASSES):
-        cp = at_reference(first, track, ws, pose, approach) if approach > 0 else None
+        cp = at_reference(found, first, approach) if approach > 0 else None
         cp = cp or first
-        ps = _patches([cp], ws, 0.0, probe_settings(settings) if probe else settings, pair,
+        ps = _patches([cp], found.wheelset, 0.0,
+                      probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
                       previous=last, run_of=run_of)
         passes.append(ps)
         new = vertical_approach(ps)
-        if cp is first and (approach <= 0 or at_reference(first, track, ws, pose, new)
-                            is None):
+        if cp is first and (approach <= 0 or at_reference(found, first, new) is None):
             if probe:  # the rigid point's patch is the answer: solved again, in full
                 probe, last = False, ps
                 continue
@@ -902,7 +907,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None, *,
     sides = ["left", "right"] if geo.side == "both" else [geo.side]
     for other in {"left", "right"} - set(sides):  # the wheelset is one body
         try:
-            check_on_rail(contact_points(placed, ws, pose, other, 0.0)[0], ws)
+            check_on_rail(contact_points(search_wheel(placed, ws, pose, other), 0.0)[0], ws)
         except RailContactError as exc:
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
                             f"{other} wheel off its rail: {exc}") from None
@@ -919,7 +924,7 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None, *,
         p.convention = convention
         n, cp = p.normal, p.geometry
         if cp.rigid is not None:  # solved in the frame at its reference point
-            p.reference = ReferencePoint(offset=cp.offset, position=cp.position,
+            p.reference = ReferencePoint(offset=reference_offset(cp), position=cp.position,
                                          rail_y=cp.rail_y, wheel_s=cp.wheel_s,
                                          contact_angle=cp.contact_angle,
                                          rolling_radius=cp.rolling_radius)

@@ -753,3 +753,35 @@ def overlap_half_length(f, a_of_s, lo, hi, delta):
             if q > q_max:
                 q_max = q
     return math.sqrt(q_max) if q_max >= 0.0 else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
+                            u_c, z_c, gamma, eta_c, s, k0, out):
+    """What a rigid contact point's curvatures read of its tangent frame
+    (:func:`rigid_frame`), formed at the samples within 1 mm of ``s[k0]`` = 0 and at
+    ``k0 +- 5`` only (the same values as over all of ``s``): (A(0), f at ``k0 - 5``,
+    ``k0``, ``k0 + 5``) with ``f`` shifted and made infinite as there. ``out`` (5,
+    len(s)) holds the samples formed."""
+    ns = s.size
+    i0 = max(k0 - 5, 0)
+    while i0 > 0 and abs(s[i0 - 1]) < 1e-3:
+        i0 -= 1
+    i1 = min(k0 + 6, ns)
+    while i1 < ns and abs(s[i1]) < 1e-3:
+        i1 += 1
+    frame_samples(eta, u, z, g_min, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back,
+                  u_c, z_c, gamma, eta_c, nearest(u, u_c), nearest_sorted(ur, u_c), s, i0,
+                  i1, out)
+    f = out[F]
+    m = 0.0
+    if math.isfinite(f[k0]):
+        m = math.inf
+        for i in range(i0, i1):
+            if abs(s[i]) < 1e-3 and f[i] < m:  # NaN compares False: nanmin
+                m = f[i]
+    three = np.empty(3)
+    for j, i in enumerate((k0 - 5, k0, k0 + 5)):
+        v = f[i] - m if math.isfinite(f[k0]) else f[i]
+        three[j] = v if math.isfinite(v) else math.inf
+    return out[A_OF_S, k0], three[0], three[1], three[2]

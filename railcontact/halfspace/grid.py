@@ -6,6 +6,7 @@ centres ``x[i] = x0 + i dx`` (rolling direction) and ``y[j] = y0 + j dy`` (later
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -13,24 +14,6 @@ import numba
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
-
-
-class _formed_once:  # noqa: N801 (used as a decorator, like ``property``)
-    """A read-only array attribute of a frozen record formed when first read and kept in
-    the instance's ``__dict__`` (which then answers without this descriptor: lighter than
-    ``functools.cached_property``, which takes a lock; a race forms the same value)."""
-
-    def __init__(self, fn) -> None:
-        self.fn, self.name, self.__doc__ = fn, fn.__name__, fn.__doc__
-
-    def __get__(self, obj, cls=None):
-        if obj is None:
-            return self
-        value = self.fn(obj)
-        value.flags.writeable = False  # shared by all who read it
-        obj.__dict__[self.name] = value
-        return value
-
 
 _INDICES = np.arange(1024.0)
 _INDICES.flags.writeable = False
@@ -40,6 +23,16 @@ def _indices(n: int) -> np.ndarray:
     """0, 1, ..., n - 1 as floats (the same values ``np.arange(n)`` gives a product with
     a float; a slice of one array for the usual counts)."""
     return _INDICES[:n] if n <= _INDICES.size else np.arange(float(n))
+
+
+@functools.lru_cache(maxsize=256, typed=True)
+def element_centres(origin: float, size: float, n: int) -> np.ndarray:
+    """The centres ``origin + size * i`` [m] of ``n`` elements (i = 0 ... n - 1) along one
+    axis of a grid, read-only: one array for every grid with these values (a grid's
+    :attr:`Grid.x` and :attr:`Grid.y`; most grids of a time step read neither)."""
+    out = origin + size * _indices(n)
+    out.flags.writeable = False
+    return out
 
 
 _BOUND_NAMES = {a: (f"grid.{a} lower bound", f"grid.{a} upper bound") for a in "xy"}
@@ -83,10 +76,6 @@ class Grid:
         check_finite("grid.x0", self.x0, "m")
         check_finite("grid.y0", self.y0, "m")
 
-    def __getstate__(self) -> dict:
-        """Pickled without the coordinates formed once (they are formed again, read-only)."""
-        return {k: v for k, v in self.__dict__.items() if k not in ("x", "y")}
-
     @classmethod
     def from_bounds(
         cls, xmin: float, xmax: float, ymin: float, ymax: float, nx: int, ny: int
@@ -114,15 +103,15 @@ class Grid:
         """Area of one element dx * dy [m^2]."""
         return self.dx * self.dy
 
-    @_formed_once
+    @property
     def x(self) -> np.ndarray:
-        """Element centres along x [m], shape (nx,); formed once, read-only."""
-        return self.x0 + self.dx * _indices(self.nx)
+        """Element centres along x [m], shape (nx,); read-only (:func:`element_centres`)."""
+        return element_centres(self.x0, self.dx, self.nx)
 
-    @_formed_once
+    @property
     def y(self) -> np.ndarray:
-        """Element centres along y [m], shape (ny,); formed once, read-only."""
-        return self.y0 + self.dy * _indices(self.ny)
+        """Element centres along y [m], shape (ny,); read-only (:func:`element_centres`)."""
+        return element_centres(self.y0, self.dy, self.ny)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres as two (nx, ny) arrays (x, y) [m]."""

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import CaseError
+from ..geometry.points import samples
 
 FRICTION_AXES = ("angle", "rail_y")
 """What a friction table is given against: the rail's surface inclination [rad] or the
@@ -159,7 +160,7 @@ def angle_sign(side: str, convention: str) -> float:
 def friction_at_point(friction: float | FrictionTable, cp: Any, convention: str = "railcontact"
                       ) -> float:
     """The coefficient of friction [-] at a wheel-rail contact point ``cp``
-    (:class:`~railcontact.geometry.search.ContactPoint`: its contact angle [rad] or rail
+    (:class:`~railcontact.geometry.points.ContactPoint`: its contact angle [rad] or rail
     profile coordinate [m]); ``friction`` itself when it is a number."""
     if not isinstance(friction, FrictionTable):
         return friction
@@ -182,7 +183,7 @@ def side_friction(friction: float | FrictionTable, side: str, convention: str
 
 def row_friction(table: FrictionTable, cp: Any, track: Any) -> Callable[[Any], np.ndarray]:
     """The coefficient of friction of each lateral element row of the patch of the contact
-    point ``cp`` (:class:`~railcontact.geometry.search.ContactPoint`, its patch frame), as a
+    point ``cp`` (:class:`~railcontact.geometry.points.ContactPoint`, its patch frame), as a
     function of the patch's grid: an array (1, ny) [-].
 
     A row at the lateral coordinate ``y`` of the patch's tangent plane lies over the rail
@@ -192,7 +193,8 @@ def row_friction(table: FrictionTable, cp: Any, track: Any) -> Callable[[Any], n
     coordinate of that point (``track.rail_coordinate``). ``table`` is in the side frame
     (:func:`side_friction`). Rows beyond the ends of the profiles take the value of the
     nearest row over them."""
-    s, u, z = np.asarray(cp.s), np.asarray(cp.rail_u_of_s), np.asarray(cp.rail_z_of_s)
+    full = samples(cp)
+    s, u, z = np.asarray(full.s), np.asarray(full.rail_u_of_s), np.asarray(full.rail_z_of_s)
     ok = np.isfinite(u) & np.isfinite(z)
     if ok.sum() < 2:
         mu0 = friction_at_point(table, cp)

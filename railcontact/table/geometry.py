@@ -52,8 +52,9 @@ import numpy as np
 
 from ..contact.wheelrail import build_geometry, check_on_rail, solve_wheel_rail, vertical_approach
 from ..errors import CaseError, RailContactError, SolverError
+from ..geometry.points import ContactPoint
 from ..geometry.roll import contact_roll, first_contact_gap
-from ..geometry.search import ContactPoint, contact_points
+from ..geometry.search import contact_points
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..settings import Case
 from ..status import status_of

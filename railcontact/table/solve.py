@@ -35,6 +35,7 @@ from ..contact.patch import normal_estimate
 from ..contact.start import NormalStart, TangentialStart, WarmStart
 from ..contact.wheelrail import solve_wheel_rail
 from ..errors import CaseError, RailContactError, SolverError
+from ..geometry.points import samples
 from ..settings import Case, ContactSettings
 from ..status import status_of
 from ..timestep.warmstart import PatchMemory, match, previous_pressure, previous_tangential
@@ -67,7 +68,7 @@ def _starts(case: Case, memory: list[PatchMemory]):
 
     def estimate_for(cp, hz, control) -> WarmStart:
         m = match(memory, cp.rail_u, cp.position[2])
-        cold = normal_estimate(normal, hz, cp.s, cp.f, cp.a_of_s, pair, control)
+        cold = normal_estimate(normal, hz, *samples(cp)[:3], pair, control)
         if m is None:
             return cold
 

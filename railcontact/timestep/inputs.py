@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass, replace
 
 from ..errors import RailContactError, check_finite, check_positive
-from ..geometry.search import ContactPoint
+from ..geometry.points import ContactPoint
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..settings import ContactSettings
 from ..settings.convention import wheel_frame_creepage

@@ -62,7 +62,8 @@ from typing import Any
 
 from ..contact.results import Work
 from ..errors import RailContactError, SolverError
-from ..geometry.roll import MAX_ROLL, first_contact_gap
+from ..geometry.roll import MAX_ROLL
+from ..geometry.search import search_wheel
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from .warmstart import MAX_EXTRAPOLATION
 
@@ -82,9 +83,10 @@ wheelset rolls it up, and ``G`` grows at about 0.6 m/rad (S1002 on 60E1, 7-8 mm)
 smaller slope overshoots by a multiple of the root; the secant takes over after."""
 
 ApproachAt = Callable[..., tuple[float, float]]
-"""``(phi[, guess]) -> (delta_L, delta_R)``: the wheels' vertical approaches [m] at roll
-``phi``; ``guess``, when given, the approaches [m] expected there (the wheels' solves
-form their frames at them first)."""
+"""``(phi[, guess], found=...) -> (delta_L, delta_R)``: the wheels' vertical approaches [m]
+at roll ``phi``; ``guess``, when given, the approaches [m] expected there (the wheels'
+solves form their frames at them first); ``found``: the two wheels searched at that roll
+(:func:`~railcontact.geometry.search.search_wheel`, left and right)."""
 
 
 @dataclass(frozen=True)
@@ -206,8 +208,8 @@ def vertical_and_roll(track: Track | tuple[Track, Track],
                       approach_at: ApproachAt | None = None, *,
                       start: float | None = None, start_slope: float = 0.0,
                       approach_slopes: tuple[float, float] | None = None,
-                      anchor: tuple[float, tuple[float, float]] | None = None
-                      ) -> RigidSolution:
+                      anchor: tuple[float, tuple[float, float]] | None = None,
+                      gaps: tuple[float, float] | None = None) -> RigidSolution:
     """The vertical displacement [m] and roll [rad] of the rigid wheelset at which both
     wheels have their loads (module docstring).
 
@@ -237,6 +239,11 @@ def vertical_and_roll(track: Track | tuple[Track, Track],
         A roll [rad] and the approaches [m] expected there, from which the first guess
         is formed (the previous steps' at their roots, extrapolated); None: the pose's
         roll and ``approaches``. Later guesses start from the last evaluation.
+    gaps
+        The wheels' least gaps [m] (left, right) at the pose's roll, when the step searched
+        them there (:attr:`~railcontact.geometry.points.WheelSearch.least_gap`); None:
+        searched here. At every other roll each wheel is searched once, for its least gap
+        and ``approach_at``'s solve.
     """
     tracks = track if isinstance(track, tuple) else (track, track)
     wheelsets = ws if isinstance(ws, tuple) else (ws, ws)
@@ -263,19 +270,26 @@ def vertical_and_roll(track: Track | tuple[Track, Track],
         """(G, v) at roll ``phi``."""
         nonlocal rates, base, last
         p = Pose(pose.lateral, pose.yaw, phi)
+        if phi == pose.roll and gaps is not None:
+            found = None
+            gl, gr = gaps
+        else:  # the two wheels searched at this roll, once
+            found = (search_wheel(tracks[0], wheelsets[0], p, "left"),
+                     search_wheel(tracks[1], wheelsets[1], p, "right"))
+            gl, gr = found[0].least_gap, found[1].least_gap
         if phi == pose.roll or approach_at is None:
             dl, dr = approaches
         else:
-            dl, dr = (approach_at(phi) if rates is None else approach_at(
+            dl, dr = (approach_at(phi, found=found) if rates is None else approach_at(
                 phi, tuple(a + k * (phi - base[0])
-                           for a, k in zip(base[1], rates, strict=True))))
+                           for a, k in zip(base[1], rates, strict=True)), found=found))
             ref = last or (pose.roll, approaches)
             if phi != ref[0]:
                 rates = tuple((d - a) / (phi - ref[0])
                               for d, a in zip((dl, dr), ref[1], strict=True))
             last = base = (phi, (dl, dr))
-        hl = first_contact_gap(tracks[0], wheelsets[0], p, "left") + dl
-        hr = first_contact_gap(tracks[1], wheelsets[1], p, "right") + dr
+        hl = gl + dl
+        hr = gr + dr
         return hl - hr, -0.5 * (hl + hr)
 
     points: list[tuple[float, float, float]] = []  # (phi, G, v)
@@ -367,6 +381,9 @@ class RigidWheelset:
     """The previous steps' roots, newest first (:class:`RigidMemory`): the start in time."""
     time: float | None = None
     """Simulation time of the step [s]."""
+    gaps: tuple[float, float] | None = None
+    """The wheels' least gaps [m] (left, right) at the pose, from the step's search; None:
+    searched where needed."""
 
     def solve(self) -> RigidSolution:
         """(:func:`vertical_and_roll`, started in time from :attr:`history`; what the
@@ -381,7 +398,7 @@ class RigidWheelset:
                               approach_slopes=(self.history[0].approach_slopes
                                                if self.history else None),
                               anchor=(None if start is None or approaches is None
-                                      else (start, approaches)))
+                                      else (start, approaches)), gaps=self.gaps)
         if work is not None:  # the wheels' solves at other rolls: the step's work too
             s = replace(s, work=tuple(work_since(work[k], before[k]) for k in ("left", "right")))
         return s

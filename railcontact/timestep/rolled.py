@@ -8,6 +8,7 @@ from dataclasses import dataclass, field, replace
 
 from ..contact.results import Work
 from ..errors import RailContactError, SolverError
+from ..geometry.points import WheelSearch
 from ..geometry.track import Pose
 from ..halfspace.hertz import negligible_load
 from ..halfspace.materials import ElasticPair
@@ -60,9 +61,11 @@ class RolledApproaches:
     passes, re-meshes, wall time [s]): a running count over this step's searches
     (:attr:`RigidSolution.work` is the part one search added)."""
 
-    def __call__(self, phi: float, guess: tuple[float, float] | None = None
-                 ) -> tuple[float, float]:
-        """``guess``: the approaches [m] expected, at which each wheel's first pass forms
+    def __call__(self, phi: float, guess: tuple[float, float] | None = None,
+                 found: tuple[WheelSearch, WheelSearch] | None = None) -> tuple[float, float]:
+        """``found``: the wheels (left, right) searched at the roll ``phi``
+        (:func:`~railcontact.geometry.search.search_wheel`; None: searched in their solves).
+        ``guess``: the approaches [m] expected, at which each wheel's first pass forms
         its frame (scaled to the pass's load as Hertz's: the ``start`` of
         :func:`~railcontact.contact.wheelrail.solve_wheel_normal`). The solve forms the
         frame again while its approach misses the one the frame was formed at by more than
@@ -91,7 +94,7 @@ class RolledApproaches:
             wheel, mem, error = solve_step_wheel(
                 self.setups[k], pose, Control(load=self.loads[k]), creep, self.kinematics,
                 self.time, self.pair, self.convention, (older, start, self.step.wheel(side)),
-                None if guess is None else guess[k])
+                None if guess is None else guess[k], None if found is None else found[k])
             if error is not None:  # (a patch beyond the model, a load loop that raised)
                 raise error
             count_work(self.work[side], wheel)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 
-from ..geometry.search import ContactPoint, overlap_on_rail
+from ..geometry.points import ContactPoint, overlap_on_rail
 from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
 from ..halfspace.sums import array_sum, numpy_sum
 from ..normal.bem import REUSE_GENERATIONS, Displacement
@@ -157,7 +157,7 @@ def merged(cp: ContactPoint, memory: PatchMemory, memories: list[PatchMemory],
     """Whether the patch of ``cp``, matched to ``memory``, took in another remembered
     patch: the contact point of one of the other ``memories`` lies in the patch's rigid
     overlap at the normal ``penetration`` [m]
-    (:func:`~railcontact.geometry.search.overlap_on_rail`).
+    (:func:`~railcontact.geometry.points.overlap_on_rail`).
     Two patches that merge into one: the potential area of the one remembered is not the
     merged patch's (without this, its other lobe was left out, its load lost, in that step
     and every later one). Without other memories (a wheel with one patch) nothing is

@@ -23,7 +23,7 @@ from ..contact.start import NormalStart, WarmStart
 from ..contact.wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution
 from ..contact.wheelrail import solve_wheel, solve_wheel_normal, wheel_problem
 from ..errors import RailContactError, SolverError
-from ..geometry.search import ContactPoint, at_reference, vertical_gap
+from ..geometry.points import ContactPoint, WheelSearch, at_reference, samples
 from ..geometry.track import SIDES, Pose
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
@@ -95,8 +95,7 @@ class StepStart:
                 and cp.A > 0):
             cosg = math.cos(cp.contact_angle)
             approach = hertz(cp.A, cp.B, problem.pair, load=load / cosg).penetration / cosg
-            cp = at_reference(cp, problem.track, problem.wheelset, problem.pose,
-                              approach) or cp
+            cp = at_reference(problem.found, cp, approach) or cp
         c = self.creepage(cp, problem)
         sgn = SIDES[problem.side]
         return vertical_creep_estimate(cp, load, (c[0], sgn * c[1], sgn * c[2]),
@@ -125,8 +124,8 @@ class StepStart:
                 return hz or hertz(cp.A, cp.B, pair, **ctrl.kwargs())
 
             def estimate() -> WarmStart:  # KP/INFCON cost a solve of their own: when needed
-                return normal_estimate(s.normal_settings, hertz_of(), cp.s, cp.f,
-                                       cp.a_of_s, pair, ctrl)
+                return normal_estimate(s.normal_settings, hertz_of(), *samples(cp)[:3],
+                                       pair, ctrl)
 
             m = match(source, cp.rail_u, cp.position[2])
             if m is None:
@@ -214,7 +213,8 @@ def wheel_settings(setup: WheelSetup, tangential: bool) -> WheelSettings:
 def solve_step_wheel(setup: WheelSetup, pose: Pose, control: Control,
                      creep: tuple[float, float, float] | None, kin: Kinematics | None,
                      time: float | None, pair: ElasticPair, convention: str,
-                     memory: tuple[Memory, Memory, Memory], approach: float | None = None
+                     memory: tuple[Memory, Memory, Memory], approach: float | None = None,
+                     found: WheelSearch | None = None
                      ) -> tuple[WheelContact, Memory, RailContactError | SolverError | None]:
     """One wheel of a step: its :class:`~.results.WheelContact`, what the next step keeps
     of it, and the exception its solve raised (None; the wheel's status and message are
@@ -225,14 +225,16 @@ def solve_step_wheel(setup: WheelSetup, pose: Pose, control: Control,
     the rolled wheelset's (:class:`~.rolled.RolledApproaches`); none of it is read, and
     nothing kept, when the settings' warm start does not use the previous step.
     ``approach``: the vertical approach [m] expected, where the first pass forms its frame.
-    Raises a :class:`RailContactError` for a pose beyond the profiles or off the rail."""
+    ``found``: the wheel searched at ``pose`` (:func:`~railcontact.geometry.search.
+    search_wheel`; None: searched here). Raises a :class:`RailContactError` for a pose
+    beyond the profiles or off the rail."""
     side, settings = setup.side, setup.settings
     keep = settings.uses_previous
     previous, first, own = memory if keep else ((), (), ())
     tangential = creep is not None or kin is not None
     start = StepStart(setup, creep, kin, time, previous, first, own, approach)
     solution = solve_wheel(wheel_problem(setup.track, setup.wheelset, pose, side, pair,
-                                         control),
+                                         control, found),
                            wheel_settings(setup, tangential), start)
     wheel = wheel_contact(side, solution, pose, kin and kin.speed, convention)
     if solution.error is None and wheel.patches:
@@ -300,11 +302,10 @@ def _mark_uniqueness(wheel: WheelContact, solution: WheelSolution, warm: bool,
     wheel.message = "ok; the load has more than one solution: " + "; ".join(why)
 
 
-def penetration_approach(pose: Pose, setup: WheelSetup, vertical: float) -> float:
-    """Vertical approach [m] of a wheel into its rail for a wheelset lowered by
+def penetration_approach(found: WheelSearch, vertical: float) -> float:
+    """Vertical approach [m] of the searched wheel into its rail for a wheelset lowered by
     ``-vertical`` [m] (penetration control)."""
-    g = vertical_gap(setup.track, setup.wheelset, pose, setup.side)[4]
-    approach = max(-(float(g.min()) + vertical), 0.0)
+    approach = max(-(float(found.trace[4].min()) + vertical), 0.0)
     if approach > MAX_PENETRATION:
         raise RailContactError(f"vertical = {vertical:g} m puts the wheel "
                                f"{approach * 1e3:.4g} mm into its rail; a contact's "

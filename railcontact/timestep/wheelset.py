@@ -61,7 +61,10 @@ from dataclasses import replace
 from time import perf_counter
 
 from ..errors import CaseError, RailContactError, SolverError
+from ..geometry.points import WheelSearch
+from ..geometry.search import search_wheel
 from ..geometry.track import SIDES, Pose, Track, Wheelset
+from ..halfspace.hertz import negligible_load
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings, Control
 from ..settings.case import check_convention
@@ -98,6 +101,10 @@ from .rolled import RolledApproaches, rigid_stage
 from .validity import check_validity
 from .warmstart import PatchMemory
 from .wheel import penetration_approach, solve_step_wheel
+
+Found = tuple["WheelSearch | RailContactError", "WheelSearch | RailContactError"]
+"""The step's search of each wheel (left, right): its record, or the error of a wheel beside
+its rail."""
 
 WARM_PROMISE = (0.01, 0.02)
 """What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
@@ -225,8 +232,9 @@ class WheelsetContact:
         t0 = perf_counter()
         step = self._inputs(pose, loads, vertical, creepages, kinematics, time, rails,
                             friction)
-        wheels, memory, off_track = self._wheels(step)
-        result, memory = self._rigid_stage(step, wheels, memory, remember, off_track)
+        found = self._search(step)
+        wheels, memory, off_track = self._wheels(step, found)
+        result, memory = self._rigid_stage(step, found, wheels, memory, remember, off_track)
         if remember:
             self.memory = memory
         result.wall_time = perf_counter() - t0
@@ -242,24 +250,47 @@ class WheelsetContact:
         return step_inputs(pose, loads, vertical, creepages, kinematics, time,
                            self._setups.at(self.settings, rails, friction), self.convention)
 
-    def _wheels(self, step: StepInputs) -> tuple[list[WheelContact], StepMemory, bool]:
-        """Both wheels solved (:func:`~.wheel.solve_step_wheel`), each warm-started from
-        this contact's memory, their validity checked, what the next step keeps of them,
-        and whether a wheel is off its rail. A wheel that cannot be solved has its own
-        status (the other still is); a wheel off its rail puts the whole wheelset out of
-        range."""
+    def _search(self, step: StepInputs) -> Found:
+        """Each wheel searched at the step's pose (:func:`~railcontact.geometry.search.
+        search_wheel`): what its contact points and patch frames are formed from, or the
+        :class:`RailContactError` of a wheel beside its rail."""
+        found: list[WheelSearch | RailContactError] = []
+        for side, setup in zip(SIDE_NAMES, step.setups, strict=True):
+            try:
+                found.append(search_wheel(setup.track, setup.wheelset, step.pose, side))
+            except RailContactError as exc:
+                found.append(exc)
+        return found[0], found[1]
+
+    def _wheels(self, step: StepInputs, found: Found
+                ) -> tuple[list[WheelContact], StepMemory, bool]:
+        """Both wheels solved (:func:`~.wheel.solve_step_wheel`) on their searches
+        (``found``), each warm-started from this contact's memory, their validity checked,
+        what the next step keeps of them, and whether a wheel is off its rail. A wheel
+        that cannot be solved has its own status (the other still is); a wheel off its
+        rail (beside it: its search's error, raised where the wheel has a load or a
+        penetration to solve) puts the whole wheelset out of range."""
         wheels = []
         kept: dict[str, tuple[PatchMemory, ...]] = {}
         off_track = ""
         for k, (side, setup) in enumerate(zip(SIDE_NAMES, step.setups, strict=True)):
             try:
-                control = (Control(load=step.loads[k]) if step.loads is not None else
-                           Control(penetration=penetration_approach(step.pose, setup,
-                                                                    step.vertical)))
+                searched = found[k]
+                if step.loads is not None:
+                    control = Control(load=step.loads[k])
+                    if isinstance(searched, RailContactError) and not negligible_load(
+                            control.load) and control.value != 0.0:
+                        raise searched
+                else:
+                    if isinstance(searched, RailContactError):
+                        raise searched
+                    control = Control(penetration=penetration_approach(searched,
+                                                                       step.vertical))
                 own = self.memory.wheel(side)
                 wheel, kept[side], _ = solve_step_wheel(
                     setup, step.pose, control, step.creep(k), step.kinematics, step.time,
-                    self.pair, self.convention, (own, own, own))
+                    self.pair, self.convention, (own, own, own), None,
+                    None if isinstance(searched, RailContactError) else searched)
             except (CaseError, SolverError) as exc:  # (the penetration's control)
                 wheel, kept[side] = WheelContact(side, status_of(exc), str(exc)), ()
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
@@ -274,13 +305,14 @@ class WheelsetContact:
             self._check_validity(wheel, setup)
         return wheels, StepMemory(kept["left"], kept["right"]), False
 
-    def _rigid_stage(self, step: StepInputs, wheels: list[WheelContact],
+    def _rigid_stage(self, step: StepInputs, found: Found, wheels: list[WheelContact],
                      memory: StepMemory, remember: bool, off_track: bool
                      ) -> tuple[WheelsetResult, StepMemory]:
         """The step's result, under load control with the rigid wheelset's vertical
         displacement and roll when the settings ask for them (:func:`~.rolled.
-        rigid_stage`), and the memory the next step starts from (empty when it is not
-        remembered or the warm start does not use it)."""
+        rigid_stage`; the wheels' least gaps at the step's roll from their searches
+        ``found``, each other roll searched once), and the memory the next step starts
+        from (empty when it is not remembered or the warm start does not use it)."""
         keep = remember and self.settings.uses_previous  # (what the next step starts from)
         out = memory if keep else EMPTY_MEMORY
         result = WheelsetResult(wheels[0], wheels[1], 0.0, self.wheelset.radius)
@@ -299,7 +331,9 @@ class WheelsetContact:
                 RolledApproaches(pose, step.loads, step.creepages, step.kinematics,
                                  step.time, self.pair, self.convention,
                                  out if remember else self.memory, last.rolled, step.setups),
-                history=last.rigid, time=step.time)
+                history=last.rigid, time=step.time,
+                gaps=None if any(isinstance(f, RailContactError) for f in found) else
+                (found[0].least_gap, found[1].least_gap))
             s = rigid_stage(rigid)
             result.rigid_solution, result.rigid_work = s, s.work
             if s.evaluations:  # (found, or its best estimate; none when the search raised)
