@@ -25,6 +25,7 @@ from bench_step import fixed_workload
 
 import railcontact as rc
 from railcontact.contact import simplified_tangential
+from railcontact.geometry.points import samples
 from railcontact.normal import virtual
 from railcontact.tangential.strips import remesh_strips
 
@@ -57,10 +58,10 @@ def main() -> None:
     creepage = (2e-4, 2e-4, 0.2)
     calls = {
         "INFCON (load)": lambda p, pair: virtual.virtual_penetration(
-            "infcon", p.geometry.s, p.geometry.f, p.geometry.a_of_s, pair,
+            "infcon", *samples(p.geometry)[:3], pair,
             load=p.normal.force),
         "KP (load)": lambda p, pair: virtual.virtual_penetration(
-            "kp", p.geometry.s, p.geometry.f, p.geometry.a_of_s, pair, load=p.normal.force),
+            "kp", *samples(p.geometry)[:3], pair, load=p.normal.force),
         "FaStrip": lambda p, pair: simplified_tangential(
             "fastrip", p.hertz, pair, settings, p.normal, creepage),
         "FASTSIM": lambda p, pair: simplified_tangential(

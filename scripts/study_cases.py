@@ -39,6 +39,7 @@ from _sweep import approach_for_load, paper_case, write_csv
 
 import railcontact as rc
 from railcontact.contact import normal_estimate, simplified_tangential
+from railcontact.geometry.points import samples
 from railcontact.io.plotting import _pyplot
 from railcontact.settings import Control
 from railcontact.settings.choices import NORMAL_ESTIMATES, TANGENTIAL_ESTIMATES
@@ -91,7 +92,7 @@ def normal_case(dy: float) -> dict:
         patch = {"reference": rp, "estimates": {}, "runs": {}, "runs_pk": {}}
         for est in NORMAL_ESTIMATES[1:]:
             settings = replace(ref.case.normal, estimate=est)
-            start = normal_estimate(settings, rp.hertz, cp.s, cp.f, cp.a_of_s, pair, control)
+            start = normal_estimate(settings, rp.hertz, *samples(cp)[:3], pair, control)
             p0 = start.pressure_on(grid).pressure
             patch["estimates"][est] = np.clip(p0, 0.0, None)
         out["patches"].append(patch)
