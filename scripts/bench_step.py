@@ -50,7 +50,7 @@ except ImportError:  # an older package: the step's wheels solved in its wheelse
 
 STAGES = {  # stage: (module, function name) pairs timed as that stage
     "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
-               (step_wheel_module, "vertical_gap")],
+               (step_wheel_module, "vertical_gap"), (wheelset_module, "search_wheel")],
     "meshing": [(patch_module, "make_grid"), (geometry_search.ContactPoint, "gap_on_grid"),
                 (warmstart_module, "remesh")],
     "reach check": [(wheelrail_module, "uncovered"), (wheelrail_module, "overlap_box")],
@@ -64,7 +64,8 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                        else [(patch_module, "solve_tangential")]),
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
-LEGACY = frozenset({"strips_from_contact", "sample_on_strips", "uncovered", "overlap_box"})
+LEGACY = frozenset({"strips_from_contact", "sample_on_strips", "uncovered", "overlap_box",
+                    "vertical_gap", "search_wheel"})
 """Targets that one version of the package has and another lacks (functions it no longer
 has, or not yet: the reach check), timed when present: the script also runs against an
 older package (bench_step_ab.py)."""
