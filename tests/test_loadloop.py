@@ -14,7 +14,7 @@ from railcontact.contact.loadloop import (
     probe_settings,
     vertical_creep_estimate,
 )
-from railcontact.contact.wheelrail import contact_points
+from railcontact.geometry.search import contact_points
 from railcontact.halfspace.hertz import hertz
 from railcontact.tangential.fastrip import fastrip_hertz
 
