@@ -44,7 +44,6 @@ Backends
 from __future__ import annotations
 
 import os
-import sys
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
@@ -54,55 +53,11 @@ import numpy as np
 import scipy.fft
 
 from ..errors import RailContactError
+from . import fftw as _fftw
+from .fftw import HAVE_PYFFTW, pyfftw  # pyfftw imported without its dask interface
 from .grid import Grid
 from .influence import influence_kernel
 from .materials import ElasticPair
-
-
-class _LeftOut:
-    """A meta path finder that makes the import of one module fail in one thread (others
-    import it as usual)."""
-
-    def __init__(self, name: str, thread: int):
-        self.name, self.thread = name, thread
-
-    def find_spec(self, name, path=None, target=None):
-        if name == self.name and threading.get_ident() == self.thread:
-            raise ModuleNotFoundError(f"{name} left out while pyfftw is imported", name=name)
-        return None
-
-
-def _import_pyfftw():
-    """pyfftw, imported without its dask interface (None when pyfftw is missing).
-
-    pyfftw's package imports ``pyfftw.interfaces``, which imports ``dask.array.fft``
-    whenever dask is installed (the ``table`` extra installs it): about a second of
-    dask.array and its dependencies at every import of railcontact - every FMU instance's
-    start, every ``railcontact solve`` - for an interface railcontact does not use (it
-    plans ``pyfftw.FFTW`` objects alone). While pyfftw is imported, the first of
-    ``dask``, ``dask.array``, ``dask.array.fft`` not imported yet fails to import in this
-    thread (:class:`_LeftOut`, first on ``sys.meta_path``), so pyfftw leaves out
-    ``pyfftw.interfaces.dask_fft`` as it does without dask; other threads import dask as
-    usual meanwhile (a ``sys.modules[name] = None`` marker, used before, refused their
-    ``import dask.array``), a process that imported dask.array before is left as it is,
-    and ``import pyfftw.interfaces.dask_fft`` works afterwards as usual."""
-    name = next((n for n in ("dask", "dask.array", "dask.array.fft")
-                 if n not in sys.modules), None)
-    finder = None if name is None else _LeftOut(name, threading.get_ident())
-    if finder is not None:
-        sys.meta_path.insert(0, finder)
-    try:
-        import pyfftw as module
-    except ImportError:  # pragma: no cover
-        return None
-    finally:
-        if finder is not None:
-            sys.meta_path.remove(finder)
-    return module
-
-
-pyfftw = _import_pyfftw()
-HAVE_PYFFTW = pyfftw is not None
 
 try:
     import numba
@@ -272,20 +227,29 @@ class _PackedPlan:
         self.w_out = buffer(r)  # the packed result
         self.nc, self.n = nc, n
         cut = np.s_[:, :n]
-        self.steps = (
-            _plan(self.z_in[cut], self.z_y[:r, :n], "FFTW_FORWARD", (1,), measure),
-            _plan(self.z_y[cut], self.z_s[cut], "FFTW_FORWARD", (0,), measure))
-        self.back = (
-            _plan(self.w_s[cut], self.z_s[cut], "FFTW_BACKWARD", (0,), measure),
-            _plan(self.z_s[:r, :n], self.w_out[cut], "FFTW_BACKWARD", (1,), measure))
+        transforms = (  # (from, into, axis, direction): forward along y, x; back along x, y
+            (self.z_in[cut], self.z_y[:r, :n], 1, "FFTW_FORWARD"),
+            (self.z_y[cut], self.z_s[cut], 0, "FFTW_FORWARD"),
+            (self.w_s[cut], self.z_s[cut], 0, "FFTW_BACKWARD"),
+            (self.z_s[:r, :n], self.w_out[cut], 1, "FFTW_BACKWARD"))
+        self.compiled = _fftw.AVAILABLE
+        """Whether the product is one compiled call (FFTW's plans executed inside it,
+        :mod:`.fftw`), else pyfftw's executes between compiled kernels."""
+        if self.compiled:
+            self.plans = np.array([_c_plan(a, b, (ax,), d, measure)
+                                   for a, b, ax, d in transforms], dtype=np.uintp)
+            _fftw.destroy_when_gone(self, self.plans)
+        else:
+            steps = [_plan(a, b, d, (ax,), measure) for a, b, ax, d in transforms]
+            self._fwd = tuple(step.execute for step in steps[:2])
+            self._bwd = tuple(step.execute for step in steps[2:])
         self.z_in[...] = 0.0  # (measuring overwrites the buffers)
         self.z_y[...] = 0.0
         self.ny = 0
         """The grid width last written into ``z_in`` (its padding must stay zero)."""
-        self._fwd = tuple(step.execute for step in self.steps)
-        self._bwd = tuple(step.execute for step in self.back)
         self._pack, self._unpack = ((_pack_rows, _unpack_rows) if nc == 1
                                     else (_pack_pair, _unpack_pair))
+        self._product = _packed_rows if nc == 1 else _packed_pair
 
     def convolve(self, operands: tuple[np.ndarray, np.ndarray], p: np.ndarray,
                  out: np.ndarray | None) -> np.ndarray:
@@ -295,6 +259,12 @@ class _PackedPlan:
         if ny != self.ny:
             self.z_in[...] = 0.0
             self.ny = ny
+        if self.compiled:
+            if out is None:
+                out = np.empty(p.shape)
+            self._product(self.plans, p, self.z_in, self.z_s, self.w_s, self.w_out,
+                          operands[0], operands[1], self.n, out)
+            return out
         self._pack(p, self.z_in)
         f0, f1 = self._fwd
         f0()
@@ -412,6 +382,37 @@ if numba is not None:
                   _unpack_pair_py))
 
 
+def _packed_rows_py(plans, p, z_in, z_s, w_s, w_out, a, b, n, out):  # pragma: no cover
+    """:class:`_PackedPlan`'s product of one component in one compiled call that releases
+    the GIL once: the rows packed in pairs, FFTW's four transforms (``plans``, executed
+    through FFTW's C interface, :mod:`.fftw`), the spectral map and the unpacking."""
+    _pack_rows(p, z_in)
+    _fftw.execute(plans[0])
+    _fftw.execute(plans[1])
+    _real_linear(a, b, z_s, w_s, n)
+    _fftw.execute(plans[2])
+    _fftw.execute(plans[3])
+    _unpack_rows(w_out, out)
+
+
+def _packed_pair_py(plans, p, z_in, z_s, w_s, w_out, a, b, n, out):  # pragma: no cover
+    """:func:`_packed_rows_py` for two components (``p_x + i p_y``)."""
+    _pack_pair(p, z_in)
+    _fftw.execute(plans[0])
+    _fftw.execute(plans[1])
+    _real_linear(a, b, z_s, w_s, n)
+    _fftw.execute(plans[2])
+    _fftw.execute(plans[3])
+    _unpack_pair(w_out, out)
+
+
+if numba is not None and _fftw.AVAILABLE:
+    _packed_rows, _packed_pair = (numba.njit(cache=True, nogil=True)(f)
+                                  for f in (_packed_rows_py, _packed_pair_py))
+else:  # pragma: no cover
+    _packed_rows = _packed_pair = None
+
+
 def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
     """``u[0] = s[0] q[0] + s[1] q[1]``, ``u[1] = s[2] q[0] + s[3] q[1]`` (complex, rows
     of flat arrays: ``s`` (4, N) the spectra s00, s01, s10, s11, ``q``, ``u`` (2, N)): the
@@ -450,12 +451,27 @@ def _plan(a: np.ndarray, b: np.ndarray, direction: str, axes: tuple[int, ...] = 
     """The measured plan if the wisdom has it, else the estimated one (``measure``:
     measured now, for :func:`save_wisdom`)."""
     kw = {"axes": axes, "direction": direction, "threads": 1}
+    with _fftw.PLANNER_LOCK:  # (with the plans made through FFTW's C interface)
+        if measure:
+            return pyfftw.FFTW(a, b, flags=("FFTW_MEASURE",), **kw)
+        try:
+            return pyfftw.FFTW(a, b, flags=("FFTW_MEASURE", "FFTW_WISDOM_ONLY"), **kw)
+        except RuntimeError:  # not in the wisdom
+            return pyfftw.FFTW(a, b, flags=("FFTW_ESTIMATE",), **kw)
+
+
+def _c_plan(a: np.ndarray, b: np.ndarray, axes: tuple[int, ...], direction: str,
+            measure: bool = False) -> int:
+    """:func:`_plan`'s plan of a complex transform made through FFTW's C interface (the
+    same flags in the same order: the same plan), as an integer for compiled kernels."""
     if measure:
-        return pyfftw.FFTW(a, b, flags=("FFTW_MEASURE",), **kw)
-    try:
-        return pyfftw.FFTW(a, b, flags=("FFTW_MEASURE", "FFTW_WISDOM_ONLY"), **kw)
-    except RuntimeError:  # not in the wisdom
-        return pyfftw.FFTW(a, b, flags=("FFTW_ESTIMATE",), **kw)
+        plan = _fftw.plan_dft(a, b, axes, direction, ("FFTW_MEASURE",))
+    else:
+        plan = (_fftw.plan_dft(a, b, axes, direction, ("FFTW_MEASURE", "FFTW_WISDOM_ONLY"))
+                or _fftw.plan_dft(a, b, axes, direction, ("FFTW_ESTIMATE",)))
+    if not plan:  # pragma: no cover - FFTW plans any complex transform with ESTIMATE
+        raise RailContactError(f"FFTW made no plan of a {a.shape} transform")
+    return plan
 
 
 def save_wisdom(path: str | os.PathLike, max_elements: int = 100, components: Sequence[int]
