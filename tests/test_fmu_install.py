@@ -26,6 +26,7 @@ from pathlib import Path
 import pytest
 
 import railcontact
+from railcontact._kernelcache import cache_root
 
 fmpy = pytest.importorskip("fmpy")
 
@@ -143,6 +144,9 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
     r = _run([installed / "bin" / "railcontact", "fmu", "build", "-o", fmu, "--python",
               installed], cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
+    kernel_cache = cache_root()  # where the build (this process's environment) warmed them
+    assert "kernels warmed for " in r.stdout and str(kernel_cache) in r.stdout, \
+        r.stdout
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/python.txt").decode().strip() == str(installed)
         # the FMU's copy of railcontact is the installed one, not this checkout
@@ -167,8 +171,12 @@ def test_wheel_install_builds_and_runs_the_fmu_then_a_moved_venv_is_reported(
               f"python{sys.version_info[0]}.{sys.version_info[1]}" / "site-packages"):
         (d / "numpy").mkdir(parents=True)
         (d / "numpy" / "__init__.py").write_text("raise ImportError('not this numpy')\n")
+    # (the other HOME would move the per-user kernel cache too: it names the one the build
+    # warmed, else this start would compile every kernel; tests/test_fmu_startup.py checks
+    # that a fresh unpacking loads them)
     code, out, log = run_host(host, unzipped, PYTHONPATH=tmp_path / "pythonpath",
-                              HOME=tmp_path / "home", PYTHONHOME="/nonexistent")
+                              HOME=tmp_path / "home", PYTHONHOME="/nonexistent",
+                              RAILCONTACT_CACHE_DIR=kernel_cache)
     assert code == 0 and "ok: 1 cycles of 5 steps" in out, log
     info = log[0][1]
     assert "pythonpath" not in info and str(tmp_path / "home") not in info

@@ -673,7 +673,8 @@ def virtual_penetration(method: str, s: np.ndarray, f: np.ndarray, a_of_s: np.nd
     t0 = time.perf_counter()
     if method not in METHODS:
         raise RailContactError(f"method must be one of {METHODS}, got {method!r}")
-    s, f, a_of_s = (np.ascontiguousarray(v, dtype=float) for v in (s, f, a_of_s))
+    # (own writable copies: a read-only input would compile the kernels a second time)
+    s, f, a_of_s = (np.array(v, dtype=float, order="C") for v in (s, f, a_of_s))
     if s.ndim != 1 or s.size < 2 or f.shape != s.shape or a_of_s.shape != s.shape:
         raise RailContactError(f"s, f and a_of_s must be 1-D samples of one length (2 or "
                                f"more), got shapes {s.shape}, {f.shape}, {a_of_s.shape}")

@@ -702,7 +702,7 @@ class SweepProblem:
         if operator.components != "xy" or (operator.nx, operator.ny) != shape:
             raise RailContactError("operator must be the 'xy' steady-rolling operator of "
                                    "this grid")
-        pn = np.asarray(pressure, dtype=float)
+        pn = np.ascontiguousarray(pressure, dtype=float)  # (one compiled layout)
         if np.ndim(friction) == 0:
             mu = check_positive("friction", friction, allow_zero=True)
         else:  # per element: the bound mu p_n formed here, the layout's own mu 1 (exact)
@@ -842,12 +842,12 @@ def _start_arrays(initial_traction, initial_state, shape: tuple[int, int]
     """An initial traction (2, nx, ny) [Pa] and adhesion/slip map (nx, ny) as the arrays
     the compiled clip (:func:`_clip_start`, in :func:`_bound_layout`) reads (float; int8,
     empty without a map), and the error of a wrong shape (None: none)."""
-    p0 = np.asarray(initial_traction, dtype=float)
+    p0 = np.ascontiguousarray(initial_traction, dtype=float)  # (one compiled layout)
     if p0.shape != (2, *shape):
         return _NO_START, _NO_STATE, f"initial_traction must be finite, shape {(2, *shape)}"
     st0 = _NO_STATE
     if initial_state is not None:
-        st0 = np.asarray(initial_state)
+        st0 = np.ascontiguousarray(initial_state)
         if st0.shape != shape:
             return _NO_START, _NO_STATE, f"initial_state must have shape {shape}"
         if st0.dtype != np.int8:  # (the compiled clip reads the states as int8)
