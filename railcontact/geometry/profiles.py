@@ -42,6 +42,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ..errors import RailContactError
+from ..formed import FormedOnce
 from .spline import evaluate
 
 KINDS = ("wheel", "rail")
@@ -116,13 +117,7 @@ class Profile:
     def samples(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """``n`` equally spaced points (y, z(y)) over the profile's extent [m], computed once
         per ``n`` (read-only arrays)."""
-        cache = self.__dict__.setdefault("_samples", {})
-        if n not in cache:
-            y = np.linspace(*self.bounds, n)
-            z = self.height(y)
-            y.flags.writeable = z.flags.writeable = False
-            cache[n] = (y, z)
-        return cache[n]
+        return _formed.get(self, _form_samples, n)
 
     def slope(self, y: np.ndarray | float) -> np.ndarray:
         """dz/dy [-]."""
@@ -150,6 +145,17 @@ class Profile:
                      else "(height, positive up, uncanted)"))
         np.savetxt(p, np.column_stack([self.y * f, self.z * f]), fmt="%.6f", header=header)
         return p
+
+
+def _form_samples(profile: Profile, n: int) -> tuple[np.ndarray, np.ndarray]:
+    y = np.linspace(*profile.bounds, n)
+    z = profile.height(y)
+    y.flags.writeable = z.flags.writeable = False
+    return y, z
+
+
+_formed = FormedOnce()
+"""What is formed once per profile (:meth:`Profile.samples`), beside the frozen records."""
 
 
 # ------------------------------------------------------------------------------ built-ins

@@ -27,6 +27,7 @@ import threading
 import numpy as np
 
 from ..errors import RailContactError
+from ..formed import FormedOnce
 from . import kernels
 from . import points as _points
 from .points import (  # noqa: F401  (the search's records and constants, importable from here too)
@@ -164,31 +165,31 @@ def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
 
 def _wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
     """The pose-independent part of a wheel's trace: axial positions eta, radii r and
-    dr/deta at the :data:`N_TRACE` samples [m], computed once per wheelset (read-only)."""
-    cached = ws.__dict__.get("_trace_samples")
-    if cached is None:
-        s_lo, s_hi = ws.wheel.bounds
-        eta = ws.axial_position(np.linspace(s_lo + 1e-6, s_hi - 1e-6, N_TRACE))
-        S = ws.profile_coordinate(eta)
-        r = ws.radius + ws.wheel.height(S)
-        dr = ws.wheel.slope(S)
-        for a in (eta, r, dr):
-            a.flags.writeable = False
-        cached = (eta, r, dr)
-        object.__setattr__(ws, "_trace_samples", cached)  # a cache on a frozen record
-    return cached
+    dr/deta at the :data:`N_TRACE` samples [m], formed once per wheelset (read-only)."""
+    return _formed.get(ws, _form_wheel_samples)
+
+
+def _form_wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
+    s_lo, s_hi = ws.wheel.bounds
+    eta = ws.axial_position(np.linspace(s_lo + 1e-6, s_hi - 1e-6, N_TRACE))
+    S = ws.profile_coordinate(eta)
+    r = ws.radius + ws.wheel.height(S)
+    dr = ws.wheel.slope(S)
+    for a in (eta, r, dr):
+        a.flags.writeable = False
+    return eta, r, dr
 
 
 def rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
     """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z) and its
     spline's breakpoints and coefficients, then its extent (lo, hi) [m] and the same
-    breakpoints and coefficients (computed once per track; read-only)."""
-    cached = track.__dict__.get("_kernel_arrays")
-    if cached is None:
-        rail = track.side_rail
-        cached = (*rail.samples(N_RAIL), *rail._pieces, *rail.bounds, *rail._pieces)
-        object.__setattr__(track, "_kernel_arrays", cached)  # a cache on a frozen record
-    return cached
+    breakpoints and coefficients (formed once per track; read-only)."""
+    return _formed.get(track, _form_rail_arrays)
+
+
+def _form_rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
+    rail = track.side_rail
+    return (*rail.samples(N_RAIL), *rail._pieces, *rail.bounds, *rail._pieces)
 
 
 def wheel_arrays(ws: Wheelset) -> tuple:
@@ -196,9 +197,13 @@ def wheel_arrays(ws: Wheelset) -> tuple:
     nominal radius [m], and ``back_to_back / 2``, ``flange_back`` [m] (profile coordinate
     S = eta - back_to_back / 2 + flange_back, :meth:`Wheelset.profile_coordinate`);
     formed once per wheelset."""
-    cached = ws.__dict__.get("_kernel_arrays")
-    if cached is None:
-        cached = (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2,
-                  float(ws.flange_back))
-        object.__setattr__(ws, "_kernel_arrays", cached)  # a cache on a frozen record
-    return cached
+    return _formed.get(ws, _form_wheel_arrays)
+
+
+def _form_wheel_arrays(ws: Wheelset) -> tuple:
+    return (*ws.wheel._pieces, float(ws.radius), ws.back_to_back / 2, float(ws.flange_back))
+
+
+_formed = FormedOnce()
+"""What the search forms once per track and per wheelset (keyed by the forming function:
+a wheelset's trace samples and its kernel arrays), beside the frozen records."""

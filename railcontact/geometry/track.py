@@ -24,11 +24,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
+from ..formed import formed_once
 from .kernels import nearest_point_sorted
 from .profiles import Profile
 
@@ -99,7 +99,7 @@ class Track:
         _, _, _, du, dz = self.placement
         return du, dz
 
-    @cached_property
+    @formed_once
     def placement(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
         """The rail profile canted: profile y, canted (u, z) and the offsets (du, dz) that
         place it (gauge point at gauge/2, top at 0), so that placed = (u + du, z + dz).
@@ -123,7 +123,7 @@ class Track:
             uc, zc = y * c - z * s, y * s + z * c
         return y, uc, zc, du + self.shift[0], dz + self.shift[1]
 
-    @cached_property
+    @formed_once
     def side_rail(self) -> Profile:
         """The rail in the side frame: Z(u), canted and placed (see the module docstring)."""
         _, uc, zc, du, dz = self.placement
@@ -156,7 +156,7 @@ class Track:
         pu, pz, order, pu_sorted = self._placed_search
         return float(self.placement[0][nearest_point_sorted(pu, pz, order, pu_sorted, u, z)])
 
-    @cached_property
+    @formed_once
     def _placed_search(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:attr:`_placed_points` and their order in u (stable), with the u so ordered:
         what :meth:`rail_coordinate`'s search reads."""
@@ -164,7 +164,7 @@ class Track:
         order = np.argsort(pu, kind="stable")
         return pu, pz, order, pu[order]
 
-    @cached_property
+    @formed_once
     def _placed_points(self) -> tuple[np.ndarray, np.ndarray]:
         """The samples of :attr:`placement` placed in the side frame (u, Z) [m]."""
         _, uc, zc, du, dz = self.placement
@@ -208,13 +208,13 @@ class Wheelset:
         """Inverse of :meth:`profile_coordinate`."""
         return np.asarray(s) + self.back_to_back / 2 - self.flange_back
 
-    @cached_property
+    @formed_once
     def flange_tip(self) -> float:
         """Profile coordinate S [m] of the flange tip (the largest radius increment): a
         contact at smaller S is on the back of the flange, the wheel off its rail."""
         return float(self.wheel.y[int(np.argmax(self.wheel.z))])
 
-    @cached_property
+    @formed_once
     def flange_flank(self) -> tuple[float, float]:
         """Profile coordinate S [m] of the steepest point of the flange's running flank
         (between the flange tip and the tread) and its angle [rad] (S1002: -39 mm, 70 deg).

@@ -11,10 +11,10 @@ switches that are not solver settings.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from typing import ClassVar
 
 from ..errors import RailContactError
+from ..formed import formed_once
 from .case import (
     GridSettings,
     NormalSettings,
@@ -109,7 +109,7 @@ class ContactSettings(Record):
     def uses_previous(self) -> bool:
         return self.warm_start in ("previous", "previous+estimate")
 
-    @cached_property
+    @formed_once
     def grid_settings(self) -> GridSettings:
         """The patch grids: square elements of ``element_size`` on a shared lattice (in
         the frame at the reference point, the origin an element's centre, as in CONTACT's
@@ -118,7 +118,7 @@ class ContactSettings(Record):
                             quantum=self.quantum, snap=True,
                             centred=self.patch_frame == "reference")
 
-    @cached_property
+    @formed_once
     def normal_settings(self) -> NormalSettings:
         """The normal BEM's settings (the estimate only when the warm start uses it)."""
         return NormalSettings(
@@ -126,7 +126,7 @@ class ContactSettings(Record):
             estimate_grid=self.estimate_grid, tolerance=self.normal_tolerance,
             max_iterations=self.max_iterations_normal, fft=self.fft)
 
-    @cached_property
+    @formed_once
     def tangential_settings(self) -> TangentialSettings:
         """The tangential BEM's settings (creepages are given per patch and step)."""
         return TangentialSettings(
@@ -135,7 +135,7 @@ class ContactSettings(Record):
             tolerance=self.tangential_tolerance, max_iterations=self.max_iterations_tangential,
             strips=self.strips, spin_offset=self.spin_offset, solver=self.tangential_solver)
 
-    @cached_property
+    @formed_once
     def patch_settings(self) -> PatchSettings:
         """The grid and normal settings of a wheel's normal solve (the time step solves the
         tangential problem itself, patch by patch; Hertz's solution formed only where the
