@@ -17,7 +17,10 @@ per repetition, their medians and the ratio threaded / sequential (1.0: nothing 
 parallel; 0.5: two cores fully used), the process's CPU time over the wall time of each
 way (below 1 for the sequential way: other processes take the core; the threaded way can
 reach 2 only with two cores free), and checks that the threaded results equal the
-sequential ones (forces and tractions, bit for bit).
+sequential ones (forces and tractions, bit for bit). On Linux it also prints the
+process's voluntary context switches per wheelset step of each way (``/proc``): in the
+threaded way each is a thread put to sleep waiting for the GIL, i.e. a hand-over of the GIL
+between the threads that had to wake the other one.
 
 Where the time under the GIL remains: ``--profile`` runs trajectory A on one thread with
 every compiled kernel of the package (numba, ``nogil=True``) and every DC-FFT product
@@ -124,6 +127,25 @@ class Worker:
     def stop(self) -> None:
         self.jobs.put(None)
         self.thread.join()
+
+
+def context_switches() -> int | None:
+    """The voluntary context switches of all this process's threads so far (Linux's
+    ``/proc``; None elsewhere)."""
+    total = 0
+    try:
+        tasks = os.listdir(f"/proc/{os.getpid()}/task")
+    except OSError:
+        return None
+    for task in tasks:
+        try:
+            with open(f"/proc/{os.getpid()}/task/{task}/status") as f:
+                for line in f:
+                    if line.startswith("voluntary_ctxt_switches"):
+                        total += int(line.split()[1])
+        except OSError:  # a thread that ended meanwhile
+            pass
+    return total
 
 
 def sequential(workers: list[Worker], steps: int) -> tuple[float, float, dict]:
@@ -245,16 +267,20 @@ def main() -> None:
         print(f"{os.cpu_count()} cores; {args.steps} steps of 1 ms per wheelset, two "
               f"wheelsets (trajectories {', '.join(TRAJECTORIES)})")
         print(f"{'repeat':>6} {'sequential [s]':>14} {'threaded [s]':>12} {'ratio':>6} "
-              f"{'CPU/wall seq.':>13} {'CPU/wall thr.':>13}")
+              f"{'CPU/wall seq.':>13} {'CPU/wall thr.':>13} {'switches/step thr.':>18}")
         seq, thr = [], []
         reference = None
         for k in range(args.repeats):
             ways = (sequential, threaded) if k % 2 == 0 else (threaded, sequential)
-            times, cpu = {}, {}
+            times, cpu, switches = {}, {}, {}
             for way in ways:
+                before = context_switches()
                 seconds, cpu_seconds, results = way(workers, args.steps)
+                after = context_switches()
                 times[way.__name__] = seconds
                 cpu[way.__name__] = cpu_seconds / seconds
+                switches[way.__name__] = (math.nan if before is None or after is None
+                                          else (after - before) / (2 * args.steps))
                 if reference is None:
                     reference = results
                 elif results != reference:
@@ -263,7 +289,8 @@ def main() -> None:
             seq.append(times["sequential"])
             thr.append(times["threaded"])
             print(f"{k:6d} {seq[-1]:14.3f} {thr[-1]:12.3f} {thr[-1] / seq[-1]:6.3f} "
-                  f"{cpu['sequential']:13.2f} {cpu['threaded']:13.2f}")
+                  f"{cpu['sequential']:13.2f} {cpu['threaded']:13.2f} "
+                  f"{switches['threaded']:18.1f}")
     finally:
         for worker in workers:
             worker.stop()
