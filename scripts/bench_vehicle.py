@@ -35,7 +35,9 @@ processes way its worker processes' as well: below 1 other processes take the co
 threaded and processes ways reach 2 only with two cores free), and the ratios threaded /
 sequential and processes / sequential of the medians. It checks that the threaded and
 processes results equal the sequential ones bit for bit (forces, moments, iterations,
-pressures, tractions).
+pressures, tractions). For the processes way it prints the wheelsets' solve time in the
+workers and the wall time of a step beyond the busiest worker's solves (the pool's cost:
+sending, waking, pickling).
 
 Goal (issue: a vehicle in real time): a warm vehicle step <= 0.03 of the workload.
 
@@ -143,9 +145,13 @@ def cpu_seconds(pids: list[int]) -> float:
     return sum(sum(psutil.Process(pid).cpu_times()[:2]) for pid in pids)
 
 
-def run_pool(pool: rc.WheelsetPool, steps: int) -> tuple[list[float], float, list]:
+def run_pool(pool: rc.WheelsetPool, steps: int, split: dict | None = None
+             ) -> tuple[list[float], float, list]:
     """As :func:`run` with the wheelsets in ``pool``'s worker processes (built anew); the CPU
-    time counts this process's and the workers'."""
+    time counts this process's and the workers'. ``split``: per step (the first left out)
+    appends to ``"solves"`` the sum of the wheelsets' solve times in their workers [s] and
+    to ``"overhead"`` the step's wall time beyond its busiest worker's solves [s] (sending,
+    waking, pickling, reading)."""
     pool.reset()
     pids = [p.pid for p in pool._processes]
     times, results = [], []
@@ -155,6 +161,10 @@ def run_pool(pool: rc.WheelsetPool, steps: int) -> tuple[list[float], float, lis
         out = pool.step([inputs(i, k) for i in range(len(POSITIONS))])
         times.append(time.perf_counter() - t0)
         results.append(tuple(out))
+        if split is not None and k > 0:
+            split["solves"].append(sum(pool.seconds))
+            split["overhead"].append(times[-1] - max(sum(pool.seconds[i] for i in which)
+                                                     for which in pool.shares))
     wall = time.perf_counter() - t_run
     cpu = (time.process_time() - c0 + cpu_seconds(pids) - w0) / wall
     return times, cpu, results
@@ -188,13 +198,14 @@ def main() -> None:
             medians = {w: [] for w in ways}
             cpu = {w: [] for w in ways}
             workloads = []
+            split: dict[str, list[float]] = {"solves": [], "overhead": []}
             reference = None
             for r in range(args.repeats):
                 workloads.append(fixed_workload())
                 order = list(ways)
                 for way in order[r % len(order):] + order[:r % len(order)]:
                     if way == "processes":
-                        t, c, results = run_pool(pools[mode], steps)
+                        t, c, results = run_pool(pools[mode], steps, split)
                     else:
                         t, c, results = run(ways[way], mode, steps)
                     if reference is None:
@@ -223,6 +234,10 @@ def main() -> None:
                 print(f"ratio {way} / sequential: "
                       f"{np.median(times[way]) / np.median(times['sequential']):.3f} "
                       f"(of the medians); per repeat {', '.join(f'{q:.3f}' for q in ratios)}")
+            solves = np.median(split["solves"])
+            print(f"processes: the wheelsets' solves in the workers {solves * 1e3:.2f}"
+                  f" ms per vehicle step (sum, median); wall time beyond the busiest worker's "
+                  f"solves {np.median(split['overhead']) * 1e3:.2f} ms (median)")
             print("threaded and processes results equal the sequential ones bit for bit")
     finally:
         for worker in workers:

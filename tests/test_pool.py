@@ -148,3 +148,25 @@ def test_reset_builds_new_wheelsets_in_the_same_workers(pool):
     assert [p.pid for p in pool._processes] == pids
     with pytest.raises(RailContactError, match="3 wheelset descriptions expected"):
         pool.reset([description()])
+
+
+def test_demo_vehicle_in_processes_runs_as_in_process(capsys, tmp_path):
+    """``railcontact demo --vehicle --contact in-process --processes 2``: the vehicle's
+    motion equal bit for bit to the run in this process; --processes without the
+    in-process contact is refused (one line, exit status 2)."""
+    from railcontact.cli import main
+    from railcontact.sim.vehicle_demo import VehicleDemoOptions, run_vehicle_demo
+
+    opts = dict(contact="in-process", duration=0.004, step=0.002, element_size=2e-3,
+                plots=False)
+    here = run_vehicle_demo(VehicleDemoOptions(**opts), progress=False)
+    there = run_vehicle_demo(VehicleDemoOptions(**opts, processes=2), progress=False)
+    assert here.sim.completed and there.sim.completed
+    assert here.sim.wheelset_lateral().tobytes() == there.sim.wheelset_lateral().tobytes()
+    assert "in 2 worker processes" in there.text
+    assert main(["demo", "--vehicle", "--contact", "in-process", "--processes", "2",
+                 "--duration", "0.002", "--step", "0.002", "--element-size", "2e-3",
+                 "--no-plots", "--no-progress", "--output-dir", str(tmp_path)]) == 0
+    assert "real-time factor" in capsys.readouterr().out
+    assert main(["demo", "--vehicle", "--processes", "2", "--no-progress"]) == 2
+    assert "processes" in capsys.readouterr().err
