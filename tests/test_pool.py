@@ -6,6 +6,7 @@ close(); and the vehicle's contact stepped in processes equal to the in-process 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -170,3 +171,44 @@ def test_demo_vehicle_in_processes_runs_as_in_process(capsys, tmp_path):
     assert "real-time factor" in capsys.readouterr().out
     assert main(["demo", "--vehicle", "--processes", "2", "--no-progress"]) == 2
     assert "processes" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads process states in /proc")
+def test_workers_end_with_their_host(tmp_path):
+    """A host that ends without closing its pool (``os._exit``: no atexit, no finaliser):
+    its workers see their pipes close and end."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "host.py"
+    script.write_text(
+        "import os, sys\n"
+        f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+        "from test_pool import description\n"
+        "from railcontact.timestep.pool import WheelsetPool\n"
+        "if __name__ == '__main__':\n"
+        "    pool = WheelsetPool([description(), description()], processes=2)\n"
+        "    print(*[p.pid for p in pool._processes], flush=True)\n"
+        "    os._exit(0)\n", encoding="utf-8")
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(root), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         env=env, timeout=300, check=True)
+    pids = [int(x) for x in out.stdout.split()]
+    assert len(pids) == 2
+
+    def running(pid: int) -> bool:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().split()[2]
+        except FileNotFoundError:
+            return False
+        return state != "Z"
+
+    for _ in range(300):  # up to 30 s
+        if not any(running(pid) for pid in pids):
+            break
+        time.sleep(0.1)
+    assert not any(running(pid) for pid in pids)
