@@ -83,6 +83,8 @@ def test_an_error_comes_back_and_the_pool_keeps_working(pool):
     assert any("wheelset 2" in note for note in there.value.__notes__)
     with pytest.raises(TypeError, match="unexpected keyword"):
         pool.step([inputs(0, 11), inputs(1, 11), {**inputs(2, 11), "speed": 3.0}])
+    with pytest.raises(Exception, match="pickle"):  # an input that cannot be sent
+        pool.step([inputs(0, 11), inputs(1, 11), {**inputs(2, 11), "time": lambda: 0.0}])
     assert pool.alive
     out = pool.step([inputs(i, 12) for i in range(3)])
     assert all(r.status == rc.Status.OK for r in out), [r.status for r in out]
@@ -103,6 +105,8 @@ def test_close_ends_the_workers_and_bad_pools_are_refused():
         WheelsetPool([])
     with pytest.raises(RailContactError, match="processes must be at least 1"):
         WheelsetPool([description()], processes=0)
+    with pytest.raises(RailContactError, match="module's top level"):
+        WheelsetPool([description()], reduce=lambda r: r.force)
     with pytest.raises(RailContactError, match="WheelsetDescription expected"):
         WheelsetPool([description().build()])
     d = description()

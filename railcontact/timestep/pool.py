@@ -23,6 +23,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import pickle
+import signal
 import time
 import traceback
 import weakref
@@ -106,7 +107,10 @@ def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescri
     worker in ``which`` order; its answer a list of ``(ok, value, seconds)``: ``ok`` True
     and the (reduced) result, or False and the exception, and the wall time of the solve
     [s]. A tuple ``("reset", descriptions)`` builds the wheelsets anew (from new
-    descriptions unless None); its answer is that of the first build."""
+    descriptions unless None); its answer is that of the first build. Interrupts (Ctrl+C
+    in a terminal reaches the whole process group) are left to the host, which closes
+    the pool."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     contacts, answer = _build(which, descriptions)
     conn.send(answer)
     if contacts is None:
@@ -198,6 +202,13 @@ class WheelsetPool:
             if not isinstance(d, WheelsetDescription):
                 raise RailContactError(f"wheelset {i + 1}: a WheelsetDescription expected, "
                                        f"got {type(d).__name__}")
+        if reduce is not None:
+            try:
+                pickle.dumps(reduce)
+            except Exception as exc:  # noqa: BLE001 - whatever pickling raises
+                raise RailContactError(
+                    f"reduce must be a function defined at a module's top level (sent to "
+                    f"the worker processes by name), got {reduce!r}") from exc
         p = (os.cpu_count() or 1) if processes is None else processes
         if p < 1:
             raise RailContactError(f"processes must be at least 1, got {p}")
@@ -276,28 +287,35 @@ class WheelsetPool:
         if len(inputs) != self.count:
             raise RailContactError(f"{self.count} wheelsets' inputs expected, got "
                                    f"{len(inputs)}")
-        for j, which in enumerate(self.shares):
-            try:
-                self._connections[j].send([dict(inputs[i]) for i in which])
-            except (OSError, ValueError) as exc:
-                self.close()
-                raise RailContactError(f"worker process {j + 1} of the wheelset pool "
-                                       f"cannot be reached; the pool is closed") from exc
+        # every request pickled before any is sent: an input that does not pickle leaves
+        # the workers in step with the host
+        payloads = [pickle.dumps([dict(inputs[i]) for i in which], pickle.HIGHEST_PROTOCOL)
+                    for which in self.shares]
         out: list[Any] = [None] * self.count
         errors: list[tuple[int, BaseException]] = []
         ended: RailContactError | None = None
-        for j, which in enumerate(self.shares):
-            try:
-                answer = self._receive(j, self._connections[j])
-            except RailContactError as exc:
-                ended = ended or exc
-                continue
-            for i, (ok, value, secs) in zip(which, answer, strict=True):
-                self.seconds[i] = secs
-                if ok:
-                    out[i] = value
-                else:
-                    errors.append((i, value))
+        try:
+            for j, payload in enumerate(payloads):
+                try:
+                    self._connections[j].send_bytes(payload)
+                except (OSError, ValueError) as exc:
+                    raise RailContactError(f"worker process {j + 1} of the wheelset pool "
+                                           "cannot be reached; the pool is closed") from exc
+            for j, which in enumerate(self.shares):
+                try:
+                    answer = self._receive(j, self._connections[j])
+                except RailContactError as exc:
+                    ended = ended or exc
+                    continue
+                for i, (ok, value, secs) in zip(which, answer, strict=True):
+                    self.seconds[i] = secs
+                    if ok:
+                        out[i] = value
+                    else:
+                        errors.append((i, value))
+        except BaseException:  # an interrupted round trip: the workers are out of step
+            self.close()
+            raise
         if ended is not None:
             self.close()
             raise ended
