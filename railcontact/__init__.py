@@ -23,6 +23,7 @@ hertz(A, B, pair, ...)         Hertz's solution
 solve_normal(...)              the normal BEM (Polonsky–Keer CG) on plain arrays
 solve_tangential(...)          the steady-rolling tangential BEM (ConvexGS) on plain arrays
 WheelsetContact, ContactSettings, Kinematics   the time-step solver
+WheelsetPool, WheelsetDescription   wheelsets stepped at once in worker processes
 """
 
 from . import _kernelcache  # noqa: F401  (first: keys the kernels' caches)
@@ -58,6 +59,8 @@ from .timestep import (
     RailDeviation,
     WheelContact,
     WheelsetContact,
+    WheelsetDescription,
+    WheelsetPool,
     WheelsetResult,
 )
 
@@ -70,7 +73,8 @@ __all__ = [
     "GridSettings", "HertzSolution", "InfluenceOperator", "Kinematics", "Material", "RailDeviation",
     "NormalResult", "NormalSettings", "PatchSolution", "Pose", "Profile", "RailContactError",
     "Solution", "SolverError", "Status", "TangentialResult", "TangentialSettings", "Track",
-    "WheelContact", "Wheelset", "WheelsetContact", "WheelsetResult", "hertz",
+    "WheelContact", "Wheelset", "WheelsetContact", "WheelsetDescription", "WheelsetPool",
+    "WheelsetResult", "hertz",
     "influence_operator", "load_case", "read_profile", "rolling_operator", "solve",
     "solve_normal", "solve_tangential", "validate_case",
 ]

@@ -211,7 +211,7 @@ def _cmd_demo_vehicle(args: argparse.Namespace) -> int:
         wheel_profile=args.wheel_profile, rail_profile=args.rail_profile,
         profile_unit=args.profile_unit, element_size=args.element_size,
         warm_start=args.warm_start, quick=args.quick, output_dir=args.output_dir,
-        plots=not args.no_plots, contact=args.contact,
+        plots=not args.no_plots, contact=args.contact, processes=args.processes,
         fmu=VEHICLE_FMU if args.fmu is None else args.fmu)
     res = run_vehicle_demo(opts, progress=not args.no_progress)
     print(res.text)
@@ -237,6 +237,9 @@ def _add_demo(sub) -> None:
     d.add_argument("--contact", default="fmu", choices=("fmu", "in-process"),
                    help="--vehicle: the wheelsets' contact: fmu, the FMU of --fmu run by "
                    "fmpy; in-process, four WheelsetContacts in this process (default: fmu)")
+    d.add_argument("--processes", type=int, default=None,
+                   help="--vehicle --contact in-process: step the four wheelsets at the same "
+                   "time in N worker processes (default: one after the other in this process)")
     d.add_argument("--speed", type=float, help="forward speed [m/s] (30; --vehicle: 60)")
     d.add_argument("--duration", type=float, help="simulated time [s] (1.5)")
     d.add_argument("--step", type=float, help="communication step [s] (0.001)")

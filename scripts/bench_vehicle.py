@@ -1,4 +1,5 @@
-"""Benchmark of a vehicle step: four wheelsets, one after the other or on worker threads.
+"""Benchmark of a vehicle step: four wheelsets, one after the other, on worker threads or in
+worker processes.
 
 Four :class:`railcontact.WheelsetContact` instances (S1002 on 60E1 at 1:40, 0.5 mm
 elements, mu = 0.4, load control with the creep forces counted, 30 m/s, kinematic
@@ -10,29 +11,39 @@ yaw of half the kinematic one (``psi = 0.5 dy/dx``, its rate from it) and wheel 
 that shift between the sides by 4 % with the motion (83.3 kN mean). A *vehicle step*
 solves all four for one time.
 
-Each repetition runs the same steps from new instances in two ways, the order alternating
+Each repetition runs the same steps from new instances in three ways, the order rotating
 (on a shared machine the load of other processes changes over minutes):
 
 * ``sequential``: one worker thread steps the four wheelsets one after the other;
 * ``threaded``: ``--threads`` worker threads (2), wheelset ``i`` on thread ``i mod N``,
   all started on a step at once and waited for (as a co-simulation host steps its
-  wheelsets).
+  wheelsets);
+* ``processes``: a :class:`railcontact.WheelsetPool` of ``--processes`` worker processes
+  (2), wheelset ``i`` in process ``i mod N``, one round trip per process and step; each
+  worker sends back the step's fingerprint (below), not the whole result.
 
-The worker threads live for the whole run and are warmed up first (numba kernels, each
-thread's FFTW plans). For the warm (``previous+estimate``) and cold (``none``) starts it
+The worker threads and processes live for the whole run and are warmed up first (numba
+kernels, each thread's and process's FFTW plans; a pool's wheelsets are built anew for
+each run, :meth:`~railcontact.WheelsetPool.reset`). For the warm (``previous+estimate``)
+and cold (``none``) starts it
 prints, per way, the wall time of a vehicle step (median, mean, 99th percentile over the
 steps of every repetition, each run's first step left out), each as a ratio to the fixed
 numpy workload of ``scripts/bench_step.py`` (timed before every repetition, its median),
 the real-time factor at 1 kHz (the median vehicle step over the 1 ms it simulates: below
-1 is faster than real time), the process's CPU time over the wall time (below 1: other
-processes take the core; the threaded way reaches 2 only with two cores free), and the
-ratio threaded / sequential of the medians. It checks that the threaded results equal the
-sequential ones bit for bit (forces, moments, iterations, pressures, tractions).
+1 is faster than real time), the CPU time over the wall time (this process's, and for the
+processes way its worker processes' as well: below 1 other processes take the core; the
+threaded and processes ways reach 2 only with two cores free), and the ratios threaded /
+sequential and processes / sequential of the medians. It checks that the threaded and
+processes results equal the sequential ones bit for bit (forces, moments, iterations,
+pressures, tractions). For the processes way it prints the wheelsets' solve time in the
+workers and the wall time of a step beyond the busiest worker's solves (the pool's cost:
+sending, waking, pickling).
 
 Goal (issue: a vehicle in real time): a warm vehicle step <= 0.03 of the workload.
 
 Usage: python scripts/bench_vehicle.py [--steps 150] [--cold-steps 30] [--repeats 3]
-                                       [--threads 2] [--modes previous+estimate,none]
+                                       [--threads 2] [--processes 2]
+                                       [--modes previous+estimate,none]
 """
 
 from __future__ import annotations
@@ -68,13 +79,19 @@ YAW_SHARE = 0.5
 """Yaw as this share of the kinematic yaw dy/dx."""
 
 
-def wheelset(mode: str) -> rc.WheelsetContact:
-    """A new wheelset (its own track, profiles and settings, as FMU instances have)."""
-    return rc.WheelsetContact(
+def description(mode: str) -> rc.WheelsetDescription:
+    """A new wheelset's description (its own track, profiles and settings, as FMU instances
+    have)."""
+    return rc.WheelsetDescription(
         rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
         rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
         rc.ElasticPair.of(rc.STEEL, rc.STEEL),
         rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+
+
+def wheelset(mode: str) -> rc.WheelsetContact:
+    """A new wheelset."""
+    return description(mode).build()
 
 
 def inputs(i: int, k: int, step: float = 1e-3) -> dict:
@@ -119,34 +136,78 @@ def run(workers: list[Worker], mode: str, steps: int) -> tuple[list[float], floa
     return times, cpu, results
 
 
+def cpu_seconds(pids: list[int]) -> float:
+    """User + system CPU time of the processes ``pids`` [s] (NaN where it cannot be read)."""
+    try:
+        import psutil
+    except ImportError:
+        return math.nan
+    return sum(sum(psutil.Process(pid).cpu_times()[:2]) for pid in pids)
+
+
+def run_pool(pool: rc.WheelsetPool, steps: int, split: dict | None = None
+             ) -> tuple[list[float], float, list]:
+    """As :func:`run` with the wheelsets in ``pool``'s worker processes (built anew); the CPU
+    time counts this process's and the workers'. ``split``: per step (the first left out)
+    appends to ``"solves"`` the sum of the wheelsets' solve times in their workers [s] and
+    to ``"overhead"`` the step's wall time beyond its busiest worker's solves [s] (sending,
+    waking, pickling, reading)."""
+    pool.reset()
+    pids = [p.pid for p in pool._processes]
+    times, results = [], []
+    c0, w0, t_run = time.process_time(), cpu_seconds(pids), time.perf_counter()
+    for k in range(steps):
+        t0 = time.perf_counter()
+        out = pool.step([inputs(i, k) for i in range(len(POSITIONS))])
+        times.append(time.perf_counter() - t0)
+        results.append(tuple(out))
+        if split is not None and k > 0:
+            split["solves"].append(sum(pool.seconds))
+            split["overhead"].append(times[-1] - max(sum(pool.seconds[i] for i in which)
+                                                     for which in pool.shares))
+    wall = time.perf_counter() - t_run
+    cpu = (time.process_time() - c0 + cpu_seconds(pids) - w0) / wall
+    return times, cpu, results
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=150, help="vehicle steps of a warm run")
     ap.add_argument("--cold-steps", type=int, default=30, help="vehicle steps of a cold run")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--modes", default="previous+estimate,none")
     args = ap.parse_args()
     modes = args.modes.split(",")
     workers = [Worker(f"wheelsets-{j}") for j in range(max(args.threads, 1))]
-    ways = {"sequential": workers[:1], "threaded": workers}
+    pools = {mode: rc.WheelsetPool([description(mode) for _ in POSITIONS], args.processes,
+                                   reduce=fingerprint) for mode in modes}
+    ways = {"sequential": workers[:1], "threaded": workers, "processes": None}
     try:
-        for mode in modes:  # numba kernels, each worker thread's FFTW plans
+        for mode in modes:  # numba kernels, each worker thread's and process's FFTW plans
             for j in range(len(workers)):
                 run(workers[j:j + 1], mode, 5)
+            run_pool(pools[mode], 5)
         print(f"{os.cpu_count()} cores; four wheelsets (at {', '.join(f'{x:g}' for x in POSITIONS)}"
-              f" m), {args.threads} worker threads in the threaded way")
+              f" m), {args.threads} worker threads in the threaded way, "
+              f"{pools[modes[0]].processes} worker processes in the processes way")
         for mode in modes:
             steps = args.steps if mode != "none" else args.cold_steps
             times = {w: [] for w in ways}
             medians = {w: [] for w in ways}
             cpu = {w: [] for w in ways}
             workloads = []
+            split: dict[str, list[float]] = {"solves": [], "overhead": []}
             reference = None
             for r in range(args.repeats):
                 workloads.append(fixed_workload())
-                for way in (ways if r % 2 == 0 else list(ways)[::-1]):
-                    t, c, results = run(ways[way], mode, steps)
+                order = list(ways)
+                for way in order[r % len(order):] + order[:r % len(order)]:
+                    if way == "processes":
+                        t, c, results = run_pool(pools[mode], steps, split)
+                    else:
+                        t, c, results = run(ways[way], mode, steps)
                     if reference is None:
                         reference = results
                     elif results != reference:
@@ -168,14 +229,21 @@ def main() -> None:
                 print(f"{way:<11} {med * 1e3:11.2f} {med / ref:10.4f} {mean * 1e3:9.2f} "
                       f"{mean / ref:10.4f} {p99 * 1e3:8.2f} {p99 / ref:10.4f} "
                       f"{med / 1e-3:9.2f} {float(np.median(cpu[way])):8.2f}")
-            ratios = np.array(medians["threaded"]) / np.array(medians["sequential"])
-            print(f"ratio threaded / sequential: "
-                  f"{np.median(times['threaded']) / np.median(times['sequential']):.3f} "
-                  f"(of the medians); per repeat {', '.join(f'{q:.3f}' for q in ratios)}")
-            print("threaded results equal the sequential ones bit for bit")
+            for way in ("threaded", "processes"):
+                ratios = np.array(medians[way]) / np.array(medians["sequential"])
+                print(f"ratio {way} / sequential: "
+                      f"{np.median(times[way]) / np.median(times['sequential']):.3f} "
+                      f"(of the medians); per repeat {', '.join(f'{q:.3f}' for q in ratios)}")
+            solves = np.median(split["solves"])
+            print(f"processes: the wheelsets' solves in the workers {solves * 1e3:.2f}"
+                  f" ms per vehicle step (sum, median); wall time beyond the busiest worker's "
+                  f"solves {np.median(split['overhead']) * 1e3:.2f} ms (median)")
+            print("threaded and processes results equal the sequential ones bit for bit")
     finally:
         for worker in workers:
             worker.stop()
+        for pool in pools.values():
+            pool.close()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
     print(f"\nload average (1 min) at the end: {load:.1f}")
 

@@ -5,7 +5,8 @@ forces out.
 integrates against. Two implementations:
 
 * :class:`InProcessContact`: one :class:`~railcontact.timestep.WheelsetContact` per
-  wheelset (the exact BEM, warm-started step after step), called one after the other;
+  wheelset (the exact BEM, warm-started step after step), called one after the other or
+  stepped at the same time in worker processes;
 * :class:`LinearContact`: the linearised contact of
   :mod:`railcontact.sim.linear_contact` (Kalker's linear creep forces), for the checks
   against the eigenvalue analysis.
@@ -19,7 +20,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -28,7 +29,8 @@ from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings
 from ..status import Status
-from ..timestep import Kinematics, WheelsetContact
+from ..timestep import Kinematics, WheelsetContact, WheelsetResult
+from ..timestep.pool import WheelsetDescription, WheelsetPool
 from .linear_contact import LinearWheelsetContact
 
 
@@ -136,8 +138,67 @@ class LinearContact:
                            np.zeros(n))
 
 
+def wheelset_inputs(states: WheelsetStates, i: int) -> dict[str, Any]:
+    """The keyword arguments of :meth:`WheelsetContact.solve
+    <railcontact.timestep.WheelsetContact.solve>` for wheelset ``i`` (load control,
+    kinematic creepages)."""
+    return dict(pose=Pose(float(states.lateral[i]), float(states.yaw[i])),
+                loads=(float(states.loads[i, 0]), float(states.loads[i, 1])),
+                kinematics=Kinematics(states.speed, float(states.lateral_velocity[i]),
+                                      float(states.yaw_rate[i]),
+                                      float(states.spin_speed[i])),
+                time=states.time)
+
+
+@dataclass(frozen=True)
+class WheelsetRow:
+    """What the vehicle reads of one wheelset's result (SI units): a
+    :class:`WheelForces` row.
+
+    Attributes
+    ----------
+    generalized
+        (F_Y [N], M_Z [N m], T_y [N m]).
+    lateral, vertical, normal, derailment_quotient
+        Per wheel (left, right): track Y and Z forces [N], normal force [N], Y/Q [-].
+    status
+        The wheelset's :class:`~railcontact.status.Status` value.
+    stop
+        Why the wheelset stops the run (:data:`STOPPING`), else None.
+    iterations
+        Normal + tangential BEM iterations of both wheels.
+    """
+
+    generalized: tuple[float, float, float]
+    lateral: tuple[float, float]
+    vertical: tuple[float, float]
+    normal: tuple[float, float]
+    derailment_quotient: tuple[float, float]
+    status: int
+    stop: str | None
+    iterations: int
+
+
+def wheelset_row(r: WheelsetResult) -> WheelsetRow:
+    """The :class:`WheelsetRow` of a wheelset's result (a module-level function: a
+    :class:`~railcontact.timestep.pool.WheelsetPool` applies it in its workers)."""
+    wl, wr = r.wheels
+    stop = None
+    if r.status in STOPPING:
+        stop = "; ".join(w.message for w in r.wheels if w.status == r.status)
+    return WheelsetRow(
+        (r.force[1], r.yaw_moment,
+         -(wl.rolling_radius * wl.track_force[0] + wr.rolling_radius * wr.track_force[0])),
+        (wl.track_force[1], wr.track_force[1]), (wl.track_force[2], wr.track_force[2]),
+        (wl.normal_force, wr.normal_force), (wl.derailment_quotient, wr.derailment_quotient),
+        int(r.status), stop,
+        sum(w.normal_iterations + w.tangential_iterations for w in r.wheels))
+
+
 class InProcessContact:
-    """One :class:`~railcontact.timestep.WheelsetContact` per wheelset, in this process.
+    """One :class:`~railcontact.timestep.WheelsetContact` per wheelset, solved in this
+    process one after the other, or in worker processes at the same time
+    (:class:`~railcontact.timestep.pool.WheelsetPool`).
 
     Parameters
     ----------
@@ -145,46 +206,62 @@ class InProcessContact:
         As :class:`~railcontact.timestep.WheelsetContact` (the same for all wheelsets).
     count
         Number of wheelsets.
+    processes
+        None: in this process, one after the other. Else the number of worker processes
+        the wheelsets are stepped in (at most ``count``; each wheelset stays in its
+        process); the results are the same bit for bit. Call :meth:`close` (or use as a
+        context manager) to end them.
     """
 
     def __init__(self, track: Track, wheelset: Wheelset, pair: ElasticPair,
-                 settings: ContactSettings | None = None, count: int = 4) -> None:
-        self.solvers = [WheelsetContact(track, wheelset, pair, settings) for _ in range(count)]
+                 settings: ContactSettings | None = None, count: int = 4,
+                 processes: int | None = None) -> None:
+        self.count = count
+        self.solvers: list[WheelsetContact] = []
+        self.pool: WheelsetPool | None = None
+        if processes is None:
+            self.solvers = [WheelsetContact(track, wheelset, pair, settings)
+                            for _ in range(count)]
+        else:
+            d = WheelsetDescription(track, wheelset, pair, settings)
+            self.pool = WheelsetPool([d] * count, processes, reduce=wheelset_row)
+
+    def _rows(self, states: WheelsetStates) -> tuple[list[WheelsetRow], np.ndarray]:
+        n = states.count
+        if self.pool is not None:
+            rows = self.pool.step([wheelset_inputs(states, i) for i in range(n)])
+            return rows, np.array(self.pool.seconds)
+        rows, secs = [], np.zeros(n)
+        for i, solver in enumerate(self.solvers):
+            t0 = time.perf_counter()
+            rows.append(wheelset_row(solver.solve(**wheelset_inputs(states, i))))
+            secs[i] = time.perf_counter() - t0
+        return rows, secs
 
     def __call__(self, states: WheelsetStates) -> WheelForces:
         n = states.count
-        if n != len(self.solvers):
-            raise RailContactError(f"{len(self.solvers)} wheelsets expected, got {n}")
-        gen = np.zeros((n, 3))
-        lat, vert, nor, yq = (np.zeros((n, 2)) for _ in range(4))
-        status = np.zeros(n, dtype=int)
-        secs, its = np.zeros(n), np.zeros(n)
-        bad: list[str] = []
-        for i, solver in enumerate(self.solvers):
-            t0 = time.perf_counter()
-            r = solver.solve(Pose(float(states.lateral[i]), float(states.yaw[i])),
-                             loads=(float(states.loads[i, 0]), float(states.loads[i, 1])),
-                             kinematics=Kinematics(states.speed,
-                                                   float(states.lateral_velocity[i]),
-                                                   float(states.yaw_rate[i]),
-                                                   float(states.spin_speed[i])),
-                             time=states.time)
-            secs[i] = time.perf_counter() - t0
-            status[i] = int(r.status)
-            if r.status in STOPPING:
-                bad.append(f"wheelset {i + 1}: " + "; ".join(
-                    w.message for w in r.wheels if w.status == r.status))
-            wl, wr = r.wheels
-            gen[i] = (r.force[1], r.yaw_moment,
-                      -(wl.rolling_radius * wl.track_force[0]
-                        + wr.rolling_radius * wr.track_force[0]))
-            for k, w in enumerate(r.wheels):
-                lat[i, k], vert[i, k] = w.track_force[1], w.track_force[2]
-                nor[i, k], yq[i, k] = w.normal_force, w.derailment_quotient
-            its[i] = sum(w.normal_iterations + w.tangential_iterations for w in r.wheels)
-        return WheelForces(gen, lat, vert, nor, yq, status, secs, not bad,
-                           "; ".join(bad) or "ok", its)
+        if n != self.count:
+            raise RailContactError(f"{self.count} wheelsets expected, got {n}")
+        rows, secs = self._rows(states)
+        bad = [f"wheelset {i + 1}: {r.stop}" for i, r in enumerate(rows) if r.stop is not None]
+        return WheelForces(
+            np.array([r.generalized for r in rows]), np.array([r.lateral for r in rows]),
+            np.array([r.vertical for r in rows]), np.array([r.normal for r in rows]),
+            np.array([r.derailment_quotient for r in rows]),
+            np.array([r.status for r in rows], dtype=int), secs, not bad,
+            "; ".join(bad) or "ok", np.array([r.iterations for r in rows], dtype=float))
+
+    def close(self) -> None:
+        """End the worker processes, if any (idempotent)."""
+        if self.pool is not None:
+            self.pool.close()
+
+    def __enter__(self) -> InProcessContact:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 __all__ = ["STOPPING", "InProcessContact", "LinearContact", "VehicleContact", "WheelForces",
-           "WheelsetStates"]
+           "WheelsetRow", "WheelsetStates", "wheelset_inputs", "wheelset_row"]

@@ -68,6 +68,10 @@ class VehicleDemoOptions:
     contact: str = "fmu"
     """"fmu" (the FMU at :attr:`fmu` through fmpy) or "in-process" (four WheelsetContacts
     in this process)."""
+    processes: int | None = None
+    """``contact = "in-process"``: None, the four wheelsets one after the other in this
+    process; N, stepped at the same time in N worker processes
+    (:class:`~railcontact.timestep.pool.WheelsetPool`, the same forces)."""
     fmu: str = VEHICLE_FMU
     """The FMU of ``contact = "fmu"``: at :data:`VEHICLE_FMU` or a path that does not exist,
     one of four wheelsets built when missing or stale (one instance); another FMU that
@@ -81,6 +85,11 @@ class VehicleDemoOptions:
         check_positive("initial_lateral", self.initial_lateral, "m")
         if self.contact not in CONTACTS:
             raise RailContactError(f"contact must be one of {', '.join(CONTACTS)}, got "
+                                   f"{self.contact!r}")
+        if self.processes is not None and (self.contact != "in-process"
+                                           or self.processes < 1):
+            raise RailContactError("processes must be at least 1 and needs contact = "
+                                   f"'in-process', got {self.processes} with contact = "
                                    f"{self.contact!r}")
         for k, v in out.items():
             check_positive(k, v, "m" if k == "element_size" else "s")
@@ -110,7 +119,7 @@ def run_vehicle_demo(opts: VehicleDemoOptions, progress: bool = True) -> Vehicle
     else:
         settings = ContactSettings(element_size=cfg["element_size"],
                                    warm_start=opts.warm_start)
-        contact = InProcessContact(track, ws, pair, settings)
+        contact = InProcessContact(track, ws, pair, settings, processes=opts.processes)
     q = np.zeros(DOFS)
     for i in range(4):
         q[wheelset_dofs(i)[0]] = opts.initial_lateral
@@ -190,6 +199,9 @@ def describe(sim: VehicleResult, s: dict[str, Any], opts: VehicleDemoOptions,
         f"{run.steps} steps of {run.step * 1e3:g} ms, element size "
         f"{cfg['element_size'] * MM:g} mm, {p.wheel_load * KN:.2f} kN per wheel",
         (f"contact: four in-process WheelsetContacts ({opts.warm_start}), one after the other"
+         if opts.contact == "in-process" and opts.processes is None else
+         f"contact: four WheelsetContacts ({opts.warm_start}) in {opts.processes} worker "
+         f"processes, stepped at the same time"
          if opts.contact == "in-process" else
          f"contact: the FMU {opts.fmu} through fmpy ({opts.warm_start})")
         + f"; start: all wheelsets at y = {opts.initial_lateral * MM:g} mm (equivalent "

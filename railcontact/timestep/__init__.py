@@ -6,11 +6,14 @@
 - :mod:`.memory`: :class:`StepMemory`, what a step keeps for the next one (a value);
 - :mod:`.validity`: where a solved wheel is beyond the model's validity (Y/Q, Nadal,
   flange climb, penetration, load);
-- :mod:`.rigid`: the rigid wheelset's vertical displacement and roll under load control.
+- :mod:`.rigid`: the rigid wheelset's vertical displacement and roll under load control;
+- :mod:`.pool`: :class:`WheelsetPool`, wheelsets stepped at the same time in worker
+  processes.
 """
 
 from ..settings import ContactSettings
 from .memory import StepMemory
+from .pool import WheelsetDescription, WheelsetPool
 from .wheelset import (
     OUTSIDE_VALIDITY,
     STATUS_NAMES,
@@ -22,4 +25,5 @@ from .wheelset import (
 )
 
 __all__ = ["OUTSIDE_VALIDITY", "STATUS_NAMES", "ContactSettings", "Kinematics", "RailDeviation",
-           "StepMemory", "WheelContact", "WheelsetContact", "WheelsetResult"]
+           "StepMemory", "WheelContact", "WheelsetContact", "WheelsetDescription", "WheelsetPool",
+           "WheelsetResult"]

@@ -1,0 +1,373 @@
+"""Wheelsets stepped in parallel in worker processes.
+
+A :class:`WheelsetPool` owns N :class:`~railcontact.timestep.WheelsetContact` s spread over
+worker processes, each wheelset always in the same process (its warm-start memory stays
+there). One call of :meth:`WheelsetPool.step` sends every wheelset the keyword arguments
+of :meth:`WheelsetContact.solve` and returns their results in wheelset order: one round
+trip through a pipe per worker process and step, the workers solving at the same time.
+
+Processes, not threads: the Python that runs between the compiled kernels of a step holds
+the interpreter, so two wheelsets on two threads of one process take about as long as one
+after the other; in two processes they run on two cores at once.
+
+The workers are started once with the ``spawn`` method (safe after the compiled kernels,
+FFTW and threads are initialised in the host; each worker loads the compiled kernels from
+their on-disk cache), build
+their wheelsets from picklable descriptions (:class:`WheelsetDescription`) and end when
+the pool is closed, when the host process ends (a worker sees its pipe close) or on
+garbage collection of the pool.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import pickle
+import signal
+import time
+import traceback
+import weakref
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from multiprocessing.connection import Connection
+from typing import Any
+
+from ..errors import RailContactError
+from ..geometry.track import Track, Wheelset
+from ..halfspace.materials import ElasticPair
+from ..settings import ContactSettings
+from .wheelset import WheelsetContact
+
+START_METHOD = "spawn"
+"""How worker processes start: a new interpreter (``fork`` would copy a host whose kernel,
+FFTW or other threads may hold locks)."""
+
+
+@dataclass(frozen=True)
+class WheelsetDescription:
+    """What a worker process builds a :class:`~railcontact.timestep.WheelsetContact` from
+    (the arguments of its constructor; all picklable).
+
+    Attributes
+    ----------
+    track, wheelset, pair, settings, convention, patch_frame
+        As :class:`~railcontact.timestep.WheelsetContact` (SI units; a track and a
+        wheelset, or one per side (left, right)); settings None: the defaults.
+    """
+
+    track: Track | tuple[Track, Track]
+    wheelset: Wheelset | tuple[Wheelset, Wheelset]
+    pair: ElasticPair
+    settings: ContactSettings | None = None
+    convention: str = "railcontact"
+    patch_frame: str | None = None
+
+    def build(self) -> WheelsetContact:
+        """A new wheelset contact of this description."""
+        return WheelsetContact(self.track, self.wheelset, self.pair, self.settings,
+                               convention=self.convention, patch_frame=self.patch_frame)
+
+
+class RemoteError(RailContactError):
+    """An error raised in a worker process whose exception could not be sent back as it
+    was (not picklable): its type's name, message and the worker's traceback."""
+
+
+def _portable(exc: BaseException, where: str) -> BaseException:
+    """``exc`` as it can be sent to the host: itself when it pickles, else a
+    :class:`RemoteError` of its type and message; the worker's traceback as a note."""
+    note = f"{where}; the worker's traceback:\n" + "".join(
+        traceback.format_exception(type(exc), exc, exc.__traceback__))
+    exc.__traceback__ = None
+    try:
+        pickle.loads(pickle.dumps(exc))
+        out = exc
+    except Exception:  # noqa: BLE001 - anything the exception's pickling raises
+        out = RemoteError(f"{type(exc).__name__}: {exc}")
+    out.add_note(note)
+    return out
+
+
+def _build(which: list[int], descriptions: list[WheelsetDescription]
+           ) -> tuple[list[WheelsetContact] | None, tuple[bool, BaseException | None]]:
+    """The wheelsets of a worker, and the answer to the host: ``(True, None)``, or
+    ``(False, exception)`` when one cannot be built."""
+    try:
+        return [d.build() for d in descriptions], (True, None)
+    except BaseException as exc:  # noqa: BLE001 - sent to the host, which raises it
+        return None, (False, _portable(exc, f"building wheelsets {[i + 1 for i in which]}"))
+
+
+def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescription],
+           reduce: Callable[[Any], Any] | None) -> None:
+    """A worker process: build the wheelsets ``which`` (pool indices) from their
+    descriptions, then answer requests until ``None`` or the pipe closes.
+
+    A step request is a list of ``solve`` keyword arguments, one per wheelset of this
+    worker in ``which`` order; its answer a list of ``(ok, value, seconds)``: ``ok`` True
+    and the (reduced) result, or False and the exception, and the wall time of the solve
+    [s]. A tuple ``("reset", descriptions)`` builds the wheelsets anew (from new
+    descriptions unless None); its answer is that of the first build. Interrupts (Ctrl+C
+    in a terminal reaches the whole process group) are left to the host, which closes
+    the pool."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    contacts, answer = _build(which, descriptions)
+    conn.send(answer)
+    if contacts is None:
+        conn.close()
+        return
+    while True:
+        try:
+            request = conn.recv()
+        except (EOFError, OSError):  # the host ended
+            return
+        if request is None:
+            conn.close()
+            return
+        if isinstance(request, tuple):
+            descriptions = request[1] or descriptions
+            built, answer = _build(which, descriptions)
+            contacts = built or contacts
+            conn.send(answer)
+            continue
+        answer = []
+        for i, contact, kwargs in zip(which, contacts, request, strict=True):
+            t0 = time.perf_counter()
+            try:
+                r = contact.solve(**kwargs)
+                value = r if reduce is None else reduce(r)
+                answer.append((True, value, time.perf_counter() - t0))
+            except Exception as exc:  # noqa: BLE001 - sent to the host, which raises it
+                answer.append((False, _portable(exc, f"wheelset {i + 1}"),
+                               time.perf_counter() - t0))
+        try:
+            conn.send(answer)
+        except Exception as exc:  # noqa: BLE001 - an answer that does not pickle
+            conn.send([(False, _portable(exc, "sending the results"), 0.0)] * len(which))
+
+
+def _stop(processes: list, connections: list[Connection], timeout: float = 5.0) -> None:
+    """End the workers: ask, wait up to ``timeout`` [s] each, then terminate."""
+    for conn in connections:
+        try:
+            conn.send(None)
+        except (OSError, ValueError, BrokenPipeError):
+            pass
+    for p in processes:
+        p.join(timeout)
+        if p.is_alive():
+            p.terminate()
+            p.join(timeout)
+    for conn in connections:
+        conn.close()
+
+
+class WheelsetPool:
+    """N wheelsets, each in the same worker process step after step, stepped at once.
+
+    Parameters
+    ----------
+    descriptions
+        One :class:`WheelsetDescription` per wheelset (pool index ``i`` = its position).
+    processes
+        Worker processes; None: ``os.cpu_count()``; at most the number of wheelsets.
+        Wheelset ``i`` runs in process ``i mod processes``.
+    reduce
+        None: :meth:`step` returns each wheelset's
+        :class:`~railcontact.timestep.WheelsetResult` (its values as in-process; about
+        1 MB a wheelset with its patches' geometry, pickled in the worker and read here
+        every step). Else a picklable function (defined at a module's top level) applied
+        to each result in the worker; :meth:`step` returns its values: what the host
+        needs, sent instead of the whole result.
+
+    Raises
+    ------
+    RailContactError
+        No wheelsets, ``processes < 1``, or a wheelset that cannot be built (then the
+        worker's exception itself, e.g. a :class:`RailContactError` of the settings).
+
+    Notes
+    -----
+    Use as a context manager or call :meth:`close`; workers end with the host process as
+    well. The pool is used from one thread at a time.
+    """
+
+    def __init__(self, descriptions: Sequence[WheelsetDescription],
+                 processes: int | None = None,
+                 reduce: Callable[[Any], Any] | None = None) -> None:
+        n = len(descriptions)
+        if n == 0:
+            raise RailContactError("a wheelset pool needs at least one wheelset")
+        for i, d in enumerate(descriptions):
+            if not isinstance(d, WheelsetDescription):
+                raise RailContactError(f"wheelset {i + 1}: a WheelsetDescription expected, "
+                                       f"got {type(d).__name__}")
+        if reduce is not None:
+            try:
+                pickle.dumps(reduce)
+            except Exception as exc:  # noqa: BLE001 - whatever pickling raises
+                raise RailContactError(
+                    f"reduce must be a function defined at a module's top level (sent to "
+                    f"the worker processes by name), got {reduce!r}") from exc
+        p = (os.cpu_count() or 1) if processes is None else processes
+        if p < 1:
+            raise RailContactError(f"processes must be at least 1, got {p}")
+        p = min(p, n)
+        self.count = n
+        """Number of wheelsets."""
+        self.shares = [[i for i in range(n) if i % p == j] for j in range(p)]
+        """The wheelsets (pool indices) of each worker process."""
+        self.seconds: list[float] = [0.0] * n
+        """Wall time of each wheelset's solve in its worker at the last step [s]."""
+        ctx = multiprocessing.get_context(START_METHOD)
+        self._processes: list = []
+        self._connections: list[Connection] = []
+        self._closed = False
+        self._finalizer = weakref.finalize(self, _stop, self._processes, self._connections)
+        try:
+            for j, which in enumerate(self.shares):
+                here, there = ctx.Pipe()
+                proc = ctx.Process(target=_serve, name=f"railcontact-wheelsets-{j}",
+                                   args=(there, which, [descriptions[i] for i in which],
+                                         reduce), daemon=True)
+                proc.start()
+                there.close()
+                self._processes.append(proc)
+                self._connections.append(here)
+            for j, conn in enumerate(self._connections):
+                ok, exc = self._receive(j, conn)
+                if not ok:
+                    raise exc
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def processes(self) -> int:
+        """Number of worker processes."""
+        return len(self.shares)
+
+    def _receive(self, j: int, conn: Connection) -> Any:
+        try:
+            return conn.recv()
+        except (EOFError, OSError) as exc:
+            proc = self._processes[j]
+            proc.join(1.0)
+            raise RailContactError(
+                f"worker process {j + 1} of the wheelset pool ended (exit code "
+                f"{proc.exitcode}); the pool is closed") from exc
+
+    def step(self, inputs: Sequence[Mapping[str, Any]]) -> list[Any]:
+        """Step every wheelset once.
+
+        Parameters
+        ----------
+        inputs
+            Per wheelset (pool order) the keyword arguments of
+            :meth:`WheelsetContact.solve <railcontact.timestep.WheelsetContact.solve>`
+            (``pose``, ``loads`` or ``vertical``, ``kinematics``, ``time`` [s], ...).
+
+        Returns
+        -------
+        list
+            Per wheelset its :class:`~railcontact.timestep.WheelsetResult`, or what the
+            pool's ``reduce`` makes of it. :attr:`seconds`: the solves' wall times [s].
+
+        Raises
+        ------
+        Exception
+            The exception a wheelset's solve raised in its worker (its type and message,
+            the worker's traceback as a note; the first failing wheelset's); the other
+            wheelsets of the step are solved and the pool keeps working.
+        RailContactError
+            A closed pool, a wrong number of inputs, or a worker process that ended.
+        """
+        if self._closed:
+            raise RailContactError("the wheelset pool is closed")
+        if len(inputs) != self.count:
+            raise RailContactError(f"{self.count} wheelsets' inputs expected, got "
+                                   f"{len(inputs)}")
+        # every request pickled before any is sent: an input that does not pickle leaves
+        # the workers in step with the host
+        payloads = [pickle.dumps([dict(inputs[i]) for i in which], pickle.HIGHEST_PROTOCOL)
+                    for which in self.shares]
+        out: list[Any] = [None] * self.count
+        errors: list[tuple[int, BaseException]] = []
+        ended: RailContactError | None = None
+        try:
+            for j, payload in enumerate(payloads):
+                try:
+                    self._connections[j].send_bytes(payload)
+                except (OSError, ValueError) as exc:
+                    raise RailContactError(f"worker process {j + 1} of the wheelset pool "
+                                           "cannot be reached; the pool is closed") from exc
+            for j, which in enumerate(self.shares):
+                try:
+                    answer = self._receive(j, self._connections[j])
+                except RailContactError as exc:
+                    ended = ended or exc
+                    continue
+                for i, (ok, value, secs) in zip(which, answer, strict=True):
+                    self.seconds[i] = secs
+                    if ok:
+                        out[i] = value
+                    else:
+                        errors.append((i, value))
+        except BaseException:  # an interrupted round trip: the workers are out of step
+            self.close()
+            raise
+        if ended is not None:
+            self.close()
+            raise ended
+        if errors:
+            raise min(errors, key=lambda e: e[0])[1]
+        return out
+
+    def reset(self, descriptions: Sequence[WheelsetDescription] | None = None) -> None:
+        """Build every wheelset anew in its worker process (no warm-start memory), from
+        ``descriptions`` (one per wheelset) or from those it was built from; the worker
+        processes, their loaded kernels and FFT plans stay.
+
+        Raises
+        ------
+        Exception
+            A wheelset that cannot be built (the worker's exception; the wheelsets of
+            that worker stay as they were).
+        """
+        if self._closed:
+            raise RailContactError("the wheelset pool is closed")
+        if descriptions is not None and len(descriptions) != self.count:
+            raise RailContactError(f"{self.count} wheelset descriptions expected, got "
+                                   f"{len(descriptions)}")
+        for j, which in enumerate(self.shares):
+            self._connections[j].send(
+                ("reset", None if descriptions is None else [descriptions[i] for i in which]))
+        first: BaseException | None = None
+        for j, conn in enumerate(self._connections):
+            ok, exc = self._receive(j, conn)
+            if not ok and first is None:
+                first = exc
+        if first is not None:
+            raise first
+
+    def close(self) -> None:
+        """End the worker processes (idempotent)."""
+        self._closed = True
+        self._finalizer()
+
+    def __enter__(self) -> WheelsetPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __len__(self) -> int:
+        return self.count
+
+    @property
+    def alive(self) -> bool:
+        """Whether every worker process runs."""
+        return not self._closed and all(p.is_alive() for p in self._processes)
+
+
+__all__ = ["START_METHOD", "RemoteError", "WheelsetDescription", "WheelsetPool"]

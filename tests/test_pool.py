@@ -1,0 +1,218 @@
+"""Wheelsets stepped in worker processes (railcontact.timestep.pool): the same results as
+the in-process WheelsetContact (whose physics the time-step tests verify) bit for bit over
+warm steps, errors raised in the host with the pool still working, workers ended by
+close(); and the vehicle's contact stepped in processes equal to the in-process one."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import railcontact as rc
+from railcontact.errors import RailContactError
+from railcontact.sim.vehicle_contact import InProcessContact, WheelsetStates
+from railcontact.timestep.pool import WheelsetDescription, WheelsetPool
+
+STEPS = 3
+"""Warm steps compared (the first one cold)."""
+
+
+def description() -> WheelsetDescription:
+    """S1002 on 60E1 at 1:40, coarse elements (quick)."""
+    return WheelsetDescription(rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+                               rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                               rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                               rc.ContactSettings(friction=0.4, element_size=1.5e-3))
+
+
+def inputs(i: int, k: int) -> dict:
+    """Wheelset ``i``'s solve arguments at step ``k`` (1 ms steps): a lateral sine of its
+    own amplitude and phase, load control, kinematic creepages."""
+    w = 2 * math.pi * 1.5
+    a, phase = 2e-3 + 1e-3 * i, 0.7 * i
+    y, y_dot = a * math.sin(w * k * 1e-3 + phase), a * w * math.cos(w * k * 1e-3 + phase)
+    return dict(pose=rc.Pose(y, 0.2 * y_dot / 30.0), loads=(83e3 + 2e3 * i, 83e3 - 2e3 * i),
+                kinematics=rc.Kinematics(30.0, y_dot), time=k * 1e-3)
+
+
+def same(a: rc.WheelsetResult, b: rc.WheelsetResult) -> None:
+    """Every reported value of two wheelset results equal bit for bit."""
+    assert a.status == b.status and a.vertical == b.vertical and a.roll == b.roll
+    for wa, wb in zip(a.wheels, b.wheels, strict=True):
+        for name in ("status", "message", "normal_force", "creep_force", "spin_moment",
+                     "track_force", "yaw_moment", "approach", "moment", "rolling_radius",
+                     "contact_angle", "derailment_quotient", "normal_iterations",
+                     "tangential_iterations", "load_passes", "area", "max_pressure"):
+            assert getattr(wa, name) == getattr(wb, name), name
+        assert len(wa.patches) == len(wb.patches)
+        for pa, pb in zip(wa.patches, wb.patches, strict=True):
+            assert pa.normal.pressure.tobytes() == pb.normal.pressure.tobytes()
+            assert np.asarray(pa.tangential.traction).tobytes() == \
+                np.asarray(pb.tangential.traction).tobytes()
+            assert pa.tangential.relative_slip().tobytes() == \
+                pb.tangential.relative_slip().tobytes()
+
+
+@pytest.fixture(scope="module")
+def pool():
+    with WheelsetPool([description() for _ in range(3)], processes=2) as p:
+        yield p
+
+
+def test_pool_results_equal_in_process_bit_for_bit(pool):
+    assert pool.processes == 2 and pool.shares == [[0, 2], [1]]
+    here = [description().build() for _ in range(3)]
+    for k in range(STEPS):
+        there = pool.step([inputs(i, k) for i in range(3)])
+        for i in range(3):
+            same(there[i], here[i].solve(**inputs(i, k)))
+            assert pool.seconds[i] > 0
+
+
+def test_an_error_comes_back_and_the_pool_keeps_working(pool):
+    bad = [inputs(i, 10) for i in range(3)]
+    bad[1]["loads"] = (-1.0, 83e3)
+    with pytest.raises(RailContactError) as here:
+        description().build().solve(**bad[1])
+    with pytest.raises(RailContactError) as there:
+        pool.step(bad)
+    assert str(there.value) == str(here.value)
+    assert any("wheelset 2" in note for note in there.value.__notes__)
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        pool.step([inputs(0, 11), inputs(1, 11), {**inputs(2, 11), "speed": 3.0}])
+    with pytest.raises(Exception, match="pickle"):  # an input that cannot be sent
+        pool.step([inputs(0, 11), inputs(1, 11), {**inputs(2, 11), "time": lambda: 0.0}])
+    assert pool.alive
+    out = pool.step([inputs(i, 12) for i in range(3)])
+    assert all(r.status == rc.Status.OK for r in out), [r.status for r in out]
+    with pytest.raises(RailContactError, match="3 wheelsets' inputs expected"):
+        pool.step([inputs(0, 13)])
+
+
+def test_close_ends_the_workers_and_bad_pools_are_refused():
+    p = WheelsetPool([description(), description()], processes=5)
+    assert p.processes == 2 and p.alive
+    procs = list(p._processes)
+    p.close()
+    p.close()
+    assert not p.alive and all(not q.is_alive() and q.exitcode == 0 for q in procs)
+    with pytest.raises(RailContactError, match="closed"):
+        p.step([inputs(0, 0), inputs(1, 0)])
+    with pytest.raises(RailContactError, match="at least one wheelset"):
+        WheelsetPool([])
+    with pytest.raises(RailContactError, match="processes must be at least 1"):
+        WheelsetPool([description()], processes=0)
+    with pytest.raises(RailContactError, match="module's top level"):
+        WheelsetPool([description()], reduce=lambda r: r.force)
+    with pytest.raises(RailContactError, match="WheelsetDescription expected"):
+        WheelsetPool([description().build()])
+    d = description()
+    # two wheel radii on one axle: refused when the worker builds the wheelset
+    broken = WheelsetDescription(d.track, (d.wheelset, rc.Wheelset(d.wheelset.wheel, 0.45)),
+                                 d.pair, d.settings)
+    with pytest.raises(RailContactError) as here:
+        broken.build()
+    with pytest.raises(RailContactError) as there:
+        WheelsetPool([d, broken], processes=2)
+    assert str(there.value) == str(here.value) and "wheel radius" in str(here.value)
+
+
+def test_vehicle_contact_in_processes_equals_in_process():
+    d = description()
+    n = 2
+    with InProcessContact(d.track, d.wheelset, d.pair, d.settings, count=n) as here, \
+            InProcessContact(d.track, d.wheelset, d.pair, d.settings, count=n,
+                             processes=2) as there:
+        assert here.pool is None and there.pool is not None
+        for k in range(STEPS):
+            a = [inputs(i, k) for i in range(n)]
+            states = WheelsetStates(
+                k * 1e-3, 30.0, np.array([x["pose"].lateral for x in a]),
+                np.array([x["pose"].yaw for x in a]),
+                np.array([x["kinematics"].lateral_velocity for x in a]), np.zeros(n),
+                np.full(n, 30.0 / 0.46), np.array([x["loads"] for x in a]))
+            fa, fb = here(states), there(states)
+            for name in ("generalized", "lateral", "vertical", "normal",
+                         "derailment_quotient", "status", "iterations"):
+                assert getattr(fa, name).tobytes() == getattr(fb, name).tobytes(), name
+            assert (fa.ok, fa.message) == (fb.ok, fb.message)
+    assert not there.pool.alive
+
+
+def test_reset_builds_new_wheelsets_in_the_same_workers(pool):
+    pids = [p.pid for p in pool._processes]
+    pool.reset()
+    here = [description().build() for _ in range(3)]
+    for k in range(2):
+        there = pool.step([inputs(i, k) for i in range(3)])
+        for i in range(3):
+            same(there[i], here[i].solve(**inputs(i, k)))
+    assert [p.pid for p in pool._processes] == pids
+    with pytest.raises(RailContactError, match="3 wheelset descriptions expected"):
+        pool.reset([description()])
+
+
+def test_demo_vehicle_in_processes_runs_as_in_process(capsys, tmp_path):
+    """``railcontact demo --vehicle --contact in-process --processes 2``: the vehicle's
+    motion equal bit for bit to the run in this process; --processes without the
+    in-process contact is refused (one line, exit status 2)."""
+    from railcontact.cli import main
+    from railcontact.sim.vehicle_demo import VehicleDemoOptions, run_vehicle_demo
+
+    opts = dict(contact="in-process", duration=0.004, step=0.002, element_size=2e-3,
+                plots=False)
+    here = run_vehicle_demo(VehicleDemoOptions(**opts), progress=False)
+    there = run_vehicle_demo(VehicleDemoOptions(**opts, processes=2), progress=False)
+    assert here.sim.completed and there.sim.completed
+    assert here.sim.wheelset_lateral().tobytes() == there.sim.wheelset_lateral().tobytes()
+    assert "in 2 worker processes" in there.text
+    assert main(["demo", "--vehicle", "--contact", "in-process", "--processes", "2",
+                 "--duration", "0.002", "--step", "0.002", "--element-size", "2e-3",
+                 "--no-plots", "--no-progress", "--output-dir", str(tmp_path)]) == 0
+    assert "real-time factor" in capsys.readouterr().out
+    assert main(["demo", "--vehicle", "--processes", "2", "--no-progress"]) == 2
+    assert "processes" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads process states in /proc")
+def test_workers_end_with_their_host(tmp_path):
+    """A host that ends without closing its pool (``os._exit``: no atexit, no finaliser):
+    its workers see their pipes close and end."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "host.py"
+    script.write_text(
+        "import os, sys\n"
+        f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+        "from test_pool import description\n"
+        "from railcontact.timestep.pool import WheelsetPool\n"
+        "if __name__ == '__main__':\n"
+        "    pool = WheelsetPool([description(), description()], processes=2)\n"
+        "    print(*[p.pid for p in pool._processes], flush=True)\n"
+        "    os._exit(0)\n", encoding="utf-8")
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(root), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         env=env, timeout=300, check=True)
+    pids = [int(x) for x in out.stdout.split()]
+    assert len(pids) == 2
+
+    def running(pid: int) -> bool:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().split()[2]
+        except FileNotFoundError:
+            return False
+        return state != "Z"
+
+    for _ in range(300):  # up to 30 s
+        if not any(running(pid) for pid in pids):
+            break
+        time.sleep(0.1)
+    assert not any(running(pid) for pid in pids)
