@@ -79,13 +79,15 @@ class Slave:
         for k, v in values.items():
             if self.type[k] == "String":
                 self.s.setString([self.vr[k]], [v])
+            elif self.type[k] in ("Integer", "Enumeration"):
+                self.s.setInteger([self.vr[k]], [int(v)])
             else:
                 self.s.setReal([self.vr[k]], [float(v)])
 
     def get(self, *names):
         out = []
         for n in names:
-            if self.type[n] == "Integer":
+            if self.type[n] in ("Integer", "Enumeration"):
                 out.append(self.s.getInteger([self.vr[n]])[0])
             else:
                 out.append(self.s.getReal([self.vr[n]])[0])

@@ -20,9 +20,9 @@ import pytest
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy.fmi1 import FMICallException  # noqa: E402
-from fmpy.fmi2 import FMU2Slave  # noqa: E402
 from fmpy.model_description import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
+from test_fmu import Slave  # noqa: E402 - (tests/ is on the path: pytest's rootdir import)
 
 from railcontact.errors import RailContactError  # noqa: E402
 from railcontact.fmu import build_fmu  # noqa: E402
@@ -31,60 +31,20 @@ from railcontact.fmu import variables as V  # noqa: E402
 STEP = 1e-3
 
 
-class Instance:
-    """An fmpy instance of an unpacked FMU, its variables by name."""
+class Instance(Slave):
+    """An fmpy instance of an FMU unpacked next to it (``test_fmu.Slave``)."""
 
     def __init__(self, fmu: Path, name: str, **start) -> None:
         where = fmu.parent / f"{fmu.stem}-unpacked"
         if not where.exists():
             with zipfile.ZipFile(fmu) as z:
                 z.extractall(where)
-        md = read_model_description(str(fmu))
-        self.md = md
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.type = {v.name: v.type for v in md.modelVariables}
-        self.outputs = [v.name for v in md.modelVariables if v.causality == "output"]
-        self.s = FMU2Slave(guid=md.guid, unzipDirectory=str(where),
-                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.s.instantiate()
-        self.s.setupExperiment(startTime=0.0)
-        self.s.enterInitializationMode()
-        self.set(**start)
-        self.s.exitInitializationMode()
-        self.t = 0.0
-
-    def set(self, **values) -> None:
-        for k, v in values.items():
-            if self.type[k] == "String":
-                self.s.setString([self.vr[k]], [v])
-            elif self.type[k] in ("Integer", "Enumeration"):
-                self.s.setInteger([self.vr[k]], [int(v)])
-            else:
-                self.s.setReal([self.vr[k]], [float(v)])
-
-    def get(self, name: str):
-        if self.type[name] in ("Integer", "Enumeration"):
-            return self.s.getInteger([self.vr[name]])[0]
-        return self.s.getReal([self.vr[name]])[0]
-
-    def step(self, **inputs) -> int:
-        """doStep; its FMI status (fmpy raises for Discard and worse)."""
-        self.set(**inputs)
-        try:
-            self.s.doStep(self.t, STEP)
-        except FMICallException as exc:
-            return exc.status
-        self.t += STEP
-        return 0
+        super().__init__(fmu, where, read_model_description(str(fmu)), name, **start)
 
     def outputs_of(self, suffix: str = "") -> dict:
         """Every output of the one-wheelset FMU's names read with ``suffix`` (the wall
         time apart)."""
         return {n: self.get(n + suffix) for n in SINGLE_OUTPUTS if n != "solve_time"}
-
-    def free(self) -> None:
-        self.s.terminate()
-        self.s.freeInstance()
 
 
 SINGLE_OUTPUTS = [v.name for v in V.table() if v.causality == "output"]
