@@ -37,7 +37,7 @@ class FormedOnce:
         held = self._held.get(id(record))
         if held is None or held[0]() is not record:
             held = self._hold(record)
-        values, key = held[1], (form, *args)
+        values, key = held[1], (form, *args) if args else form
         value = values.get(key, _NONE)
         if value is _NONE:
             value = values.setdefault(key, form(record, *args))
@@ -69,8 +69,14 @@ def formed_once(method: Callable[[Any], Any]) -> property:
     """A read-only property of a frozen record whose value ``method(record)`` forms on
     the first read, held by a :class:`FormedOnce` (not written into the record)."""
     held = FormedOnce()
+    entries = held._held
 
-    def read(record: Any) -> Any:
+    def read(record: Any) -> Any:  # (a value formed: read here, one call less a read)
+        entry = entries.get(id(record))
+        if entry is not None and entry[0]() is record:
+            value = entry[1].get(method, _NONE)
+            if value is not _NONE:
+                return value
         return held.get(record, method)
 
     update_wrapper(read, method)

@@ -11,6 +11,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numba
 import numpy as np
@@ -128,17 +129,29 @@ def check_operator_memory(grid: Grid, components: str, backend: str,
     ``components`` on ``grid`` with ``backend`` would take more memory than ``max_elements``
     elements are budgeted (:data:`~railcontact.settings.case.ELEMENT_BYTES` each), before
     anything is allocated: a dense product grows as the square of the element count."""
-    concrete = resolve_backend(backend, grid.size)
-    need = operator_bytes(grid.nx, grid.ny, len(components), concrete)
+    why = _operator_memory_error(grid.nx, grid.ny, components, backend, max_elements)
+    if why is not None:
+        raise CaseError(why)
+
+
+@lru_cache(maxsize=256)
+def _operator_memory_error(nx: int, ny: int, components: str, backend: str,
+                           max_elements: int) -> str | None:
+    """:func:`check_operator_memory`'s message for an operator on ``nx`` x ``ny`` elements,
+    None when it fits (formed once per grid shape and settings: the patches of a time
+    series come back to a few shapes)."""
+    concrete = resolve_backend(backend, nx * ny)
+    need = operator_bytes(nx, ny, len(components), concrete)
     budget = float(max_elements) * ELEMENT_BYTES
-    if not need <= budget:
-        n = len(components) * grid.size
-        what = (f"fft = 'dense' needs a {n} x {n} matrix" if concrete == "dense"
-                else f"fft = {concrete!r} needs its spectra")
-        raise CaseError(f"[normal] {what} for {grid.nx} x {grid.ny} elements, {need / 2**30:.3g} "
-                        f"GiB, more than the {budget / 2**30:.3g} GiB that [grid] max_elements "
-                        f"= {max_elements} allows; set [normal] fft = 'auto' (an FFT product, "
-                        "memory in proportion to the elements) or use fewer elements")
+    if need <= budget:
+        return None
+    n = len(components) * nx * ny
+    what = (f"fft = 'dense' needs a {n} x {n} matrix" if concrete == "dense"
+            else f"fft = {concrete!r} needs its spectra")
+    return (f"[normal] {what} for {nx} x {ny} elements, {need / 2**30:.3g} "
+            f"GiB, more than the {budget / 2**30:.3g} GiB that [grid] max_elements "
+            f"= {max_elements} allows; set [normal] fft = 'auto' (an FFT product, "
+            "memory in proportion to the elements) or use fewer elements")
 
 
 def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,

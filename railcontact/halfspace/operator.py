@@ -251,6 +251,17 @@ class _PackedPlan:
                                     else (_pack_pair, _unpack_pair))
         self._product = _packed_rows if nc == 1 else _packed_pair
 
+    def kernel_arguments(self, operands: tuple[np.ndarray, np.ndarray], ny: int) -> tuple:
+        """The arguments ``(plans, z_in, z_s, w_s, w_out, a, b, n)`` that the compiled
+        product (:func:`_packed_rows_py`, :func:`_packed_pair_py`) takes before its input
+        and output, for grids of width ``ny``, for a compiled solver that runs the
+        products itself (the plan compiled only; in its thread, within one solve)."""
+        if ny != self.ny:
+            self.z_in[...] = 0.0
+            self.ny = ny
+        return (self.plans, self.z_in, self.z_s, self.w_s, self.w_out, operands[0],
+                operands[1], self.n)
+
     def convolve(self, operands: tuple[np.ndarray, np.ndarray], p: np.ndarray,
                  out: np.ndarray | None) -> np.ndarray:
         """``p`` (nx, ny), or (2, nx, ny), convolved: ``operands`` the plan's ``(a, b)``
@@ -411,6 +422,10 @@ if numba is not None and _fftw.AVAILABLE:
                                   for f in (_packed_rows_py, _packed_pair_py))
 else:  # pragma: no cover
     _packed_rows = _packed_pair = None
+packed_product = {1: _packed_rows, 2: _packed_pair}
+"""The compiled DC-FFT product of a packed plan of one or two components (None without
+FFTW's C interface): ``packed_product[nc](*operator.compiled_product(), x, out)``, for
+compiled solvers (:meth:`InfluenceOperator.compiled_product`)."""
 
 
 def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
@@ -697,6 +712,20 @@ class InfluenceOperator:
             return partial(self._convolve, spectra)
         plan, operand = self._fftw(spectra)
         return partial(plan.convolve, operand)
+
+    def compiled_product(self) -> tuple | None:
+        """The arguments before its input and output of :data:`packed_product` for this
+        operator's product (:meth:`_PackedPlan.kernel_arguments`), for a compiled solver
+        that runs its products itself: ``packed_product[nc](*args, x, out)`` is
+        :meth:`apply`'s ``(x, out)``, the same bits. None when the product is not one
+        compiled call (not ``"pyfftw"``, a pruned plan, no FFTW C interface). As
+        :meth:`bound`: within one solve, in the thread that formed it."""
+        if self.backend != "pyfftw":
+            return None
+        plan, operand = self._fftw(self._spectra)
+        if not isinstance(plan, _PackedPlan) or not plan.compiled:
+            return None
+        return plan.kernel_arguments(operand, self.ny)
 
     def preconditioner(self, floor: float = PRECONDITIONER_FLOOR
                        ) -> Callable[[np.ndarray], np.ndarray]:

@@ -752,12 +752,21 @@ class SweepProblem:
         fallen below :data:`STALL_GAIN` of its best in ``stall_sweeps`` sweeps; the result
         on the problem's grid, or with ``embed`` on that larger grid (see
         :func:`solve_tangential`)."""
+        return self.result(name, stall_sweeps, t0, embed, *self.iterate(sweep, stall_sweeps))
+
+    @property
+    def floor_above(self) -> float:
+        """The norm [Pa] (scaled by :attr:`measure`) above which the convergence measure's
+        floor ``1e-9 ||g||`` cannot matter: ``1.01e-9 sqrt(ncon) max(g)`` bounds it, so the
+        floor is formed only for a norm below this (it is then the same value as always)."""
+        return 1.01e-9 * math.sqrt(self.contact_count) * self.largest_bound * self.measure
+
+    def iterate(self, sweep: Callable[[], float], stall_sweeps: int
+                ) -> tuple[int, float, bool, bool, np.ndarray]:
+        """:meth:`solve`'s sweeps: ``(sweeps, error, converged, stalled, history)``."""
         px, py = self.px, self.py
-        ncon = self.contact_count
-        # the floor 1e-9 ||g|| of the norm is at most 1e-9 sqrt(ncon) max(g): formed only
-        # for a norm below that (it is then the same value as always)
         m = self.measure
-        floor_above = 1.01e-9 * math.sqrt(ncon) * self.largest_bound * m
+        floor_above = self.floor_above
         floor = None
         squares = np.empty_like(px)
         hist: list[float] = []
@@ -765,8 +774,7 @@ class SweepProblem:
         best, best_its = math.inf, 0
         its = 0
         err = 0.0
-        in_contact = ncon > 0
-        if in_contact and self.rolling:
+        if self.contact_count > 0 and self.rolling:
             while its < self.max_iterations:
                 its += 1
                 dif = sweep()
@@ -791,6 +799,15 @@ class SweepProblem:
                     break
         else:
             converged = True
+        return its, err, converged, stalled, np.asarray(hist)
+
+    def result(self, name: str, stall_sweeps: int, t0: float, embed: Embedding | None,
+               its: int, err: float, converged: bool, stalled: bool, hist: np.ndarray
+               ) -> TangentialResult:
+        """The :class:`TangentialResult` of the sweeps :meth:`iterate` (or a compiled loop
+        of the same steps) ran: ``its`` sweeps, the last ``err``, whether they converged
+        or stalled, the error after each (``hist``)."""
+        in_contact = self.contact_count > 0
         grid = self.grid
         if embed is None:
             # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it
@@ -824,7 +841,7 @@ class SweepProblem:
             grid=grid, traction=traction, state=st, slip_of=slip, force=force,
             spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
             converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
-            history=np.asarray(hist))
+            history=hist)
 
     def _slip(self) -> np.ndarray:
         """The relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny) of the traction solved

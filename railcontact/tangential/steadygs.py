@@ -69,18 +69,22 @@ import numpy as np
 
 from ..errors import RailContactError
 from ..halfspace.grid import Grid
-from ..halfspace.operator import InfluenceOperator
+from ..halfspace.operator import InfluenceOperator, packed_product
+from ..halfspace.sums import numpy_sum
 from .convexgs import (
     ADHESION,
     HAVE_NUMBA,
     NOT_HUGE,
     NOT_TINY,
+    STALL_GAIN,
     Embedding,
     SweepProblem,
     TangentialResult,
+    _block_rows,
     _blocks_of,
     _element_solve,
     _gs_kernels,
+    _squares,
 )
 
 try:
@@ -403,6 +407,101 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     return dif
 
 
+def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,
+                   measure, tolerance, max_iterations, stall_sweeps,
+                   floor_above):  # pragma: no cover - compiled
+    """:func:`_sweep_blocked`'s sweeps and :meth:`~.convexgs.SweepProblem.iterate`'s
+    measure and stopping rules in one compiled call, the same steps on the same arrays
+    (the same bits), the DC-FFT products run through the operator's compiled packed
+    plan (``fft``: :meth:`~railcontact.halfspace.operator.InfluenceOperator.
+    compiled_product`'s arguments) and ``rows`` the blocks as an array (nblocks, 2).
+    ``floor_above``: :attr:`~.convexgs.SweepProblem.floor_above`. Returns ``(sweeps,
+    error, converged, stalled, history)``."""
+    plans, z_in, z_s, w_s, w_out, a, b, n = fft
+    rxx, rxy, ryy, fxx, fxy, fyy = kern
+    ny, nx = g.shape
+    px = p[0]
+    py = p[1]
+    pt = p.transpose(0, 2, 1)  # (the traction as (2, nx, ny), for the products)
+    work = np.empty((4, ny, nx))  # the shift and the changes, as _sweep_blocked's
+    ux = work[0]
+    uy = work[1]
+    dpx = work[2]
+    dpy = work[3]
+    dp = work[2:]
+    dpt = dp.transpose(0, 2, 1)
+    prod = np.empty((2, nx, ny))
+    squares = np.empty((ny, nx))
+    hist = np.empty(max(min(max_iterations, 64), 1))
+    nb = rows.shape[0]
+    have_floor = False
+    floor = 0.0
+    best = np.inf
+    best_its = 0
+    its = 0
+    err = 0.0
+    converged = False
+    stalled = False
+    while its < max_iterations:
+        its += 1
+        dp[:] = 0.0  # (the shift's rows are all written by the first product)
+        _packed_pair(plans, pt, z_in, z_s, w_s, w_out, a, b, n, prod)
+        _add_product_c(ux, uy, wx, wy, prod, 0)
+        dif = 0.0
+        for k in range(nb):
+            r0 = rows[k, 0]
+            r1 = rows[k, 1]
+            dif += _steady_block_numba(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py,
+                                       dpx, dpy, state, lo, hi, r0, r1, omega_h, omega_s,
+                                       measure)
+            if k + 1 < nb:
+                _packed_pair(plans, dpt, z_in, z_s, w_s, w_out, a, b, n, prod)
+                _add_product_c(ux, uy, ux, uy, prod, r1)
+                dp[:, r0:r1] = 0.0
+        norm = math.sqrt(_squares(px, py, squares, measure))
+        if not norm > floor_above:
+            if not have_floor:  # 1e-9 ||g|| (scaled), numpy's sum of the squares
+                for iy in range(ny):
+                    for ix in range(nx):
+                        v = g[iy, ix] * measure
+                        squares[iy, ix] = v * v
+                floor = 1e-9 * math.sqrt(numpy_sum(squares))
+                have_floor = True
+            scale = floor if floor > norm else norm  # (max(norm, floor))
+        else:
+            scale = norm
+        if scale > 0:
+            err = math.sqrt(dif) / scale
+        elif dif == 0:
+            err = 0.0
+        else:
+            err = np.inf
+        if its > hist.size:
+            more = np.empty(2 * hist.size)
+            more[:hist.size] = hist
+            hist = more
+        hist[its - 1] = err
+        if not math.isfinite(err):
+            break
+        if err < tolerance:
+            converged = True
+            break
+        if err < STALL_GAIN * best:
+            best = err
+            best_its = its
+        elif its - best_its >= stall_sweeps:
+            stalled = True
+            break
+    return its, err, converged, stalled, hist[:its].copy()
+
+
+if HAVE_NUMBA and packed_product[2] is not None:
+    _packed_pair = packed_product[2]
+    _steady_sweeps_c = numba.njit(cache=True, nogil=True)(_steady_sweeps)
+else:  # pragma: no cover
+    _steady_sweeps_c = None
+
+
 def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
     """The plain sweep: the shift of each element as a vectorised sum over all elements."""
     rxx, rxy, ryx, ryy = kern
@@ -522,8 +621,20 @@ def solve_steadygs(
                                engine, spin_offset)
     px, py = prob.px, prob.py
     cum = _run_coefficients(operator)
-    rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     oh, os_ = float(omega_h), float(omega_s)
+    fft = None
+    if prob.use_numba and _steady_sweeps_c is not None and prob.contact_count > 0 \
+            and prob.rolling:
+        fft = operator.compiled_product()
+    if fft is not None:  # the sweeps and their measures one compiled call
+        sweeps = _steady_sweeps_c(
+            fft, _steady_kernels(operator), cum, prob.wx, prob.wy, prob.g, prob.p,
+            prob.state, prob.lo, prob.hi,
+            _block_rows(prob.row_counts, BLOCK_SCALE**2 * grid.size), oh, os_,
+            prob.measure, prob.tolerance, prob.max_iterations, STALL_SWEEPS,
+            prob.floor_above)
+        return prob.result("SteadyGS", STALL_SWEEPS, t0, embed, *sweeps)
+    rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     if prob.use_numba:
         kern = _steady_kernels(operator)
         product = operator.bound()  # the FFT plan fetched once for all the sweeps
