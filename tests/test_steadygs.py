@@ -406,3 +406,42 @@ def test_embed_gives_the_whole_grid_answer(solver):
     ps, ws = part.relative_slip(), whole.relative_slip()
     assert slip.any() and not ps[:, outside].any()
     np.testing.assert_allclose(ps[:, slip], ws[:, slip], rtol=0, atol=1e-7 * np.abs(ws).max())
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_compiled_and_python_sweeps_agree(sphere, wheel_rail_patch, monkeypatch):
+    """The sweeps and their measure as one compiled call (the operator's packed plan) and
+    as the Python loop between the same kernels give the same result to the bit: one
+    block and many, a warm start, a stalled solve; and the solve is ConvexGS's."""
+    import railcontact.tangential.steadygs as steadygs
+    from railcontact.halfspace.operator import InfluenceOperator
+
+    hz, g, nr = sphere
+    op = rolling_operator(g, STEEL, "pyfftw")
+    assert op.compiled_product() is not None
+    wr, pair, creepage = wheel_rail_patch
+    wr_op = rolling_operator(wr.grid, pair, "pyfftw")
+    warm = solve_steadygs(wr.grid, wr_op, wr.pressure, 0.4, creepage, tolerance=1e-8)
+
+    def solves():
+        out = [solve_steadygs(wr.grid, wr_op, wr.pressure, 0.4, creepage, tolerance=1e-5,
+                              initial_traction=warm.traction, initial_state=warm.state),
+               solve_steadygs(g, op, nr.pressure, 0.3, (2e-4, 0, 1.0), tolerance=1e-30)]
+        for scale in (1e3, 2.0):  # one block; many
+            monkeypatch.setattr(steadygs, "BLOCK_SCALE", scale)
+            out.append(solve_steadygs(g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2),
+                                      tolerance=1e-6))
+        monkeypatch.undo()
+        return out
+
+    compiled = solves()
+    monkeypatch.setattr(InfluenceOperator, "compiled_product", lambda self, floor=None: None)
+    python = solves()
+    assert "stalled" in compiled[1].message
+    for a, b in zip(compiled, python, strict=True):
+        assert a.message == b.message and a.iterations == b.iterations
+        assert a.force == b.force and a.spin_moment == b.spin_moment
+        for f in ("traction", "state", "history"):
+            np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+    ref = solve_tangential(g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2), tolerance=1e-6)
+    assert rel_l2(compiled[-1].traction, ref.traction) < 1e-3

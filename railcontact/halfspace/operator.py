@@ -252,10 +252,11 @@ class _PackedPlan:
         self._product = _packed_rows if nc == 1 else _packed_pair
 
     def kernel_arguments(self, operands: tuple[np.ndarray, np.ndarray], ny: int) -> tuple:
-        """The arguments ``(plans, z_in, z_s, w_s, w_out, a, b, n)`` that the compiled
-        product (:func:`_packed_rows_py`, :func:`_packed_pair_py`) takes before its input
-        and output, for grids of width ``ny``, for a compiled solver that runs the
-        products itself (the plan compiled only; in its thread, within one solve)."""
+        """The arguments ``(plans, z_in, z_s, w_s, w_out, a, b, n)`` of the compiled
+        product (:func:`_packed_rows_py`, :func:`_packed_pair_py`: ``(plans, x, z_in,
+        z_s, w_s, w_out, a, b, n, out)``) for grids of width ``ny``, for a compiled solver
+        that runs the products itself (the plan compiled only; in its thread, within one
+        solve)."""
         if ny != self.ny:
             self.z_in[...] = 0.0
             self.ny = ny
@@ -424,8 +425,9 @@ else:  # pragma: no cover
     _packed_rows = _packed_pair = None
 packed_product = {1: _packed_rows, 2: _packed_pair}
 """The compiled DC-FFT product of a packed plan of one or two components (None without
-FFTW's C interface): ``packed_product[nc](*operator.compiled_product(), x, out)``, for
-compiled solvers (:meth:`InfluenceOperator.compiled_product`)."""
+FFTW's C interface): ``packed_product[nc](plans, x, z_in, z_s, w_s, w_out, a, b, n,
+out)`` with the arguments of :meth:`InfluenceOperator.compiled_product`, for compiled
+solvers."""
 
 
 def _spectral_product_2(s: np.ndarray, q: np.ndarray, u: np.ndarray) -> None:
@@ -714,12 +716,13 @@ class InfluenceOperator:
         return partial(plan.convolve, operand)
 
     def compiled_product(self) -> tuple | None:
-        """The arguments before its input and output of :data:`packed_product` for this
-        operator's product (:meth:`_PackedPlan.kernel_arguments`), for a compiled solver
-        that runs its products itself: ``packed_product[nc](*args, x, out)`` is
-        :meth:`apply`'s ``(x, out)``, the same bits. None when the product is not one
-        compiled call (not ``"pyfftw"``, a pruned plan, no FFTW C interface). As
-        :meth:`bound`: within one solve, in the thread that formed it."""
+        """The arguments ``(plans, z_in, z_s, w_s, w_out, a, b, n)`` of :data:`packed_product`
+        for this operator's product (:meth:`_PackedPlan.kernel_arguments`), for a compiled
+        solver that runs its products itself: ``packed_product[nc](plans, x, z_in, z_s,
+        w_s, w_out, a, b, n, out)`` is :meth:`apply`'s ``(x, out)``, the same bits. None
+        when the product is not one compiled call (not ``"pyfftw"``, a pruned plan, no
+        FFTW C interface). As :meth:`bound`: within one solve, in the thread that formed
+        it."""
         if self.backend != "pyfftw":
             return None
         plan, operand = self._fftw(self._spectra)

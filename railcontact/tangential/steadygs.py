@@ -408,14 +408,15 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
 
 
 def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,
-                   measure, tolerance, max_iterations, stall_sweeps,
+                   measure, tolerance, max_iterations, stall_sweeps, stall_gain,
                    floor_above):  # pragma: no cover - compiled
     """:func:`_sweep_blocked`'s sweeps and :meth:`~.convexgs.SweepProblem.iterate`'s
     measure and stopping rules in one compiled call, the same steps on the same arrays
     (the same bits), the DC-FFT products run through the operator's compiled packed
     plan (``fft``: :meth:`~railcontact.halfspace.operator.InfluenceOperator.
     compiled_product`'s arguments) and ``rows`` the blocks as an array (nblocks, 2).
-    ``floor_above``: :attr:`~.convexgs.SweepProblem.floor_above`. Returns ``(sweeps,
+    ``stall_gain``: :data:`~.convexgs.STALL_GAIN`; ``floor_above``:
+    :attr:`~.convexgs.SweepProblem.floor_above`. Returns ``(sweeps,
     error, converged, stalled, history)``."""
     plans, z_in, z_s, w_s, w_out, a, b, n = fft
     rxx, rxy, ryy, fxx, fxy, fyy = kern
@@ -486,7 +487,7 @@ def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, omega_h, o
         if err < tolerance:
             converged = True
             break
-        if err < STALL_GAIN * best:
+        if err < stall_gain * best:
             best = err
             best_its = its
         elif its - best_its >= stall_sweeps:
@@ -494,6 +495,10 @@ def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, omega_h, o
             break
     return its, err, converged, stalled, hist[:its].copy()
 
+
+COMPILED_MAX_SWEEPS = 2**62
+"""Sweep limits below this run the sweeps compiled (:func:`_steady_sweeps`); a larger one
+(no machine integer holds it) runs them in Python."""
 
 if HAVE_NUMBA and packed_product[2] is not None:
     _packed_pair = packed_product[2]
@@ -623,15 +628,15 @@ def solve_steadygs(
     cum = _run_coefficients(operator)
     oh, os_ = float(omega_h), float(omega_s)
     fft = None
-    if prob.use_numba and _steady_sweeps_c is not None and prob.contact_count > 0 \
-            and prob.rolling:
+    if (prob.use_numba and _steady_sweeps_c is not None and prob.contact_count > 0
+            and prob.rolling and prob.max_iterations < COMPILED_MAX_SWEEPS):
         fft = operator.compiled_product()
     if fft is not None:  # the sweeps and their measures one compiled call
         sweeps = _steady_sweeps_c(
             fft, _steady_kernels(operator), cum, prob.wx, prob.wy, prob.g, prob.p,
             prob.state, prob.lo, prob.hi,
             _block_rows(prob.row_counts, BLOCK_SCALE**2 * grid.size), oh, os_,
-            prob.measure, prob.tolerance, prob.max_iterations, STALL_SWEEPS,
+            prob.measure, prob.tolerance, prob.max_iterations, STALL_SWEEPS, STALL_GAIN,
             prob.floor_above)
         return prob.result("SteadyGS", STALL_SWEEPS, t0, embed, *sweeps)
     rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
