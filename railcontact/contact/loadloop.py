@@ -411,12 +411,15 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     patches = final.patches
     if not patches:
         return WheelSolution(memory=final.memory)
+    other = None
     if not failure:  # the smallest approach of the load with its creep forces
         final, other = first_root(lambda a: wheel_pass(Control(penetration=a)), final,
                                   vertical_approach(patches), problem.merges, q, rtol,
                                   noisy=True)
         patches = final.patches
-        unique = other is None and load_unique(patches, t.friction)
+    one_root = load_unique(patches, t.friction)  # (of the patches returned)
+    if not failure:
+        unique = other is None and one_root
         for p in patches:  # (the total's roots, not the normal share's of a pass)
             p.load_other, p.load_unique = other, unique
         if other is not None and not load_met(patches, q, rtol, t.tolerance):
@@ -430,5 +433,4 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     if failure and not load_met(patches, q, accept, t.tolerance):
         status, message = Status.NOT_CONVERGED, failure
     return WheelSolution(patches, status, message, final.creepages, final.memory,
-                         load_other=other_root(patches),
-                         steep=not load_unique(patches, t.friction))
+                         load_other=other_root(patches), steep=not one_root)

@@ -703,7 +703,7 @@ class SweepProblem:
             raise RailContactError("operator must be the 'xy' steady-rolling operator of "
                                    "this grid")
         pn = np.ascontiguousarray(pressure, dtype=float)  # (one compiled layout)
-        if np.ndim(friction) == 0:
+        if type(friction) is float or np.ndim(friction) == 0:  # (a number: no numpy call)
             mu = check_positive("friction", friction, allow_zero=True)
         else:  # per element: the bound mu p_n formed here, the layout's own mu 1 (exact)
             pn = _bound_of(friction, pn, shape)

@@ -407,29 +407,31 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     return dif
 
 
-def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, omega_h, omega_s,
+def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, per_row, work, omega_h, omega_s,
                    measure, tolerance, max_iterations, stall_sweeps, stall_gain,
                    floor_above):  # pragma: no cover - compiled
     """:func:`_sweep_blocked`'s sweeps and :meth:`~.convexgs.SweepProblem.iterate`'s
     measure and stopping rules in one compiled call, the same steps on the same arrays
     (the same bits), the DC-FFT products run through the operator's compiled packed
     plan (``fft``: :meth:`~railcontact.halfspace.operator.InfluenceOperator.
-    compiled_product`'s arguments) and ``rows`` the blocks as an array (nblocks, 2).
+    compiled_product`'s arguments), the blocks formed here (:func:`~.convexgs._block_rows`
+    of the contact elements ``per_row`` and the block ``work``).
     ``stall_gain``: :data:`~.convexgs.STALL_GAIN`; ``floor_above``:
     :attr:`~.convexgs.SweepProblem.floor_above`. Returns ``(sweeps,
     error, converged, stalled, history)``."""
     plans, z_in, z_s, w_s, w_out, a, b, n = fft
     rxx, rxy, ryy, fxx, fxy, fyy = kern
+    rows = _block_rows(per_row, work)
     ny, nx = g.shape
     px = p[0]
     py = p[1]
     pt = p.transpose(0, 2, 1)  # (the traction as (2, nx, ny), for the products)
-    work = np.empty((4, ny, nx))  # the shift and the changes, as _sweep_blocked's
-    ux = work[0]
-    uy = work[1]
-    dpx = work[2]
-    dpy = work[3]
-    dp = work[2:]
+    shift = np.empty((4, ny, nx))  # the shift and the changes, as _sweep_blocked's
+    ux = shift[0]
+    uy = shift[1]
+    dpx = shift[2]
+    dpy = shift[3]
+    dp = shift[2:]
     dpt = dp.transpose(0, 2, 1)
     prod = np.empty((2, nx, ny))
     squares = np.empty((ny, nx))
@@ -634,8 +636,7 @@ def solve_steadygs(
     if fft is not None:  # the sweeps and their measures one compiled call
         sweeps = _steady_sweeps_c(
             fft, _steady_kernels(operator), cum, prob.wx, prob.wy, prob.g, prob.p,
-            prob.state, prob.lo, prob.hi,
-            _block_rows(prob.row_counts, BLOCK_SCALE**2 * grid.size), oh, os_,
+            prob.state, prob.lo, prob.hi, prob.row_counts, BLOCK_SCALE**2 * grid.size, oh, os_,
             prob.measure, prob.tolerance, prob.max_iterations, STALL_SWEEPS, STALL_GAIN,
             prob.floor_above)
         return prob.result("SteadyGS", STALL_SWEEPS, t0, embed, *sweeps)
