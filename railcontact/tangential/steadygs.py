@@ -50,7 +50,11 @@ Convergence as ConvexGS's: one iteration is one sweep over all contact elements 
 sweep ``k`` (the shifted runs included). When that measure has not fallen below
 :data:`~.convexgs.STALL_GAIN` of its best for :data:`STALL_SWEEPS` sweeps the iteration
 stops, not converged, and says so; a non-finite measure stops it too. Set-up, loop and
-result are ConvexGS's (:class:`~.convexgs.SweepProblem`); only the sweep differs.
+result are ConvexGS's (:class:`~.convexgs.SweepProblem`); only the sweep differs. Where
+the operator's product is a compiled packed plan (FFTW's C interface) the sweeps and the
+loop's measure and stopping rules run as one compiled call per solve
+(:func:`_steady_sweeps`: the same kernels in the same order, the same bits), with no
+Python between the sweeps.
 
 Relaxation: ``omega_h = 0.65``, ``omega_s = 0.9`` by default, the best on S1002/60E1
 patches (about 20-25 sweeps from zero traction at eps 1e-5, 31-33 on the most
