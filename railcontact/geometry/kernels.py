@@ -155,6 +155,14 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
     values as over all of ``s``. (The walks stop one point beyond ``s[i0]`` and
     ``s[i1 - 1]`` where these are not the ends of ``s``, so that a sample on a point of
     the curve is interpolated in the same segment as over all of ``s``.)"""
+    _in_plane(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out, o,
+              np.empty(u.size))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _in_plane(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out, o, along):
+    """:func:`interp_in_plane_range`, the coordinates s' of the curve's samples walked
+    kept in ``along`` (as long as ``u``) and read again there."""
     if i1 <= i0:
         return
     n = u.size
@@ -164,6 +172,7 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
     inner_hi = i1 < s.size
     lo = k  # the samples of the branch that bracket s: lo ... hi
     s_lo = _along(u, z, za, zb, k, u_c, z_c, cg, sg)
+    along[k] = s_lo
     s_k = s_lo
     while lo > 0 and (s_lo >= first if inner_lo else s_lo > first):
         s_prev = _along(u, z, za, zb, lo - 1, u_c, z_c, cg, sg)
@@ -171,6 +180,7 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
             break
         lo -= 1
         s_lo = s_prev
+        along[lo] = s_lo
     hi = k
     s_hi = s_k
     while hi < n - 1 and (s_hi <= last if inner_hi else s_hi < last):
@@ -179,9 +189,12 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
             break
         hi += 1
         s_hi = s_next
+        along[hi] = s_hi
     j = lo
     x0 = s_lo
-    x1 = _along(u, z, za, zb, j + 1, u_c, z_c, cg, sg) if hi > lo else s_lo
+    x1 = along[j + 1] if hi > lo else s_lo
+    jn = -2  # the segment whose ends' distances n0, n1 are at hand
+    n0 = n1 = 0.0
     for i in range(i0, i1):
         x = s[i]
         if hi == lo or x < s_lo or x > s_hi:
@@ -193,10 +206,12 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
         while j < hi - 1 and x1 <= x:  # the segment [x0, x1) that holds x
             j += 1
             x0 = x1
-            x1 = _along(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+            x1 = along[j + 1]
         t = (x - x0) / (x1 - x0)
-        n0 = _normal(u, z, za, zb, j, u_c, z_c, cg, sg)
-        n1 = _normal(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+        if j != jn:
+            n0 = n1 if j == jn + 1 else _normal(u, z, za, zb, j, u_c, z_c, cg, sg)
+            n1 = _normal(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+            jn = j
         out[0, i - o] = n0 + t * (n1 - n0)
         out[1, i - o] = a[j] + t * (a[j + 1] - a[j])
         if with_b:
@@ -240,6 +255,19 @@ def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_bac
         out[WHEEL_S, i] = si if math.isfinite(e) else math.nan
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _trace_point(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius):
+    """One point of :func:`trace_gap`'s trace in the side frame: (X, u, Z)."""
+    if yawed:
+        sin_t = min(max(-tan_psi * dr, -1.0), 1.0)
+        rs = r * sin_t
+        y = sz * rs + cz * eta
+        zw = -(r * math.sqrt(1.0 - sin_t * sin_t))
+        return cz * rs - sz * eta, cx * y - sx * zw + u_ws, sx * y + cx * zw + radius
+    zw = -r  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+    return 0.0, cx * eta - sx * zw + u_ws, sx * eta + cx * zw + radius
+
+
 @numba.njit(cache=True, nogil=True)
 def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, rx, rc, out):
     """The trace points of one wheel (axial positions ``eta``, radii ``r``, dr/deta ``dr``)
@@ -249,25 +277,6 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     spline ``rx``, ``rc``) written to ``out`` (5, n): eta, X, u, Z and the vertical gap
     g = Z - rail(u). Returns (how many, the least g, its first index, whether the kept
     u increase strictly, how many samples have the least g)."""
-    n = eta.size
-    xs = np.empty(n)  # all points first (a loop without branches: vectorised)
-    us = np.empty(n)
-    zs = np.empty(n)
-    if yawed:
-        for i in range(n):
-            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
-            rs = r[i] * sin_t
-            xs[i] = cz * rs - sz * eta[i]
-            y = sz * rs + cz * eta[i]
-            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
-            us[i] = cx * y - sx * zw + u_ws
-            zs[i] = sx * y + cx * zw + radius
-    else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-        for i in range(n):
-            xs[i] = 0.0
-            zw = -r[i]
-            us[i] = cx * eta[i] - sx * zw + u_ws
-            zs[i] = sx * eta[i] + cx * zw + radius
     m = 0
     j = 0
     g_min = math.inf
@@ -275,26 +284,36 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     ties = 0
     increasing = True
     u_last = -math.inf
-    for i in range(n):
-        u = us[i]
-        if lo < u < hi:
-            increasing = increasing and u > u_last
-            u_last = u
-            z = zs[i]
-            j = _interval_walk(rx, u, j)  # (ordered points: a step or two)
-            g = z - _piece(rc, j, u - rx[j], 0)
-            out[0, m] = eta[i]
-            out[1, m] = xs[i]
-            out[2, m] = u
-            out[3, m] = z
-            out[4, m] = g
-            if g < g_min:
-                g_min = g
-                k = m
-                ties = 1
-            elif g == g_min:
-                ties += 1
-            m += 1
+    n = eta.size
+    nyawed = n if yawed else 0  # yawed: all points first (a loop without branches)
+    xs, us, zs = np.empty(nyawed), np.empty(nyawed), np.empty(nyawed)
+    for i in range(nyawed):
+        xs[i], us[i], zs[i] = _trace_point(eta[i], r[i], dr[i], True, tan_psi, cz, sz, cx,
+                                           sx, u_ws, radius)
+    for i in range(n):  # (no yaw: the point formed here, kept or not)
+        if yawed:
+            x, u, z = xs[i], us[i], zs[i]
+        else:
+            x, u, z = _trace_point(eta[i], r[i], dr[i], False, tan_psi, cz, sz, cx, sx,
+                                   u_ws, radius)
+        if not lo < u < hi:
+            continue
+        increasing = increasing and u > u_last
+        u_last = u
+        j = _interval_walk(rx, u, j)  # (ordered points: a step or two)
+        g = z - _piece(rc, j, u - rx[j], 0)
+        out[0, m] = eta[i]
+        out[1, m] = x
+        out[2, m] = u
+        out[3, m] = z
+        out[4, m] = g
+        if g < g_min:
+            g_min = g
+            k = m
+            ties = 1
+        elif g == g_min:
+            ties += 1
+        m += 1
     return m, g_min, k, increasing, ties
 
 
@@ -455,6 +474,8 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
     total = 0.0
     su = 0.0
     sgam = 0.0
+    weight = 0.0  # the run's weight integrated across the rail: each sample's weight
+    # times its share of the rail, half the distance between its neighbours
     u_lo = u[lo]
     u_hi = u[lo]
     inc = True
@@ -475,16 +496,11 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
         u_hi = max(u_hi, u[i])
         if i > lo and not u[i] > u[i - 1]:
             inc = False
+        weight += w * 0.5 * abs(u[min(i + 1, n - 1)] - u[max(i - 1, 0)])
     u_ref = su / total
     gamma = sgam / total + turn
-    # the run's weight integrated across the rail (each sample's weight times its share
-    # of the rail, half the distance between its neighbours) and its ends: where the
-    # interpenetration, linear between the last sample in and the first out, is zero
-    weight = 0.0
-    for i in range(lo, hi):
-        e = approach - (g[i] - g_min)
-        w = e * e * math.sqrt(e) if power == 2.5 else e**power
-        weight += w * 0.5 * abs(u[min(i + 1, n - 1)] - u[max(i - 1, 0)])
+    # the run's ends: where the interpenetration, linear between the last sample in and
+    # the first out, is zero
     u_a = u[lo]
     if lo > 0:
         e_in, e_out = approach - (g[lo] - g_min), approach - (g[lo - 1] - g_min)
