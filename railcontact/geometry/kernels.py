@@ -717,18 +717,22 @@ def saddles(g, g_min):
 
 
 @numba.njit(cache=True, nogil=True)
-def run_extent(g, u, g_min, approach, u_c):
+def run_extent(g, u, g_min, approach, u_c, increasing):
     """``(u_lo, u_hi)``: the lateral positions on the rail [m] spanned by the run of the
     trace (gap above first contact ``g - g_min`` at most ``approach`` [m], rail positions
     ``u``) that holds the run's sample nearest ``u_c`` [m]; ``(u_c, u_c)`` without any
-    run."""
+    run. ``increasing``: whether ``u`` increase strictly (the nearest sample then searched
+    outward from ``u_c``, :func:`_nearest_in_run`)."""
     n = g.size
-    best = -1
-    dist = np.inf
-    for i in range(n):
-        if g[i] - g_min <= approach and abs(u[i] - u_c) < dist:
-            dist = abs(u[i] - u_c)
-            best = i
+    if increasing and math.isfinite(u_c):
+        best = _nearest_in_run(g, u, g_min, approach, u_c)
+    else:
+        best = -1
+        dist = np.inf
+        for i in range(n):
+            if g[i] - g_min <= approach and abs(u[i] - u_c) < dist:
+                dist = abs(u[i] - u_c)
+                best = i
     if best < 0:
         return u_c, u_c
     a = best
@@ -738,6 +742,33 @@ def run_extent(g, u, g_min, approach, u_c):
     while b < n - 1 and g[b + 1] - g_min <= approach:
         b += 1
     return min(u[a], u[b]), max(u[a], u[b])
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_in_run(g, u, g_min, approach, u_c):
+    """The first of the samples with ``g - g_min <= approach`` nearest ``u_c`` (as a scan
+    of all, -1 without any) for strictly increasing ``u``: the distances ``|u - u_c|``
+    (rounded) do not rise towards ``u_c`` and do not fall beyond it, so the nearest are the
+    last such sample before ``u_c`` (or the first of equal distance before it) and the
+    first at or beyond it."""
+    n = g.size
+    j = np.searchsorted(u, u_c)  # u[j - 1] < u_c <= u[j]
+    right = j
+    while right < n and not g[right] - g_min <= approach:
+        right += 1
+    left = j - 1
+    while left >= 0 and not g[left] - g_min <= approach:
+        left -= 1
+    if left >= 0:
+        d = abs(u[left] - u_c)
+        i = left - 1
+        while i >= 0 and abs(u[i] - u_c) == d:
+            if g[i] - g_min <= approach:
+                left = i
+            i -= 1
+        if right == n or d <= abs(u[right] - u_c):
+            return left
+    return right if right < n else -1
 
 
 @numba.njit(cache=True, nogil=True)
@@ -773,12 +804,13 @@ def overlap_half_length(f, a_of_s, lo, hi, delta):
 
 @numba.njit(cache=True, nogil=True)
 def rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
-                            u_c, z_c, gamma, eta_c, s, k0, out):
+                            u_c, z_c, gamma, eta_c, s, k0, increasing, out):
     """What a rigid contact point's curvatures read of its tangent frame
     (:func:`rigid_frame`), formed at the samples within 1 mm of ``s[k0]`` = 0 and at
     ``k0 +- 5`` only (the same values as over all of ``s``): (A(0), f at ``k0 - 5``,
     ``k0``, ``k0 + 5``) with ``f`` shifted and made infinite as there. ``out`` (5,
-    len(s)) holds the samples formed."""
+    len(s)) holds the samples formed; ``increasing``: whether the trace's ``u`` increase
+    strictly (the sample nearest ``u_c`` then found by bisection)."""
     ns = s.size
     i0 = max(k0 - 5, 0)
     while i0 > 0 and abs(s[i0 - 1]) < 1e-3:
@@ -787,8 +819,8 @@ def rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, f
     while i1 < ns and abs(s[i1]) < 1e-3:
         i1 += 1
     frame_samples(eta, u, z, g_min, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back,
-                  u_c, z_c, gamma, eta_c, nearest(u, u_c), nearest_sorted(ur, u_c), s, i0,
-                  i1, out)
+                  u_c, z_c, gamma, eta_c, nearest_first(u, u_c, increasing),
+                  nearest_sorted(ur, u_c), s, i0, i1, out)
     f = out[F]
     m = 0.0
     if math.isfinite(f[k0]):

@@ -332,7 +332,7 @@ def run_on_rail(found: WheelSearch, approach: float, rail_u: float) -> tuple[flo
     the extent of one patch's rigid contact region (:func:`~.kernels.run_extent`)."""
     trace = found.trace
     return kernels.run_extent(trace[4], trace[2], found.least_gap, float(approach),
-                              float(rail_u))
+                              float(rail_u), found.increasing)
 
 
 def contact_points(found: WheelSearch, approach: float = 0.0) -> list[ContactPoint]:
@@ -391,7 +391,7 @@ def _point(found: WheelSearch, row) -> ContactPoint:
     near = np.empty((5, N_S))
     A, lo, mid, hi = kernels.rigid_curvature_samples(
         trace[0], trace[2], trace[3], g_min, *rail[:2], *wheel, u_c, z_rail, gamma, eta_c,
-        _S_SAMPLES, K0, near)
+        _S_SAMPLES, K0, found.increasing, near)
     side = found.side
     return ContactPoint(
         side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
