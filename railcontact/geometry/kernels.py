@@ -101,13 +101,22 @@ def _interp(x, xp, fp, finite):
     """:func:`interp_sorted` of ``fp``, or (``finite``) of ``fp`` with its values that
     are not finite read as 0."""
     n = xp.size
+    if math.isnan(x) or x < xp[0] or x > xp[n - 1]:
+        return _interp_at(x, xp, fp, finite, 0)
+    return _interp_at(x, xp, fp, finite, np.searchsorted(xp, x, side="right") - 1)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _interp_at(x, xp, fp, finite, j):
+    """:func:`_interp` with ``j`` = ``searchsorted(xp, x, side="right") - 1`` given
+    (read only where ``x`` lies within ``xp``)."""
+    n = xp.size
     if math.isnan(x):
         return x
     if x < xp[0]:
         return _at(fp, 0, finite)
     if x > xp[n - 1]:
         return _at(fp, n - 1, finite)
-    j = np.searchsorted(xp, x, side="right") - 1
     if j >= n - 1:
         return _at(fp, n - 1, finite)
     f0 = _at(fp, j, finite)
@@ -121,6 +130,21 @@ def _interp(x, xp, fp, finite):
         if math.isnan(v) and f0 == f1:
             v = f0
     return v
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _right_of(xp, x):
+    """``searchsorted(xp, x, side="right") - 1`` for ``x`` within the increasing ``xp``
+    (``xp[0] <= x <= xp[-1]``), searched from the sample where ``x`` would lie were the
+    samples equally spaced."""
+    n = xp.size
+    j = int((x - xp[0]) / (xp[n - 1] - xp[0]) * (n - 1)) if xp[n - 1] > xp[0] else 0
+    j = min(max(j, 0), n - 1)
+    while j > 0 and xp[j] > x:
+        j -= 1
+    while j < n - 1 and xp[j + 1] <= x:
+        j += 1
+    return j
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -646,11 +670,13 @@ def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     ay = np.empty(ny)
     for jy in range(ny):
         y = y0 + dy * jy
-        if y < s[0] or y > s[ns - 1]:
-            fy[jy] = far
-        else:
-            fy[jy] = interp_sorted(y, s, f)
-        ay[jy] = _interp(y, s, a_of_s, True)
+        if math.isnan(y) or y < s[0] or y > s[ns - 1]:
+            fy[jy] = far if not math.isnan(y) else interp_sorted(y, s, f)
+            ay[jy] = _interp(y, s, a_of_s, True)
+        else:  # one search of the samples for both
+            j = _right_of(s, y)
+            fy[jy] = _interp_at(y, s, f, False, j)
+            ay[jy] = _interp_at(y, s, a_of_s, True, j)
     for ix in range(nx):
         xi = x0 + dx * ix
         x2 = xi * xi
