@@ -185,8 +185,9 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _in_plane(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out, o, along):
-    """:func:`interp_in_plane_range`, the coordinates s' of the curve's samples walked
-    kept in ``along`` (as long as ``u``) and read again there."""
+    """:func:`interp_in_plane_range` with a work array ``along`` (as long as ``u``): the
+    coordinates s' of the samples the walks pass are kept there and read again where the
+    samples of ``s`` are placed between them."""
     if i1 <= i0:
         return
     n = u.size
@@ -740,6 +741,20 @@ def saddles(g, g_min):
         out[m, 1] = min(h - lo_left, h - lo_right)
         m += 1
     return out[:m]
+
+
+@numba.njit(cache=True, nogil=True)
+def merge_saddles(g, g_min, min_lobe):
+    """The heights above first contact [m] of the :func:`saddles` of the gap whose
+    shallower lobe is at least ``min_lobe`` times the height deep, increasing."""
+    s = saddles(g, g_min)
+    out = np.empty(s.shape[0])
+    m = 0
+    for i in range(s.shape[0]):
+        if s[i, 1] >= min_lobe * s[i, 0]:
+            out[m] = s[i, 0]
+            m += 1
+    return np.sort(out[:m])
 
 
 @numba.njit(cache=True, nogil=True)

@@ -370,12 +370,10 @@ def count_contacts(found: WheelSearch, approach: float = 0.0) -> int:
 def merge_approaches(found: WheelSearch, min_lobe: float = 0.0) -> np.ndarray:
     """The vertical approaches [m] beyond first contact at which two of the wheel's rigid
     contact regions (runs of :func:`contact_points`) join into one patch, increasing: the
-    saddles of the trace's gap (:func:`~.kernels.saddles`) whose shallower lobe is at least
-    ``min_lobe`` times the saddle's approach deep (a lobe shallower than that is a ripple
-    of the profiles: its run carries little of the load). Read-only."""
-    s = kernels.saddles(found.trace[4], found.least_gap)
-    keep = s[:, 1] >= min_lobe * s[:, 0]
-    out = np.sort(s[keep, 0])
+    saddles of the trace's gap whose shallower lobe is at least ``min_lobe`` times the
+    saddle's approach deep (a lobe shallower than that is a ripple of the profiles: its run
+    carries little of the load; :func:`~.kernels.merge_saddles`). Read-only."""
+    out = kernels.merge_saddles(found.trace[4], found.least_gap, float(min_lobe))
     out.flags.writeable = False
     return out
 
