@@ -138,14 +138,12 @@ def main() -> None:
         totals = {"A": 0.0, "B": 0.0}
         for i in range(max(len(ca), len(cb))):
             pair = {"A": ca[i] if i < len(ca) else None, "B": cb[i] if i < len(cb) else None}
-            copies = {n: [_copy(p[1]) for _ in range(args.repeats)]
-                      for n, p in pair.items() if p is not None}
-            t = {n: [] for n in copies}
+            t = {n: [] for n, p in pair.items() if p is not None}
             for r in range(args.repeats):
                 for n in (("A", "B") if r % 2 == 0 else ("B", "A")):
-                    if n not in copies:
+                    if n not in t:
                         continue
-                    fn, a = pair[n][0], copies[n][r]
+                    fn, a = pair[n][0], _copy(pair[n][1])  # (each call its own copy)
                     t0 = time.perf_counter()
                     fn(*a)
                     t[n].append(time.perf_counter() - t0)
