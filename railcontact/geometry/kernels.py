@@ -101,13 +101,22 @@ def _interp(x, xp, fp, finite):
     """:func:`interp_sorted` of ``fp``, or (``finite``) of ``fp`` with its values that
     are not finite read as 0."""
     n = xp.size
+    if math.isnan(x) or x < xp[0] or x > xp[n - 1]:
+        return _interp_at(x, xp, fp, finite, 0)
+    return _interp_at(x, xp, fp, finite, np.searchsorted(xp, x, side="right") - 1)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _interp_at(x, xp, fp, finite, j):
+    """:func:`_interp` with ``j`` = ``searchsorted(xp, x, side="right") - 1`` given
+    (read only where ``x`` lies within ``xp``)."""
+    n = xp.size
     if math.isnan(x):
         return x
     if x < xp[0]:
         return _at(fp, 0, finite)
     if x > xp[n - 1]:
         return _at(fp, n - 1, finite)
-    j = np.searchsorted(xp, x, side="right") - 1
     if j >= n - 1:
         return _at(fp, n - 1, finite)
     f0 = _at(fp, j, finite)
@@ -121,6 +130,21 @@ def _interp(x, xp, fp, finite):
         if math.isnan(v) and f0 == f1:
             v = f0
     return v
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _right_of(xp, x):
+    """``searchsorted(xp, x, side="right") - 1`` for ``x`` within the increasing ``xp``
+    (``xp[0] <= x <= xp[-1]``), searched from the sample where ``x`` would lie were the
+    samples equally spaced."""
+    n = xp.size
+    j = int((x - xp[0]) / (xp[n - 1] - xp[0]) * (n - 1)) if xp[n - 1] > xp[0] else 0
+    j = min(max(j, 0), n - 1)
+    while j > 0 and xp[j] > x:
+        j -= 1
+    while j < n - 1 and xp[j + 1] <= x:
+        j += 1
+    return j
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -155,6 +179,15 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
     values as over all of ``s``. (The walks stop one point beyond ``s[i0]`` and
     ``s[i1 - 1]`` where these are not the ends of ``s``, so that a sample on a point of
     the curve is interpolated in the same segment as over all of ``s``.)"""
+    _in_plane(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out, o,
+              np.empty(u.size))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _in_plane(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, sg, k, out, o, along):
+    """:func:`interp_in_plane_range` with a work array ``along`` (as long as ``u``): the
+    coordinates s' of the samples the walks pass are kept there and read again where the
+    samples of ``s`` are placed between them."""
     if i1 <= i0:
         return
     n = u.size
@@ -164,6 +197,7 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
     inner_hi = i1 < s.size
     lo = k  # the samples of the branch that bracket s: lo ... hi
     s_lo = _along(u, z, za, zb, k, u_c, z_c, cg, sg)
+    along[k] = s_lo
     s_k = s_lo
     while lo > 0 and (s_lo >= first if inner_lo else s_lo > first):
         s_prev = _along(u, z, za, zb, lo - 1, u_c, z_c, cg, sg)
@@ -171,6 +205,7 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
             break
         lo -= 1
         s_lo = s_prev
+        along[lo] = s_lo
     hi = k
     s_hi = s_k
     while hi < n - 1 and (s_hi <= last if inner_hi else s_hi < last):
@@ -179,9 +214,12 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
             break
         hi += 1
         s_hi = s_next
+        along[hi] = s_hi
     j = lo
     x0 = s_lo
-    x1 = _along(u, z, za, zb, j + 1, u_c, z_c, cg, sg) if hi > lo else s_lo
+    x1 = along[j + 1] if hi > lo else s_lo
+    jn = -2  # the segment whose ends' distances n0, n1 are at hand
+    n0 = n1 = 0.0
     for i in range(i0, i1):
         x = s[i]
         if hi == lo or x < s_lo or x > s_hi:
@@ -193,10 +231,12 @@ def interp_in_plane_range(s, i0, i1, u, z, za, zb, a, b, with_b, u_c, z_c, cg, s
         while j < hi - 1 and x1 <= x:  # the segment [x0, x1) that holds x
             j += 1
             x0 = x1
-            x1 = _along(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+            x1 = along[j + 1]
         t = (x - x0) / (x1 - x0)
-        n0 = _normal(u, z, za, zb, j, u_c, z_c, cg, sg)
-        n1 = _normal(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+        if j != jn:
+            n0 = n1 if j == jn + 1 else _normal(u, z, za, zb, j, u_c, z_c, cg, sg)
+            n1 = _normal(u, z, za, zb, j + 1, u_c, z_c, cg, sg)
+            jn = j
         out[0, i - o] = n0 + t * (n1 - n0)
         out[1, i - o] = a[j] + t * (a[j + 1] - a[j])
         if with_b:
@@ -240,6 +280,19 @@ def frame_samples(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_bac
         out[WHEEL_S, i] = si if math.isfinite(e) else math.nan
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _trace_point(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius):
+    """One point of :func:`trace_gap`'s trace in the side frame: (X, u, Z)."""
+    if yawed:
+        sin_t = min(max(-tan_psi * dr, -1.0), 1.0)
+        rs = r * sin_t
+        y = sz * rs + cz * eta
+        zw = -(r * math.sqrt(1.0 - sin_t * sin_t))
+        return cz * rs - sz * eta, cx * y - sx * zw + u_ws, sx * y + cx * zw + radius
+    zw = -r  # no yaw: the trace is the wheel's lowest line (sin t = 0)
+    return 0.0, cx * eta - sx * zw + u_ws, sx * eta + cx * zw + radius
+
+
 @numba.njit(cache=True, nogil=True)
 def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, rx, rc, out):
     """The trace points of one wheel (axial positions ``eta``, radii ``r``, dr/deta ``dr``)
@@ -249,25 +302,6 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     spline ``rx``, ``rc``) written to ``out`` (5, n): eta, X, u, Z and the vertical gap
     g = Z - rail(u). Returns (how many, the least g, its first index, whether the kept
     u increase strictly, how many samples have the least g)."""
-    n = eta.size
-    xs = np.empty(n)  # all points first (a loop without branches: vectorised)
-    us = np.empty(n)
-    zs = np.empty(n)
-    if yawed:
-        for i in range(n):
-            sin_t = min(max(-tan_psi * dr[i], -1.0), 1.0)
-            rs = r[i] * sin_t
-            xs[i] = cz * rs - sz * eta[i]
-            y = sz * rs + cz * eta[i]
-            zw = -(r[i] * math.sqrt(1.0 - sin_t * sin_t))
-            us[i] = cx * y - sx * zw + u_ws
-            zs[i] = sx * y + cx * zw + radius
-    else:  # no yaw: the trace is the wheel's lowest line (sin t = 0)
-        for i in range(n):
-            xs[i] = 0.0
-            zw = -r[i]
-            us[i] = cx * eta[i] - sx * zw + u_ws
-            zs[i] = sx * eta[i] + cx * zw + radius
     m = 0
     j = 0
     g_min = math.inf
@@ -275,26 +309,36 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     ties = 0
     increasing = True
     u_last = -math.inf
-    for i in range(n):
-        u = us[i]
-        if lo < u < hi:
-            increasing = increasing and u > u_last
-            u_last = u
-            z = zs[i]
-            j = _interval_walk(rx, u, j)  # (ordered points: a step or two)
-            g = z - _piece(rc, j, u - rx[j], 0)
-            out[0, m] = eta[i]
-            out[1, m] = xs[i]
-            out[2, m] = u
-            out[3, m] = z
-            out[4, m] = g
-            if g < g_min:
-                g_min = g
-                k = m
-                ties = 1
-            elif g == g_min:
-                ties += 1
-            m += 1
+    n = eta.size
+    nyawed = n if yawed else 0  # yawed: all points first (a loop without branches)
+    xs, us, zs = np.empty(nyawed), np.empty(nyawed), np.empty(nyawed)
+    for i in range(nyawed):
+        xs[i], us[i], zs[i] = _trace_point(eta[i], r[i], dr[i], True, tan_psi, cz, sz, cx,
+                                           sx, u_ws, radius)
+    for i in range(n):  # (no yaw: the point formed here, kept or not)
+        if yawed:
+            x, u, z = xs[i], us[i], zs[i]
+        else:
+            x, u, z = _trace_point(eta[i], r[i], dr[i], False, tan_psi, cz, sz, cx, sx,
+                                   u_ws, radius)
+        if not lo < u < hi:
+            continue
+        increasing = increasing and u > u_last
+        u_last = u
+        j = _interval_walk(rx, u, j)  # (ordered points: a step or two)
+        g = z - _piece(rc, j, u - rx[j], 0)
+        out[0, m] = eta[i]
+        out[1, m] = x
+        out[2, m] = u
+        out[3, m] = z
+        out[4, m] = g
+        if g < g_min:
+            g_min = g
+            k = m
+            ties = 1
+        elif g == g_min:
+            ties += 1
+        m += 1
     return m, g_min, k, increasing, ties
 
 
@@ -455,6 +499,8 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
     total = 0.0
     su = 0.0
     sgam = 0.0
+    weight = 0.0  # the run's weight integrated across the rail: each sample's weight
+    # times its share of the rail, half the distance between its neighbours
     u_lo = u[lo]
     u_hi = u[lo]
     inc = True
@@ -475,16 +521,11 @@ def reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
         u_hi = max(u_hi, u[i])
         if i > lo and not u[i] > u[i - 1]:
             inc = False
+        weight += w * 0.5 * abs(u[min(i + 1, n - 1)] - u[max(i - 1, 0)])
     u_ref = su / total
     gamma = sgam / total + turn
-    # the run's weight integrated across the rail (each sample's weight times its share
-    # of the rail, half the distance between its neighbours) and its ends: where the
-    # interpenetration, linear between the last sample in and the first out, is zero
-    weight = 0.0
-    for i in range(lo, hi):
-        e = approach - (g[i] - g_min)
-        w = e * e * math.sqrt(e) if power == 2.5 else e**power
-        weight += w * 0.5 * abs(u[min(i + 1, n - 1)] - u[max(i - 1, 0)])
+    # the run's ends: where the interpenetration, linear between the last sample in and
+    # the first out, is zero
     u_a = u[lo]
     if lo > 0:
         e_in, e_out = approach - (g[lo] - g_min), approach - (g[lo - 1] - g_min)
@@ -630,11 +671,13 @@ def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     ay = np.empty(ny)
     for jy in range(ny):
         y = y0 + dy * jy
-        if y < s[0] or y > s[ns - 1]:
-            fy[jy] = far
-        else:
-            fy[jy] = interp_sorted(y, s, f)
-        ay[jy] = _interp(y, s, a_of_s, True)
+        if math.isnan(y) or y < s[0] or y > s[ns - 1]:
+            fy[jy] = far if not math.isnan(y) else interp_sorted(y, s, f)
+            ay[jy] = _interp(y, s, a_of_s, True)
+        else:  # one search of the samples for both
+            j = _right_of(s, y)
+            fy[jy] = _interp_at(y, s, f, False, j)
+            ay[jy] = _interp_at(y, s, a_of_s, True, j)
     for ix in range(nx):
         xi = x0 + dx * ix
         x2 = xi * xi
@@ -701,18 +744,36 @@ def saddles(g, g_min):
 
 
 @numba.njit(cache=True, nogil=True)
-def run_extent(g, u, g_min, approach, u_c):
+def merge_saddles(g, g_min, min_lobe):
+    """The heights above first contact [m] of the :func:`saddles` of the gap whose
+    shallower lobe is at least ``min_lobe`` times the height deep, increasing."""
+    s = saddles(g, g_min)
+    out = np.empty(s.shape[0])
+    m = 0
+    for i in range(s.shape[0]):
+        if s[i, 1] >= min_lobe * s[i, 0]:
+            out[m] = s[i, 0]
+            m += 1
+    return np.sort(out[:m])
+
+
+@numba.njit(cache=True, nogil=True)
+def run_extent(g, u, g_min, approach, u_c, increasing):
     """``(u_lo, u_hi)``: the lateral positions on the rail [m] spanned by the run of the
     trace (gap above first contact ``g - g_min`` at most ``approach`` [m], rail positions
     ``u``) that holds the run's sample nearest ``u_c`` [m]; ``(u_c, u_c)`` without any
-    run."""
+    run. ``increasing``: whether ``u`` increase strictly (the nearest sample then searched
+    outward from ``u_c``, :func:`_nearest_in_run`)."""
     n = g.size
-    best = -1
-    dist = np.inf
-    for i in range(n):
-        if g[i] - g_min <= approach and abs(u[i] - u_c) < dist:
-            dist = abs(u[i] - u_c)
-            best = i
+    if increasing and math.isfinite(u_c):
+        best = _nearest_in_run(g, u, g_min, approach, u_c)
+    else:
+        best = -1
+        dist = np.inf
+        for i in range(n):
+            if g[i] - g_min <= approach and abs(u[i] - u_c) < dist:
+                dist = abs(u[i] - u_c)
+                best = i
     if best < 0:
         return u_c, u_c
     a = best
@@ -722,6 +783,33 @@ def run_extent(g, u, g_min, approach, u_c):
     while b < n - 1 and g[b + 1] - g_min <= approach:
         b += 1
     return min(u[a], u[b]), max(u[a], u[b])
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest_in_run(g, u, g_min, approach, u_c):
+    """The first of the samples with ``g - g_min <= approach`` nearest ``u_c`` (as a scan
+    of all, -1 without any) for strictly increasing ``u``: the distances ``|u - u_c|``
+    (rounded) do not rise towards ``u_c`` and do not fall beyond it, so the nearest are the
+    last such sample before ``u_c`` (or the first of equal distance before it) and the
+    first at or beyond it."""
+    n = g.size
+    j = np.searchsorted(u, u_c)  # u[j - 1] < u_c <= u[j]
+    right = j
+    while right < n and not g[right] - g_min <= approach:
+        right += 1
+    left = j - 1
+    while left >= 0 and not g[left] - g_min <= approach:
+        left -= 1
+    if left >= 0:
+        d = abs(u[left] - u_c)
+        i = left - 1
+        while i >= 0 and abs(u[i] - u_c) == d:
+            if g[i] - g_min <= approach:
+                left = i
+            i -= 1
+        if right == n or d <= abs(u[right] - u_c):
+            return left
+    return right if right < n else -1
 
 
 @numba.njit(cache=True, nogil=True)
@@ -757,12 +845,13 @@ def overlap_half_length(f, a_of_s, lo, hi, delta):
 
 @numba.njit(cache=True, nogil=True)
 def rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
-                            u_c, z_c, gamma, eta_c, s, k0, out):
+                            u_c, z_c, gamma, eta_c, s, k0, increasing, out):
     """What a rigid contact point's curvatures read of its tangent frame
     (:func:`rigid_frame`), formed at the samples within 1 mm of ``s[k0]`` = 0 and at
     ``k0 +- 5`` only (the same values as over all of ``s``): (A(0), f at ``k0 - 5``,
     ``k0``, ``k0 + 5``) with ``f`` shifted and made infinite as there. ``out`` (5,
-    len(s)) holds the samples formed."""
+    len(s)) holds the samples formed; ``increasing``: whether the trace's ``u`` increase
+    strictly (the sample nearest ``u_c`` then found by bisection)."""
     ns = s.size
     i0 = max(k0 - 5, 0)
     while i0 > 0 and abs(s[i0 - 1]) < 1e-3:
@@ -771,8 +860,8 @@ def rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, f
     while i1 < ns and abs(s[i1]) < 1e-3:
         i1 += 1
     frame_samples(eta, u, z, g_min, 0.0, ur, zr, wx, wc, radius, half_bb, flange_back,
-                  u_c, z_c, gamma, eta_c, nearest(u, u_c), nearest_sorted(ur, u_c), s, i0,
-                  i1, out)
+                  u_c, z_c, gamma, eta_c, nearest_first(u, u_c, increasing),
+                  nearest_sorted(ur, u_c), s, i0, i1, out)
     f = out[F]
     m = 0.0
     if math.isfinite(f[k0]):

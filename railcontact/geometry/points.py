@@ -332,7 +332,7 @@ def run_on_rail(found: WheelSearch, approach: float, rail_u: float) -> tuple[flo
     the extent of one patch's rigid contact region (:func:`~.kernels.run_extent`)."""
     trace = found.trace
     return kernels.run_extent(trace[4], trace[2], found.least_gap, float(approach),
-                              float(rail_u))
+                              float(rail_u), found.increasing)
 
 
 def contact_points(found: WheelSearch, approach: float = 0.0) -> list[ContactPoint]:
@@ -370,12 +370,10 @@ def count_contacts(found: WheelSearch, approach: float = 0.0) -> int:
 def merge_approaches(found: WheelSearch, min_lobe: float = 0.0) -> np.ndarray:
     """The vertical approaches [m] beyond first contact at which two of the wheel's rigid
     contact regions (runs of :func:`contact_points`) join into one patch, increasing: the
-    saddles of the trace's gap (:func:`~.kernels.saddles`) whose shallower lobe is at least
-    ``min_lobe`` times the saddle's approach deep (a lobe shallower than that is a ripple
-    of the profiles: its run carries little of the load). Read-only."""
-    s = kernels.saddles(found.trace[4], found.least_gap)
-    keep = s[:, 1] >= min_lobe * s[:, 0]
-    out = np.sort(s[keep, 0])
+    saddles of the trace's gap whose shallower lobe is at least ``min_lobe`` times the
+    saddle's approach deep (a lobe shallower than that is a ripple of the profiles: its run
+    carries little of the load; :func:`~.kernels.merge_saddles`). Read-only."""
+    out = kernels.merge_saddles(found.trace[4], found.least_gap, float(min_lobe))
     out.flags.writeable = False
     return out
 
@@ -391,7 +389,7 @@ def _point(found: WheelSearch, row) -> ContactPoint:
     near = np.empty((5, N_S))
     A, lo, mid, hi = kernels.rigid_curvature_samples(
         trace[0], trace[2], trace[3], g_min, *rail[:2], *wheel, u_c, z_rail, gamma, eta_c,
-        _S_SAMPLES, K0, near)
+        _S_SAMPLES, K0, found.increasing, near)
     side = found.side
     return ContactPoint(
         side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
