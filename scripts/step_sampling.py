@@ -3,9 +3,9 @@
 Runs ``--steps`` steps (1000) of :mod:`bench_step`'s hunting-like run (S1002 on 60E1,
 0.5 mm elements, 83.3 kN, mu 0.4, kinematic creepages, load control with the creep forces
 counted) in a child process sampled by `py-spy <https://github.com/benfred/py-spy>`_
-(``pip install py-spy``, or the ``bench`` extra; ``--native``, ``--rate`` samples a second), and sorts the samples
-taken inside :meth:`railcontact.WheelsetContact.solve` by the code running when each was
-taken:
+(``pip install py-spy``, or the ``bench`` extra; ``--native``, ``--rate`` samples a
+second), and sorts the samples taken inside :meth:`railcontact.WheelsetContact.solve` by
+the code running when each was taken:
 
 * **compiled**: numba's machine code (frames without a symbol) and FFTW;
 * **C libraries**: the C runtime and libm called from Python (allocation, copies; called
@@ -133,6 +133,7 @@ def main() -> None:
     ap.add_argument("--mode", default="previous+estimate")
     ap.add_argument("--rate", type=int, default=200, help="samples a second")
     ap.add_argument("--top", type=int, default=25, help="package functions listed")
+    ap.add_argument("--raw", type=Path, default=None, help="keep py-spy's samples here")
     ap.add_argument("--child", type=Path, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child is not None:
@@ -156,6 +157,8 @@ def main() -> None:
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         if run.wait() != 0:
             sys.exit("the sampled run failed")
+        if args.raw is not None:
+            shutil.copy(raw, args.raw)
         kinds, where = classify(raw)
         run = json.loads(ready.with_suffix(".json").read_text())
     ref = fixed_workload()
