@@ -174,10 +174,13 @@ def test_a_bad_input_on_one_wheelset_is_its_status(default_fmu, fmu2, capsys):
     single.free()
 
 
-def test_state_of_all_wheelsets_round_trips(fmu2):
+@pytest.mark.parametrize("workers", ["processes", "threads"])
+def test_state_of_all_wheelsets_round_trips(fmu2, workers, monkeypatch):
     """fmi2GetFMUstate after two steps, three steps more, the state set again (kept and
     serialized): the three steps repeat every output of both wheelsets bit for bit,
-    iterations included (the warm start of both wheelsets is in the state)."""
+    iterations included (the warm start of both wheelsets is in the state, read from and
+    set in the worker processes when they step the wheelsets)."""
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2" if workers == "processes" else workers)
     s = Instance(fmu2, "state", creepage_input="kinematic")
     for k in range(2):
         s.step(**{f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
@@ -210,3 +213,112 @@ def test_the_wheelsets_parameter_is_fixed(fmu2, capsys):
     with pytest.raises(FMICallException):
         Instance(fmu2, "three", wheelsets=3)
     assert "this FMU was built for 2 wheelsets" in capsys.readouterr().out
+
+
+def _outputs(s: Instance) -> list[dict]:
+    """Every output of both wheelsets but the wall times, and the worst status."""
+    return [{n: x for n, x in s.outputs_of(f"_{j}").items()} for j in (1, 2)] + \
+        [s.get("status")]
+
+
+def _workers_of(name: str) -> list:
+    """The worker processes (multiprocessing's children of this process, fmpy's host) of
+    the pools started since: named railcontact-wheelsets-j."""
+    import multiprocessing
+
+    return [p for p in multiprocessing.active_children()
+            if p.name.startswith("railcontact-wheelsets-") and p.pid not in _SEEN]
+
+
+_SEEN: set[int] = set()
+
+
+def test_processes_equal_threads_bit_for_bit(fmu2, monkeypatch):
+    """RAILCONTACT_FMU_WORKERS = 2 (two worker processes) and = threads on the same steps
+    (two lateral sines with kinematic creepages and warm starts; a wheelset beyond the
+    profiles; a NaN input; back): every FMI status, every output of both wheelsets (the
+    wall times apart) and status equal bit for bit. fmi2FreeInstance ends the workers."""
+    import threading
+
+    _SEEN.update(p.pid for p in _workers_of(""))
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "threads")
+    threads = Instance(fmu2, "threads", creepage_input="kinematic")
+    assert not _workers_of("threads")
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2")
+    procs = Instance(fmu2, "procs", creepage_input="kinematic")
+    workers = _workers_of("procs")
+    assert sorted(p.name for p in workers) == ["railcontact-wheelsets-0",
+                                               "railcontact-wheelsets-1"]
+    for k in range(7):
+        motions = [_motion(k, 3e-3, 0.0), _motion(k, 2e-3, 0.9)]
+        if k == 3:
+            motions[1]["lateral_displacement"] = 0.08  # beyond the profiles
+        if k == 4:
+            motions[0]["speed"] = float("nan")
+        inputs = {f"{n}_{j}": x for j, m in enumerate(motions, start=1) for n, x in m.items()}
+        assert procs.step(**inputs) == threads.step(**inputs), k
+        assert _outputs(procs) == _outputs(threads), k
+    assert {t.name for t in threading.enumerate()} >= {"railcontact-threads-0_0",
+                                                       "railcontact-threads-1_0"}
+    assert not any(t.name.startswith("railcontact-procs") for t in threading.enumerate())
+    assert _outputs(procs)[0]["normal_iterations"] > 0
+    procs.s.freeInstance()  # (without fmi2Terminate)
+    for w in workers:
+        w.join(30)
+        assert not w.is_alive() and w.exitcode == 0
+    threads.free()
+
+
+def test_a_worker_that_ends_is_an_error_and_a_state_restarts_them(fmu2, monkeypatch):
+    """A worker process killed: the next fmi2DoStep returns fmi2Error at once (no hang),
+    every output zero and every status 3, naming the worker; fmi2SetFMUstate of a state
+    saved before starts new workers with the state's memories, and the steps after it
+    repeat those of an instance that never lost its workers, bit for bit. fmi2Terminate
+    ends the workers; fmi2GetFMUstate still holds both wheelsets' memories."""
+    _SEEN.update(p.pid for p in _workers_of(""))
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2")
+
+    def inputs(k: int) -> dict:
+        return {f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
+                for n, x in _motion(k, a, j).items()}
+
+    s = Instance(fmu2, "killed", creepage_input="kinematic")
+    mine = _workers_of("killed")
+    _SEEN.update(p.pid for p in mine)
+    truth = Instance(fmu2, "kept", creepage_input="kinematic")
+    _SEEN.update(p.pid for p in _workers_of("kept"))
+    assert len(mine) == 2
+    for k in range(2):
+        assert s.step(**inputs(k)) == truth.step(**inputs(k)) == 0
+    state = s.s.getFMUstate()
+    mine[1].kill()
+    mine[1].join(10)
+    assert s.step(**inputs(2)) == 3  # fmi2Error
+    out = _outputs(s)
+    assert [out[j][n] for j in (0, 1) for n in ("status", "status_left")] == [3] * 4
+    assert all(x == 0 for j in (0, 1) for n, x in out[j].items() if "status" not in n)
+    assert out[2] == 3
+    s.s.setFMUstate(state)
+    new = _workers_of("restarted")
+    assert len(new) == 2
+    for k in range(2, 5):
+        assert s.step(**inputs(k)) == truth.step(**inputs(k)) == 0
+        assert _outputs(s) == _outputs(truth), k
+    s.s.terminate()
+    for p in new:
+        p.join(30)
+        assert not p.is_alive() and p.exitcode == 0
+    after = s.s.getFMUstate()  # the memories the workers had at fmi2Terminate
+    ref = truth.s.getFMUstate()
+    got = []
+    for restore in (after, ref):
+        truth.s.setFMUstate(restore)
+        truth.t = 5 * STEP
+        assert truth.step(**inputs(5)) == 0
+        got.append(_outputs(truth))
+    assert got[0] == got[1] and got[0][0]["normal_iterations"] < 20  # warm
+    truth.s.freeFMUstate(ref)
+    s.s.freeFMUstate(state)
+    s.s.freeFMUstate(after)
+    s.s.freeInstance()
+    truth.free()
