@@ -322,3 +322,61 @@ def test_a_worker_that_ends_is_an_error_and_a_state_restarts_them(fmu2, monkeypa
     s.s.freeFMUstate(after)
     s.s.freeInstance()
     truth.free()
+
+
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads process states in /proc")
+def test_bare_c_host_starts_the_workers_with_python(fmu2, tmp_path):
+    """The N = 2 FMU in a C program (``tests/fmu/host.c``: 200 steps of wheelset 1's
+    lateral sine, every output read finite; an environment of PATH and HOME only, the
+    kernels' per-user cache): the FMU starts Python inside the host, whose program is
+    not Python, and its two worker processes run the FMU's Python (the interpreter that
+    built it), not the host program; they end with the instance."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    headers = Path(fmpy.__file__).parent / "c-code"
+    host = tmp_path / "host"
+    subprocess.run(["gcc", "-O2", f"-I{headers}", str(Path(__file__).parent / "fmu" / "host.c"),
+                    "-o", str(host), "-ldl", "-lm"], check=True)
+    where = fmu2.parent / f"{fmu2.stem}-unpacked"
+    if not where.exists():
+        with zipfile.ZipFile(fmu2) as z:
+            z.extractall(where)
+    md = read_model_description(str(fmu2))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    binary = where / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    env = ["env", "-i", "PATH=/usr/bin:/bin", f"HOME={os.environ.get('HOME', '/')}",
+           f"VR_LAT={vr['lateral_displacement_1']}", f"VR_OUT={vr['normal_force_left_1']}"]
+    run = subprocess.Popen(env + [str(host), str(binary), (where / "resources").as_uri(),
+                                  md.guid, "200", "1"], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+
+    def workers() -> dict[int, str]:
+        """The host's child processes that run multiprocessing's spawn_main: their
+        programs (the host's other children: the shim's probe of its Python, the check of
+        the interpreter to start the workers with)."""
+        out = {}
+        for d in Path("/proc").iterdir():
+            try:
+                if d.name.isdigit() and int((d / "stat").read_text().rsplit(")", 1)[1]
+                                            .split()[1]) == run.pid and \
+                        b"spawn_main" in (d / "cmdline").read_bytes():
+                    out[int(d.name)] = os.path.realpath(d / "exe")
+            except (OSError, IndexError, ValueError):
+                continue
+        return out
+
+    seen: dict[int, str] = {}
+    while run.poll() is None:
+        seen.update(workers())
+        time.sleep(0.05)
+    out, err = run.communicate()
+    assert run.returncode == 0, err[-3000:]
+    assert "ok: 1 cycles of 200 steps" in out
+    assert len(seen) == 2, seen
+    assert set(seen.values()) == {os.path.realpath(sys.executable)}, seen
+    for pid in seen:  # (ended at fmi2FreeInstance; reaped by the host or init)
+        state = Path(f"/proc/{pid}/stat")
+        assert not state.exists() or state.read_text().rsplit(")", 1)[1].split()[0] == "Z"
