@@ -501,23 +501,33 @@ class Slave:
         """The worker processes of the wheelsets (:attr:`_descriptions`): those of an
         earlier initialisation with the wheelsets built anew, or new ones; threads instead
         (:attr:`workers`, a message in the log) when no Python interpreter is found to
-        start them with (:func:`~railcontact.timestep.pool.worker_python`)."""
+        start them with (:func:`~railcontact.timestep.pool.worker_python`) or they do not
+        start (a wheelset that cannot be built is an error, as on threads)."""
         pool = self._pool
         if pool is not None and pool.alive and pool.processes == processes:
             pool.reset(self._descriptions)
             return
         self.close()
         python = worker_python()
+        why = None
         if python is None:
+            why = (f"no Python {sys.version.split()[0]} interpreter found to start them with "
+                   f"(sys.executable = {sys.executable!r}, environment {sys.prefix!r})")
+        else:
+            try:
+                self._pool = self._new_pool(self._descriptions, processes, python)
+            except RailContactError as exc:
+                if not isinstance(exc.__cause__, (EOFError, OSError)):
+                    raise  # (the worker's own error building a wheelset)
+                why = f"they did not start with {python}: {exc}"
+            except (OSError, RuntimeError) as exc:
+                why = f"they did not start with {python}: {type(exc).__name__}: {exc}"
+        if why is not None:
             self.workers = ("threads", min(len(self.units), _threads()))
             self._fell_back = True  # (initialisation says so with fmi2Warning)
-            self.log.append(
-                f"the wheelsets are stepped on {self.workers[1]} threads, not in worker "
-                f"processes: no Python {sys.version.split()[0]} interpreter found to start "
-                f"them with (sys.executable = {sys.executable!r}, environment "
-                f"{sys.prefix!r}); set {WORKERS_ENV}=threads to choose threads")
-            return
-        self._pool = self._new_pool(self._descriptions, processes, python)
+            self.log.append(f"the wheelsets are stepped on {self.workers[1]} threads, not in "
+                            f"worker processes: {why}; set {WORKERS_ENV}=threads to choose "
+                            "threads")
 
     def _new_pool(self, descriptions: list[WheelsetDescription], processes: int,
                   python: str | None = None) -> WheelsetPool:

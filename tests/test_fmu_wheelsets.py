@@ -3,11 +3,12 @@
 Its truth is the one-wheelset FMU (the default build, ``conftest.default_fmu``, itself
 checked against the Python API in ``tests/test_fmu.py``): each wheelset of the N-wheelset
 FMU has its own solver with the parameters shared, so its outputs must be those of a
-one-wheelset instance given the same inputs, bit for bit. They are stepped on threads of
-their own, and distinct solvers stepping at the same time give the results of stepping them
-one after the other bit for bit (``tests/test_threads.py``, the thread-safety contract of
-``docs/performance.md``): no round-off is allowed. Two builds (N = 1 and N = 2, without
-warming the kernels: the default build has them cached).
+one-wheelset instance given the same inputs, bit for bit. They are stepped in worker
+processes (the default on two cores) or on threads of their own (distinct solvers stepping
+at the same time give the results of stepping them one after the other bit for bit,
+``tests/test_threads.py``, the thread-safety contract of ``docs/performance.md``), and the
+two ways write the same outputs: no round-off is allowed. Two builds (N = 1 and N = 2,
+without warming the kernels: the default build has them cached).
 """
 
 from __future__ import annotations
@@ -221,9 +222,10 @@ def _outputs(s: Instance) -> list[dict]:
         [s.get("status")]
 
 
-def _workers_of(name: str) -> list:
+def _workers_of(instance: str) -> list:
     """The worker processes (multiprocessing's children of this process, fmpy's host) of
-    the pools started since: named railcontact-wheelsets-j."""
+    the pools started since those in :data:`_SEEN` (``instance``'s, when it started the
+    last): named railcontact-wheelsets-j."""
     import multiprocessing
 
     return [p for p in multiprocessing.active_children()
@@ -380,3 +382,31 @@ def test_bare_c_host_starts_the_workers_with_python(fmu2, tmp_path):
     for pid in seen:  # (ended at fmi2FreeInstance; reaped by the host or init)
         state = Path(f"/proc/{pid}/stat")
         assert not state.exists() or state.read_text().rsplit(")", 1)[1].split()[0] == "Z"
+
+
+def test_no_python_to_start_the_workers_is_threads_and_a_warning(fmu2, monkeypatch, capsys):
+    """When no Python interpreter is found to start the worker processes with
+    (worker_python() None: Python embedded in a program, its environment gone), the
+    wheelsets are stepped on threads: initialisation returns fmi2Warning saying why and
+    how to choose threads, the steps are solved (status 0) on the instance's threads."""
+    import sys
+    import threading
+
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "threads")
+    Instance(fmu2, "loaded").free()  # (the FMU's slave module imported in this process)
+    slave = next(m for n, m in sys.modules.items()
+                 if n.startswith("railcontact_fmu_") and n.endswith("._fmu_slave")
+                 and Path(m.__file__).is_relative_to(fmu2.parent))
+    monkeypatch.setattr(slave, "worker_python", lambda: None)
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "processes")
+    capsys.readouterr()
+    _SEEN.update(p.pid for p in _workers_of(""))
+    s = Instance(fmu2, "nopython", creepage_input="kinematic")
+    log = capsys.readouterr().out
+    assert "[WARNING]" in log and "not in worker processes: no Python" in log, log
+    assert "RAILCONTACT_FMU_WORKERS=threads" in log
+    assert s.step(**{f"{n}_{j}": x for j in (1, 2) for n, x in _motion(1, 2e-3, j).items()}) == 0
+    assert {"railcontact-nopython-0_0", "railcontact-nopython-1_0"} <= \
+        {t.name for t in threading.enumerate()}
+    assert not _workers_of("nopython")
+    s.free()
