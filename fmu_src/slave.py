@@ -532,9 +532,10 @@ class Slave:
     def _new_pool(self, descriptions: list[WheelsetDescription], processes: int,
                   python: str | None = None) -> WheelsetPool:
         """Worker processes stepping ``descriptions``' wheelsets (their results reduced to
-        :class:`~railcontact.fmu.outputs.StepOutputs`)."""
+        :class:`~railcontact.fmu.outputs.StepOutputs`; without the host's main module:
+        the workers need the package only, and a host script is not run again in them)."""
         return WheelsetPool(descriptions, processes, reduce=step_outputs,
-                            python=python or worker_python())
+                            python=python or worker_python(), main=False)
 
     def _table(self, modes: FMUModes, contact: ContactSettings):
         """The contact table of ``table_file`` (looked up in the resources first, like a

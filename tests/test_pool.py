@@ -272,3 +272,35 @@ def test_worker_python_is_a_python_of_this_version(monkeypatch, tmp_path):
     for name in ("prefix", "base_prefix", "_base_executable"):
         monkeypatch.setattr(sys, name, str(tmp_path / "nothing"))
     assert worker_python() is None
+
+
+def test_workers_without_the_hosts_main_module(tmp_path):
+    """A host script without the ``if __name__ == "__main__"`` guard: with main=False its
+    workers do not run it again (its top level runs once) and step as usual; with the
+    default, spawn runs it in each worker, where starting a pool again fails."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / "host.py"
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(root), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    for main, ok in ((False, True), (True, False)):
+        script.write_text(
+            "import sys\n"
+            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+            "from test_pool import description, inputs\n"
+            "from railcontact.timestep.pool import WheelsetPool\n"
+            "print('top level', flush=True)\n"
+            f"with WheelsetPool([description(), description()], 2, main={main}) as pool:\n"
+            "    out = pool.step([inputs(0, 0), inputs(1, 0)])\n"
+            "print('stepped', [int(r.status) for r in out], flush=True)\n", encoding="utf-8")
+        out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                             env=env, timeout=600)
+        if ok:
+            assert out.returncode == 0, out.stderr[-2000:]
+            assert out.stdout.splitlines() == ["top level", "stepped [0, 0]"], out.stdout
+        else:
+            assert out.returncode != 0 and out.stdout.count("top level") > 1
+            assert "bootstrapping phase" in out.stderr

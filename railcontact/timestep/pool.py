@@ -27,10 +27,12 @@ import pickle
 import signal
 import subprocess
 import sys
+import threading
 import time
 import traceback
 import weakref
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any
@@ -214,6 +216,30 @@ def _command(request: tuple, which: list[int], contacts: list[WheelsetContact],
                 contacts, descriptions)
 
 
+@contextmanager
+def _without_main() -> Iterator[None]:
+    """Workers started within do not import the host's main module (``spawn`` runs it
+    again in the worker as ``__mp_main__``: a script without the ``if __name__ ==
+    "__main__"`` guard would run again in each)."""
+    given = multiprocessing.spawn.get_preparation_data
+
+    def preparation(name: str) -> dict:
+        data = given(name)
+        data.pop("init_main_from_name", None)
+        data.pop("init_main_from_path", None)
+        return data
+
+    with _SPAWN_LOCK:
+        multiprocessing.spawn.get_preparation_data = preparation
+        try:
+            yield
+        finally:
+            multiprocessing.spawn.get_preparation_data = given
+
+
+_SPAWN_LOCK = threading.Lock()
+
+
 def _stop(processes: list, connections: list[Connection], timeout: float = 5.0) -> None:
     """End the workers: ask, wait up to ``timeout`` [s] each, then terminate."""
     for conn in connections:
@@ -247,6 +273,11 @@ class WheelsetPool:
         every step). Else a picklable function (defined at a module's top level) applied
         to each result in the worker; :meth:`step` returns its values: what the host
         needs, sent instead of the whole result.
+    main
+        Whether the workers import the host's main module first, as ``spawn`` does (needed
+        when ``descriptions`` or ``reduce`` refer to it). False: they do not, so that a
+        host script without the ``if __name__ == "__main__"`` guard (or a host whose main
+        module is none of the pool's concern, as an FMU's) is not run again in each.
     python
         The Python interpreter the workers run (``multiprocessing``'s ``set_executable``
         for the ``spawn`` start method, a setting of the process); None: as it is
@@ -268,7 +299,7 @@ class WheelsetPool:
     def __init__(self, descriptions: Sequence[WheelsetDescription],
                  processes: int | None = None,
                  reduce: Callable[[Any], Any] | None = None,
-                 python: str | None = None) -> None:
+                 python: str | None = None, main: bool = True) -> None:
         n = len(descriptions)
         if n == 0:
             raise RailContactError("a wheelset pool needs at least one wheelset")
@@ -306,7 +337,8 @@ class WheelsetPool:
                 proc = ctx.Process(target=_serve, name=f"railcontact-wheelsets-{j}",
                                    args=(there, which, [descriptions[i] for i in which],
                                          reduce), daemon=True)
-                proc.start()
+                with _without_main() if not main else nullcontext():
+                    proc.start()
                 there.close()
                 self._processes.append(proc)
                 self._connections.append(here)
