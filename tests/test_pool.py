@@ -277,7 +277,8 @@ def test_worker_python_is_a_python_of_this_version(monkeypatch, tmp_path):
 def test_workers_without_the_hosts_main_module(tmp_path):
     """A host script without the ``if __name__ == "__main__"`` guard: with main=False its
     workers do not run it again (its top level runs once) and step as usual; with the
-    default, spawn runs it in each worker, where starting a pool again fails."""
+    default, spawn runs it in the worker, where starting a pool again fails and the worker
+    ends: the host's pool says so at once (no wait for ever)."""
     import os
     import subprocess
     import sys
@@ -297,10 +298,11 @@ def test_workers_without_the_hosts_main_module(tmp_path):
             "    out = pool.step([inputs(0, 0), inputs(1, 0)])\n"
             "print('stepped', [int(r.status) for r in out], flush=True)\n", encoding="utf-8")
         out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                             env=env, timeout=600)
+                             env=env, timeout=300)
         if ok:
             assert out.returncode == 0, out.stderr[-2000:]
             assert out.stdout.splitlines() == ["top level", "stepped [0, 0]"], out.stdout
         else:
             assert out.returncode != 0 and out.stdout.count("top level") > 1
             assert "bootstrapping phase" in out.stderr
+            assert "of the wheelset pool ended as it started" in out.stderr

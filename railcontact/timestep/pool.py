@@ -131,10 +131,12 @@ def _build(which: list[int], descriptions: list[WheelsetDescription]
         return None, (False, _portable(exc, f"building wheelsets {[i + 1 for i in which]}"))
 
 
-def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescription],
-           reduce: Callable[[Any], Any] | None) -> None:
-    """A worker process: build the wheelsets ``which`` (pool indices) from their
-    descriptions, then answer requests until ``None`` or the pipe closes.
+def _serve(conn: Connection) -> None:
+    """A worker process: receive ``(which, descriptions, reduce)`` and build the wheelsets
+    ``which`` (pool indices) from their descriptions, then answer requests until ``None``
+    or the pipe closes. (Sent through the pipe rather than as the process's arguments: a
+    worker that ends while it reads them makes the host's send fail, where ``spawn`` would
+    wait for ever to write arguments larger than the pipe's buffer.)
 
     A step request is a list of ``solve`` keyword arguments, one per wheelset of this
     worker in ``which`` order (None: that wheelset not stepped); its answer a list of
@@ -144,6 +146,10 @@ def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescri
     (Ctrl+C in a terminal reaches the whole process group) are left to the host, which
     closes the pool."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        which, descriptions, reduce = conn.recv()
+    except (EOFError, OSError):  # the host ended
+        return
     contacts, answer = _build(which, descriptions)
     conn.send(answer)
     if contacts is None:
@@ -332,16 +338,24 @@ class WheelsetPool:
         self._closed = False
         self._finalizer = weakref.finalize(self, _stop, self._processes, self._connections)
         try:
-            for j, which in enumerate(self.shares):
+            for j in range(len(self.shares)):
                 here, there = ctx.Pipe()
                 proc = ctx.Process(target=_serve, name=f"railcontact-wheelsets-{j}",
-                                   args=(there, which, [descriptions[i] for i in which],
-                                         reduce), daemon=True)
+                                   args=(there,), daemon=True)
                 with _without_main() if not main else nullcontext():
                     proc.start()
                 there.close()
                 self._processes.append(proc)
                 self._connections.append(here)
+            for j, which in enumerate(self.shares):
+                try:
+                    self._connections[j].send((which, [descriptions[i] for i in which],
+                                               reduce))
+                except OSError as exc:
+                    self._processes[j].join(1.0)
+                    raise RailContactError(
+                        f"worker process {j + 1} of the wheelset pool ended as it started "
+                        f"(exit code {self._processes[j].exitcode})") from exc
             for j, conn in enumerate(self._connections):
                 ok, exc = self._receive(j, conn)
                 if not ok:
