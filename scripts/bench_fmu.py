@@ -34,7 +34,9 @@ instances stepped one after the other with the same inputs (N lateral sines of d
 amplitude and phase), the three stepped alternately step by step (each first in turn):
 the median time of the N-wheelset step each way, of the N single steps together, their
 ratios (the parallel ratio: 1 no gain, 1/N perfectly parallel; processes / threads), and
-whether every wheelset's outputs equal its single instance's bit for bit.
+whether every wheelset's outputs equal its single instance's bit for bit. Before and after,
+two processes of pure Python work at once against one after the other say how many cores
+were free for the job (0.5: two; 1: one, the other taken by other jobs).
 
 Usage: python scripts/bench_fmu.py [--part all|modes|penetration|wheelsets]
                                    [--duration 2.0] [--csv FILE] [--steps 400]
@@ -240,6 +242,29 @@ def penetration_ratio(fmu_dir: Path, md, steps: int, repeats: int) -> dict:
             "paired": float(np.median(np.array(fmu) / np.array(api)))}
 
 
+def _burn(n: int) -> float:
+    """Wall time [s] of ``n`` rounds of pure Python arithmetic (one core's work)."""
+    t0 = time.perf_counter()
+    x = 0
+    for i in range(n):
+        x += i * i
+    return time.perf_counter() - t0
+
+
+def cores_free(n: int = 3_000_000) -> float:
+    """Two processes of the same pure-Python work at once, wall time over one of them
+    alone twice: 0.5 when two cores are free for this job, 1 when one is (a machine shared
+    with other jobs)."""
+    import multiprocessing
+
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        pool.map(_burn, [1000, 1000])  # (the workers started)
+        one = _burn(n) + _burn(n)
+        t0 = time.perf_counter()
+        pool.map(_burn, [n, n])
+        return (time.perf_counter() - t0) / one
+
+
 WORKERS_ENV = "RAILCONTACT_FMU_WORKERS"
 """How an N-wheelset FMU instance steps its wheelsets (read at its initialisation; the
 slave runs in this process under fmpy)."""
@@ -326,11 +351,15 @@ def main() -> None:
             n = args.wheelsets
             multi = build_fmu(Path(tmp) / f"RailContact{n}.fmu", warm=False, wheelsets=n)
             workers = ("processes", "threads") if args.workers == "both" else (args.workers,)
+            free = cores_free()
             q = parallel_ratio((d, md), _unpacked(multi, Path(tmp) / f"x{n}"), n,
                                args.steps, args.repeats, workers)
+            free = (free, cores_free())
             print(f"{n}-wheelset FMU under control = penetration, {q['steps']} warm steps, "
                   f"medians ({os.cpu_count()} cores; load average "
-                  f"{' '.join(f'{x:.2f}' for x in os.getloadavg())} at the end)")
+                  f"{' '.join(f'{x:.2f}' for x in os.getloadavg())} at the end; two "
+                  f"processes of pure Python work at once / one after the other "
+                  f"{free[0]:.2f} before, {free[1]:.2f} after: 0.5 two cores free, 1 one)")
             print(f"  {n} one-wheelset FMU steps one after the other: "
                   f"{q['singles'] * 1e3:.3f} ms")
             for w, t in q["multi"].items():
