@@ -409,3 +409,39 @@ def test_no_python_to_start_the_workers_is_threads_and_a_warning(fmu2, monkeypat
         {t.name for t in threading.enumerate()}
     assert not _workers_of("nopython")
     s.free()
+
+
+def test_libcosim_processes_equal_threads(fmu2, monkeypatch):
+    """The N = 2 FMU in libcosim (its own threads call the FMU; the slave in this
+    process's Python): with worker processes (two, running while it steps) the wheel
+    forces of both wheelsets after three steps equal those with threads bit for bit."""
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    def run(workers: str) -> tuple[list[float], list]:
+        monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", workers)
+        _SEEN.update(p.pid for p in _workers_of(""))
+        ex = CosimExecution.from_step_size(step_size=int(1e6))  # 1 ms in ns
+        i = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(fmu2),
+                                                           instance_name=workers))
+        obs = CosimObserver.create_last_value()
+        ex.add_observer(observer=obs)
+        vr = {v.name.decode(): v.reference for v in ex.slave_variables(slave_index=i)}
+        for k in (1, 2):
+            ex.real_initial_value(slave_index=i, variable_reference=vr[f"xi_left_{k}"],
+                                  value=1e-3)
+            ex.real_initial_value(slave_index=i,
+                                  variable_reference=vr[f"lateral_displacement_{k}"],
+                                  value=1.5e-3 * k)
+        assert ex.step(step_count=3)
+        names = [f"{n}_{k}" for k in (1, 2) for n in ("normal_force_left", "creep_force_x_left",
+                                                       "force_lateral")]
+        got = obs.last_real_values(slave_index=i, variable_references=[vr[n] for n in names])
+        return got, _workers_of(workers)
+
+    there, workers = run("2")
+    here, none = run("threads")
+    assert len(workers) == 2 and not none
+    assert there == here and there[0] > 50e3 and there[1] != 0.0
