@@ -535,7 +535,8 @@ class Slave:
         :class:`~railcontact.fmu.outputs.StepOutputs`; without the host's main module:
         the workers need the package only, and a host script is not run again in them)."""
         return WheelsetPool(descriptions, processes, reduce=step_outputs,
-                            python=python or worker_python(), main=False)
+                            python=python or worker_python(), main=False,
+                            timeout=_worker_timeout())
 
     def _table(self, modes: FMUModes, contact: ContactSettings):
         """The contact table of ``table_file`` (looked up in the resources first, like a
@@ -827,6 +828,33 @@ several wheelsets are stepped on (default: the cores, :func:`_cores`)."""
 WORKERS_ENV = "RAILCONTACT_FMU_WORKERS"
 """The environment variable that chooses how the wheelsets of an FMU of several wheelsets
 are stepped: ``processes``, ``threads`` or a number of worker processes (:func:`_workers`)."""
+
+
+TIMEOUT_ENV = "RAILCONTACT_FMU_WORKER_TIMEOUT"
+"""The environment variable that limits the wait for a worker process's step [s]."""
+
+
+def _worker_timeout() -> float | None:
+    """The longest wait [s] for a worker process's answer (a step, a memory read or set),
+    ``$RAILCONTACT_FMU_WORKER_TIMEOUT``; None (no limit) when unset. A worker that takes
+    longer is taken as hung: the step is fmi2Error, as for a worker that ended.
+
+    Raises
+    ------
+    RailContactError
+        A value that is no number above 0.
+    """
+    given = os.environ.get(TIMEOUT_ENV, "").strip()
+    if not given:
+        return None
+    try:
+        seconds = float(given)
+    except ValueError:
+        seconds = math.nan
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise RailContactError(f"{TIMEOUT_ENV} = {given!r}: the longest wait for a worker "
+                               "process's step, a number of seconds above 0")
+    return seconds
 
 
 def _workers(wheelsets: int) -> tuple[str, int]:

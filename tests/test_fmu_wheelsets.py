@@ -445,3 +445,23 @@ def test_libcosim_processes_equal_threads(fmu2, monkeypatch):
     here, none = run("threads")
     assert len(workers) == 2 and not none
     assert there == here and there[0] > 50e3 and there[1] != 0.0
+
+
+def test_worker_timeout_is_an_error_not_a_wait(fmu2, monkeypatch, capsys):
+    """RAILCONTACT_FMU_WORKER_TIMEOUT: a worker that does not answer within it (1 ms
+    against the tens of milliseconds of the first, cold step at initialisation) is an
+    fmi2Error naming the timeout, the workers ended; a value that is no number above 0 is
+    an error at initialisation naming the variable."""
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2")
+    _SEEN.update(p.pid for p in _workers_of(""))
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKER_TIMEOUT", "0.001")
+    with pytest.raises(FMICallException):
+        Instance(fmu2, "hurried")
+    assert "did not answer within 0.001 s" in capsys.readouterr().out
+    for w in _workers_of("hurried"):
+        w.join(30)
+        assert not w.is_alive()
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKER_TIMEOUT", "soon")
+    with pytest.raises(FMICallException):
+        Instance(fmu2, "soon")
+    assert "RAILCONTACT_FMU_WORKER_TIMEOUT = 'soon'" in capsys.readouterr().out

@@ -306,3 +306,19 @@ def test_workers_without_the_hosts_main_module(tmp_path):
             assert out.returncode != 0 and out.stdout.count("top level") > 1
             assert "bootstrapping phase" in out.stderr
             assert "of the wheelset pool ended as it started" in out.stderr
+
+
+def test_a_worker_that_does_not_answer_in_time_closes_the_pool():
+    """timeout: a step that takes longer than it raises at once (the pool closed, its
+    workers ended), not when the step ends; a timeout not above 0 is refused."""
+    import time
+
+    with WheelsetPool([description()], 1, timeout=1e-3) as p:
+        t0 = time.perf_counter()
+        with pytest.raises(RailContactError, match="did not answer within 0.001 s"):
+            p.step([inputs(0, 0)])  # (a cold step: tens of milliseconds)
+        assert time.perf_counter() - t0 < 30 and not p.alive
+        assert all(not q.is_alive() for q in p._processes)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(RailContactError, match="timeout must be above 0 s"):
+            WheelsetPool([description()], timeout=bad)

@@ -284,6 +284,11 @@ class WheelsetPool:
         when ``descriptions`` or ``reduce`` refer to it). False: they do not, so that a
         host script without the ``if __name__ == "__main__"`` guard (or a host whose main
         module is none of the pool's concern, as an FMU's) is not run again in each.
+    timeout
+        The longest wait [s] for a worker's answer to a step or another request after
+        the pool has started; None: no limit. A worker that takes longer is taken as
+        hung: the pool is closed (its workers asked to end, then terminated) and a
+        :class:`RailContactError` raised.
     python
         The Python interpreter the workers run (``multiprocessing``'s ``set_executable``
         for the ``spawn`` start method, a setting of the process); None: as it is
@@ -305,7 +310,8 @@ class WheelsetPool:
     def __init__(self, descriptions: Sequence[WheelsetDescription],
                  processes: int | None = None,
                  reduce: Callable[[Any], Any] | None = None,
-                 python: str | None = None, main: bool = True) -> None:
+                 python: str | None = None, main: bool = True,
+                 timeout: float | None = None) -> None:
         n = len(descriptions)
         if n == 0:
             raise RailContactError("a wheelset pool needs at least one wheelset")
@@ -324,8 +330,12 @@ class WheelsetPool:
         if p < 1:
             raise RailContactError(f"processes must be at least 1, got {p}")
         p = min(p, n)
+        if timeout is not None and not timeout > 0:
+            raise RailContactError(f"timeout must be above 0 s or None, got {timeout!r}")
         self.count = n
         """Number of wheelsets."""
+        self.timeout = timeout
+        """The longest wait for a worker's answer [s] (None: no limit)."""
         self.shares = [[i for i in range(n) if i % p == j] for j in range(p)]
         """The wheelsets (pool indices) of each worker process."""
         self.seconds: list[float] = [0.0] * n
@@ -369,7 +379,13 @@ class WheelsetPool:
         """Number of worker processes."""
         return len(self.shares)
 
-    def _receive(self, j: int, conn: Connection) -> Any:
+    def _receive(self, j: int, conn: Connection, timeout: float | None = None) -> Any:
+        """Worker ``j``'s answer; a :class:`RailContactError` when it ended, or when it
+        has not answered within ``timeout`` [s] (None: no limit)."""
+        if timeout is not None and not conn.poll(timeout):
+            raise RailContactError(
+                f"worker process {j + 1} of the wheelset pool did not answer within "
+                f"{timeout:g} s (the pool's timeout); the pool is closed") from TimeoutError()
         try:
             return conn.recv()
         except (EOFError, OSError) as exc:
@@ -435,7 +451,7 @@ class WheelsetPool:
                                            "cannot be reached; the pool is closed") from exc
             for j, which in enumerate(self.shares):
                 try:
-                    answer = self._receive(j, self._connections[j])
+                    answer = self._receive(j, self._connections[j], self.timeout)
                 except RailContactError as exc:
                     ended = ended or exc
                     continue
@@ -504,7 +520,8 @@ class WheelsetPool:
         try:
             for j, request in enumerate(requests):
                 self._connections[j].send(request)
-            answers = [self._receive(j, conn) for j, conn in enumerate(self._connections)]
+            answers = [self._receive(j, conn, self.timeout)
+                       for j, conn in enumerate(self._connections)]
         except BaseException:  # a worker ended or the round trip broke: out of step
             self.close()
             raise
