@@ -647,8 +647,9 @@ class Slave:
             self["status"], self["solve_time"] = OUT_OF_RANGE, 0.0
 
     def _do_step(self) -> int:
-        """Solve the step of the inputs: each wheelset's (:meth:`_step`), on a thread of
-        its own when there are several (in BEM mode); the FMI status the worst of theirs,
+        """Solve the step of the inputs: each wheelset's, when there are several (in BEM
+        mode) in the worker processes (:meth:`_pool_step`) or on the threads
+        (:meth:`_step` on each) of :attr:`workers`; the FMI status the worst of theirs,
         each wheelset's messages named by its number."""
         if not self.initialised:
             self.log.append("doStep before initialization")
