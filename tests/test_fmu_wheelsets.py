@@ -465,3 +465,40 @@ def test_worker_timeout_is_an_error_not_a_wait(fmu2, monkeypatch, capsys):
     with pytest.raises(FMICallException):
         Instance(fmu2, "soon")
     assert "RAILCONTACT_FMU_WORKER_TIMEOUT = 'soon'" in capsys.readouterr().out
+
+
+def test_reset_keeps_the_workers_and_builds_their_wheelsets_anew(fmu2, monkeypatch,
+                                                                 capsys):
+    """fmi2Reset and a new initialisation: the same worker processes, their wheelsets
+    built anew (the steps equal a new instance's bit for bit: no memory of the steps
+    before the reset). RAILCONTACT_FMU_WORKERS that is neither processes, threads nor a
+    positive integer is an error at initialisation naming it."""
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2")
+    _SEEN.update(p.pid for p in _workers_of(""))
+
+    def inputs(k: int) -> dict:
+        return {f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
+                for n, x in _motion(k, a, j).items()}
+
+    s = Instance(fmu2, "reset", creepage_input="kinematic")
+    mine = _workers_of("reset")
+    _SEEN.update(p.pid for p in mine)
+    for k in range(3):
+        s.step(**inputs(k))
+    s.s.reset()
+    s.s.setupExperiment(startTime=0.0)
+    s.s.enterInitializationMode()
+    s.set(creepage_input="kinematic")
+    s.s.exitInitializationMode()
+    s.t = 0.0
+    fresh = Instance(fmu2, "fresh", creepage_input="kinematic")
+    for k in range(1, 3):
+        assert s.step(**inputs(k)) == fresh.step(**inputs(k)) == 0
+        assert _outputs(s) == _outputs(fresh), k
+    assert all(p.is_alive() for p in mine) and len(mine) == 2
+    s.free()
+    fresh.free()
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "many")
+    with pytest.raises(FMICallException):
+        Instance(fmu2, "many")
+    assert "RAILCONTACT_FMU_WORKERS = 'many'" in capsys.readouterr().out
