@@ -61,7 +61,8 @@ def model_description(guid: str, model_identifier: str = MODEL_IDENTIFIER,
     from railcontact.fmu.variables import item_name, table
 
     variables = table(wheelsets)
-    what = "a wheelset" if wheelsets is None else f"{wheelsets} wheelsets, solved on worker threads"
+    what = "a wheelset" if wheelsets is None else \
+        f"{wheelsets} wheelsets, solved in worker processes or on threads"
     used = sorted({v.unit for v in variables if v.unit})
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
@@ -301,7 +302,8 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
         Called with a line of text for the user (what the warm-up did), or None.
     wheelsets
         None: the FMU of one wheelset. 1 to 8: the FMU of that many wheelsets (their
-        variables repeated with ``_k`` appended, solved on worker threads), the number written to
+        variables repeated with ``_k`` appended, solved in worker processes or on threads), the
+        number written to
         ``resources/wheelsets.txt`` and fixed in the modelDescription.
     """
     import railcontact

@@ -72,8 +72,11 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
 fmi2Status fmi2Terminate(fmi2Component comp) {
     Instance *c = comp;
     if (!c) return fmi2Error;
+    ENTER;
+    fmi2Status s = call_status(c, c->m_terminate, NULL); /* the worker processes end */
+    LEAVE;
     c->mode = TERMINATED;
-    return fmi2OK;
+    return s;
 }
 
 fmi2Status fmi2Reset(fmi2Component comp) {

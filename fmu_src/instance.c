@@ -83,10 +83,15 @@ void instance_free(Instance *c) {
     if (!c) return;
     if (c->slave && py_ready) {
         ENTER;
+        if (c->m_close) { /* the slave's threads and worker processes end with it */
+            PyObject *r = py.CallObject(c->m_close, NULL);
+            if (r) py.DecRef(r);
+            else py.ErrClear();
+        }
         PyObject *objs[] = {c->m_do_step, c->m_exit_init, c->m_enter_init, c->m_reset,
                             c->m_get_state, c->m_set_state, c->m_check_state,
                             c->m_get_string, c->m_set_string,
-                            c->m_pop_log, c->slave};
+                            c->m_pop_log, c->m_terminate, c->m_close, c->slave};
         for (size_t k = 0; k < sizeof objs / sizeof objs[0]; ++k)
             if (objs[k]) py.DecRef(objs[k]);
         LEAVE;
@@ -190,6 +195,8 @@ Instance *instance_new(fmi2String name, fmi2Type type, fmi2String resources_uri,
             c->m_get_string = method(slave, "get_string");
             c->m_set_string = method(slave, "set_string");
             c->m_pop_log = method(slave, "pop_log");
+            c->m_terminate = method(slave, "terminate");
+            c->m_close = method(slave, "close");
             PyObject *bm = method(slave, "buffers");
             PyObject *b = bm ? py.CallObject(bm, NULL) : NULL;
             if (bm) py.DecRef(bm);
@@ -207,7 +214,8 @@ Instance *instance_new(fmi2String name, fmi2Type type, fmi2String resources_uri,
                 ok = c->m_do_step && c->m_exit_init && c->m_enter_init && c->m_reset &&
                      c->m_get_state && c->m_set_state && c->m_check_state &&
                      c->m_get_string &&
-                     c->m_set_string && c->m_pop_log && !py.ErrOccurred();
+                     c->m_set_string && c->m_pop_log && c->m_terminate && c->m_close &&
+                     !py.ErrOccurred();
             }
             if (!ok) {
                 py.ErrClear();

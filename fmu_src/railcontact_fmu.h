@@ -142,7 +142,7 @@ typedef struct {
     int mode;
     PyObject *slave;
     PyObject *m_do_step, *m_exit_init, *m_enter_init, *m_reset, *m_get_state, *m_set_state,
-        *m_check_state, *m_get_string, *m_set_string, *m_pop_log;
+        *m_check_state, *m_get_string, *m_set_string, *m_pop_log, *m_terminate, *m_close;
     double *real;
     size_t n_real;
     int32_t *integer;

@@ -7,12 +7,16 @@ buffers (``buffers()``), and calls the methods below, each of which returns an F
 
 An FMU built with ``--wheelsets N`` (``resources/wheelsets.txt`` holds N) solves N
 wheelsets, each with its own solver and its own variables (``_k`` appended to the names of
-the one-wheelset FMU, :func:`railcontact.fmu.variables.table`), in one ``fmi2DoStep``: the
-wheelsets shared among as many threads as the process has cores, each wheelset always on
-the same thread (:class:`_Wheelset`; the kernels release the GIL, and
-distinct solvers stepping on threads give the results of stepping them one after the other,
-bit for bit: the thread-safety contract of ``docs/performance.md``), the step's FMI status
-the worst of the wheelsets'.
+the one-wheelset FMU, :func:`railcontact.fmu.variables.table`), in one ``fmi2DoStep``, the
+step's FMI status the worst of the wheelsets'. The wheelsets are shared among worker
+processes (:class:`~railcontact.timestep.pool.WheelsetPool`, each wheelset's solver and its
+memory always in the same process; the workers send back
+:class:`~railcontact.fmu.outputs.StepOutputs`) or among threads of this process (each
+wheelset always on the same thread; the kernels release the GIL, and distinct solvers
+stepping on threads give the results of stepping them one after the other, bit for bit:
+the thread-safety contract of ``docs/performance.md``): :func:`_workers`. Both ways write
+the outputs from the same :class:`~railcontact.fmu.outputs.StepOutputs`, so that they
+agree bit for bit.
 
 This file is copied into the FMU as ``<package>/_fmu_slave.py`` next to a copy of the
 railcontact package, hence the relative imports.
@@ -23,6 +27,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import sys
 import time
 import traceback
 from concurrent.futures import ThreadPoolExecutor
@@ -34,13 +39,16 @@ from . import __version__
 from .errors import RailContactError
 from .fmu import state as S
 from .fmu import variables as V
+from .fmu.outputs import StepOutputs, WheelOutcome, step_outputs
 from .geometry.profiles import read_profile
 from .geometry.track import Pose, Track, Wheelset
 from .settings import ContactSettings, FMUModes
 from .status import Status
 from .table import TableContact  # (xarray, zarr: imported when a table is opened)
-from .timestep import Kinematics, RailDeviation, WheelsetContact, WheelsetResult
+from .timestep import Kinematics, RailDeviation, WheelsetContact
+from .timestep.memory import EMPTY as EMPTY_MEMORY
 from .timestep.memory import StepMemory
+from .timestep.pool import RemoteError, WheelsetDescription, WheelsetPool, worker_python
 from .timestep.wheelset import (
     NO_DEVIATION,
     NOT_CONVERGED,
@@ -93,13 +101,11 @@ class _Wheelset:
         self.slots = {**slots, **{v.name: slots[v.name + suffix] for v in own}}
         outputs = [v for v in own if v.causality == "output"]
         self.zeroed = []  # (buffer, value references) of the Real and the Integer outputs
-        self.outputs = []  # ... and their functions of a result
-        for t in ("Real", "Integer"):
+        for t in ("Real", "Integer"):  # (in the order of outputs.output_functions)
             mine = [v for v in outputs if v.type == t]
             buffer = slots[mine[0].name + suffix][0]
             vrs = np.array([slots[v.name + suffix][1] for v in mine], dtype=int)
             self.zeroed.append((buffer, vrs))
-            self.outputs.append((buffer, vrs, [v.value for v in mine]))  # one assignment
         self.real_outputs = self.zeroed[0][1]
         self.contact: WheelsetContact | TableContact | None = None
         self.log: list[str] = []
@@ -159,7 +165,15 @@ class Slave:
         else:
             self.units = [_Wheelset(self._slots, k, single)
                           for k in range(1, self.wheelsets + 1)]
-        self._threads: list[ThreadPoolExecutor] = []  # one a wheelset, made at the first step
+        self._threads: list[ThreadPoolExecutor] = []  # made at the first step (threads)
+        self._pool: WheelsetPool | None = None  # the worker processes (processes)
+        self._kept: list[StepMemory] | None = None  # the workers' memories at termination
+        self.workers: tuple[str, int] | None = None
+        """How the wheelsets are stepped (:func:`_workers`), set at initialisation; None:
+        in this thread one after the other (one wheelset, table mode)."""
+        self.settings: ContactSettings | None = None  # the solver settings built with
+        self._fell_back = False  # threads: no Python found to start worker processes
+        self._descriptions: list[WheelsetDescription] = []  # the workers' wheelsets
         self.modes: FMUModes | None = None
         self.built: dict | None = None  # the parameters self.contact was built with
         self.guid, self.model = _identity(self.resources)
@@ -180,14 +194,37 @@ class Slave:
 
     @property
     def contact(self) -> WheelsetContact | TableContact | None:
-        """The (first) wheelset's solver; None before initialisation."""
+        """The (first) wheelset's solver in this process; None before initialisation and
+        when the wheelsets are stepped in worker processes."""
         return self.units[0].contact
 
-    def close(self) -> None:
-        """Stop the wheelsets' threads (they are made again when needed)."""
+    @property
+    def initialised(self) -> bool:
+        """Whether the wheelsets' solvers are built (initialisation done, no reset
+        since)."""
+        return self.built is not None
+
+    def close(self) -> int:
+        """fmi2FreeInstance: stop the wheelsets' threads (they are made again when needed)
+        and end the worker processes."""
         threads, self._threads = getattr(self, "_threads", []), []  # (__init__ may have failed)
         for t in threads:
             t.shutdown(wait=False)
+        pool, self._pool = getattr(self, "_pool", None), None
+        if pool is not None:
+            pool.close()
+        return FMI_OK
+
+    def terminate(self) -> int:
+        """fmi2Terminate: end the worker processes, their wheelsets' memories kept here
+        for fmi2GetFMUstate (no step follows before fmi2Reset)."""
+        return self._guard("terminate", FMI_ERROR, self._terminate)
+
+    def _terminate(self) -> int:
+        if self._pool is not None and self._pool.alive and self.initialised:
+            self._kept = self._pool.memories()
+        self.close()
+        return FMI_OK
 
     def __del__(self) -> None:
         self.close()
@@ -241,10 +278,13 @@ class Slave:
         return status
 
     def reset(self) -> int:
+        """fmi2Reset: the start values, no solver (the worker processes stay, their
+        wheelsets built anew at the next initialisation)."""
         self._start_values()
         for u in self.units:
             u.contact = None
         self.built = None
+        self._kept = None
         return FMI_OK
 
     def get_state(self) -> bytes:
@@ -254,7 +294,7 @@ class Slave:
         log."""
         try:
             return S.pack(S.State(
-                guid=self.guid, model=self.model, initialised=self.contact is not None,
+                guid=self.guid, model=self.model, initialised=self.initialised,
                 parameters=self.built if self.built is not None else self._parameters(
                     self.real, self.integer, self.strings),
                 real=self.real, integer=self.integer, control=self.control,
@@ -266,11 +306,16 @@ class Slave:
 
     def _memory(self):
         """The solvers' memory of the previous steps: the wheelset's (one wheelset), a list
-        of the wheelsets' (several), None before initialisation."""
-        if self.contact is None:
+        of the wheelsets' (several; read from the worker processes when they step them),
+        None before initialisation."""
+        if not self.initialised:
             return None
         if self.wheelsets is None:
             return self.contact.memory
+        if self._pool is not None:
+            return self._pool.memories()
+        if self._kept is not None:
+            return list(self._kept)
         return [u.contact.memory for u in self.units]
 
     def set_state(self, data: bytes) -> int:
@@ -308,11 +353,21 @@ class Slave:
         np.copyto(self.integer, state.integer)
         np.copyto(self.control, state.control)
         self.strings[:] = state.strings
-        if self.contact is None:  # not initialised: the solver is built from the
-            return FMI_OK         # parameters just restored at initialisation
+        if not self.initialised:  # the solver is built from the parameters just
+            return FMI_OK         # restored at initialisation
         memories = [state.memory] if self.wheelsets is None else state.memory
+        if not state.initialised:
+            memories = [None] * len(self.units)  # (None: forget the previous steps)
+        if self._pool is not None:
+            if not self._pool.alive:  # a worker ended (the step said fmi2Error): new ones
+                self._pool = self._new_pool(self._descriptions, self.workers[1])
+            self._pool.set_memories(memories)
+            return FMI_OK
+        if self._kept is not None:  # terminated: the workers have ended
+            self._kept = [m if m is not None else EMPTY_MEMORY for m in memories]
+            return FMI_OK
         for k, u in enumerate(self.units):
-            if state.initialised:
+            if memories[k] is not None:
                 u.contact.memory = memories[k]
             else:
                 u.contact.reset()
@@ -385,6 +440,7 @@ class Slave:
         """Each wheelset's solver from the parameters (the wheelsets share the profiles,
         the material and the settings, and in table mode the table)."""
         self.built = None
+        self.workers = None
         for u in self.units:
             u.contact = None
         for v in V.PARAMETERS:
@@ -398,10 +454,12 @@ class Slave:
         built = self._parameters(self.real, self.integer, self.strings)
         ps = V.parameter_settings(built)
         self.modes = ps.modes
+        self.settings = ps.contact
         if ps.modes.contact_model == "table":
             table = self._table(ps.modes, ps.contact)  # no memory: one for all wheelsets
             for u in self.units:
                 u.contact = table
+            self.close()  # (the workers of an earlier initialisation)
             self.built = built
             return
         g = ps.geometry  # profile_unit: the String or its enumeration
@@ -426,10 +484,59 @@ class Slave:
         track = tracks[0] if tracks[0] is tracks[1] else tuple(tracks)
         ws = wheelsets[0] if wheelsets[0] is wheelsets[1] else tuple(wheelsets)
         pair = ps.material.elastic_pair()
-        for u in self.units:
-            u.contact = WheelsetContact(track, ws, pair, ps.contact,
-                                        convention=ps.modes.convention)
+        self.workers = _workers(len(self.units)) if len(self.units) > 1 else None
+        if self.workers is not None and self.workers[0] == "processes":
+            self._descriptions = [WheelsetDescription(track, ws, pair, ps.contact,
+                                                      convention=ps.modes.convention)
+                                  for _ in self.units]
+            self._start_pool(self.workers[1])
+        if self.workers is None or self.workers[0] == "threads":
+            self.close()  # (the workers of an earlier initialisation)
+            for u in self.units:
+                u.contact = WheelsetContact(track, ws, pair, ps.contact,
+                                            convention=ps.modes.convention)
         self.built = built
+
+    def _start_pool(self, processes: int) -> None:
+        """The worker processes of the wheelsets (:attr:`_descriptions`): those of an
+        earlier initialisation with the wheelsets built anew, or new ones; threads instead
+        (:attr:`workers`, a message in the log) when no Python interpreter is found to
+        start them with (:func:`~railcontact.timestep.pool.worker_python`) or they do not
+        start (a wheelset that cannot be built is an error, as on threads)."""
+        pool = self._pool
+        if pool is not None and pool.alive and pool.processes == processes:
+            pool.reset(self._descriptions)
+            return
+        self.close()
+        python = worker_python()
+        why = None
+        if python is None:
+            why = (f"no Python {sys.version.split()[0]} interpreter found to start them with "
+                   f"(sys.executable = {sys.executable!r}, environment {sys.prefix!r})")
+        else:
+            try:
+                self._pool = self._new_pool(self._descriptions, processes, python)
+            except RailContactError as exc:
+                if not isinstance(exc.__cause__, (EOFError, OSError)):
+                    raise  # (the worker's own error building a wheelset)
+                why = f"they did not start with {python}: {exc}"
+            except (OSError, RuntimeError) as exc:
+                why = f"they did not start with {python}: {type(exc).__name__}: {exc}"
+        if why is not None:
+            self.workers = ("threads", min(len(self.units), _threads()))
+            self._fell_back = True  # (initialisation says so with fmi2Warning)
+            self.log.append(f"the wheelsets are stepped on {self.workers[1]} threads, not in "
+                            f"worker processes: {why}; set {WORKERS_ENV}=threads to choose "
+                            "threads")
+
+    def _new_pool(self, descriptions: list[WheelsetDescription], processes: int,
+                  python: str | None = None) -> WheelsetPool:
+        """Worker processes stepping ``descriptions``' wheelsets (their results reduced to
+        :class:`~railcontact.fmu.outputs.StepOutputs`; without the host's main module:
+        the workers need the package only, and a host script is not run again in them)."""
+        return WheelsetPool(descriptions, processes, reduce=step_outputs,
+                            python=python or worker_python(), main=False,
+                            timeout=_worker_timeout())
 
     def _table(self, modes: FMUModes, contact: ContactSettings):
         """The contact table of ``table_file`` (looked up in the resources first, like a
@@ -468,6 +575,7 @@ class Slave:
         return table
 
     def _exit_initialization(self) -> int:
+        self._fell_back = False
         try:
             self._build()
         except RailContactError as exc:
@@ -475,8 +583,11 @@ class Slave:
             return FMI_ERROR
         status = self._do_step()  # the outputs at the start values of the inputs
         # (initialisation has no Discard: inputs it cannot solve are a warning, its message
-        # logged, the outputs and statuses saying so)
-        return FMI_WARNING if status == FMI_DISCARD else status
+        # logged, the outputs and statuses saying so; threads instead of worker processes
+        # are a warning)
+        if status == FMI_DISCARD or (status == FMI_OK and self._fell_back):
+            return FMI_WARNING
+        return status
 
     @staticmethod
     def _inputs(u: _Wheelset, names: list[str]) -> dict[str, float]:
@@ -536,20 +647,23 @@ class Slave:
             self["status"], self["solve_time"] = OUT_OF_RANGE, 0.0
 
     def _do_step(self) -> int:
-        """Solve the step of the inputs: each wheelset's (:meth:`_step`), on a thread of
-        its own when there are several (in BEM mode); the FMI status the worst of theirs,
+        """Solve the step of the inputs: each wheelset's, when there are several (in BEM
+        mode) in the worker processes (:meth:`_pool_step`) or on the threads
+        (:meth:`_step` on each) of :attr:`workers`; the FMI status the worst of theirs,
         each wheelset's messages named by its number."""
-        if self.contact is None:
+        if not self.initialised:
             self.log.append("doStep before initialization")
             return FMI_ERROR
         if self.wheelsets is None:
             return self._step(self.units[0])
         t0 = time.perf_counter()
-        if len(self.units) > 1 and self.modes.contact_model == "bem":
+        if self._pool is not None:
+            statuses = self._pool_step()
+        elif self.workers is not None:
             if not self._threads:  # as many threads as cores (_threads); each wheelset on its
                 self._threads = [  # thread step after step (its FFT plans and search
                     ThreadPoolExecutor(1, f"railcontact-{self.instance_name}-{j}")  # memory
-                    for j in range(min(len(self.units), _threads()))]  # stay with it)
+                    for j in range(self.workers[1])]  # stay with it)
             n = len(self._threads)
             running = [t.submit(self._step_group, self.units[j::n])
                        for j, t in enumerate(self._threads)]
@@ -564,6 +678,46 @@ class Slave:
         self["solve_time"] = time.perf_counter() - t0
         return max(statuses)
 
+    def _pool_step(self) -> list[int]:
+        """The FMI statuses of the wheelsets' steps in the worker processes: each
+        wheelset's inputs read and checked here (:meth:`_prepare`), solved in its worker,
+        its :class:`~railcontact.fmu.outputs.StepOutputs` written here (:meth:`_finish`);
+        an error in a wheelset's solve discards its step as on a thread. A worker process
+        that ended discards every wheelset's step with fmi2Error (its wheelsets' memories
+        are lost; fmi2SetFMUstate starts new workers)."""
+        prepared = [self._guard_unit(u, self._prepare, u) for u in self.units]
+        try:
+            outs = self._pool.step([p[0] if isinstance(p, tuple) else None
+                                    for p in prepared], errors="return")
+        except RailContactError as exc:
+            self._discard_all()
+            self.log.append(f"doStep: the wheelsets' worker processes: {exc}")
+            return [FMI_ERROR] * len(self.units)
+        statuses = []
+        for u, p, out in zip(self.units, prepared, outs, strict=True):
+            if not isinstance(p, tuple):  # discarded before solving
+                statuses.append(p)
+            elif isinstance(out, RailContactError) and not isinstance(out, RemoteError):
+                statuses.append(self._discarded(u, f"input out of range: {out}"))
+            elif isinstance(out, BaseException):
+                u.log.append(f"doStep: {type(out).__name__}: {out}\n"
+                             + "\n".join(getattr(out, "__notes__", [])))
+                self._discard(u)
+                statuses.append(FMI_DISCARD)
+            else:
+                statuses.append(self._guard_unit(u, self._finish, u, out, p[1]))
+        return statuses
+
+    def _guard_unit(self, u: _Wheelset, fn, *args):
+        """``fn(*args)``; an unexpected error discards wheelset ``u``'s step (fmi2Discard)
+        with the traceback in its messages."""
+        try:
+            return fn(*args)
+        except Exception as exc:  # never let an exception reach the simulator
+            u.log.append(f"doStep: {type(exc).__name__}: {exc}\n{traceback.format_exc()}")
+            self._discard(u)
+            return FMI_DISCARD
+
     def _step_group(self, units: list[_Wheelset]) -> list[int]:
         """The steps of ``units`` one after the other (one thread's share)."""
         return [self._guarded_step(u) for u in units]
@@ -571,20 +725,30 @@ class Slave:
     def _guarded_step(self, u: _Wheelset) -> int:
         """:meth:`_step` of wheelset ``u``; an unexpected error discards its step (nothing
         of it is to be trusted) with the traceback in its messages."""
-        try:
-            return self._step(u)
-        except Exception as exc:  # never let an exception reach the simulator
-            u.log.append(f"doStep: {type(exc).__name__}: {exc}\n{traceback.format_exc()}")
-            self._discard(u)
-            return FMI_DISCARD
+        return self._guard_unit(u, self._step, u)
 
     def _step(self, u: _Wheelset) -> int:
-        """Solve wheelset ``u``'s step of its inputs. fmi2Discard when nothing could be
-        solved for a wheel in contact (the outputs and statuses say what was: a wheel not
-        solved has zero forces and its own status 3 or 1, the wheelset's status 3 or 1; an
-        input not finite or beyond its range zeroes every output, each status 3);
-        fmi2Warning for a wheel not ok but solved; fmi2OK otherwise."""
-        contact = u.contact
+        """Solve wheelset ``u``'s step of its inputs here (:meth:`_prepare`, the solve,
+        :meth:`_finish`). fmi2Discard when nothing could be solved for a wheel in contact
+        (the outputs and statuses say what was: a wheel not solved has zero forces and its
+        own status 3 or 1, the wheelset's status 3 or 1; an input not finite or beyond its
+        range zeroes every output, each status 3); fmi2Warning for a wheel not ok but
+        solved; fmi2OK otherwise."""
+        prepared = self._prepare(u)
+        if not isinstance(prepared, tuple):
+            return prepared
+        kw, x = prepared
+        try:
+            res = u.contact.solve(**kw)
+        except RailContactError as exc:
+            return self._discarded(u, f"input out of range: {exc}")
+        return self._finish(u, step_outputs(res), x)
+
+    def _prepare(self, u: _Wheelset) -> tuple[dict, dict[str, float]] | int:
+        """Wheelset ``u``'s step from its inputs: the keyword arguments of its solve
+        (:meth:`WheelsetContact.solve <railcontact.timestep.WheelsetContact.solve>`) and
+        the inputs read [SI units]; or fmi2Discard, its step discarded (an input not finite
+        or beyond its range, or a solve that cannot be set up)."""
         # only the inputs the modes use are read: a NaN elsewhere is no concern of ours
         names = ["lateral_displacement", "yaw"]
         penetration = self.modes.control == "penetration"
@@ -601,8 +765,8 @@ class Slave:
         except RailContactError as exc:
             return self._discarded(u, str(exc))
         try:
-            pose = Pose(x["lateral_displacement"], x["yaw"], x.get("roll", 0.0))
-            kw: dict = {"time": float(self.control[0])}
+            kw: dict = {"pose": Pose(x["lateral_displacement"], x["yaw"], x.get("roll", 0.0)),
+                        "time": float(self.control[0])}
             if penetration:
                 kw["vertical"] = x["vertical_displacement"]
             else:
@@ -621,45 +785,108 @@ class Slave:
                 kw["rails"] = rails
             mu = tuple(x[f"friction_{s}"] for s in V.SIDES)
             if any(m > 0 for m in mu):  # (<= 0: the parameter's)
-                kw["friction"] = tuple(m if m > 0 else contact.settings.friction
-                                       for m in mu)
-            res = contact.solve(pose, **kw)
+                kw["friction"] = tuple(m if m > 0 else self.settings.friction for m in mu)
         except RailContactError as exc:
             return self._discarded(u, f"input out of range: {exc}")
-        _write(u, res)  # (the rigid wheelset: a stage of the solve when asked for)
+        return kw, x
+
+    def _finish(self, u: _Wheelset, out: StepOutputs, x: dict[str, float]) -> int:
+        """Write wheelset ``u``'s outputs of its solved step ``out`` (its inputs ``x``)
+        and check them; its FMI status (:meth:`_step`)."""
+        _write(u, out)  # (the rigid wheelset: a stage of the solve when asked for)
         speed = float(u["speed"])  # the frictional power: per unit speed times V
         for s in V.SIDES:
             u[f"frictional_power_{s}"] *= speed if math.isfinite(speed) and speed > 0 \
                 else 0.0
-        rigid = res.rigid_solution
-        if rigid is not None and not rigid.converged:  # not found: the status says so
-            u.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {rigid.message}")
+        unfound = out.rigid is not None and not out.rigid[0]
+        if unfound:  # not found: the status says so
+            u.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {out.rigid[1]}")
             u["status"] = Status.worst((NOT_CONVERGED, int(u["status"])))
         if not np.all(np.isfinite(self.real[u.real_outputs])):  # (inputs may be NaN)
             return self._discarded(u, "non-finite result; outputs set to zero")
-        if kinematic:  # the creepages the velocities formed, as direct ones
+        if self.modes.creepage_input == "kinematic":  # the creepages the velocities
             beyond = [f"{w.side} wheel: (xi, eta, phi) = ({c[0]:g}, {c[1]:g}, {c[2]:g} 1/m)"
-                      for w in res.wheels for c in w.creepages
+                      for w in out.wheels for c in w.creepages  # formed, as direct ones
                       if not all(abs(v) <= V.CREEPAGE_LIMITS[1] for v in c)]
             if beyond:
                 return self._discarded(u, "inputs out of range: the kinematic inputs (speed "
                                        f"= {x['speed']:g} m/s) give creepages beyond the "
                                        f"range, {'; '.join(beyond)}: {_CREEPAGE_RANGE}")
-        failed = [w for w in res.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
+        failed = [w for w in out.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
                                                         OUTSIDE_VALIDITY)]
         for w in failed:  # each wheel has its own status; the other is still solved
             name = STATUS_NAMES[w.status]  # (a message may name its status already)
             text = w.message if w.message.startswith(name) else f"{name}: {w.message}"
             u.log.append(f"{w.side} wheel: {text}")
-        if any(_unsolved(w) for w in res.wheels):  # zero forces are no contact's only
+        if any(_unsolved(w) for w in out.wheels):  # zero forces are no contact's only
             return FMI_DISCARD
-        unfound = rigid is not None and not rigid.converged
         return FMI_WARNING if failed or unfound else FMI_OK
 
 
 THREADS_ENV = "RAILCONTACT_FMU_THREADS"
 """The environment variable that sets the number of threads the wheelsets of an FMU of
 several wheelsets are stepped on (default: the cores, :func:`_cores`)."""
+WORKERS_ENV = "RAILCONTACT_FMU_WORKERS"
+"""The environment variable that chooses how the wheelsets of an FMU of several wheelsets
+are stepped: ``processes``, ``threads`` or a number of worker processes (:func:`_workers`)."""
+
+
+TIMEOUT_ENV = "RAILCONTACT_FMU_WORKER_TIMEOUT"
+"""The environment variable that limits the wait for a worker process's step [s]."""
+
+
+def _worker_timeout() -> float | None:
+    """The longest wait [s] for a worker process's answer (a step, a memory read or set),
+    ``$RAILCONTACT_FMU_WORKER_TIMEOUT``; None (no limit) when unset. A worker that takes
+    longer is taken as hung: the step is fmi2Error, as for a worker that ended.
+
+    Raises
+    ------
+    RailContactError
+        A value that is no number above 0.
+    """
+    given = os.environ.get(TIMEOUT_ENV, "").strip()
+    if not given:
+        return None
+    try:
+        seconds = float(given)
+    except ValueError:
+        seconds = math.nan
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise RailContactError(f"{TIMEOUT_ENV} = {given!r}: the longest wait for a worker "
+                               "process's step, a number of seconds above 0")
+    return seconds
+
+
+def _workers(wheelsets: int) -> tuple[str, int]:
+    """How an FMU's ``wheelsets`` (at least 2) are stepped: ``("processes", P)``, in P
+    worker processes, or ``("threads", T)``, on T threads of this process (P, T at most
+    ``wheelsets``).
+
+    ``$RAILCONTACT_FMU_WORKERS``: ``processes`` (P the cores, :func:`_cores`), a positive
+    integer P, or ``threads`` (T :func:`_threads`). Unset: threads when
+    ``$RAILCONTACT_FMU_THREADS`` is set or the process has one core, else processes.
+
+    Raises
+    ------
+    RailContactError
+        Another value.
+    """
+    given = os.environ.get(WORKERS_ENV, "").strip().lower()
+    if given == "threads" or (not given and (os.environ.get(THREADS_ENV, "").strip()
+                                             or _cores() < 2)):
+        return "threads", min(wheelsets, _threads())
+    if given in ("", "processes"):
+        return "processes", min(wheelsets, _cores())
+    try:
+        n = int(given)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise RailContactError(f"{WORKERS_ENV} = {os.environ[WORKERS_ENV]!r}: the wheelsets "
+                               "are stepped in worker processes (processes, or their number, "
+                               "a positive integer) or on threads (threads)")
+    return "processes", min(wheelsets, n)
 
 
 def _threads() -> int:
@@ -684,24 +911,23 @@ def _cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _write(u: _Wheelset, res: WheelsetResult | None) -> None:
-    """Wheelset ``u``'s outputs from ``res``; all zero (and no patches) for None."""
-    if res is None:
+def _write(u: _Wheelset, out: StepOutputs | None) -> None:
+    """Wheelset ``u``'s outputs from ``out``; all zero (and no patches) for None."""
+    if out is None:
         for buffer, vrs in u.zeroed:
             buffer[vrs] = 0
         return
-    for buffer, vrs, values in u.outputs:
-        buffer[vrs] = [value(res) for value in values]
+    for (buffer, vrs), values in zip(u.zeroed, (out.real, out.integer), strict=True):
+        buffer[vrs] = values
 
 
 _CREEPAGE_RANGE = (f"creepages must be within {V.CREEPAGE_LIMITS[0]:g} to "
                    f"{V.CREEPAGE_LIMITS[1]:g} (xi, eta [-]; phi [1/m]), as a case file's")
 
 
-def _unsolved(wheel) -> bool:
-    """Whether ``wheel`` (a :class:`~railcontact.timestep.WheelContact`) has no solution
-    though it should carry load: out of range, or a load loop that found none (zero
-    forces, status not converged)."""
+def _unsolved(wheel: WheelOutcome) -> bool:
+    """Whether ``wheel`` has no solution though it should carry load: out of range, or a
+    load loop that found none (zero forces, status not converged, no patches)."""
     return wheel.status == OUT_OF_RANGE or (wheel.status == NOT_CONVERGED
                                             and not wheel.patches)
 

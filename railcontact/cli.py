@@ -554,10 +554,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help="do not compile the FMU's kernels into the per-user cache now "
                     "(the FMU's first run in an environment then compiles them: 40-100 s)")
     fb.add_argument("--wheelsets", type=int, metavar="N",
-                    help="an FMU of N wheelsets (1 to 8), solved on worker threads in each "
-                    "step: every input and output repeated with _1 ... _N appended, the "
-                    "parameters once, the Integer parameter wheelsets = N (default: the "
-                    "one-wheelset FMU, its variables without a suffix)")
+                    help="an FMU of N wheelsets (1 to 8), solved in worker processes or on "
+                    "threads in each step: every input and output repeated with _1 ... _N "
+                    "appended, the parameters once, the Integer parameter wheelsets = N "
+                    "(default: the one-wheelset FMU, its variables without a suffix)")
     fb.set_defaults(func=_cmd_fmu_build)
     fc = fsub.add_parser("check", help="which Python an FMU will run in, and whether it can",
                          description="Asks the FMU which Python it chooses here "

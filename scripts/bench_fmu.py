@@ -28,15 +28,20 @@ per-step times, their ratio (FMU / in-process; the goal is at most 1.2) and the 
 the per-step ratios.
 
 ``--part wheelsets`` builds the FMU of ``--wheelsets`` N wheelsets and steps it, under
-``control = penetration``, against N one-wheelset FMU instances stepped one after the other
-with the same inputs (N lateral sines of different amplitude and phase): the median time of
-the N-wheelset step, of the N single steps together, their ratio (the parallel ratio: 1 no
-gain, 1/N perfectly parallel; this machine has 2 cores), and whether every wheelset's
-outputs equal its single instance's bit for bit.
+``control = penetration``, with its wheelsets in worker processes and on threads
+(``--workers``; ``RAILCONTACT_FMU_WORKERS`` of each instance), against N one-wheelset FMU
+instances stepped one after the other with the same inputs (N lateral sines of different
+amplitude and phase), the three stepped alternately step by step (each first in turn):
+the median time of the N-wheelset step each way, of the N single steps together, their
+ratios (the parallel ratio: 1 no gain, 1/N perfectly parallel; processes / threads), and
+whether every wheelset's outputs equal its single instance's bit for bit. Before and after,
+two processes of pure Python work at once against one after the other say how many cores
+were free for the job (0.5: two; 1: one, the other taken by other jobs).
 
 Usage: python scripts/bench_fmu.py [--part all|modes|penetration|wheelsets]
                                    [--duration 2.0] [--csv FILE] [--steps 400]
                                    [--repeats 3] [--wheelsets 4]
+                                   [--workers both|processes|threads]
 """
 
 from __future__ import annotations
@@ -44,6 +49,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import os
 import subprocess
 import sys
 import tempfile
@@ -236,29 +242,70 @@ def penetration_ratio(fmu_dir: Path, md, steps: int, repeats: int) -> dict:
             "paired": float(np.median(np.array(fmu) / np.array(api)))}
 
 
+def _burn(n: int) -> float:
+    """Wall time [s] of ``n`` rounds of pure Python arithmetic (one core's work)."""
+    t0 = time.perf_counter()
+    x = 0
+    for i in range(n):
+        x += i * i
+    return time.perf_counter() - t0
+
+
+def cores_free(n: int = 3_000_000) -> float:
+    """Two processes of the same pure-Python work at once, wall time over one of them
+    alone twice: 0.5 when two cores are free for this job, 1 when one is (a machine shared
+    with other jobs)."""
+    import multiprocessing
+
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        pool.map(_burn, [1000, 1000])  # (the workers started)
+        one = _burn(n) + _burn(n)
+        t0 = time.perf_counter()
+        pool.map(_burn, [n, n])
+        return (time.perf_counter() - t0) / one
+
+
+WORKERS_ENV = "RAILCONTACT_FMU_WORKERS"
+"""How an N-wheelset FMU instance steps its wheelsets (read at its initialisation; the
+slave runs in this process under fmpy)."""
+
+
 def parallel_ratio(single: tuple, multi: tuple, wheelsets: int, steps: int,
-                   repeats: int) -> dict:
-    """Median wall time [s] of the N-wheelset FMU's step and of N single-wheelset instances
-    stepped one after the other, over the same motions; and whether each wheelset's Real
-    outputs equal its single instance's bit for bit (solve_time apart)."""
+                   repeats: int, workers: tuple[str, ...] = ("processes", "threads")) -> dict:
+    """Median wall time [s] of the N-wheelset FMU's step with each of ``workers`` and of N
+    single-wheelset instances stepped one after the other, over the same motions, stepped
+    alternately; and whether each wheelset's Real outputs equal its single instance's bit
+    for bit (solve_time apart)."""
     motions = [_motion(steps, 3e-3 - 0.4e-3 * j, 0.9 * j) for j in range(wheelsets)]
-    many, ones, equal = [], [], True
+    many: dict[str, list[float]] = {w: [] for w in workers}
+    ones, equal = [], True
+    before = os.environ.get(WORKERS_ENV)
     for k in range(repeats):
-        m = _Instance(*multi, f"multi{k}", wheelsets)
+        ms = {}
+        for w in workers:
+            os.environ[WORKERS_ENV] = w
+            ms[w] = _Instance(*multi, f"multi{k}-{w}", wheelsets)
         singles = [_Instance(*single, f"single{k}-{j}") for j in range(wheelsets)]
+        ways = [*workers, "singles"]
         for i in range(steps):
-            t_multi, _ = m.step([mo[i] for mo in motions])
-            t_single = sum(s.step([mo[i]])[0] for s, mo in zip(singles, motions, strict=True))
-            if i:  # (the first step is cold)
-                many.append(t_multi)
-                ones.append(t_single)
-            for j, s in enumerate(singles):
-                equal &= m.s.getReal(m.all_outs[j]) == s.s.getReal(s.all_outs[0])
-        m.free()
-        for s in singles:
-            s.free()
-    return {"multi": float(np.median(many)), "singles": float(np.median(ones)),
-            "equal": equal, "steps": len(many)}
+            for way in ways[i % len(ways):] + ways[:i % len(ways)]:  # each first in turn
+                if way == "singles":
+                    t = sum(s.step([mo[i]])[0] for s, mo in zip(singles, motions, strict=True))
+                else:
+                    t = ms[way].step([mo[i] for mo in motions])[0]
+                if i:  # (the first step is cold)
+                    (ones if way == "singles" else many[way]).append(t)
+            for m in ms.values():
+                for j, s in enumerate(singles):
+                    equal &= m.s.getReal(m.all_outs[j]) == s.s.getReal(s.all_outs[0])
+        for m in [*ms.values(), *singles]:
+            m.free()
+    if before is None:
+        os.environ.pop(WORKERS_ENV, None)
+    else:
+        os.environ[WORKERS_ENV] = before
+    return {"multi": {w: float(np.median(t)) for w, t in many.items()},
+            "singles": float(np.median(ones)), "equal": equal, "steps": len(ones)}
 
 
 def main() -> None:
@@ -277,6 +324,9 @@ def main() -> None:
                     help="repetitions of the penetration-control runs, interleaved")
     ap.add_argument("--wheelsets", type=int, default=4,
                     help="wheelsets of the FMU of --part wheelsets")
+    ap.add_argument("--workers", default="both", choices=("both", "processes", "threads"),
+                    help="how the N-wheelset FMU of --part wheelsets steps its wheelsets "
+                    "(RAILCONTACT_FMU_WORKERS): in worker processes, on threads, or both")
     args = ap.parse_args()
 
     from railcontact.fmu import build_fmu
@@ -300,16 +350,25 @@ def main() -> None:
         if args.part in ("all", "wheelsets"):
             n = args.wheelsets
             multi = build_fmu(Path(tmp) / f"RailContact{n}.fmu", warm=False, wheelsets=n)
+            workers = ("processes", "threads") if args.workers == "both" else (args.workers,)
+            free = cores_free()
             q = parallel_ratio((d, md), _unpacked(multi, Path(tmp) / f"x{n}"), n,
-                               args.steps, args.repeats)
+                               args.steps, args.repeats, workers)
+            free = (free, cores_free())
             print(f"{n}-wheelset FMU under control = penetration, {q['steps']} warm steps, "
-                  f"medians (2-core machine)")
-            print(f"  one step of the {n}-wheelset FMU: {q['multi'] * 1e3:.3f} ms")
+                  f"medians ({os.cpu_count()} cores; load average "
+                  f"{' '.join(f'{x:.2f}' for x in os.getloadavg())} at the end; two "
+                  f"processes of pure Python work at once / one after the other "
+                  f"{free[0]:.2f} before, {free[1]:.2f} after: 0.5 two cores free, 1 one)")
             print(f"  {n} one-wheelset FMU steps one after the other: "
                   f"{q['singles'] * 1e3:.3f} ms")
-            print(f"  parallel ratio ({n}-wheelset / {n} single): "
-                  f"{q['multi'] / q['singles']:.3f} (1: no gain; {1 / n:.2f}: perfectly "
-                  f"parallel)")
+            for w, t in q["multi"].items():
+                print(f"  one step of the {n}-wheelset FMU, {w}: {t * 1e3:.3f} ms; parallel "
+                      f"ratio ({n}-wheelset / {n} single) {t / q['singles']:.3f} (1: no gain; "
+                      f"{1 / n:.2f}: perfectly parallel)")
+            if len(q["multi"]) == 2:
+                print(f"  processes / threads: "
+                      f"{q['multi']['processes'] / q['multi']['threads']:.3f}")
             print(f"  every wheelset's outputs equal its single instance's bit for bit: "
                   f"{q['equal']}")
         if args.part not in ("all", "modes"):

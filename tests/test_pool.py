@@ -14,6 +14,7 @@ import pytest
 import railcontact as rc
 from railcontact.errors import RailContactError
 from railcontact.sim.vehicle_contact import InProcessContact, WheelsetStates
+from railcontact.timestep.memory import StepMemory
 from railcontact.timestep.pool import WheelsetDescription, WheelsetPool
 
 STEPS = 3
@@ -216,3 +217,108 @@ def test_workers_end_with_their_host(tmp_path):
             break
         time.sleep(0.1)
     assert not any(running(pid) for pid in pids)
+
+
+def test_memories_round_trip_and_skipped_wheelsets(pool):
+    """memories() read in the workers and set_memories() there: the steps after a memory
+    set again repeat those after it was read, bit for bit (and equal the in-process
+    wheelsets'); None forgets (the next step as a cold one: a fresh wheelset's). A None
+    input skips its wheelset (its result None, its memory unchanged); errors="return"
+    puts a wheelset's exception in its place, the others solved."""
+    pool.reset()
+    here = [description().build() for _ in range(3)]
+    for k in range(2):
+        pool.step([inputs(i, k) for i in range(3)])
+        for i in range(3):
+            here[i].solve(**inputs(i, k))
+    kept = pool.memories()
+    assert all(isinstance(m, StepMemory) and m.left for m in kept)
+    first = pool.step([inputs(i, 2) for i in range(3)])
+    pool.set_memories(kept)
+    again = pool.step([inputs(i, 2) for i in range(3)])
+    for i in range(3):
+        same(again[i], first[i])
+        same(again[i], here[i].solve(**inputs(i, 2)))
+    pool.set_memories([kept[0], None, kept[2]])
+    cold = pool.step([None, inputs(1, 2), None])
+    assert cold[0] is None and cold[2] is None and pool.seconds[0] == 0.0
+    same(cold[1], description().build().solve(**inputs(1, 2)))
+    same(pool.step([inputs(0, 2), None, None])[0], first[0])  # (its memory unchanged)
+    bad = [inputs(i, 3) for i in range(3)]
+    bad[1]["loads"] = (-1.0, 83e3)
+    out = pool.step(bad, errors="return")
+    assert isinstance(out[1], RailContactError) and "wheelset 2" in out[1].__notes__[0]
+    assert all(isinstance(out[i], rc.WheelsetResult) for i in (0, 2))
+    with pytest.raises(RailContactError, match="3 wheelsets' memories expected"):
+        pool.set_memories(kept[:2])
+    with pytest.raises(RailContactError, match="a StepMemory or None expected"):
+        pool.set_memories([kept[0], "memory", None])
+    with pytest.raises(RailContactError, match='errors must be "raise" or "return"'):
+        pool.step(bad, errors="ignore")
+
+
+def test_worker_python_is_a_python_of_this_version(monkeypatch, tmp_path):
+    """worker_python(): sys.executable when it is this Python; the environment's
+    bin/python3 when sys.executable is another program (Python embedded in a C host);
+    None when no Python of this version is found."""
+    import os
+    import sys
+
+    from railcontact.timestep.pool import worker_python
+
+    assert worker_python() == sys.executable
+    monkeypatch.setattr(sys, "executable", "/bin/true")  # a program that is not Python
+    assert worker_python() == os.path.join(sys.prefix, "bin", "python3")
+    for name in ("prefix", "base_prefix", "_base_executable"):
+        monkeypatch.setattr(sys, name, str(tmp_path / "nothing"))
+    assert worker_python() is None
+
+
+def test_workers_without_the_hosts_main_module(tmp_path):
+    """A host script without the ``if __name__ == "__main__"`` guard: with main=False its
+    workers do not run it again (its top level runs once) and step as usual; with the
+    default, spawn runs it in the worker, where starting a pool again fails and the worker
+    ends: the host's pool says so at once (no wait for ever)."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / "host.py"
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(root), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    for main, ok in ((False, True), (True, False)):
+        script.write_text(
+            "import sys\n"
+            f"sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
+            "from test_pool import description, inputs\n"
+            "from railcontact.timestep.pool import WheelsetPool\n"
+            "print('top level', flush=True)\n"
+            f"with WheelsetPool([description(), description()], 2, main={main}) as pool:\n"
+            "    out = pool.step([inputs(0, 0), inputs(1, 0)])\n"
+            "print('stepped', [int(r.status) for r in out], flush=True)\n", encoding="utf-8")
+        out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                             env=env, timeout=300)
+        if ok:
+            assert out.returncode == 0, out.stderr[-2000:]
+            assert out.stdout.splitlines() == ["top level", "stepped [0, 0]"], out.stdout
+        else:
+            assert out.returncode != 0 and out.stdout.count("top level") > 1
+            assert "bootstrapping phase" in out.stderr
+            assert "of the wheelset pool ended as it started" in out.stderr
+
+
+def test_a_worker_that_does_not_answer_in_time_closes_the_pool():
+    """timeout: a step that takes longer than it raises at once (the pool closed, its
+    workers ended), not when the step ends; a timeout not above 0 is refused."""
+    import time
+
+    with WheelsetPool([description()], 1, timeout=1e-3) as p:
+        t0 = time.perf_counter()
+        with pytest.raises(RailContactError, match="did not answer within 0.001 s"):
+            p.step([inputs(0, 0)])  # (a cold step: tens of milliseconds)
+        assert time.perf_counter() - t0 < 30 and not p.alive
+        assert all(not q.is_alive() for q in p._processes)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(RailContactError, match="timeout must be above 0 s"):
+            WheelsetPool([description()], timeout=bad)

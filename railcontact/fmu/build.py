@@ -71,7 +71,7 @@ def build_fmu(output: str | Path = DEFAULT_OUTPUT, profiles: list[str | Path] = 
         None (default): the FMU of one wheelset. N from 1 to 8: the FMU of N wheelsets,
         every input and output repeated per wheelset with ``_k`` appended
         (``normal_force_left_2``), the parameters once, the Integer parameter ``wheelsets``
-        = N; the wheelsets are solved on worker threads within each step
+        = N; the wheelsets are solved in worker processes or on threads within each step
         (:func:`railcontact.fmu.variables.table`, ``docs/fmu.md``).
     """
     b = _builder()

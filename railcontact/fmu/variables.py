@@ -570,7 +570,8 @@ VEHICLE_OUTPUTS = [
              "the most severe of the wheelsets' status_k (3 > 1 > 4 > 2 > 0); the step's FMI "
              "status is the worst of the wheelsets' steps"),
     Variable("solve_time", "Real", "output", None, "s",
-             "wall time of the last step's solves of all wheelsets (on worker threads)"),
+             "wall time of the last step's solves of all wheelsets (in worker processes "
+             "or on threads)"),
 ]
 """The outputs of an FMU of several wheelsets about all of them (the slave writes them)."""
 

@@ -21,13 +21,18 @@ garbage collection of the pool.
 from __future__ import annotations
 
 import multiprocessing
+import multiprocessing.spawn
 import os
 import pickle
 import signal
+import subprocess
+import sys
+import threading
 import time
 import traceback
 import weakref
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any
@@ -36,11 +41,39 @@ from ..errors import RailContactError
 from ..geometry.track import Track, Wheelset
 from ..halfspace.materials import ElasticPair
 from ..settings import ContactSettings
+from .memory import StepMemory
 from .wheelset import WheelsetContact
 
 START_METHOD = "spawn"
 """How worker processes start: a new interpreter (``fork`` would copy a host whose kernel,
 FFTW or other threads may hold locks)."""
+
+
+def worker_python() -> str | None:
+    """The Python interpreter the workers are started with: a program of this process's
+    Python version (its ``sys.hexversion``, asked with ``-E -s -c``), the first of
+    ``sys.executable`` (a Python host), the environment's ``bin/python3`` or ``bin/python``
+    (``sys.prefix``), ``sys._base_executable`` and the base installation's
+    ``bin/python3`` (``sys.base_prefix``); None when none is. Python embedded in another
+    program (an FMU in a C host) may have that program as ``sys.executable``."""
+    candidates = [sys.executable,
+                  *(os.path.join(sys.prefix, "bin", n) for n in ("python3", "python")),
+                  getattr(sys, "_base_executable", ""),
+                  os.path.join(sys.base_prefix, "bin", "python3")]
+    asked: set[str] = set()
+    for exe in candidates:
+        if not exe or exe in asked or not (os.path.isfile(exe) and os.access(exe, os.X_OK)):
+            continue
+        asked.add(exe)
+        try:
+            out = subprocess.run([exe, "-E", "-s", "-c", "import sys; print(sys.hexversion)"],
+                                 capture_output=True, text=True, timeout=60, check=False,
+                                 stdin=subprocess.DEVNULL)
+        except (OSError, subprocess.SubprocessError):
+            continue
+        if out.returncode == 0 and out.stdout.strip() == str(sys.hexversion):
+            return exe
+    return None
 
 
 @dataclass(frozen=True)
@@ -98,19 +131,25 @@ def _build(which: list[int], descriptions: list[WheelsetDescription]
         return None, (False, _portable(exc, f"building wheelsets {[i + 1 for i in which]}"))
 
 
-def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescription],
-           reduce: Callable[[Any], Any] | None) -> None:
-    """A worker process: build the wheelsets ``which`` (pool indices) from their
-    descriptions, then answer requests until ``None`` or the pipe closes.
+def _serve(conn: Connection) -> None:
+    """A worker process: receive ``(which, descriptions, reduce)`` and build the wheelsets
+    ``which`` (pool indices) from their descriptions, then answer requests until ``None``
+    or the pipe closes. (Sent through the pipe rather than as the process's arguments: a
+    worker that ends while it reads them makes the host's send fail, where ``spawn`` would
+    wait for ever to write arguments larger than the pipe's buffer.)
 
     A step request is a list of ``solve`` keyword arguments, one per wheelset of this
-    worker in ``which`` order; its answer a list of ``(ok, value, seconds)``: ``ok`` True
-    and the (reduced) result, or False and the exception, and the wall time of the solve
-    [s]. A tuple ``("reset", descriptions)`` builds the wheelsets anew (from new
-    descriptions unless None); its answer is that of the first build. Interrupts (Ctrl+C
-    in a terminal reaches the whole process group) are left to the host, which closes
-    the pool."""
+    worker in ``which`` order (None: that wheelset not stepped); its answer a list of
+    ``(ok, value, seconds)``: ``ok`` True and the (reduced) result (None for a wheelset
+    not stepped), or False and the exception, and the wall time of the solve [s]. A tuple
+    is another request (:func:`_command`: reset, read or set the memories). Interrupts
+    (Ctrl+C in a terminal reaches the whole process group) are left to the host, which
+    closes the pool."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        which, descriptions, reduce = conn.recv()
+    except (EOFError, OSError):  # the host ended
+        return
     contacts, answer = _build(which, descriptions)
     conn.send(answer)
     if contacts is None:
@@ -125,13 +164,15 @@ def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescri
             conn.close()
             return
         if isinstance(request, tuple):
-            descriptions = request[1] or descriptions
-            built, answer = _build(which, descriptions)
-            contacts = built or contacts
+            answer, contacts, descriptions = _command(request, which, contacts,
+                                                      descriptions)
             conn.send(answer)
             continue
         answer = []
         for i, contact, kwargs in zip(which, contacts, request, strict=True):
+            if kwargs is None:  # not stepped
+                answer.append((True, None, 0.0))
+                continue
             t0 = time.perf_counter()
             try:
                 r = contact.solve(**kwargs)
@@ -144,6 +185,65 @@ def _serve(conn: Connection, which: list[int], descriptions: list[WheelsetDescri
             conn.send(answer)
         except Exception as exc:  # noqa: BLE001 - an answer that does not pickle
             conn.send([(False, _portable(exc, "sending the results"), 0.0)] * len(which))
+
+
+def _command(request: tuple, which: list[int], contacts: list[WheelsetContact],
+             descriptions: list[WheelsetDescription]
+             ) -> tuple[Any, list[WheelsetContact], list[WheelsetDescription]]:
+    """A worker's answer to a request other than a step (a tuple, its name first), and
+    its wheelsets and their descriptions after it:
+
+    - ``("reset", descriptions)``: the wheelsets built anew (from new descriptions unless
+      None); the answer of :func:`_build` (the wheelsets unchanged when it fails);
+    - ``("memory",)``: ``(True, memories)``, the wheelsets' step memories
+      (:attr:`WheelsetContact.memory`) in ``which`` order;
+    - ``("set_memory", memories)``: each wheelset's memory set (None: forgotten,
+      :meth:`WheelsetContact.reset`); ``(True, None)``.
+
+    An error is answered ``(False, exception)``."""
+    name = request[0]
+    if name == "reset":
+        wanted = request[1] or descriptions
+        built, answer = _build(which, wanted)
+        return (answer, contacts, descriptions) if built is None else (answer, built, wanted)
+    try:
+        if name == "memory":
+            return (True, [c.memory for c in contacts]), contacts, descriptions
+        if name == "set_memory":
+            for c, m in zip(contacts, request[1], strict=True):
+                if m is None:
+                    c.reset()
+                else:
+                    c.memory = m
+            return (True, None), contacts, descriptions
+        raise RailContactError(f"unknown request {name!r} to a wheelset pool's worker")
+    except Exception as exc:  # noqa: BLE001 - sent to the host, which raises it
+        return ((False, _portable(exc, f"{name} of wheelsets {[i + 1 for i in which]}")),
+                contacts, descriptions)
+
+
+@contextmanager
+def _without_main() -> Iterator[None]:
+    """Workers started within do not import the host's main module (``spawn`` runs it
+    again in the worker as ``__mp_main__``: a script without the ``if __name__ ==
+    "__main__"`` guard would run again in each)."""
+    given = multiprocessing.spawn.get_preparation_data
+
+    def preparation(name: str) -> dict:
+        data = given(name)
+        data.pop("init_main_from_name", None)
+        data.pop("init_main_from_path", None)
+        return data
+
+    with _SPAWN_LOCK:
+        multiprocessing.spawn.get_preparation_data = preparation
+        try:
+            yield
+        finally:
+            multiprocessing.spawn.get_preparation_data = given
+
+
+_SPAWN_LOCK = threading.Lock()
 
 
 def _stop(processes: list, connections: list[Connection], timeout: float = 5.0) -> None:
@@ -179,6 +279,21 @@ class WheelsetPool:
         every step). Else a picklable function (defined at a module's top level) applied
         to each result in the worker; :meth:`step` returns its values: what the host
         needs, sent instead of the whole result.
+    main
+        Whether the workers import the host's main module first, as ``spawn`` does (needed
+        when ``descriptions`` or ``reduce`` refer to it). False: they do not, so that a
+        host script without the ``if __name__ == "__main__"`` guard (or a host whose main
+        module is none of the pool's concern, as an FMU's) is not run again in each.
+    timeout
+        The longest wait [s] for a worker's answer to a step or another request after
+        the pool has started; None: no limit. A worker that takes longer is taken as
+        hung: the pool is closed (its workers asked to end, then terminated) and a
+        :class:`RailContactError` raised.
+    python
+        The Python interpreter the workers run (``multiprocessing``'s ``set_executable``
+        for the ``spawn`` start method, a setting of the process); None: as it is
+        (``sys.executable`` unless set before). In a program that embeds Python, give
+        :func:`worker_python`.
 
     Raises
     ------
@@ -194,7 +309,9 @@ class WheelsetPool:
 
     def __init__(self, descriptions: Sequence[WheelsetDescription],
                  processes: int | None = None,
-                 reduce: Callable[[Any], Any] | None = None) -> None:
+                 reduce: Callable[[Any], Any] | None = None,
+                 python: str | None = None, main: bool = True,
+                 timeout: float | None = None) -> None:
         n = len(descriptions)
         if n == 0:
             raise RailContactError("a wheelset pool needs at least one wheelset")
@@ -213,27 +330,42 @@ class WheelsetPool:
         if p < 1:
             raise RailContactError(f"processes must be at least 1, got {p}")
         p = min(p, n)
+        if timeout is not None and not timeout > 0:
+            raise RailContactError(f"timeout must be above 0 s or None, got {timeout!r}")
         self.count = n
         """Number of wheelsets."""
+        self.timeout = timeout
+        """The longest wait for a worker's answer [s] (None: no limit)."""
         self.shares = [[i for i in range(n) if i % p == j] for j in range(p)]
         """The wheelsets (pool indices) of each worker process."""
         self.seconds: list[float] = [0.0] * n
         """Wall time of each wheelset's solve in its worker at the last step [s]."""
         ctx = multiprocessing.get_context(START_METHOD)
+        if python is not None and python != multiprocessing.spawn.get_executable():
+            ctx.set_executable(python)
         self._processes: list = []
         self._connections: list[Connection] = []
         self._closed = False
         self._finalizer = weakref.finalize(self, _stop, self._processes, self._connections)
         try:
-            for j, which in enumerate(self.shares):
+            for j in range(len(self.shares)):
                 here, there = ctx.Pipe()
                 proc = ctx.Process(target=_serve, name=f"railcontact-wheelsets-{j}",
-                                   args=(there, which, [descriptions[i] for i in which],
-                                         reduce), daemon=True)
-                proc.start()
+                                   args=(there,), daemon=True)
+                with _without_main() if not main else nullcontext():
+                    proc.start()
                 there.close()
                 self._processes.append(proc)
                 self._connections.append(here)
+            for j, which in enumerate(self.shares):
+                try:
+                    self._connections[j].send((which, [descriptions[i] for i in which],
+                                               reduce))
+                except OSError as exc:
+                    self._processes[j].join(1.0)
+                    raise RailContactError(
+                        f"worker process {j + 1} of the wheelset pool ended as it started "
+                        f"(exit code {self._processes[j].exitcode})") from exc
             for j, conn in enumerate(self._connections):
                 ok, exc = self._receive(j, conn)
                 if not ok:
@@ -247,7 +379,13 @@ class WheelsetPool:
         """Number of worker processes."""
         return len(self.shares)
 
-    def _receive(self, j: int, conn: Connection) -> Any:
+    def _receive(self, j: int, conn: Connection, timeout: float | None = None) -> Any:
+        """Worker ``j``'s answer; a :class:`RailContactError` when it ended, or when it
+        has not answered within ``timeout`` [s] (None: no limit)."""
+        if timeout is not None and not conn.poll(timeout):
+            raise RailContactError(
+                f"worker process {j + 1} of the wheelset pool did not answer within "
+                f"{timeout:g} s (the pool's timeout); the pool is closed") from TimeoutError()
         try:
             return conn.recv()
         except (EOFError, OSError) as exc:
@@ -257,7 +395,8 @@ class WheelsetPool:
                 f"worker process {j + 1} of the wheelset pool ended (exit code "
                 f"{proc.exitcode}); the pool is closed") from exc
 
-    def step(self, inputs: Sequence[Mapping[str, Any]]) -> list[Any]:
+    def step(self, inputs: Sequence[Mapping[str, Any] | None], errors: str = "raise"
+             ) -> list[Any]:
         """Step every wheelset once.
 
         Parameters
@@ -265,13 +404,18 @@ class WheelsetPool:
         inputs
             Per wheelset (pool order) the keyword arguments of
             :meth:`WheelsetContact.solve <railcontact.timestep.WheelsetContact.solve>`
-            (``pose``, ``loads`` or ``vertical``, ``kinematics``, ``time`` [s], ...).
+            (``pose``, ``loads`` or ``vertical``, ``kinematics``, ``time`` [s], ...); None:
+            the wheelset is not stepped (its result None, its memory unchanged).
+        errors
+            ``"raise"``: a wheelset's error is raised (below). ``"return"``: it takes the
+            wheelset's place in the list returned, the other wheelsets' results beside it.
 
         Returns
         -------
         list
             Per wheelset its :class:`~railcontact.timestep.WheelsetResult`, or what the
-            pool's ``reduce`` makes of it. :attr:`seconds`: the solves' wall times [s].
+            pool's ``reduce`` makes of it (with ``errors="return"``, the exception of a
+            wheelset whose solve raised one). :attr:`seconds`: the solves' wall times [s].
 
         Raises
         ------
@@ -280,8 +424,11 @@ class WheelsetPool:
             the worker's traceback as a note; the first failing wheelset's); the other
             wheelsets of the step are solved and the pool keeps working.
         RailContactError
-            A closed pool, a wrong number of inputs, or a worker process that ended.
+            A closed pool, a wrong number of inputs, or a worker process that ended
+            (whatever ``errors``; the pool is closed).
         """
+        if errors not in ("raise", "return"):
+            raise RailContactError(f'errors must be "raise" or "return", got {errors!r}')
         if self._closed:
             raise RailContactError("the wheelset pool is closed")
         if len(inputs) != self.count:
@@ -289,10 +436,11 @@ class WheelsetPool:
                                    f"{len(inputs)}")
         # every request pickled before any is sent: an input that does not pickle leaves
         # the workers in step with the host
-        payloads = [pickle.dumps([dict(inputs[i]) for i in which], pickle.HIGHEST_PROTOCOL)
+        payloads = [pickle.dumps([None if inputs[i] is None else dict(inputs[i])
+                                  for i in which], pickle.HIGHEST_PROTOCOL)
                     for which in self.shares]
         out: list[Any] = [None] * self.count
-        errors: list[tuple[int, BaseException]] = []
+        failed: list[tuple[int, BaseException]] = []
         ended: RailContactError | None = None
         try:
             for j, payload in enumerate(payloads):
@@ -303,24 +451,23 @@ class WheelsetPool:
                                            "cannot be reached; the pool is closed") from exc
             for j, which in enumerate(self.shares):
                 try:
-                    answer = self._receive(j, self._connections[j])
+                    answer = self._receive(j, self._connections[j], self.timeout)
                 except RailContactError as exc:
                     ended = ended or exc
                     continue
                 for i, (ok, value, secs) in zip(which, answer, strict=True):
                     self.seconds[i] = secs
-                    if ok:
-                        out[i] = value
-                    else:
-                        errors.append((i, value))
+                    out[i] = value
+                    if not ok:
+                        failed.append((i, value))
         except BaseException:  # an interrupted round trip: the workers are out of step
             self.close()
             raise
         if ended is not None:
             self.close()
             raise ended
-        if errors:
-            raise min(errors, key=lambda e: e[0])[1]
+        if failed and errors == "raise":
+            raise min(failed, key=lambda e: e[0])[1]
         return out
 
     def reset(self, descriptions: Sequence[WheelsetDescription] | None = None) -> None:
@@ -334,21 +481,54 @@ class WheelsetPool:
             A wheelset that cannot be built (the worker's exception; the wheelsets of
             that worker stay as they were).
         """
-        if self._closed:
-            raise RailContactError("the wheelset pool is closed")
         if descriptions is not None and len(descriptions) != self.count:
             raise RailContactError(f"{self.count} wheelset descriptions expected, got "
                                    f"{len(descriptions)}")
-        for j, which in enumerate(self.shares):
-            self._connections[j].send(
-                ("reset", None if descriptions is None else [descriptions[i] for i in which]))
-        first: BaseException | None = None
-        for j, conn in enumerate(self._connections):
-            ok, exc = self._receive(j, conn)
-            if not ok and first is None:
-                first = exc
+        self._ask([("reset", None if descriptions is None else
+                    [descriptions[i] for i in which]) for which in self.shares])
+
+    def memories(self) -> list[StepMemory]:
+        """Each wheelset's step memory (:attr:`WheelsetContact.memory
+        <railcontact.timestep.WheelsetContact.memory>`, where its next step starts), read
+        in its worker process; pool order."""
+        out: list[Any] = [None] * self.count
+        for which, values in zip(self.shares, self._ask([("memory",)] * self.processes),
+                                 strict=True):
+            for i, m in zip(which, values, strict=True):
+                out[i] = m
+        return out
+
+    def set_memories(self, memories: Sequence[StepMemory | None]) -> None:
+        """Set each wheelset's step memory in its worker process (pool order; None: the
+        wheelset forgets its previous steps, :meth:`WheelsetContact.reset
+        <railcontact.timestep.WheelsetContact.reset>`): its next step starts from it as
+        after the step that left it."""
+        if len(memories) != self.count:
+            raise RailContactError(f"{self.count} wheelsets' memories expected, got "
+                                   f"{len(memories)}")
+        for i, m in enumerate(memories):
+            if m is not None and not isinstance(m, StepMemory):
+                raise RailContactError(f"wheelset {i + 1}: a StepMemory or None expected, "
+                                       f"got {type(m).__name__}")
+        self._ask([("set_memory", [memories[i] for i in which]) for which in self.shares])
+
+    def _ask(self, requests: list[tuple]) -> list[Any]:
+        """Send each worker process its request (:func:`_command`) and return their
+        answers' values; the first worker's exception raised after all have answered."""
+        if self._closed:
+            raise RailContactError("the wheelset pool is closed")
+        try:
+            for j, request in enumerate(requests):
+                self._connections[j].send(request)
+            answers = [self._receive(j, conn, self.timeout)
+                       for j, conn in enumerate(self._connections)]
+        except BaseException:  # a worker ended or the round trip broke: out of step
+            self.close()
+            raise
+        first = next((value for ok, value in answers if not ok), None)
         if first is not None:
             raise first
+        return [value for _, value in answers]
 
     def close(self) -> None:
         """End the worker processes (idempotent)."""
@@ -370,4 +550,5 @@ class WheelsetPool:
         return not self._closed and all(p.is_alive() for p in self._processes)
 
 
-__all__ = ["START_METHOD", "RemoteError", "WheelsetDescription", "WheelsetPool"]
+__all__ = ["START_METHOD", "RemoteError", "WheelsetDescription", "WheelsetPool",
+           "worker_python"]
