@@ -831,10 +831,9 @@ def solve_normal(
     work = np.empty((5, h.size))
     work[2] = 0.0  # the first direction's previous one
     c = np.empty(h.size, dtype=bool)
-    # the products of this solve (A x, and the preconditioner's M x) as bound functions
-    # (x, out) -> out: the arrays are the solve's own, checked above
+    # the product of this solve (A x) as a bound function (x, out) -> out: the arrays are
+    # the solve's own, checked above
     product = operator.bound()
-    inverse = operator.bound(PRECONDITIONER_FLOOR) if precondition else None
     # u = A p of the current p, kept up to date below: convolved, or the start's shown
     # displacement less the columns of the elements the start set to zero
     u = np.empty(shape)
@@ -852,9 +851,9 @@ def solve_normal(
     if fft is not None and fft_inverse is not None:
         iterate, kernels, products = _iterate_compiled, (_kernel_addresses(),), (fft,
                                                                                  fft_inverse)
-    else:  # (the kernels called from Python)
+    else:  # (the kernels called from Python; the preconditioner's M x bound as A x)
         iterate, kernels = _iterate_py, (_gradient, _direction, _step)
-        products = product, inverse if precondition else product
+        products = product, operator.bound(PRECONDITIONER_FLOOR) if precondition else product
     state = np.array([penetration if not force_control else 0.0, 1.0, np.inf, np.inf])
     counts = np.array([0, 0, 0, generations, 0, 0], dtype=np.int64)
     load_value = float(load) if force_control else 0.0
