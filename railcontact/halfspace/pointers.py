@@ -1,13 +1,14 @@
 """Compiled kernels called from other compiled code through function pointers, so that they
 run their own machine code: the bits they give when Python calls them.
 
-A compiled caller that calls a kernel by name has the kernel's code linked into its own,
-and LLVM inlines it there and optimises it anew. For a kernel compiled with fast-math
-flags (:data:`~railcontact.normal.bem.REASSOCIATE`: sums may be reordered and vectorised,
-multiply-adds fused) the new context can reorder its sums otherwise, and the last bits
-of its results change (1 ulp, which an iteration carries on). Called through a pointer
-whose value the caller learns only when it runs, the kernel cannot be inlined: it runs
-its own compiled code, the code a call from Python runs.
+A compiled caller that calls a kernel by name has the kernel's optimised code (LLVM IR)
+linked into its own module, where LLVM optimises it anew with the caller's and may inline
+it. For a kernel compiled with fast-math flags (:data:`~railcontact.normal.bem.REASSOCIATE`:
+sums may be reordered and vectorised, multiply-adds fused) the new machine code can sum
+in another order, and the last bits of its results change (1 ulp, which an iteration
+carries on). Called through a pointer whose value the caller learns only when it runs,
+the kernel is neither inlined nor compiled again: it runs its own machine code, the code
+a call from Python runs.
 
 A kernel so called is compiled with explicit signatures (:func:`numba.njit` given the
 types, so that Python's calls run that very code or fail, never a second specialisation).

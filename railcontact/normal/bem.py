@@ -552,8 +552,8 @@ def _iterate_py(gradient, direction, step, h, p, q, u, work, c, kernel, index, c
     ``inverse`` functions ``f(x, out)`` (any backend); compiled (:func:`_iterate_compiled`,
     one call that releases the GIL for all the iterations), the kernels first-class
     functions that call the same kernels' own code through pointers
-    (:mod:`~railcontact.halfspace.pointers`: inlined into this loop, LLVM would reorder
-    their fast-math sums and change the last bits) and the products the packed plan's
+    (:mod:`~railcontact.halfspace.pointers`: linked into this loop, LLVM could compile
+    their fast-math sums anew and change their last bits) and the products the packed plan's
     arguments (:func:`_apply`). Both run the same compiled code in the same order: the
     same bits. ``inverse`` is not used without ``precondition`` (give ``product``).
 

@@ -432,7 +432,7 @@ def _steady_sweeps(block_address, fft, kern, cum, wx, wy, g, p, state, lo, hi, p
     ``stall_gain``: :data:`~.convexgs.STALL_GAIN`; ``floor_above``:
     :attr:`~.convexgs.SweepProblem.floor_above`. The block is
     :func:`_steady_block_numba`'s own code called through its pointer (``block_address``,
-    :func:`_block_address`): linked into this function, LLVM could optimise its fast-math
+    :func:`_block_address`): linked into this function, LLVM could compile its fast-math
     sums anew and change their last bits. Returns ``(sweeps, error, converged, stalled,
     history)``."""
     block = _block_at(block_address)
