@@ -10,11 +10,10 @@ carries on). Called through a pointer whose value the caller learns only when it
 the kernel is neither inlined nor compiled again: it runs its own machine code, the code
 a call from Python runs.
 
-A kernel so called is compiled with explicit signatures (:func:`numba.njit` given the
-types, so that Python's calls run that very code or fail, never a second specialisation).
-:func:`address` gives the address of its code for one signature (once per process: the
-conversion costs about 30 us, which numba would pay at every call from Python if the
-kernel itself were the argument of a compiled function); in compiled code
+:func:`address` gives the address of a kernel's code for one signature (compiled when
+needed; the calls from Python with those argument types run that very code), once per
+process: the conversion costs about 30 us, which numba would pay at every call from
+Python if the kernel itself were the argument of a compiled function. In compiled code
 :func:`function_at` of a signature makes of such an address (an int64, e.g. an element
 of an array of addresses given to the caller) a first-class function
 (``numba.types.FunctionType``) that is called as the kernel, through the pointer.
@@ -37,8 +36,8 @@ except ImportError:  # pragma: no cover
 
 def address(kernel, signature) -> int:
     """The address of ``kernel``'s compiled code (numba's calling convention) for
-    ``signature`` (``return_type(*argument_types)``; the kernel compiled for it,
-    :func:`numba.njit` given the signature), as an int for :func:`function_at`."""
+    ``signature`` (``return_type(*argument_types)``, the types of the calls from Python;
+    compiled for it if not yet), as an int for :func:`function_at`."""
     addr = _get_jit_address(kernel, signature)
     if addr <= 0:  # pragma: no cover - a kernel numba did not compile
         raise RuntimeError(f"no compiled code of {kernel} for {signature}")

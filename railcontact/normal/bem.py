@@ -216,9 +216,9 @@ assumption about NaN or infinities, which the solver must see."""
 # arrays (row-major, as the grid's (nx, ny) arrays), in place of a dozen numpy calls with
 # their masks and temporaries. ``c`` is the contact set of the iteration (bool).
 # The three with fast-math flags that the iterations call (_gradient, _direction, _step)
-# are compiled for one explicit signature each (the solve's C-ordered arrays): the
-# compiled iterations (_iterate) call that code through pointers, the code Python calls
-# (:mod:`~railcontact.halfspace.pointers`).
+# are called with one signature each (the solve's C-ordered, writeable arrays): the
+# compiled iterations (_iterate_compiled) call the code of that signature through
+# pointers, the code Python's calls run (:mod:`~railcontact.halfspace.pointers`).
 _F, _B = numba.types.float64, numba.types.boolean
 _FLAT, _SET = numba.types.float64[::1], numba.types.boolean[::1]
 _GRADIENT = _F(_FLAT, _FLAT, _FLAT, _F, _B, _SET, _FLAT, _FLAT)
@@ -342,7 +342,7 @@ def _floored(p, index, change, load, area):  # pragma: no cover - compiled
     return q, total, changes, scale
 
 
-@numba.njit(_GRADIENT, cache=True, nogil=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _gradient(h, u, p, delta, force_control, c, g, gm):  # pragma: no cover - compiled
     """The contact set ``c`` (p > 0, or where the bodies interpenetrate if no pressure is
     left), the approach (force control: the mean of ``h + u`` on ``c``), the gradient
@@ -384,7 +384,7 @@ def _mean_on(x, c):  # pragma: no cover - compiled
     return total / max(count, 1)
 
 
-@numba.njit(_DIRECTION, cache=True, nogil=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _direction(g, z, c, t, project, conjugate, g_old):  # pragma: no cover - compiled
     """The search direction ``t`` (in place): the correction ``z`` on ``c`` (minus its mean
     there when ``project``) plus the conjugate share of the previous ``t``; returns
@@ -442,7 +442,7 @@ def _shown_start(values, u, scale, kernel, index, change, changes):  # pragma: n
     return True
 
 
-@numba.njit(_STEP, cache=True, nogil=True, fastmath=REASSOCIATE)
+@numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
 def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area,
           self_compliance, kernel, nx, ny, index, change):  # pragma: no cover - compiled
     """One CG step from ``p`` into ``q``; ``r = A t`` (before its mean is taken out).
@@ -512,6 +512,9 @@ RAN_OUT, CONVERGED, STALLED, VANISHED, HISTORY_FULL = range(5)
 converged), converged, stalled (:data:`STALL_ITERATIONS`), the pressure vanished (force
 control), or its history array full (call it again to go on)."""
 HISTORY_CHUNK = 512
+MAX_LAST = 2**62
+"""The iteration limit :func:`_iterate_py` is given at most (a machine integer; no solve
+comes near it)."""
 """Length of the history array :func:`_iterate_py` is given per call."""
 
 
@@ -863,7 +866,7 @@ def solve_normal(
         status, k = iterate(*kernels, h, p, q, u, work, c, kernel, index, change,
                             *products, precondition, force_control, load_value,
                             float(area_el), self_compliance, float(tolerance),
-                            int(max_iterations), state, counts, hist)
+                            min(int(max_iterations), MAX_LAST), state, counts, hist)
         chunks.append(hist[:k])
         if status != HISTORY_FULL:
             break

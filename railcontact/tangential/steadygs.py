@@ -362,14 +362,15 @@ if HAVE_NUMBA:
                    error_model="numpy")(_cross_rows_of(n))
         for n in LANES)
     _visit_c = _jit(_visit)
-    # (one explicit signature, the sweep's C-ordered arrays: the compiled sweeps call that
-    # code through a pointer, the code Python calls, :mod:`~railcontact.halfspace.pointers`)
+    # (called with one signature, _BLOCK, the sweep's C-ordered arrays: the compiled sweeps
+    # call the code of that signature through a pointer, the code Python's calls run,
+    # :mod:`~railcontact.halfspace.pointers`)
     _PLANE = numba.types.float64[:, ::1]
     _BLOCK = numba.types.float64(*[_PLANE] * 14, numba.types.int8[:, ::1],
                                  numba.types.int64[::1], numba.types.int64[::1],
                                  numba.types.int64, numba.types.int64, numba.types.float64,
                                  numba.types.float64, numba.types.float64)
-    _steady_block_numba = numba.njit(_BLOCK, cache=True, nogil=True, fastmath=True,
+    _steady_block_numba = numba.njit(cache=True, nogil=True, fastmath=True,
                                      error_model="numpy")(_steady_block)
     _block_at = function_at(_BLOCK)
 else:  # pragma: no cover
