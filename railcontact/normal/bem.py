@@ -512,10 +512,10 @@ RAN_OUT, CONVERGED, STALLED, VANISHED, HISTORY_FULL = range(5)
 converged), converged, stalled (:data:`STALL_ITERATIONS`), the pressure vanished (force
 control), or its history array full (call it again to go on)."""
 HISTORY_CHUNK = 512
+"""Length of the history array :func:`_iterate_py` is given per call."""
 MAX_LAST = 2**62
 """The iteration limit :func:`_iterate_py` is given at most (a machine integer; no solve
 comes near it)."""
-"""Length of the history array :func:`_iterate_py` is given per call."""
 
 
 def _apply(product, x: np.ndarray, out: np.ndarray) -> None:
