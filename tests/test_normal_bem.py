@@ -318,6 +318,9 @@ def _counted_products(monkeypatch):
 
     monkeypatch.setattr(InfluenceOperator, "_convolve", counted)
     monkeypatch.setattr(InfluenceOperator, "bound", counted_bound)
+    # the iterations run as Python, where every product is a call of a bound function
+    # (the compiled run is the same loop: test_compiled_iterations_equal_the_python_run)
+    monkeypatch.setattr(InfluenceOperator, "compiled_product", lambda self, floor=None: None)
     return count
 
 
@@ -376,3 +379,100 @@ def test_a_problem_scaled_beyond_the_cg_range_is_not_converged():
                     (1e150, {"penetration": hz.penetration * 1e150})):
         r = solve_normal(h * lam, g, op, tolerance=1e-9, **kw)
         assert not r.converged and "under- or overflow" in r.message
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="the compiled iterations need pyfftw's FFTW")
+def test_compiled_iterations_equal_the_python_run(monkeypatch):
+    """The CG's iterations as one compiled call (the kernels called through pointers, the
+    products the packed plan's) and the same loop run as Python between the same kernels
+    give the same result to the bit: a warm wheel-rail patch (its start's displacement
+    given), cold solves under penetration and load control, with and without the
+    preconditioner, one that reaches its iteration limit, one that stalls, the history
+    handed back in chunks; and the answers are Hertz's and the dense reference's."""
+    import math
+
+    import railcontact as rc
+    import railcontact.contact.patch as patch
+    import railcontact.normal.bem as bem
+    from railcontact.halfspace.operator import InfluenceOperator
+    from railcontact.normal.bem import Displacement
+
+    if bem.packed_product[1] is None:
+        pytest.skip("no FFTW C interface: the iterations run as Python only")
+    d = {"material": {"young": 2 * 82e9 * 1.28, "poisson": 0.28},
+         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1", "side": "left",
+                      "lateral_displacement": -4e-3},
+         "grid": {"dx": 0.5e-3, "dy": 0.5e-3}, "normal": {"load": 83.3e3, "tolerance": 1e-5}}
+    wr = rc.solve(d).patches[0].normal
+    assert wr.contact_box[1] < 36
+    # its first 36 rows (37 pad to 75, an odd count, which the packed plan cannot hold)
+    wg = Grid(36, wr.grid.ny, wr.grid.dx, wr.grid.dy, wr.grid.x[0], wr.grid.y[0])
+    pair = rc.Case.from_dict(d).pair
+    wr_op = influence_operator(wg, pair, "z", "pyfftw")
+    wr_h = (wr.gap - wr.displacement.values + wr.penetration)[:36]  # the undeformed gap
+    warm = np.roll(1.02 * wr.pressure[:36], 1, axis=0)  # (a time step's extrapolated start)
+    A, B, hz, g, X, Y, h = hertz_box(1.5, 40, 36)
+    op = influence_operator(g, PAIR, "z", "pyfftw")
+    assert op.compiled_product() is not None and wr_op.compiled_product() is not None
+    # the normal solves of a wheelset's first two steps from cold starts (the step's
+    # windows, its estimates as starts, their displacements given)
+    steps = []
+    monkeypatch.setattr(patch, "solve_normal",
+                        lambda *a, **kw: steps.append((a, kw)) or solve_normal(*a, **kw))
+    wc = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+                            rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                            rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                            rc.ContactSettings(friction=0.4, element_size=0.5e-3,
+                                               warm_start="none"))
+    for t in (0.0, 1e-3):
+        w = 2 * math.pi * 1.5
+        wc.solve(rc.Pose(3e-3 * math.sin(w * t)), loads=(83.3e3, 83.3e3),
+                 kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
+    monkeypatch.undo()
+
+    def solves():
+        out = [solve_normal(wr_h, wg, wr_op, load=0.98 * 83.3e3, tolerance=1e-5,
+                            initial_pressure=warm,
+                            initial_displacement=Displacement(wr_op.apply(warm), 1))]
+        out += [solve_normal(*a, **kw) for a, kw in steps]
+        for pre in ("fft", "none"):
+            out += [solve_normal(h, g, op, penetration=hz.penetration, tolerance=1e-9,
+                                 preconditioner=pre),
+                    solve_normal(h, g, op, load=hz.load, tolerance=1e-9, preconditioner=pre),
+                    solve_normal(h, g, op, load=hz.load, tolerance=1e-9, max_iterations=7,
+                                 preconditioner=pre)]
+        monkeypatch.setattr(bem, "HISTORY_CHUNK", 3)
+        out += [solve_normal(h, g, op, load=hz.load, tolerance=1e-30)]
+        monkeypatch.setattr(bem, "HISTORY_CHUNK", 512)
+        return out
+
+    calls = [0]
+    iterate = bem._iterate_compiled
+
+    def counted(*args):
+        calls[0] += 1
+        return iterate(*args)
+
+    monkeypatch.setattr(bem, "_iterate_compiled", counted)
+    compiled = solves()
+    assert calls[0] == len(compiled) + compiled[-1].iterations // 3  # (all compiled)
+    assert len(steps) >= 6 and all(r.converged for r in compiled[1:len(steps) + 1])
+    monkeypatch.setattr(InfluenceOperator, "compiled_product", lambda self, floor=None: None)
+    python = solves()
+    assert calls[0] == len(compiled) + compiled[-1].iterations // 3  # (none compiled)
+    assert all(not r.converged and r.iterations == 7 for r in (compiled[-5], compiled[-2]))
+    assert "stalled" in compiled[-1].message and compiled[-1].iterations > 100
+    for a, b in zip(compiled, python, strict=True):
+        assert a.message == b.message and a.iterations == b.iterations
+        assert a.converged == b.converged and a.error == b.error
+        assert a.force == b.force and a.penetration == b.penetration
+        for f in ("pressure", "gap", "history"):
+            np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+        np.testing.assert_array_equal(a.displacement.values, b.displacement.values)
+        assert a.displacement.generations == b.displacement.generations
+    ref = solve_normal(wr_h, wg, influence_operator(wg, pair, "z", "dense"),
+                       load=0.98 * 83.3e3, tolerance=1e-9)
+    assert compiled[0].converged and np.array_equal(compiled[0].contact, ref.contact)
+    assert np.max(np.abs(compiled[0].pressure - ref.pressure)) < 1e-3 * ref.max_pressure
+    for r in compiled[-7:-5] + compiled[-4:-2]:
+        assert r.converged and r.max_pressure == pytest.approx(hz.max_pressure, rel=0.02)

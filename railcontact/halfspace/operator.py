@@ -715,17 +715,20 @@ class InfluenceOperator:
         plan, operand = self._fftw(spectra)
         return partial(plan.convolve, operand)
 
-    def compiled_product(self) -> tuple | None:
+    def compiled_product(self, floor: float | None = None) -> tuple | None:
         """The arguments ``(plans, z_in, z_s, w_s, w_out, a, b, n)`` of :data:`packed_product`
-        for this operator's product (:meth:`_PackedPlan.kernel_arguments`), for a compiled
-        solver that runs its products itself: ``packed_product[nc](plans, x, z_in, z_s,
-        w_s, w_out, a, b, n, out)`` is :meth:`apply`'s ``(x, out)``, the same bits. None
-        when the product is not one compiled call (not ``"pyfftw"``, a pruned plan, no
-        FFTW C interface). As :meth:`bound`: within one solve, in the thread that formed
-        it."""
+        for this operator's product (:meth:`_PackedPlan.kernel_arguments`), or with a
+        ``floor`` for its FFT preconditioner's (:meth:`preconditioner`, one component),
+        for a compiled solver that runs its products itself: ``packed_product[nc](plans,
+        x, z_in, z_s, w_s, w_out, a, b, n, out)`` is :meth:`bound`'s ``(x, out)``, the
+        same bits. None when the product is not one compiled call (not ``"pyfftw"``, a
+        pruned plan, no FFTW C interface). As :meth:`bound`: within one solve, in the
+        thread that formed it."""
         if self.backend != "pyfftw":
             return None
-        plan, operand = self._fftw(self._spectra)
+        spectra = (self._spectra if floor is None
+                   else self._inverse_spectra(floor, complex_=True))
+        plan, operand = self._fftw(spectra)
         if not isinstance(plan, _PackedPlan) or not plan.compiled:
             return None
         return plan.kernel_arguments(operand, self.ny)

@@ -43,6 +43,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numba
 import numpy as np
@@ -50,7 +51,8 @@ import numpy as np
 from ..errors import RailContactError, check_count, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import no_contact_load
-from ..halfspace.operator import PRECONDITIONER_FLOOR, InfluenceOperator
+from ..halfspace.operator import PRECONDITIONER_FLOOR, InfluenceOperator, packed_product
+from ..halfspace.pointers import address, function_at
 from ..halfspace.sums import array_sum, numpy_sum
 
 PRECONDITIONERS = ("fft", "none")
@@ -213,6 +215,18 @@ assumption about NaN or infinities, which the solver must see."""
 # The CG's array work, compiled: each function is one or two passes over the flat element
 # arrays (row-major, as the grid's (nx, ny) arrays), in place of a dozen numpy calls with
 # their masks and temporaries. ``c`` is the contact set of the iteration (bool).
+# The three with fast-math flags that the iterations call (_gradient, _direction, _step)
+# are called with one signature each (the solve's C-ordered, writeable arrays): the
+# compiled iterations (_iterate_compiled) call the code of that signature through
+# pointers, the code Python's calls run (:mod:`~railcontact.halfspace.pointers`).
+_F, _B = numba.types.float64, numba.types.boolean
+_FLAT, _SET = numba.types.float64[::1], numba.types.boolean[::1]
+_GRADIENT = _F(_FLAT, _FLAT, _FLAT, _F, _B, _SET, _FLAT, _FLAT)
+_DIRECTION = numba.types.UniTuple(_F, 2)(_FLAT, _FLAT, _SET, _FLAT, _B, _B, _F)
+_STEP = numba.types.Tuple((_F, _F, _F, numba.types.int64, _B, _B))(
+    _FLAT, _FLAT, _FLAT, _FLAT, _FLAT, _SET, _FLAT, _F, _F, _B, _B, _F, _F, _F,
+    numba.types.float64[:, ::1], numba.types.int64, numba.types.int64,
+    numba.types.int64[::1], _FLAT)
 
 @numba.njit(cache=True, nogil=True)
 def _overlaps_flat(h, u, p, force_control, delta, tolerance):  # pragma: no cover - compiled
@@ -493,6 +507,163 @@ def _step(p, q, t, g, r, c, u, gz, gg, preconditioned, force_control, load, area
     return tau, moved, total, changes, entered, updated
 
 
+RAN_OUT, CONVERGED, STALLED, VANISHED, HISTORY_FULL = range(5)
+"""How :func:`_iterate_py` ended: ``last`` iteration reached or a non-finite eps (not
+converged), converged, stalled (:data:`STALL_ITERATIONS`), the pressure vanished (force
+control), or its history array full (call it again to go on)."""
+HISTORY_CHUNK = 512
+"""Length of the history array :func:`_iterate_py` is given per call."""
+MAX_LAST = 2**62
+"""The iteration limit :func:`_iterate_py` is given at most (a machine integer; no solve
+comes near it)."""
+
+
+def _apply(product, x: np.ndarray, out: np.ndarray) -> None:
+    """``out = A x`` (or the preconditioner's ``M x``) by a product of one solve: from
+    Python ``product`` is a function ``f(x, out)``
+    (:meth:`~railcontact.halfspace.operator.InfluenceOperator.bound`); in compiled code
+    the arguments of the packed plan's compiled product (:meth:`~railcontact.halfspace.
+    operator.InfluenceOperator.compiled_product`, run by
+    :data:`~railcontact.halfspace.operator.packed_product`; the same bits). ``x`` and
+    ``out`` (nx, ny) float, C-ordered."""
+    product(x, out)
+
+
+if packed_product[1] is not None:
+    from numba.extending import overload
+
+    _packed_rows = packed_product[1]
+
+    @overload(_apply, jit_options={"nogil": True})
+    def _apply_compiled(product, x, out):  # pragma: no cover - compiled
+        def apply(product, x, out):
+            plans, z_in, z_s, w_s, w_out, a, b, n = product
+            _packed_rows(plans, x, z_in, z_s, w_s, w_out, a, b, n, out)
+        return apply
+
+
+def _iterate_py(gradient, direction, step, h, p, q, u, work, c, kernel, index, change,
+                product, inverse, precondition, force_control, load, area, self_compliance,
+                tolerance, last, state, counts, hist):  # pragma: no cover - also compiled
+    """The CG iterations of :func:`solve_normal` on its arrays (all C-ordered): the gap
+    ``h``, the pressures ``p`` (the current one) and ``q`` and ``u = A p`` (nx, ny), the
+    work rows ``work`` (5, nx ny: the gradient, its part on the contact, the direction,
+    its product, the preconditioned gradient) and the contact set ``c``.
+
+    One source, run two ways: as Python, ``gradient``, ``direction`` and ``step`` the
+    kernels :func:`_gradient`, :func:`_direction` and :func:`_step` and ``product`` and
+    ``inverse`` functions ``f(x, out)`` (any backend); compiled (:func:`_iterate_compiled`,
+    one call that releases the GIL for all the iterations), the kernels first-class
+    functions that call the same kernels' own code through pointers
+    (:mod:`~railcontact.halfspace.pointers`: linked into this loop, LLVM could compile
+    their fast-math sums anew and change their last bits) and the products the packed plan's
+    arguments (:func:`_apply`). Both run the same compiled code in the same order: the
+    same bits. ``inverse`` is not used without ``precondition`` (give ``product``).
+
+    The state carried between calls (and out): ``state`` (float) the approach, the
+    previous ``g.z``, the best eps and the last eps; ``counts`` (int) the iterations
+    taken, the iteration of the best eps, the updates of ``u`` since its last
+    convolution, the solves since then (:class:`Displacement`), whether the next
+    direction is conjugate and whether ``p`` and ``q`` have been swapped (the current
+    pressure in the given ``q``). It iterates up to iteration ``last`` and writes each
+    iteration's eps into ``hist``; returns (how it ended, :data:`RAN_OUT` ..
+    :data:`HISTORY_FULL`; the number of eps written). On :data:`VANISHED` the unscaled
+    pressure is in the array that is not the current one."""
+    nx, ny = h.shape
+    n = h.size
+    hf, uf, pf, qf = h.reshape(n), u.reshape(n), p.reshape(n), q.reshape(n)
+    gf, gmf, tf, rf = work[0], work[1], work[2], work[3]
+    gm, t, r = gmf.reshape((nx, ny)), tf.reshape((nx, ny)), rf.reshape((nx, ny))
+    zf = work[4] if precondition else gf
+    z = zf.reshape((nx, ny))
+    delta, g_old, best, err = (float(state[0]), float(state[1]), float(state[2]),
+                               float(state[3]))
+    its, best_its, fresh, generations = counts[0], counts[1], counts[2], counts[3]
+    conjugate, swapped = counts[4] != 0, counts[5] != 0
+    status = RAN_OUT
+    k = 0
+    while its < last:
+        if k == hist.size:
+            status = HISTORY_FULL
+            break
+        its += 1
+        delta = gradient(hf, uf, pf, delta, force_control, c, gf, gmf)
+        if precondition:
+            _apply(inverse, gm, z)
+        gz, gg = direction(gf, zf, c, tf, force_control and precondition, conjugate, g_old)
+        g_old = gz
+        _apply(product, t, r)
+        _, moved, total, changes, entered, updated = step(
+            pf, qf, tf, gf, rf, c, uf, gz, gg, precondition, force_control, load, area,
+            self_compliance, kernel, nx, ny, index, change)
+        conjugate = not entered
+        if force_control and not total > 0.0:
+            status = VANISHED
+            break
+        p, q, pf, qf = q, p, qf, pf
+        swapped = not swapped
+        if updated:
+            fresh += 1
+        else:  # too many elements left or entered the contact: convolve
+            _apply(product, p, u)
+            fresh = generations = 0
+        err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
+        hist[k] = err
+        k += 1
+        if not math.isfinite(err):
+            break
+        if err < tolerance:
+            if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
+                _apply(product, p, u)
+                fresh = generations = 0
+            if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
+                status = CONVERGED
+                break
+        if err < STALL_GAIN * best:
+            best, best_its = err, its
+        elif its - best_its >= STALL_ITERATIONS:  # at round-off: a tolerance out of reach
+            status = STALLED
+            break
+    state[0], state[1], state[2], state[3] = delta, g_old, best, err
+    counts[0], counts[1], counts[2], counts[3] = its, best_its, fresh, generations
+    counts[4], counts[5] = conjugate, swapped
+    return status, k
+
+
+_iterate = numba.njit(cache=True, nogil=True)(_iterate_py)
+_gradient_at, _direction_at, _step_at = (function_at(s) for s in (_GRADIENT, _DIRECTION,
+                                                                    _STEP))
+
+
+@numba.njit(cache=True, nogil=True)
+def _iterate_compiled(kernels, h, p, q, u, work, c, kernel, index, change, product, inverse,
+                      precondition, force_control, load, area, self_compliance, tolerance,
+                      last, state, counts, hist):  # pragma: no cover - compiled
+    """:func:`_iterate_py` compiled, one call: ``kernels`` the addresses of the code of
+    :func:`_gradient`, :func:`_direction` and :func:`_step` (:func:`_kernel_addresses`),
+    called through pointers; ``product`` and ``inverse`` the packed plan's arguments
+    (:meth:`~railcontact.halfspace.operator.InfluenceOperator.compiled_product`)."""
+    return _iterate(_gradient_at(kernels[0]), _direction_at(kernels[1]),
+                    _step_at(kernels[2]), h, p, q, u, work, c, kernel, index, change,
+                    product, inverse, precondition, force_control, load, area,
+                    self_compliance, tolerance, last, state, counts, hist)
+
+
+@lru_cache(maxsize=1)
+def _kernel_addresses() -> np.ndarray:
+    """The addresses of the code of :func:`_gradient`, :func:`_direction` and
+    :func:`_step` (their one signature each) for :func:`_iterate_compiled`, formed once."""
+    return np.array([address(f, s) for f, s in ((_gradient, _GRADIENT),
+                                                (_direction, _DIRECTION), (_step, _STEP))],
+                    dtype=np.int64)
+
+
+COMPILED_LOOP = packed_product[1] is not None
+"""Whether :func:`solve_normal` runs its iterations as one compiled call
+(:func:`_iterate_compiled`) where both products are compiled packed-plan products; else
+(or without FFTW's C interface) the same loop runs as Python (:func:`_iterate_py`)."""
+
+
 def solve_normal(
     gap: np.ndarray,
     grid: Grid,
@@ -562,6 +733,8 @@ def solve_normal(
     if gap is None:
         raise RailContactError("gap is required")
     h = np.ascontiguousarray(gap, dtype=float)
+    if not h.flags.writeable:  # (the CG kernels' one signature: writeable arrays)
+        h = h.copy()
     if h.shape != shape:
         raise RailContactError(f"gap must have the grid shape {shape}, got {h.shape}")
     hmin, finite = _least(h)  # (its smallest value, and whether all are finite)
@@ -589,7 +762,8 @@ def solve_normal(
         raise RailContactError(f"initial_contact must have the grid shape {shape}, "
                                f"got {mask.shape}")
     area_el = grid.element_area
-    kernel = operator.kernels[0, 0]  # the "zz" kernel (2nx-1, 2ny-1) [m/Pa]
+    kernel = np.require(operator.kernels[0, 0], dtype=float, requirements="CW")  # "zz"
+    # (2nx-1, 2ny-1) [m/Pa]
     self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
 
     def finish(p, u, delta, its, converged, message, err, hist, final=False, shown=None):
@@ -652,24 +826,17 @@ def solve_normal(
         scale = load / (area_el * total)
         p *= scale
 
-    # Work arrays: the rows of one block, flat (``*f``, for the compiled steps) and as
-    # (nx, ny) views of the same memory; the pressures ``p``, ``q`` (one of which is the
-    # result's) on their own.
+    # Work arrays (_iterate_py): the rows of one block, flat; the pressures ``p``, ``q``
+    # (one of which is the result's) and ``u`` (the result's displacement keeps it) on
+    # their own.
     p = np.ascontiguousarray(p, dtype=float)
     q = np.empty(shape)
-    hf, pf, qf = h.ravel(), p.ravel(), q.ravel()
-    # (u on its own: the result's displacement keeps it)
     work = np.empty((5, h.size))
-    gf, gmf, tf, rf, zf = work
-    g, gm, t, r, z = work.reshape(5, *shape)
-    if not precondition:
-        z, zf = g, gf
-    tf[:] = 0.0
+    work[2] = 0.0  # the first direction's previous one
     c = np.empty(h.size, dtype=bool)
-    # the products of this solve (A x, and the preconditioner's M x) as bound functions
-    # (x, out) -> out: the arrays are the solve's own, checked above
+    # the product of this solve (A x) as a bound function (x, out) -> out: the arrays are
+    # the solve's own, checked above
     product = operator.bound()
-    inverse = operator.bound(PRECONDITIONER_FLOOR) if precondition else None
     # u = A p of the current p, kept up to date below: convolved, or the start's shown
     # displacement less the columns of the elements the start set to zero
     u = np.empty(shape)
@@ -679,54 +846,38 @@ def solve_normal(
     else:
         product(p, u)
         generations = 0
-    uf = u.ravel()
-    fresh = 0  # iterations since u was last formed by a convolution
-    g_old = 1.0
-    conjugate = False
-    hist: list[float] = []
-    err = np.inf
-    its = 0
-    converged = stalled = False
-    best, best_its = np.inf, 0
-    delta = penetration if not force_control else 0.0
+    # The iterations (_iterate_py): one compiled call that releases the GIL where both
+    # products are compiled packed-plan products, else the same loop run as Python.
+    fft = operator.compiled_product() if COMPILED_LOOP else None
+    fft_inverse = (operator.compiled_product(PRECONDITIONER_FLOOR)
+                   if precondition and fft is not None else fft)
+    if fft is not None and fft_inverse is not None:
+        iterate, kernels, products = _iterate_compiled, (_kernel_addresses(),), (fft,
+                                                                                 fft_inverse)
+    else:  # (the kernels called from Python; the preconditioner's M x bound as A x)
+        iterate, kernels = _iterate_py, (_gradient, _direction, _step)
+        products = product, operator.bound(PRECONDITIONER_FLOOR) if precondition else product
+    state = np.array([penetration if not force_control else 0.0, 1.0, np.inf, np.inf])
+    counts = np.array([0, 0, 0, generations, 0, 0], dtype=np.int64)
     load_value = float(load) if force_control else 0.0
-    for its in range(1, int(max_iterations) + 1):
-        delta = _gradient(hf, uf, pf, delta, force_control, c, gf, gmf)
-        if precondition:
-            inverse(gm, z)
-        gz, gg = _direction(gf, zf, c, tf, force_control and precondition,
-                            conjugate, g_old)
-        g_old = gz
-        product(t, r)
-        _, moved, total, changes, entered, updated = _step(
-            pf, qf, tf, gf, rf, c, uf, gz, gg, precondition,
-            force_control, load_value, area_el, self_compliance, kernel, shape[0], shape[1],
-            index, change)
-        conjugate = not entered
-        if force_control and not total > 0.0:
-            return finish(q, u, delta, its, False, "pressure vanished", np.inf, hist)
-        p, q, pf, qf = q, p, qf, pf
-        if updated:
-            fresh += 1
-        else:  # too many elements left or entered the contact: convolve
-            product(p, u)
-            fresh = generations = 0
-        err = moved / total if total > 0 else (0.0 if total == 0 else np.nan)  # NaN stops
-        hist.append(err)
-        if not math.isfinite(err):
+    chunks = []
+    while True:
+        hist = np.empty(min(int(max_iterations), HISTORY_CHUNK))
+        status, k = iterate(*kernels, h, p, q, u, work, c, kernel, index, change,
+                            *products, precondition, force_control, load_value,
+                            float(area_el), self_compliance, float(tolerance),
+                            min(int(max_iterations), MAX_LAST), state, counts, hist)
+        chunks.append(hist[:k])
+        if status != HISTORY_FULL:
             break
-        if err < tolerance:
-            if fresh > REFRESH_ITERATIONS:  # the updates' round-off, renewed
-                product(p, u)
-                fresh = generations = 0
-            if not _overlaps_flat(hf, uf, pf, force_control, delta, tolerance):
-                converged = True
-                break
-        if err < STALL_GAIN * best:
-            best, best_its = err, its
-        elif its - best_its >= STALL_ITERATIONS:  # at round-off: a tolerance out of reach
-            stalled = True
-            break
+    hist = chunks[0] if len(chunks) == 1 else np.concatenate(chunks)
+    if counts[5]:  # p and q swapped: the current pressure is in q's array
+        p, q = q, p
+    delta, err = float(state[0]), float(state[3])
+    its, fresh, generations = int(counts[0]), int(counts[2]), int(counts[3])
+    if status == VANISHED:
+        return finish(q, u, delta, its, False, "pressure vanished", np.inf, hist)
+    converged, stalled = status == CONVERGED, status == STALLED
 
     if not converged and (fresh > 0 or generations > 0):  # the gap from a convolution
         product(p, u)

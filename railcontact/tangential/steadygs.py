@@ -74,6 +74,7 @@ import numpy as np
 from ..errors import RailContactError
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator, packed_product
+from ..halfspace.pointers import address, function_at
 from ..halfspace.sums import numpy_sum
 from .convexgs import (
     ADHESION,
@@ -361,8 +362,17 @@ if HAVE_NUMBA:
                    error_model="numpy")(_cross_rows_of(n))
         for n in LANES)
     _visit_c = _jit(_visit)
-    _steady_block_numba = numba.njit(cache=True, nogil=True, fastmath=True, error_model="numpy")(
-        _steady_block)
+    # (called with one signature, _BLOCK, the sweep's C-ordered arrays: the compiled sweeps
+    # call the code of that signature through a pointer, the code Python's calls run,
+    # :mod:`~railcontact.halfspace.pointers`)
+    _PLANE = numba.types.float64[:, ::1]
+    _BLOCK = numba.types.float64(*[_PLANE] * 14, numba.types.int8[:, ::1],
+                                 numba.types.int64[::1], numba.types.int64[::1],
+                                 numba.types.int64, numba.types.int64, numba.types.float64,
+                                 numba.types.float64, numba.types.float64)
+    _steady_block_numba = numba.njit(cache=True, nogil=True, fastmath=True,
+                                     error_model="numpy")(_steady_block)
+    _block_at = function_at(_BLOCK)
 else:  # pragma: no cover
     _element_solve_c = _element_solve
     _shift_run_c = _shift_run
@@ -411,9 +421,9 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     return dif
 
 
-def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, per_row, work, omega_h, omega_s,
-                   measure, tolerance, max_iterations, stall_sweeps, stall_gain,
-                   floor_above):  # pragma: no cover - compiled
+def _steady_sweeps(block_address, fft, kern, cum, wx, wy, g, p, state, lo, hi, per_row, work,
+                   omega_h, omega_s, measure, tolerance, max_iterations, stall_sweeps,
+                   stall_gain, floor_above):  # pragma: no cover - compiled
     """:func:`_sweep_blocked`'s sweeps and :meth:`~.convexgs.SweepProblem.iterate`'s
     measure and stopping rules in one compiled call, the same steps on the same arrays
     (the same bits), the DC-FFT products run through the operator's compiled packed
@@ -421,8 +431,12 @@ def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, per_row, work, o
     compiled_product`'s arguments), the blocks formed here (:func:`~.convexgs._block_rows`
     of the contact elements ``per_row`` and the block ``work``).
     ``stall_gain``: :data:`~.convexgs.STALL_GAIN`; ``floor_above``:
-    :attr:`~.convexgs.SweepProblem.floor_above`. Returns ``(sweeps,
-    error, converged, stalled, history)``."""
+    :attr:`~.convexgs.SweepProblem.floor_above`. The block is
+    :func:`_steady_block_numba`'s own code called through its pointer (``block_address``,
+    :func:`_block_address`): linked into this function, LLVM could compile its fast-math
+    sums anew and change their last bits. Returns ``(sweeps, error, converged, stalled,
+    history)``."""
+    block = _block_at(block_address)
     plans, z_in, z_s, w_s, w_out, a, b, n = fft
     rxx, rxy, ryy, fxx, fxy, fyy = kern
     rows = _block_rows(per_row, work)
@@ -458,9 +472,8 @@ def _steady_sweeps(fft, kern, cum, wx, wy, g, p, state, lo, hi, per_row, work, o
         for k in range(nb):
             r0 = rows[k, 0]
             r1 = rows[k, 1]
-            dif += _steady_block_numba(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py,
-                                       dpx, dpy, state, lo, hi, r0, r1, omega_h, omega_s,
-                                       measure)
+            dif += block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy,
+                         state, lo, hi, r0, r1, omega_h, omega_s, measure)
             if k + 1 < nb:
                 _packed_pair(plans, dpt, z_in, z_s, w_s, w_out, a, b, n, prod)
                 _add_product_c(ux, uy, ux, uy, prod, r1)
@@ -509,6 +522,12 @@ COMPILED_MAX_SWEEPS = 2**62
 if HAVE_NUMBA and packed_product[2] is not None:
     _packed_pair = packed_product[2]
     _steady_sweeps_c = numba.njit(cache=True, nogil=True)(_steady_sweeps)
+
+    @lru_cache(maxsize=1)
+    def _block_address() -> int:
+        """The address of :func:`_steady_block_numba`'s code for :func:`_steady_sweeps`,
+        formed once."""
+        return address(_steady_block_numba, _BLOCK)
 else:  # pragma: no cover
     _steady_sweeps_c = None
 
@@ -639,7 +658,7 @@ def solve_steadygs(
         fft = operator.compiled_product()
     if fft is not None:  # the sweeps and their measures one compiled call
         sweeps = _steady_sweeps_c(
-            fft, _steady_kernels(operator), cum, prob.wx, prob.wy, prob.g, prob.p,
+            _block_address(), fft, _steady_kernels(operator), cum, prob.wx, prob.wy, prob.g, prob.p,
             prob.state, prob.lo, prob.hi, prob.row_counts, BLOCK_SCALE**2 * grid.size, oh, os_,
             prob.measure, prob.tolerance, prob.max_iterations, STALL_SWEEPS, STALL_GAIN,
             prob.floor_above)
