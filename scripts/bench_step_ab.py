@@ -29,7 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_step import fixed_workload  # noqa: E402
 
 
-def _contact(rc, mode: str, frame: str | None):
+def hunting_contact(rc, mode: str, frame: str | None = None):
+    """The hunting run's wheelset contact (bench_step.py) of package ``rc``."""
     extra = {} if frame is None else {"patch_frame": frame}
     return rc.WheelsetContact(
         rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
@@ -57,10 +58,10 @@ def main() -> None:
     versions = {"A": importlib.import_module(args.name),
                 "B": importlib.import_module("railcontact")}
     for rc in versions.values():  # compile the numba kernels outside the measurement
-        wc = _contact(rc, args.mode, args.patch_frame)
+        wc = hunting_contact(rc, args.mode, args.patch_frame)
         for k in range(5):
             _step(rc, wc, k)
-    contacts = {n: _contact(rc, args.mode, args.patch_frame) for n, rc in versions.items()}
+    contacts = {n: hunting_contact(rc, args.mode, args.patch_frame) for n, rc in versions.items()}
     times: dict[str, list[float]] = {n: [] for n in versions}
     workloads = []
     order = list(versions)

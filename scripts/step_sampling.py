@@ -57,13 +57,11 @@ def hunting(mode: str, steps: int, ready: Path | None = None) -> list[float]:
     """Wall times [s] of ``steps`` steps of the hunting run after 50 not timed; with
     ``ready``, that file is written after those 50 and the steps start 2 s later (for
     the sampler to attach)."""
+    from bench_step_ab import hunting_contact
+
     import railcontact as rc
 
-    wc = rc.WheelsetContact(
-        rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
-        rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
-        rc.ElasticPair.of(rc.STEEL, rc.STEEL),
-        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+    wc = hunting_contact(rc, mode)
     w = 2 * math.pi * 1.5
     times = []
     for k in range(steps + 50):

@@ -105,6 +105,16 @@ class Slave:
         self.t += STEP
         return 0
 
+    def reset(self, **start):
+        """fmi2Reset, then initialise again with the parameters ``start``: the instance as
+        a new one, time 0."""
+        self.s.reset()
+        self.s.setupExperiment(startTime=0.0)
+        self.s.enterInitializationMode()
+        self.set(**start)
+        self.s.exitInitializationMode()
+        self.t = 0.0
+
     def free(self):
         self.s.terminate()
         self.s.freeInstance()
@@ -481,12 +491,7 @@ def test_reset(fmu, extracted, md):
     s.step(lateral_displacement=2e-3, **CREEP)
     fresh = s.get("creep_force_x_left", "normal_force_left")
     s.step(lateral_displacement=-3e-3, **CREEP)
-    s.s.reset()
-    s.s.setupExperiment(startTime=0.0)
-    s.s.enterInitializationMode()
-    s.set(warm_start="none")
-    s.s.exitInitializationMode()
-    s.t = 0.0
+    s.reset(warm_start="none")
     s.step(lateral_displacement=2e-3, **CREEP)
     assert s.get("creep_force_x_left", "normal_force_left") == fresh
     s.free()

@@ -72,6 +72,13 @@ def _motion(k: int, amplitude: float, phase: float) -> dict:
             "yaw": 1e-3 * math.cos(w * t + phase), "speed": 30.0}
 
 
+def _two_motions(k: int) -> dict:
+    """Step ``k``'s inputs of the N = 2 FMU: wheelset 1 on a 3 mm sine, wheelset 2 on a
+    2 mm one a radian later (:func:`_motion`)."""
+    return {f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
+            for n, x in _motion(k, a, j).items()}
+
+
 def test_variables_are_repeated_per_wheelset_and_the_parameters_shared(fmu2):
     """The N = 2 FMU: fmpy's validation clean; the default build's parameters once, the
     Integer parameter wheelsets = 2, each input and output of the default build with _1 and
@@ -280,10 +287,6 @@ def test_a_worker_that_ends_is_an_error_and_a_state_restarts_them(fmu2, monkeypa
     _SEEN.update(p.pid for p in _workers_of(""))
     monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2")
 
-    def inputs(k: int) -> dict:
-        return {f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
-                for n, x in _motion(k, a, j).items()}
-
     s = Instance(fmu2, "killed", creepage_input="kinematic")
     mine = _workers_of("killed")
     _SEEN.update(p.pid for p in mine)
@@ -291,11 +294,11 @@ def test_a_worker_that_ends_is_an_error_and_a_state_restarts_them(fmu2, monkeypa
     _SEEN.update(p.pid for p in _workers_of("kept"))
     assert len(mine) == 2
     for k in range(2):
-        assert s.step(**inputs(k)) == truth.step(**inputs(k)) == 0
+        assert s.step(**_two_motions(k)) == truth.step(**_two_motions(k)) == 0
     state = s.s.getFMUstate()
     mine[1].kill()
     mine[1].join(10)
-    assert s.step(**inputs(2)) == 3  # fmi2Error
+    assert s.step(**_two_motions(2)) == 3  # fmi2Error
     out = _outputs(s)
     assert [out[j][n] for j in (0, 1) for n in ("status", "status_left")] == [3] * 4
     assert all(x == 0 for j in (0, 1) for n, x in out[j].items() if "status" not in n)
@@ -304,7 +307,7 @@ def test_a_worker_that_ends_is_an_error_and_a_state_restarts_them(fmu2, monkeypa
     new = _workers_of("restarted")
     assert len(new) == 2
     for k in range(2, 5):
-        assert s.step(**inputs(k)) == truth.step(**inputs(k)) == 0
+        assert s.step(**_two_motions(k)) == truth.step(**_two_motions(k)) == 0
         assert _outputs(s) == _outputs(truth), k
     s.s.terminate()
     for p in new:
@@ -316,7 +319,7 @@ def test_a_worker_that_ends_is_an_error_and_a_state_restarts_them(fmu2, monkeypa
     for restore in (after, ref):
         truth.s.setFMUstate(restore)
         truth.t = 5 * STEP
-        assert truth.step(**inputs(5)) == 0
+        assert truth.step(**_two_motions(5)) == 0
         got.append(_outputs(truth))
     assert got[0] == got[1] and got[0][0]["normal_iterations"] < 20  # warm
     truth.s.freeFMUstate(ref)
@@ -476,24 +479,15 @@ def test_reset_keeps_the_workers_and_builds_their_wheelsets_anew(fmu2, monkeypat
     monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2")
     _SEEN.update(p.pid for p in _workers_of(""))
 
-    def inputs(k: int) -> dict:
-        return {f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
-                for n, x in _motion(k, a, j).items()}
-
     s = Instance(fmu2, "reset", creepage_input="kinematic")
     mine = _workers_of("reset")
     _SEEN.update(p.pid for p in mine)
     for k in range(3):
-        s.step(**inputs(k))
-    s.s.reset()
-    s.s.setupExperiment(startTime=0.0)
-    s.s.enterInitializationMode()
-    s.set(creepage_input="kinematic")
-    s.s.exitInitializationMode()
-    s.t = 0.0
+        s.step(**_two_motions(k))
+    s.reset(creepage_input="kinematic")
     fresh = Instance(fmu2, "fresh", creepage_input="kinematic")
     for k in range(1, 3):
-        assert s.step(**inputs(k)) == fresh.step(**inputs(k)) == 0
+        assert s.step(**_two_motions(k)) == fresh.step(**_two_motions(k)) == 0
         assert _outputs(s) == _outputs(fresh), k
     assert all(p.is_alive() for p in mine) and len(mine) == 2
     s.free()
