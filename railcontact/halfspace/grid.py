@@ -182,17 +182,31 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
 
 def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
     """Whole-element offset (i, j) of ``target``'s element (0, 0) in ``source``, when both
-    grids have the same element size and their centres lie on one lattice; else None."""
-    if not ((source.dx == target.dx and source.dy == target.dy)  # (the common case)
-            or (math.isclose(source.dx, target.dx, rel_tol=1e-12)
-                and math.isclose(source.dy, target.dy, rel_tol=1e-12))):
-        return None
-    fi = (target.x0 - source.x0) / source.dx
-    fj = (target.y0 - source.y0) / source.dy
+    grids have the same element size and their centres lie on one lattice; else None
+    (:func:`lattice_offset`)."""
+    i, j, ok = lattice_offset(source.dx, source.dy, source.x0, source.y0, target.dx,
+                              target.dy, target.x0, target.y0)
+    return (i, j) if ok else None
+
+
+def lattice_offset(sdx: float, sdy: float, sx0: float, sy0: float, tdx: float, tdy: float,
+                   tx0: float, ty0: float) -> tuple[int, int, bool]:
+    """Whole-element offset ``(i, j, True)`` of the element (0, 0) of a target grid (element
+    size ``tdx``, ``tdy``, centre of element (0, 0) at ``tx0``, ``ty0`` [m]) in a source
+    grid (``sdx``, ``sdy``, ``sx0``, ``sy0``), when the element sizes agree to 1e-12
+    (relative) and the centres lie on one lattice to 1e-9 of an element; else
+    ``(0, 0, False)``. Plain scalars, compiled as well (:mod:`railcontact.timestep.
+    warmstart`'s kernels read it there)."""
+    if not ((sdx == tdx and sdy == tdy)  # (the common case; else math.isclose's test)
+            or (abs(sdx - tdx) <= 1e-12 * max(abs(sdx), abs(tdx))
+                and abs(sdy - tdy) <= 1e-12 * max(abs(sdy), abs(tdy)))):
+        return 0, 0, False
+    fi = (tx0 - sx0) / sdx
+    fj = (ty0 - sy0) / sdy
     i, j = round(fi), round(fj)
     if abs(fi - i) > 1e-9 or abs(fj - j) > 1e-9:
-        return None
-    return int(i), int(j)
+        return 0, 0, False
+    return int(i), int(j), True
 
 
 def _shifted_copy(v: np.ndarray, shape: tuple[int, int], i: int, j: int) -> np.ndarray:

@@ -32,7 +32,7 @@ import numba
 import numpy as np
 
 from ..geometry.points import ContactPoint, overlap_on_rail
-from ..halfspace.grid import Grid, _lattice_shift, _shifted_copy, nonzero_box, remesh
+from ..halfspace.grid import Grid, _shifted_copy, lattice_offset, nonzero_box, remesh
 from ..halfspace.sums import array_sum, numpy_sum
 from ..normal.bem import REUSE_GENERATIONS, Displacement
 
@@ -173,17 +173,92 @@ def previous_pressure(memory: PatchMemory, grid: Grid, time: float | None = None
                       ) -> np.ndarray:
     """The predicted pressure [Pa] on ``grid`` at ``time`` [s] (module docstring)."""
     c = memory.extrapolation(time)
-    o = memory.older if c > 0 else None
-    shift = _on_lattice(memory, grid)
-    shift_o = _on_lattice(o, grid) if o is not None else (0, 0)
-    if shift is not None and shift_o is not None:  # grids on one lattice: one pass
-        return _extrapolated(memory.pressure, *shift, o.pressure if o is not None else
-                             memory.pressure, *shift_o, float(c), o is not None, True,
-                             *grid.shape)
+    return _previous_pressure(memory, memory.older if c > 0 else None, c, grid, False)
+
+
+def _previous_pressure(memory: PatchMemory, o: PatchMemory | None, c: float, grid: Grid,
+                       reuse: bool) -> np.ndarray | tuple[np.ndarray, Displacement | None]:
+    """:func:`previous_pressure` (``reuse`` False) or :func:`previous_start` (``reuse``:
+    the pressure and, when it can be formed, its displacement) of the memory and its
+    ``older`` step ``o`` (None: no extrapolation) with the factor ``c``: one compiled
+    pass (:func:`_pressure_start`) on one lattice, else re-meshed."""
+    u1 = memory.displacement if reuse else None
+    u0 = o.displacement if o is not None and u1 is not None else None
+    if u1 is not None and not (c <= MAX_REUSE_EXTRAPOLATION
+                               and (o is None or u0 is not None)
+                               and max(u1.generations, u0.generations if u0 is not None
+                                       else 0) < REUSE_GENERATIONS):
+        u1 = None  # (the displacement is not reused: the pressure alone)
+    g, g1 = grid, memory.grid
+    p1 = memory.pressure
+    if p1.ndim == 2 and (o is None or o.pressure.ndim == 2):
+        g0 = g1 if o is None else o.grid
+        p, u, kind = _pressure_start(
+            g.nx, g.ny, g.dx, g.dy, g.x0, g.y0,
+            p1, _NO_FIELD if u1 is None else u1.values, g1.nx, g1.ny, g1.dx, g1.dy,
+            g1.x0, g1.y0, memory.element_box,
+            p1 if o is None else o.pressure, _NO_FIELD if u0 is None else u0.values,
+            g0.nx, g0.ny, g0.dx, g0.dy, g0.x0, g0.y0,
+            memory.element_box if o is None else o.element_box,
+            c, o is not None, u1 is not None)
+        if kind == 2:
+            return p, Displacement(u, 1 + max(u1.generations, u0.generations
+                                              if u0 is not None else 0))
+        if kind == 1:
+            return (p, None) if reuse else p
     p = remesh(memory.pressure, memory.grid, grid)
     if o is not None:
         p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
-    return p
+    return (p, None) if reuse else p
+
+
+_NO_FIELD = np.zeros((0, 0))
+
+
+@numba.njit(cache=True, nogil=True)
+def _pressure_start(nx, ny, dx, dy, x0, y0, p1, u1, n1x, n1y, d1x, d1y, x1, y1, box1,
+                    p0, u0, n0x, n0y, d0x, d0y, x00, y00, box0, c, extrapolate,
+                    reuse):  # pragma: no cover - compiled
+    """The start of a warm patch on the grid (nx, ny, dx, dy, x0, y0) from the remembered
+    pressures ``p1`` (grid n1x, ..., y1; elements with pressure in ``box1``) and, when
+    ``extrapolate``, ``p0`` (n0x, ...) with the factor ``c``: ``(p, u, 2)`` the pressure
+    not floored and its displacement (``reuse``: from ``u1``, ``u0``, where the grid lies
+    on one lattice inside both remembered grids and holds all their pressure, and ``p``
+    has a positive element and both are finite, :func:`_extrapolated_pair`); else
+    ``(p, -, 1)`` the floored pressure re-meshed on one lattice (:func:`_extrapolated`);
+    ``(-, -, 0)`` off the lattice or a field not of its grid's shape (then re-meshed)."""
+    none = np.empty((0, 0))
+    i1, j1, on1 = _lattice_offset(d1x, d1y, x1, y1, dx, dy, x0, y0)
+    on1 = on1 and p1.shape[0] == n1x and p1.shape[1] == n1y
+    i0, j0, on0 = 0, 0, True
+    if extrapolate:
+        i0, j0, on0 = _lattice_offset(d0x, d0y, x00, y00, dx, dy, x0, y0)
+        on0 = on0 and p0.shape[0] == n0x and p0.shape[1] == n0y
+    if not (on1 and on0):
+        return none, none, 0
+    if (reuse and _holds(u1, n1x, n1y, i1, j1, box1, nx, ny)
+            and (not extrapolate or _holds(u0, n0x, n0y, i0, j0, box0, nx, ny))):
+        p, u, ok = _extrapolated_pair(p1, u1, i1, j1, p0, u0, i0, j0, c, extrapolate,
+                                      nx, ny)
+        if ok:
+            return p, u, 2
+    return _extrapolated(p1, i1, j1, p0, i0, j0, c, extrapolate, True, nx, ny), none, 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _holds(u, n1x, n1y, i, j, box, nx, ny):  # pragma: no cover - compiled
+    """Whether the grid (nx, ny) at the offset ``(i, j)`` lies inside the remembered grid
+    (n1x, n1y), its displacement ``u`` is of that shape, and the grid holds the elements
+    with pressure (``box``: rows i0:i1, columns j0:j1; ``i0 < 0``: none)."""
+    if not (u.shape[0] == n1x and u.shape[1] == n1y):
+        return False
+    if i < 0 or j < 0 or i + nx > n1x or j + ny > n1y:
+        return False
+    b0, b1, c0, c1 = box
+    return b0 < 0 or (i <= b0 and b1 <= i + nx and j <= c0 and c1 <= j + ny)
+
+
+_lattice_offset = numba.njit(cache=True, nogil=True)(lattice_offset)
 
 
 MAX_REUSE_EXTRAPOLATION = 1.0 + 1e-9
@@ -213,43 +288,7 @@ def previous_start(memory: PatchMemory, grid: Grid, time: float | None = None
     REUSE_GENERATIONS` old, no pressure left or a NaN in it - the displacement is None and
     the pressure is :func:`previous_pressure`'s (floored)."""
     c = memory.extrapolation(time)
-    o = memory.older if c > 0 else None
-    u1 = memory.displacement
-    u0 = o.displacement if o is not None else None
-    nx, ny = grid.shape
-    if (u1 is not None and c <= MAX_REUSE_EXTRAPOLATION
-            and (o is None or u0 is not None)
-            and max(u1.generations, u0.generations if u0 is not None else 0)
-            < REUSE_GENERATIONS):
-        s1 = _inside(memory, u1, grid)
-        s0 = _inside(o, u0, grid) if o is not None else (0, 0)
-        if s1 is not None and s0 is not None:
-            p, u, ok = _extrapolated_pair(
-                memory.pressure, u1.values, *s1,
-                o.pressure if o is not None else memory.pressure,
-                u0.values if u0 is not None else u1.values, *s0, float(c), o is not None,
-                nx, ny)
-            if ok:
-                return p, Displacement(u, 1 + max(u1.generations, u0.generations
-                                                  if u0 is not None else 0))
-    return previous_pressure(memory, grid, time), None
-
-
-def _inside(memory: PatchMemory, shown: Displacement, grid: Grid) -> tuple[int, int] | None:
-    """The whole-element offset of ``grid`` in ``memory``'s grid when ``grid`` lies inside
-    it and holds all of the memory's pressure, and the memory's pressure and displacement
-    are of its shape; else None."""
-    source = memory.grid
-    if not (memory.pressure.shape == source.shape == shown.values.shape):
-        return None
-    i, j = (0, 0) if source is grid else (_lattice_shift(source, grid) or (-1, -1))
-    nx, ny = grid.nx, grid.ny
-    if i < 0 or j < 0 or i + nx > source.nx or j + ny > source.ny:
-        return None
-    i0, i1, j0, j1 = memory.element_box
-    if i0 >= 0 and not (i <= i0 and i1 <= i + nx and j <= j0 and j1 <= j + ny):
-        return None
-    return i, j
+    return _previous_pressure(memory, memory.older if c > 0 else None, c, grid, True)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -283,9 +322,11 @@ def _on_lattice(memory: PatchMemory, grid: Grid) -> tuple[int, int] | None:
     """The whole-element offset of ``grid`` in ``memory``'s grid (as :func:`remesh` takes
     it), or None when the grids are not on one lattice or a field is not (nx, ny)."""
     source = memory.grid
-    if memory.pressure.shape != source.shape:
+    if memory.pressure.shape != (source.nx, source.ny):
         return None
-    return (0, 0) if source is grid else _lattice_shift(source, grid)
+    i, j, ok = lattice_offset(source.dx, source.dy, source.x0, source.y0, grid.dx, grid.dy,
+                              grid.x0, grid.y0)
+    return (i, j) if ok else None
 
 
 @numba.njit(cache=True, nogil=True)
@@ -339,20 +380,35 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
             or not time - o.time > 0):
         return None
     dt = float(time - o.time)
-    rate = o.traction_rate
-    shift = _lattice_shift(o.grid, grid) if o.grid is not grid else (0, 0)
-    if (shift is not None and traction.shape == (2, *grid.shape)
-            and o.traction.shape == (2, *o.grid.shape)
-            and (rate is None or rate.shape == o.traction.shape)):
-        out, total = _rate(np.ascontiguousarray(traction, dtype=float), o.traction, *shift,
-                           o.traction if rate is None else rate, rate is not None,
-                           float(gain), dt)
-    else:
-        out = (np.asarray(traction, dtype=float) - remesh(o.traction, o.grid, grid)) / dt
-        if rate is not None:
-            out = (1.0 - gain) * remesh(rate, o.grid, grid) + gain * out
-        total = array_sum(out)
+    rate, g, g0 = o.traction_rate, grid, o.grid
+    if traction.ndim == 3 and o.traction.ndim == 3 and (rate is None or rate.ndim == 3):
+        out, total, ok = _rate_on(g.nx, g.ny, g.dx, g.dy, g.x0, g.y0, traction, o.traction,
+                                  g0.nx, g0.ny, g0.dx, g0.dy, g0.x0, g0.y0,
+                                  o.traction if rate is None else rate, rate is not None,
+                                  float(gain), dt)
+        if ok:
+            return out if math.isfinite(total) else None
+    out = (np.asarray(traction, dtype=float) - remesh(o.traction, o.grid, grid)) / dt
+    if rate is not None:
+        out = (1.0 - gain) * remesh(rate, o.grid, grid) + gain * out
+    total = array_sum(out)
     return out if math.isfinite(total) else None
+
+
+@numba.njit(cache=True, nogil=True)
+def _rate_on(nx, ny, dx, dy, x0, y0, p, p0, n0x, n0y, d0x, d0y, x00, y00, v0, smooth,
+             gain, dt):  # pragma: no cover - compiled
+    """:func:`_rate` of the traction ``p`` (2, nx, ny) on the grid (nx, ny, dx, dy, x0,
+    y0) and the older step's ``p0`` and rate ``v0`` on its grid (n0x, ...), where the two
+    grids lie on one lattice and the fields have their grids' shapes: ``(rate, its sum,
+    True)``; else ``(-, -, False)``."""
+    i0, j0, on = _lattice_offset(d0x, d0y, x00, y00, dx, dy, x0, y0)
+    if not (on and p.shape[0] == 2 and p.shape[1] == nx and p.shape[2] == ny
+            and p0.shape[0] == 2 and p0.shape[1] == n0x and p0.shape[2] == n0y
+            and (not smooth or v0.shape == p0.shape)):
+        return np.empty((0, 0, 0)), 0.0, False
+    out, total = _rate(p, p0, i0, j0, v0, smooth, gain, dt)
+    return out, total, True
 
 
 @numba.njit(cache=True, nogil=True)
@@ -392,12 +448,16 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
     step then transforms and iterates on a grid a third of the size the Hertz estimate
     would mesh (whose area, for the wheel load, is the rigid interpenetration area with a
     margin)."""
-    boxes = [m.contact_box for m in (memory, memory.older) if m is not None]
-    boxes = [b for b in boxes if b is not None]
-    if not boxes:
-        return None
-    x0, x1 = min(b[0] for b in boxes), max(b[1] for b in boxes)
-    y0, y1 = min(b[2] for b in boxes), max(b[3] for b in boxes)
+    b, o = memory.contact_box, memory.older
+    ob = None if o is None else o.contact_box
+    if b is None or ob is None:
+        b = b or ob
+        if b is None:
+            return None
+        x0, x1, y0, y1 = b
+    else:  # (min and max of the two, as of a sequence: the first of equal ones)
+        x0, x1 = (ob[0] if ob[0] < b[0] else b[0]), (ob[1] if ob[1] > b[1] else b[1])
+        y0, y1 = (ob[2] if ob[2] < b[2] else b[2]), (ob[3] if ob[3] > b[3] else b[3])
     g = memory.grid
     mx = AREA_MARGIN_ELEMENTS * g.dx + AREA_MARGIN_SHARE * (x1 - x0)
     my = AREA_MARGIN_ELEMENTS * g.dy + AREA_MARGIN_SHARE * (y1 - y0)
@@ -443,22 +503,33 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
     """
     if memory.traction is None or memory.state is None:
         return None, None
+    return _previous_tangential(memory, memory.extrapolation(time), grid)
+
+
+def _previous_tangential(memory: PatchMemory, c: float, grid: Grid
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`previous_tangential` of a memory with a traction and a map, with the
+    extrapolation factor ``c`` (:meth:`PatchMemory.extrapolation`): along its rate in one
+    compiled pass (:func:`_traction_start`) on one lattice."""
     o = memory.older
-    c = memory.extrapolation(time)
     rate = memory.traction_rate
-    shift = _on_lattice(memory, grid)
-    if c > 0 and rate is not None and rate.shape == memory.traction.shape:
+    tr, st, g1 = memory.traction, memory.state, memory.grid
+    if c > 0 and rate is not None and rate.shape == tr.shape:
         h = c * float(memory.time - o.time)  # t - t_k, limited as c is
-        if shift is not None and memory.traction.shape == (2, *memory.grid.shape):
-            st = memory.state  # (one pass: the traction advanced, the map shifted as
-            if st.shape == memory.grid.shape and st.dtype.kind in "iub":  # _state_on does)
-                return _advanced(memory.traction, rate, st.astype(np.int8, copy=False),
-                                 *shift, h, *grid.shape)
-            t = _advanced(memory.traction, rate, _NO_MAP, *shift, h, *grid.shape)[0]
-        else:
-            t = remesh(memory.traction, memory.grid, grid) + h * remesh(rate, memory.grid,
-                                                                        grid)
+        if tr.ndim == 3 and memory.pressure.ndim == 2:
+            mapped = st.ndim == 2 and st.dtype.kind in "iub"
+            t, shifted, kind = _traction_start(
+                grid.nx, grid.ny, grid.dx, grid.dy, grid.x0, grid.y0, tr, rate,
+                st if mapped else _NO_MAP, mapped, memory.pressure.shape[0],
+                memory.pressure.shape[1], g1.nx, g1.ny, g1.dx, g1.dy, g1.x0, g1.y0, h)
+            if kind == 2:  # (one pass: the traction advanced, the map shifted as
+                return t, shifted  # _state_on does)
+            if kind == 1:
+                return t, _state_on(memory, grid, None)  # (the map not of its grid)
+        shift = _on_lattice(memory, grid)
+        t = remesh(tr, g1, grid) + h * remesh(rate, g1, grid)
         return t, _state_on(memory, grid, shift)
+    shift = _on_lattice(memory, grid)
     o = o if c > 0 and o is not None and o.traction is not None else None
     shift_o = _on_lattice(o, grid) if o is not None else (0, 0)
     if (shift is not None and shift_o is not None and memory.state.shape == memory.grid.shape
@@ -475,6 +546,25 @@ def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = No
     if o is not None:
         t = t + c * (t - remesh(o.traction, o.grid, grid))
     return t, _state_on(memory, grid, None)
+
+
+@numba.njit(cache=True, nogil=True)
+def _traction_start(nx, ny, dx, dy, x0, y0, v, rate, state, mapped, npx, npy, n1x, n1y,
+                    d1x, d1y, x1, y1, h):  # pragma: no cover - compiled
+    """The traction ``v + h rate`` (:func:`_advanced`) on the grid (nx, ny, dx, dy, x0,
+    y0) from the remembered one's (n1x, ..., y1; its pressure (npx, npy)) and, when
+    ``mapped`` and the map ``state`` is of the grid's shape, the map shifted:
+    ``(traction, map, 2)``; ``(traction, -, 1)`` without the map; ``(-, -, 0)`` off the
+    lattice or a field not of its grid's shape (then re-meshed)."""
+    i, j, on = _lattice_offset(d1x, d1y, x1, y1, dx, dy, x0, y0)
+    if not (on and npx == n1x and npy == n1y and v.shape[0] == 2 and v.shape[1] == n1x
+            and v.shape[2] == n1y):
+        return np.empty((0, 0, 0)), np.empty((0, 0), dtype=np.int8), 0
+    if mapped and state.shape[0] == n1x and state.shape[1] == n1y:
+        t, shifted = _advanced(v, rate, state, i, j, h, nx, ny)
+        return t, shifted, 2
+    t, shifted = _advanced(v, rate, state[:0, :0], i, j, h, nx, ny)
+    return t, shifted, 1
 
 
 def _state_on(memory: PatchMemory, grid: Grid, shift: tuple[int, int] | None) -> np.ndarray:

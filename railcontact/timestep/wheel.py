@@ -37,11 +37,11 @@ from .inputs import Kinematics, WheelSetup
 from .results import NOT_CONVERGED, OK, WheelContact, fill_resultants
 from .warmstart import (
     PatchMemory,
+    _previous_pressure,
+    _previous_tangential,
     match,
     merged,
     previous_bounds,
-    previous_start,
-    previous_tangential,
     traction_rate,
 )
 
@@ -112,39 +112,10 @@ class StepStart:
                    before: WheelPass | None) -> WheelPass:
         """One solve of the wheel's patches: the normal BEM under ``control``, then the
         tangential BEM; warm-started from :attr:`first` (the first pass) or ``before``'s
-        memory, remembering :attr:`previous` as the older step."""
+        memory (:class:`PassStart`), remembering :attr:`previous` as the older step."""
         s, pair, time = self.setup.settings, problem.pair, self.time
         source = self.first if before is None else before.memory
         previous = self.previous
-        sgn = SIDES[problem.side]
-
-        def estimate_for(cp: ContactPoint, hz: HertzSolution | None, ctrl: Control
-                         ) -> WarmStart:
-            def hertz_of() -> HertzSolution:  # (formed here only where it is needed)
-                return hz or hertz(cp.A, cp.B, pair, **ctrl.kwargs())
-
-            def estimate() -> WarmStart:  # KP/INFCON cost a solve of their own: when needed
-                return normal_estimate(s.normal_settings, hertz_of(), *samples(cp)[:3],
-                                       pair, ctrl)
-
-            m = match(source, cp.rail_u, cp.position[2])
-            if m is None:
-                return estimate()
-
-            def pressure_on(grid: Grid) -> NormalStart:  # (with A p, when the memory has it)
-                p, shown = previous_start(m, grid, time)
-                if shown is not None:  # (then p has pressure)
-                    return NormalStart(p, shown)
-                return NormalStart(p) if array_sum(p) > 0 else estimate().pressure_on(grid)
-            # the potential area: where the contact was - unless the patch's rigid overlap
-            # took in another remembered patch (two patches merged): then the rigid
-            # overlap's, as from cold (the other's area lies outside this one's, and the
-            # contact inside would not reach its edge); Hertz's penetration read only then
-            bounds = (None if len(source) > 1 and merged(cp, m, source,
-                                                         hertz_of().penetration)
-                      else previous_bounds(m))
-            return WarmStart("previous", pressure_on, bounds)
-
         # the frame at the reference point formed first at the approach of the step (or
         # pass) that starts this one, extrapolated in time: one pass in the common case
         start = _start(source, time) if source else None
@@ -153,52 +124,140 @@ class StepStart:
             start = (approach, start[1])
         patches = solve_wheel_normal(problem.track, problem.wheelset, problem.pose,
                                      problem.side, control, settings.patch, pair,
-                                     estimate_for, reference=settings.reference,
-                                     start=start, problem=problem)
-        kept = [p for p in patches if p.normal.force > 0]
-        charge(kept, [p for p in patches if p.normal.force <= 0])  # their work counts
+                                     PassStart(source, time, s, pair),
+                                     reference=settings.reference, start=start,
+                                     problem=problem)
+        kept, dropped = [], []
+        for p in patches:
+            (kept if p.normal.force > 0 else dropped).append(p)
+        if dropped:
+            charge(kept, dropped)  # their work counts
         patches = kept
         creepages, memory = [], []
         approach = vertical_approach(patches)
         tangential = settings.tangential is not None
+        # the traction extrapolated in time, and its rate kept, for SteadyGS only
+        # (previous_tangential, traction_rate)
+        steady = s.tangential_solver != "convexgs"
+        sgn = SIDES[problem.side]
         for patch in patches:
-            cp = patch.geometry
+            cp, n = patch.geometry, patch.normal
             u, z = cp.rail_u, cp.position[2]
-            m = match(source, u, z)  # None without warm start
+            m = match(source, u, z) if source else None  # None without warm start
+            last = m if previous is source else match(previous, u, z)
+            work = patch.work
             if tangential:
                 c = self.creepage(cp, problem)
                 creepages.append(c)
-                side_creep = [c[0], sgn * c[1], sgn * c[2]]
                 t0 = perf_counter()
-                # the traction extrapolated in time for SteadyGS only (previous_tangential)
-                at = time if s.tangential_solver != "convexgs" else None
-                prev = previous_tangential(m, patch.normal.grid, at) if m else None
-                patch.work.seconds += perf_counter() - t0
+                prev = None
+                if m is not None:
+                    prev = ((None, None) if m.traction is None or m.state is None else
+                            _previous_tangential(m, m.extrapolation(time if steady else
+                                                                    None), n.grid))
+                seconds = work.seconds
                 solve_patch_tangential(patch, settings.tangential, pair, s.fft,
-                                       creepage=side_creep, previous=prev)
+                                       creepage=[c[0], sgn * c[1], sgn * c[2]],
+                                       previous=prev)
+                seconds = work.seconds - seconds  # (the solve's own time, which it kept)
             t = patch.tangential
-            last = m if previous is source else match(previous, u, z)
-            # the traction's rate smoothed over the steps (SteadyGS's extrapolation only;
-            # its time is the patch's work, as the start it serves)
-            rate = None
-            if t is not None and s.tangential_solver != "convexgs":
-                t1 = perf_counter()
-                rate = traction_rate(t.traction, patch.normal.grid, time, last)
-                patch.work.seconds += perf_counter() - t1
+            # the traction's rate smoothed over the steps; its time, and the start's, is
+            # the patch's work (the interval less the solve's own)
+            rate = (traction_rate(t.traction, n.grid, time, last)
+                    if t is not None and steady else None)
+            if tangential:
+                work.seconds += (perf_counter() - t0) - seconds
             # what a newer step keeps of the older one: its traction and time for the
             # extrapolation, not its own older step or traction rate, which this step's
             # rate has taken in (the memory, and an FMU's saved state, stay two steps deep)
-            older = None if last is None else last.without_older()
-            n = patch.normal
+            g = cp.contact_angle
             memory.append(PatchMemory(
-                grid=n.grid, pressure=n.pressure,
-                traction=None if t is None else t.traction,
-                state=None if t is None else t.state, u=u, z=z, time=time, older=older,
-                vertical_creep=0.0 if t is None else
-                float(t.force[1] * math.sin(cp.contact_angle)), approach=approach,
-                vertical_normal=n.force * math.cos(cp.contact_angle), traction_rate=rate,
-                displacement=n.displacement, element_box=n.contact_box))
+                n.grid, n.pressure, None if t is None else t.traction,
+                None if t is None else t.state, u, z, time,
+                None if last is None else last.without_older(),
+                0.0 if t is None else float(t.force[1] * math.sin(g)), approach,
+                n.force * math.cos(g), rate, n.displacement, n.contact_box))
         return WheelPass(patches, creepages, memory)
+
+
+class PassStart:
+    """The start of each patch of a wheel's pass (``estimate_for`` of
+    :func:`~railcontact.contact.wheelrail.solve_wheel_normal`): the remembered patch the
+    contact point matches (:func:`~.warmstart.match`), else the settings' estimate.
+
+    Parameters
+    ----------
+    source
+        The remembered patches the pass starts from (empty: cold).
+    time
+        The step's time [s] (None: no extrapolation in time).
+    settings
+        The wheel's :class:`~railcontact.settings.ContactSettings`.
+    pair
+        The elastic pair.
+    """
+
+    __slots__ = ("pair", "settings", "source", "time")
+
+    def __init__(self, source: Memory, time: float | None, settings, pair: ElasticPair
+                 ) -> None:
+        self.source, self.time, self.settings, self.pair = source, time, settings, pair
+
+    def __call__(self, cp: ContactPoint, hz: HertzSolution | None, ctrl: Control
+                 ) -> WarmStart:
+        """The start of the patch at ``cp`` (Hertz's solution ``hz`` when formed, the
+        normal ``ctrl``): the remembered patch's (:class:`PatchStart`), with the potential
+        area where its contact was - unless the patch's rigid overlap took in another
+        remembered patch (two patches merged): then the rigid overlap's, as from cold
+        (the other's area lies outside this one's, and the contact inside would not reach
+        its edge); Hertz's penetration read only then."""
+        source = self.source
+        m = match(source, cp.rail_u, cp.position[2]) if source else None
+        start = PatchStart(self, cp, hz, ctrl, m)
+        if m is None:
+            return start.estimate()
+        bounds = (None if len(source) > 1 and merged(cp, m, source,
+                                                     start.hertz().penetration)
+                  else previous_bounds(m))
+        return WarmStart("previous", start.pressure_on, bounds)
+
+
+class PatchStart:
+    """One patch's start in a pass (:class:`PassStart`): the remembered patch ``memory``
+    (None: none) extrapolated to the step's time, else the settings' estimate on the
+    Hertz solution at ``cp`` (``hz``, or formed when needed under ``ctrl``; KP/INFCON cost
+    a solve of their own: formed only when needed)."""
+
+    __slots__ = ("cp", "ctrl", "factor", "hz", "memory", "of")
+
+    def __init__(self, of: PassStart, cp: ContactPoint, hz: HertzSolution | None,
+                 ctrl: Control, memory: PatchMemory | None) -> None:
+        self.of, self.cp, self.hz, self.ctrl, self.memory = of, cp, hz, ctrl, memory
+        self.factor = 0.0 if memory is None else memory.extrapolation(of.time)
+
+    def hertz(self) -> HertzSolution:
+        """Hertz's solution at the contact point (formed here only where it is needed)."""
+        if self.hz is None:
+            cp = self.cp
+            self.hz = hertz(cp.A, cp.B, self.of.pair, **self.ctrl.kwargs())
+        return self.hz
+
+    def estimate(self) -> WarmStart:
+        """The settings' estimate (a patch without a remembered one, or one whose
+        remembered pressure is gone)."""
+        of = self.of
+        return normal_estimate(of.settings.normal_settings, self.hertz(),
+                               *samples(self.cp)[:3], of.pair, self.ctrl)
+
+    def pressure_on(self, grid: Grid) -> NormalStart:
+        """The remembered pressure extrapolated onto ``grid``, with its ``A p`` when the
+        memory has it (:func:`~.warmstart.previous_start`); without pressure left, the
+        estimate's."""
+        m, c = self.memory, self.factor
+        p, shown = _previous_pressure(m, m.older if c > 0 else None, c, grid, True)
+        if shown is not None:  # (then p has pressure)
+            return NormalStart(p, shown)
+        return NormalStart(p) if array_sum(p) > 0 else self.estimate().pressure_on(grid)
 
 
 def wheel_settings(setup: WheelSetup, tangential: bool) -> WheelSettings:
@@ -317,9 +376,16 @@ def _start(source: Memory, time: float | None) -> tuple[float, float]:
     """The vertical approach [m] of a wheel and the vertical load [N] of its normal forces
     in the step ``source`` remembers, extrapolated linearly to ``time`` [s] from the step
     before it when both are known (:meth:`PatchMemory.extrapolation`)."""
-    a, q = source[0].approach, sum([m.vertical_normal for m in source])
+    first = source[0]
+    a, f = first.approach, first.extrapolation(time)
+    if len(source) == 1:  # (the common case: sum([q]) is 0.0 + q)
+        q, o = 0.0 + first.vertical_normal, first.older
+        if f > 0 and o is not None and o.approach > 0:
+            q_o = 0.0 + o.vertical_normal
+            a, q = max(a + f * (a - o.approach), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
+        return a, q
+    q = sum([m.vertical_normal for m in source])
     older = [m.older for m in source]
-    f = source[0].extrapolation(time)
     if f > 0 and None not in older and older[0].approach > 0:
         a_o, q_o = older[0].approach, sum([o.vertical_normal for o in older])
         a, q = max(a + f * (a - a_o), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
