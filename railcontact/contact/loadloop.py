@@ -16,6 +16,8 @@ from dataclasses import replace
 from time import perf_counter
 from typing import TypeVar
 
+import numpy as np
+
 from ..errors import RailContactError, SolverError
 from ..geometry.points import ContactPoint
 from ..halfspace.hertz import hertz
@@ -147,7 +149,10 @@ def vertical_approach(patches: list[PatchSolution]) -> float:
 def other_root(patches: list[PatchSolution]) -> float | None:
     """The approach [m] of another root of the wheel's load its patches name
     (:attr:`~.results.PatchSolution.load_other`), None when none does."""
-    return next((p.load_other for p in patches if p.load_other is not None), None)
+    for p in patches:
+        if p.load_other is not None:
+            return p.load_other
+    return None
 
 
 def vertical_force(patches: list[PatchSolution]) -> float:
@@ -187,6 +192,8 @@ def load_unique(patches: list[PatchSolution], friction: float | FrictionTable) -
     only appears at a larger approach than the returned one (a flange touching beyond a
     tread contact) could carry the load a second time there, unseen.
     """
+    if len(patches) <= 1:  # (then one loaded patch at most)
+        return True
     loaded = [p for p in patches if p.tangential is not None and p.geometry is not None]
     if len(loaded) <= 1:
         return True
@@ -351,6 +358,8 @@ def first_root(residual: Callable[[float], tuple[float, T]], solution: T, approa
     so return the same root. A root below that the secant does not find (beyond
     :data:`LOAD_SLACK_CAP`) leaves ``solution``, said not to be the only one; a probe that
     raises (beyond the model) leaves it as it is."""
+    if type(merges) is np.ndarray and merges.size == 0:  # (the common case: none)
+        return solution, None
     m = [float(a) for a in merges]
     below = [a for a in m if approach / MERGE_WINDOW <= a < approach]
     above = [a for a in m if approach < a <= approach * MERGE_WINDOW]
@@ -396,7 +405,10 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     q = problem.control.load
     passes: list[WheelPass] = []
 
-    def wheel_pass(normal: Control) -> tuple[float, WheelPass]:
+    def wheel_pass(value: float, by_load: bool = True) -> tuple[float, WheelPass]:
+        """The pass with the normal forces carrying ``value`` [N] (``by_load``), else at
+        the vertical approach ``value`` [m]: its vertical force less the load, and it."""
+        normal = Control(load=value) if by_load else Control(penetration=value)
         passes.append(start.solve_pass(problem, settings, normal,
                                        passes[-1] if passes else None))
         return vertical_force(passes[-1].patches) - q, passes[-1]
@@ -406,14 +418,13 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     seconds = perf_counter() - t0
     first = min(max(q - share, 0.05 * q), MAX_SHARE * q)
     rtol, t = settings.load_tolerance, settings.tangential
-    final, failure = creep_load_secant(lambda qn: wheel_pass(Control(load=qn)), q, first,
-                                       rtol)
+    final, failure = creep_load_secant(wheel_pass, q, first, rtol)
     patches = final.patches
     if not patches:
         return WheelSolution(memory=final.memory)
     other = None
     if not failure:  # the smallest approach of the load with its creep forces
-        final, other = first_root(lambda a: wheel_pass(Control(penetration=a)), final,
+        final, other = first_root(lambda a: wheel_pass(a, False), final,
                                   vertical_approach(patches), problem.merges, q, rtol,
                                   noisy=True)
         patches = final.patches
@@ -426,7 +437,8 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
             failure = ("the vertical load with creep forces did not converge at the "
                        "smallest approach that carries it (vertical force "
                        f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
-    count_passes(patches, [p.patches for p in passes])  # the work of every pass counts
+    if len(passes) > 1:  # the work of every pass counts
+        count_passes(patches, [p.patches for p in passes])
     patches[0].work.seconds += seconds
     accept = max(settings.load_acceptance, rtol)
     status, message = Status.OK, "ok"

@@ -197,12 +197,12 @@ def _first_moments(grid: Grid, pressure: np.ndarray) -> tuple[float, float]:
     """The pressure's first moments ``sum x p dA``, ``sum y p dA`` [N m] about the grid's
     origin: ``(grid.x[:, None] * pressure).sum() * dA`` and the same with ``grid.y``, the
     products formed and added in numpy's order in one compiled pass (the same bits)."""
-    da = grid.element_area
+    da = grid.dx * grid.dy  # (Grid.element_area)
     if not pressure.flags.c_contiguous:  # (numpy's products would be laid out otherwise)
         return (float((grid.x[:, None] * pressure).sum() * da),
                 float((grid.y[None, :] * pressure).sum() * da))
     sx, sy = _moment_sums(grid.x0, grid.dx, grid.y0, grid.dy, pressure)
-    return float(sx * da), float(sy * da)
+    return sx * da, sy * da
 
 
 @numba.njit(cache=True, nogil=True)
@@ -285,7 +285,8 @@ def fill_resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pos
     else:
         wheel.area = float(sum(p.normal.area for p in patches))
         wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
-    ts = [p.tangential for p in patches if p.tangential is not None]
+    ts = ([] if main.tangential is None else [main.tangential]) if single else [
+        p.tangential for p in patches if p.tangential is not None]
     if len(ts) == 1:  # one patch: its own ratio, the same count (slip over non-exterior)
         wheel.slip_area_ratio = ts[0].slip_area_ratio
     elif ts:

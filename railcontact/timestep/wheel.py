@@ -88,8 +88,11 @@ class StepStart:
         """The creep forces' share [N] of the vertical ``load`` [N]: the remembered
         step's; cold, estimated on the Hertz ellipse where the normal solve forms its
         frame."""
-        if self.own:
-            return sum(m.vertical_creep for m in self.own)
+        own = self.own
+        if own:
+            if len(own) == 1:  # (as sum() forms it: 0 + the one share)
+                return 0 + own[0].vertical_creep
+            return sum(m.vertical_creep for m in own)
         cp, s = problem.first, self.setup.settings
         if (s.patch_frame == "reference" and math.isfinite(cp.B) and cp.B > 0
                 and cp.A > 0):
@@ -378,10 +381,10 @@ def _start(source: Memory, time: float | None) -> tuple[float, float]:
     before it when both are known (:meth:`PatchMemory.extrapolation`)."""
     first = source[0]
     a, f = first.approach, first.extrapolation(time)
-    if len(source) == 1:  # (the common case: sum([q]) is 0.0 + q)
-        q, o = 0.0 + first.vertical_normal, first.older
+    if len(source) == 1:  # (the common case: sum([q]) is 0 + q)
+        q, o = 0 + first.vertical_normal, first.older
         if f > 0 and o is not None and o.approach > 0:
-            q_o = 0.0 + o.vertical_normal
+            q_o = 0 + o.vertical_normal
             a, q = max(a + f * (a - o.approach), 0.5 * a), max(q + f * (q - q_o), 0.5 * q)
         return a, q
     q = sum([m.vertical_normal for m in source])
