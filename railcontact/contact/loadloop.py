@@ -423,7 +423,10 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     if not patches:
         return WheelSolution(memory=final.memory)
     other = None
-    if not failure:  # the smallest approach of the load with its creep forces
+    merges = problem.merges
+    if not failure and not (type(merges) is np.ndarray and merges.size == 0):
+        # the smallest approach of the load with its creep forces (none other without
+        # merges of patches: first_root)
         final, other = first_root(lambda a: wheel_pass(a, False), final,
                                   vertical_approach(patches), problem.merges, q, rtol,
                                   noisy=True)

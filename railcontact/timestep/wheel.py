@@ -125,9 +125,9 @@ class StepStart:
         approach = self.approach if before is None else None
         if start is not None and approach is not None and approach > 0:  # expected there
             start = (approach, start[1])
+        starts = PassStart(source, time, s, pair)
         patches = solve_wheel_normal(problem.track, problem.wheelset, problem.pose,
-                                     problem.side, control, settings.patch, pair,
-                                     PassStart(source, time, s, pair),
+                                     problem.side, control, settings.patch, pair, starts,
                                      reference=settings.reference, start=start,
                                      problem=problem)
         kept, dropped = [], []
@@ -146,21 +146,25 @@ class StepStart:
         for patch in patches:
             cp, n = patch.geometry, patch.normal
             u, z = cp.rail_u, cp.position[2]
-            m = match(source, u, z) if source else None  # None without warm start
+            ps = starts.last  # (the start of this patch's contact point: its match)
+            if ps is not None and ps.cp is cp:
+                m, c = ps.memory, ps.factor
+            else:
+                m = match(source, u, z) if source else None  # None without warm start
+                c = 0.0 if m is None else m.extrapolation(time)
             last = m if previous is source else match(previous, u, z)
             work = patch.work
             if tangential:
-                c = self.creepage(cp, problem)
-                creepages.append(c)
+                k = self.creepage(cp, problem)
+                creepages.append(k)
                 t0 = perf_counter()
                 prev = None
-                if m is not None:
+                if m is not None:  # (the factor at the step's time for SteadyGS, else 0)
                     prev = ((None, None) if m.traction is None or m.state is None else
-                            _previous_tangential(m, m.extrapolation(time if steady else
-                                                                    None), n.grid))
+                            _previous_tangential(m, c if steady else 0.0, n.grid))
                 seconds = work.seconds
                 solve_patch_tangential(patch, settings.tangential, pair, s.fft,
-                                       creepage=[c[0], sgn * c[1], sgn * c[2]],
+                                       creepage=[k[0], sgn * k[1], sgn * k[2]],
                                        previous=prev)
                 seconds = work.seconds - seconds  # (the solve's own time, which it kept)
             t = patch.tangential
@@ -200,11 +204,14 @@ class PassStart:
         The elastic pair.
     """
 
-    __slots__ = ("pair", "settings", "source", "time")
+    __slots__ = ("last", "pair", "settings", "source", "time")
 
     def __init__(self, source: Memory, time: float | None, settings, pair: ElasticPair
                  ) -> None:
         self.source, self.time, self.settings, self.pair = source, time, settings, pair
+        self.last: PatchStart | None = None
+        """The last patch start formed (its contact point's match read again after the
+        normal solve)."""
 
     def __call__(self, cp: ContactPoint, hz: HertzSolution | None, ctrl: Control
                  ) -> WarmStart:
@@ -216,7 +223,7 @@ class PassStart:
         its edge); Hertz's penetration read only then."""
         source = self.source
         m = match(source, cp.rail_u, cp.position[2]) if source else None
-        start = PatchStart(self, cp, hz, ctrl, m)
+        self.last = start = PatchStart(self, cp, hz, ctrl, m)
         if m is None:
             return start.estimate()
         bounds = (None if len(source) > 1 and merged(cp, m, source,
