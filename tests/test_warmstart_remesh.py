@@ -99,3 +99,60 @@ def test_lattice_offset_as_remesh_takes_it():
         assert _on_lattice(m, b) == want
         on += want is not None
     assert 0 < on < 3000
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_traction_along_its_rate_equals_remesh_of_both(seed):
+    """The traction advanced along the remembered rate, ``p_k + (t - t_k) v_k``, and the
+    map, in one compiled pass on one lattice, equal the fields re-meshed by
+    :func:`remesh` (nearest element for the map), bit for bit - for maps of int8, int64
+    and bool."""
+    rng = np.random.default_rng(100 + seed)
+    older = _memory(rng, *rng.integers(-8, 9, 2), *rng.integers(3, 20, 2), time=0.0)
+    m = _memory(rng, *rng.integers(-8, 9, 2), *rng.integers(3, 20, 2), time=1e-3, older=older)
+    nx, ny = (int(n) for n in rng.integers(3, 20, 2))
+    grid = Grid(nx, ny, DX, DY, float(rng.integers(-8, 9)) * DX, float(rng.integers(-8, 9)) * DY)
+    rate = rng.normal(size=m.traction.shape) * 1e10
+    kinds = (m.state, m.state.astype(np.int64), m.state > 1)
+    for time in (1.7e-3, 2e-3, 9e-3):
+        h = min((time - 1e-3) / 1e-3, 2.0) * 1e-3
+        want_t = remesh(m.traction, m.grid, grid) + h * remesh(rate, m.grid, grid)
+        for st in kinds:
+            mk = PatchMemory(m.grid, m.pressure, m.traction, st, 0.0, 0.0, 1e-3, older,
+                             traction_rate=rate)
+            want_st = np.rint(remesh(st.astype(float), m.grid, grid, method="nearest"))
+            got_t, got_st = previous_tangential(mk, grid, time)
+            assert np.array_equal(got_t, want_t)  # bit for bit
+            assert got_st.dtype == np.int8 and np.array_equal(got_st, want_st)
+
+
+def test_compiled_lattice_offset_equals_its_definition():
+    """The lattice offset the warm start's kernels find (compiled) is the one of the
+    definition with ``math.isclose`` (sizes to 1e-12 relative, origins to 1e-9 of an
+    element), also at the edges of both tolerances."""
+    import math
+
+    from railcontact.timestep.warmstart import _lattice_offset
+
+    def definition(a, b):
+        if not (math.isclose(a.dx, b.dx, rel_tol=1e-12)
+                and math.isclose(a.dy, b.dy, rel_tol=1e-12)):
+            return None
+        fi, fj = (b.x0 - a.x0) / a.dx, (b.y0 - a.y0) / a.dy
+        i, j = round(fi), round(fj)
+        return None if abs(fi - i) > 1e-9 or abs(fj - j) > 1e-9 else (i, j)
+
+    rng = np.random.default_rng(7)
+    found = 0
+    for _ in range(2000):
+        rel = rng.choice([0.0, 0.9e-12, 1.1e-12, 1e-3])
+        off = rng.choice([0.0, 0.9e-9, 1.1e-9, 0.5])
+        a = Grid(4, 5, DX, DY, float(rng.normal() * 1e-2), float(rng.normal() * 1e-2))
+        k = rng.integers(-30, 30, 2)
+        dx = DX * (1 + rel * rng.choice([-1, 1]))
+        b = Grid(3, 3, dx, DY, float(a.x0 + (k[0] + off) * DX), float(a.y0 + k[1] * DY))
+        i, j, ok = _lattice_offset(a.dx, a.dy, a.x0, a.y0, b.dx, b.dy, b.x0, b.y0)
+        want = definition(a, b)
+        assert ((i, j) if ok else None) == want
+        found += want is not None
+    assert 0 < found < 2000

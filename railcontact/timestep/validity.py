@@ -96,12 +96,23 @@ def check_validity(side_sign: int, track_force: Sequence[float],
     settings
         The limits (and the friction coefficient).
     """
-    contacts = [(p.geometry.wheel_s, p.geometry.contact_angle) for p in patches
-                if p.geometry is not None]
-    penetration = max((p.normal.penetration for p in patches), default=0.0)
-    v = check_limits(side_sign, track_force, contacts, penetration, flange_flank, settings)
-    coarse = [m for m in (under_resolved(p.normal.contact, p.normal.grid.dx, p.normal.grid.dy)
-                          for p in patches if p.normal.force > 0) if m]
+    if len(patches) == 1:  # (the common case, as below without the generators)
+        p = patches[0]
+        g, n = p.geometry, p.normal
+        contacts = [] if g is None else [(g.wheel_s, g.contact_angle)]
+        v = check_limits(side_sign, track_force, contacts, n.penetration, flange_flank,
+                         settings)
+        m = under_resolved(n.contact, n.grid.dx, n.grid.dy) if n.force > 0 else None
+        coarse = [m] if m else []
+    else:
+        contacts = [(p.geometry.wheel_s, p.geometry.contact_angle) for p in patches
+                    if p.geometry is not None]
+        penetration = max((p.normal.penetration for p in patches), default=0.0)
+        v = check_limits(side_sign, track_force, contacts, penetration, flange_flank,
+                         settings)
+        coarse = [m for m in (under_resolved(p.normal.contact, p.normal.grid.dx,
+                                             p.normal.grid.dy)
+                              for p in patches if p.normal.force > 0) if m]
     if not coarse:
         return v
     return Validity(v.flags | RESOLUTION, "; ".join([m for m in (v.message, coarse[0]) if m]))

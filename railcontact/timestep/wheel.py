@@ -121,11 +121,12 @@ class StepStart:
         previous = self.previous
         # the frame at the reference point formed first at the approach of the step (or
         # pass) that starts this one, extrapolated in time: one pass in the common case
-        start = _start(source, time) if source else None
+        factor = source[0].extrapolation(time) if source else 0.0
+        start = _start(source, factor) if source else None
         approach = self.approach if before is None else None
         if start is not None and approach is not None and approach > 0:  # expected there
             start = (approach, start[1])
-        starts = PassStart(source, time, s, pair)
+        starts = PassStart(source, time, s, pair, factor)
         patches = solve_wheel_normal(problem.track, problem.wheelset, problem.pose,
                                      problem.side, control, settings.patch, pair, starts,
                                      reference=settings.reference, start=start,
@@ -204,11 +205,14 @@ class PassStart:
         The elastic pair.
     """
 
-    __slots__ = ("last", "pair", "settings", "source", "time")
+    __slots__ = ("factor", "last", "pair", "settings", "source", "time")
 
-    def __init__(self, source: Memory, time: float | None, settings, pair: ElasticPair
-                 ) -> None:
+    def __init__(self, source: Memory, time: float | None, settings, pair: ElasticPair,
+                 factor: float) -> None:
         self.source, self.time, self.settings, self.pair = source, time, settings, pair
+        self.factor = factor
+        """The extrapolation factor of the first remembered patch to ``time``
+        (:meth:`~.warmstart.PatchMemory.extrapolation`)."""
         self.last: PatchStart | None = None
         """The last patch start formed (its contact point's match read again after the
         normal solve)."""
@@ -243,7 +247,8 @@ class PatchStart:
     def __init__(self, of: PassStart, cp: ContactPoint, hz: HertzSolution | None,
                  ctrl: Control, memory: PatchMemory | None) -> None:
         self.of, self.cp, self.hz, self.ctrl, self.memory = of, cp, hz, ctrl, memory
-        self.factor = 0.0 if memory is None else memory.extrapolation(of.time)
+        self.factor = (0.0 if memory is None else of.factor if memory is of.source[0]
+                       else memory.extrapolation(of.time))
 
     def hertz(self) -> HertzSolution:
         """Hertz's solution at the contact point (formed here only where it is needed)."""
@@ -382,12 +387,13 @@ def penetration_approach(found: WheelSearch, vertical: float) -> float:
     return approach
 
 
-def _start(source: Memory, time: float | None) -> tuple[float, float]:
+def _start(source: Memory, f: float) -> tuple[float, float]:
     """The vertical approach [m] of a wheel and the vertical load [N] of its normal forces
-    in the step ``source`` remembers, extrapolated linearly to ``time`` [s] from the step
-    before it when both are known (:meth:`PatchMemory.extrapolation`)."""
+    in the step ``source`` remembers, extrapolated linearly with the factor ``f`` of its
+    first patch to the step's time from the step before it when both are known
+    (:meth:`PatchMemory.extrapolation`)."""
     first = source[0]
-    a, f = first.approach, first.extrapolation(time)
+    a = first.approach
     if len(source) == 1:  # (the common case: sum([q]) is 0 + q)
         q, o = 0 + first.vertical_normal, first.older
         if f > 0 and o is not None and o.approach > 0:
