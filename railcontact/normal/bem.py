@@ -208,7 +208,7 @@ assumption about NaN or infinities, which the solver must see."""
 # their masks and temporaries. ``c`` is the contact set of the iteration (bool).
 # The three with fast-math flags that the iterations call (_gradient, _direction, _step)
 # are called with one signature each (the solve's C-ordered, writeable arrays): the
-# compiled iterations (_iterate_compiled) call the code of that signature through
+# compiled solve (_solve_compiled) calls the code of that signature through
 # pointers, the code Python's calls run (:mod:`~railcontact.halfspace.pointers`).
 _F, _B = numba.types.float64, numba.types.boolean
 _FLAT, _SET = numba.types.float64[::1], numba.types.boolean[::1]
@@ -546,9 +546,9 @@ def _iterate_py(gradient, direction, step, h, p, q, u, work, c, kernel, index, c
 
     One source, run two ways: as Python, ``gradient``, ``direction`` and ``step`` the
     kernels :func:`_gradient`, :func:`_direction` and :func:`_step` and ``product`` and
-    ``inverse`` functions ``f(x, out)`` (any backend); compiled (:func:`_iterate_compiled`,
-    one call that releases the GIL for all the iterations), the kernels first-class
-    functions that call the same kernels' own code through pointers
+    ``inverse`` functions ``f(x, out)`` (any backend); compiled (within
+    :func:`_solve_compiled`, one call that releases the GIL for the whole solve), the
+    kernels first-class functions that call the same kernels' own code through pointers
     (:mod:`~railcontact.halfspace.pointers`: linked into this loop, LLVM could compile
     their fast-math sums anew and change their last bits) and the products the packed plan's
     arguments (:func:`_apply`). Both run the same compiled code in the same order: the
@@ -993,11 +993,9 @@ def solve_normal(
         why = "zero load" if load == 0.0 else no_contact_load(load)
         gaps, contact = np.empty(shape), np.empty(shape, dtype=bool)
         summary = _summary(h, zeros, zeros, float(h.min()), False, gaps, contact)
-        res = _result(grid, zeros, gaps, contact, summary, 0, True, f"no contact: {why}",
-                      0.0, np.empty(0), None, given, t0)
-        if undefined_gap is not None:
-            res.next_to_undefined = bool(_next_to(contact, h, float(undefined_gap)))
-        return res
+        return _result(grid, zeros, gaps, contact, summary, 0, True, f"no contact: {why}",
+                       0.0, np.empty(0), None, given, t0, undefined_gap is not None
+                       and _next_to(contact, h, float(undefined_gap)))
 
     # The start: the given pressure floored (and its shown displacement) in the solve,
     # else formed here.
@@ -1058,17 +1056,13 @@ def solve_normal(
         pressure = q
     summary = (delta, total, largest, count, edge, box)
     if outcome == NO_OVERLAP:
-        res = _result(grid, pressure, gaps, contact, summary, 0, True,
-                      "no contact: penetration below the smallest gap", 0.0, hist, None,
-                      given, t0)
-        res.next_to_undefined = bool(cut)
-        return res
+        return _result(grid, pressure, gaps, contact, summary, 0, True,
+                       "no contact: penetration below the smallest gap", 0.0, hist, None,
+                       given, t0, cut)
     its = int(its)
     if status == VANISHED:
-        res = _result(grid, pressure, gaps, contact, summary, its, False, "pressure vanished",
-                      np.inf, hist, None, given, t0)
-        res.next_to_undefined = bool(cut)
-        return res
+        return _result(grid, pressure, gaps, contact, summary, its, False,
+                       "pressure vanished", np.inf, hist, None, given, t0, cut)
     err = float(err)
     converged, stalled = status == CONVERGED, status == STALLED
     if converged:
@@ -1080,8 +1074,7 @@ def solve_normal(
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
                         f"{STALL_ITERATIONS} iterations")
     res = _result(grid, pressure, gaps, contact, summary, its, converged, message, err, hist,
-                  Displacement(u, int(generations)), given, t0)
-    res.next_to_undefined = bool(cut)
+                  Displacement(u, int(generations)), given, t0, cut)
     lo, hi = SCALE_RANGE
     depth = res.penetration - hmin
     if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
@@ -1099,11 +1092,11 @@ def solve_normal(
 def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarray,
             summary: tuple, iterations: int, converged: bool, message: str, error: float,
             history: np.ndarray, shown: Displacement | None, start: np.ndarray | None,
-            t0: float) -> NormalResult:
+            t0: float, cut: bool) -> NormalResult:
     """The :class:`NormalResult` of a solve from :func:`_summary`'s values ``summary``
     (the approach, the pressure's sum and largest value, the contact elements, whether
     they reach the edge, their box) on ``grid``; ``t0`` the solve's start
-    (:func:`time.perf_counter`)."""
+    (:func:`time.perf_counter`); ``cut`` its :attr:`~NormalResult.next_to_undefined`."""
     delta, total, largest, count, edge, box = summary
     area = grid.element_area
     return NormalResult(
@@ -1112,4 +1105,4 @@ def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarr
         iterations=iterations, converged=converged, message=message,
         wall_time=time.perf_counter() - t0, error=float(error), history=history,
         touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
-        displacement=shown, start=start)
+        displacement=shown, start=start, next_to_undefined=bool(cut))
