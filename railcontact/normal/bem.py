@@ -827,13 +827,16 @@ both products are compiled packed-plan products; else (or without FFTW's C inter
 same solve runs as Python between the kernels (:func:`_solve_py`)."""
 
 
-def _checked(h: np.ndarray, p: np.ndarray | None) -> None:
+def _checked(h: np.ndarray, p: np.ndarray | None) -> float:
     """Raise when the gap ``h`` or the initial pressure ``p`` (in that order) holds a NaN
-    or an infinity (the compiled solve's checks, where it does not run)."""
-    if not _least(h)[1]:
+    or an infinity (the compiled solve's checks, where it does not make them); else
+    return the least gap [m]."""
+    hmin, finite = _least(h)
+    if not finite:
         raise RailContactError("gap contains NaN or infinite values")
     if p is not None:
         _check_finite("initial_pressure", p)
+    return hmin
 
 
 def _check_finite(name: str, a: np.ndarray) -> None:
@@ -1010,8 +1013,8 @@ def solve_normal(
             if not values.flags.carray:
                 values = np.array(values, order="C")
     else:
-        _checked(h, p)
-        if not force_control and _least(h)[0] >= penetration:
+        hmin = _checked(h, p)
+        if not force_control and hmin >= penetration:
             start = np.zeros(shape)  # (no contact: the solve finds it)
         else:
             start = _formed_start(h, p, mask, operator, force_control, load, penetration,
