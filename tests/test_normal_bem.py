@@ -383,12 +383,12 @@ def test_a_problem_scaled_beyond_the_cg_range_is_not_converged():
 
 @pytest.mark.skipif(not HAVE_PYFFTW, reason="the compiled iterations need pyfftw's FFTW")
 def test_compiled_iterations_equal_the_python_run(monkeypatch):
-    """The CG's iterations as one compiled call (the kernels called through pointers, the
-    products the packed plan's) and the same loop run as Python between the same kernels
-    give the same result to the bit: a warm wheel-rail patch (its start's displacement
-    given), cold solves under penetration and load control, with and without the
-    preconditioner, one that reaches its iteration limit, one that stalls, the history
-    handed back in chunks; and the answers are Hertz's and the dense reference's."""
+    """The solve as one compiled call (its checks and start, the kernels called through
+    pointers, the products the packed plan's) and the same source run as Python between
+    the same kernels give the same result to the bit: a warm wheel-rail patch (its
+    start's displacement given), cold solves under penetration and load control, with and
+    without the preconditioner, one that reaches its iteration limit, one that stalls, the
+    history handed back in chunks; and the answers are Hertz's and the dense reference's."""
     import math
 
     import railcontact as rc
@@ -447,19 +447,19 @@ def test_compiled_iterations_equal_the_python_run(monkeypatch):
         return out
 
     calls = [0]
-    iterate = bem._iterate_compiled
+    solve = bem._solve_compiled
 
     def counted(*args):
         calls[0] += 1
-        return iterate(*args)
+        return solve(*args)
 
-    monkeypatch.setattr(bem, "_iterate_compiled", counted)
+    monkeypatch.setattr(bem, "_solve_compiled", counted)
     compiled = solves()
-    assert calls[0] == len(compiled) + compiled[-1].iterations // 3  # (all compiled)
+    assert calls[0] == len(compiled)  # (all compiled, one call each)
     assert len(steps) >= 6 and all(r.converged for r in compiled[1:len(steps) + 1])
     monkeypatch.setattr(InfluenceOperator, "compiled_product", lambda self, floor=None: None)
     python = solves()
-    assert calls[0] == len(compiled) + compiled[-1].iterations // 3  # (none compiled)
+    assert calls[0] == len(compiled)  # (none compiled)
     assert all(not r.converged and r.iterations == 7 for r in (compiled[-5], compiled[-2]))
     assert "stalled" in compiled[-1].message and compiled[-1].iterations > 100
     for a, b in zip(compiled, python, strict=True):
@@ -476,3 +476,58 @@ def test_compiled_iterations_equal_the_python_run(monkeypatch):
     assert np.max(np.abs(compiled[0].pressure - ref.pressure)) < 1e-3 * ref.max_pressure
     for r in compiled[-7:-5] + compiled[-4:-2]:
         assert r.converged and r.max_pressure == pytest.approx(hz.max_pressure, rel=0.02)
+
+
+@pytest.mark.skipif(not HAVE_PYFFTW, reason="the compiled solve needs pyfftw's FFTW")
+def test_compiled_solve_equals_the_python_run_at_its_edges(monkeypatch):
+    """The compiled solve and the same source run as Python agree to the bit where the
+    start is not the plain one: a start with negative elements and its displacement given
+    (their columns taken out), one without any pressure (the least gap's elements start),
+    penetration below the least gap (no contact), a zero load; and the undefined-gap
+    check: elements of an undefined gap beside the Hertz ellipse (x = +-a) are next to the
+    contact, those two elements beyond it are not."""
+    import railcontact.normal.bem as bem
+    from railcontact.halfspace.operator import InfluenceOperator
+    from railcontact.normal.bem import Displacement
+
+    if bem.packed_product[1] is None:
+        pytest.skip("no FFTW C interface: the solve runs as Python only")
+    A, B, hz, g, X, Y, h = hertz_box(1.0, 24, 24)
+    op = influence_operator(g, PAIR, "z", "pyfftw")
+    rough = hz.pressure(X, Y) * (1.0 + 0.3 * np.cos(7 * X / hz.a)) - 0.1 * hz.max_pressure
+    far = np.abs(X) > 1.02 * hz.a + g.dx  # at least one element beyond the ellipse
+    near = np.abs(X) > hz.a - 0.5 * g.dx  # the first elements outside (and on) its edge
+    cases = [dict(load=hz.load, initial_pressure=rough,
+                  initial_displacement=Displacement(op.apply(rough), 2)),
+             dict(load=hz.load, initial_pressure=-np.ones(g.shape)),
+             dict(penetration=0.5 * float(h.min()) if h.min() > 0 else -0.0),
+             dict(penetration=hz.penetration, initial_pressure=rough),
+             dict(load=0.0)]
+
+    def solves():
+        out = [solve_normal(h, g, op, tolerance=1e-9, **kw) for kw in cases]
+        for mark in (far, near):
+            marked = np.where(mark & (np.abs(Y) < 0.3 * hz.b), 1.0, h)
+            out.append(solve_normal(marked, g, op, load=hz.load, tolerance=1e-9,
+                                    undefined_gap=0.5))
+        return out
+
+    compiled = solves()
+    monkeypatch.setattr(InfluenceOperator, "compiled_product", lambda self, floor=None: None)
+    python = solves()
+    for a, b in zip(compiled, python, strict=True):
+        assert a.message == b.message and a.iterations == b.iterations
+        assert a.converged == b.converged and a.error == b.error
+        assert a.force == b.force and a.penetration == b.penetration
+        assert a.next_to_undefined == b.next_to_undefined
+        for f in ("pressure", "gap", "contact", "history"):
+            np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+    assert all(r.converged for r in compiled)
+    for r in compiled[:2]:
+        assert r.force == pytest.approx(hz.load, rel=1e-9)
+        assert r.max_pressure == pytest.approx(hz.max_pressure, rel=0.03)
+    assert compiled[2].area == 0.0 and "below the smallest gap" in compiled[2].message
+    assert compiled[3].force == pytest.approx(hz.load, rel=0.03)
+    assert compiled[4].force == 0.0 and "zero load" in compiled[4].message
+    assert not compiled[5].next_to_undefined and compiled[6].next_to_undefined
+    assert not any(r.next_to_undefined for r in compiled[:5])  # (none asked for)

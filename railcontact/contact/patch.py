@@ -195,7 +195,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         res = solve_normal(gap, grid, op, initial_pressure=p0,
                            tolerance=settings.tolerance, max_iterations=settings.max_iterations,
                            preconditioner=settings.preconditioner, initial_displacement=shown,
-                           min_load=MIN_LOAD, **control.kwargs())
+                           min_load=MIN_LOAD, undefined_gap=UNDEFINED_GAP, **control.kwargs())
         work.normal_iterations += res.iterations
         # the pressure array checked by the solver's summary of it (solve_normal: the
         # force is its sum, max_pressure its largest value or NaN when one is NaN; a
@@ -205,7 +205,7 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
             res.converged = False
             res.message = f"the normal solution is not finite ({res.message})"
             break
-        if _cut_off(res.contact, gap):
+        if res.next_to_undefined:  # (the solve's check of the gap beside its contact)
             res.converged = False
             if profiles:
                 res.message = ("the contact reaches where the profiles end (or turn away), "
@@ -236,29 +236,6 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         bounds = _grown(grid.bounds, bounds, automatic)
     work.seconds = time.perf_counter() - t0
     return res, work
-
-
-def _cut_off(contact: np.ndarray, gap: np.ndarray) -> bool:
-    """Whether a contact element is next to (or on) an element where the ``gap`` [m] is
-    undefined (no profile there: the geometry gives :data:`UNDEFINED_GAP` or more)."""
-    return bool(_next_to(np.asarray(contact, dtype=bool), np.asarray(gap, dtype=float),
-                         UNDEFINED_GAP))
-
-
-@numba.njit(cache=True, nogil=True)
-def _next_to(contact, gap, limit):  # pragma: no cover - compiled
-    """Whether an element with ``gap >= limit`` (NaN: not) is in ``contact`` or has a
-    neighbour along x or y that is, in one pass (the gap is read; the contact only
-    around such elements)."""
-    nx, ny = gap.shape
-    for i in range(nx):
-        for j in range(ny):
-            if gap[i, j] >= limit and (
-                    contact[i, j] or (i > 0 and contact[i - 1, j])
-                    or (i + 1 < nx and contact[i + 1, j]) or (j > 0 and contact[i, j - 1])
-                    or (j + 1 < ny and contact[i, j + 1])):
-                return True
-    return False
 
 
 UNCOVERED_MARGIN = 2

@@ -151,6 +151,10 @@ class NormalResult:
         error against :attr:`pressure` is formed only when asked,
         :func:`~railcontact.normal.starterror.estimate_error`); None when it started
         from its own uniform pressure.
+    next_to_undefined
+        True when a contact element is on or next to an element whose gap is undefined
+        (:func:`solve_normal`'s ``undefined_gap`` or more); False without
+        ``undefined_gap``.
     """
 
     grid: Grid
@@ -171,20 +175,7 @@ class NormalResult:
     contact_box: tuple[int, int, int, int] | None = None
     displacement: Displacement | None = field(default=None, repr=False)
     start: np.ndarray | None = field(default=None, repr=False, compare=False)
-
-
-def _check_field(name: str, value: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray | None:
-    if value is None:
-        return None
-    a = np.asarray(value, dtype=float)
-    if a.shape != shape:
-        raise RailContactError(f"{name} must have the grid shape {shape}, got {a.shape}")
-    # a NaN or an infinity anywhere makes the sum NaN or infinite: the elementwise test
-    # only when the sum is not finite (or overflows)
-    total = array_sum(a)
-    if not math.isfinite(total) and not np.isfinite(a).all():
-        raise RailContactError(f"{name} contains NaN or infinite values")
-    return a
+    next_to_undefined: bool = False
 
 
 def _uniform_start(gap: np.ndarray, operator: InfluenceOperator, penetration: float) -> np.ndarray:
@@ -217,10 +208,11 @@ assumption about NaN or infinities, which the solver must see."""
 # their masks and temporaries. ``c`` is the contact set of the iteration (bool).
 # The three with fast-math flags that the iterations call (_gradient, _direction, _step)
 # are called with one signature each (the solve's C-ordered, writeable arrays): the
-# compiled iterations (_iterate_compiled) call the code of that signature through
+# compiled solve (_solve_compiled) calls the code of that signature through
 # pointers, the code Python's calls run (:mod:`~railcontact.halfspace.pointers`).
 _F, _B = numba.types.float64, numba.types.boolean
 _FLAT, _SET = numba.types.float64[::1], numba.types.boolean[::1]
+_GRID = numba.types.float64[:, ::1]
 _GRADIENT = _F(_FLAT, _FLAT, _FLAT, _F, _B, _SET, _FLAT, _FLAT)
 _DIRECTION = numba.types.UniTuple(_F, 2)(_FLAT, _FLAT, _SET, _FLAT, _B, _B, _F)
 _STEP = numba.types.Tuple((_F, _F, _F, numba.types.int64, _B, _B))(
@@ -312,18 +304,20 @@ def _least(h):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _floored(p, index, change, load, area):  # pragma: no cover - compiled
-    """The start ``q = np.maximum(p, 0.0)`` of a C-ordered ``p`` (nx, ny) (NaN kept and -0
-    made 0, as numpy's) and its sum, added as numpy adds it; with a ``load`` > 0 [N] and a
-    positive sum, ``q`` scaled to it: ``q *= load / (area * sum)`` (``area`` of an element
-    [m^2]). The elements set to zero (negative): the first ``index.size`` of them (flat
-    index, and the change ``0 - p``) in ``index`` and ``change``. Returns ``(q, sum, how
-    many were negative, the scale)`` (scale 1 when not scaled)."""
-    q = np.empty_like(p)
+def _floored(p, q, index, change, load, area):  # pragma: no cover - compiled
+    """The start ``q = np.maximum(p, 0.0)`` (in place, both C-ordered (nx, ny); NaN kept
+    and -0 made 0, as numpy's) of ``p`` and its sum, added as numpy adds it; with a
+    ``load`` > 0 [N] and a positive sum, ``q`` scaled to it: ``q *= load / (area *
+    sum)`` (``area`` of an element [m^2]). The elements set to zero (negative): the first
+    ``index.size`` of them (flat index, and the change ``0 - p``) in ``index`` and
+    ``change``. Returns ``(sum, how many were negative, the scale, whether all of ``p``
+    is finite)`` (scale 1 when not scaled)."""
     flat, qf = p.reshape(p.size), q.reshape(q.size)
     changes = 0
+    finite = True
     for i in range(flat.size):
         x = flat[i]
+        finite = finite and x - x == 0.0
         if x > 0.0 or x != x:
             qf[i] = x
         else:
@@ -339,7 +333,7 @@ def _floored(p, index, change, load, area):  # pragma: no cover - compiled
         scale = load / (area * total)
         for i in range(qf.size):
             qf[i] *= scale
-    return q, total, changes, scale
+    return total, changes, scale, finite
 
 
 @numba.njit(cache=True, nogil=True, fastmath=REASSOCIATE)
@@ -552,9 +546,9 @@ def _iterate_py(gradient, direction, step, h, p, q, u, work, c, kernel, index, c
 
     One source, run two ways: as Python, ``gradient``, ``direction`` and ``step`` the
     kernels :func:`_gradient`, :func:`_direction` and :func:`_step` and ``product`` and
-    ``inverse`` functions ``f(x, out)`` (any backend); compiled (:func:`_iterate_compiled`,
-    one call that releases the GIL for all the iterations), the kernels first-class
-    functions that call the same kernels' own code through pointers
+    ``inverse`` functions ``f(x, out)`` (any backend); compiled (within
+    :func:`_solve_compiled`, one call that releases the GIL for the whole solve), the
+    kernels first-class functions that call the same kernels' own code through pointers
     (:mod:`~railcontact.halfspace.pointers`: linked into this loop, LLVM could compile
     their fast-math sums anew and change their last bits) and the products the packed plan's
     arguments (:func:`_apply`). Both run the same compiled code in the same order: the
@@ -630,38 +624,251 @@ def _iterate_py(gradient, direction, step, h, p, q, u, work, c, kernel, index, c
     return status, k
 
 
+def _iterations(gradient, direction, step, h, p, q, u, work, c, kernel, index, change,
+                product, inverse, precondition, force_control, load, area, self_compliance,
+                tolerance, last, state, counts, hist):
+    """:func:`_iterate_py` as Python; in compiled code its compiled twin (the loop of
+    :func:`_solve_py` run either way)."""
+    return _iterate_py(gradient, direction, step, h, p, q, u, work, c, kernel, index,
+                       change, product, inverse, precondition, force_control, load, area,
+                       self_compliance, tolerance, last, state, counts, hist)
+
+
 _iterate = numba.njit(cache=True, nogil=True)(_iterate_py)
-_gradient_at, _direction_at, _step_at = (function_at(s) for s in (_GRADIENT, _DIRECTION,
-                                                                    _STEP))
+if packed_product[1] is not None:
+
+    @overload(_iterations, jit_options={"nogil": True})
+    def _iterations_compiled(gradient, direction, step, h, p, q, u, work, c, kernel, index,
+                             change, product, inverse, precondition, force_control, load,
+                             area, self_compliance, tolerance, last, state, counts,
+                             hist):  # pragma: no cover - compiled
+        def iterations(gradient, direction, step, h, p, q, u, work, c, kernel, index,
+                       change, product, inverse, precondition, force_control, load, area,
+                       self_compliance, tolerance, last, state, counts, hist):
+            return _iterate(gradient, direction, step, h, p, q, u, work, c, kernel, index,
+                            change, product, inverse, precondition, force_control, load,
+                            area, self_compliance, tolerance, last, state, counts, hist)
+        return iterations
 
 
 @numba.njit(cache=True, nogil=True)
-def _iterate_compiled(kernels, h, p, q, u, work, c, kernel, index, change, product, inverse,
-                      precondition, force_control, load, area, self_compliance, tolerance,
-                      last, state, counts, hist):  # pragma: no cover - compiled
-    """:func:`_iterate_py` compiled, one call: ``kernels`` the addresses of the code of
-    :func:`_gradient`, :func:`_direction` and :func:`_step` (:func:`_kernel_addresses`),
-    called through pointers; ``product`` and ``inverse`` the packed plan's arguments
+def _next_to(contact, gap, limit):  # pragma: no cover - compiled
+    """Whether an element with ``gap >= limit`` (NaN: not) is in ``contact`` or has a
+    neighbour along x or y that is, in one pass (the gap is read; the contact only
+    around such elements)."""
+    nx, ny = gap.shape
+    for i in range(nx):
+        for j in range(ny):
+            if gap[i, j] >= limit and (
+                    contact[i, j] or (i > 0 and contact[i - 1, j])
+                    or (i + 1 < nx and contact[i + 1, j]) or (j > 0 and contact[i, j - 1])
+                    or (j + 1 < ny and contact[i, j + 1])):
+                return True
+    return False
+
+
+SOLVED, GAP_NOT_FINITE, START_NOT_FINITE, NO_OVERLAP, EMPTY_START = range(5)
+"""What :func:`_solve_py` did: solved (the iterations' end in its status), found the gap
+or the start's pressure not finite, found no interpenetration (penetration control: the
+result is no contact), or found no pressure in the floored start (the caller forms
+another start, :func:`_formed_start`, and calls it again)."""
+
+
+def _solve_py(gradient, direction, step, shown_start, h, start, floor, shown, use_shown,
+              generations, p, q, u, gap, contact, kernel, product, inverse, precondition,
+              force_control, load, penetration, area, self_compliance, tolerance,
+              max_iterations, chunk, limit):  # pragma: no cover - also compiled
+    """:func:`solve_normal` on its checked arrays (all C-ordered, (nx, ny)), from the
+    check of the gap ``h`` to the result's fields, as :func:`_iterate_py` one source run
+    two ways: as Python (``gradient``, ``direction``, ``step`` and ``shown_start`` the
+    kernels :func:`_gradient`, :func:`_direction`, :func:`_step` and
+    :func:`_shown_start`, ``product`` and ``inverse`` functions ``f(x, out)``), or
+    compiled (:func:`_solve_compiled`, one call that releases the GIL: the kernels called
+    through pointers, the products the packed plan's arguments).
+
+    The start: with ``floor``, the given pressure ``start`` floored at zero into ``p``
+    and (force control) scaled to the ``load`` [N] (:func:`_floored`); else ``p`` holds
+    the start, formed. Its ``A p``: with ``use_shown``, from ``shown`` (``A`` of
+    ``start``, :class:`Displacement`'s values, formed ``generations`` solves ago) less the
+    columns of the elements the floor set to zero (:func:`_shown_start`), else
+    convolved. The iterations (:func:`_iterate_py`) in ``p`` and ``q`` with ``u = A p``,
+    their history in chunks of ``chunk``; then the result's ``gap`` and ``contact`` (in
+    place, :func:`_summary`) and, with a finite ``limit`` [m], whether the contact is
+    next to an element whose gap is ``limit`` or more (:func:`_next_to`).
+
+    Returns ``(outcome, status, history, iterations, eps, penetration, sum of the
+    pressure, largest pressure, contact elements, whether the contact reaches the edge,
+    (i0, i1, j0, j1), generations of u, whether the result's pressure is in q, least gap,
+    whether the contact is next to the limit)``: the outcome :data:`SOLVED` ..
+    :data:`EMPTY_START`, the iterations' end :data:`RAN_OUT` .. :data:`VANISHED`."""
+    n = h.size
+    hmin, finite = _least(h)
+    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
+    change = np.empty(CHANGE_LIMIT)
+    outcome = SOLVED
+    floored = 0  # elements the start set to zero (their columns leave A p)
+    scale = 1.0  # the start's scale to the load
+    if not finite:
+        outcome = GAP_NOT_FINITE
+    else:
+        total = 1.0
+        if floor:  # np.maximum(start, 0.0), its sum, scaled
+            total, floored, scale, finite = _floored(
+                start, p, index if use_shown else index[:0], change,
+                load if force_control else 0.0, area)
+        if not finite:
+            outcome = START_NOT_FINITE
+        elif not force_control and hmin >= penetration:  # (np.all(h >= penetration))
+            outcome = NO_OVERLAP
+        elif not total > 0.0:  # (p >= 0: no element has pressure)
+            outcome = EMPTY_START
+    status = RAN_OUT
+    hist = np.empty(0)
+    its = 0
+    err = 0.0
+    delta = penetration
+    final = False  # under force control, the approach from the solution's own u
+    in_q = False
+    if outcome == SOLVED:
+        # u = A p of the current p, kept up to date by the iterations: the start's shown
+        # displacement less the columns of the elements the start set to zero, or
+        # convolved
+        if not (use_shown and floored <= CHANGE_LIMIT
+                and shown_start(shown, u, scale, kernel, index, change, floored)):
+            _apply(product, p, u)
+            generations = 0
+        # work rows (_iterate_py): the gradient, its part on the contact, the direction
+        # (the first one's previous one zero), its product, the preconditioned gradient
+        work = np.empty((5, n))
+        work[2, :] = 0.0
+        c = np.empty(n, dtype=np.bool_)
+        state = np.array([0.0 if force_control else penetration, 1.0, np.inf, np.inf])
+        counts = np.zeros(6, dtype=np.int64)
+        counts[3] = generations
+        size = min(max_iterations, chunk)
+        hist = np.empty(size)
+        filled = 0
+        while True:
+            status, k = _iterations(gradient, direction, step, h, p, q, u, work, c, kernel,
+                                    index, change, product, inverse, precondition,
+                                    force_control, load, area, self_compliance, tolerance,
+                                    max_iterations, state, counts, hist[filled:])
+            filled += k
+            if status != HISTORY_FULL:
+                break
+            grown = np.empty(filled + size)
+            grown[:filled] = hist[:filled]
+            hist = grown
+        hist = hist[:filled]
+        in_q = counts[5] != 0
+        if in_q:  # p and q swapped: the current pressure is in q's array
+            p, q = q, p
+        delta, err = state[0], state[3]
+        its, fresh, generations = counts[0], counts[2], counts[3]
+        if status == VANISHED:  # the result: the unscaled pressure, in the other array
+            p, in_q, err = q, not in_q, np.inf
+        else:
+            if status != CONVERGED and (fresh > 0 or generations > 0):
+                _apply(product, p, u)  # the gap from a convolution
+                generations = 0
+            final = force_control
+    elif outcome == NO_OVERLAP:
+        p[:, :] = 0.0
+        u[:, :] = 0.0
+    total = largest = 0.0
+    count = 0
+    edge = cut = False
+    box = (-1, 0, -1, 0)
+    if outcome == SOLVED or outcome == NO_OVERLAP:
+        delta, total, largest, count, edge, box = _summary(h, u, p, delta, final, gap,
+                                                           contact)
+        cut = limit < np.inf and _next_to(contact, h, limit)
+    return (outcome, status, hist, its, err, delta, total, largest, count, edge, box,
+            generations, in_q, hmin, cut)
+
+
+_solve = numba.njit(cache=True, nogil=True)(_solve_py)
+_SHOWN = _B(_GRID, _GRID, _F, _GRID, numba.types.int64[::1], _FLAT, numba.types.int64)
+_gradient_at, _direction_at, _step_at, _shown_at = (
+    function_at(s) for s in (_GRADIENT, _DIRECTION, _STEP, _SHOWN))
+
+
+@numba.njit(cache=True, nogil=True)
+def _solve_compiled(kernels, h, start, floor, shown, use_shown, generations, p, q, u, gap,
+                    contact, kernel, product, inverse, precondition, force_control, load,
+                    penetration, area, self_compliance, tolerance, max_iterations, chunk,
+                    limit):  # pragma: no cover - compiled
+    """:func:`_solve_py` compiled, one call: ``kernels`` the addresses of the code of
+    :func:`_gradient`, :func:`_direction`, :func:`_step` and :func:`_shown_start`
+    (:func:`_kernel_addresses`), called through pointers; ``product`` and ``inverse`` the
+    packed plan's arguments
     (:meth:`~railcontact.halfspace.operator.InfluenceOperator.compiled_product`)."""
-    return _iterate(_gradient_at(kernels[0]), _direction_at(kernels[1]),
-                    _step_at(kernels[2]), h, p, q, u, work, c, kernel, index, change,
-                    product, inverse, precondition, force_control, load, area,
-                    self_compliance, tolerance, last, state, counts, hist)
+    return _solve(_gradient_at(kernels[0]), _direction_at(kernels[1]), _step_at(kernels[2]),
+                  _shown_at(kernels[3]), h, start, floor, shown, use_shown, generations, p,
+                  q, u, gap, contact, kernel, product, inverse, precondition, force_control,
+                  load, penetration, area, self_compliance, tolerance, max_iterations,
+                  chunk, limit)
 
 
 @lru_cache(maxsize=1)
 def _kernel_addresses() -> np.ndarray:
-    """The addresses of the code of :func:`_gradient`, :func:`_direction` and
-    :func:`_step` (their one signature each) for :func:`_iterate_compiled`, formed once."""
+    """The addresses of the code of :func:`_gradient`, :func:`_direction`, :func:`_step`
+    and :func:`_shown_start` (their one signature each) for :func:`_solve_compiled`,
+    formed once."""
     return np.array([address(f, s) for f, s in ((_gradient, _GRADIENT),
-                                                (_direction, _DIRECTION), (_step, _STEP))],
+                                                (_direction, _DIRECTION), (_step, _STEP),
+                                                (_shown_start, _SHOWN))],
                     dtype=np.int64)
 
 
 COMPILED_LOOP = packed_product[1] is not None
-"""Whether :func:`solve_normal` runs its iterations as one compiled call
-(:func:`_iterate_compiled`) where both products are compiled packed-plan products; else
-(or without FFTW's C interface) the same loop runs as Python (:func:`_iterate_py`)."""
+"""Whether :func:`solve_normal` runs as one compiled call (:func:`_solve_compiled`) where
+both products are compiled packed-plan products; else (or without FFTW's C interface) the
+same solve runs as Python between the kernels (:func:`_solve_py`)."""
+
+
+def _checked(h: np.ndarray, p: np.ndarray | None) -> float:
+    """Raise when the gap ``h`` or the initial pressure ``p`` (in that order) holds a NaN
+    or an infinity (the compiled solve's checks, where it does not make them); else
+    return the least gap [m]."""
+    hmin, finite = _least(h)
+    if not finite:
+        raise RailContactError("gap contains NaN or infinite values")
+    if p is not None:
+        _check_finite("initial_pressure", p)
+    return hmin
+
+
+def _check_finite(name: str, a: np.ndarray) -> None:
+    # a NaN or an infinity anywhere makes the sum NaN or infinite: the elementwise test
+    # only when the sum is not finite (or overflows)
+    total = array_sum(a)
+    if not math.isfinite(total) and not np.isfinite(a).all():
+        raise RailContactError(f"{name} contains NaN or infinite values")
+
+
+def _formed_start(h: np.ndarray, p: np.ndarray | None, mask: np.ndarray | None,
+                  operator: InfluenceOperator, force_control: bool, load: float | None,
+                  penetration: float | None, area: float) -> np.ndarray:
+    """The start of the CG where the compiled solve does not floor the given pressure
+    ``p`` itself: none given (a uniform pressure), a mask, a pressure not C-ordered, or a
+    floored pressure without any (then the elements of the least gap, or the uniform
+    pressure); under force control scaled to the load. C-ordered, writeable."""
+    if p is None:
+        p = np.ones(h.shape) if force_control else _uniform_start(h, operator, penetration)
+    else:
+        p = np.maximum(p, 0.0)
+    total = float(p.sum())
+    if mask is not None:
+        p = np.where(mask, p, 0.0)
+        total = float(p.sum())
+    if not total > 0.0:  # (p >= 0: no element has pressure)
+        p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
+            _uniform_start(h, operator, penetration)
+        total = float(p.sum())
+    if force_control:
+        p *= load / (area * total)
+    return np.ascontiguousarray(p, dtype=float)
 
 
 def solve_normal(
@@ -678,6 +885,7 @@ def solve_normal(
     preconditioner: str = "fft",
     initial_displacement: Displacement | None = None,
     min_load: float = 0.0,
+    undefined_gap: float | None = None,
 ) -> NormalResult:
     """Solve the frictionless normal contact problem by Polonsky–Keer's CG method.
 
@@ -723,6 +931,10 @@ def solve_normal(
         A ``load`` [N] below this, as a zero load, is no contact (zero pressure, converged):
         the contact solvers pass :data:`~railcontact.halfspace.hertz.MIN_LOAD`; the default
         solves any positive load, e.g. a problem scaled to test the CG's range.
+    undefined_gap
+        Gaps [m] from this up mark elements where the gap is undefined (a profile's end):
+        the result's :attr:`NormalResult.next_to_undefined` tells whether the contact
+        reaches one. None: no such elements.
 
     Returns
     -------
@@ -737,151 +949,125 @@ def solve_normal(
         h = h.copy()
     if h.shape != shape:
         raise RailContactError(f"gap must have the grid shape {shape}, got {h.shape}")
-    hmin, finite = _least(h)  # (its smallest value, and whether all are finite)
-    if not finite:
-        raise RailContactError("gap contains NaN or infinite values")
-    if operator.components != "z" or (operator.nx, operator.ny) != shape:
-        raise RailContactError("operator must be a 'z' influence operator for this grid")
-    tolerance = check_positive("tolerance", tolerance)
-    if preconditioner not in PRECONDITIONERS:
-        raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
-                               f"got {preconditioner!r}")
-    precondition = preconditioner == "fft"
-    max_iterations = check_count("max_iterations", max_iterations)
-    if (load is None) == (penetration is None):
-        raise RailContactError("give exactly one of load [N] and penetration [m]")
-    force_control = load is not None
-    if force_control:
-        load = check_positive("load", load, "N", allow_zero=True)
-    else:
-        penetration = check_positive("penetration", penetration, "m", allow_zero=True)
-    p = _check_field("initial_pressure", initial_pressure, shape)
+    p = mask = None
+    try:  # (the gap's own check, NaN or infinity, comes first: made where one fails)
+        if operator.components != "z" or (operator.nx, operator.ny) != shape:
+            raise RailContactError("operator must be a 'z' influence operator for this grid")
+        tolerance = check_positive("tolerance", tolerance)
+        if preconditioner not in PRECONDITIONERS:
+            raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
+                                   f"got {preconditioner!r}")
+        precondition = preconditioner == "fft"
+        max_iterations = check_count("max_iterations", max_iterations)
+        if (load is None) == (penetration is None):
+            raise RailContactError("give exactly one of load [N] and penetration [m]")
+        force_control = load is not None
+        if force_control:
+            load = check_positive("load", load, "N", allow_zero=True)
+        else:
+            penetration = check_positive("penetration", penetration, "m", allow_zero=True)
+        if initial_pressure is not None:
+            p = np.asarray(initial_pressure, dtype=float)
+            if p.shape != shape:
+                raise RailContactError(f"initial_pressure must have the grid shape {shape}, "
+                                       f"got {p.shape}")
+        if initial_contact is not None:
+            if p is not None:
+                _check_finite("initial_pressure", p)
+            mask = np.asarray(initial_contact, dtype=bool)
+            if mask.shape != shape:
+                raise RailContactError(f"initial_contact must have the grid shape {shape}, "
+                                       f"got {mask.shape}")
+    except Exception:
+        if not _least(h)[1]:
+            raise RailContactError("gap contains NaN or infinite values") from None
+        raise
     given = p
-    mask = None if initial_contact is None else np.asarray(initial_contact, dtype=bool)
-    if mask is not None and mask.shape != shape:
-        raise RailContactError(f"initial_contact must have the grid shape {shape}, "
-                               f"got {mask.shape}")
     area_el = grid.element_area
-    kernel = np.require(operator.kernels[0, 0], dtype=float, requirements="CW")  # "zz"
-    # (2nx-1, 2ny-1) [m/Pa]
+    kernel = operator.kernels[0, 0]  # "zz" (2nx-1, 2ny-1) [m/Pa]
+    if kernel.dtype != np.float64 or not kernel.flags.carray:
+        kernel = np.require(kernel, dtype=float, requirements="CW")
     self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
 
-    def finish(p, u, delta, its, converged, message, err, hist, final=False, shown=None):
-        # final: under force control, the approach from the solution's own u; shown: its
-        # Displacement (u = A p of the result's p)
-        gap = np.empty(shape)
-        contact = np.empty(shape, dtype=bool)
-        delta, total, largest, count, edge, box = _summary(
-            h, u, p, float(delta), final and force_control, gap, contact)
-        return NormalResult(
-            grid=grid, pressure=p, contact=contact, gap=gap,
-            force=float(total * area_el), penetration=float(delta),
-            max_pressure=float(largest), area=float(count * area_el),
-            iterations=its, converged=converged, message=message,
-            wall_time=time.perf_counter() - t0, error=float(err), history=np.asarray(hist),
-            touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
-            displacement=shown, start=given)
-
-    # Trivial cases: no load, or no interpenetration anywhere.
+    # Trivial case: no load.
     if force_control and (load == 0.0 or load < min_load):
+        _checked(h, p)
         zeros = np.zeros(shape)
         why = "zero load" if load == 0.0 else no_contact_load(load)
-        return finish(zeros, zeros, float(h.min()), 0, True, f"no contact: {why}", 0.0, [])
-    if not force_control and hmin >= penetration:  # (np.all(h >= penetration))
-        zeros = np.zeros(shape)
-        return finish(zeros, zeros, penetration, 0, True,
-                      "no contact: penetration below the smallest gap", 0.0, [])
+        gaps, contact = np.empty(shape), np.empty(shape, dtype=bool)
+        summary = _summary(h, zeros, zeros, float(h.min()), False, gaps, contact)
+        return _result(grid, zeros, gaps, contact, summary, 0, True, f"no contact: {why}",
+                       0.0, np.empty(0), None, given, t0, undefined_gap is not None
+                       and _next_to(contact, h, float(undefined_gap)))
 
-    # Start.
-    index = np.empty(CHANGE_LIMIT, dtype=np.int64)
-    change = np.empty(CHANGE_LIMIT)
+    # The start: the given pressure floored (and its shown displacement) in the solve,
+    # else formed here.
     shown = initial_displacement  # A p of the start, if the caller knows it
-    if shown is not None and not (p is not None and mask is None and p.flags.c_contiguous
-                                  and shown.generations <= REUSE_GENERATIONS
-                                  and shown.values.shape == shape):
-        shown = None
-    floored = 0  # elements the start set to zero (their columns leave A p)
-    scale = 0.0  # the start's scale to the load (0: not scaled yet)
-    if p is None:
-        p = (np.ones(shape) if force_control else _uniform_start(h, operator, penetration))
-        total = float(p.sum())
-    elif mask is None and p.flags.c_contiguous:  # np.maximum(p, 0.0), its sum, scaled
-        p, total, floored, scale = _floored(p, index if shown is not None else index[:0],
-                                            change, load if force_control else 0.0, area_el)
+    floor = p is not None and mask is None and p.flags.c_contiguous
+    values = None
+    if floor:
+        start = p if p.flags.writeable else p.copy()
+        if shown is not None and shown.generations <= REUSE_GENERATIONS \
+                and shown.values.shape == shape:
+            values = np.asarray(shown.values, dtype=float)
+            if not values.flags.carray:
+                values = np.array(values, order="C")
     else:
-        p = np.maximum(p, 0.0)
-        total = float(p.sum())
-    if mask is not None:
-        p = np.where(mask, p, 0.0)
-        total = float(p.sum())
-    if not total > 0.0:  # (p >= 0: no element has pressure)
-        p = np.where(h <= np.min(h) + 0.0, 1.0, 0.0) if force_control else \
-            _uniform_start(h, operator, penetration)
-        total = float(p.sum())
-        shown = None
-        scale = 0.0
-    if not force_control:
-        scale = 1.0
-    elif scale == 0.0:
-        scale = load / (area_el * total)
-        p *= scale
-
-    # Work arrays (_iterate_py): the rows of one block, flat; the pressures ``p``, ``q``
-    # (one of which is the result's) and ``u`` (the result's displacement keeps it) on
-    # their own.
-    p = np.ascontiguousarray(p, dtype=float)
-    q = np.empty(shape)
-    work = np.empty((5, h.size))
-    work[2] = 0.0  # the first direction's previous one
-    c = np.empty(h.size, dtype=bool)
-    # the product of this solve (A x) as a bound function (x, out) -> out: the arrays are
-    # the solve's own, checked above
-    product = operator.bound()
-    # u = A p of the current p, kept up to date below: convolved, or the start's shown
-    # displacement less the columns of the elements the start set to zero
-    u = np.empty(shape)
-    if shown is not None and floored <= CHANGE_LIMIT and _shown_start(
-            np.asarray(shown.values, dtype=float), u, scale, kernel, index, change, floored):
-        generations = shown.generations  # solves since u was last convolved
-    else:
-        product(p, u)
-        generations = 0
-    # The iterations (_iterate_py): one compiled call that releases the GIL where both
-    # products are compiled packed-plan products, else the same loop run as Python.
+        hmin = _checked(h, p)
+        if not force_control and hmin >= penetration:
+            start = np.zeros(shape)  # (no contact: the solve finds it)
+        else:
+            start = _formed_start(h, p, mask, operator, force_control, load, penetration,
+                                  area_el)
+    # The solve (_solve_py): one compiled call that releases the GIL where both products
+    # are compiled packed-plan products, else the same run as Python.
     fft = operator.compiled_product() if COMPILED_LOOP else None
     fft_inverse = (operator.compiled_product(PRECONDITIONER_FLOOR)
                    if precondition and fft is not None else fft)
     if fft is not None and fft_inverse is not None:
-        iterate, kernels, products = _iterate_compiled, (_kernel_addresses(),), (fft,
-                                                                                 fft_inverse)
+        solve, kernels, products = _solve_compiled, (_kernel_addresses(),), (fft, fft_inverse)
     else:  # (the kernels called from Python; the preconditioner's M x bound as A x)
-        iterate, kernels = _iterate_py, (_gradient, _direction, _step)
+        product = operator.bound()
+        solve, kernels = _solve_py, (_gradient, _direction, _step, _shown_start)
         products = product, operator.bound(PRECONDITIONER_FLOOR) if precondition else product
-    state = np.array([penetration if not force_control else 0.0, 1.0, np.inf, np.inf])
-    counts = np.array([0, 0, 0, generations, 0, 0], dtype=np.int64)
-    load_value = float(load) if force_control else 0.0
-    chunks = []
+    limit = math.inf if undefined_gap is None else float(undefined_gap)
+    q, u, gaps = np.empty(shape), np.empty(shape), np.empty(shape)
+    contact = np.empty(shape, dtype=bool)
     while True:
-        hist = np.empty(min(int(max_iterations), HISTORY_CHUNK))
-        status, k = iterate(*kernels, h, p, q, u, work, c, kernel, index, change,
-                            *products, precondition, force_control, load_value,
-                            float(area_el), self_compliance, float(tolerance),
-                            min(int(max_iterations), MAX_LAST), state, counts, hist)
-        chunks.append(hist[:k])
-        if status != HISTORY_FULL:
+        pressure = np.empty(shape) if floor else start  # (the start floored into it)
+        out = solve(*kernels, h, start, floor, u if values is None else values,
+                    values is not None, 0 if values is None else int(shown.generations),
+                    pressure, q, u, gaps, contact, kernel, *products, precondition,
+                    force_control, float(load) if force_control else 0.0,
+                    0.0 if force_control else float(penetration), float(area_el),
+                    self_compliance, float(tolerance), min(max_iterations, MAX_LAST),
+                    HISTORY_CHUNK, limit)
+        outcome = out[0]
+        if outcome == GAP_NOT_FINITE:
+            raise RailContactError("gap contains NaN or infinite values")
+        if outcome == START_NOT_FINITE:
+            raise RailContactError("initial_pressure contains NaN or infinite values")
+        if outcome != EMPTY_START:
             break
-    hist = chunks[0] if len(chunks) == 1 else np.concatenate(chunks)
-    if counts[5]:  # p and q swapped: the current pressure is in q's array
-        p, q = q, p
-    delta, err = float(state[0]), float(state[3])
-    its, fresh, generations = int(counts[0]), int(counts[2]), int(counts[3])
+        # the floored start holds no pressure: formed here, A p convolved
+        start = _formed_start(h, pressure, None, operator, force_control, load, penetration,
+                              area_el)
+        floor, values = False, None
+    (_, status, hist, its, err, delta, total, largest, count, edge, box, generations, in_q,
+     hmin, cut) = out
+    if in_q:
+        pressure = q
+    summary = (delta, total, largest, count, edge, box)
+    if outcome == NO_OVERLAP:
+        return _result(grid, pressure, gaps, contact, summary, 0, True,
+                       "no contact: penetration below the smallest gap", 0.0, hist, None,
+                       given, t0, cut)
+    its = int(its)
     if status == VANISHED:
-        return finish(q, u, delta, its, False, "pressure vanished", np.inf, hist)
+        return _result(grid, pressure, gaps, contact, summary, its, False,
+                       "pressure vanished", np.inf, hist, None, given, t0, cut)
+    err = float(err)
     converged, stalled = status == CONVERGED, status == STALLED
-
-    if not converged and (fresh > 0 or generations > 0):  # the gap from a convolution
-        product(p, u)
-        generations = 0
     if converged:
         message = f"converged in {its} iterations (eps = {err:.3g} < {tolerance:g})"
     else:
@@ -890,8 +1076,8 @@ def solve_normal(
         if stalled:
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best in "
                         f"{STALL_ITERATIONS} iterations")
-    res = finish(p, u, delta, its, converged, message, err, hist, final=True,
-                 shown=Displacement(u, generations))
+    res = _result(grid, pressure, gaps, contact, summary, its, converged, message, err, hist,
+                  Displacement(u, int(generations)), given, t0, cut)
     lo, hi = SCALE_RANGE
     depth = res.penetration - hmin
     if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
@@ -904,3 +1090,22 @@ def solve_normal(
     if res.touches_boundary:
         res.message += "; contact reaches the edge of the potential contact area"
     return res
+
+
+def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarray,
+            summary: tuple, iterations: int, converged: bool, message: str, error: float,
+            history: np.ndarray, shown: Displacement | None, start: np.ndarray | None,
+            t0: float, cut: bool) -> NormalResult:
+    """The :class:`NormalResult` of a solve from :func:`_summary`'s values ``summary``
+    (the approach, the pressure's sum and largest value, the contact elements, whether
+    they reach the edge, their box) on ``grid``; ``t0`` the solve's start
+    (:func:`time.perf_counter`); ``cut`` its :attr:`~NormalResult.next_to_undefined`."""
+    delta, total, largest, count, edge, box = summary
+    area = grid.element_area
+    return NormalResult(
+        grid=grid, pressure=pressure, contact=contact, gap=gap, force=float(total * area),
+        penetration=float(delta), max_pressure=float(largest), area=float(count * area),
+        iterations=iterations, converged=converged, message=message,
+        wall_time=time.perf_counter() - t0, error=float(error), history=history,
+        touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
+        displacement=shown, start=start, next_to_undefined=bool(cut))
