@@ -628,25 +628,10 @@ class TangentialResult:
         return state
 
 
-def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
-                       ) -> tuple[tuple[float, float], float, float, float]:
-    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and largest ``|p|`` [Pa] of a
-    traction field."""
-    swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
-    if swept.flags.c_contiguous and state.flags.c_contiguous:
-        return _summarised(grid, *_summary_sums(swept, state, grid.x0, grid.dx, grid.y0,
-                                                grid.dy))
-    else:  # the same sums by numpy (any layout)
-        x, y = grid.x[:, None], grid.y[None, :]
-        sx, sy = traction[0].sum(), traction[1].sum()
-        sm = (x * traction[1] - y * traction[0]).sum()
-        ncon, nslip, pmax = _counts_and_max(traction, state)
-    return _summarised(grid, sx, sy, sm, ncon, nslip, pmax)
-
-
 def _summarised(grid: Grid, sx, sy, sm, ncon, nslip, pmax
                 ) -> tuple[tuple[float, float], float, float, float]:
-    """:func:`tangential_summary`'s values from :func:`_summary_sums`' sums."""
+    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and largest ``|p|`` [Pa] of a
+    traction field from its :func:`_summary_sums`."""
     da = grid.element_area
     ratio = float(nslip / ncon) if ncon else 0.0
     return (float(sx * da), float(sy * da)), float(sm * da), ratio, float(pmax)
@@ -690,11 +675,12 @@ def _counts_and_max(traction, state):
 
 
 def _summary_sums(swept, state, x0, dx, y0, dy):
-    """:func:`tangential_summary`'s sums of the traction ``swept`` (2, ny, nx) (C order)
-    with the states (nx, ny): ``sum p_x``, ``sum p_y`` and ``sum (x p_y - y p_x)``
-    (``x``, ``y`` the element centres as :attr:`Grid.x`, :attr:`Grid.y` form them), each
-    added in numpy's order over the traction's memory, as ``traction[k].sum()`` and the
-    sum of numpy's broadcast product (laid out as ``traction[1]``) add them; and
+    """The sums of the result's summary (:func:`_summarised`) of the traction ``swept``
+    (2, ny, nx) (C order) with the states (nx, ny): ``sum p_x``, ``sum p_y`` and
+    ``sum (x p_y - y p_x)`` (``x``, ``y`` the element centres as :attr:`Grid.x`,
+    :attr:`Grid.y` form them), each added in numpy's order over the traction's memory, as
+    ``traction[k].sum()`` and the sum of numpy's broadcast product (laid out as
+    ``traction[1]``) add them; and
     :func:`_counts_and_max`."""
     ny, nx = swept.shape[1], swept.shape[2]
     arm = np.empty((ny, nx))
@@ -860,20 +846,20 @@ class SweepProblem:
                              self.contact_count > 0, self.rolling, its, err, converged,
                              stalled, hist, traction, st, sums,
                              slip_function(self.operator, grid.dx, self.wx, self.wy, self.p,
-                                           self.state))
+                                           self.state.T))
 
 
 def slip_function(operator: InfluenceOperator, dx: float, wx: np.ndarray, wy: np.ndarray,
                   p: np.ndarray, state: np.ndarray) -> Callable[[], np.ndarray]:
     """The function that forms the relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny)
     of a solve's traction ``p`` (2, ny, nx) [Pa] with the rigid slip ``wx``, ``wy`` [m]
-    and the states (ny, nx) (the sweep layout), zero outside the slip area (in adhesion
+    (the sweep layout) and the states (nx, ny), zero outside the slip area (in adhesion
     it is zero at convergence; exterior elements are not in contact); ``dx`` [m] the
-    element length. The arrays are the solver's own, not changed once it returns."""
+    element length. The arrays are the solver's, not changed once it returns."""
     def slip() -> np.ndarray:
         w = np.stack([wx.T, wy.T])
         out = (w + operator.apply(np.stack([p[0].T, p[1].T]))) / dx
-        out[:, state.T != SLIP] = 0.0
+        out[:, state != SLIP] = 0.0
         return out
     return slip
 

@@ -50,11 +50,13 @@ Convergence as ConvexGS's: one iteration is one sweep over all contact elements 
 sweep ``k`` (the shifted runs included). When that measure has not fallen below
 :data:`~.convexgs.STALL_GAIN` of its best for :data:`STALL_SWEEPS` sweeps the iteration
 stops, not converged, and says so; a non-finite measure stops it too. Set-up, loop and
-result are ConvexGS's (:class:`~.convexgs.SweepProblem`); only the sweep differs. Where
-the operator's product is a compiled packed plan (FFTW's C interface) the sweeps and the
-loop's measure and stopping rules run as one compiled call per solve
-(:func:`_steady_sweeps`: the same kernels in the same order, the same bits), with no
-Python between the sweeps.
+result are ConvexGS's (:class:`~.convexgs.SweepProblem`, the loop
+:func:`~.convexgs._sweep_loop_of`); only the sweep differs. Where the operator's product
+is a compiled packed plan (FFTW's C interface) the whole solve runs as one compiled call
+that releases the GIL (:func:`_steady_solve`: the set-up's layout, the sweeps and their
+stopping rules, the result's fields and sums; the same kernels in the same order, the
+same bits), with Python only to check the inputs before it and to form the result
+record after it.
 
 Relaxation: ``omega_h = 0.65``, ``omega_s = 0.9`` by default, the best on S1002/60E1
 patches (about 20-25 sweeps from zero traction at eps 1e-5, 31-33 on the most
@@ -484,13 +486,14 @@ def _steady_solve(block_address, fft, kern, cum, pn, mu, x0, dx, y0, dy, xi, eta
     :meth:`~railcontact.halfspace.operator.InfluenceOperator.compiled_product`'s
     arguments; ``kern``: :func:`_steady_kernels`; ``cum``: :func:`_run_coefficients`.
 
-    Returns ``(fields, state, traction, st, sums, history, counts, error)``: the layout's
-    fields (5, ny, nx) (``g``, ``wx``, ``wy``, ``p``) and states (ny, nx); the result's
-    traction [Pa] and states (nx, ny): with ``whole`` on the larger grid (2, nx, ny),
-    else in the sweep layout (2, ny, nx), a copy of ``p`` (its transpose is the
-    traction); :func:`~.convexgs._summary_sums`' sums (``sum p_x``, ``sum p_y``,
-    ``sum (x p_y - y p_x)``, the elements in contact and in slip, the largest ``|p|``)
-    over the solve's grid; the error after each sweep; ``counts``: the sweeps, whether
+    Returns ``(fields, traction, st, sums, history, counts, error)``: the layout's fields
+    (5, ny, nx) (``g``, ``wx``, ``wy``, ``p``); the result's traction [Pa] and states
+    ``st`` (nx, ny) (with ``whole`` those of the larger grid, the solve's states their
+    window): the traction with ``whole`` (2, nx, ny), else in the sweep layout
+    (2, ny, nx), a copy of ``p`` (its transpose is the traction);
+    :func:`~.convexgs._summary_sums`' sums (``sum p_x``, ``sum p_y``, ``sum (x p_y - y
+    p_x)``, the elements in contact and in slip, the largest ``|p|``) over the solve's
+    grid; the error after each sweep; ``counts``: the sweeps, whether
     they converged, stalled, the pressure was valid (finite, non-negative), the start
     valid (finite), the elements in contact (the layout's); the last error. With an
     invalid pressure or start no sweep is run (the caller raises)."""
@@ -517,7 +520,7 @@ def _steady_solve(block_address, fft, kern, cum, pn, mu, x0, dx, y0, dy, xi, eta
         traction = p.copy()
         st = np.ascontiguousarray(state.T)
         sx, sy, sm, nc, nslip, pmax = _summary_sums(traction, st, x0, dx, y0, dy)
-    return (fields, state, traction, st, (sx, sy, sm, nc, nslip, pmax), hist,
+    return (fields, traction, st, (sx, sy, sm, nc, nslip, pmax), hist,
             (its, converged, stalled, ok, start_ok, ncon), err)
 
 
@@ -672,7 +675,7 @@ def solve_steadygs(
     if fft is not None:  # the whole solve one compiled call
         whole = (-1, 0, 0, 0) if embed is None else (
             embed[0].nx, embed[0].ny, embed[1][0].start, embed[1][1].start)
-        fields, state, traction, st, sums, hist, counts, err = _steady_solve_c(
+        fields, traction, st, sums, hist, counts, err = _steady_solve_c(
             _block_address(), fft, kern, _run_coefficients(operator), pn, mu, grid.x0,
             grid.dx, grid.y0, grid.dy, xi, eta, phi, offset, p0, st0, start,
             float(omega_h), float(omega_s), tol, max_its, STALL_SWEEPS, STALL_GAIN,
@@ -682,10 +685,13 @@ def solve_steadygs(
             raise pressure_error(grid)
         if not start_ok:
             raise start_failure(grid, None)
+        if embed is None:  # (the traction's sweep layout, transposed)
+            traction, state = traction.transpose(0, 2, 1), st
+        else:  # (the solve's states: the window of the result's)
+            state = st[embed[1][0], embed[1][1]]
         return result_record(
             "SteadyGS", STALL_SWEEPS, t0, grid, embed, tol, ncon > 0, True, its, err,
-            converged, stalled, hist, traction if embed is not None else
-            traction.transpose(0, 2, 1), st, sums,
+            converged, stalled, hist, traction, st, sums,
             slip_function(operator, grid.dx, fields[1], fields[2], fields[3:], state))
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
                                initial_state, tolerance, max_iterations, omega_h, omega_s,
