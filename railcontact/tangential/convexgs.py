@@ -951,7 +951,17 @@ def start_failure(grid: Grid, start_error: str | None) -> RailContactError:
 def checked_settings(tolerance, max_iterations, omega_h, omega_s, engine
                      ) -> tuple[float, int, bool]:
     """The solvers' settings checked (after the pressure's values): the tolerance, the
-    sweep limit and whether the sweeps are compiled (numba)."""
+    sweep limit and whether the sweeps are compiled (numba). Settings of the plain types
+    (the time step's, the same at every solve) are checked once (:data:`_checked_once`)."""
+    if (type(tolerance) is float and type(max_iterations) is int
+            and type(omega_h) is float and type(omega_s) is float and type(engine) is str):
+        return _checked_once(tolerance, max_iterations, omega_h, omega_s, engine)
+    return _settings_of(tolerance, max_iterations, omega_h, omega_s, engine)
+
+
+def _settings_of(tolerance, max_iterations, omega_h, omega_s, engine
+                 ) -> tuple[float, int, bool]:
+    """:func:`checked_settings`' checks."""
     tolerance = check_positive("tolerance", tolerance)
     for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
         if not 0.0 < check_finite(name, om) <= 1.5:
@@ -962,6 +972,11 @@ def checked_settings(tolerance, max_iterations, omega_h, omega_s, engine
     if engine == "numba" and not HAVE_NUMBA:
         raise RailContactError("engine 'numba' requested but numba is not installed")
     return tolerance, max_iterations, engine in ("auto", "numba") and HAVE_NUMBA
+
+
+_checked_once = lru_cache(maxsize=16)(_settings_of)
+""":func:`_settings_of` of hashable settings, formed once per value (an error is raised
+at every call: it is not kept)."""
 
 
 def _start_arrays(initial_traction, initial_state, shape: tuple[int, int]
