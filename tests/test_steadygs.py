@@ -445,3 +445,68 @@ def test_compiled_and_python_sweeps_agree(sphere, wheel_rail_patch, monkeypatch)
             np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
     ref = solve_tangential(g, op, nr.pressure, 0.3, (1e-4, -5e-5, 0.2), tolerance=1e-6)
     assert rel_l2(compiled[-1].traction, ref.traction) < 1e-3
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_compiled_solve_on_a_window_agrees_with_python(wheel_rail_patch, monkeypatch):
+    """The whole solve as one compiled call (set-up, sweeps, the result's fields and sums
+    on the larger grid) and the Python solve around the same kernels give the same result
+    to the bit on the contact's window: a warm start (the time step's solve), a cold one,
+    no contact; the same errors, in the same order, for a start that is not finite and a
+    negative pressure. The solution obeys Coulomb's law: ``|p| <= mu p_n``, equal in slip,
+    where the slip opposes the traction."""
+    from railcontact.contact.patch import contact_window
+    from railcontact.halfspace.operator import InfluenceOperator
+
+    wr, pair, creepage = wheel_rail_patch
+    sx, sy = contact_window(wr.contact)
+    w = Grid(sx.stop - sx.start, sy.stop - sy.start, wr.grid.dx, wr.grid.dy,
+             wr.grid.x0 + sx.start * wr.grid.dx, wr.grid.y0 + sy.start * wr.grid.dy)
+    op = rolling_operator(w, pair, "pyfftw")
+    assert op.compiled_product() is not None and w.size < wr.grid.size
+    pn = wr.pressure[sx, sy]
+    warm = solve_steadygs(w, op, pn, 0.4, creepage, tolerance=1e-8)
+    shifted = (creepage[0] * 1.05, creepage[1], creepage[2] * 0.95)  # the next step's
+    embed = (wr.grid, (sx, sy))
+
+    def solves():
+        return [solve_steadygs(w, op, pn, 0.4, shifted, tolerance=1e-5, embed=embed,
+                               initial_traction=warm.traction, initial_state=warm.state),
+                solve_steadygs(w, op, pn, 0.4, shifted, tolerance=1e-5, embed=embed),
+                solve_steadygs(w, op, np.zeros(w.shape), 0.4, shifted, embed=embed)]
+
+    def errors():
+        nan = warm.traction.copy()
+        nan[0, 3, 4] = np.nan
+        out = []
+        for p in (pn, -pn):
+            with pytest.raises(rc.RailContactError) as e:
+                solve_steadygs(w, op, p, 0.4, shifted, initial_traction=nan)
+            out.append(str(e.value))
+        return out
+
+    compiled, compiled_errors = solves(), errors()
+    monkeypatch.setattr(InfluenceOperator, "compiled_product", lambda self, floor=None: None)
+    python, python_errors = solves(), errors()
+    assert compiled_errors == python_errors
+    assert "initial_traction" in compiled_errors[0] and "pressure" in compiled_errors[1]
+    assert compiled[0].converged and compiled[0].iterations < compiled[1].iterations
+    assert compiled[2].iterations == 0 and "no contact" in compiled[2].message
+    for a, b in zip(compiled, python, strict=True):
+        assert a.grid is wr.grid and b.grid is wr.grid
+        assert a.message == b.message and a.iterations == b.iterations
+        assert (a.force, a.spin_moment, a.slip_area_ratio, a.max_traction, a.error) == (
+            b.force, b.spin_moment, b.slip_area_ratio, b.max_traction, b.error)
+        for f in ("traction", "state", "history"):
+            np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+        np.testing.assert_array_equal(a.relative_slip(), b.relative_slip())
+    r = compiled[0]
+    bound = 0.4 * wr.pressure
+    size = np.hypot(*r.traction)
+    slip = r.state == 2
+    assert slip.any() and (r.state == 1).any()
+    assert np.all(size <= bound * (1 + 1e-12))
+    np.testing.assert_allclose(size[slip], bound[slip], rtol=1e-12)
+    s = r.relative_slip()[:, slip]
+    cos = -np.sum(r.traction[:, slip] * s, axis=0) / (size[slip] * np.hypot(*s))
+    assert cos.min() > 1 - 1e-3

@@ -429,8 +429,8 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
         patch.work.seconds += time.perf_counter() - t0
     t = patch.tangential
     if t is not None:
-        patch.creepage = tuple(float(c) for c in (settings.creepage if creepage is None
-                                                   else creepage))
+        patch.creepage = tuple(map(float, settings.creepage if creepage is None
+                                   else creepage))
         patch.work.tangential_iterations += t.iterations
         fx, fy = t.force
         # the traction array checked by the solver's summary of it: max_traction is the

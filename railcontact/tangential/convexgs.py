@@ -445,12 +445,101 @@ measures form as they are; beyond it they are scaled (:attr:`SweepProblem.measur
 bound of 1e-170 Pa made every change square to 0, and a sweep "converged" at once."""
 
 
-def _measure(largest_bound: float) -> float:
-    """:attr:`SweepProblem.measure` for the largest traction bound [Pa]."""
+def _measure(largest_bound):
+    """:attr:`SweepProblem.measure` for the largest traction bound [Pa] (also compiled, in
+    the compiled solves)."""
     lo, hi = MEASURED_RANGE
     if lo <= largest_bound <= hi or not (0.0 < largest_bound < math.inf):
         return 1.0
     return math.ldexp(1.0, -math.frexp(largest_bound)[1])
+
+
+def _floor_above(contact_count, largest_bound, measure):
+    """:attr:`SweepProblem.floor_above` of ``contact_count`` elements in contact, the
+    largest bound [Pa] and the :attr:`~SweepProblem.measure` (also compiled)."""
+    return 1.01e-9 * math.sqrt(contact_count) * largest_bound * measure
+
+
+def _floor_of(g, measure, squares):
+    """The convergence measure's floor ``1e-9 ||g||`` [Pa] of the bound ``g`` (ny, nx),
+    scaled by ``measure``: the squares (in ``squares``) added in numpy's order, as
+    ``((g * measure) ** 2).sum()`` adds them."""
+    ny, nx = g.shape
+    for iy in range(ny):
+        for ix in range(nx):
+            v = g[iy, ix] * measure
+            squares[iy, ix] = v * v
+    return 1e-9 * math.sqrt(numpy_sum(squares))
+
+
+def _sweep_loop_of(sweep):
+    """The sweeps of a Gauss–Seidel solve and their stopping rules around one sweep
+    ``sweep(args)`` (which returns the squared norm of its traction change [Pa^2], scaled
+    by the measure): one source, run as Python (``sweep`` a Python function,
+    :meth:`SweepProblem.iterate`) or compiled with a compiled sweep (SteadyGS's compiled
+    solve: the function made of this one with numba, the sweep a compiled function it
+    calls by name, a constant of the code, so that the caller is cached as any kernel).
+    Both run the same compiled kernels (:func:`_squares`, :func:`_floor_of`) in the same
+    order: the same bits."""
+
+    def iterate(args, px, py, g, squares, measure, floor_above, tolerance, max_iterations,
+                stall_sweeps, stall_gain, active):
+        """Sweep until ``||p^k - p^(k-1)|| < tolerance ||p^k||`` (the norms of the
+        traction ``px``, ``py`` (ny, nx) [Pa] and of its change, scaled by ``measure``),
+        stopping when the error is not finite or has not fallen below ``stall_gain`` of
+        its best in ``stall_sweeps`` sweeps, at ``max_iterations`` sweeps at most. The
+        norm is at least the floor ``1e-9 ||g||`` (formed only below ``floor_above``,
+        :attr:`SweepProblem.floor_above`). Not ``active`` (no contact or no creepage):
+        no sweep, converged. ``squares`` (ny, nx): work. Returns ``(sweeps, error,
+        converged, stalled, history)``."""
+        hist = np.empty(max(min(max_iterations, 64), 1))
+        have_floor = False
+        floor = 0.0
+        best = math.inf
+        best_its = 0
+        its = 0
+        err = 0.0
+        converged = False
+        stalled = False
+        if not active:
+            converged = True
+        while active and its < max_iterations:
+            its += 1
+            dif = sweep(args)
+            norm = math.sqrt(_squares(px, py, squares, measure))  # (px*px + py*py).sum()
+            if not norm > floor_above:
+                if not have_floor:
+                    floor = _floor_of(g, measure, squares)
+                    have_floor = True
+                # max(norm, floor): 0 only when mu p underflows (mu ~ 1e-300)
+                scale = floor if floor > norm else norm
+            else:
+                scale = norm
+            if scale > 0:
+                err = math.sqrt(dif) / scale
+            elif dif == 0:
+                err = 0.0
+            else:
+                err = math.inf
+            if its > hist.size:
+                more = np.empty(2 * hist.size)
+                more[:hist.size] = hist
+                hist = more
+            hist[its - 1] = err
+            if not math.isfinite(err):
+                break
+            if err < tolerance:
+                converged = True
+                break
+            if err < stall_gain * best:
+                best = err
+                best_its = its
+            elif its - best_its >= stall_sweeps:  # round-off: a tolerance out of reach
+                stalled = True
+                break
+        return its, err, converged, stalled, hist[:its].copy()
+
+    return iterate
 
 
 _NO_STATE = np.zeros((0, 0), dtype=np.int8)
@@ -460,6 +549,12 @@ if HAVE_NUMBA:
     _clip_start = numba.njit(cache=True, nogil=True)(_clip_start)
     _bound_layout = numba.njit(cache=True, nogil=True)(_bound_layout)
     _squares = numba.njit(cache=True, nogil=True)(_squares)
+    _floor_of = numba.njit(cache=True, nogil=True)(_floor_of)
+    _measure_c = numba.njit(cache=True, nogil=True)(_measure)
+    _floor_above_c = numba.njit(cache=True, nogil=True)(_floor_above)
+else:  # pragma: no cover
+    _measure_c = _measure
+    _floor_above_c = _floor_above
 
 
 @lru_cache(maxsize=16)
@@ -533,25 +628,10 @@ class TangentialResult:
         return state
 
 
-def tangential_summary(grid: Grid, traction: np.ndarray, state: np.ndarray
-                       ) -> tuple[tuple[float, float], float, float, float]:
-    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and largest ``|p|`` [Pa] of a
-    traction field."""
-    swept = traction.transpose(0, 2, 1)  # (2, ny, nx): the sweep layout the solvers give
-    if swept.flags.c_contiguous and state.flags.c_contiguous:
-        return _summarised(grid, *_summary_sums(swept, state, grid.x0, grid.dx, grid.y0,
-                                                grid.dy))
-    else:  # the same sums by numpy (any layout)
-        x, y = grid.x[:, None], grid.y[None, :]
-        sx, sy = traction[0].sum(), traction[1].sum()
-        sm = (x * traction[1] - y * traction[0]).sum()
-        ncon, nslip, pmax = _counts_and_max(traction, state)
-    return _summarised(grid, sx, sy, sm, ncon, nslip, pmax)
-
-
 def _summarised(grid: Grid, sx, sy, sm, ncon, nslip, pmax
                 ) -> tuple[tuple[float, float], float, float, float]:
-    """:func:`tangential_summary`'s values from :func:`_summary_sums`' sums."""
+    """Forces (F_x, F_y) [N], M_z [N m], slip-area ratio and largest ``|p|`` [Pa] of a
+    traction field from its :func:`_summary_sums`."""
     da = grid.element_area
     ratio = float(nslip / ncon) if ncon else 0.0
     return (float(sx * da), float(sy * da)), float(sm * da), ratio, float(pmax)
@@ -595,11 +675,12 @@ def _counts_and_max(traction, state):
 
 
 def _summary_sums(swept, state, x0, dx, y0, dy):
-    """:func:`tangential_summary`'s sums of the traction ``swept`` (2, ny, nx) (C order)
-    with the states (nx, ny): ``sum p_x``, ``sum p_y`` and ``sum (x p_y - y p_x)``
-    (``x``, ``y`` the element centres as :attr:`Grid.x`, :attr:`Grid.y` form them), each
-    added in numpy's order over the traction's memory, as ``traction[k].sum()`` and the
-    sum of numpy's broadcast product (laid out as ``traction[1]``) add them; and
+    """The sums of the result's summary (:func:`_summarised`) of the traction ``swept``
+    (2, ny, nx) (C order) with the states (nx, ny): ``sum p_x``, ``sum p_y`` and
+    ``sum (x p_y - y p_x)`` (``x``, ``y`` the element centres as :attr:`Grid.x`,
+    :attr:`Grid.y` form them), each added in numpy's order over the traction's memory, as
+    ``traction[k].sum()`` and the sum of numpy's broadcast product (laid out as
+    ``traction[1]``) add them; and
     :func:`_counts_and_max`."""
     ny, nx = swept.shape[1], swept.shape[2]
     arm = np.empty((ny, nx))
@@ -698,52 +779,24 @@ class SweepProblem:
                initial_traction, initial_state, tolerance, max_iterations, omega_h, omega_s,
                engine, spin_offset) -> SweepProblem:
         """Check the inputs of a solver (see :func:`solve_tangential`) and lay them out."""
-        shape = grid.shape
-        if operator.components != "xy" or (operator.nx, operator.ny) != shape:
-            raise RailContactError("operator must be the 'xy' steady-rolling operator of "
-                                   "this grid")
-        pn = np.ascontiguousarray(pressure, dtype=float)  # (one compiled layout)
-        if type(friction) is float or np.ndim(friction) == 0:  # (a number: no numpy call)
-            mu = check_positive("friction", friction, allow_zero=True)
-        else:  # per element: the bound mu p_n formed here, the layout's own mu 1 (exact)
-            pn = _bound_of(friction, pn, shape)
-            mu = 1.0
-        if len(creepage) != 3:
-            raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
-        xi = check_finite("xi", creepage[0], "-")  # (rigid_slip_lines' checks)
-        eta = check_finite("eta", creepage[1], "-")
-        phi = check_finite("phi", creepage[2], "1/m")
-        spin_offset = check_finite("spin_offset", spin_offset)
-        rolling = xi != 0.0 or eta != 0.0 or phi != 0.0
-        start_error = None  # (raised after the other checks, as before)
-        p0, st0 = _NO_START, _NO_STATE
-        if initial_traction is not None and rolling:  # no creepage: no traction, exactly
-            p0, st0, start_error = _start_arrays(initial_traction, initial_state, shape)
-        start = initial_traction is not None and rolling and start_error is None
-        if pn.shape == shape:
-            fields, (lo, hi, count), state, contact, ok, gmax, ncon, start_ok = _bound_layout(
-                pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset, p0,
-                st0, start)
-            g, wx, wy, p = fields[0], fields[1], fields[2], fields[3:]
-        if pn.shape != shape or not ok:
-            raise RailContactError(f"pressure must be finite, non-negative, shape {shape}")
-        tolerance = check_positive("tolerance", tolerance)
-        for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
-            if not 0.0 < check_finite(name, om) <= 1.5:
-                raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
-        max_iterations = check_count("max_iterations", max_iterations)
-        if engine not in ENGINES:
-            raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
-        if engine == "numba" and not HAVE_NUMBA:
-            raise RailContactError("engine 'numba' requested but numba is not installed")
+        inputs = checked_inputs(grid, operator, pressure, friction, creepage,
+                                initial_traction, initial_state, spin_offset)
+        pn, mu, xi, eta, phi, spin_offset, rolling, p0, st0, start, start_error = inputs
+        fields, (lo, hi, count), state, contact, ok, gmax, ncon, start_ok = _bound_layout(
+            pn, mu, grid.x0, grid.dx, grid.y0, grid.dy, xi, eta, phi, spin_offset, p0, st0,
+            start)
+        if not ok:
+            raise pressure_error(grid)
+        tolerance, max_iterations, use_numba = checked_settings(tolerance, max_iterations,
+                                                                omega_h, omega_s, engine)
         if start_error is not None or not start_ok:
-            raise RailContactError(start_error or "initial_traction must be finite, "
-                                   f"shape {(2, *shape)}")
+            raise start_failure(grid, start_error)
+        g, wx, wy, p = fields[0], fields[1], fields[2], fields[3:]
         return cls(
             grid=grid, operator=operator, g=g, wx=wx, wy=wy, p=p, px=p[0], py=p[1], state=state,
             contact=contact, lo=lo, hi=hi, row_counts=count, rolling=rolling, tolerance=tolerance,
-            max_iterations=max_iterations, use_numba=engine in ("auto", "numba") and HAVE_NUMBA,
-            largest_bound=float(gmax), contact_count=int(ncon), measure=_measure(float(gmax)))
+            max_iterations=max_iterations, use_numba=use_numba, largest_bound=float(gmax),
+            contact_count=int(ncon), measure=_measure(float(gmax)))
 
     def solve(self, sweep: Callable[[], float], name: str, stall_sweeps: int,
               t0: float, embed: Embedding | None = None) -> TangentialResult:
@@ -759,99 +812,171 @@ class SweepProblem:
         """The norm [Pa] (scaled by :attr:`measure`) above which the convergence measure's
         floor ``1e-9 ||g||`` cannot matter: ``1.01e-9 sqrt(ncon) max(g)`` bounds it, so the
         floor is formed only for a norm below this (it is then the same value as always)."""
-        return 1.01e-9 * math.sqrt(self.contact_count) * self.largest_bound * self.measure
+        return _floor_above(self.contact_count, self.largest_bound, self.measure)
 
     def iterate(self, sweep: Callable[[], float], stall_sweeps: int
                 ) -> tuple[int, float, bool, bool, np.ndarray]:
-        """:meth:`solve`'s sweeps: ``(sweeps, error, converged, stalled, history)``."""
-        px, py = self.px, self.py
-        m = self.measure
-        floor_above = self.floor_above
-        floor = None
-        squares = np.empty_like(px)
-        hist: list[float] = []
-        converged = stalled = False
-        best, best_its = math.inf, 0
-        its = 0
-        err = 0.0
-        if self.contact_count > 0 and self.rolling:
-            while its < self.max_iterations:
-                its += 1
-                dif = sweep()
-                norm = math.sqrt(_squares(px, py, squares, m))  # (px*px + py*py).sum()
-                if not norm > floor_above:
-                    if floor is None:
-                        floor = 1e-9 * math.sqrt(float(((self.g * m) ** 2).sum()))
-                    scale = max(norm, floor)  # 0 only when mu p underflows (mu ~ 1e-300)
-                else:
-                    scale = norm
-                err = math.sqrt(dif) / scale if scale > 0 else (0.0 if dif == 0 else math.inf)
-                hist.append(err)
-                if not math.isfinite(err):
-                    break
-                if err < self.tolerance:
-                    converged = True
-                    break
-                if err < STALL_GAIN * best:
-                    best, best_its = err, its
-                elif its - best_its >= stall_sweeps:  # round-off: a tolerance out of reach
-                    stalled = True
-                    break
-        else:
-            converged = True
-        return its, err, converged, stalled, np.asarray(hist)
+        """:meth:`solve`'s sweeps (:func:`_sweep_loop_of`'s loop, run as Python):
+        ``(sweeps, error, converged, stalled, history)``."""
+        loop = _sweep_loop_of(lambda _: sweep())
+        return loop(None, self.px, self.py, self.g, np.empty_like(self.px), self.measure,
+                    self.floor_above, self.tolerance, self.max_iterations, stall_sweeps,
+                    STALL_GAIN, self.contact_count > 0 and self.rolling)
 
     def result(self, name: str, stall_sweeps: int, t0: float, embed: Embedding | None,
                its: int, err: float, converged: bool, stalled: bool, hist: np.ndarray
                ) -> TangentialResult:
-        """The :class:`TangentialResult` of the sweeps :meth:`iterate` (or a compiled loop
-        of the same steps) ran: ``its`` sweeps, the last ``err``, whether they converged
-        or stalled, the error after each (``hist``)."""
-        in_contact = self.contact_count > 0
+        """The :class:`TangentialResult` of the sweeps :meth:`iterate` ran: ``its``
+        sweeps, the last ``err``, whether they converged or stalled, the error after each
+        (``hist``)."""
         grid = self.grid
         if embed is None:
             # (2, nx, ny) over the sweep layout's memory, as np.stack([px.T, py.T]) lays it
             # out (its sums keep their order, so their bits): one copy of ``p``
             traction = self.p.transpose(0, 2, 1).copy(order="K")
             st = np.ascontiguousarray(self.state.T)
-            force, mz, ratio, pmax = tangential_summary(grid, traction, st)
-            slip = self._slip
+            sums = _summary_sums(traction.transpose(0, 2, 1), st, grid.x0, grid.dx,
+                                 grid.y0, grid.dy)
         else:  # the fields on the larger grid; the sums over the problem's, as above
             big, (sx, sy) = embed
             traction, st, *sums = _embedded_fields(self.p, self.state, big.nx, big.ny,
                                                    sx.start, sy.start, grid.x0, grid.dx,
                                                    grid.y0, grid.dy)
-            force, mz, ratio, pmax = _summarised(grid, *sums)
-            slip = _embedded_slip(self._slip, big.shape, sx, sy)
-            grid = big
-        tol = self.tolerance
-        if not in_contact:
-            message = "no contact: zero normal pressure"
-        elif not self.rolling:
-            message = "zero creepage: zero traction, no iterations"
-        elif converged:
-            message = f"{name} converged in {its} sweeps (eps = {err:.3g} < {tol:g})"
-        else:
-            message = (f"{name} not converged: eps = {err:.3g} after {its} sweeps "
-                       f"(tolerance {tol:g})")
-            if stalled:
-                message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
-                            f"in {stall_sweeps} sweeps")
-        return TangentialResult(
-            grid=grid, traction=traction, state=st, slip_of=slip, force=force,
-            spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
-            converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
-            history=hist)
+        return result_record(name, stall_sweeps, t0, grid, embed, self.tolerance,
+                             self.contact_count > 0, self.rolling, its, err, converged,
+                             stalled, hist, traction, st, sums,
+                             slip_function(self.operator, grid.dx, self.wx, self.wy, self.p,
+                                           self.state.T))
 
-    def _slip(self) -> np.ndarray:
-        """The relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny) of the traction solved
-        for, zero outside the slip area (in adhesion it is zero at convergence; exterior
-        elements are not in contact). ``px``, ``py`` and ``state`` are the solver's own
-        arrays, not changed once it returns."""
-        w = np.stack([self.wx.T, self.wy.T])
-        slip = (w + self.operator.apply(np.stack([self.px.T, self.py.T]))) / self.grid.dx
-        slip[:, self.state.T != SLIP] = 0.0
-        return slip
+
+def slip_function(operator: InfluenceOperator, dx: float, wx: np.ndarray, wy: np.ndarray,
+                  p: np.ndarray, state: np.ndarray) -> Callable[[], np.ndarray]:
+    """The function that forms the relative slip ``S/dx = (W + B p)/dx`` [-] (2, nx, ny)
+    of a solve's traction ``p`` (2, ny, nx) [Pa] with the rigid slip ``wx``, ``wy`` [m]
+    (the sweep layout) and the states (nx, ny), zero outside the slip area (in adhesion
+    it is zero at convergence; exterior elements are not in contact); ``dx`` [m] the
+    element length. The arrays are the solver's, not changed once it returns."""
+    def slip() -> np.ndarray:
+        w = np.stack([wx.T, wy.T])
+        out = (w + operator.apply(np.stack([p[0].T, p[1].T]))) / dx
+        out[:, state != SLIP] = 0.0
+        return out
+    return slip
+
+
+def result_record(name: str, stall_sweeps: int, t0: float, grid: Grid,
+                  embed: Embedding | None, tolerance: float, in_contact: bool, rolling: bool,
+                  its: int, err: float, converged: bool, stalled: bool, hist: np.ndarray,
+                  traction: np.ndarray, st: np.ndarray, sums, slip: Callable[[], np.ndarray]
+                  ) -> TangentialResult:
+    """The :class:`TangentialResult` of a solve on ``grid`` (with ``embed`` given on its
+    larger grid): ``its`` sweeps (:func:`_sweep_loop_of`), the last ``err``, whether they
+    converged or stalled, the error after each (``hist``); the traction and states on the
+    result's grid, :func:`_summary_sums`' ``sums`` of the solve's own grid and the
+    solve's ``slip`` function (:func:`slip_function`)."""
+    force, mz, ratio, pmax = _summarised(grid, *sums)
+    if embed is not None:
+        big, (sx, sy) = embed
+        slip = _embedded_slip(slip, big.shape, sx, sy)
+        grid = big
+    if not in_contact:
+        message = "no contact: zero normal pressure"
+    elif not rolling:
+        message = "zero creepage: zero traction, no iterations"
+    elif converged:
+        message = f"{name} converged in {its} sweeps (eps = {err:.3g} < {tolerance:g})"
+    else:
+        message = (f"{name} not converged: eps = {err:.3g} after {its} sweeps "
+                   f"(tolerance {tolerance:g})")
+        if stalled:
+            message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
+                        f"in {stall_sweeps} sweeps")
+    return TangentialResult(
+        grid=grid, traction=traction, state=st, slip_of=slip, force=force,
+        spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
+        converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
+        history=hist)
+
+
+def checked_inputs(grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,
+                   initial_traction, initial_state, spin_offset) -> tuple:
+    """The problem's inputs checked (the first of the solvers' checks, raising as they
+    find a fault) and as the set-up's compiled layout (:func:`_bound_layout`) reads them:
+    ``(pn, mu, xi, eta, phi, spin_offset, rolling, p0, st0, start, start_error)``, the
+    pressure ``pn`` (nx, ny) [Pa] (the bound ``mu p_n`` with ``mu`` 1 where the friction
+    is given per element), the start's arrays and whether there is one; a fault of the
+    start (``start_error``, a message or None) and of the pressure's values
+    (:func:`pressure_error`, which the layout finds) are raised after the pressure's and
+    the settings' checks (:func:`checked_settings`), in that order."""
+    shape = grid.shape
+    if operator.components != "xy" or (operator.nx, operator.ny) != shape:
+        raise RailContactError("operator must be the 'xy' steady-rolling operator of "
+                               "this grid")
+    pn = np.ascontiguousarray(pressure, dtype=float)  # (one compiled layout)
+    if type(friction) is float or np.ndim(friction) == 0:  # (a number: no numpy call)
+        mu = check_positive("friction", friction, allow_zero=True)
+    else:  # per element: the bound mu p_n formed here, the layout's own mu 1 (exact)
+        pn = _bound_of(friction, pn, shape)
+        mu = 1.0
+    if len(creepage) != 3:
+        raise RailContactError(f"creepage must be (xi, eta, phi), got {creepage!r}")
+    xi = check_finite("xi", creepage[0], "-")  # (rigid_slip_lines' checks)
+    eta = check_finite("eta", creepage[1], "-")
+    phi = check_finite("phi", creepage[2], "1/m")
+    spin_offset = check_finite("spin_offset", spin_offset)
+    rolling = xi != 0.0 or eta != 0.0 or phi != 0.0
+    start_error = None  # (raised after the other checks)
+    p0, st0 = _NO_START, _NO_STATE
+    if initial_traction is not None and rolling:  # no creepage: no traction, exactly
+        p0, st0, start_error = _start_arrays(initial_traction, initial_state, shape)
+    start = initial_traction is not None and rolling and start_error is None
+    if pn.shape != shape:
+        raise pressure_error(grid)
+    return pn, mu, xi, eta, phi, spin_offset, rolling, p0, st0, start, start_error
+
+
+def pressure_error(grid: Grid) -> RailContactError:
+    """The error of a pressure of the wrong shape or with a value that is negative or not
+    finite."""
+    return RailContactError(f"pressure must be finite, non-negative, shape {grid.shape}")
+
+
+def start_failure(grid: Grid, start_error: str | None) -> RailContactError:
+    """The error of an initial traction or state of the wrong shape (``start_error``) or
+    with a value that is not finite (None)."""
+    return RailContactError(start_error or "initial_traction must be finite, "
+                            f"shape {(2, *grid.shape)}")
+
+
+def checked_settings(tolerance, max_iterations, omega_h, omega_s, engine
+                     ) -> tuple[float, int, bool]:
+    """The solvers' settings checked (after the pressure's values): the tolerance, the
+    sweep limit and whether the sweeps are compiled (numba). Settings of the plain types
+    (the time step's, the same at every solve) are checked once (:data:`_checked_once`)."""
+    if (type(tolerance) is float and type(max_iterations) is int
+            and type(omega_h) is float and type(omega_s) is float and type(engine) is str):
+        return _checked_once(tolerance, max_iterations, omega_h, omega_s, engine)
+    return _settings_of(tolerance, max_iterations, omega_h, omega_s, engine)
+
+
+def _settings_of(tolerance, max_iterations, omega_h, omega_s, engine
+                 ) -> tuple[float, int, bool]:
+    """:func:`checked_settings`' checks."""
+    tolerance = check_positive("tolerance", tolerance)
+    for name, om in (("omega_h", omega_h), ("omega_s", omega_s)):
+        if not 0.0 < check_finite(name, om) <= 1.5:
+            raise RailContactError(f"{name} must lie in (0, 1.5], got {om}")
+    max_iterations = check_count("max_iterations", max_iterations)
+    if engine not in ENGINES:
+        raise RailContactError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if engine == "numba" and not HAVE_NUMBA:
+        raise RailContactError("engine 'numba' requested but numba is not installed")
+    return tolerance, max_iterations, engine in ("auto", "numba") and HAVE_NUMBA
+
+
+_checked_once = lru_cache(maxsize=16)(_settings_of)
+""":func:`_settings_of` of hashable settings, formed once per value (an error is raised
+at every call: it is not kept)."""
 
 
 def _start_arrays(initial_traction, initial_state, shape: tuple[int, int]

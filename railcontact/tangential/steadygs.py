@@ -50,11 +50,13 @@ Convergence as ConvexGS's: one iteration is one sweep over all contact elements 
 sweep ``k`` (the shifted runs included). When that measure has not fallen below
 :data:`~.convexgs.STALL_GAIN` of its best for :data:`STALL_SWEEPS` sweeps the iteration
 stops, not converged, and says so; a non-finite measure stops it too. Set-up, loop and
-result are ConvexGS's (:class:`~.convexgs.SweepProblem`); only the sweep differs. Where
-the operator's product is a compiled packed plan (FFTW's C interface) the sweeps and the
-loop's measure and stopping rules run as one compiled call per solve
-(:func:`_steady_sweeps`: the same kernels in the same order, the same bits), with no
-Python between the sweeps.
+result are ConvexGS's (:class:`~.convexgs.SweepProblem`, the loop
+:func:`~.convexgs._sweep_loop_of`); only the sweep differs. Where the operator's product
+is a compiled packed plan (FFTW's C interface) the whole solve runs as one compiled call
+that releases the GIL (:func:`_steady_solve`: the set-up's layout, the sweeps and their
+stopping rules, the result's fields and sums; the same kernels in the same order, the
+same bits), with Python only to check the inputs before it and to form the result
+record after it.
 
 Relaxation: ``omega_h = 0.65``, ``omega_s = 0.9`` by default, the best on S1002/60E1
 patches (about 20-25 sweeps from zero traction at eps 1e-5, 31-33 on the most
@@ -75,7 +77,6 @@ from ..errors import RailContactError
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator, packed_product
 from ..halfspace.pointers import address, function_at
-from ..halfspace.sums import numpy_sum
 from .convexgs import (
     ADHESION,
     HAVE_NUMBA,
@@ -87,9 +88,20 @@ from .convexgs import (
     TangentialResult,
     _block_rows,
     _blocks_of,
+    _bound_layout,
     _element_solve,
+    _embedded_fields,
+    _floor_above_c,
     _gs_kernels,
-    _squares,
+    _measure_c,
+    _summary_sums,
+    _sweep_loop_of,
+    checked_inputs,
+    checked_settings,
+    pressure_error,
+    result_record,
+    slip_function,
+    start_failure,
 )
 
 try:
@@ -421,115 +433,116 @@ def _sweep_blocked(kern, cum, product, wx, wy, g, p, state, lo, hi, rows, omega_
     return dif
 
 
-def _steady_sweeps(block_address, fft, kern, cum, wx, wy, g, p, state, lo, hi, per_row, work,
-                   omega_h, omega_s, measure, tolerance, max_iterations, stall_sweeps,
-                   stall_gain, floor_above):  # pragma: no cover - compiled
-    """:func:`_sweep_blocked`'s sweeps and :meth:`~.convexgs.SweepProblem.iterate`'s
-    measure and stopping rules in one compiled call, the same steps on the same arrays
-    (the same bits), the DC-FFT products run through the operator's compiled packed
-    plan (``fft``: :meth:`~railcontact.halfspace.operator.InfluenceOperator.
-    compiled_product`'s arguments), the blocks formed here (:func:`~.convexgs._block_rows`
-    of the contact elements ``per_row`` and the block ``work``).
-    ``stall_gain``: :data:`~.convexgs.STALL_GAIN`; ``floor_above``:
-    :attr:`~.convexgs.SweepProblem.floor_above`. The block is
-    :func:`_steady_block_numba`'s own code called through its pointer (``block_address``,
-    :func:`_block_address`): linked into this function, LLVM could compile its fast-math
-    sums anew and change their last bits. Returns ``(sweeps, error, converged, stalled,
-    history)``."""
-    block = _block_at(block_address)
+def _steady_sweep(args):  # pragma: no cover - compiled
+    """One sweep of :func:`_sweep_blocked`, compiled, on the arrays of :func:`_steady_solve`
+    (``args``): the DC-FFT products run through the operator's compiled packed plan, the
+    blocks :func:`_steady_block_numba`'s own code called through its pointer (linked into
+    the caller, LLVM could compile its fast-math sums anew and change their last bits).
+    The same steps on the same arrays as :func:`_sweep_blocked`: the same bits. Returns the
+    squared norm of the sweep's traction change [Pa^2] (scaled by the measure)."""
+    (block, fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, shift, prod, omega_h, omega_s,
+     measure) = args
     plans, z_in, z_s, w_s, w_out, a, b, n = fft
     rxx, rxy, ryy, fxx, fxy, fyy = kern
-    rows = _block_rows(per_row, work)
-    ny, nx = g.shape
     px = p[0]
     py = p[1]
     pt = p.transpose(0, 2, 1)  # (the traction as (2, nx, ny), for the products)
-    shift = np.empty((4, ny, nx))  # the shift and the changes, as _sweep_blocked's
     ux = shift[0]
     uy = shift[1]
     dpx = shift[2]
     dpy = shift[3]
     dp = shift[2:]
     dpt = dp.transpose(0, 2, 1)
+    nb = rows.shape[0]
+    dp[:] = 0.0  # (the shift's rows are all written by the first product)
+    _packed_pair(plans, pt, z_in, z_s, w_s, w_out, a, b, n, prod)
+    _add_product_c(ux, uy, wx, wy, prod, 0)
+    dif = 0.0
+    for k in range(nb):
+        r0 = rows[k, 0]
+        r1 = rows[k, 1]
+        dif += block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy, state,
+                     lo, hi, r0, r1, omega_h, omega_s, measure)
+        if k + 1 < nb:
+            _packed_pair(plans, dpt, z_in, z_s, w_s, w_out, a, b, n, prod)
+            _add_product_c(ux, uy, ux, uy, prod, r1)
+            dp[:, r0:r1] = 0.0
+    return dif
+
+
+def _steady_solve(block_address, fft, kern, cum, pn, mu, x0, dx, y0, dy, xi, eta, phi,
+                  offset, p0, st0, start, omega_h, omega_s, tolerance, max_iterations,
+                  stall_sweeps, stall_gain, work, whole):  # pragma: no cover - compiled
+    """A whole SteadyGS solve of rolling contact (``xi, eta, phi`` not all zero) in one
+    compiled call that releases the GIL: :class:`~.convexgs.SweepProblem`'s set-up
+    (:func:`~.convexgs._bound_layout` of the pressure ``pn`` (nx, ny) [Pa], ``mu``, the
+    grid ``(x0, dx, y0, dy)`` and the start ``p0``, ``st0`` when ``start``), its sweeps
+    and their stopping rules (:func:`~.convexgs._sweep_loop_of` around
+    :func:`_steady_sweep`, the blocks :func:`~.convexgs._block_rows` of ``work``) and the
+    result's fields and sums: on the solve's grid, or with ``whole = (nx, ny, i0, j0)``
+    (``nx`` > 0) on the larger grid of which it is the window at ``(i0, j0)``
+    (:func:`~.convexgs._embedded_fields`). The same kernels in the same order as the
+    Python solve: the same bits. ``block_address``: :func:`_block_address`; ``fft``:
+    :meth:`~railcontact.halfspace.operator.InfluenceOperator.compiled_product`'s
+    arguments; ``kern``: :func:`_steady_kernels`; ``cum``: :func:`_run_coefficients`.
+
+    Returns ``(fields, traction, st, sums, history, counts, error)``: the layout's fields
+    (5, ny, nx) (``g``, ``wx``, ``wy``, ``p``); the result's traction [Pa] and states
+    ``st`` (nx, ny) (with ``whole`` those of the larger grid, the solve's states their
+    window): the traction with ``whole`` (2, nx, ny), else in the sweep layout
+    (2, ny, nx), a copy of ``p`` (its transpose is the traction);
+    :func:`~.convexgs._summary_sums`' sums (``sum p_x``, ``sum p_y``, ``sum (x p_y - y
+    p_x)``, the elements in contact and in slip, the largest ``|p|``) over the solve's
+    grid; the error after each sweep; ``counts``: the sweeps, whether
+    they converged, stalled, the pressure was valid (finite, non-negative), the start
+    valid (finite), the elements in contact (the layout's); the last error. With an
+    invalid pressure or start no sweep is run (the caller raises)."""
+    fields, rows_, state, contact, ok, gmax, ncon, start_ok = _bound_layout(
+        pn, mu, x0, dx, y0, dy, xi, eta, phi, offset, p0, st0, start)
+    ny, nx = state.shape
+    g = fields[0]
+    wx = fields[1]
+    wy = fields[2]
+    p = fields[3:]
+    measure = _measure_c(gmax)
+    shift = np.empty((4, ny, nx))  # the shift and the changes, as _sweep_blocked's
     prod = np.empty((2, nx, ny))
     squares = np.empty((ny, nx))
-    hist = np.empty(max(min(max_iterations, 64), 1))
-    nb = rows.shape[0]
-    have_floor = False
-    floor = 0.0
-    best = np.inf
-    best_its = 0
-    its = 0
-    err = 0.0
-    converged = False
-    stalled = False
-    while its < max_iterations:
-        its += 1
-        dp[:] = 0.0  # (the shift's rows are all written by the first product)
-        _packed_pair(plans, pt, z_in, z_s, w_s, w_out, a, b, n, prod)
-        _add_product_c(ux, uy, wx, wy, prod, 0)
-        dif = 0.0
-        for k in range(nb):
-            r0 = rows[k, 0]
-            r1 = rows[k, 1]
-            dif += block(rxx, rxy, ryy, fxx, fxy, fyy, cum, ux, uy, g, px, py, dpx, dpy,
-                         state, lo, hi, r0, r1, omega_h, omega_s, measure)
-            if k + 1 < nb:
-                _packed_pair(plans, dpt, z_in, z_s, w_s, w_out, a, b, n, prod)
-                _add_product_c(ux, uy, ux, uy, prod, r1)
-                dp[:, r0:r1] = 0.0
-        norm = math.sqrt(_squares(px, py, squares, measure))
-        if not norm > floor_above:
-            if not have_floor:  # 1e-9 ||g|| (scaled), numpy's sum of the squares
-                for iy in range(ny):
-                    for ix in range(nx):
-                        v = g[iy, ix] * measure
-                        squares[iy, ix] = v * v
-                floor = 1e-9 * math.sqrt(numpy_sum(squares))
-                have_floor = True
-            scale = floor if floor > norm else norm  # (max(norm, floor))
-        else:
-            scale = norm
-        if scale > 0:
-            err = math.sqrt(dif) / scale
-        elif dif == 0:
-            err = 0.0
-        else:
-            err = np.inf
-        if its > hist.size:
-            more = np.empty(2 * hist.size)
-            more[:hist.size] = hist
-            hist = more
-        hist[its - 1] = err
-        if not math.isfinite(err):
-            break
-        if err < tolerance:
-            converged = True
-            break
-        if err < stall_gain * best:
-            best = err
-            best_its = its
-        elif its - best_its >= stall_sweeps:
-            stalled = True
-            break
-    return its, err, converged, stalled, hist[:its].copy()
+    args = (_block_at(block_address), fft, kern, cum, wx, wy, g, p, state, rows_[0], rows_[1],
+            _block_rows(rows_[2], work), shift, prod, omega_h, omega_s, measure)
+    its, err, converged, stalled, hist = _steady_loop(
+        args, p[0], p[1], g, squares, measure, _floor_above_c(ncon, gmax, measure), tolerance,
+        max_iterations, stall_sweeps, stall_gain, ok and start_ok and ncon > 0)
+    if whole[0] > 0:  # the fields on the larger grid; the sums over the solve's
+        traction, st, sx, sy, sm, nc, nslip, pmax = _embedded_fields(
+            p, state, whole[0], whole[1], whole[2], whole[3], x0, dx, y0, dy)
+    else:  # the traction in the sweep layout (a copy of p), the states as (nx, ny)
+        traction = p.copy()
+        st = np.ascontiguousarray(state.T)
+        sx, sy, sm, nc, nslip, pmax = _summary_sums(traction, st, x0, dx, y0, dy)
+    return (fields, traction, st, (sx, sy, sm, nc, nslip, pmax), hist,
+            (its, converged, stalled, ok, start_ok, ncon), err)
 
 
 COMPILED_MAX_SWEEPS = 2**62
-"""Sweep limits below this run the sweeps compiled (:func:`_steady_sweeps`); a larger one
-(no machine integer holds it) runs them in Python."""
+"""Sweep limits below this run the solve compiled (:func:`_steady_solve`); a larger one
+(no machine integer holds it) runs its sweeps in Python."""
 
 if HAVE_NUMBA and packed_product[2] is not None:
     _packed_pair = packed_product[2]
-    _steady_sweeps_c = numba.njit(cache=True, nogil=True)(_steady_sweeps)
+    # (the sweep and its loop compiled into the solve alone, which is cached: the loop
+    # calls the sweep as a constant of its code, _sweep_loop_of)
+    _steady_sweep_c = numba.njit(nogil=True)(_steady_sweep)
+    _steady_loop = numba.njit(nogil=True)(_sweep_loop_of(_steady_sweep_c))
+    _steady_solve_c = numba.njit(cache=True, nogil=True)(_steady_solve)
 
     @lru_cache(maxsize=1)
     def _block_address() -> int:
-        """The address of :func:`_steady_block_numba`'s code for :func:`_steady_sweeps`,
+        """The address of :func:`_steady_block_numba`'s code for :func:`_steady_sweep`,
         formed once."""
         return address(_steady_block_numba, _BLOCK)
 else:  # pragma: no cover
-    _steady_sweeps_c = None
+    _steady_solve_c = None
 
 
 def _sweep_numpy(kern, cum, wx, wy, g, px, py, state, lo, hi, omega_h, omega_s):
@@ -646,23 +659,46 @@ def solve_steadygs(
         is the window ``sx``, ``sy`` (see :func:`railcontact.tangential.solve_tangential`).
     """
     t0 = time.perf_counter()
+    pn, mu, xi, eta, phi, offset, rolling, p0, st0, start, start_error = checked_inputs(
+        grid, operator, pressure, friction, creepage, initial_traction, initial_state,
+        spin_offset)
+    fft = None
+    if _steady_solve_c is not None and rolling and start_error is None:
+        try:
+            tol, max_its, use_numba = checked_settings(tolerance, max_iterations, omega_h,
+                                                       omega_s, engine)
+            kern = (_steady_kernels(operator) if use_numba and max_its < COMPILED_MAX_SWEEPS
+                    else None)
+        except RailContactError:  # (raised below, in the order of the checks)
+            kern = None
+        fft = None if kern is None else operator.compiled_product()
+    if fft is not None:  # the whole solve one compiled call
+        whole = (-1, 0, 0, 0) if embed is None else (
+            embed[0].nx, embed[0].ny, embed[1][0].start, embed[1][1].start)
+        fields, traction, st, sums, hist, counts, err = _steady_solve_c(
+            _block_address(), fft, kern, _run_coefficients(operator), pn, mu, grid.x0,
+            grid.dx, grid.y0, grid.dy, xi, eta, phi, offset, p0, st0, start,
+            float(omega_h), float(omega_s), tol, max_its, STALL_SWEEPS, STALL_GAIN,
+            BLOCK_SCALE**2 * grid.size, whole)
+        its, converged, stalled, ok, start_ok, ncon = counts
+        if not ok:
+            raise pressure_error(grid)
+        if not start_ok:
+            raise start_failure(grid, None)
+        if embed is None:  # (the traction's sweep layout, transposed)
+            traction, state = traction.transpose(0, 2, 1), st
+        else:  # (the solve's states: the window of the result's)
+            state = st[embed[1][0], embed[1][1]]
+        return result_record(
+            "SteadyGS", STALL_SWEEPS, t0, grid, embed, tol, ncon > 0, True, its, err,
+            converged, stalled, hist, traction, st, sums,
+            slip_function(operator, grid.dx, fields[1], fields[2], fields[3:], state))
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
                                initial_state, tolerance, max_iterations, omega_h, omega_s,
                                engine, spin_offset)
     px, py = prob.px, prob.py
     cum = _run_coefficients(operator)
     oh, os_ = float(omega_h), float(omega_s)
-    fft = None
-    if (prob.use_numba and _steady_sweeps_c is not None and prob.contact_count > 0
-            and prob.rolling and prob.max_iterations < COMPILED_MAX_SWEEPS):
-        fft = operator.compiled_product()
-    if fft is not None:  # the sweeps and their measures one compiled call
-        sweeps = _steady_sweeps_c(
-            _block_address(), fft, _steady_kernels(operator), cum, prob.wx, prob.wy, prob.g, prob.p,
-            prob.state, prob.lo, prob.hi, prob.row_counts, BLOCK_SCALE**2 * grid.size, oh, os_,
-            prob.measure, prob.tolerance, prob.max_iterations, STALL_SWEEPS, STALL_GAIN,
-            prob.floor_above)
-        return prob.result("SteadyGS", STALL_SWEEPS, t0, embed, *sweeps)
     rows = _blocks_of(prob.row_counts, BLOCK_SCALE**2 * grid.size)
     if prob.use_numba:
         kern = _steady_kernels(operator)
