@@ -49,7 +49,7 @@ reached its worker and the slowest answer's way back (the pool's time stamps).
 Usage: python scripts/bench_fmu.py [--part all|modes|penetration|wheelsets|split]
                                    [--duration 2.0] [--csv FILE] [--steps 400]
                                    [--repeats 3] [--wheelsets 4]
-                                   [--workers both|processes|threads]
+                                   [--workers both|processes|threads|P,...]
 """
 
 from __future__ import annotations
@@ -463,9 +463,12 @@ def main() -> None:
                     help="repetitions of the penetration-control runs, interleaved")
     ap.add_argument("--wheelsets", type=int, default=4,
                     help="wheelsets of the FMU of --part wheelsets")
-    ap.add_argument("--workers", default="both", choices=("both", "processes", "threads"),
-                    help="how the N-wheelset FMU of --part wheelsets steps its wheelsets "
-                    "(RAILCONTACT_FMU_WORKERS): in worker processes, on threads, or both")
+    ap.add_argument("--workers", default="both",
+                    help="how the N-wheelset FMU of --part wheelsets steps its wheelsets: "
+                    "comma-separated values of RAILCONTACT_FMU_WORKERS (processes: this "
+                    "process and worker processes; a number: that many worker processes; "
+                    "threads), each way stepped alternately with the others; both: "
+                    "processes,threads")
     args = ap.parse_args()
 
     from railcontact.fmu import build_fmu
@@ -489,7 +492,8 @@ def main() -> None:
         if args.part in ("all", "wheelsets"):
             n = args.wheelsets
             multi = build_fmu(Path(tmp) / f"RailContact{n}.fmu", warm=False, wheelsets=n)
-            workers = ("processes", "threads") if args.workers == "both" else (args.workers,)
+            workers = (("processes", "threads") if args.workers == "both" else
+                       tuple(w.strip() for w in args.workers.split(",") if w.strip()))
             free = cores_free()
             q = parallel_ratio((d, md), _unpacked(multi, Path(tmp) / f"x{n}"), n,
                                args.steps, args.repeats, workers)
@@ -505,7 +509,7 @@ def main() -> None:
                 print(f"  one step of the {n}-wheelset FMU, {w}: {t * 1e3:.3f} ms; parallel "
                       f"ratio ({n}-wheelset / {n} single) {t / q['singles']:.3f} (1: no gain; "
                       f"{1 / n:.2f}: perfectly parallel)")
-            if len(q["multi"]) == 2:
+            if set(q["multi"]) == {"processes", "threads"}:
                 print(f"  processes / threads: "
                       f"{q['multi']['processes'] / q['multi']['threads']:.3f}")
             print(f"  every wheelset's outputs equal its single instance's bit for bit: "
