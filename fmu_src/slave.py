@@ -8,9 +8,9 @@ buffers (``buffers()``), and calls the methods below, each of which returns an F
 An FMU built with ``--wheelsets N`` (``resources/wheelsets.txt`` holds N) solves N
 wheelsets, each with its own solver and its own variables (``_k`` appended to the names of
 the one-wheelset FMU, :func:`railcontact.fmu.variables.table`), in one ``fmi2DoStep``, the
-step's FMI status the worst of the wheelsets'. The wheelsets are shared among worker
-processes (:class:`~railcontact.timestep.pool.WheelsetPool`, each wheelset's solver and its
-memory always in the same process; the workers send back
+step's FMI status the worst of the wheelsets'. The wheelsets are shared among processes
+(:class:`~railcontact.timestep.pool.WheelsetPool`, each wheelset's solver and its memory
+always in the same process: this one and worker processes, which send back
 :class:`~railcontact.fmu.outputs.StepOutputs`) or among threads of this process (each
 wheelset always on the same thread; the kernels release the GIL, and distinct solvers
 stepping on threads give the results of stepping them one after the other, bit for bit:
@@ -107,6 +107,9 @@ class _Wheelset:
             vrs = np.array([slots[v.name + suffix][1] for v in mine], dtype=int)
             self.zeroed.append((buffer, vrs))
         self.real_outputs = self.zeroed[0][1]
+        self.reads = np.zeros(0, dtype=np.intp)  # the inputs a step reads (Slave._reads)
+        self.power = np.array([slots[f"frictional_power_{s}{suffix}"][1] for s in V.SIDES],
+                              dtype=np.intp)  # (Real outputs)
         self.contact: WheelsetContact | TableContact | None = None
         self.log: list[str] = []
 
@@ -174,7 +177,9 @@ class Slave:
         self.settings: ContactSettings | None = None  # the solver settings built with
         self._fell_back = False  # threads: no Python found to start worker processes
         self._descriptions: list[WheelsetDescription] = []  # the workers' wheelsets
+        self._here = True  # processes: this one steps a share of the wheelsets as well
         self.modes: FMUModes | None = None
+        self._reads: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())  # (_read_inputs)
         self.built: dict | None = None  # the parameters self.contact was built with
         self.guid, self.model = _identity(self.resources)
         self._start_values()
@@ -454,6 +459,13 @@ class Slave:
         built = self._parameters(self.real, self.integer, self.strings)
         ps = V.parameter_settings(built)
         self.modes = ps.modes
+        names = _read_inputs(ps.modes)  # (what a step reads, and where)
+        self._reads = (names, tuple(n for n in names if n.startswith("load_")
+                                    or n.split("_")[0] in ("xi", "eta", "phi")))
+        for u in self.units:
+            if any(u.slots[n][0] is not self.real for n in names):
+                raise TypeError("the FMU's inputs are Real variables")
+            u.reads = np.array([u.slots[n][1] for n in names], dtype=np.intp)
         self.settings = ps.contact
         if ps.modes.contact_model == "table":
             table = self._table(ps.modes, ps.contact)  # no memory: one for all wheelsets
@@ -486,6 +498,7 @@ class Slave:
         pair = ps.material.elastic_pair()
         self.workers = _workers(len(self.units)) if len(self.units) > 1 else None
         if self.workers is not None and self.workers[0] == "processes":
+            self._here = _steps_here()
             self._descriptions = [WheelsetDescription(track, ws, pair, ps.contact,
                                                       convention=ps.modes.convention)
                                   for _ in self.units]
@@ -504,7 +517,8 @@ class Slave:
         start them with (:func:`~railcontact.timestep.pool.worker_python`) or they do not
         start (a wheelset that cannot be built is an error, as on threads)."""
         pool = self._pool
-        if pool is not None and pool.alive and pool.processes == processes:
+        if pool is not None and pool.alive and pool.processes == processes and \
+                pool.here == self._here:
             pool.reset(self._descriptions)
             return
         self.close()
@@ -531,12 +545,14 @@ class Slave:
 
     def _new_pool(self, descriptions: list[WheelsetDescription], processes: int,
                   python: str | None = None) -> WheelsetPool:
-        """Worker processes stepping ``descriptions``' wheelsets (their results reduced to
-        :class:`~railcontact.fmu.outputs.StepOutputs`; without the host's main module:
-        the workers need the package only, and a host script is not run again in them)."""
+        """``processes`` processes stepping ``descriptions``' wheelsets, this one among
+        them when :attr:`_here` (:func:`_steps_here`), the others worker processes (their
+        results reduced to :class:`~railcontact.fmu.outputs.StepOutputs`, as here;
+        without the host's main module: the workers need the package only, and a host
+        script is not run again in them)."""
         return WheelsetPool(descriptions, processes, reduce=step_outputs,
                             python=python or worker_python(), main=False,
-                            timeout=_worker_timeout())
+                            timeout=_worker_timeout(), here=self._here)
 
     def _table(self, modes: FMUModes, contact: ContactSettings):
         """The contact table of ``table_file`` (looked up in the resources first, like a
@@ -589,17 +605,18 @@ class Slave:
             return FMI_WARNING
         return status
 
-    @staticmethod
-    def _inputs(u: _Wheelset, names: list[str]) -> dict[str, float]:
-        """The inputs ``names`` of wheelset ``u`` [SI units]; a :class:`RailContactError`
-        naming each one not finite, and each load or direct creepage beyond its range
-        (:data:`~railcontact.fmu.variables.LOAD_LIMITS`,
+    def _inputs(self, u: _Wheelset) -> dict[str, float]:
+        """The inputs of wheelset ``u`` its step reads (:func:`_read_inputs` of the modes)
+        [SI units]; a :class:`RailContactError` naming each one not finite, and each load
+        or direct creepage beyond its range (:data:`~railcontact.fmu.variables.LOAD_LIMITS`,
         :data:`~railcontact.fmu.variables.CREEPAGE_LIMITS`)."""
-        values = {n: float(u[n]) for n in names}
+        names, limited = self._reads
+        values = dict(zip(names, self.real[u.reads].tolist(), strict=True))
         bad = [f"{n} = {x}" for n, x in values.items() if not math.isfinite(x)]
         if bad:
             raise RailContactError("inputs not finite: " + ", ".join(bad))
-        for n, x in values.items():
+        for n in limited:
+            x = values[n]
             if n.startswith("load_") and not V.LOAD_LIMITS[0] <= x <= V.LOAD_LIMITS[1]:
                 bad.append(f"{n} = {x:g} N: a wheel load must be within "
                            f"{V.LOAD_LIMITS[0]:g} to {V.LOAD_LIMITS[1]:g} N (0 lifts the "
@@ -680,7 +697,7 @@ class Slave:
 
     def _pool_step(self) -> list[int]:
         """The FMI statuses of the wheelsets' steps in the worker processes: each
-        wheelset's inputs read and checked here (:meth:`_prepare`), solved in its worker,
+        wheelset's inputs read and checked here (:meth:`_prepare`), solved in its process,
         its :class:`~railcontact.fmu.outputs.StepOutputs` written here (:meth:`_finish`);
         an error in a wheelset's solve discards its step as on a thread. A worker process
         that ended discards every wheelset's step with fmi2Error (its wheelsets' memories
@@ -749,19 +766,10 @@ class Slave:
         (:meth:`WheelsetContact.solve <railcontact.timestep.WheelsetContact.solve>`) and
         the inputs read [SI units]; or fmi2Discard, its step discarded (an input not finite
         or beyond its range, or a solve that cannot be set up)."""
-        # only the inputs the modes use are read: a NaN elsewhere is no concern of ours
-        names = ["lateral_displacement", "yaw"]
         penetration = self.modes.control == "penetration"
-        names += ["vertical_displacement", "roll"] if penetration else ["load_left",
-                                                                        "load_right"]
         kinematic = self.modes.creepage_input == "kinematic"
-        names += (["speed", "lateral_velocity", "yaw_rate", "spin_speed", "curvature"]
-                  if kinematic else [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
-        names += [f"{q}_{s}" for s in V.SIDES for q in ("rail_offset_lateral",
-                                                          "rail_offset_vertical", "rail_roll",
-                                                          "friction")]
         try:
-            x = self._inputs(u, names)
+            x = self._inputs(u)
         except RailContactError as exc:
             return self._discarded(u, str(exc))
         try:
@@ -795,9 +803,7 @@ class Slave:
         and check them; its FMI status (:meth:`_step`)."""
         _write(u, out)  # (the rigid wheelset: a stage of the solve when asked for)
         speed = float(u["speed"])  # the frictional power: per unit speed times V
-        for s in V.SIDES:
-            u[f"frictional_power_{s}"] *= speed if math.isfinite(speed) and speed > 0 \
-                else 0.0
+        self.real[u.power] *= speed if math.isfinite(speed) and speed > 0 else 0.0
         unfound = out.rigid is not None and not out.rigid[0]
         if unfound:  # not found: the status says so
             u.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {out.rigid[1]}")
@@ -860,11 +866,13 @@ def _worker_timeout() -> float | None:
 
 def _workers(wheelsets: int) -> tuple[str, int]:
     """How an FMU's ``wheelsets`` (at least 2) are stepped: ``("processes", P)``, in P
-    worker processes, or ``("threads", T)``, on T threads of this process (P, T at most
-    ``wheelsets``).
+    processes (this one and P - 1 worker processes, or P worker processes:
+    :func:`_steps_here`), or ``("threads", T)``, on T threads of this process (P, T at
+    most ``wheelsets``).
 
-    ``$RAILCONTACT_FMU_WORKERS``: ``processes`` (P the cores, :func:`_cores`), a positive
-    integer P, or ``threads`` (T :func:`_threads`). Unset: threads when
+    ``$RAILCONTACT_FMU_WORKERS``: ``processes`` (P the cores, :func:`_cores`, this one
+    among them), a positive integer P (worker processes), or ``threads`` (T
+    :func:`_threads`). Unset: threads when
     ``$RAILCONTACT_FMU_THREADS`` is set or the process has one core, else processes.
 
     Raises
@@ -889,6 +897,15 @@ def _workers(wheelsets: int) -> tuple[str, int]:
     return "processes", min(wheelsets, n)
 
 
+def _steps_here() -> bool:
+    """Whether this process steps a share of the wheelsets itself when they are stepped
+    in processes (:func:`_workers`): with ``$RAILCONTACT_FMU_WORKERS`` unset or
+    ``processes`` the P processes are this one and P - 1 worker processes (no round trip
+    for its share, no process more than cores); a number P is P worker processes, this
+    one only reading the inputs and writing the outputs."""
+    return os.environ.get(WORKERS_ENV, "").strip().lower() in ("", "processes")
+
+
 def _threads() -> int:
     """The threads of a multi-wheelset step: ``$RAILCONTACT_FMU_THREADS`` (a positive
     integer), else the cores this process may run on."""
@@ -909,6 +926,21 @@ def _cores() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except (AttributeError, OSError):
         return max(1, os.cpu_count() or 1)
+
+
+def _read_inputs(modes: FMUModes) -> tuple[str, ...]:
+    """The inputs a wheelset's step reads under ``modes`` (by the one-wheelset FMU's
+    names): only those the modes use, so that a NaN elsewhere is no concern of ours."""
+    names = ["lateral_displacement", "yaw"]
+    names += (["vertical_displacement", "roll"] if modes.control == "penetration"
+              else ["load_left", "load_right"])
+    names += (["speed", "lateral_velocity", "yaw_rate", "spin_speed", "curvature"]
+              if modes.creepage_input == "kinematic"
+              else [f"{c}_{s}" for s in V.SIDES for c in ("xi", "eta", "phi")])
+    names += [f"{q}_{s}" for s in V.SIDES for q in ("rail_offset_lateral",
+                                                      "rail_offset_vertical", "rail_roll",
+                                                      "friction")]
+    return tuple(names)
 
 
 def _write(u: _Wheelset, out: StepOutputs | None) -> None:

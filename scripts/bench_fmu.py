@@ -38,10 +38,18 @@ whether every wheelset's outputs equal its single instance's bit for bit. Before
 two processes of pure Python work at once against one after the other say how many cores
 were free for the job (0.5: two; 1: one, the other taken by other jobs).
 
-Usage: python scripts/bench_fmu.py [--part all|modes|penetration|wheelsets]
+``--part split`` says where the time of a step under ``control = penetration`` goes: for
+the one-wheelset FMU (its in-process solve of the same motion beside it) fmpy's setReal
+and getReal, and within doStep the slave's reading and checking of the inputs, the solve,
+the outputs taken from its result, their writing and checks, and the rest (the C shim,
+the slave's own); for the N-wheelset FMU in processes the same host side, the pool's step,
+and within it the busiest process's solves, the time beyond them, when the last request
+reached its worker and the slowest answer's way back (the pool's time stamps).
+
+Usage: python scripts/bench_fmu.py [--part all|modes|penetration|wheelsets|split]
                                    [--duration 2.0] [--csv FILE] [--steps 400]
                                    [--repeats 3] [--wheelsets 4]
-                                   [--workers both|processes|threads]
+                                   [--workers both|processes|threads|P,...]
 """
 
 from __future__ import annotations
@@ -308,25 +316,159 @@ def parallel_ratio(single: tuple, multi: tuple, wheelsets: int, steps: int,
             "singles": float(np.median(ones)), "equal": equal, "steps": len(ones)}
 
 
+def _slave_named(name: str):
+    """The Python slave of the fmpy instance ``name`` (fmpy is a Python host: the FMU's
+    slave runs in this interpreter)."""
+    import gc
+
+    found = [o for o in gc.get_objects()
+             if type(o).__name__ == "Slave" and getattr(o, "instance_name", None) == name]
+    if len(found) != 1:
+        raise RuntimeError(f"{len(found)} slaves named {name!r} in this process")
+    return found[0]
+
+
+class _Clock:
+    """Wall time [s] spent in some methods of some objects during one step: each method
+    wrapped in place (an instance attribute over the class's) until :meth:`undo`."""
+
+    def __init__(self) -> None:
+        self.spent: dict[str, float] = {}
+        self._undo: list = []
+
+    def wrap(self, obj, method: str, name: str) -> None:
+        given = getattr(obj, method)
+        had = method in vars(obj)
+
+        def timed(*args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return given(*args, **kwargs)
+            finally:
+                self.spent[name] = self.spent.get(name, 0.0) + time.perf_counter() - t0
+
+        setattr(obj, method, timed)
+        self._undo.append((obj, method, given if had else None))
+
+    def undo(self) -> None:
+        for obj, method, given in reversed(self._undo):
+            if given is None:
+                delattr(obj, method)
+            else:
+                setattr(obj, method, given)
+        self._undo.clear()
+
+
+def split_single(fmu_dir: Path, md, steps: int) -> dict:
+    """Where the one-wheelset FMU's step under penetration control goes: medians [s] of
+    the host's setReal, doStep and getReal, and within doStep of the slave's input
+    reading and checks (``_prepare``), the solve, the outputs taken from its result
+    (``step_outputs``), their writing and checks (``_finish``); the in-process solve of
+    the same motion (another instance, stepped alternately) beside it."""
+    motion = _motion(steps)
+    inst = _Instance(fmu_dir, md, "split1")
+    slave = _slave_named("split1")
+    module = sys.modules[type(slave).__module__]
+    wc = _contact()
+    rows = []
+    for i, m in enumerate(motion):
+        api = _in_process_step(wc, m)
+        clock = _Clock()
+        clock.wrap(slave, "_prepare", "prepare")
+        clock.wrap(slave, "_finish", "finish")
+        clock.wrap(slave.units[0].contact, "solve", "solve")
+        clock.wrap(module, "step_outputs", "outputs")
+        t0 = time.perf_counter()
+        inst.s.setReal(inst.ins, [m[n] for n in INPUT_NAMES])
+        t1 = time.perf_counter()
+        inst.s.doStep(m["time"], 1e-3)
+        t2 = time.perf_counter()
+        inst.s.getReal(inst.outs)
+        t3 = time.perf_counter()
+        clock.undo()
+        if i:
+            c = clock.spent
+            rows.append({"total": t3 - t0, "setReal": t1 - t0, "doStep": t2 - t1,
+                         "getReal": t3 - t2, **c, "in-process": api, "ratio": (t3 - t0) / api,
+                         "rest": t2 - t1 - c["prepare"] - c["solve"] - c["outputs"]
+                         - c["finish"]})
+    inst.free()
+    return {k: float(np.median([r[k] for r in rows])) for k in rows[0]}
+
+
+def split_multi(multi: tuple, wheelsets: int, steps: int) -> dict:
+    """Where the N-wheelset FMU's step under penetration control goes, its wheelsets in
+    processes (``RAILCONTACT_FMU_WORKERS`` as set): medians [s] of the host's setReal,
+    doStep and getReal; within doStep the slave's input reading and checks of all
+    wheelsets (``_prepare``), the pool's step, their output writing and checks
+    (``_finish``); within the pool's step the solves of the busiest process (this one's
+    share, or a worker's), the sum of all solves, and from the pool's time stamps the
+    latest arrival of a request in a worker after sending and the latest answer's way
+    back (:attr:`~railcontact.timestep.pool.WheelsetPool.spans`)."""
+    motions = [_motion(steps, 3e-3 - 0.4e-3 * j, 0.9 * j) for j in range(wheelsets)]
+    inst = _Instance(*multi, "splitN", wheelsets)
+    slave = _slave_named("splitN")
+    pool = slave._pool
+    if pool is None:
+        inst.free()
+        raise RuntimeError("the N-wheelset FMU does not step its wheelsets in processes")
+    rows = []
+    for i in range(steps):
+        ms = [mo[i] for mo in motions]
+        clock = _Clock()
+        clock.wrap(slave, "_prepare", "prepare")
+        clock.wrap(slave, "_finish", "finish")
+        clock.wrap(pool, "step", "pool step")
+        t0 = time.perf_counter()
+        inst.s.setReal(inst.ins, [m[n] for m in ms for n in INPUT_NAMES])
+        t1 = time.perf_counter()
+        inst.s.doStep(ms[0]["time"], 1e-3)
+        t2 = time.perf_counter()
+        inst.s.getReal(inst.outs)
+        t3 = time.perf_counter()
+        clock.undo()
+        sec = pool.seconds
+        busiest = max(sum(sec[k] for k in share) for share in pool.shares)
+        remote = pool.shares[1:] if pool.here else pool.shares
+        arrive = max((a - pool.sent for a, _, _ in pool.spans), default=0.0)
+        back = max((c - b for _, b, c in pool.spans), default=0.0)
+        if i:
+            c = clock.spent
+            rows.append({"total": t3 - t0, "setReal": t1 - t0, "doStep": t2 - t1,
+                         "getReal": t3 - t2, **c, "busiest": busiest, "solves": sum(sec),
+                         "beyond": c["pool step"] - busiest, "arrive": arrive, "back": back,
+                         "rest": t2 - t1 - c["prepare"] - c["pool step"] - c["finish"],
+                         "workers": float(len(remote))})
+    here = pool.here
+    inst.free()
+    out = {k: float(np.median([r[k] for r in rows])) for k in rows[0]}
+    out["here"] = here
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=2.0, help="simulated time [s]")
     ap.add_argument("--step", type=float, default=1e-3, help="communication step [s]")
     ap.add_argument("--csv", default="", help="per-step CSV output (optional)")
     ap.add_argument("--part", default="all",
-                    choices=("all", "modes", "penetration", "wheelsets"),
+                    choices=("all", "modes", "penetration", "wheelsets", "split"),
                     help="what to run: the warm_start modes and the C host's overhead, the "
                     "penetration-control FMU / in-process ratio, the N-wheelset FMU's "
-                    "parallel ratio, or all")
+                    "parallel ratio, where the one- and the N-wheelset FMU's steps' time "
+                    "goes (split), or all but split")
     ap.add_argument("--steps", type=int, default=400,
                     help="steps of each penetration-control run (penetration, wheelsets)")
     ap.add_argument("--repeats", type=int, default=3,
                     help="repetitions of the penetration-control runs, interleaved")
     ap.add_argument("--wheelsets", type=int, default=4,
                     help="wheelsets of the FMU of --part wheelsets")
-    ap.add_argument("--workers", default="both", choices=("both", "processes", "threads"),
-                    help="how the N-wheelset FMU of --part wheelsets steps its wheelsets "
-                    "(RAILCONTACT_FMU_WORKERS): in worker processes, on threads, or both")
+    ap.add_argument("--workers", default="both",
+                    help="how the N-wheelset FMU of --part wheelsets steps its wheelsets: "
+                    "comma-separated values of RAILCONTACT_FMU_WORKERS (processes: this "
+                    "process and worker processes; a number: that many worker processes; "
+                    "threads), each way stepped alternately with the others; both: "
+                    "processes,threads")
     args = ap.parse_args()
 
     from railcontact.fmu import build_fmu
@@ -350,7 +492,8 @@ def main() -> None:
         if args.part in ("all", "wheelsets"):
             n = args.wheelsets
             multi = build_fmu(Path(tmp) / f"RailContact{n}.fmu", warm=False, wheelsets=n)
-            workers = ("processes", "threads") if args.workers == "both" else (args.workers,)
+            workers = (("processes", "threads") if args.workers == "both" else
+                       tuple(w.strip() for w in args.workers.split(",") if w.strip()))
             free = cores_free()
             q = parallel_ratio((d, md), _unpacked(multi, Path(tmp) / f"x{n}"), n,
                                args.steps, args.repeats, workers)
@@ -366,11 +509,17 @@ def main() -> None:
                 print(f"  one step of the {n}-wheelset FMU, {w}: {t * 1e3:.3f} ms; parallel "
                       f"ratio ({n}-wheelset / {n} single) {t / q['singles']:.3f} (1: no gain; "
                       f"{1 / n:.2f}: perfectly parallel)")
-            if len(q["multi"]) == 2:
+            if set(q["multi"]) == {"processes", "threads"}:
                 print(f"  processes / threads: "
                       f"{q['multi']['processes'] / q['multi']['threads']:.3f}")
             print(f"  every wheelset's outputs equal its single instance's bit for bit: "
                   f"{q['equal']}")
+        if args.part == "split":
+            _print_split(split_single(d, md, args.steps), split_multi(
+                _unpacked(build_fmu(Path(tmp) / f"RailContact{args.wheelsets}.fmu",
+                                    warm=False, wheelsets=args.wheelsets),
+                          Path(tmp) / f"x{args.wheelsets}"), args.wheelsets, args.steps),
+                args.wheelsets)
         if args.part not in ("all", "modes"):
             return
         ref = fixed_workload()
@@ -413,6 +562,33 @@ def main() -> None:
                 for row in r["rows"]:
                     wr.writerow([r["mode"], *row])
         print(f"per-step data written to {out}")
+
+
+def _print_split(one: dict, many: dict, n: int) -> None:
+    ms = {k: 1e3 * v for k, v in one.items()}
+    print(f"where a step's time goes under control = penetration (medians [ms]; load "
+          f"average {' '.join(f'{x:.2f}' for x in os.getloadavg())})")
+    print(f"  1 wheelset: set, doStep, get {ms['total']:.3f} (in-process solve of the same "
+          f"motion {ms['in-process']:.3f}; median of the per-step ratios {one['ratio']:.3f})")
+    rest = ms["rest"]
+    print(f"    fmpy setReal {ms['setReal']:.3f}, getReal {ms['getReal']:.3f}; doStep "
+          f"{ms['doStep']:.3f}: inputs read and checked {ms['prepare']:.3f}, solve "
+          f"{ms['solve']:.3f}, outputs taken {ms['outputs']:.3f}, written and checked "
+          f"{ms['finish']:.3f}, the rest (shim, slave) {rest:.3f}")
+    mm = {k: 1e3 * v for k, v in many.items() if k != "here"}
+    who = (f"this process and {many['workers']:.0f} worker process(es)" if many["here"]
+           else f"{many['workers']:.0f} worker processes")
+    print(f"  {n} wheelsets in {who}: set, doStep, get {mm['total']:.3f}")
+    rest = mm["rest"]
+    print(f"    fmpy setReal {mm['setReal']:.3f}, getReal {mm['getReal']:.3f}; doStep "
+          f"{mm['doStep']:.3f}: inputs read and checked {mm['prepare']:.3f}, pool step "
+          f"{mm['pool step']:.3f}, outputs written and checked {mm['finish']:.3f}, the rest "
+          f"{rest:.3f}")
+    print(f"    in the pool step: the busiest process's solves {mm['busiest']:.3f} (all "
+          f"solves {mm['solves']:.3f}, /{n} x 2 = {mm['solves'] / n * 2:.3f}), beyond them "
+          f"{mm['beyond']:.3f}; the last request arrived {mm['arrive']:.3f} after sending, "
+          f"the slowest answer's way back {mm['back']:.3f} (with this process stepping a "
+          f"share, an answer waits for it to end its own)")
 
 
 if __name__ == "__main__":

@@ -182,13 +182,14 @@ def test_a_bad_input_on_one_wheelset_is_its_status(default_fmu, fmu2, capsys):
     single.free()
 
 
-@pytest.mark.parametrize("workers", ["processes", "threads"])
+@pytest.mark.parametrize("workers", ["2", "processes", "threads"])
 def test_state_of_all_wheelsets_round_trips(fmu2, workers, monkeypatch):
     """fmi2GetFMUstate after two steps, three steps more, the state set again (kept and
     serialized): the three steps repeat every output of both wheelsets bit for bit,
     iterations included (the warm start of both wheelsets is in the state, read from and
-    set in the worker processes when they step the wheelsets)."""
-    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "2" if workers == "processes" else workers)
+    set in the worker processes when they step the wheelsets: two of them, or one beside
+    the host's process stepping the other wheelset)."""
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", workers)
     s = Instance(fmu2, "state", creepage_input="kinematic")
     for k in range(2):
         s.step(**{f"{n}_{j}": x for j, a in ((1, 3e-3), (2, 2e-3))
@@ -243,10 +244,13 @@ _SEEN: set[int] = set()
 
 
 def test_processes_equal_threads_bit_for_bit(fmu2, monkeypatch):
-    """RAILCONTACT_FMU_WORKERS = 2 (two worker processes) and = threads on the same steps
-    (two lateral sines with kinematic creepages and warm starts; a wheelset beyond the
-    profiles; a NaN input; back): every FMI status, every output of both wheelsets (the
-    wall times apart) and status equal bit for bit. fmi2FreeInstance ends the workers."""
+    """RAILCONTACT_FMU_WORKERS = 2 (two worker processes), = processes (on two cores or
+    more: this process steps wheelset 1, one worker process wheelset 2) and = threads on
+    the same steps (two lateral sines with kinematic creepages and warm starts; a
+    wheelset beyond the profiles; a NaN input; back): every FMI status, every output of
+    both wheelsets (the wall times apart) and status equal bit for bit. fmi2FreeInstance
+    ends the workers."""
+    import os
     import threading
 
     _SEEN.update(p.pid for p in _workers_of(""))
@@ -258,6 +262,13 @@ def test_processes_equal_threads_bit_for_bit(fmu2, monkeypatch):
     workers = _workers_of("procs")
     assert sorted(p.name for p in workers) == ["railcontact-wheelsets-0",
                                                "railcontact-wheelsets-1"]
+    _SEEN.update(p.pid for p in workers)
+    monkeypatch.setenv("RAILCONTACT_FMU_WORKERS", "processes")
+    mixed = Instance(fmu2, "mixed", creepage_input="kinematic")
+    theirs = _workers_of("mixed")
+    if len(os.sched_getaffinity(0)) >= 2:
+        assert [p.name for p in theirs] == ["railcontact-wheelsets-0"]
+    workers += theirs
     for k in range(7):
         motions = [_motion(k, 3e-3, 0.0), _motion(k, 2e-3, 0.9)]
         if k == 3:
@@ -265,13 +276,14 @@ def test_processes_equal_threads_bit_for_bit(fmu2, monkeypatch):
         if k == 4:
             motions[0]["speed"] = float("nan")
         inputs = {f"{n}_{j}": x for j, m in enumerate(motions, start=1) for n, x in m.items()}
-        assert procs.step(**inputs) == threads.step(**inputs), k
-        assert _outputs(procs) == _outputs(threads), k
+        assert procs.step(**inputs) == threads.step(**inputs) == mixed.step(**inputs), k
+        assert _outputs(procs) == _outputs(threads) == _outputs(mixed), k
     assert {t.name for t in threading.enumerate()} >= {"railcontact-threads-0_0",
                                                        "railcontact-threads-1_0"}
     assert not any(t.name.startswith("railcontact-procs") for t in threading.enumerate())
     assert _outputs(procs)[0]["normal_iterations"] > 0
     procs.s.freeInstance()  # (without fmi2Terminate)
+    mixed.s.freeInstance()
     for w in workers:
         w.join(30)
         assert not w.is_alive() and w.exitcode == 0
@@ -334,8 +346,9 @@ def test_bare_c_host_starts_the_workers_with_python(fmu2, tmp_path):
     """The N = 2 FMU in a C program (``tests/fmu/host.c``: 200 steps of wheelset 1's
     lateral sine, every output read finite; an environment of PATH and HOME only, the
     kernels' per-user cache): the FMU starts Python inside the host, whose program is
-    not Python, and its two worker processes run the FMU's Python (the interpreter that
-    built it), not the host program; they end with the instance."""
+    not Python, and steps wheelset 1 there, its worker process (on two cores or more)
+    wheelset 2: the worker runs the FMU's Python (the interpreter that built it), not
+    the host program; it ends with the instance."""
     import os
     import subprocess
     import sys
@@ -380,7 +393,7 @@ def test_bare_c_host_starts_the_workers_with_python(fmu2, tmp_path):
     out, err = run.communicate()
     assert run.returncode == 0, err[-3000:]
     assert "ok: 1 cycles of 200 steps" in out
-    assert len(seen) == 2, seen
+    assert len(seen) == min(2, len(os.sched_getaffinity(0))) - 1, seen
     assert set(seen.values()) == {os.path.realpath(sys.executable)}, seen
     for pid in seen:  # (ended at fmi2FreeInstance; reaped by the host or init)
         state = Path(f"/proc/{pid}/stat")

@@ -322,3 +322,47 @@ def test_a_worker_that_does_not_answer_in_time_closes_the_pool():
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(RailContactError, match="timeout must be above 0 s"):
             WheelsetPool([description()], timeout=bad)
+
+
+def test_this_process_steps_its_share_as_a_worker_would():
+    """here=True: this process steps the first share (wheelsets 1 and 3 of three in two
+    processes), one worker process the other; the results equal the in-process
+    wheelsets' bit for bit over warm steps, memories round trip here and there, an error
+    of a wheelset stepped here comes back as a worker's does (its type, message and a note
+    naming the wheelset; errors="return" puts it in its place), reset builds all anew,
+    and a closed pool refuses every request."""
+    with WheelsetPool([description() for _ in range(3)], processes=2, here=True) as p:
+        assert p.here and p.processes == 2 and p.shares == [[0, 2], [1]]
+        assert len(p._processes) == 1 and p.alive
+        here = [description().build() for _ in range(3)]
+        for k in range(STEPS):
+            there = p.step([inputs(i, k) for i in range(3)])
+            for i in range(3):
+                same(there[i], here[i].solve(**inputs(i, k)))
+                assert p.seconds[i] > 0
+        kept = p.memories()
+        assert all(isinstance(m, StepMemory) and m.left for m in kept)
+        first = p.step([inputs(i, STEPS) for i in range(3)])
+        p.set_memories(kept)
+        again = p.step([inputs(i, STEPS) for i in range(3)])
+        for i in range(3):
+            same(again[i], first[i])
+        bad = [inputs(i, STEPS + 1) for i in range(3)]
+        bad[0]["loads"] = (-1.0, 83e3)
+        with pytest.raises(RailContactError) as alone:
+            description().build().solve(**bad[0])
+        with pytest.raises(RailContactError) as raised:
+            p.step(bad)
+        assert str(raised.value) == str(alone.value)
+        assert any("wheelset 1" in note for note in raised.value.__notes__)
+        out = p.step(bad, errors="return")
+        assert isinstance(out[0], RailContactError) and "wheelset 1" in out[0].__notes__[0]
+        assert all(isinstance(out[i], rc.WheelsetResult) for i in (1, 2))
+        p.reset()
+        fresh = [description().build() for _ in range(3)]
+        for i, r in enumerate(p.step([inputs(i, 0) for i in range(3)])):
+            same(r, fresh[i].solve(**inputs(i, 0)))
+    for request in (p.memories, lambda: p.set_memories(kept), p.reset,
+                    lambda: p.step([inputs(i, 0) for i in range(3)])):
+        with pytest.raises(RailContactError, match="closed"):
+            request()

@@ -4,7 +4,8 @@ A :class:`WheelsetPool` owns N :class:`~railcontact.timestep.WheelsetContact` s 
 worker processes, each wheelset always in the same process (its warm-start memory stays
 there). One call of :meth:`WheelsetPool.step` sends every wheelset the keyword arguments
 of :meth:`WheelsetContact.solve` and returns their results in wheelset order: one round
-trip through a pipe per worker process and step, the workers solving at the same time.
+trip through a pipe per worker process and step, the workers solving at the same time
+(and, with ``here``, this process solving a share of its own meanwhile).
 
 Processes, not threads: the Python that runs between the compiled kernels of a step holds
 the interpreter, so two wheelsets on two threads of one process take about as long as one
@@ -139,9 +140,9 @@ def _serve(conn: Connection) -> None:
     wait for ever to write arguments larger than the pipe's buffer.)
 
     A step request is a list of ``solve`` keyword arguments, one per wheelset of this
-    worker in ``which`` order (None: that wheelset not stepped); its answer a list of
-    ``(ok, value, seconds)``: ``ok`` True and the (reduced) result (None for a wheelset
-    not stepped), or False and the exception, and the wall time of the solve [s]. A tuple
+    worker in ``which`` order (None: that wheelset not stepped); its answer ``(answers,
+    received, replied)``: a list of :func:`_solve`'s ``(ok, value, seconds)`` and when
+    the request was read and the answer sent (``time.perf_counter()`` [s]). A tuple
     is another request (:func:`_command`: reset, read or set the memories). Interrupts
     (Ctrl+C in a terminal reaches the whole process group) are left to the host, which
     closes the pool."""
@@ -168,23 +169,29 @@ def _serve(conn: Connection) -> None:
                                                       descriptions)
             conn.send(answer)
             continue
-        answer = []
-        for i, contact, kwargs in zip(which, contacts, request, strict=True):
-            if kwargs is None:  # not stepped
-                answer.append((True, None, 0.0))
-                continue
-            t0 = time.perf_counter()
-            try:
-                r = contact.solve(**kwargs)
-                value = r if reduce is None else reduce(r)
-                answer.append((True, value, time.perf_counter() - t0))
-            except Exception as exc:  # noqa: BLE001 - sent to the host, which raises it
-                answer.append((False, _portable(exc, f"wheelset {i + 1}"),
-                               time.perf_counter() - t0))
+        received = time.perf_counter()
+        answer = [_solve(i, contact, kwargs, reduce)
+                  for i, contact, kwargs in zip(which, contacts, request, strict=True)]
         try:
-            conn.send(answer)
+            conn.send((answer, received, time.perf_counter()))
         except Exception as exc:  # noqa: BLE001 - an answer that does not pickle
-            conn.send([(False, _portable(exc, "sending the results"), 0.0)] * len(which))
+            conn.send(([(False, _portable(exc, "sending the results"), 0.0)] * len(which),
+                       received, time.perf_counter()))
+
+
+def _solve(i: int, contact: WheelsetContact, kwargs: Mapping[str, Any] | None,
+           reduce: Callable[[Any], Any] | None) -> tuple[bool, Any, float]:
+    """Wheelset ``i``'s step (pool index) of ``kwargs`` (None: not stepped): ``(True,
+    its result or what ``reduce`` makes of it (None when not stepped), the wall time of
+    the solve [s])``, or ``(False, the exception as it can be sent, the wall time)``."""
+    if kwargs is None:
+        return True, None, 0.0
+    t0 = time.perf_counter()
+    try:
+        r = contact.solve(**kwargs)
+        return True, r if reduce is None else reduce(r), time.perf_counter() - t0
+    except Exception as exc:  # noqa: BLE001 - the host raises or returns it
+        return False, _portable(exc, f"wheelset {i + 1}"), time.perf_counter() - t0
 
 
 def _command(request: tuple, which: list[int], contacts: list[WheelsetContact],
@@ -270,8 +277,9 @@ class WheelsetPool:
     descriptions
         One :class:`WheelsetDescription` per wheelset (pool index ``i`` = its position).
     processes
-        Worker processes; None: ``os.cpu_count()``; at most the number of wheelsets.
-        Wheelset ``i`` runs in process ``i mod processes``.
+        Processes stepping the wheelsets (worker processes, and this one with ``here``);
+        None: ``os.cpu_count()``; at most the number of wheelsets. Wheelset ``i`` runs in
+        process ``i mod processes`` (process 0 this one with ``here``).
     reduce
         None: :meth:`step` returns each wheelset's
         :class:`~railcontact.timestep.WheelsetResult` (its values as in-process; about
@@ -289,6 +297,12 @@ class WheelsetPool:
         the pool has started; None: no limit. A worker that takes longer is taken as
         hung: the pool is closed (its workers asked to end, then terminated) and a
         :class:`RailContactError` raised.
+    here
+        Whether this process steps the first share of the wheelsets itself (wheelsets
+        ``i`` with ``i mod processes = 0``, built here), while the ``processes - 1``
+        worker processes step theirs: one process fewer than cores to keep busy, and no
+        round trip for that share; its results and errors are those a worker gives (the
+        same solve and ``reduce``). False: every wheelset in a worker process.
     python
         The Python interpreter the workers run (``multiprocessing``'s ``set_executable``
         for the ``spawn`` start method, a setting of the process); None: as it is
@@ -311,7 +325,7 @@ class WheelsetPool:
                  processes: int | None = None,
                  reduce: Callable[[Any], Any] | None = None,
                  python: str | None = None, main: bool = True,
-                 timeout: float | None = None) -> None:
+                 timeout: float | None = None, here: bool = False) -> None:
         n = len(descriptions)
         if n == 0:
             raise RailContactError("a wheelset pool needs at least one wheelset")
@@ -337,9 +351,24 @@ class WheelsetPool:
         self.timeout = timeout
         """The longest wait for a worker's answer [s] (None: no limit)."""
         self.shares = [[i for i in range(n) if i % p == j] for j in range(p)]
-        """The wheelsets (pool indices) of each worker process."""
+        """The wheelsets (pool indices) of each process (the first this one's with
+        ``here``)."""
+        self.here = bool(here)
+        """Whether this process steps the first share itself."""
+        self._remote = self.shares[1:] if self.here else self.shares
+        self._reduce = reduce
+        self._local: list[WheelsetContact] = []  # the first share's wheelsets with here
+        self._local_descriptions: list[WheelsetDescription] = []
         self.seconds: list[float] = [0.0] * n
-        """Wall time of each wheelset's solve in its worker at the last step [s]."""
+        """Wall time of each wheelset's solve in its process at the last step [s]."""
+        self.sent = 0.0
+        """When the last step's requests were sent (``time.perf_counter()`` [s])."""
+        self.spans: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * len(self._remote)
+        """Per worker process (in :attr:`shares` order) at the last step: when its
+        request arrived, when it sent its answer (its ``time.perf_counter()``: on Linux
+        the host's clock as well) and when the answer was read here [s]; with
+        :attr:`sent` and :attr:`seconds`, where a step's time went (sending, waking,
+        solving, answering)."""
         ctx = multiprocessing.get_context(START_METHOD)
         if python is not None and python != multiprocessing.spawn.get_executable():
             ctx.set_executable(python)
@@ -348,7 +377,10 @@ class WheelsetPool:
         self._closed = False
         self._finalizer = weakref.finalize(self, _stop, self._processes, self._connections)
         try:
-            for j in range(len(self.shares)):
+            if self.here:
+                self._local_descriptions = [descriptions[i] for i in self.shares[0]]
+                self._local = [d.build() for d in self._local_descriptions]
+            for j in range(len(self._remote)):
                 here, there = ctx.Pipe()
                 proc = ctx.Process(target=_serve, name=f"railcontact-wheelsets-{j}",
                                    args=(there,), daemon=True)
@@ -357,7 +389,7 @@ class WheelsetPool:
                 there.close()
                 self._processes.append(proc)
                 self._connections.append(here)
-            for j, which in enumerate(self.shares):
+            for j, which in enumerate(self._remote):
                 try:
                     self._connections[j].send((which, [descriptions[i] for i in which],
                                                reduce))
@@ -376,7 +408,8 @@ class WheelsetPool:
 
     @property
     def processes(self) -> int:
-        """Number of worker processes."""
+        """Number of processes stepping the wheelsets (this one included with
+        :attr:`here`)."""
         return len(self.shares)
 
     def _receive(self, j: int, conn: Connection, timeout: float | None = None) -> Any:
@@ -438,10 +471,11 @@ class WheelsetPool:
         # the workers in step with the host
         payloads = [pickle.dumps([None if inputs[i] is None else dict(inputs[i])
                                   for i in which], pickle.HIGHEST_PROTOCOL)
-                    for which in self.shares]
+                    for which in self._remote]
         out: list[Any] = [None] * self.count
         failed: list[tuple[int, BaseException]] = []
         ended: RailContactError | None = None
+        self.sent = time.perf_counter()
         try:
             for j, payload in enumerate(payloads):
                 try:
@@ -449,12 +483,18 @@ class WheelsetPool:
                 except (OSError, ValueError) as exc:
                     raise RailContactError(f"worker process {j + 1} of the wheelset pool "
                                            "cannot be reached; the pool is closed") from exc
-            for j, which in enumerate(self.shares):
+            if self.here:  # (while the workers solve theirs)
+                for i, contact in zip(self.shares[0], self._local, strict=True):
+                    ok, out[i], self.seconds[i] = _solve(i, contact, inputs[i], self._reduce)
+                    if not ok:
+                        failed.append((i, out[i]))
+            for j, which in enumerate(self._remote):
                 try:
-                    answer = self._receive(j, self._connections[j], self.timeout)
+                    answer, *span = self._receive(j, self._connections[j], self.timeout)
                 except RailContactError as exc:
                     ended = ended or exc
                     continue
+                self.spans[j] = (span[0], span[1], time.perf_counter())
                 for i, (ok, value, secs) in zip(which, answer, strict=True):
                     self.seconds[i] = secs
                     out[i] = value
@@ -484,22 +524,39 @@ class WheelsetPool:
         if descriptions is not None and len(descriptions) != self.count:
             raise RailContactError(f"{self.count} wheelset descriptions expected, got "
                                    f"{len(descriptions)}")
+        self._check_open()
+        error = None
+        if self.here:
+            wanted = (self._local_descriptions if descriptions is None
+                      else [descriptions[i] for i in self.shares[0]])
+            try:
+                local = [d.build() for d in wanted]
+            except Exception as exc:  # noqa: BLE001 - raised after the workers' reset
+                error = exc
+            else:
+                self._local, self._local_descriptions = local, wanted
         self._ask([("reset", None if descriptions is None else
-                    [descriptions[i] for i in which]) for which in self.shares])
+                    [descriptions[i] for i in which]) for which in self._remote])
+        if error is not None:
+            raise error
 
     def memories(self) -> list[StepMemory]:
         """Each wheelset's step memory (:attr:`WheelsetContact.memory
         <railcontact.timestep.WheelsetContact.memory>`, where its next step starts), read
-        in its worker process; pool order."""
+        in its process; pool order."""
+        self._check_open()
         out: list[Any] = [None] * self.count
-        for which, values in zip(self.shares, self._ask([("memory",)] * self.processes),
+        if self.here:
+            for i, contact in zip(self.shares[0], self._local, strict=True):
+                out[i] = contact.memory
+        for which, values in zip(self._remote, self._ask([("memory",)] * len(self._remote)),
                                  strict=True):
             for i, m in zip(which, values, strict=True):
                 out[i] = m
         return out
 
     def set_memories(self, memories: Sequence[StepMemory | None]) -> None:
-        """Set each wheelset's step memory in its worker process (pool order; None: the
+        """Set each wheelset's step memory in its process (pool order; None: the
         wheelset forgets its previous steps, :meth:`WheelsetContact.reset
         <railcontact.timestep.WheelsetContact.reset>`): its next step starts from it as
         after the step that left it."""
@@ -510,7 +567,18 @@ class WheelsetPool:
             if m is not None and not isinstance(m, StepMemory):
                 raise RailContactError(f"wheelset {i + 1}: a StepMemory or None expected, "
                                        f"got {type(m).__name__}")
-        self._ask([("set_memory", [memories[i] for i in which]) for which in self.shares])
+        self._check_open()
+        if self.here:
+            for i, contact in zip(self.shares[0], self._local, strict=True):
+                if memories[i] is None:
+                    contact.reset()
+                else:
+                    contact.memory = memories[i]
+        self._ask([("set_memory", [memories[i] for i in which]) for which in self._remote])
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RailContactError("the wheelset pool is closed")
 
     def _ask(self, requests: list[tuple]) -> list[Any]:
         """Send each worker process its request (:func:`_command`) and return their
@@ -533,6 +601,7 @@ class WheelsetPool:
     def close(self) -> None:
         """End the worker processes (idempotent)."""
         self._closed = True
+        self._local = []
         self._finalizer()
 
     def __enter__(self) -> WheelsetPool:
