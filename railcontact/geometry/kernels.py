@@ -953,3 +953,34 @@ def reference_patch(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
         return r, math.nan, math.nan
     return (r, lateral_curvature(out[F, k0 - 5], out[F, k0], out[F, k0 + 5], denominator),
             rail_coordinate(pu, pz, order, pu_sorted, py, r[1], r[2]))
+
+
+@numba.njit(cache=True, nogil=True)
+def overlap_box_frame(g, u_trace, g_min, approach, rail_u, increasing, eta, u, z, za, zb, ur,
+                      zr, wx, wc, radius, half_bb, flange_back, u_c, z_c, gamma, eta_c, kw,
+                      kr, s, overlap, frame, i0, i1, penetration, k0, grow):
+    """The box (xmin, xmax, ymin, ymax) [m] around a patch's rigid overlap at the normal
+    ``penetration`` [m] (:func:`~.points.overlap_box`) with the run of the wheel's
+    vertical overlap at the vertical ``approach`` [m] that holds ``rail_u``
+    (:func:`run_extent` of the trace's gap ``g`` and rail positions ``u_trace``), of a
+    frame of :func:`reference_frame` formed at the samples ``i0:i1`` of ``frame``: formed
+    further (:func:`extend_frame`, ``grow`` samples a time; its arguments from ``eta`` to
+    ``overlap``) where the overlap, or the run, reaches the edge of those formed. Returns
+    the box and the samples formed then (i0, i1)."""
+    lo_u, hi_u = run_extent(g, u_trace, g_min, approach, rail_u, increasing)
+    ns = s.size
+    while True:
+        f = frame[F, i0:i1]
+        ru = frame[RAIL_U, i0:i1]
+        m = i1 - i0
+        lo, hi = lobes_extent(f, ru, penetration, min(max(k0 - i0, 0), m - 1), lo_u, hi_u)
+        a = i0 - grow if i0 > 0 and (lo == 0 or lo_u <= ru[0] <= hi_u) else i0
+        b = i1 + grow if i1 < ns and (hi == m - 1 or lo_u <= ru[m - 1] <= hi_u) else i1
+        if a == i0 and b == i1:
+            ds = s[i0 + 1] - s[i0]
+            xl = overlap_half_length(f, frame[A_OF_S, i0:i1], lo, hi, penetration)
+            return -xl, xl, s[i0 + lo] - ds, s[i0 + hi] + ds, i0, i1
+        a, b = min(max(a, 0), i0), max(min(b, ns), i1)
+        extend_frame(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
+                     z_c, gamma, eta_c, kw, kr, s, overlap, i0, i1, a, b, frame)
+        i0, i1 = a, b

@@ -307,6 +307,24 @@ def overlap_box(cp: ContactPoint, penetration: float,
     return _box(s, f, full.a_of_s, lo, hi, penetration)
 
 
+def overlap_box_on_run(found: WheelSearch, cp: ContactPoint, penetration: float,
+                      approach: float) -> tuple[float, float, float, float]:
+    """:func:`overlap_box` of the patch ``cp`` of the searched wheel at the normal
+    ``penetration`` [m] with the run of the wheel's vertical overlap at the vertical
+    ``approach`` [m] that holds the patch's point (:func:`run_on_rail`): of a frame at the
+    reference point formed over part of its samples, one compiled pass
+    (:func:`~.kernels.overlap_box_frame`)."""
+    plane = cp.plane
+    if plane.frame is None:
+        return overlap_box(cp, penetration, run_on_rail(found, approach, cp.rail_u))
+    trace = found.trace
+    xmin, xmax, ymin, ymax, plane.i0, plane.i1 = kernels.overlap_box_frame(
+        trace[4], trace[2], found.least_gap, float(approach), float(cp.rail_u),
+        found.increasing, *_frame_arguments(plane.what), plane.frame, plane.i0, plane.i1,
+        float(penetration), K0, kernels.FRAME_GROW)
+    return xmin, xmax, ymin, ymax
+
+
 def _box(s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, lo: int, hi: int,
          penetration: float) -> tuple[float, float, float, float]:
     """:func:`overlap_box` of the run ``lo..hi`` (inclusive) of the samples."""
