@@ -57,7 +57,7 @@ def test_search_in_one_pass_is_the_kernels_one_by_one(pose):
         n, g_min, k, inc, ties = kernels.trace_gap(
             eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi),
             math.cos(phi), math.sin(phi), float(sgn * pose.lateral), float(WS.radius),
-            *search.rail_arrays(TRACK)[4:], out)
+            *search.rail_arrays(TRACK)[4:8], out)
         np.testing.assert_array_equal(found.trace, out[:, :n])
         assert (found.least_gap, found.first_sample, found.increasing, found.ties) == (
             g_min, k, inc, ties)

@@ -198,12 +198,28 @@ class ContactPoint:
     plane: TangentPlane = field(repr=False, compare=False)
 
     def normal_penetration(self, approach: float) -> float:
-        """:func:`normal_penetration` of this patch."""
-        return normal_penetration(self, approach)
+        """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
+        return max(approach - self.gap, 0.0) * math.cos(self.contact_angle)
 
     def gap_on_grid(self, grid: Grid) -> np.ndarray:
-        """:func:`gap_on_grid` of this patch."""
-        return gap_on_grid(self, grid)
+        """Undeformed gap h(x, y) = f(y) + A(y) x^2 of this patch at the element centres
+        of ``grid`` [m], with the grid's y along s. Where the profiles end (or fold away
+        from this contact) the gap is :data:`FAR` - such elements can never touch."""
+        out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
+        plane = self.plane
+        if plane.frame is None:
+            full = samples(self)
+            kernels.gap_on_grid(full.s, full.f, full.a_of_s, float(grid.x0),
+                                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy),
+                                grid.ny, FAR, out)
+            return out
+        while True:  # a frame at the reference point formed over part of its samples
+            done, a, b = kernels.gap_on_grid_part(
+                _S_SAMPLES, plane.frame, plane.i0, plane.i1, float(grid.x0),
+                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+            if done:
+                return out
+            _extend(plane, a, b)
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """:func:`lateral_extent` of this patch."""
@@ -211,8 +227,9 @@ class ContactPoint:
 
 
 def normal_penetration(cp: ContactPoint, approach: float) -> float:
-    """Normal penetration [m] of the patch ``cp`` for a vertical wheel approach [m]."""
-    return max(approach - cp.gap, 0.0) * math.cos(cp.contact_angle)
+    """Normal penetration [m] of the patch ``cp`` for a vertical wheel approach [m]
+    (:meth:`ContactPoint.normal_penetration`)."""
+    return cp.normal_penetration(approach)
 
 
 def samples(cp: ContactPoint) -> Samples:
@@ -236,22 +253,8 @@ def samples(cp: ContactPoint) -> Samples:
 
 def gap_on_grid(cp: ContactPoint, grid: Grid) -> np.ndarray:
     """Undeformed gap h(x, y) = f(y) + A(y) x^2 of the patch ``cp`` at the element centres
-    of ``grid`` [m], with the grid's y along s. Where the profiles end (or fold away from
-    this contact) the gap is :data:`FAR` - such elements can never touch."""
-    out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
-    plane = cp.plane
-    if plane.frame is None:
-        full = samples(cp)
-        kernels.gap_on_grid(full.s, full.f, full.a_of_s, float(grid.x0), float(grid.dx),
-                            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
-        return out
-    while True:  # a frame at the reference point formed over part of its samples
-        done, a, b = kernels.gap_on_grid_part(
-            _S_SAMPLES, plane.frame, plane.i0, plane.i1, float(grid.x0), float(grid.dx),
-            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
-        if done:
-            return out
-        _extend(plane, a, b)
+    of ``grid`` [m] (:meth:`ContactPoint.gap_on_grid`)."""
+    return cp.gap_on_grid(grid)
 
 
 def lateral_extent(cp: ContactPoint, delta: float, margin: float = 1.0
@@ -320,7 +323,7 @@ def overlap_box_on_run(found: WheelSearch, cp: ContactPoint, penetration: float,
     trace = found.trace
     xmin, xmax, ymin, ymax, plane.i0, plane.i1 = kernels.overlap_box_frame(
         trace[4], trace[2], found.least_gap, float(approach), float(cp.rail_u),
-        found.increasing, *_frame_arguments(plane.what), plane.frame, plane.i0, plane.i1,
+        found.increasing, *plane.what, plane.frame, plane.i0, plane.i1,
         float(penetration), K0, kernels.FRAME_GROW)
     return xmin, xmax, ymin, ymax
 
@@ -369,7 +372,7 @@ def contact_points(found: WheelSearch, approach: float = 0.0) -> list[ContactPoi
     ``approach = 0`` gives the first point of contact only. Patches are ordered by gap
     (the first one has gap 0).
     """
-    approach = check_positive("approach", approach, "m", allow_zero=True)
+    approach = _approach(approach)
     trace, g_min, k = found.trace, found.least_gap, found.first_sample
     wheel = found.wheel
     rail = found.rail[2:4]
@@ -390,9 +393,17 @@ def contact_points(found: WheelSearch, approach: float = 0.0) -> list[ContactPoi
     return points
 
 
+def _approach(approach: float) -> float:
+    """A vertical ``approach`` [m] checked: finite and not negative (a float of those
+    passed as it is, without the checks' calls)."""
+    if type(approach) is float and 0.0 <= approach < math.inf:
+        return approach
+    return check_positive("approach", approach, "m", allow_zero=True)
+
+
 def count_contacts(found: WheelSearch, approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
-    approach = check_positive("approach", approach, "m", allow_zero=True)
+    approach = _approach(approach)
     return kernels.count_runs(found.trace[4], found.least_gap, found.first_sample,
                               float(approach))
 
@@ -420,7 +431,7 @@ def _point(found: WheelSearch, row, rec=None) -> ContactPoint:
         rec = kernels.rigid_record(trace[0], trace[2], trace[3], g_min, *rail[:2], *wheel,
                                    u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0,
                                    _B_DENOMINATOR, found.increasing,
-                                   *found.track.placed_search)
+                                   *rail[8:])
     A, B, rail_y = rec
     if rail_y != rail_y:  # NaN: the point is not finite (raises)
         found.track.rail_coordinate(u_c, z_rail)
@@ -456,7 +467,7 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     :func:`patch_run` gives what that turning reads of the point.
     """
     approach = float(approach)  # plain floats in the point: numpy's scalars cost more
-    d = normal_penetration(cp, approach)  # in every use after (Hertz's Newton iteration)
+    d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
     if not d > 0:
         return None
     trace, g_min, increasing = found.trace, found.least_gap, found.increasing
@@ -472,7 +483,7 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
       height, weight, u_a, z_a, u_b, z_b), B, rail_y) = kernels.reference_patch(
         trace, g_min, increasing, approach, float(cp.rail_u), *rail[:4], *wheel,
         _S_SAMPLES, K0, _B_DENOMINATOR, WEIGHT_POWER, float(turn),
-        *found.track.placed_search, frame)
+        *rail[8:], frame)
     if not ok:
         return None
     if rail_y != rail_y:  # NaN: the point is not finite (raises)
@@ -483,7 +494,8 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     if hi - lo >= 5:
         B = overlap / (0.5 * (float(_S_SAMPLES[hi - 1] - _S_SAMPLES[lo]) + _DS)) ** 2
     # what forms the other samples (:func:`_frame_arguments`)
-    what = (trace, rail, wheel, g_lo, approach, u_ref, z_ref, gamma, eta_c, kw, kr, overlap)
+    what = (trace[0], trace[2], trace[3], g_lo, approach, *rail[:2], *wheel[:5], u_ref,
+            z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
     side = cp.side
     return ContactPoint(
         side=side, gap=approach - overlap / math.cos(gamma), wheel_s=wheel_s, rail_u=u_ref,
@@ -520,18 +532,16 @@ def _extend(plane: TangentPlane, a: int, b: int) -> np.ndarray:
     the same values); returns the frame."""
     frame, i0, i1 = plane.frame, plane.i0, plane.i1
     a, b = min(a, i0), max(b, i1)
-    kernels.extend_frame(*_frame_arguments(plane.what), i0, i1, a, b, frame)
+    kernels.extend_frame(*plane.what, i0, i1, a, b, frame)
     plane.i0, plane.i1 = a, b
     return frame
 
 
 def _frame_arguments(what: tuple) -> tuple:
     """The arguments of :func:`~.kernels.frame_samples` (before ``i0``) of a frame at the
-    reference point, and its overlap, from what :func:`at_reference` keeps: the trace
-    lowered by the approach (``(z - g_min) - approach``), the frame's point and plane."""
-    trace, rail, wheel, g_min, approach, u_ref, z_ref, gamma, eta_c, kw, kr, overlap = what
-    return (trace[0], trace[2], trace[3], g_min, approach, *rail[:2], *wheel[:5], u_ref,
-            z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
+    reference point, and its overlap: what :func:`at_reference` keeps (the trace lowered
+    by the approach, ``(z - g_min) - approach``, the frame's point and plane), as it is."""
+    return what
 
 
 @dataclass(frozen=True)
