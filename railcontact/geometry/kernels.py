@@ -647,20 +647,18 @@ def _samples_read(y, s):
 
 
 @numba.njit(cache=True, nogil=True)
-def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far):
-    """:func:`gap_on_grid` from a frame (5, len(s)) formed at the samples ``i0:i1`` only,
-    in an array (nx, ny) formed here. Returns (done, a, b, that array): not done (the
-    array not written) when the grid reads samples beyond them, ``a:b`` the samples to
-    form then (those formed included)."""
-    out = np.empty((nx, ny))
+def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
+    """:func:`gap_on_grid` from a frame (5, len(s)) formed at the samples ``i0:i1`` only.
+    Returns (done, a, b): not done (``out`` not written) when the grid reads samples
+    beyond them, ``a:b`` the samples to form then (those formed included)."""
     f = frame[F]
     a_of_s = frame[A_OF_S]
     ra = _samples_read(y0, s)[0]
     rb = _samples_read(y0 + dy * (ny - 1), s)[1] + 1
     if ra < i0 or rb > i1:
-        return False, min(ra, i0), max(rb, i1), out
+        return False, min(ra, i0), max(rb, i1)
     _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out)
-    return True, i0, i1, out
+    return True, i0, i1
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

@@ -205,18 +205,18 @@ class ContactPoint:
         """Undeformed gap h(x, y) = f(y) + A(y) x^2 of this patch at the element centres
         of ``grid`` [m], with the grid's y along s. Where the profiles end (or fold away
         from this contact) the gap is :data:`FAR` - such elements can never touch."""
-        plane = self.plane  # (f and A depend on y alone: one compiled pass)
+        out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
+        plane = self.plane
         if plane.frame is None:
             full = samples(self)
-            out = np.empty((grid.nx, grid.ny))
             kernels.gap_on_grid(full.s, full.f, full.a_of_s, float(grid.x0),
                                 float(grid.dx), grid.nx, float(grid.y0), float(grid.dy),
                                 grid.ny, FAR, out)
             return out
         while True:  # a frame at the reference point formed over part of its samples
-            done, a, b, out = kernels.gap_on_grid_part(
+            done, a, b = kernels.gap_on_grid_part(
                 _S_SAMPLES, plane.frame, plane.i0, plane.i1, float(grid.x0),
-                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR)
+                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
             if done:
                 return out
             _extend(plane, a, b)
