@@ -918,45 +918,40 @@ def rigid_record(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
 @numba.njit(cache=True, nogil=True)
 def search_wheel(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, lo, hi, ur, zr, rx, rc,
                  wx, wc, radius, half_bb, flange_back, s, k0, denominator, pu, pz, order,
-                 pu_sorted, py):
-    """One wheel searched at a pose in one pass: its trace (:func:`trace_gap`, in an array
-    (5, len(eta)) of which the first n columns are written) and, where its least gap is
-    finite and on one sample, its first rigid contact point (:func:`rigid_point` of that
-    sample alone) with what :func:`rigid_record` gives of it. Returns (that array, n, the
-    least gap, its first index, whether u increase, how many samples have the least gap,
-    whether the point is formed, its row (8) and (A, B, rail coordinate)); the point is
-    not formed for fewer than 10 trace points."""
-    out = np.empty((5, eta.size))
+                 pu_sorted, py, out):
+    """One wheel searched at a pose in one pass: its trace (:func:`trace_gap`, written to
+    ``out``) and, where its least gap is finite and on one sample, its first rigid contact
+    point (:func:`rigid_point` of that sample alone) with what :func:`rigid_record` gives
+    of it. Returns (n, the least gap, its first index, whether u increase, how many samples
+    have the least gap, whether the point is formed, its row (8) and (A, B, rail
+    coordinate)); the point is not formed for fewer than 10 trace points."""
     n, g_min, k, increasing, ties = trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx,
                                               u_ws, radius, lo, hi, rx, rc, out)
     nan = math.nan
     if n < 10 or ties != 1 or not math.isfinite(g_min):
-        return (out, n, g_min, k, increasing, ties, False,
-                (nan, nan, nan, nan, nan, nan, nan, nan), (nan, nan, nan))
+        return (n, g_min, k, increasing, ties, False, (nan, nan, nan, nan, nan, nan, nan, nan),
+                (nan, nan, nan))
     e, x, u, z, g = out[0, :n], out[1, :n], out[2, :n], out[3, :n], out[4, :n]
     row = rigid_point(e, x, u, g, g_min, k, k + 1, rx, rc, wx, wc, half_bb, flange_back)
     rec = rigid_record(e, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, row[2],
                        row[3], row[5], row[0], s, k0, denominator, increasing, pu, pz, order,
                        pu_sorted, py)
-    return out, n, g_min, k, increasing, ties, True, row, rec
+    return n, g_min, k, increasing, ties, True, row, rec
 
 
 @numba.njit(cache=True, nogil=True)
 def reference_patch(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx, wc,
                     radius, half_bb, flange_back, s, k0, denominator, power, turn, pu, pz,
-                    order, pu_sorted, py):
-    """:func:`reference_frame` (its frame in an array (5, len(s)) formed here), with
-    :func:`lateral_curvature` of the frame's samples ``k0 - 5``, ``k0``, ``k0 + 5`` (its
-    ``denominator``) and the rail profile coordinate of its point (:func:`rail_coordinate`,
-    NaN where the point is not finite): returns its tuple, the frame, that B and that
-    coordinate."""
-    out = np.empty((5, s.size))
+                    order, pu_sorted, py, out):
+    """:func:`reference_frame`, with :func:`lateral_curvature` of the frame's samples
+    ``k0 - 5``, ``k0``, ``k0 + 5`` (its ``denominator``) and the rail profile coordinate
+    of its point (:func:`rail_coordinate`, NaN where the point is not finite): returns its
+    tuple, that B and that coordinate."""
     r = reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx,
                         wc, radius, half_bb, flange_back, s, k0, power, turn, out)
     if not r[0]:
-        return r, out, math.nan, math.nan
-    return (r, out,
-            lateral_curvature(out[F, k0 - 5], out[F, k0], out[F, k0 + 5], denominator),
+        return r, math.nan, math.nan
+    return (r, lateral_curvature(out[F, k0 - 5], out[F, k0], out[F, k0 + 5], denominator),
             rail_coordinate(pu, pz, order, pu_sorted, py, r[1], r[2]))
 
 

@@ -477,11 +477,13 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     # (the others formed when read); CONTACT's wheel profile coordinate of the point: the
     # wheel above it; its rolling radius: the wheel surface's along the contact normal
     # through it (where the rigid slip of the wheel is taken)
+    frame = np.empty((5, N_S))
     rail, wheel = found.rail, found.wheel
     ((ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
-      height, weight, u_a, z_a, u_b, z_b), frame, B, rail_y) = kernels.reference_patch(
+      height, weight, u_a, z_a, u_b, z_b), B, rail_y) = kernels.reference_patch(
         trace, g_min, increasing, approach, float(cp.rail_u), *rail[:4], *wheel,
-        _S_SAMPLES, K0, _B_DENOMINATOR, WEIGHT_POWER, float(turn), *rail[8:])
+        _S_SAMPLES, K0, _B_DENOMINATOR, WEIGHT_POWER, float(turn),
+        *rail[8:], frame)
     if not ok:
         return None
     if rail_y != rail_y:  # NaN: the point is not finite (raises)

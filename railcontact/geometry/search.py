@@ -140,10 +140,11 @@ def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr = _wheel_samples(ws)
     rail, wheel = rail_arrays(track), wheel_arrays(ws)
-    out, n, g_min, k, increasing, ties, formed, row, rec = kernels.search_wheel(
+    out = np.empty((5, eta.size))
+    n, g_min, k, increasing, ties, formed, row, rec = kernels.search_wheel(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
         math.sin(phi), float(sgn * pose.lateral), *rail[4:6], *rail[:4], *wheel,
-        _points.S_SAMPLES, K0, _points.B_DENOMINATOR, *rail[8:])
+        _points.S_SAMPLES, K0, _points.B_DENOMINATOR, *rail[8:], out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
