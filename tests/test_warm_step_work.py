@@ -96,7 +96,7 @@ def test_first_contact_of_one_least_sample_is_the_scans_point():
         pose = Pose(lateral=rng.uniform(-9e-3, 9e-3), yaw=rng.uniform(-8e-3, 8e-3),
                     roll=rng.uniform(-3e-3, 3e-3) if rng.random() < 0.7 else 0.0)
         for side in ("left", "right"):
-            trace, g_min, k, _, ties = search._trace(track, ws, pose, side)
+            trace, g_min, k, _, ties = search._trace(track, ws, pose, side)[:5]
             assert ties == np.count_nonzero(trace[4] == trace[4].min())
             rows = kernels.rigid_points(trace, g_min, k, 0.0, *rail, *wheel[:2], *wheel[3:])
             search.forget(traces=False)

@@ -56,10 +56,10 @@ from ..geometry.points import (
     count_contacts,
     merge_approaches,
     overlap_box,
+    overlap_box_on_run,
     patch_run,
     reference_offset,
     reference_point,
-    run_on_rail,
     samples,
 )
 from ..geometry.profiles import read_profile
@@ -109,10 +109,11 @@ EstimateFor = Callable[[ContactPoint, HertzSolution | None, Control], WarmStart]
 previous time step's, or a table's previous point), instead of the settings' estimate;
 ``hertz`` is None where the settings do not form it (:attr:`PatchSettings.hertz`: a time
 step's; ``hertz(cp.A, cp.B, pair, **control.kwargs())`` forms it)."""
-RunOf = Callable[[float, float], tuple[float, float]]
-"""``run_of(approach, rail_u)``: the rail positions [m] spanned by a wheel's run of vertical
-overlap at the vertical ``approach`` [m] around ``rail_u`` [m]
-(:func:`~railcontact.geometry.points.run_on_rail` of a searched wheel)."""
+BoxOf = Callable[[ContactPoint, float, float], tuple[float, float, float, float]]
+"""``box_of(cp, penetration, approach)``: the box [m] around the rigid overlap of a
+wheel's patch ``cp`` at the normal ``penetration`` [m] with the wheel's run of vertical
+overlap at the vertical ``approach`` [m] around the patch's point
+(:func:`~railcontact.geometry.points.overlap_box_on_run` of a searched wheel)."""
 Starts = Callable[[str], EstimateFor | None]
 """``starts(side)``: the ``estimate_for`` of a wheel (its :class:`CaseStart`), or None."""
 LOAD_RTOL = 1e-6
@@ -225,15 +226,15 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
              pair: ElasticPair, loads: list[float] | None = None,
              estimate_for: EstimateFor | None = None,
              previous: list[PatchSolution] | None = None,
-             run_of: RunOf | None = None) -> list[PatchSolution]:
+             box_of: BoxOf | None = None) -> list[PatchSolution]:
     """The normal BEM solution of each contact point's patch: at the vertical ``approach``
     [m], or carrying the normal ``loads`` [N] (one per point).
 
     Each solution is checked against the patch's rigid overlap (:func:`_overlap_covered`):
-    on a potential area an estimate gave (a time step's), and with ``run_of`` (the rail
-    positions spanned by the wheel's run of vertical overlap at an approach around a rail
-    position, :func:`~railcontact.geometry.points.run_on_rail`) on every area, so that
-    a second lobe of the run that the patch's plane shows apart is not left out.
+    on a potential area an estimate gave (a time step's), and with ``box_of`` (the box
+    around the patch's overlap with the wheel's run of vertical overlap at an approach,
+    :func:`~railcontact.geometry.points.overlap_box_on_run`) on every area, so that a
+    second lobe of the run that the patch's plane shows apart is not left out.
 
     A patch of ``previous`` (the wheel's last load pass) at the same contact point starts
     the solve: its pressure is the initial estimate, and its grid is kept when it serves
@@ -298,9 +299,9 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                                             grid.dx is None or grid.dy is None)
         res, work = solve_patch_normal(gap_of, bounds, grid, normal, pair, control,
                                        est, grid=last.normal.grid if keep else None)
-        if given or run_of is not None:
+        if given or box_of is not None:
             res = _overlap_covered(cp, gap_of, bounds, grid, normal, pair, control, est, res,
-                                   work, run_of)
+                                   work, box_of)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work, start=est,
@@ -364,12 +365,12 @@ def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], An
 def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
                      bounds: tuple[float, float, float, float], grid: GridSettings, normal,
                      pair: ElasticPair, control: Control, est: WarmStart, res, work,
-                     run_of: RunOf | None = None):
+                     box_of: BoxOf | None = None):
     """The normal solution ``res`` of the patch ``cp`` on a potential area ``bounds``
     [m] (a time step's: the previous contact's box with a margin; or the cold one),
     checked against the patch's rigid overlap at the penetration it found
     (:func:`~railcontact.geometry.points.overlap_box`, with every lobe of the wheel's
-    run of vertical overlap at the approach it found when ``run_of`` gives the run;
+    run of vertical overlap at the approach it found with ``box_of``, which reads the run;
     :func:`~.patch.uncovered`): while
     the overlap beyond the grid holds places where the solution's deformed gap may be
     negative, the patch is solved again on the area grown to hold them (with
@@ -385,9 +386,10 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
     for k in range(MAX_OVERLAP_PASSES + 1):
         if not (res.force > 0 and math.isfinite(res.penetration) and res.penetration > 0):
             return res
-        run = None if run_of is None else run_of(
-            res.penetration / math.cos(cp.contact_angle) + cp.gap, cp.rail_u)
-        flagged = uncovered(gap_of, res, pair, overlap_box(cp, res.penetration, run))
+        box = (overlap_box(cp, res.penetration) if box_of is None else
+               box_of(cp, res.penetration, res.penetration / math.cos(cp.contact_angle)
+                      + cp.gap))
+        flagged = uncovered(gap_of, res, pair, box)
         if flagged is None:
             return res
         if k == MAX_OVERLAP_PASSES:
@@ -594,14 +596,14 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     found = (problem.found if problem is not None and problem.found is not None
              else search_wheel(track, ws, pose, side))
     points = partial(referenced, separation=settings.separation) if reference else _rigid
-    run_of = partial(run_on_rail, found)
+    box_of = partial(overlap_box_on_run, found)
     if not control.by_load:
         approach = control.penetration
         if approach <= 0:
             return []
         return _patches(points(found, approach), ws, approach,
                         settings, pair, estimate_for=estimate_for, previous=previous,
-                        run_of=run_of)
+                        box_of=box_of)
     q = control.load
     if negligible_load(q):
         return []
@@ -609,11 +611,11 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     # approach of the pass before (or Hertz's) and again until the approach holds
     first = contact_points(found, 0.0)[0] if problem is None else problem.first
     single, passes = _single_patch(found, first, q, settings, pair, estimate_for,
-                                   previous, reference, start, run_of)
+                                   previous, reference, start, box_of)
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
         ps = _patches(points(found, a), ws, a, settings, pair,
-                      estimate_for=estimate_for, previous=passes[-1], run_of=run_of)
+                      estimate_for=estimate_for, previous=passes[-1], box_of=box_of)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -686,7 +688,7 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
                   settings: PatchSettings, pair: ElasticPair,
                   estimate_for: EstimateFor | None,
                   previous: list[PatchSolution] | None, reference: bool = True,
-                  start: tuple[float, float] | None = None, run_of: RunOf | None = None
+                  start: tuple[float, float] | None = None, box_of: BoxOf | None = None
                   ) -> tuple[list[PatchSolution], list[list[PatchSolution]]]:
     """The patch of a wheel with one contact point ``first`` carrying the vertical load
     ``q`` [N] by its normal force, solved in the frame at its reference point, and the
@@ -709,7 +711,7 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     if not reference:
         cosg = math.cos(first.contact_angle)
         single = _patches([first], found.wheelset, 0.0, settings, pair, loads=[q / cosg],
-                          estimate_for=estimate_for, previous=previous, run_of=run_of)
+                          estimate_for=estimate_for, previous=previous, box_of=box_of)
         return single, [single]
     if previous:  # the pass before, its approach scaled to this load as Hertz's
         q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
@@ -734,7 +736,7 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
         ps = _patches([cp], found.wheelset, 0.0,
                       probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
-                      previous=last, run_of=run_of)
+                      previous=last, box_of=box_of)
         passes.append(ps)
         new = vertical_approach(ps)
         if cp is first and (approach <= 0 or at_reference(found, first, new) is None):

@@ -874,3 +874,113 @@ def rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, f
         v = f[i] - m if math.isfinite(f[k0]) else f[i]
         three[j] = v if math.isfinite(v) else math.inf
     return out[A_OF_S, k0], three[0], three[1], three[2]
+
+
+@numba.njit(cache=True, nogil=True)
+def rail_coordinate(pu, pz, order, pu_sorted, py, u, z):
+    """The rail profile coordinate ``py`` [m] of the placed rail's point (``pu``, ``pz``)
+    nearest (u, Z) (:func:`nearest_point_sorted`; ``order``, ``pu_sorted`` its search's
+    order), NaN where ``u`` or ``z`` is not finite (no nearest point)."""
+    if not (math.isfinite(u) and math.isfinite(z)):
+        return math.nan
+    return py[nearest_point_sorted(pu, pz, order, pu_sorted, u, z)]
+
+
+@numba.njit(cache=True, nogil=True)
+def lateral_curvature(lo, mid, hi, denominator):
+    """B = f''(0) / 2 [1/m] from three samples of f ``h`` [m] apart (the middle at the
+    origin), ``denominator`` = ``2 h^2`` (formed by the caller: Python's ``h ** 2`` is the
+    C library's ``pow``, which a compiled ``h ** 2`` is not, to the last bit); NaN where
+    it is not positive or a sample is not finite (a profile's end: no convex contact)."""
+    if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
+        return math.nan
+    b = (lo - 2 * mid + hi) / denominator
+    return b if math.isfinite(b) and b > 0 else math.nan
+
+
+@numba.njit(cache=True, nogil=True)
+def rigid_record(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, u_c, z_c,
+                 gamma, eta_c, s, k0, denominator, increasing, pu, pz, order, pu_sorted,
+                 py):
+    """What a rigid contact point (:func:`rigid_point`: ``u_c``, ``z_c``, ``gamma``,
+    ``eta_c``) holds beyond its row: (A, B) from the samples of its tangent frame near it
+    (:func:`rigid_curvature_samples`, :func:`lateral_curvature` of the samples ``k0 - 5``,
+    ``k0``, ``k0 + 5`` with its ``denominator``) and its rail profile coordinate
+    (:func:`rail_coordinate`: NaN where the point is not finite)."""
+    near = np.empty((5, s.size))
+    a, lo, mid, hi = rigid_curvature_samples(eta, u, z, g_min, ur, zr, wx, wc, radius,
+                                             half_bb, flange_back, u_c, z_c, gamma, eta_c,
+                                             s, k0, increasing, near)
+    return (a, lateral_curvature(lo, mid, hi, denominator),
+            rail_coordinate(pu, pz, order, pu_sorted, py, u_c, z_c))
+
+
+@numba.njit(cache=True, nogil=True)
+def search_wheel(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, lo, hi, ur, zr, rx, rc,
+                 wx, wc, radius, half_bb, flange_back, s, k0, denominator, pu, pz, order,
+                 pu_sorted, py, out):
+    """One wheel searched at a pose in one pass: its trace (:func:`trace_gap`, written to
+    ``out``) and, where its least gap is finite and on one sample, its first rigid contact
+    point (:func:`rigid_point` of that sample alone) with what :func:`rigid_record` gives
+    of it. Returns (n, the least gap, its first index, whether u increase, how many samples
+    have the least gap, whether the point is formed, its row (8) and (A, B, rail
+    coordinate)); the point is not formed for fewer than 10 trace points."""
+    n, g_min, k, increasing, ties = trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx,
+                                              u_ws, radius, lo, hi, rx, rc, out)
+    nan = math.nan
+    if n < 10 or ties != 1 or not math.isfinite(g_min):
+        return (n, g_min, k, increasing, ties, False, (nan, nan, nan, nan, nan, nan, nan, nan),
+                (nan, nan, nan))
+    e, x, u, z, g = out[0, :n], out[1, :n], out[2, :n], out[3, :n], out[4, :n]
+    row = rigid_point(e, x, u, g, g_min, k, k + 1, rx, rc, wx, wc, half_bb, flange_back)
+    rec = rigid_record(e, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, row[2],
+                       row[3], row[5], row[0], s, k0, denominator, increasing, pu, pz, order,
+                       pu_sorted, py)
+    return n, g_min, k, increasing, ties, True, row, rec
+
+
+@numba.njit(cache=True, nogil=True)
+def reference_patch(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx, wc,
+                    radius, half_bb, flange_back, s, k0, denominator, power, turn, pu, pz,
+                    order, pu_sorted, py, out):
+    """:func:`reference_frame`, with :func:`lateral_curvature` of the frame's samples
+    ``k0 - 5``, ``k0``, ``k0 + 5`` (its ``denominator``) and the rail profile coordinate
+    of its point (:func:`rail_coordinate`, NaN where the point is not finite): returns its
+    tuple, that B and that coordinate."""
+    r = reference_frame(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, rc, wx,
+                        wc, radius, half_bb, flange_back, s, k0, power, turn, out)
+    if not r[0]:
+        return r, math.nan, math.nan
+    return (r, lateral_curvature(out[F, k0 - 5], out[F, k0], out[F, k0 + 5], denominator),
+            rail_coordinate(pu, pz, order, pu_sorted, py, r[1], r[2]))
+
+
+@numba.njit(cache=True, nogil=True)
+def overlap_box_frame(g, u_trace, g_min, approach, rail_u, increasing, eta, u, z, za, zb, ur,
+                      zr, wx, wc, radius, half_bb, flange_back, u_c, z_c, gamma, eta_c, kw,
+                      kr, s, overlap, frame, i0, i1, penetration, k0, grow):
+    """The box (xmin, xmax, ymin, ymax) [m] around a patch's rigid overlap at the normal
+    ``penetration`` [m] (:func:`~.points.overlap_box`) with the run of the wheel's
+    vertical overlap at the vertical ``approach`` [m] that holds ``rail_u``
+    (:func:`run_extent` of the trace's gap ``g`` and rail positions ``u_trace``), of a
+    frame of :func:`reference_frame` formed at the samples ``i0:i1`` of ``frame``: formed
+    further (:func:`extend_frame`, ``grow`` samples a time; its arguments from ``eta`` to
+    ``overlap``) where the overlap, or the run, reaches the edge of those formed. Returns
+    the box and the samples formed then (i0, i1)."""
+    lo_u, hi_u = run_extent(g, u_trace, g_min, approach, rail_u, increasing)
+    ns = s.size
+    while True:
+        f = frame[F, i0:i1]
+        ru = frame[RAIL_U, i0:i1]
+        m = i1 - i0
+        lo, hi = lobes_extent(f, ru, penetration, min(max(k0 - i0, 0), m - 1), lo_u, hi_u)
+        a = i0 - grow if i0 > 0 and (lo == 0 or lo_u <= ru[0] <= hi_u) else i0
+        b = i1 + grow if i1 < ns and (hi == m - 1 or lo_u <= ru[m - 1] <= hi_u) else i1
+        if a == i0 and b == i1:
+            ds = s[i0 + 1] - s[i0]
+            xl = overlap_half_length(f, frame[A_OF_S, i0:i1], lo, hi, penetration)
+            return -xl, xl, s[i0 + lo] - ds, s[i0 + hi] + ds, i0, i1
+        a, b = min(max(a, 0), i0), max(min(b, ns), i1)
+        extend_frame(eta, u, z, za, zb, ur, zr, wx, wc, radius, half_bb, flange_back, u_c,
+                     z_c, gamma, eta_c, kw, kr, s, overlap, i0, i1, a, b, frame)
+        i0, i1 = a, b

@@ -47,9 +47,13 @@ N_S = 1001
 """Lateral samples of a patch's tangent plane (0.05 mm apart)."""
 K0 = N_S // 2
 """The sample at the patch origin, s = 0."""
-_S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
+S_SAMPLES = _S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
+"""The lateral coordinates s [m] of a tangent plane's samples (read-only)."""
 _S_SAMPLES.flags.writeable = False
 _DS = float(_S_SAMPLES[1] - _S_SAMPLES[0])
+B_DENOMINATOR = _B_DENOMINATOR = 2 * float(_S_SAMPLES[5] - _S_SAMPLES[0]) ** 2
+"""``2 h^2`` of the samples ``K0 - 5``, ``K0``, ``K0 + 5`` a curvature B is read from
+(:func:`~.kernels.lateral_curvature`)."""
 
 WEIGHT_POWER = 2.5
 """The reference point's weight is the vertical interpenetration to this power: its square
@@ -79,6 +83,10 @@ class WheelSearch:
     rail, wheel
         The placed rail and the wheel as the kernels read them (:func:`~.search.
         rail_arrays`, :func:`~.search.wheel_arrays`).
+    first
+        The first rigid contact point as the search formed it: its row of
+        :func:`~.kernels.rigid_point` and its :func:`~.kernels.rigid_record`; None where
+        the least gap is not on one sample (:func:`contact_points` forms it then).
     """
 
     track: Track
@@ -92,6 +100,7 @@ class WheelSearch:
     ties: int
     rail: tuple = field(repr=False)
     wheel: tuple = field(repr=False)
+    first: tuple | None = field(default=None, repr=False)
 
 
 class Samples(NamedTuple):
@@ -189,12 +198,28 @@ class ContactPoint:
     plane: TangentPlane = field(repr=False, compare=False)
 
     def normal_penetration(self, approach: float) -> float:
-        """:func:`normal_penetration` of this patch."""
-        return normal_penetration(self, approach)
+        """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
+        return max(approach - self.gap, 0.0) * math.cos(self.contact_angle)
 
     def gap_on_grid(self, grid: Grid) -> np.ndarray:
-        """:func:`gap_on_grid` of this patch."""
-        return gap_on_grid(self, grid)
+        """Undeformed gap h(x, y) = f(y) + A(y) x^2 of this patch at the element centres
+        of ``grid`` [m], with the grid's y along s. Where the profiles end (or fold away
+        from this contact) the gap is :data:`FAR` - such elements can never touch."""
+        out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
+        plane = self.plane
+        if plane.frame is None:
+            full = samples(self)
+            kernels.gap_on_grid(full.s, full.f, full.a_of_s, float(grid.x0),
+                                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy),
+                                grid.ny, FAR, out)
+            return out
+        while True:  # a frame at the reference point formed over part of its samples
+            done, a, b = kernels.gap_on_grid_part(
+                _S_SAMPLES, plane.frame, plane.i0, plane.i1, float(grid.x0),
+                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+            if done:
+                return out
+            _extend(plane, a, b)
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """:func:`lateral_extent` of this patch."""
@@ -202,8 +227,9 @@ class ContactPoint:
 
 
 def normal_penetration(cp: ContactPoint, approach: float) -> float:
-    """Normal penetration [m] of the patch ``cp`` for a vertical wheel approach [m]."""
-    return max(approach - cp.gap, 0.0) * math.cos(cp.contact_angle)
+    """Normal penetration [m] of the patch ``cp`` for a vertical wheel approach [m]
+    (:meth:`ContactPoint.normal_penetration`)."""
+    return cp.normal_penetration(approach)
 
 
 def samples(cp: ContactPoint) -> Samples:
@@ -227,22 +253,8 @@ def samples(cp: ContactPoint) -> Samples:
 
 def gap_on_grid(cp: ContactPoint, grid: Grid) -> np.ndarray:
     """Undeformed gap h(x, y) = f(y) + A(y) x^2 of the patch ``cp`` at the element centres
-    of ``grid`` [m], with the grid's y along s. Where the profiles end (or fold away from
-    this contact) the gap is :data:`FAR` - such elements can never touch."""
-    out = np.empty((grid.nx, grid.ny))  # f and A depend on y alone: one compiled pass
-    plane = cp.plane
-    if plane.frame is None:
-        full = samples(cp)
-        kernels.gap_on_grid(full.s, full.f, full.a_of_s, float(grid.x0), float(grid.dx),
-                            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
-        return out
-    while True:  # a frame at the reference point formed over part of its samples
-        done, a, b = kernels.gap_on_grid_part(
-            _S_SAMPLES, plane.frame, plane.i0, plane.i1, float(grid.x0), float(grid.dx),
-            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
-        if done:
-            return out
-        _extend(plane, a, b)
+    of ``grid`` [m] (:meth:`ContactPoint.gap_on_grid`)."""
+    return cp.gap_on_grid(grid)
 
 
 def lateral_extent(cp: ContactPoint, delta: float, margin: float = 1.0
@@ -298,6 +310,24 @@ def overlap_box(cp: ContactPoint, penetration: float,
     return _box(s, f, full.a_of_s, lo, hi, penetration)
 
 
+def overlap_box_on_run(found: WheelSearch, cp: ContactPoint, penetration: float,
+                      approach: float) -> tuple[float, float, float, float]:
+    """:func:`overlap_box` of the patch ``cp`` of the searched wheel at the normal
+    ``penetration`` [m] with the run of the wheel's vertical overlap at the vertical
+    ``approach`` [m] that holds the patch's point (:func:`run_on_rail`): of a frame at the
+    reference point formed over part of its samples, one compiled pass
+    (:func:`~.kernels.overlap_box_frame`)."""
+    plane = cp.plane
+    if plane.frame is None:
+        return overlap_box(cp, penetration, run_on_rail(found, approach, cp.rail_u))
+    trace = found.trace
+    xmin, xmax, ymin, ymax, plane.i0, plane.i1 = kernels.overlap_box_frame(
+        trace[4], trace[2], found.least_gap, float(approach), float(cp.rail_u),
+        found.increasing, *plane.what, plane.frame, plane.i0, plane.i1,
+        float(penetration), K0, kernels.FRAME_GROW)
+    return xmin, xmax, ymin, ymax
+
+
 def _box(s: np.ndarray, f: np.ndarray, a_of_s: np.ndarray, lo: int, hi: int,
          penetration: float) -> tuple[float, float, float, float]:
     """:func:`overlap_box` of the run ``lo..hi`` (inclusive) of the samples."""
@@ -342,13 +372,16 @@ def contact_points(found: WheelSearch, approach: float = 0.0) -> list[ContactPoi
     ``approach = 0`` gives the first point of contact only. Patches are ordered by gap
     (the first one has gap 0).
     """
-    approach = check_positive("approach", approach, "m", allow_zero=True)
+    approach = _approach(approach)
     trace, g_min, k = found.trace, found.least_gap, found.first_sample
     wheel = found.wheel
     rail = found.rail[2:4]
     if approach == 0.0 and found.ties == 1 and math.isfinite(g_min):
         # first contact: the least gap's sample is the only one at most 0 above it, so
-        # its run is that sample alone (rigid_points' scans of the trace find the same)
+        # its run is that sample alone (rigid_points' scans of the trace find the same),
+        # formed by the search
+        if found.first is not None:
+            return [_point(found, *found.first)]
         rows = [kernels.rigid_point(trace[0], trace[1], trace[2], trace[4], g_min, k, k + 1,
                                     *rail, *wheel[:2], *wheel[3:])]
     else:
@@ -360,9 +393,17 @@ def contact_points(found: WheelSearch, approach: float = 0.0) -> list[ContactPoi
     return points
 
 
+def _approach(approach: float) -> float:
+    """A vertical ``approach`` [m] checked: finite and not negative (a float of those
+    passed as it is, without the checks' calls)."""
+    if type(approach) is float and 0.0 <= approach < math.inf:
+        return approach
+    return check_positive("approach", approach, "m", allow_zero=True)
+
+
 def count_contacts(found: WheelSearch, approach: float = 0.0) -> int:
     """The number of patches :func:`contact_points` finds, without their geometry."""
-    approach = check_positive("approach", approach, "m", allow_zero=True)
+    approach = _approach(approach)
     return kernels.count_runs(found.trace[4], found.least_gap, found.first_sample,
                               float(approach))
 
@@ -378,37 +419,29 @@ def merge_approaches(found: WheelSearch, min_lobe: float = 0.0) -> np.ndarray:
     return out
 
 
-def _point(found: WheelSearch, row) -> ContactPoint:
+def _point(found: WheelSearch, row, rec=None) -> ContactPoint:
     """The rigid contact point ``row`` of :func:`~.kernels.rigid_points` (a run of the
     trace: its least gap above the least gap, refined by a parabola through three
-    samples): its curvatures from the samples of its tangent frame near the point
-    (:func:`~.kernels.rigid_curvature_samples`), the others formed when read
-    (:func:`samples`)."""
+    samples): its curvatures from the samples of its tangent frame near the point and its
+    rail profile coordinate (``rec``, :func:`~.kernels.rigid_record`: formed here when
+    not given), the others formed when read (:func:`samples`)."""
     eta_c, x_c, u_c, z_rail, gap_c, gamma, s_c, dr = row
     trace, g_min, rail, wheel = found.trace, found.least_gap, found.rail, found.wheel
-    near = np.empty((5, N_S))
-    A, lo, mid, hi = kernels.rigid_curvature_samples(
-        trace[0], trace[2], trace[3], g_min, *rail[:2], *wheel, u_c, z_rail, gamma, eta_c,
-        _S_SAMPLES, K0, found.increasing, near)
+    if rec is None:
+        rec = kernels.rigid_record(trace[0], trace[2], trace[3], g_min, *rail[:2], *wheel,
+                                   u_c, z_rail, gamma, eta_c, _S_SAMPLES, K0,
+                                   _B_DENOMINATOR, found.increasing,
+                                   *rail[8:])
+    A, B, rail_y = rec
+    if rail_y != rail_y:  # NaN: the point is not finite (raises)
+        found.track.rail_coordinate(u_c, z_rail)
     side = found.side
     return ContactPoint(
-        side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c,
-        rail_y=found.track.rail_coordinate(u_c, z_rail),
+        side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c, rail_y=rail_y,
         position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
-        rolling_radius=found.wheelset.radius + dr, A=float(A),
-        B=_curvature(float(lo), float(mid), float(hi)), s=_S_SAMPLES, approach=None,
+        rolling_radius=found.wheelset.radius + dr, A=A, B=B, s=_S_SAMPLES, approach=None,
         rigid=None, run=None,
         plane=TangentPlane((trace, g_min, rail, wheel, u_c, z_rail, gamma, eta_c)))
-
-
-def _curvature(lo: float, mid: float, hi: float) -> float:
-    """B = f''(0) / 2 [1/m] from the samples ``K0 - 5``, ``K0``, ``K0 + 5`` of f; NaN
-    where it is not positive or the gap is not finite there (a profile's end: no convex
-    contact, which the caller says)."""
-    if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
-        return float("nan")
-    B = (lo - 2 * mid + hi) / (2 * float(_S_SAMPLES[5] - _S_SAMPLES[0]) ** 2)
-    return B if math.isfinite(B) and B > 0 else float("nan")
 
 
 def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: float = 0.0
@@ -434,7 +467,7 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     :func:`patch_run` gives what that turning reads of the point.
     """
     approach = float(approach)  # plain floats in the point: numpy's scalars cost more
-    d = normal_penetration(cp, approach)  # in every use after (Hertz's Newton iteration)
+    d = cp.normal_penetration(approach)  # in every use after (Hertz's Newton iteration)
     if not d > 0:
         return None
     trace, g_min, increasing = found.trace, found.least_gap, found.increasing
@@ -446,27 +479,30 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     # through it (where the rigid slip of the wheel is taken)
     frame = np.empty((5, N_S))
     rail, wheel = found.rail, found.wheel
-    (ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
-     height, weight, u_a, z_a, u_b, z_b) = kernels.reference_frame(
-        trace, g_min, increasing, approach, float(cp.rail_u), *rail[:4], *wheel, _S_SAMPLES,
-        K0, WEIGHT_POWER, float(turn), frame)
+    ((ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
+      height, weight, u_a, z_a, u_b, z_b), B, rail_y) = kernels.reference_patch(
+        trace, g_min, increasing, approach, float(cp.rail_u), *rail[:4], *wheel,
+        _S_SAMPLES, K0, _B_DENOMINATOR, WEIGHT_POWER, float(turn),
+        *rail[8:], frame)
     if not ok:
         return None
-    s = _S_SAMPLES
+    if rail_y != rail_y:  # NaN: the point is not finite (raises)
+        found.track.rail_coordinate(u_ref, z_ref)
     # B for Hertz's estimates: the parabola with the overlap's depth and width (the origin
-    # is the weighted centre, not the gap's minimum, where f'' may be anything)
-    width = float(s[hi - 1] - s[lo]) + _DS  # s increases
-    B = overlap / (0.5 * width) ** 2 if hi - lo >= 5 else _curvature(
-        float(frame[0, K0 - 5]), float(frame[0, K0]), float(frame[0, K0 + 5]))
+    # is the weighted centre, not the gap's minimum, where f'' may be anything), else f''
+    # at the origin (Python's ``** 2``: the C library's pow)
+    if hi - lo >= 5:
+        B = overlap / (0.5 * (float(_S_SAMPLES[hi - 1] - _S_SAMPLES[lo]) + _DS)) ** 2
     # what forms the other samples (:func:`_frame_arguments`)
-    what = (trace, rail, wheel, g_lo, approach, u_ref, z_ref, gamma, eta_c, kw, kr, overlap)
+    what = (trace[0], trace[2], trace[3], g_lo, approach, *rail[:2], *wheel[:5], u_ref,
+            z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
     side = cp.side
     return ContactPoint(
         side=side, gap=approach - overlap / math.cos(gamma), wheel_s=wheel_s, rail_u=u_ref,
-        rail_y=found.track.rail_coordinate(u_ref, z_ref),
-        position=(cp.position[0], SIDES[side] * u_ref, z_ref), contact_angle=gamma,
-        rolling_radius=found.wheelset.radius + height, A=float(frame[1, K0]),
-        B=B if math.isfinite(B) else cp.B, s=s, approach=approach, rigid=cp,
+        rail_y=rail_y, position=(cp.position[0], SIDES[side] * u_ref, z_ref),
+        contact_angle=gamma, rolling_radius=found.wheelset.radius + height,
+        A=float(frame[1, K0]), B=B if math.isfinite(B) else cp.B, s=_S_SAMPLES,
+        approach=approach, rigid=cp,
         run=PatchRun(u=u_ref, angle=gamma - float(turn), weight=weight,
                      low_end=(u_a, z_a), high_end=(u_b, z_b)),
         plane=TangentPlane(what, frame, i0, i1))
@@ -496,18 +532,16 @@ def _extend(plane: TangentPlane, a: int, b: int) -> np.ndarray:
     the same values); returns the frame."""
     frame, i0, i1 = plane.frame, plane.i0, plane.i1
     a, b = min(a, i0), max(b, i1)
-    kernels.extend_frame(*_frame_arguments(plane.what), i0, i1, a, b, frame)
+    kernels.extend_frame(*plane.what, i0, i1, a, b, frame)
     plane.i0, plane.i1 = a, b
     return frame
 
 
 def _frame_arguments(what: tuple) -> tuple:
     """The arguments of :func:`~.kernels.frame_samples` (before ``i0``) of a frame at the
-    reference point, and its overlap, from what :func:`at_reference` keeps: the trace
-    lowered by the approach (``(z - g_min) - approach``), the frame's point and plane."""
-    trace, rail, wheel, g_min, approach, u_ref, z_ref, gamma, eta_c, kw, kr, overlap = what
-    return (trace[0], trace[2], trace[3], g_min, approach, *rail[:2], *wheel[:5], u_ref,
-            z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
+    reference point, and its overlap: what :func:`at_reference` keeps (the trace lowered
+    by the approach, ``(z - g_min) - approach``, the frame's point and plane), as it is."""
+    return what
 
 
 @dataclass(frozen=True)

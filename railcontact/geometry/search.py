@@ -63,9 +63,10 @@ def search_wheel(track: Track, ws: Wheelset, pose: Pose, side: str) -> WheelSear
     ``track``, searched: its trace and least gap, and the rail and the wheel as the kernels
     read them (:class:`~.points.WheelSearch`). Raises a :class:`RailContactError` when the
     wheel is beside its rail (the pose beyond the profiles)."""
-    trace, g_min, k, increasing, ties = _trace_of_pose(track, ws, pose, side)
+    trace, g_min, k, increasing, ties, first, rail, wheel = _trace_of_pose(track, ws, pose,
+                                                                          side)
     return WheelSearch(track, ws, pose, side, trace, float(g_min), int(k), bool(increasing),
-                       int(ties), rail_arrays(track), wheel_arrays(ws))
+                       int(ties), rail, wheel, first)
 
 
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -127,23 +128,28 @@ def forget(traces: bool = True) -> None:
 
 
 def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
-    """:func:`vertical_gap` (one compiled pass, :func:`~.kernels.trace_gap`) as one array
-    (5, n), with the least gap, its first sample, whether the trace's u increase and how
-    many samples have the least gap."""
+    """:func:`vertical_gap` as one array (5, n), with the least gap, its first sample,
+    whether the trace's u increase, how many samples have the least gap and the first
+    rigid contact point (its row of :func:`~.kernels.rigid_point` and its
+    :func:`~.kernels.rigid_record`; None where the least gap is not on one sample): one
+    compiled pass (:func:`~.kernels.search_wheel`); then the rail and the wheel as it read
+    them (:func:`rail_arrays`, :func:`wheel_arrays`)."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr = _wheel_samples(ws)
+    rail, wheel = rail_arrays(track), wheel_arrays(ws)
     out = np.empty((5, eta.size))
-    n, g_min, k, increasing, ties = kernels.trace_gap(
+    n, g_min, k, increasing, ties, formed, row, rec = kernels.search_wheel(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
-        math.sin(phi), float(sgn * pose.lateral), float(ws.radius), *rail_arrays(track)[4:],
-        out)
+        math.sin(phi), float(sgn * pose.lateral), *rail[4:6], *rail[:4], *wheel,
+        _points.S_SAMPLES, K0, _points.B_DENOMINATOR, *rail[8:], out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    return out[:, :n], g_min, k, increasing, ties
+    return (out[:, :n], g_min, k, increasing, ties, (row, rec) if formed else None, rail,
+            wheel)
 
 
 def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -183,13 +189,15 @@ def _form_wheel_samples(ws: Wheelset) -> tuple[np.ndarray, ...]:
 def rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
     """The placed rail as the kernels read it: :data:`N_RAIL` samples (u, Z) and its
     spline's breakpoints and coefficients, then its extent (lo, hi) [m] and the same
-    breakpoints and coefficients (formed once per track; read-only)."""
+    breakpoints and coefficients, then what its profile coordinate's search reads
+    (:attr:`Track.placed_search`, five arrays) (formed once per track; read-only)."""
     return _formed.get(track, _form_rail_arrays)
 
 
 def _form_rail_arrays(track: Track) -> tuple[np.ndarray, ...]:
     rail = track.side_rail
-    return (*rail.samples(N_RAIL), *rail._pieces, *rail.bounds, *rail._pieces)
+    return (*rail.samples(N_RAIL), *rail._pieces, *rail.bounds, *rail._pieces,
+            *track.placed_search)
 
 
 def wheel_arrays(ws: Wheelset) -> tuple:

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import RailContactError, check_finite, check_positive
 from ..formed import formed_once
-from .kernels import nearest_point_sorted
+from . import kernels
 from .profiles import Profile
 
 SIDES = {"left": 1, "right": -1}
@@ -153,16 +153,16 @@ class Track:
         u, z = float(u), float(z)
         if not (math.isfinite(u) and math.isfinite(z)):
             raise RailContactError(f"rail point (u, Z) = ({u:g}, {z:g}) m is not finite")
-        pu, pz, order, pu_sorted = self._placed_search
-        return float(self.placement[0][nearest_point_sorted(pu, pz, order, pu_sorted, u, z)])
+        return float(kernels.rail_coordinate(*self.placed_search, u, z))
 
     @formed_once
-    def _placed_search(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:attr:`_placed_points` and their order in u (stable), with the u so ordered:
-        what :meth:`rail_coordinate`'s search reads."""
+    def placed_search(self) -> tuple[np.ndarray, ...]:
+        """What :meth:`rail_coordinate`'s search reads (:func:`~.kernels.rail_coordinate`):
+        :attr:`_placed_points` (u, Z) [m], their order in u (stable), the u so ordered and
+        the rail profile coordinate y [m] of each point."""
         pu, pz = self._placed_points
         order = np.argsort(pu, kind="stable")
-        return pu, pz, order, pu[order]
+        return pu, pz, order, pu[order], self.placement[0]
 
     @formed_once
     def _placed_points(self) -> tuple[np.ndarray, np.ndarray]:
