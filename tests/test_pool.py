@@ -73,15 +73,23 @@ def test_pool_results_equal_in_process_bit_for_bit(pool):
             assert pool.seconds[i] > 0
 
 
-def test_an_error_comes_back_and_the_pool_keeps_working(pool):
-    bad = [inputs(i, 10) for i in range(3)]
-    bad[1]["loads"] = (-1.0, 83e3)
-    with pytest.raises(RailContactError) as here:
-        description().build().solve(**bad[1])
-    with pytest.raises(RailContactError) as there:
+def _raises_as_alone(pool, k, index):
+    """Step ``pool`` at step ``k`` with a negative wheel load on wheelset ``index`` (0-based):
+    the pool raises the error that wheelset raises alone, noting which wheelset it was.
+    Returns the inputs stepped."""
+    bad = [inputs(i, k) for i in range(3)]
+    bad[index]["loads"] = (-1.0, 83e3)
+    with pytest.raises(RailContactError) as alone:
+        description().build().solve(**bad[index])
+    with pytest.raises(RailContactError) as raised:
         pool.step(bad)
-    assert str(there.value) == str(here.value)
-    assert any("wheelset 2" in note for note in there.value.__notes__)
+    assert str(raised.value) == str(alone.value)
+    assert any(f"wheelset {index + 1}" in note for note in raised.value.__notes__)
+    return bad
+
+
+def test_an_error_comes_back_and_the_pool_keeps_working(pool):
+    _raises_as_alone(pool, 10, 1)
     with pytest.raises(TypeError, match="unexpected keyword"):
         pool.step([inputs(0, 11), inputs(1, 11), {**inputs(2, 11), "speed": 3.0}])
     with pytest.raises(Exception, match="pickle"):  # an input that cannot be sent
@@ -347,14 +355,7 @@ def test_this_process_steps_its_share_as_a_worker_would():
         again = p.step([inputs(i, STEPS) for i in range(3)])
         for i in range(3):
             same(again[i], first[i])
-        bad = [inputs(i, STEPS + 1) for i in range(3)]
-        bad[0]["loads"] = (-1.0, 83e3)
-        with pytest.raises(RailContactError) as alone:
-            description().build().solve(**bad[0])
-        with pytest.raises(RailContactError) as raised:
-            p.step(bad)
-        assert str(raised.value) == str(alone.value)
-        assert any("wheelset 1" in note for note in raised.value.__notes__)
+        bad = _raises_as_alone(p, STEPS + 1, 0)
         out = p.step(bad, errors="return")
         assert isinstance(out[0], RailContactError) and "wheelset 1" in out[0].__notes__[0]
         assert all(isinstance(out[i], rc.WheelsetResult) for i in (1, 2))

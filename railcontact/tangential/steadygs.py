@@ -440,8 +440,9 @@ def _steady_sweep(args):  # pragma: no cover - compiled
     the caller, LLVM could compile its fast-math sums anew and change their last bits).
     The same steps on the same arrays as :func:`_sweep_blocked`: the same bits. Returns the
     squared norm of the sweep's traction change [Pa^2] (scaled by the measure)."""
-    (block, fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, shift, prod, omega_h, omega_s,
-     measure) = args
+    (block_address, fft, kern, cum, wx, wy, g, p, state, lo, hi, rows, shift, prod, omega_h,
+     omega_s, measure) = args
+    block = _block_at(block_address)
     plans, z_in, z_s, w_s, w_out, a, b, n = fft
     rxx, rxy, ryy, fxx, fxy, fyy = kern
     px = p[0]
@@ -508,7 +509,7 @@ def _steady_solve(block_address, fft, kern, cum, pn, mu, x0, dx, y0, dy, xi, eta
     shift = np.empty((4, ny, nx))  # the shift and the changes, as _sweep_blocked's
     prod = np.empty((2, nx, ny))
     squares = np.empty((ny, nx))
-    args = (_block_at(block_address), fft, kern, cum, wx, wy, g, p, state, rows_[0], rows_[1],
+    args = (block_address, fft, kern, cum, wx, wy, g, p, state, rows_[0], rows_[1],
             _block_rows(rows_[2], work), shift, prod, omega_h, omega_s, measure)
     its, err, converged, stalled, hist = _steady_loop(
         args, p[0], p[1], g, squares, measure, _floor_above_c(ncon, gmax, measure), tolerance,
