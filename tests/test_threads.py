@@ -1,6 +1,7 @@
 """Two wheelsets stepping on two threads (the thread-safety contract of
 ``docs/performance.md``): the same results, bit for bit, as one after the other; and every
-compiled kernel of the package releases the GIL."""
+compiled kernel of the package that does more than a few microseconds of work releases the
+GIL."""
 
 from __future__ import annotations
 
@@ -111,10 +112,26 @@ def _dispatchers():
     return found
 
 
-def test_every_compiled_kernel_releases_the_gil():
+SHORT_KERNELS = {
+    "railcontact.contact.patch._uncovered", "railcontact.geometry.kernels.count_runs",
+    "railcontact.geometry.kernels.gap_on_grid_part",
+    "railcontact.geometry.kernels.merge_saddles",
+    "railcontact.geometry.kernels.overlap_box_frame", "railcontact.halfspace.sums.numpy_sum",
+    "railcontact.normal.resolution._span", "railcontact.timestep.results._moment_sums",
+    "railcontact.timestep.warmstart._pressure_start",
+    "railcontact.timestep.warmstart._rate_on",
+    "railcontact.timestep.warmstart._traction_start"}
+"""Kernels a warm step calls from Python that take 2-9 us a call (scripts/bench_threads.py
+--profile): they keep the GIL, since handing it to another thread and waiting to take it
+back costs more than they do."""
+
+
+def test_every_long_compiled_kernel_releases_the_gil():
     """The contract's premise: the package's numba kernels run without the GIL
-    (``nogil=True``), so that two wheelsets overlap on two cores."""
-    kernels = _dispatchers()
+    (``nogil=True``), so that two wheelsets overlap on two cores; only the short ones of
+    :data:`SHORT_KERNELS` keep it."""
+    kernels = dict(_dispatchers())
     assert len(kernels) > 50
-    holding = [name for name, d in kernels if not d.targetoptions.get("nogil")]
-    assert not holding, f"kernels compiled without nogil=True: {holding}"
+    assert SHORT_KERNELS <= kernels.keys(), SHORT_KERNELS - kernels.keys()
+    holding = {name for name, d in kernels.items() if not d.targetoptions.get("nogil")}
+    assert holding == SHORT_KERNELS, (holding - SHORT_KERNELS, SHORT_KERNELS - holding)

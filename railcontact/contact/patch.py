@@ -287,7 +287,7 @@ def uncovered(gap_of: Callable[[Grid], np.ndarray], res: NormalResult, pair: Ela
             outer.y0 + (c0 - 0.5) * dy, outer.y0 + (c1 + 0.5) * dy)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def _uncovered(h, pen, p, ia, jb, x0, dx, y0, dy, ox, oy, k):  # pragma: no cover
     """:func:`uncovered`'s pass: the pressure's force, centroid and second moment on its
     grid (at the offset ``(ia, jb)`` in the outer one), then the outer elements outside

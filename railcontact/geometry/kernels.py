@@ -342,7 +342,7 @@ def trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, radius, lo, hi, 
     return m, g_min, k, increasing, ties
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def count_runs(g, g_min, k, approach):
     """How many connected runs of samples the gap above first contact ``g - g_min`` is
     at most ``approach`` [m] on (the least gap's sample ``k`` always in one): the runs of
@@ -646,7 +646,7 @@ def _samples_read(y, s):
     return j, j + 1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
     """:func:`gap_on_grid` from a frame (5, len(s)) formed at the samples ``i0:i1`` only.
     Returns (done, a, b): not done (``out`` not written) when the grid reads samples
@@ -743,7 +743,7 @@ def saddles(g, g_min):
     return out[:m]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def merge_saddles(g, g_min, min_lobe):
     """The heights above first contact [m] of the :func:`saddles` of the gap whose
     shallower lobe is at least ``min_lobe`` times the height deep, increasing."""
@@ -955,7 +955,7 @@ def reference_patch(tr, g_min_trace, increasing, approach, u_rigid, ur, zr, rx, 
             rail_coordinate(pu, pz, order, pu_sorted, py, r[1], r[2]))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def overlap_box_frame(g, u_trace, g_min, approach, rail_u, increasing, eta, u, z, za, zb, ur,
                       zr, wx, wc, radius, half_bb, flange_back, u_c, z_c, gamma, eta_c, kw,
                       kr, s, overlap, frame, i0, i1, penetration, k0, grow):

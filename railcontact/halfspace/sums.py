@@ -87,7 +87,7 @@ def pairwise_sum(a, lo, n):  # pragma: no cover - compiled
     return values[0]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def numpy_sum(a):  # pragma: no cover - compiled
     """``a.sum()`` of a C-contiguous float64 array, as numpy adds it: the pairwise sum
     added to the reduction's start ``+0.0`` (which turns the -0.0 of a run of -0.0 into

@@ -50,7 +50,7 @@ def elements_across(contact: np.ndarray) -> tuple[int, int]:
     return int(nx), int(ny)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def _span(c):
     """:func:`elements_across` of a C-contiguous 2-D boolean mask (one pass)."""
     r0, r1, c0, c1 = c.shape[0], -1, c.shape[1], -1

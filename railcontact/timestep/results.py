@@ -205,7 +205,7 @@ def _first_moments(grid: Grid, pressure: np.ndarray) -> tuple[float, float]:
     return sx * da, sy * da
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def _moment_sums(x0, dx, y0, dy, p):  # pragma: no cover - compiled
     """``sum x p`` and ``sum y p`` over the grid's element centres (as :attr:`Grid.x`,
     :attr:`Grid.y` form them: ``x0 + dx i``), each product array added as numpy adds it."""

@@ -215,7 +215,7 @@ def _previous_pressure(memory: PatchMemory, o: PatchMemory | None, c: float, gri
 _NO_FIELD = np.zeros((0, 0))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def _pressure_start(nx, ny, dx, dy, x0, y0, p1, u1, n1x, n1y, d1x, d1y, x1, y1, box1,
                     p0, u0, n0x, n0y, d0x, d0y, x00, y00, box0, c, extrapolate,
                     reuse):  # pragma: no cover - compiled
@@ -395,7 +395,7 @@ def traction_rate(traction: np.ndarray, grid: Grid, time: float | None,
     return out if math.isfinite(total) else None
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def _rate_on(nx, ny, dx, dy, x0, y0, p, p0, n0x, n0y, d0x, d0y, x00, y00, v0, smooth,
              gain, dt):  # pragma: no cover - compiled
     """:func:`_rate` of the traction ``p`` (2, nx, ny) on the grid (nx, ny, dx, dy, x0,
@@ -548,7 +548,7 @@ def _previous_tangential(memory: PatchMemory, c: float, grid: Grid
     return t, _state_on(memory, grid, None)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
 def _traction_start(nx, ny, dx, dy, x0, y0, v, rate, state, mapped, npx, npy, n1x, n1y,
                     d1x, d1y, x1, y1, h):  # pragma: no cover - compiled
     """The traction ``v + h rate`` (:func:`_advanced`) on the grid (nx, ny, dx, dy, x0,
