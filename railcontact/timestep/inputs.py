@@ -128,11 +128,13 @@ def per_wheel(name: str, value, size: int, shape: str) -> tuple:
     """``value`` as a pair (left, right) of numbers (``size`` 1) or of ``size``-tuples."""
     try:
         pair = tuple(value)
-        if len(pair) == 2 and size > 1:
-            pair = tuple(tuple(v) for v in pair)
-            ok = all(len(v) == size for v in pair)
+        if len(pair) != 2:
+            ok = False
+        elif size > 1:
+            pair = (tuple(pair[0]), tuple(pair[1]))
+            ok = len(pair[0]) == size and len(pair[1]) == size
         else:
-            ok = len(pair) == 2 and all(not hasattr(v, "__len__") for v in pair)
+            ok = not hasattr(pair[0], "__len__") and not hasattr(pair[1], "__len__")
     except TypeError:
         ok = False
     if not ok:
@@ -202,8 +204,8 @@ def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics |
         creepages = per_wheel("creepages", creepages, 3,
                                "((xi, eta, phi) left, (xi, eta, phi) right)")
     if loads is not None:
-        loads = tuple(check_positive(f"{s} wheel load", q, "N", allow_zero=True)
-                      for s, q in zip(SIDE_NAMES, loads, strict=True))
+        loads = (check_positive("left wheel load", loads[0], "N", allow_zero=True),
+                 check_positive("right wheel load", loads[1], "N", allow_zero=True))
     else:
         check_finite("vertical", vertical, "m")
     if creepages is not None:
@@ -228,11 +230,24 @@ class Setups:
         self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
         self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
         self._friction_base: ContactSettings | None = None  # (what they were made from)
+        self._plain: tuple = (None, None)  # (settings, their setups without deviations
+        # or friction given: formed once, frozen records shared by the steps)
 
     def at(self, settings: ContactSettings, rails: tuple[RailDeviation, RailDeviation] | None,
            friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
         """Each wheel's rail (placed with its deviation), wheelset and ``settings`` (with
         its friction) at a step."""
+        if rails is None and friction is None:
+            plain = self._plain
+            if plain[0] is not settings:
+                plain = self._plain = (settings, self._formed(settings, None, None))
+            return plain[1]
+        return self._formed(settings, rails, friction)
+
+    def _formed(self, settings: ContactSettings,
+                rails: tuple[RailDeviation, RailDeviation] | None,
+                friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
+        """:meth:`at`'s setups, formed."""
         if rails is not None:
             rails = per_wheel("rails", rails, 1, "(left, right) RailDeviation")
             for r in rails:
