@@ -5,8 +5,9 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
+from ..contact.wheel import WheelSettings
 from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.points import ContactPoint
 from ..geometry.track import SIDES, Pose, Track, Wheelset
@@ -152,6 +153,19 @@ class WheelSetup:
     track: Track
     wheelset: Wheelset
     settings: ContactSettings
+    solvers: tuple[WheelSettings, WheelSettings] | None = field(default=None, repr=False,
+                                                                 compare=False)
+    """The wheel solver's settings of :attr:`settings` without and with the tangential
+    problem (:func:`solver_settings`); None: formed where they are needed."""
+
+
+def solver_settings(settings: ContactSettings, tangential: bool) -> WheelSettings:
+    """The wheel solver's settings of a step's wheel with ``settings`` (``tangential``:
+    creepages or velocities given)."""
+    s = settings
+    return WheelSettings(s.patch_settings, s.tangential_settings if tangential else None,
+                         s.patch_frame == "reference", s.load_tolerance, s.load_tolerance,
+                         s.load_includes_creep)
 
 
 @dataclass(frozen=True, slots=True)
@@ -230,6 +244,7 @@ class Setups:
         self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
         self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
         self._friction_base: ContactSettings | None = None  # (what they were made from)
+        self._solvers: dict = {}  # id(settings) -> (settings, its solvers) (the last ones)
         self._plain: tuple = (None, None)  # (settings, their setups without deviations
         # or friction given: formed once, frozen records shared by the steps)
 
@@ -266,8 +281,20 @@ class Setups:
             s = settings
             if friction is not None and friction[k] != settings.friction:
                 s = self._with_friction(settings, friction[k])
-            out.append(WheelSetup(side, track, self.wheelsets[k], s))
+            out.append(WheelSetup(side, track, self.wheelsets[k], s, self._solvers_of(s)))
         return out[0], out[1]
+
+    def _solvers_of(self, settings: ContactSettings) -> tuple[WheelSettings, WheelSettings]:
+        """The wheel solver's settings of ``settings`` without and with the tangential
+        problem (:attr:`WheelSetup.solvers`; the last few kept)."""
+        held = self._solvers.get(id(settings))
+        if held is None or held[0] is not settings:
+            held = (settings, (solver_settings(settings, False),
+                               solver_settings(settings, True)))
+            if len(self._solvers) >= 8:
+                self._solvers.pop(next(iter(self._solvers)))
+            self._solvers[id(settings)] = held  # (the settings kept: the id is not reused)
+        return held[1]
 
     def _placed_rail(self, side: str, track: Track, rail: RailDeviation) -> Track:
         """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a

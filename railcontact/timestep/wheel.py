@@ -33,7 +33,7 @@ from ..settings import Control
 from ..settings.case import MAX_PENETRATION
 from ..settings.convention import wheel_frame_creepage
 from ..status import Status
-from .inputs import Kinematics, WheelSetup
+from .inputs import Kinematics, WheelSetup, solver_settings
 from .results import NOT_CONVERGED, OK, WheelContact, fill_resultants
 from .warmstart import (
     PatchMemory,
@@ -277,11 +277,12 @@ class PatchStart:
 
 def wheel_settings(setup: WheelSetup, tangential: bool) -> WheelSettings:
     """The wheel solver's settings of a step's wheel (``tangential``: creepages or
-    velocities given)."""
-    s = setup.settings
-    return WheelSettings(s.patch_settings, s.tangential_settings if tangential else None,
-                         s.patch_frame == "reference", s.load_tolerance, s.load_tolerance,
-                         s.load_includes_creep)
+    velocities given): its setup's (:attr:`~.inputs.WheelSetup.solvers`), else formed
+    (:func:`~.inputs.solver_settings`)."""
+    solvers = setup.solvers
+    if solvers is not None:
+        return solvers[1] if tangential else solvers[0]
+    return solver_settings(setup.settings, tangential)
 
 
 def solve_step_wheel(setup: WheelSetup, pose: Pose, control: Control,
