@@ -5,8 +5,9 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
+from ..contact.wheel import WheelSettings
 from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.points import ContactPoint
 from ..geometry.track import SIDES, Pose, Track, Wheelset
@@ -128,11 +129,13 @@ def per_wheel(name: str, value, size: int, shape: str) -> tuple:
     """``value`` as a pair (left, right) of numbers (``size`` 1) or of ``size``-tuples."""
     try:
         pair = tuple(value)
-        if len(pair) == 2 and size > 1:
-            pair = tuple(tuple(v) for v in pair)
-            ok = all(len(v) == size for v in pair)
+        if len(pair) != 2:
+            ok = False
+        elif size > 1:
+            pair = (tuple(pair[0]), tuple(pair[1]))
+            ok = len(pair[0]) == size and len(pair[1]) == size
         else:
-            ok = len(pair) == 2 and all(not hasattr(v, "__len__") for v in pair)
+            ok = not hasattr(pair[0], "__len__") and not hasattr(pair[1], "__len__")
     except TypeError:
         ok = False
     if not ok:
@@ -150,6 +153,19 @@ class WheelSetup:
     track: Track
     wheelset: Wheelset
     settings: ContactSettings
+    solvers: tuple[WheelSettings, WheelSettings] | None = field(default=None, repr=False,
+                                                                 compare=False)
+    """The wheel solver's settings of :attr:`settings` without and with the tangential
+    problem (:func:`solver_settings`); None: formed where they are needed."""
+
+
+def solver_settings(settings: ContactSettings, tangential: bool) -> WheelSettings:
+    """The wheel solver's settings of a step's wheel with ``settings`` (``tangential``:
+    creepages or velocities given)."""
+    s = settings
+    return WheelSettings(s.patch_settings, s.tangential_settings if tangential else None,
+                         s.patch_frame == "reference", s.load_tolerance, s.load_tolerance,
+                         s.load_includes_creep)
 
 
 @dataclass(frozen=True, slots=True)
@@ -202,8 +218,8 @@ def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics |
         creepages = per_wheel("creepages", creepages, 3,
                                "((xi, eta, phi) left, (xi, eta, phi) right)")
     if loads is not None:
-        loads = tuple(check_positive(f"{s} wheel load", q, "N", allow_zero=True)
-                      for s, q in zip(SIDE_NAMES, loads, strict=True))
+        loads = (check_positive("left wheel load", loads[0], "N", allow_zero=True),
+                 check_positive("right wheel load", loads[1], "N", allow_zero=True))
     else:
         check_finite("vertical", vertical, "m")
     if creepages is not None:
@@ -228,11 +244,25 @@ class Setups:
         self._placed: dict = {}  # (side, deviation) -> the rail deviated (the last ones)
         self._settings_of: dict = {}  # friction -> the settings with it (the last ones)
         self._friction_base: ContactSettings | None = None  # (what they were made from)
+        self._solvers: dict = {}  # id(settings) -> (settings, its solvers) (the last ones)
+        self._plain: tuple = (None, None)  # (settings, their setups without deviations
+        # or friction given: formed once, frozen records shared by the steps)
 
     def at(self, settings: ContactSettings, rails: tuple[RailDeviation, RailDeviation] | None,
            friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
         """Each wheel's rail (placed with its deviation), wheelset and ``settings`` (with
         its friction) at a step."""
+        if rails is None and friction is None:
+            plain = self._plain
+            if plain[0] is not settings:
+                plain = self._plain = (settings, self._formed(settings, None, None))
+            return plain[1]
+        return self._formed(settings, rails, friction)
+
+    def _formed(self, settings: ContactSettings,
+                rails: tuple[RailDeviation, RailDeviation] | None,
+                friction: tuple[float, float] | None) -> tuple[WheelSetup, WheelSetup]:
+        """:meth:`at`'s setups, formed."""
         if rails is not None:
             rails = per_wheel("rails", rails, 1, "(left, right) RailDeviation")
             for r in rails:
@@ -251,8 +281,20 @@ class Setups:
             s = settings
             if friction is not None and friction[k] != settings.friction:
                 s = self._with_friction(settings, friction[k])
-            out.append(WheelSetup(side, track, self.wheelsets[k], s))
+            out.append(WheelSetup(side, track, self.wheelsets[k], s, self._solvers_of(s)))
         return out[0], out[1]
+
+    def _solvers_of(self, settings: ContactSettings) -> tuple[WheelSettings, WheelSettings]:
+        """The wheel solver's settings of ``settings`` without and with the tangential
+        problem (:attr:`WheelSetup.solvers`; the last few kept)."""
+        held = self._solvers.get(id(settings))
+        if held is None or held[0] is not settings:
+            held = (settings, (solver_settings(settings, False),
+                               solver_settings(settings, True)))
+            if len(self._solvers) >= 8:
+                self._solvers.pop(next(iter(self._solvers)))
+            self._solvers[id(settings)] = held  # (the settings kept: the id is not reused)
+        return held[1]
 
     def _placed_rail(self, side: str, track: Track, rail: RailDeviation) -> Track:
         """``track`` with its ``side`` rail deviated by ``rail`` (the last few kept: a

@@ -76,6 +76,10 @@ class Validity:
     message: str = ""
 
 
+WITHIN = Validity()
+"""A wheel within every limit."""
+
+
 def check_validity(side_sign: int, track_force: Sequence[float],
                    patches: Sequence[PatchSolution], flange_flank: tuple[float, float],
                    settings: ContactSettings) -> Validity:
@@ -169,9 +173,9 @@ def check_limits(side_sign: int, track_force: Sequence[float],
         flags |= LOAD
         why.append(f"wheel load Q = {q / 1e3:.4g} kN above max_wheel_load = "
                    f"{settings.max_wheel_load / 1e3:g} kN")
-    return Validity(flags, "; ".join(why))
+    return Validity(flags, "; ".join(why)) if flags else WITHIN
 
 
 __all__ = ["FLANGE_CLIMB", "FLANGE_CLIMB_MARGIN", "LOAD", "NADAL", "PENETRATION",
-           "RESOLUTION", "VALIDITY_NAMES", "Validity", "Y_Q", "check_limits", "check_validity",
-           "derailment_quotient", "nadal_limit"]
+           "RESOLUTION", "VALIDITY_NAMES", "WITHIN", "Y_Q", "Validity", "check_limits",
+           "check_validity", "derailment_quotient", "nadal_limit"]

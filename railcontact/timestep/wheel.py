@@ -14,7 +14,7 @@ first normal share of the creep-load loop is the load less the previous step's c
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from time import perf_counter
 
 from ..contact.loadloop import charge, vertical_approach, vertical_creep_estimate
@@ -33,7 +33,7 @@ from ..settings import Control
 from ..settings.case import MAX_PENETRATION
 from ..settings.convention import wheel_frame_creepage
 from ..status import Status
-from .inputs import Kinematics, WheelSetup
+from .inputs import Kinematics, WheelSetup, solver_settings
 from .results import NOT_CONVERGED, OK, WheelContact, fill_resultants
 from .warmstart import (
     PatchMemory,
@@ -49,7 +49,7 @@ Memory = tuple[PatchMemory, ...]
 """One wheel's remembered patches."""
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, init=False)
 class StepStart:
     """How a wheel's passes start at a time step (a :class:`~railcontact.contact.wheel.
     WheelStart`).
@@ -83,6 +83,22 @@ class StepStart:
     first: Memory = ()
     own: Memory = ()
     approach: float | None = None
+
+    def __init__(self, setup: WheelSetup, creep: tuple[float, float, float] | None,
+                 kinematics: Kinematics | None, time: float | None, previous: Memory = (),
+                 first: Memory = (), own: Memory = (), approach: float | None = None
+                 ) -> None:
+        # (the fields in their order, each set through its slot: formed per wheel and step,
+        # where the frozen record's generated __init__ sets each by its name)
+        s = _STEP_START_SLOTS
+        s[0](self, setup)
+        s[1](self, creep)
+        s[2](self, kinematics)
+        s[3](self, time)
+        s[4](self, previous)
+        s[5](self, first)
+        s[6](self, own)
+        s[7](self, approach)
 
     def share(self, problem: WheelProblem, settings: WheelSettings, load: float) -> float:
         """The creep forces' share [N] of the vertical ``load`` [N]: the remembered
@@ -188,6 +204,10 @@ class StepStart:
         return WheelPass(patches, creepages, memory)
 
 
+_STEP_START_SLOTS = tuple(StepStart.__dict__[f.name].__set__ for f in fields(StepStart))
+"""The setters of :class:`StepStart`'s slots, in the order of its fields."""
+
+
 class PassStart:
     """The start of each patch of a wheel's pass (``estimate_for`` of
     :func:`~railcontact.contact.wheelrail.solve_wheel_normal`): the remembered patch the
@@ -277,11 +297,12 @@ class PatchStart:
 
 def wheel_settings(setup: WheelSetup, tangential: bool) -> WheelSettings:
     """The wheel solver's settings of a step's wheel (``tangential``: creepages or
-    velocities given)."""
-    s = setup.settings
-    return WheelSettings(s.patch_settings, s.tangential_settings if tangential else None,
-                         s.patch_frame == "reference", s.load_tolerance, s.load_tolerance,
-                         s.load_includes_creep)
+    velocities given): its setup's (:attr:`~.inputs.WheelSetup.solvers`), else formed
+    (:func:`~.inputs.solver_settings`)."""
+    solvers = setup.solvers
+    if solvers is not None:
+        return solvers[1] if tangential else solvers[0]
+    return solver_settings(setup.settings, tangential)
 
 
 def solve_step_wheel(setup: WheelSetup, pose: Pose, control: Control,

@@ -254,13 +254,8 @@ class WheelsetContact:
         """Each wheel searched at the step's pose (:func:`~railcontact.geometry.search.
         search_wheel`): what its contact points and patch frames are formed from, or the
         :class:`RailContactError` of a wheel beside its rail."""
-        found: list[WheelSearch | RailContactError] = []
-        for side, setup in zip(SIDE_NAMES, step.setups, strict=True):
-            try:
-                found.append(search_wheel(setup.track, setup.wheelset, step.pose, side))
-            except RailContactError as exc:
-                found.append(exc)
-        return found[0], found[1]
+        left, right = step.setups
+        return _searched(left, step.pose), _searched(right, step.pose)
 
     def _wheels(self, step: StepInputs, found: Found
                 ) -> tuple[list[WheelContact], StepMemory, bool]:
@@ -271,13 +266,15 @@ class WheelsetContact:
         rail (beside it: its search's error, raised where the wheel has a load or a
         penetration to solve) puts the whole wheelset out of range."""
         wheels = []
-        kept: dict[str, tuple[PatchMemory, ...]] = {}
+        kept: list[tuple[PatchMemory, ...]] = []
         off_track = ""
-        for k, (side, setup) in enumerate(zip(SIDE_NAMES, step.setups, strict=True)):
+        loads, memory = step.loads, self.memory
+        for k, setup in enumerate(step.setups):
+            side = setup.side
             try:
                 searched = found[k]
-                if step.loads is not None:
-                    control = Control(load=step.loads[k])
+                if loads is not None:
+                    control = Control(load=loads[k])
                     if isinstance(searched, RailContactError) and not negligible_load(
                             control.load) and control.value != 0.0:
                         raise searched
@@ -286,24 +283,25 @@ class WheelsetContact:
                         raise searched
                     control = Control(penetration=penetration_approach(searched,
                                                                        step.vertical))
-                own = self.memory.wheel(side)
-                wheel, kept[side], _ = solve_step_wheel(
+                own = memory.wheel(side)
+                wheel, remembered, _ = solve_step_wheel(
                     setup, step.pose, control, step.creep(k), step.kinematics, step.time,
                     self.pair, self.convention, (own, own, own), None,
                     None if isinstance(searched, RailContactError) else searched)
             except (CaseError, SolverError) as exc:  # (the penetration's control)
-                wheel, kept[side] = WheelContact(side, status_of(exc), str(exc)), ()
+                wheel, remembered = WheelContact(side, status_of(exc), str(exc)), ()
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
                 off_track = off_track or f"{side} wheel: {exc}"
-                wheel, kept[side] = WheelContact(side=side), ()
+                wheel, remembered = WheelContact(side=side), ()
             wheels.append(wheel)
+            kept.append(remembered)
         if off_track:  # a wheelset with a wheel off its rail has no contact forces to give
             msg = f"wheelset out of range: {off_track}"
             return ([WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
                      for s in SIDE_NAMES], EMPTY_MEMORY, True)
         for wheel, setup in zip(wheels, step.setups, strict=True):
             self._check_validity(wheel, setup)
-        return wheels, StepMemory(kept["left"], kept["right"]), False
+        return wheels, StepMemory(kept[0], kept[1]), False
 
     def _rigid_stage(self, step: StepInputs, found: Found, wheels: list[WheelContact],
                      memory: StepMemory, remember: bool, off_track: bool
@@ -365,6 +363,15 @@ class WheelsetContact:
         wheel.mark_validity(check_validity(SIDES[wheel.side], wheel.track_force,
                                            wheel.patches, setup.wheelset.flange_flank,
                                            setup.settings))
+
+
+def _searched(setup: WheelSetup, pose: Pose) -> WheelSearch | RailContactError:
+    """The wheel of ``setup`` searched at ``pose`` (:func:`~railcontact.geometry.search.
+    search_wheel`), or the :class:`RailContactError` of a wheel beside its rail."""
+    try:
+        return search_wheel(setup.track, setup.wheelset, pose, setup.side)
+    except RailContactError as exc:
+        return exc
 
 
 __all__ = ["WARM_PROMISE", "WheelsetContact"]
