@@ -64,11 +64,10 @@ integrated along the track over the overlap ``e - x^2 / (2 r)`` gives ``e^(5/2)`
 matched to 0.01 mm and 0.001 rad, with 2 or 3 not)."""
 
 
-@dataclass(frozen=True, slots=True)
-class WheelSearch:
+class WheelSearch(NamedTuple):
     """One wheel searched at a pose (:func:`~.search.search_wheel`): what every contact
     point and patch frame of the wheel at that pose is formed from (SI units, side frame;
-    arrays read-only).
+    arrays read-only; a named tuple: one is formed per wheel and pose).
 
     Attributes
     ----------
@@ -95,14 +94,20 @@ class WheelSearch:
     wheelset: Wheelset
     pose: Pose
     side: str
-    trace: np.ndarray = field(repr=False)
+    trace: np.ndarray
     least_gap: float
     first_sample: int
     increasing: bool
     ties: int
-    rail: tuple = field(repr=False)
-    wheel: tuple = field(repr=False)
-    first: tuple | None = field(default=None, repr=False)
+    rail: tuple
+    wheel: tuple
+    first: tuple | None = None
+
+    def __repr__(self) -> str:  # (without the arrays)
+        return (f"WheelSearch(track={self.track!r}, wheelset={self.wheelset!r}, "
+                f"pose={self.pose!r}, side={self.side!r}, least_gap={self.least_gap!r}, "
+                f"first_sample={self.first_sample!r}, increasing={self.increasing!r}, "
+                f"ties={self.ties!r})")
 
 
 class Samples(NamedTuple):
