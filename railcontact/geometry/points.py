@@ -110,6 +110,10 @@ class WheelSearch(NamedTuple):
                 f"ties={self.ties!r})")
 
 
+_set_attribute = object.__setattr__
+"""How a frozen record sets its fields in its ``__init__``."""
+
+
 class Samples(NamedTuple):
     """A tangent plane's lateral samples (SI units): the lateral coordinate ``s`` [m], the
     normal gap ``f(s)`` [m], ``A(s)`` [1/m], the wheel profile coordinate S [m] and the
@@ -147,7 +151,7 @@ class TangentPlane:
         self.what, self.frame, self.i0, self.i1, self.full = state
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class ContactPoint:
     """One contact patch's geometry (SI units; side frame unless stated).
 
@@ -203,6 +207,19 @@ class ContactPoint:
     rigid: ContactPoint | None = field(repr=False)
     run: PatchRun | None = field(repr=False, compare=False)
     plane: TangentPlane = field(repr=False, compare=False)
+
+    def __init__(self, side: str, gap: float, wheel_s: float, rail_u: float, rail_y: float,
+                 position: tuple[float, float, float], contact_angle: float,
+                 rolling_radius: float, A: float, B: float, s: np.ndarray,
+                 approach: float | None, rigid: ContactPoint | None, run: PatchRun | None,
+                 plane: TangentPlane) -> None:
+        # (the fields at once, in one dictionary: a frozen dataclass's own __init__ sets
+        # them one call each; a few points are formed per wheel and pass)
+        _set_attribute(self, "__dict__", {
+            "side": side, "gap": gap, "wheel_s": wheel_s, "rail_u": rail_u,
+            "rail_y": rail_y, "position": position, "contact_angle": contact_angle,
+            "rolling_radius": rolling_radius, "A": A, "B": B, "s": s, "approach": approach,
+            "rigid": rigid, "run": run, "plane": plane})
 
     def normal_penetration(self, approach: float) -> float:
         """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
