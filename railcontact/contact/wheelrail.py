@@ -490,7 +490,8 @@ def wheel_problem(track: Track, ws: Wheelset, pose: Pose, side: str, pair: Elast
     solve). Raises a :class:`RailContactError` for a pose beyond the profiles."""
     if control.value == 0.0 or (control.by_load and negligible_load(control.load)):
         return WheelProblem(track, ws, pose, side, pair, control, None, _NO_MERGES)
-    found = found or search_wheel(track, ws, pose, side)
+    if found is None:
+        found = search_wheel(track, ws, pose, side)
     first = contact_points(found, 0.0)[0]
     merges = merge_approaches(found, MIN_LOBE) if control.by_load else _NO_MERGES
     return WheelProblem(track, ws, pose, side, pair, control, first, merges, found)
