@@ -110,10 +110,6 @@ class WheelSearch(NamedTuple):
                 f"ties={self.ties!r})")
 
 
-_set_attribute = object.__setattr__
-"""How a frozen record sets its fields in its ``__init__``."""
-
-
 class Samples(NamedTuple):
     """A tangent plane's lateral samples (SI units): the lateral coordinate ``s`` [m], the
     normal gap ``f(s)`` [m], ``A(s)`` [1/m], the wheel profile coordinate S [m] and the
@@ -215,7 +211,7 @@ class ContactPoint:
                  plane: TangentPlane) -> None:
         # (the fields at once, in one dictionary: a frozen dataclass's own __init__ sets
         # them one call each; a few points are formed per wheel and pass)
-        _set_attribute(self, "__dict__", {
+        object.__setattr__(self, "__dict__", {
             "side": side, "gap": gap, "wheel_s": wheel_s, "rail_u": rail_u,
             "rail_y": rail_y, "position": position, "contact_angle": contact_angle,
             "rolling_radius": rolling_radius, "A": A, "B": B, "s": s, "approach": approach,
