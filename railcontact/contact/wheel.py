@@ -78,9 +78,8 @@ class WheelProblem(NamedTuple):
     found: WheelSearch | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class WheelSettings:
-    """How a wheel is solved.
+class WheelSettings(NamedTuple):
+    """How a wheel is solved (a named tuple: one is formed per wheel and step).
 
     Attributes
     ----------

@@ -190,13 +190,15 @@ def check_on_rail(cp: ContactPoint, ws: Wheelset) -> None:
     """Raise a :class:`RailContactError` when the contact point ``cp`` says the wheel is off
     its rail: on the back of the flange (derailed), or past the flange's steepest point
     with an angle below :data:`CLIMBED_SHARE` of that point's (climbed its flange)."""
+    s_steep, steepest = ws.flange_flank
+    if not cp.wheel_s < s_steep:  # (the steepest point is at or beyond the tip: on the rail)
+        return
     if cp.wheel_s < ws.flange_tip:
         raise RailContactError(
             f"contact at S = {cp.wheel_s * 1e3:.4g} mm, on the back of "
             f"the flange (tip at S = {ws.flange_tip * 1e3:.4g} mm): the wheel is off its "
             "rail (derailed)")
-    s_steep, steepest = ws.flange_flank
-    if cp.wheel_s < s_steep and abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
+    if abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
         raise RailContactError(
             f"contact at S = {cp.wheel_s * 1e3:.4g} mm at "
             f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's steepest "
