@@ -15,7 +15,7 @@ that wants one).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 
@@ -36,9 +36,9 @@ noise floor) is accepted when the wheel's vertical force meets its load to this
 (:attr:`WheelSettings.load_acceptance`'s default)."""
 
 
-@dataclass(frozen=True, slots=True)
-class WheelProblem:
-    """A wheel at a pose, formed once for all the passes of its solve.
+class WheelProblem(NamedTuple):
+    """A wheel at a pose, formed once for all the passes of its solve (a named tuple:
+    one is formed per wheel and step).
 
     Attributes
     ----------
@@ -78,9 +78,8 @@ class WheelProblem:
     found: WheelSearch | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class WheelSettings:
-    """How a wheel is solved.
+class WheelSettings(NamedTuple):
+    """How a wheel is solved (a named tuple: one is formed per wheel and step).
 
     Attributes
     ----------

@@ -190,13 +190,15 @@ def check_on_rail(cp: ContactPoint, ws: Wheelset) -> None:
     """Raise a :class:`RailContactError` when the contact point ``cp`` says the wheel is off
     its rail: on the back of the flange (derailed), or past the flange's steepest point
     with an angle below :data:`CLIMBED_SHARE` of that point's (climbed its flange)."""
+    s_steep, steepest = ws.flange_flank
+    if not cp.wheel_s < s_steep:  # (the steepest point is at or beyond the tip: on the rail)
+        return
     if cp.wheel_s < ws.flange_tip:
         raise RailContactError(
             f"contact at S = {cp.wheel_s * 1e3:.4g} mm, on the back of "
             f"the flange (tip at S = {ws.flange_tip * 1e3:.4g} mm): the wheel is off its "
             "rail (derailed)")
-    s_steep, steepest = ws.flange_flank
-    if cp.wheel_s < s_steep and abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
+    if abs(cp.contact_angle) < CLIMBED_SHARE * steepest:
         raise RailContactError(
             f"contact at S = {cp.wheel_s * 1e3:.4g} mm at "
             f"{math.degrees(abs(cp.contact_angle)):.3g} deg, past the flange's steepest "
@@ -245,9 +247,10 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
     out = []
     for k, cp in enumerate(cps):
         check_on_rail(cp.rigid or cp, ws)
-        dn = cp.normal_penetration(approach)
-        if dn <= 0 and loads is None:
-            continue
+        if loads is None:  # (under loads the normal force is given, not the penetration)
+            dn = cp.normal_penetration(approach)
+            if dn <= 0:
+                continue
         # beside other patches: the patch's own run of the overlap alone (the others'
         # lobes, which its plane's gap also shows, are theirs)
         gap_of = (cp.gap_on_grid if len(cps) == 1 or loads is not None else
@@ -489,7 +492,8 @@ def wheel_problem(track: Track, ws: Wheelset, pose: Pose, side: str, pair: Elast
     solve). Raises a :class:`RailContactError` for a pose beyond the profiles."""
     if control.value == 0.0 or (control.by_load and negligible_load(control.load)):
         return WheelProblem(track, ws, pose, side, pair, control, None, _NO_MERGES)
-    found = found or search_wheel(track, ws, pose, side)
+    if found is None:
+        found = search_wheel(track, ws, pose, side)
     first = contact_points(found, 0.0)[0]
     merges = merge_approaches(found, MIN_LOBE) if control.by_load else _NO_MERGES
     return WheelProblem(track, ws, pose, side, pair, control, first, merges, found)
@@ -595,15 +599,14 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     """
     found = (problem.found if problem is not None and problem.found is not None
              else search_wheel(track, ws, pose, side))
-    points = partial(referenced, separation=settings.separation) if reference else _rigid
     box_of = partial(overlap_box_on_run, found)
     if not control.by_load:
         approach = control.penetration
         if approach <= 0:
             return []
-        return _patches(points(found, approach), ws, approach,
-                        settings, pair, estimate_for=estimate_for, previous=previous,
-                        box_of=box_of)
+        return _patches(_points_at(found, approach, reference, settings.separation), ws,
+                        approach, settings, pair, estimate_for=estimate_for,
+                        previous=previous, box_of=box_of)
     q = control.load
     if negligible_load(q):
         return []
@@ -614,8 +617,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
                                    previous, reference, start, box_of)
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
-        ps = _patches(points(found, a), ws, a, settings, pair,
-                      estimate_for=estimate_for, previous=passes[-1], box_of=box_of)
+        ps = _patches(_points_at(found, a, reference, settings.separation), ws, a, settings,
+                      pair, estimate_for=estimate_for, previous=passes[-1], box_of=box_of)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -658,8 +661,14 @@ def mark_other(ps: list[PatchSolution], other: float | None) -> None:
             p.load_unique = True
 
 
-def _rigid(found: WheelSearch, approach: float) -> list[ContactPoint]:
-    """The rigid contact points of a searched wheel at the vertical ``approach`` [m]."""
+def _points_at(found: WheelSearch, approach: float, reference: bool,
+               separation: PatchSeparation | None) -> list[ContactPoint]:
+    """The contact points of a searched wheel at the vertical ``approach`` [m]: with
+    ``reference`` each in the frame at its reference point (:func:`referenced`, with
+    ``separation``), else the rigid ones (:func:`~railcontact.geometry.points.
+    contact_points`)."""
+    if reference:
+        return referenced(found, approach, separation)
     return contact_points(found, approach)
 
 

@@ -50,6 +50,8 @@ K0 = N_S // 2
 S_SAMPLES = _S_SAMPLES = np.linspace(-HALF_WIDTH, HALF_WIDTH, N_S)
 """The lateral coordinates s [m] of a tangent plane's samples (read-only)."""
 _S_SAMPLES.flags.writeable = False
+_S_LIST = _S_SAMPLES.tolist()
+"""The same as Python floats (read without numpy's scalars)."""
 _DS = float(_S_SAMPLES[1] - _S_SAMPLES[0])
 B_DENOMINATOR = _B_DENOMINATOR = 2 * float(_S_SAMPLES[5] - _S_SAMPLES[0]) ** 2
 """``2 h^2`` of the samples ``K0 - 5``, ``K0``, ``K0 + 5`` a curvature B is read from
@@ -62,11 +64,10 @@ integrated along the track over the overlap ``e - x^2 / (2 r)`` gives ``e^(5/2)`
 matched to 0.01 mm and 0.001 rad, with 2 or 3 not)."""
 
 
-@dataclass(frozen=True, slots=True)
-class WheelSearch:
+class WheelSearch(NamedTuple):
     """One wheel searched at a pose (:func:`~.search.search_wheel`): what every contact
     point and patch frame of the wheel at that pose is formed from (SI units, side frame;
-    arrays read-only).
+    arrays read-only; a named tuple: one is formed per wheel and pose).
 
     Attributes
     ----------
@@ -93,14 +94,20 @@ class WheelSearch:
     wheelset: Wheelset
     pose: Pose
     side: str
-    trace: np.ndarray = field(repr=False)
+    trace: np.ndarray
     least_gap: float
     first_sample: int
     increasing: bool
     ties: int
-    rail: tuple = field(repr=False)
-    wheel: tuple = field(repr=False)
-    first: tuple | None = field(default=None, repr=False)
+    rail: tuple
+    wheel: tuple
+    first: tuple | None = None
+
+    def __repr__(self) -> str:  # (without the arrays)
+        return (f"WheelSearch(track={self.track!r}, wheelset={self.wheelset!r}, "
+                f"pose={self.pose!r}, side={self.side!r}, least_gap={self.least_gap!r}, "
+                f"first_sample={self.first_sample!r}, increasing={self.increasing!r}, "
+                f"ties={self.ties!r})")
 
 
 class Samples(NamedTuple):
@@ -140,7 +147,7 @@ class TangentPlane:
         self.what, self.frame, self.i0, self.i1, self.full = state
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class ContactPoint:
     """One contact patch's geometry (SI units; side frame unless stated).
 
@@ -196,6 +203,19 @@ class ContactPoint:
     rigid: ContactPoint | None = field(repr=False)
     run: PatchRun | None = field(repr=False, compare=False)
     plane: TangentPlane = field(repr=False, compare=False)
+
+    def __init__(self, side: str, gap: float, wheel_s: float, rail_u: float, rail_y: float,
+                 position: tuple[float, float, float], contact_angle: float,
+                 rolling_radius: float, A: float, B: float, s: np.ndarray,
+                 approach: float | None, rigid: ContactPoint | None, run: PatchRun | None,
+                 plane: TangentPlane) -> None:
+        # (the fields at once, in one dictionary: a frozen dataclass's own __init__ sets
+        # them one call each; a few points are formed per wheel and pass)
+        object.__setattr__(self, "__dict__", {
+            "side": side, "gap": gap, "wheel_s": wheel_s, "rail_u": rail_u,
+            "rail_y": rail_y, "position": position, "contact_angle": contact_angle,
+            "rolling_radius": rolling_radius, "A": A, "B": B, "s": s, "approach": approach,
+            "rigid": rigid, "run": run, "plane": plane})
 
     def normal_penetration(self, approach: float) -> float:
         """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
@@ -436,12 +456,12 @@ def _point(found: WheelSearch, row, rec=None) -> ContactPoint:
     if rail_y != rail_y:  # NaN: the point is not finite (raises)
         found.track.rail_coordinate(u_c, z_rail)
     side = found.side
-    return ContactPoint(
-        side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c, rail_y=rail_y,
-        position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
-        rolling_radius=found.wheelset.radius + dr, A=A, B=B, s=_S_SAMPLES, approach=None,
-        rigid=None, run=None,
-        plane=TangentPlane((trace, g_min, rail, wheel, u_c, z_rail, gamma, eta_c)))
+    return ContactPoint(  # (by position, in the order of its fields: side, gap, wheel_s,
+        # rail_u, rail_y, position, contact_angle, rolling_radius, A, B, s, approach, rigid,
+        # run, plane)
+        side, gap_c, s_c, u_c, rail_y, (x_c, SIDES[side] * u_c, z_rail), gamma,
+        found.wheelset.radius + dr, A, B, _S_SAMPLES, None, None, None,
+        TangentPlane((trace, g_min, rail, wheel, u_c, z_rail, gamma, eta_c)))
 
 
 def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: float = 0.0
@@ -479,11 +499,12 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     # through it (where the rigid slip of the wheel is taken)
     frame = np.empty((5, N_S))
     rail, wheel = found.rail, found.wheel
+    turn = float(turn)
     ((ok, u_ref, z_ref, gamma, overlap, wheel_s, lo, hi, i0, i1, kw, kr, eta_c, g_lo,
       height, weight, u_a, z_a, u_b, z_b), B, rail_y) = kernels.reference_patch(
         trace, g_min, increasing, approach, float(cp.rail_u), *rail[:4], *wheel,
-        _S_SAMPLES, K0, _B_DENOMINATOR, WEIGHT_POWER, float(turn),
-        *rail[8:], frame)
+        _S_SAMPLES, K0, _B_DENOMINATOR, WEIGHT_POWER, turn, *rail[8:],
+        frame)
     if not ok:
         return None
     if rail_y != rail_y:  # NaN: the point is not finite (raises)
@@ -492,20 +513,17 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     # is the weighted centre, not the gap's minimum, where f'' may be anything), else f''
     # at the origin (Python's ``** 2``: the C library's pow)
     if hi - lo >= 5:
-        B = overlap / (0.5 * (float(_S_SAMPLES[hi - 1] - _S_SAMPLES[lo]) + _DS)) ** 2
+        B = overlap / (0.5 * ((_S_LIST[hi - 1] - _S_LIST[lo]) + _DS)) ** 2
     # what forms the other samples (:func:`_frame_arguments`)
     what = (trace[0], trace[2], trace[3], g_lo, approach, *rail[:2], *wheel[:5], u_ref,
             z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
     side = cp.side
-    return ContactPoint(
-        side=side, gap=approach - overlap / math.cos(gamma), wheel_s=wheel_s, rail_u=u_ref,
-        rail_y=rail_y, position=(cp.position[0], SIDES[side] * u_ref, z_ref),
-        contact_angle=gamma, rolling_radius=found.wheelset.radius + height,
-        A=float(frame[1, K0]), B=B if math.isfinite(B) else cp.B, s=_S_SAMPLES,
-        approach=approach, rigid=cp,
-        run=PatchRun(u=u_ref, angle=gamma - float(turn), weight=weight,
-                     low_end=(u_a, z_a), high_end=(u_b, z_b)),
-        plane=TangentPlane(what, frame, i0, i1))
+    return ContactPoint(  # (by position, as in :func:`_point`)
+        side, approach - overlap / math.cos(gamma), wheel_s, u_ref, rail_y,
+        (cp.position[0], SIDES[side] * u_ref, z_ref), gamma, found.wheelset.radius + height,
+        frame.item(1, K0), B if math.isfinite(B) else cp.B, _S_SAMPLES, approach, cp,
+        PatchRun(u_ref, gamma - turn, weight, (u_a, z_a), (u_b, z_b)),
+        TangentPlane(what, frame, i0, i1))
 
 
 def patch_run(cp: ContactPoint) -> PatchRun | None:

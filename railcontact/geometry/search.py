@@ -63,10 +63,11 @@ def search_wheel(track: Track, ws: Wheelset, pose: Pose, side: str) -> WheelSear
     ``track``, searched: its trace and least gap, and the rail and the wheel as the kernels
     read them (:class:`~.points.WheelSearch`). Raises a :class:`RailContactError` when the
     wheel is beside its rail (the pose beyond the profiles)."""
+    # (the kernel's least gap, sample, order and ties are a Python float, int, bool, int)
     trace, g_min, k, increasing, ties, first, rail, wheel = _trace_of_pose(track, ws, pose,
                                                                           side)
-    return WheelSearch(track, ws, pose, side, trace, float(g_min), int(k), bool(increasing),
-                       int(ties), rail, wheel, first)
+    return WheelSearch(track, ws, pose, side, trace, g_min, k, increasing, ties, rail, wheel,
+                       first)
 
 
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -127,45 +128,61 @@ def forget(traces: bool = True) -> None:
         _memo.traces = {}
 
 
-def _trace(track: Track, ws: Wheelset, pose: Pose, side: str):
+def _trace(track: Track, ws: Wheelset, pose: Pose, side: str, formed: tuple | None = None):
     """:func:`vertical_gap` as one array (5, n), with the least gap, its first sample,
     whether the trace's u increase, how many samples have the least gap and the first
     rigid contact point (its row of :func:`~.kernels.rigid_point` and its
     :func:`~.kernels.rigid_record`; None where the least gap is not on one sample): one
     compiled pass (:func:`~.kernels.search_wheel`); then the rail and the wheel as it read
-    them (:func:`rail_arrays`, :func:`wheel_arrays`)."""
+    them (:func:`rail_arrays`, :func:`wheel_arrays`). ``formed``: the track's and the
+    wheelset's part of that pass (:func:`_search_arguments`), when the caller holds it."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
-    eta, r, dr = _wheel_samples(ws)
-    rail, wheel = rail_arrays(track), wheel_arrays(ws)
+    eta, r, dr, tail, rail, wheel = formed or _search_arguments(track, ws)
     out = np.empty((5, eta.size))
-    n, g_min, k, increasing, ties, formed, row, rec = kernels.search_wheel(
+    n, g_min, k, increasing, ties, found, row, rec = kernels.search_wheel(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
-        math.sin(phi), float(sgn * pose.lateral), *rail[4:6], *rail[:4], *wheel,
-        _points.S_SAMPLES, K0, _points.B_DENOMINATOR, *rail[8:], out)
+        math.sin(phi), float(sgn * pose.lateral), *tail, out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
-    return (out[:, :n], g_min, k, increasing, ties, (row, rec) if formed else None, rail,
+    return (out[:, :n], g_min, k, increasing, ties, (row, rec) if found else None, rail,
             wheel)
+
+
+def _search_arguments(track: Track, ws: Wheelset) -> tuple:
+    """What :func:`~.kernels.search_wheel` reads of the track and the wheelset (formed once
+    for each, :func:`_wheel_samples`, :func:`rail_arrays`, :func:`wheel_arrays`): the
+    wheel's samples eta, r, dr, the arguments after the pose's (``tail``), and the rail
+    and the wheel arrays as :class:`~.points.WheelSearch` holds them."""
+    eta, r, dr = _wheel_samples(ws)
+    rail, wheel = rail_arrays(track), wheel_arrays(ws)
+    tail = (*rail[4:6], *rail[:4], *wheel, _points.S_SAMPLES, K0, _points.B_DENOMINATOR,
+            *rail[8:])
+    return eta, r, dr, tail, rail, wheel
 
 
 def _trace_of_pose(track: Track, ws: Wheelset, pose: Pose, side: str):
     """:func:`_trace`, remembered for the last (track, wheelset, pose) of each side: a load
     iteration asks for the same wheel's contact several times, and the rigid wheelset's
-    search for both wheels' least gaps after solving them (:func:`least_gap`)."""
+    search for both wheels' least gaps after solving them (:func:`least_gap`); the
+    track's and wheelset's arguments of the search (:func:`_search_arguments`) kept with
+    it for the next pose of the same track and wheelset."""
     traces = getattr(_memo, "traces", None)
     if traces is None:
         traces = _memo.traces = {}
     last = traces.get(side)  # (a step passes one pose to every call: identity first)
-    if (last is not None and last[0] is track and last[1] is ws
-            and (last[2] is pose or last[2] == pose)):
-        return last[3]
-    out = _trace(track, ws, pose, side)
+    formed = None
+    if last is not None and last[0] is track and last[1] is ws:
+        if last[2] is pose or last[2] == pose:
+            return last[3]
+        formed = last[4]
+    formed = formed or _search_arguments(track, ws)
+    out = _trace(track, ws, pose, side, formed)
     out[0].flags.writeable = False  # (its rows too)
-    traces[side] = (track, ws, pose, out)
+    traces[side] = (track, ws, pose, out, formed)
     return out
 
 

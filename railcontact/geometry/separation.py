@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from ..errors import RailContactError
 
@@ -90,13 +91,13 @@ class PatchSeparation:
         return self.turn if self.turn is not None else 2 * self.distance - self.combine
 
 
-@dataclass(frozen=True)
-class PatchRun:
+class PatchRun(NamedTuple):
     """What the turning reads of one patch (SI units, side frame): the lateral position of
     its reference point on the rail ``u`` [m] (increasing towards the field side), its
     contact angle before turning [rad], its weight (the weighted interpenetration
     integrated across the rail, any unit common to the wheel's patches) and the two ends
-    of its interpenetration on the rail, ``(u, Z)`` [m] each, the end of least u first."""
+    of its interpenetration on the rail, ``(u, Z)`` [m] each, the end of least u first.
+    (A named tuple: one is formed with every frame at a reference point.)"""
 
     u: float
     angle: float
