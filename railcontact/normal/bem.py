@@ -847,6 +847,30 @@ def _check_finite(name: str, a: np.ndarray) -> None:
         raise RailContactError(f"{name} contains NaN or infinite values")
 
 
+def _settings_of(tolerance, preconditioner, max_iterations) -> tuple[float, bool, int]:
+    """:func:`solve_normal`'s settings checked, in this order: the tolerance, the
+    preconditioner (whether it is the FFT's) and the iteration limit."""
+    tolerance = check_positive("tolerance", tolerance)
+    if preconditioner not in PRECONDITIONERS:
+        raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
+                               f"got {preconditioner!r}")
+    return tolerance, preconditioner == "fft", check_count("max_iterations", max_iterations)
+
+
+_settings_once = lru_cache(maxsize=16, typed=True)(_settings_of)
+""":func:`_settings_of` of settings of the plain types, formed once per value (an error
+is raised at every call: it is not kept)."""
+
+
+def _checked_settings(tolerance, preconditioner, max_iterations) -> tuple[float, bool, int]:
+    """:func:`_settings_of`; settings of the plain types (a time step's, the same at
+    every solve) checked once (:data:`_settings_once`)."""
+    if type(tolerance) is float and type(preconditioner) is str and type(
+            max_iterations) is int:
+        return _settings_once(tolerance, preconditioner, max_iterations)
+    return _settings_of(tolerance, preconditioner, max_iterations)
+
+
 def _formed_start(h: np.ndarray, p: np.ndarray | None, mask: np.ndarray | None,
                   operator: InfluenceOperator, force_control: bool, load: float | None,
                   penetration: float | None, area: float) -> np.ndarray:
@@ -953,12 +977,8 @@ def solve_normal(
     try:  # (the gap's own check, NaN or infinity, comes first: made where one fails)
         if operator.components != "z" or (operator.nx, operator.ny) != shape:
             raise RailContactError("operator must be a 'z' influence operator for this grid")
-        tolerance = check_positive("tolerance", tolerance)
-        if preconditioner not in PRECONDITIONERS:
-            raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
-                                   f"got {preconditioner!r}")
-        precondition = preconditioner == "fft"
-        max_iterations = check_count("max_iterations", max_iterations)
+        tolerance, precondition, max_iterations = _checked_settings(
+            tolerance, preconditioner, max_iterations)
         if (load is None) == (penetration is None):
             raise RailContactError("give exactly one of load [N] and penetration [m]")
         force_control = load is not None
@@ -984,10 +1004,7 @@ def solve_normal(
         raise
     given = p
     area_el = grid.element_area
-    kernel = operator.kernels[0, 0]  # "zz" (2nx-1, 2ny-1) [m/Pa]
-    if kernel.dtype != np.float64 or not kernel.flags.carray:
-        kernel = np.require(kernel, dtype=float, requirements="CW")
-    self_compliance = float(kernel[shape[0] - 1, shape[1] - 1])  # [m/Pa]
+    kernel, self_compliance = operator.first_kernel  # "zz" (2nx-1, 2ny-1), its centre [m/Pa]
 
     # Trivial case: no load.
     if force_control and (load == 0.0 or load < min_load):
