@@ -82,7 +82,7 @@ products are sums of their squares, which under- or overflow beyond it (a sphere
 pressure; under penetration control at 1e150 with 0.6 % of the force)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Displacement:
     """The elastic displacement ``u = A p`` [m] of a pressure ``p`` on a grid, as a solve
     formed it (by a convolution, or carried by the CG's updates from one).
@@ -100,6 +100,11 @@ class Displacement:
 
     values: np.ndarray
     generations: int = 0
+
+    def __init__(self, values: np.ndarray, generations: int = 0) -> None:
+        d = self.__dict__  # (the frozen fields written at once)
+        d["values"] = values
+        d["generations"] = generations
 
 
 @dataclass
@@ -1119,10 +1124,8 @@ def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarr
     (:func:`time.perf_counter`); ``cut`` its :attr:`~NormalResult.next_to_undefined`."""
     delta, total, largest, count, edge, box = summary
     area = grid.element_area
-    return NormalResult(
-        grid=grid, pressure=pressure, contact=contact, gap=gap, force=float(total * area),
-        penetration=float(delta), max_pressure=float(largest), area=float(count * area),
-        iterations=iterations, converged=converged, message=message,
-        wall_time=time.perf_counter() - t0, error=float(error), history=history,
-        touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
-        displacement=shown, start=start, next_to_undefined=bool(cut))
+    return NormalResult(  # (the fields in their order)
+        grid, pressure, contact, gap, float(total * area), float(delta), float(largest),
+        float(count * area), iterations, converged, message, time.perf_counter() - t0,
+        float(error), history, bool(edge), box if box[0] >= 0 else None, shown, start,
+        bool(cut))
