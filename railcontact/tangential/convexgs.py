@@ -544,15 +544,6 @@ def _sweep_loop_of(sweep):
 
 _NO_STATE = np.zeros((0, 0), dtype=np.int8)
 _NO_START = np.zeros((2, 0, 0))
-_FLOAT = np.dtype(float)
-
-
-def _c_ordered(a, dtype: np.dtype | None = None) -> np.ndarray:
-    """``np.ascontiguousarray(a, dtype=dtype)``: an array of ``dtype`` (None: its own) as
-    it is when C-ordered, else its C-ordered copy (the same values)."""
-    if type(a) is np.ndarray and a.ndim and (dtype is None or a.dtype is dtype):
-        return a if a.flags.c_contiguous else a.copy()
-    return np.ascontiguousarray(a, dtype=dtype)
 
 if HAVE_NUMBA:
     _clip_start = numba.njit(cache=True, nogil=True)(_clip_start)
@@ -919,7 +910,7 @@ def checked_inputs(grid: Grid, operator: InfluenceOperator, pressure, friction, 
     if operator.components != "xy" or (operator.nx, operator.ny) != shape:
         raise RailContactError("operator must be the 'xy' steady-rolling operator of "
                                "this grid")
-    pn = _c_ordered(pressure, _FLOAT)  # (one compiled layout)
+    pn = np.ascontiguousarray(pressure, dtype=float)  # (one compiled layout)
     if type(friction) is float or np.ndim(friction) == 0:  # (a number: no numpy call)
         mu = check_positive("friction", friction, allow_zero=True)
     else:  # per element: the bound mu p_n formed here, the layout's own mu 1 (exact)
@@ -991,12 +982,12 @@ def _start_arrays(initial_traction, initial_state, shape: tuple[int, int]
     """An initial traction (2, nx, ny) [Pa] and adhesion/slip map (nx, ny) as the arrays
     the compiled clip (:func:`_clip_start`, in :func:`_bound_layout`) reads (float; int8,
     empty without a map), and the error of a wrong shape (None: none)."""
-    p0 = _c_ordered(initial_traction, _FLOAT)  # (one compiled layout)
+    p0 = np.ascontiguousarray(initial_traction, dtype=float)  # (one compiled layout)
     if p0.shape != (2, *shape):
         return _NO_START, _NO_STATE, f"initial_traction must be finite, shape {(2, *shape)}"
     st0 = _NO_STATE
     if initial_state is not None:
-        st0 = _c_ordered(initial_state)
+        st0 = np.ascontiguousarray(initial_state)
         if st0.shape != shape:
             return _NO_START, _NO_STATE, f"initial_state must have shape {shape}"
         if st0.dtype != np.int8:  # (the compiled clip reads the states as int8)
