@@ -55,18 +55,17 @@ def potential_area(A: float, B: float, delta0: float, margin: float = 1.0) -> Bo
     return (-xl, xl, -yl, yl)
 
 
-def _axis(lo: float, hi: float, n: int, h: float | None, settings: GridSettings
+def _axis(lo: float, hi: float, n: int, h: float | None, q: int, centred: bool, snap: bool
           ) -> tuple[float, float, int]:
-    """One axis of a grid: the counts, or the element size ``h`` with the quantum and snap
-    (or centred) rules of ``settings``."""
+    """One axis of a grid: the counts, or the element size ``h`` with the quantum ``q``
+    and the snap (or ``centred``) rules of :class:`~railcontact.settings.GridSettings`."""
     if h is None:
         return lo, hi, n
-    q = settings.quantum
-    if settings.centred:  # edges at (i + 1/2) h: the origin is an element's centre
+    if centred:  # edges at (i + 1/2) h: the origin is an element's centre
         first = math.floor(lo / h + 0.5)
         n = max(2, q * math.ceil((math.ceil(hi / h - 0.5) - first + 1) / q))
         return (first - 0.5) * h, (first - 0.5 + n) * h, n
-    extra = 1 if settings.snap else 0
+    extra = 1 if snap else 0
     n = max(2, q * math.ceil(((hi - lo) / h + extra) / q - 1e-9))
     c = 0.5 * (lo + hi)
     c = round(c / h) * h if extra else c
@@ -81,15 +80,16 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
     of the element size, so that the grids of consecutive time steps share one lattice
     around the contact point and a warm start is not smeared by interpolation.
     """
-    x0, x1, y0, y1 = (float(b) for b in bounds)  # Python floats: an overflow is inf, silently
+    x0, x1, y0, y1 = map(float, bounds)  # Python floats: an overflow is inf, silently
     dx, dy = settings.dx, settings.dy
     sx = (x1 - x0) / dx if dx else settings.nx
     sy = (y1 - y0) / dy if dy else settings.ny
     if not sx * sy <= settings.max_elements:  # (the message formed only when it is needed)
         check_grid_size(f"the potential area {(x1 - x0) * 1e3:.4g} x {(y1 - y0) * 1e3:.4g} "
                         f"mm with [grid] dx = {dx}, dy = {dy} m", sx, sy, settings.max_elements)
-    xmin, xmax, nx = _axis(x0, x1, settings.nx, dx, settings)
-    ymin, ymax, ny = _axis(y0, y1, settings.ny, dy, settings)
+    q, centred, snap = settings.quantum, settings.centred, settings.snap
+    xmin, xmax, nx = _axis(x0, x1, settings.nx, dx, q, centred, snap)
+    ymin, ymax, ny = _axis(y0, y1, settings.ny, dy, q, centred, snap)
     if (xmin < xmax and ymin < ymax and xmin - xmin == 0.0 and xmax - xmax == 0.0
             and ymin - ymin == 0.0 and ymax - ymax == 0.0):  # (finite: Grid.from_bounds'
         ex = (xmax - xmin) / nx  # checks passed; its element sizes and centres)
@@ -418,20 +418,23 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
     t0 = time.perf_counter()
     if friction is None:
         friction = settings.friction
-    if not isinstance(friction, (PatchFriction, int, float)):
+    if isinstance(friction, PatchFriction):
+        patch.friction = float(friction.reference)
+    elif isinstance(friction, (int, float)):
+        patch.friction = float(friction)
+    else:
         raise CaseError("a friction table is read per patch: give solve_patch_tangential "
                         "the patch's coefficient (friction=...)")
-    patch.friction = float(friction.reference if isinstance(friction, PatchFriction)
-                           else friction)
+    work = patch.work
     try:
         _tangential(patch, settings, pair, fft, creepage, previous, friction)
     finally:
-        patch.work.seconds += time.perf_counter() - t0
+        work.seconds += time.perf_counter() - t0
     t = patch.tangential
     if t is not None:
         patch.creepage = tuple(map(float, settings.creepage if creepage is None
                                    else creepage))
-        patch.work.tangential_iterations += t.iterations
+        work.tangential_iterations += t.iterations
         fx, fy = t.force
         # the traction array checked by the solver's summary of it: max_traction is the
         # largest |p| or NaN when one is NaN, so finite only when every traction is
@@ -445,14 +448,14 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
                 fft: str, creepage: tuple[float, float, float] | None,
                 previous: tuple | None, friction: float | PatchFriction) -> None:
     res = patch.normal
-    A, B = patch.curvatures
     creepage = settings.creepage if creepage is None else tuple(creepage)
     model, estimate = settings.model, settings.estimate
     p0, st0 = previous if previous is not None else (None, None)
     # The simplified models work on the Hertz ellipse that carries the BEM's normal force
     # (not needed when the BEM starts from a given traction).
     needs_hertz = model != "bem" or (p0 is None and estimate != "none")
-    hz = hertz(A, B, pair, load=res.force) if res.force > 0 and needs_hertz else None
+    hz = (hertz(*patch.curvatures, pair, load=res.force) if res.force > 0 and needs_hertz
+          else None)
     patch.tangential_model, patch.tangential_estimate = model, estimate
     actual = res if patch.geometry is not None else None  # wheel-rail: non-elliptic patch
     if model != "bem":
@@ -468,19 +471,20 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
             simplified_tangential(estimate, hz, pair, settings, actual, creepage,
                                   patch.friction), res.grid)
     grid, pn = res.grid, res.pressure
-    window = None if settings.solver == "convexgs" else contact_window(
+    solver = settings.solver
+    window = None if solver == "convexgs" else contact_window(
         res.contact, box=res.contact_box or (-1, 0, -1, 0))
     if window is not None:  # solve on the contact's own window, return on the patch's grid
         sx, sy = window
-        grid = Grid(sx.stop - sx.start, sy.stop - sy.start, grid.dx, grid.dy,
-                    grid.x0 + sx.start * grid.dx, grid.y0 + sy.start * grid.dy)
+        i0, j0, dx, dy = sx.start, sy.start, grid.dx, grid.dy
+        grid = Grid(sx.stop - i0, sy.stop - j0, dx, dy, grid.x0 + i0 * dx, grid.y0 + j0 * dy)
         pn = pn[sx, sy]
         p0 = None if p0 is None else np.asarray(p0)[:, sx, sy]
         st0 = None if st0 is None else np.asarray(st0)[sx, sy]
     # (on a window: the result on the patch's grid, zero outside the window)
     check_operator_memory(grid, "xy", fft)
     mu = friction.rows(grid) if isinstance(friction, PatchFriction) else friction
-    patch.tangential = SOLVERS[settings.solver](
+    patch.tangential = SOLVERS[solver](
         grid, rolling_operator(grid, pair, fft), pn, mu, creepage, initial_traction=p0,
         initial_state=st0, tolerance=settings.tolerance,
         max_iterations=settings.max_iterations, spin_offset=settings.spin_offset,
@@ -515,11 +519,11 @@ def contact_window(contact: np.ndarray, quantum: int = WINDOW_QUANTUM,
     i0, i1, j0, j1 = nonzero_box(contact) if box is None else box
     if i0 < 0:
         return None
-    out = []
-    for lo, hi, n in ((i0, i1, contact.shape[0]), (j0, j1, contact.shape[1])):
-        m = min(n, quantum * math.ceil((hi - lo) / quantum))
-        start = min(max(lo - (m - (hi - lo)) // 2, 0), n - m)
-        out.append(slice(start, start + m))
-    if (out[0].stop - out[0].start, out[1].stop - out[1].start) == contact.shape:
+    nx, ny = contact.shape
+    mx = min(nx, quantum * math.ceil((i1 - i0) / quantum))
+    my = min(ny, quantum * math.ceil((j1 - j0) / quantum))
+    if mx == nx and my == ny:
         return None
-    return out[0], out[1]
+    sx = min(max(i0 - (mx - (i1 - i0)) // 2, 0), nx - mx)
+    sy = min(max(j0 - (my - (j1 - j0)) // 2, 0), ny - my)
+    return slice(sx, sx + mx), slice(sy, sy + my)

@@ -199,6 +199,11 @@ def _row_stride(n: int) -> int:
     return n + 8 if n % 32 == 0 else n
 
 
+MAX_ARGUMENTS = 8
+"""Operands a packed plan keeps the compiled product's arguments of
+(:meth:`_PackedPlan.kernel_arguments`) at most; beyond, they are formed anew."""
+
+
 class _PackedPlan:
     """The DC-FFT product of one or two real components through complex transforms.
 
@@ -247,6 +252,9 @@ class _PackedPlan:
         self.z_y[...] = 0.0
         self.ny = 0
         """The grid width last written into ``z_in`` (its padding must stay zero)."""
+        self._arguments: dict[int, tuple] = {}
+        """:meth:`kernel_arguments`' tuples by the operands they hold (the plan is one
+        thread's: :func:`_fftw_plan`)."""
         self._pack, self._unpack = ((_pack_rows, _unpack_rows) if nc == 1
                                     else (_pack_pair, _unpack_pair))
         self._product = _packed_rows if nc == 1 else _packed_pair
@@ -260,8 +268,14 @@ class _PackedPlan:
         if ny != self.ny:
             self.z_in[...] = 0.0
             self.ny = ny
-        return (self.plans, self.z_in, self.z_s, self.w_s, self.w_out, operands[0],
-                operands[1], self.n)
+        held = self._arguments.get(id(operands))
+        if held is None or held[0] is not operands:  # (formed once per operands)
+            if len(self._arguments) >= MAX_ARGUMENTS:  # (operands of dropped operators)
+                self._arguments.clear()
+            held = self._arguments[id(operands)] = (operands, (
+                self.plans, self.z_in, self.z_s, self.w_s, self.w_out, operands[0],
+                operands[1], self.n))
+        return held[1]
 
     def convolve(self, operands: tuple[np.ndarray, np.ndarray], p: np.ndarray,
                  out: np.ndarray | None) -> np.ndarray:
@@ -656,6 +670,13 @@ class InfluenceOperator:
                                        f"got {kernels.shape}")
         self.kernels = kernels  # (nc, nc, 2nx-1, 2ny-1)
         nx, ny = self.nx, self.ny
+        first = kernels[0, 0]
+        if first.dtype != np.float64 or not first.flags.carray:
+            first = np.require(first, dtype=float, requirements="CW")
+        self.first_kernel = (first, float(first[nx - 1, ny - 1]))
+        """The kernel of the first component's block (2nx-1, 2ny-1) [m/Pa] (C-ordered,
+        writeable: the compiled solvers' layout) and its centre, an element's influence
+        on itself [m/Pa]."""
         self._padded = padded_shape(nx, ny)
         self._shapes = ((nc, nx, ny),) + (((nx, ny),) if nc == 1 else ())  # apply's inputs
         self._inverse: dict[tuple[float, bool], np.ndarray] = {}
