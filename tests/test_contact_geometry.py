@@ -276,22 +276,3 @@ def test_overlap_half_length_is_the_largest_root_of_the_overlap():
     # a parabola's overlap: f = 0, A = 2 over the run, delta = 8e-4 -> x = 0.02 exactly
     assert kernels.overlap_half_length(np.zeros(5), np.full(5, 2.0), 1, 3, 8e-4) == \
         pytest.approx(0.02, rel=1e-15)
-
-
-def test_contact_point_record_holds_every_field_as_given():
-    """ContactPoint's own __init__ (its fields set at once) takes each field by name, in
-    the order of the fields, and keeps it; the record stays frozen."""
-    import dataclasses
-
-    from railcontact.geometry.points import ContactPoint
-
-    cp = first(3e-3, "left")
-    names = [f.name for f in dataclasses.fields(ContactPoint)]
-    values = {n: getattr(cp, n) for n in names}
-    again = ContactPoint(**values)
-    assert all(getattr(again, n) is values[n] for n in names)
-    by_position = ContactPoint(*values.values())
-    assert all(getattr(by_position, n) is values[n] for n in names)
-    assert dataclasses.replace(cp, gap=1e-3).gap == 1e-3
-    with pytest.raises(dataclasses.FrozenInstanceError):
-        cp.gap = 0.0

@@ -1,12 +1,10 @@
-"""A time step's own records, formed without their generated constructors, and the setups
-a contact keeps from step to step.
+"""A time step's own records and the setups a contact keeps from step to step.
 
-:class:`~railcontact.timestep.warmstart.PatchMemory` and :class:`~railcontact.timestep.
-wheel.StepStart` set their fields through their slots (records formed per patch and per
-wheel every step); an FMU's saved state rebuilds a memory from its fields by name, so each
-field must land where its name says. A contact keeps its wheels' setups (and their solver
-settings) for the settings it was given: a contact whose settings are replaced between
-steps must solve with the new ones, as a contact made with them does.
+An FMU's saved state rebuilds a :class:`~railcontact.timestep.warmstart.PatchMemory` from
+its fields by name, so each field must land where its name says and its boxes be formed
+from its pressure. A contact keeps its wheels' setups (and their solver settings) for the
+settings it was given: a contact whose settings are replaced between steps must solve with
+the new ones, as a contact made with them does.
 """
 
 from __future__ import annotations
@@ -19,7 +17,6 @@ import numpy as np
 import railcontact as rc
 from railcontact.halfspace.grid import Grid
 from railcontact.timestep.warmstart import PatchMemory
-from railcontact.timestep.wheel import StepStart
 
 STEEL = rc.Material(206e9, 0.28)
 
@@ -60,15 +57,6 @@ def test_patch_memory_fields_by_name_and_its_boxes():
     kept = memory.without_older()
     assert kept.older is None and kept.traction_rate is None
     assert kept.contact_box == memory.contact_box and kept.time == memory.time
-
-
-def test_step_start_fields_by_name():
-    values = dict(setup="setup", creep=(1e-3, 0.0, 0.0), kinematics=None, time=0.5,
-                  previous=("p",), first=("f",), own=("o",), approach=1e-4)
-    start = StepStart(**values)
-    assert _fields(start) == values
-    assert StepStart("setup", None, None, None) == StepStart(
-        "setup", None, None, None, (), (), (), None)
 
 
 def test_replaced_settings_solve_as_a_new_contact():

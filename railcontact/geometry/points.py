@@ -147,7 +147,7 @@ class TangentPlane:
         self.what, self.frame, self.i0, self.i1, self.full = state
 
 
-@dataclass(frozen=True, init=False)
+@dataclass(frozen=True)
 class ContactPoint:
     """One contact patch's geometry (SI units; side frame unless stated).
 
@@ -203,19 +203,6 @@ class ContactPoint:
     rigid: ContactPoint | None = field(repr=False)
     run: PatchRun | None = field(repr=False, compare=False)
     plane: TangentPlane = field(repr=False, compare=False)
-
-    def __init__(self, side: str, gap: float, wheel_s: float, rail_u: float, rail_y: float,
-                 position: tuple[float, float, float], contact_angle: float,
-                 rolling_radius: float, A: float, B: float, s: np.ndarray,
-                 approach: float | None, rigid: ContactPoint | None, run: PatchRun | None,
-                 plane: TangentPlane) -> None:
-        # (the fields at once, in one dictionary: a frozen dataclass's own __init__ sets
-        # them one call each; a few points are formed per wheel and pass)
-        object.__setattr__(self, "__dict__", {
-            "side": side, "gap": gap, "wheel_s": wheel_s, "rail_u": rail_u,
-            "rail_y": rail_y, "position": position, "contact_angle": contact_angle,
-            "rolling_radius": rolling_radius, "A": A, "B": B, "s": s, "approach": approach,
-            "rigid": rigid, "run": run, "plane": plane})
 
     def normal_penetration(self, approach: float) -> float:
         """Normal penetration [m] of this patch for a vertical wheel approach [m]."""
@@ -456,12 +443,12 @@ def _point(found: WheelSearch, row, rec=None) -> ContactPoint:
     if rail_y != rail_y:  # NaN: the point is not finite (raises)
         found.track.rail_coordinate(u_c, z_rail)
     side = found.side
-    return ContactPoint(  # (by position, in the order of its fields: side, gap, wheel_s,
-        # rail_u, rail_y, position, contact_angle, rolling_radius, A, B, s, approach, rigid,
-        # run, plane)
-        side, gap_c, s_c, u_c, rail_y, (x_c, SIDES[side] * u_c, z_rail), gamma,
-        found.wheelset.radius + dr, A, B, _S_SAMPLES, None, None, None,
-        TangentPlane((trace, g_min, rail, wheel, u_c, z_rail, gamma, eta_c)))
+    return ContactPoint(
+        side=side, gap=gap_c, wheel_s=s_c, rail_u=u_c, rail_y=rail_y,
+        position=(x_c, SIDES[side] * u_c, z_rail), contact_angle=gamma,
+        rolling_radius=found.wheelset.radius + dr, A=A, B=B, s=_S_SAMPLES, approach=None,
+        rigid=None, run=None,
+        plane=TangentPlane((trace, g_min, rail, wheel, u_c, z_rail, gamma, eta_c)))
 
 
 def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: float = 0.0
@@ -518,12 +505,14 @@ def at_reference(found: WheelSearch, cp: ContactPoint, approach: float, turn: fl
     what = (trace[0], trace[2], trace[3], g_lo, approach, *rail[:2], *wheel[:5], u_ref,
             z_ref, gamma, eta_c, kw, kr, _S_SAMPLES, overlap)
     side = cp.side
-    return ContactPoint(  # (by position, as in :func:`_point`)
-        side, approach - overlap / math.cos(gamma), wheel_s, u_ref, rail_y,
-        (cp.position[0], SIDES[side] * u_ref, z_ref), gamma, found.wheelset.radius + height,
-        frame.item(1, K0), B if math.isfinite(B) else cp.B, _S_SAMPLES, approach, cp,
-        PatchRun(u_ref, gamma - turn, weight, (u_a, z_a), (u_b, z_b)),
-        TangentPlane(what, frame, i0, i1))
+    return ContactPoint(
+        side=side, gap=approach - overlap / math.cos(gamma), wheel_s=wheel_s, rail_u=u_ref,
+        rail_y=rail_y, position=(cp.position[0], SIDES[side] * u_ref, z_ref),
+        contact_angle=gamma, rolling_radius=found.wheelset.radius + height,
+        A=frame.item(1, K0), B=B if math.isfinite(B) else cp.B, s=_S_SAMPLES,
+        approach=approach, rigid=cp,
+        run=PatchRun(u_ref, gamma - turn, weight, (u_a, z_a), (u_b, z_b)),
+        plane=TangentPlane(what, frame, i0, i1))
 
 
 def patch_run(cp: ContactPoint) -> PatchRun | None:

@@ -39,7 +39,7 @@ _BOUND_NAMES = {a: (f"grid.{a} lower bound", f"grid.{a} upper bound") for a in "
 """The names of the bounds in :meth:`Grid.from_bounds`'s messages (formed once)."""
 
 
-@dataclass(frozen=True, init=False)
+@dataclass(frozen=True)
 class Grid:
     """A rectangular grid of ``nx * ny`` elements of size ``dx * dy`` [m].
 
@@ -60,29 +60,21 @@ class Grid:
     x0: float
     y0: float
 
-    def __init__(self, nx: int, ny: int, dx: float, dy: float, x0: float, y0: float
-                 ) -> None:
-        # (the frozen fields written into the instance's dict at once, then checked)
-        d = self.__dict__
-        d["nx"] = nx
-        d["ny"] = ny
-        d["dx"] = dx
-        d["dy"] = dy
-        d["x0"] = x0
-        d["y0"] = y0
+    def __post_init__(self) -> None:
+        nx, ny, dx, dy, x0, y0 = self.nx, self.ny, self.dx, self.dy, self.x0, self.y0
         if (type(nx) is int and type(ny) is int and nx >= 1 and ny >= 1  # the common case
                 and type(dx) is float and type(dy) is float and 0.0 < dx < math.inf
                 and 0.0 < dy < math.inf and type(x0) is float and type(y0) is float
                 and x0 - x0 == 0.0 and y0 - y0 == 0.0):  # (finite: x - x is 0, else NaN)
             return
         for name in ("nx", "ny"):
-            n = d[name]
+            n = getattr(self, name)
             if isinstance(n, bool) or int(n) != n or n < 1:
                 raise RailContactError(f"grid.{name} must be a positive integer, got {n!r}")
-        check_positive("grid.dx", dx, "m")
-        check_positive("grid.dy", dy, "m")
-        check_finite("grid.x0", x0, "m")
-        check_finite("grid.y0", y0, "m")
+        check_positive("grid.dx", self.dx, "m")
+        check_positive("grid.dy", self.dy, "m")
+        check_finite("grid.x0", self.x0, "m")
+        check_finite("grid.y0", self.y0, "m")
 
     @classmethod
     def from_bounds(

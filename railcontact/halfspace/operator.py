@@ -199,11 +199,6 @@ def _row_stride(n: int) -> int:
     return n + 8 if n % 32 == 0 else n
 
 
-MAX_ARGUMENTS = 8
-"""Operands a packed plan keeps the compiled product's arguments of
-(:meth:`_PackedPlan.kernel_arguments`) at most; beyond, they are formed anew."""
-
-
 class _PackedPlan:
     """The DC-FFT product of one or two real components through complex transforms.
 
@@ -252,9 +247,6 @@ class _PackedPlan:
         self.z_y[...] = 0.0
         self.ny = 0
         """The grid width last written into ``z_in`` (its padding must stay zero)."""
-        self._arguments: dict[int, tuple] = {}
-        """:meth:`kernel_arguments`' tuples by the operands they hold (the plan is one
-        thread's: :func:`_fftw_plan`)."""
         self._pack, self._unpack = ((_pack_rows, _unpack_rows) if nc == 1
                                     else (_pack_pair, _unpack_pair))
         self._product = _packed_rows if nc == 1 else _packed_pair
@@ -268,14 +260,8 @@ class _PackedPlan:
         if ny != self.ny:
             self.z_in[...] = 0.0
             self.ny = ny
-        held = self._arguments.get(id(operands))
-        if held is None or held[0] is not operands:  # (formed once per operands)
-            if len(self._arguments) >= MAX_ARGUMENTS:  # (operands of dropped operators)
-                self._arguments.clear()
-            held = self._arguments[id(operands)] = (operands, (
-                self.plans, self.z_in, self.z_s, self.w_s, self.w_out, operands[0],
-                operands[1], self.n))
-        return held[1]
+        return (self.plans, self.z_in, self.z_s, self.w_s, self.w_out, operands[0],
+                operands[1], self.n)
 
     def convolve(self, operands: tuple[np.ndarray, np.ndarray], p: np.ndarray,
                  out: np.ndarray | None) -> np.ndarray:

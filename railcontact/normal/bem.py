@@ -82,7 +82,7 @@ products are sums of their squares, which under- or overflow beyond it (a sphere
 pressure; under penetration control at 1e150 with 0.6 % of the force)."""
 
 
-@dataclass(frozen=True, init=False)
+@dataclass(frozen=True)
 class Displacement:
     """The elastic displacement ``u = A p`` [m] of a pressure ``p`` on a grid, as a solve
     formed it (by a convolution, or carried by the CG's updates from one).
@@ -100,11 +100,6 @@ class Displacement:
 
     values: np.ndarray
     generations: int = 0
-
-    def __init__(self, values: np.ndarray, generations: int = 0) -> None:
-        d = self.__dict__  # (the frozen fields written at once)
-        d["values"] = values
-        d["generations"] = generations
 
 
 @dataclass
@@ -852,30 +847,6 @@ def _check_finite(name: str, a: np.ndarray) -> None:
         raise RailContactError(f"{name} contains NaN or infinite values")
 
 
-def _settings_of(tolerance, preconditioner, max_iterations) -> tuple[float, bool, int]:
-    """:func:`solve_normal`'s settings checked, in this order: the tolerance, the
-    preconditioner (whether it is the FFT's) and the iteration limit."""
-    tolerance = check_positive("tolerance", tolerance)
-    if preconditioner not in PRECONDITIONERS:
-        raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
-                               f"got {preconditioner!r}")
-    return tolerance, preconditioner == "fft", check_count("max_iterations", max_iterations)
-
-
-_settings_once = lru_cache(maxsize=16, typed=True)(_settings_of)
-""":func:`_settings_of` of settings of the plain types, formed once per value (an error
-is raised at every call: it is not kept)."""
-
-
-def _checked_settings(tolerance, preconditioner, max_iterations) -> tuple[float, bool, int]:
-    """:func:`_settings_of`; settings of the plain types (a time step's, the same at
-    every solve) checked once (:data:`_settings_once`)."""
-    if type(tolerance) is float and type(preconditioner) is str and type(
-            max_iterations) is int:
-        return _settings_once(tolerance, preconditioner, max_iterations)
-    return _settings_of(tolerance, preconditioner, max_iterations)
-
-
 def _formed_start(h: np.ndarray, p: np.ndarray | None, mask: np.ndarray | None,
                   operator: InfluenceOperator, force_control: bool, load: float | None,
                   penetration: float | None, area: float) -> np.ndarray:
@@ -982,8 +953,12 @@ def solve_normal(
     try:  # (the gap's own check, NaN or infinity, comes first: made where one fails)
         if operator.components != "z" or (operator.nx, operator.ny) != shape:
             raise RailContactError("operator must be a 'z' influence operator for this grid")
-        tolerance, precondition, max_iterations = _checked_settings(
-            tolerance, preconditioner, max_iterations)
+        tolerance = check_positive("tolerance", tolerance)
+        if preconditioner not in PRECONDITIONERS:
+            raise RailContactError(f"preconditioner must be one of {PRECONDITIONERS}, "
+                                   f"got {preconditioner!r}")
+        precondition = preconditioner == "fft"
+        max_iterations = check_count("max_iterations", max_iterations)
         if (load is None) == (penetration is None):
             raise RailContactError("give exactly one of load [N] and penetration [m]")
         force_control = load is not None
@@ -1124,8 +1099,10 @@ def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarr
     (:func:`time.perf_counter`); ``cut`` its :attr:`~NormalResult.next_to_undefined`."""
     delta, total, largest, count, edge, box = summary
     area = grid.element_area
-    return NormalResult(  # (the fields in their order)
-        grid, pressure, contact, gap, float(total * area), float(delta), float(largest),
-        float(count * area), iterations, converged, message, time.perf_counter() - t0,
-        float(error), history, bool(edge), box if box[0] >= 0 else None, shown, start,
-        bool(cut))
+    return NormalResult(
+        grid=grid, pressure=pressure, contact=contact, gap=gap, force=float(total * area),
+        penetration=float(delta), max_pressure=float(largest), area=float(count * area),
+        iterations=iterations, converged=converged, message=message,
+        wall_time=time.perf_counter() - t0, error=float(error), history=history,
+        touches_boundary=bool(edge), contact_box=box if box[0] >= 0 else None,
+        displacement=shown, start=start, next_to_undefined=bool(cut))

@@ -891,9 +891,11 @@ def result_record(name: str, stall_sweeps: int, t0: float, grid: Grid,
         if stalled:
             message += (f"; stalled: eps has not fallen below {STALL_GAIN:g} of its best "
                         f"in {stall_sweeps} sweeps")
-    return TangentialResult(  # (the fields in their order)
-        grid, traction, st, slip, force, mz, ratio, pmax, its, converged, message,
-        time.perf_counter() - t0, err, hist)
+    return TangentialResult(
+        grid=grid, traction=traction, state=st, slip_of=slip, force=force,
+        spin_moment=mz, slip_area_ratio=ratio, max_traction=pmax, iterations=its,
+        converged=converged, message=message, wall_time=time.perf_counter() - t0, error=err,
+        history=hist)
 
 
 def checked_inputs(grid: Grid, operator: InfluenceOperator, pressure, friction, creepage,

@@ -26,7 +26,7 @@ extrapolation brings this to 0.01 %, the traction's error from 1.2 % to 0.2 %.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -48,7 +48,7 @@ AREA_MARGIN_SHARE = 0.05
 side by this many elements plus this share of its extent (:func:`previous_bounds`)."""
 
 
-@dataclass(frozen=True, slots=True, init=False)
+@dataclass(frozen=True, slots=True)
 class PatchMemory:
     """What a time step keeps of one contact patch for the next one (SI units).
 
@@ -113,34 +113,12 @@ class PatchMemory:
     element_box: tuple[int, int, int, int] | None = None
     contact_box: tuple[float, float, float, float] | None = field(init=False)
 
-    def __init__(self, grid: Grid, pressure: np.ndarray, traction: np.ndarray | None,
-                 state: np.ndarray | None, u: float, z: float, time: float | None = None,
-                 older: PatchMemory | None = None, vertical_creep: float = 0.0,
-                 approach: float = 0.0, vertical_normal: float = 0.0,
-                 traction_rate: np.ndarray | None = None,
-                 displacement: Displacement | None = None,
-                 element_box: tuple[int, int, int, int] | None = None) -> None:
-        # The fields in their order, each set through its slot (the frozen record's
-        # generated __init__ sets each by its name: a record formed twice a patch a step),
-        # and the boxes formed once.
-        s = _PATCH_MEMORY_SLOTS
-        s[0](self, grid)
-        s[1](self, pressure)
-        s[2](self, traction)
-        s[3](self, state)
-        s[4](self, u)
-        s[5](self, z)
-        s[6](self, time)
-        s[7](self, older)
-        s[8](self, vertical_creep)
-        s[9](self, approach)
-        s[10](self, vertical_normal)
-        s[11](self, traction_rate)
-        s[12](self, displacement)
-        if element_box is None:
-            element_box = nonzero_box(np.asarray(pressure))
-        s[13](self, element_box)
-        s[14](self, box_edges(element_box, grid))
+    def __post_init__(self) -> None:  # (the frozen record's own fields, formed once)
+        box = self.element_box
+        if box is None:
+            box = nonzero_box(np.asarray(self.pressure))
+            object.__setattr__(self, "element_box", box)
+        object.__setattr__(self, "contact_box", box_edges(box, self.grid))
 
     def without_older(self) -> PatchMemory:
         """This memory without its ``older`` step and traction rate: what a newer step
@@ -161,10 +139,6 @@ class PatchMemory:
         if not dt > 0:
             return 0.0
         return min(max(float((time - self.time) / dt), 0.0), MAX_EXTRAPOLATION)
-
-
-_PATCH_MEMORY_SLOTS = tuple(PatchMemory.__dict__[f.name].__set__ for f in fields(PatchMemory))
-"""The setters of :class:`PatchMemory`'s slots, in the order of its fields."""
 
 
 def match(memories: list[PatchMemory], u: float, z: float) -> PatchMemory | None:

@@ -14,7 +14,7 @@ first normal share of the creep-load loop is the load less the previous step's c
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from time import perf_counter
 
 from ..contact.loadloop import charge, vertical_approach, vertical_creep_estimate
@@ -49,7 +49,7 @@ Memory = tuple[PatchMemory, ...]
 """One wheel's remembered patches."""
 
 
-@dataclass(frozen=True, slots=True, init=False)
+@dataclass(frozen=True, slots=True)
 class StepStart:
     """How a wheel's passes start at a time step (a :class:`~railcontact.contact.wheel.
     WheelStart`).
@@ -83,22 +83,6 @@ class StepStart:
     first: Memory = ()
     own: Memory = ()
     approach: float | None = None
-
-    def __init__(self, setup: WheelSetup, creep: tuple[float, float, float] | None,
-                 kinematics: Kinematics | None, time: float | None, previous: Memory = (),
-                 first: Memory = (), own: Memory = (), approach: float | None = None
-                 ) -> None:
-        # (the fields in their order, each set through its slot: formed per wheel and step,
-        # where the frozen record's generated __init__ sets each by its name)
-        s = _STEP_START_SLOTS
-        s[0](self, setup)
-        s[1](self, creep)
-        s[2](self, kinematics)
-        s[3](self, time)
-        s[4](self, previous)
-        s[5](self, first)
-        s[6](self, own)
-        s[7](self, approach)
 
     def share(self, problem: WheelProblem, settings: WheelSettings, load: float) -> float:
         """The creep forces' share [N] of the vertical ``load`` [N]: the remembered
@@ -202,10 +186,6 @@ class StepStart:
                 0.0 if t is None else float(t.force[1] * math.sin(g)), approach,
                 n.force * math.cos(g), rate, n.displacement, n.contact_box))
         return WheelPass(patches, creepages, memory)
-
-
-_STEP_START_SLOTS = tuple(StepStart.__dict__[f.name].__set__ for f in fields(StepStart))
-"""The setters of :class:`StepStart`'s slots, in the order of its fields."""
 
 
 class PassStart:
