@@ -20,7 +20,10 @@ Each repetition runs the same steps from new instances in three ways, the order 
   wheelsets);
 * ``processes``: a :class:`railcontact.WheelsetPool` of ``--processes`` worker processes
   (2), wheelset ``i`` in process ``i mod N``, one round trip per process and step; each
-  worker sends back the step's fingerprint (below), not the whole result.
+  worker sends back the step's fingerprint (below), not the whole result;
+* ``host+workers``: a pool of ``--processes`` processes of which this one is the first
+  (``WheelsetPool(here=True)``, the multi-wheelset FMU's default): it steps its share of
+  the wheelsets while ``--processes - 1`` workers step theirs.
 
 The worker threads and processes live for the whole run and are warmed up first (numba
 kernels, each thread's and process's FFTW plans; a pool's wheelsets are built anew for
@@ -183,15 +186,21 @@ def main() -> None:
     workers = [Worker(f"wheelsets-{j}") for j in range(max(args.threads, 1))]
     pools = {mode: rc.WheelsetPool([description(mode) for _ in POSITIONS], args.processes,
                                    reduce=fingerprint) for mode in modes}
-    ways = {"sequential": workers[:1], "threaded": workers, "processes": None}
+    hosts = {mode: rc.WheelsetPool([description(mode) for _ in POSITIONS], args.processes,
+                                   reduce=fingerprint, here=True) for mode in modes}
+    ways = {"sequential": workers[:1], "threaded": workers, "processes": None,
+            "host+workers": None}
     try:
         for mode in modes:  # numba kernels, each worker thread's and process's FFTW plans
             for j in range(len(workers)):
                 run(workers[j:j + 1], mode, 5)
             run_pool(pools[mode], 5)
+            run_pool(hosts[mode], 5)
         print(f"{os.cpu_count()} cores; four wheelsets (at {', '.join(f'{x:g}' for x in POSITIONS)}"
               f" m), {args.threads} worker threads in the threaded way, "
-              f"{pools[modes[0]].processes} worker processes in the processes way")
+              f"{pools[modes[0]].processes} worker processes in the processes way, this "
+              f"process and {hosts[modes[0]].processes - 1} worker(s) in the host+workers "
+              "way")
         for mode in modes:
             steps = args.steps if mode != "none" else args.cold_steps
             times = {w: [] for w in ways}
@@ -206,6 +215,8 @@ def main() -> None:
                 for way in order[r % len(order):] + order[:r % len(order)]:
                     if way == "processes":
                         t, c, results = run_pool(pools[mode], steps, split)
+                    elif way == "host+workers":
+                        t, c, results = run_pool(hosts[mode], steps)
                     else:
                         t, c, results = run(ways[way], mode, steps)
                     if reference is None:
@@ -219,17 +230,17 @@ def main() -> None:
             ref = float(np.median(workloads))
             print(f"\n{mode}: {args.repeats} repeats of {steps} vehicle steps of 1 ms, "
                   f"workload median {ref * 1e3:.1f} ms (min {min(workloads) * 1e3:.1f})")
-            print(f"{'way':<11} {'median [ms]':>11} {'/ workload':>10} {'mean [ms]':>9} "
+            print(f"{'way':<12} {'median [ms]':>11} {'/ workload':>10} {'mean [ms]':>9} "
                   f"{'/ workload':>10} {'p99 [ms]':>8} {'/ workload':>10} {'RTF 1 kHz':>9} "
                   f"{'CPU/wall':>8}")
             for way in ways:
                 x = np.array(times[way])
                 med, mean, p99 = float(np.median(x)), float(x.mean()), \
                     float(np.percentile(x, 99))
-                print(f"{way:<11} {med * 1e3:11.2f} {med / ref:10.4f} {mean * 1e3:9.2f} "
+                print(f"{way:<12} {med * 1e3:11.2f} {med / ref:10.4f} {mean * 1e3:9.2f} "
                       f"{mean / ref:10.4f} {p99 * 1e3:8.2f} {p99 / ref:10.4f} "
                       f"{med / 1e-3:9.2f} {float(np.median(cpu[way])):8.2f}")
-            for way in ("threaded", "processes"):
+            for way in ("threaded", "processes", "host+workers"):
                 ratios = np.array(medians[way]) / np.array(medians["sequential"])
                 print(f"ratio {way} / sequential: "
                       f"{np.median(times[way]) / np.median(times['sequential']):.3f} "
@@ -238,11 +249,12 @@ def main() -> None:
             print(f"processes: the wheelsets' solves in the workers {solves * 1e3:.2f}"
                   f" ms per vehicle step (sum, median); wall time beyond the busiest worker's "
                   f"solves {np.median(split['overhead']) * 1e3:.2f} ms (median)")
-            print("threaded and processes results equal the sequential ones bit for bit")
+            print("threaded, processes and host+workers results equal the sequential ones "
+                  "bit for bit")
     finally:
         for worker in workers:
             worker.stop()
-        for pool in pools.values():
+        for pool in (*pools.values(), *hosts.values()):
             pool.close()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
     print(f"\nload average (1 min) at the end: {load:.1f}")
