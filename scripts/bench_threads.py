@@ -30,8 +30,22 @@ could reach at best on two free cores, ``max(0.5, 1 - share)`` (the GIL-holding 
 the two runs cannot overlap). numpy's own loops, which release the GIL on large arrays,
 count as holding it here.
 
+What the shape of a step allows: ``--synthetic PYTHON_US,KERNEL_US,CALLS`` runs, instead
+of the wheelsets, two threads whose steps have the same shape - ``CALLS`` GIL-free calls of
+a compiled loop a step, ``KERNEL_US`` microseconds of them in all, each after its share of
+``PYTHON_US`` microseconds of a plain Python loop - against one after the other, and prints
+the ratio. A real step's Python reaches further into memory than such a loop (objects, their
+reference counts, allocations), so its ratio is at least the synthetic one; how far above
+it is what the Python itself costs on two threads, beyond the GIL. ``--synthetic
+P1:K1,P2:K2,...`` replays a step's own pattern instead: Python of ``Pi`` microseconds, then
+a GIL-free call of ``Ki`` (0: none), in turn (a real step's pattern: the Python before
+each of its long GIL-free calls and the call, as ``--profile``'s times and a timeline of
+one step give them).
+
 Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile]
                                       [--switch-interval SECONDS]
+                                      [--synthetic PYTHON_US,KERNEL_US,CALLS |
+                                       --synthetic P1:K1,P2:K2,...]
 """
 
 from __future__ import annotations
@@ -244,6 +258,98 @@ def profile(steps: int) -> None:
         print(f"{name:<40} {s / total:6.1%} {n / steps:10.1f} {s / n * 1e6:8.1f}")
 
 
+def _synthetic_kernel():
+    """A compiled loop that runs without the GIL (``n`` iterations)."""
+    import numba
+
+    @numba.njit(nogil=True)
+    def spin(n):
+        s = 0.0
+        for i in range(n):
+            s += (i % 7) * 1e-9
+        return s
+
+    return spin
+
+
+def _python_loop(n: int) -> int:
+    s = 0
+    for i in range(n):
+        s += i
+    return s
+
+
+def _per_microsecond(fn, n: int = 200_000) -> float:
+    """Iterations of ``fn(n)`` a microsecond (the best of five)."""
+    best = math.inf
+    for _ in range(5):
+        t0 = time.perf_counter()
+        fn(n)
+        best = min(best, time.perf_counter() - t0)
+    return n / (best * 1e6)
+
+
+def _pattern(shape: str) -> list[tuple[float, float]]:
+    """The (Python, GIL-free) microseconds of each stretch of a ``--synthetic`` shape:
+    "PYTHON_US,KERNEL_US,CALLS" (CALLS equal stretches) or "P1:K1,P2:K2,..."."""
+    try:
+        if ":" in shape:
+            pattern = [tuple(float(x) for x in part.split(":")) for part in shape.split(",")]
+            if not pattern or any(len(pk) != 2 for pk in pattern):
+                raise ValueError
+        else:
+            python_us, kernel_us, calls = (float(x) for x in shape.split(","))
+            if calls != int(calls) or calls < 1:
+                raise ValueError
+            pattern = [(python_us / calls, kernel_us / calls)] * int(calls)
+        if not all(p >= 0 and k >= 0 and math.isfinite(p + k) for p, k in pattern):
+            raise ValueError
+    except ValueError:
+        raise SystemExit("--synthetic takes PYTHON_US,KERNEL_US,CALLS or P1:K1,P2:K2,... "
+                         f"(microseconds >= 0, CALLS >= 1), got {shape!r}") from None
+    return pattern
+
+
+def synthetic(shape: str, steps: int, repeats: int) -> None:
+    """Two threads stepping a synthetic step of ``shape`` (:func:`_pattern`) against one
+    after the other; prints the ratio per repeat and its median."""
+    pattern = _pattern(shape)
+    python_us = sum(p for p, _ in pattern)
+    kernel_us = sum(k for _, k in pattern)
+    spin = _synthetic_kernel()
+    spin(10)
+    per_py, per_k = _per_microsecond(_python_loop), _per_microsecond(spin, 2_000_000)
+    counts = [(int(p * per_py), int(k * per_k)) for p, k in pattern]
+
+    def one() -> None:
+        for _ in range(steps):
+            for n_py, n_k in counts:
+                _python_loop(n_py)
+                if n_k:
+                    spin(n_k)
+
+    ratios = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        one()
+        one()
+        seq = time.perf_counter() - t0
+        threads = [threading.Thread(target=one) for _ in range(2)]
+        t0 = time.perf_counter()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        ratios.append((time.perf_counter() - t0) / seq)
+    step = seq / (2 * steps) * 1e6
+    calls = sum(1 for _, k in pattern if k > 0)
+    print(f"synthetic step: {python_us:g} us of Python and {kernel_us:g} us GIL-free in "
+          f"{calls} calls (measured one after the other: {step:.0f} us a step)")
+    print(f"ratio threaded / sequential per repeat: {', '.join(f'{r:.3f}' for r in ratios)}; "
+          f"median {np.median(ratios):.3f} (the GIL's bound max(0.5, Python share) = "
+          f"{max(0.5, python_us / (python_us + kernel_us)):.3f})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100)
@@ -252,7 +358,12 @@ def main() -> None:
                     "one run instead (where the time under the GIL remains)")
     ap.add_argument("--switch-interval", type=float, default=None, help="sys."
                     "setswitchinterval [s] for the run (Python's default: 0.005)")
+    ap.add_argument("--synthetic", metavar="PYTHON_US,KERNEL_US,CALLS", default=None,
+                    help="two threads of a synthetic step of this shape instead")
     args = ap.parse_args()
+    if args.synthetic is not None:
+        synthetic(args.synthetic, args.steps, args.repeats)
+        return
     if args.switch_interval is not None:
         sys.setswitchinterval(args.switch_interval)
     if args.profile:
