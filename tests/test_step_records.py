@@ -1,9 +1,9 @@
 """A time step's own records and the setups a contact keeps from step to step.
 
 A :class:`~railcontact.timestep.warmstart.PatchMemory` forms its boxes from its pressure
-(the next step's potential area starts from them). A contact keeps its wheels' setups (and their solver settings) for the
-settings it was given: a contact whose settings are replaced between steps must solve with
-the new ones, as a contact made with them does.
+(the next step's potential area starts from them). A contact keeps its wheels' setups (and
+their solver settings) for the settings it was given: a contact whose settings are replaced
+between steps must solve with the new ones, as a contact made with them does.
 """
 
 from __future__ import annotations
