@@ -311,6 +311,32 @@ def test_remesh_on_a_shared_lattice_is_the_interpolation():
             np.testing.assert_array_equal(both[k], remesh(v2[k], src, dst))
 
 
+def test_remesh_off_the_lattice_is_scipys_bilinear_interpolation():
+    """Off the lattice, remesh is bilinear interpolation between the source's element
+    centres and a ring of zeros half an element outside them, zero beyond: scipy's
+    RegularGridInterpolator on the padded nodes gives the same values (finer, coarser,
+    shifted and partly outside targets, a source of one element along an axis)."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    rng = np.random.default_rng(5)
+    outside = 0
+    for src, dst in [
+        (Grid(12, 9, 0.5e-3, 0.4e-3, -3e-3, 1e-3), Grid(30, 21, 0.23e-3, 0.19e-3, -4e-3, 0.3e-3)),
+        (Grid(40, 44, 1e-3, 1e-3, -20e-3, -21e-3), Grid(64, 72, 0.5e-3, 0.5e-3, -16e-3, -17e-3)),
+        (Grid(20, 22, 1e-3, 1e-3, 0.0, 0.0), Grid(10, 10, 2.1e-3, 2.3e-3, 0.7e-3, -5e-3)),
+        (Grid(1, 7, 1e-3, 1e-3, 0.0, 0.0), Grid(5, 9, 0.3e-3, 0.8e-3, -0.6e-3, -1e-3)),
+    ]:
+        v = rng.random(src.shape)
+        x = np.concatenate([[src.x[0] - src.dx / 2], src.x, [src.x[-1] + src.dx / 2]])
+        y = np.concatenate([[src.y[0] - src.dy / 2], src.y, [src.y[-1] + src.dy / 2]])
+        want = RegularGridInterpolator((x, y), np.pad(v, 1), bounds_error=False,
+                                       fill_value=0.0)(np.stack(dst.mesh(), axis=-1))
+        assert np.count_nonzero(want) > 0
+        outside += np.count_nonzero(want == 0)
+        np.testing.assert_allclose(remesh(v, src, dst), want, rtol=1e-12, atol=1e-15)
+    assert outside > 0  # (some targets beyond the ring)
+
+
 def test_infcon_in_the_reference_frame_between_two_lobes(root):
     """S1002/60E1 at +5.48 mm, 83.3 kN, in the frame at CONTACT's reference point: the
     tread and the flange root have joined into one patch of two lobes, its reference point

@@ -224,6 +224,16 @@ def _covers(outer: tuple[float, float, float, float],
                                        and ho <= (1 + 4 * KEEP_SLACK) * hi))
 
 
+def _resolves(grid: Grid, settings: GridSettings) -> bool:
+    """Whether an earlier pass's ``grid`` has the resolution ``settings`` ask for: their
+    element sizes (to round-off: a grid's is its extent over its count), or their element
+    counts where the sizes are not given (a probe pass's coarser grid is not kept)."""
+    if settings.dx is None or settings.dy is None:
+        return grid.nx == settings.nx and grid.ny == settings.ny
+    return (abs(grid.dx - settings.dx) <= 1e-9 * settings.dx
+            and abs(grid.dy - settings.dy) <= 1e-9 * settings.dy)
+
+
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
              pair: ElasticPair, loads: list[float] | None = None,
              estimate_for: EstimateFor | None = None,
@@ -298,8 +308,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             xl = grid.margin * math.sqrt(d0 / cp.A)
             ylo, yhi = cp.lateral_extent(d0, grid.margin)
             bounds = (-xl, xl, ylo, yhi)
-        keep = last is not None and _covers(last.normal.grid.bounds, bounds,
-                                            grid.dx is None or grid.dy is None)
+        keep = (last is not None and _resolves(last.normal.grid, grid)
+                and _covers(last.normal.grid.bounds, bounds, grid.dx is None or grid.dy is None))
         res, work = solve_patch_normal(gap_of, bounds, grid, normal, pair, control,
                                        est, grid=last.normal.grid if keep else None)
         if given or box_of is not None:
@@ -715,8 +725,11 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     overlap can grow faster with the approach than the vertical motion's normal share, and
     the plain iteration then swings). From Hertz's approach (a cold wheel: no ``previous``,
     no ``start``) the first pass is a probe of the approach, solved to a looser normal
-    tolerance (:func:`~.loadloop.probe_settings`) and always followed by a pass at the full
-    one. Without ``reference``: one force-controlled solve at the rigid point."""
+    tolerance (:func:`~.loadloop.probe_settings`) and always followed by a pass at the
+    full one. A probe without an estimate to start from is solved on a coarser grid; the
+    frame formed at its approach, an estimate as an earlier solve's, then serves within
+    :data:`WARM_REFERENCE_RTOL`. Without ``reference``: one force-controlled solve at the
+    rigid point."""
     if not reference:
         cosg = math.cos(first.contact_angle)
         single = _patches([first], found.wheelset, 0.0, settings, pair, loads=[q / cosg],
@@ -755,6 +768,8 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
             break  # no reference point to form: the rigid point's patch is the answer
         if abs(new - approach) <= rtol * new and not probe:
             break
+        if probe and ps and not _resolves(ps[0].normal.grid, settings.grid):
+            rtol = WARM_REFERENCE_RTOL  # (a coarse probe's approach: an estimate)
         probe = False
         tried.append((approach, new - approach))
         last = ps

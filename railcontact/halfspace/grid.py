@@ -161,23 +161,75 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
             if total > 0:
                 out *= v.sum() * source.element_area / total
         return out
-    from scipy.interpolate import RegularGridInterpolator  # (only off the lattice)
+    if method == "linear":  # (one compiled pass)
+        out = _bilinear(v, float(source.x0), float(source.dx), float(source.y0),
+                        float(source.dy), target.nx, target.ny, float(target.x0),
+                        float(target.dx), float(target.y0), float(target.dy))
+    else:
+        from scipy.interpolate import RegularGridInterpolator  # (off the lattice only)
 
-    # pad with a ring of zeros half an element outside, so the field falls to zero at the
-    # edge of the source grid instead of stopping at its outer element centres
-    x = np.concatenate([[source.x[0] - source.dx / 2], source.x, [source.x[-1] + source.dx / 2]])
-    y = np.concatenate([[source.y[0] - source.dy / 2], source.y, [source.y[-1] + source.dy / 2]])
-    vp = np.pad(v, 1)
-    interp = RegularGridInterpolator((x, y), vp, method=method, bounds_error=False,
-                                     fill_value=0.0)
-    X, Y = target.mesh()
-    out = interp(np.stack([X, Y], axis=-1))
+        # pad with a ring of zeros half an element outside, so the field falls to zero at
+        # the edge of the source grid instead of stopping at its outer element centres
+        x = np.concatenate([[source.x[0] - source.dx / 2], source.x,
+                            [source.x[-1] + source.dx / 2]])
+        y = np.concatenate([[source.y[0] - source.dy / 2], source.y,
+                            [source.y[-1] + source.dy / 2]])
+        interp = RegularGridInterpolator((x, y), np.pad(v, 1), method=method,
+                                         bounds_error=False, fill_value=0.0)
+        X, Y = target.mesh()
+        out = interp(np.stack([X, Y], axis=-1))
     if conserve:
         total = out.sum() * target.element_area
         want = v.sum() * source.element_area
         if total > 0:
             out *= want / total
     return out
+
+
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
+def _bilinear(v, sx0, sdx, sy0, sdy, nx, ny, tx0, tdx, ty0, tdy):  # pragma: no cover
+    """The field ``v`` (source grid: centres ``sx0 + i sdx``, ``sy0 + j sdy``) at the
+    element centres of the target grid (``nx`` x ``ny``, ``tx0``, ``tdx``, ``ty0``,
+    ``tdy``), bilinear between the source's centres and a ring of zeros half an element
+    outside them (the field falls to zero at the source grid's edge), zero beyond it."""
+    mx, my = v.shape
+    out = np.zeros((nx, ny))
+    ia = np.empty(ny, dtype=np.int64)  # per target column: the source columns' node
+    fa = np.empty(ny)  # and the weight of the upper one (node -1, my: the zero ring)
+    for b in range(ny):
+        ia[b], fa[b] = _node(ty0 + b * tdy, sy0, sdy, my)
+    for a in range(nx):
+        i, fx = _node(tx0 + a * tdx, sx0, sdx, mx)
+        if i < -1:
+            continue
+        for b in range(ny):
+            j, fy = ia[b], fa[b]
+            if j < -1:
+                continue
+            v00 = v[i, j] if i >= 0 and j >= 0 else 0.0
+            v01 = v[i, j + 1] if i >= 0 and j + 1 < my else 0.0
+            v10 = v[i + 1, j] if i + 1 < mx and j >= 0 else 0.0
+            v11 = v[i + 1, j + 1] if i + 1 < mx and j + 1 < my else 0.0
+            out[a, b] = ((1.0 - fx) * ((1.0 - fy) * v00 + fy * v01)
+                         + fx * ((1.0 - fy) * v10 + fy * v11))
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _node(t, s0, ds, m):  # pragma: no cover - compiled
+    """The source node below the coordinate ``t`` [m] and the weight of the one above:
+    nodes at the ``m`` centres ``s0 + k ds`` (k = 0 .. m - 1) and the zero ring at
+    ``-1/2`` and ``m - 1/2`` elements (reported as nodes -1 and m - 1 with the weight
+    over that half element); ``(-2, 0)`` outside the ring."""
+    r = (t - s0) / ds
+    if not (r >= -0.5 and r <= m - 0.5):
+        return -2, 0.0
+    if r < 0.0:  # between the ring and the first centre
+        return -1, (r + 0.5) / 0.5
+    if r >= m - 1:  # between the last centre and the ring
+        return m - 1, (r - (m - 1)) / 0.5
+    k = min(int(math.floor(r)), m - 2)
+    return k, r - k
 
 
 def _lattice_shift(source: Grid, target: Grid) -> tuple[int, int] | None:
