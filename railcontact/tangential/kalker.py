@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -69,6 +70,15 @@ def _interp_nu(c: np.ndarray, nu: float) -> np.ndarray:
     return 1.0 / inv
 
 
+@lru_cache(maxsize=8)
+def _rows(a_le_b: bool, nu: float) -> np.ndarray:
+    """The table of ``a <= b`` (else ``a >= b``) at Poisson's ratio ``nu``
+    (:func:`_interp_nu`), one row per coefficient (4, 10), formed once per ratio."""
+    rows = _interp_nu(_A_LE_B if a_le_b else _A_GE_B, nu).T.copy()
+    rows.flags.writeable = False
+    return rows
+
+
 def _asymptote(g: float, nu: float, a_le_b: bool) -> np.ndarray:
     """Kalker's slender-ellipse asymptotes (g < 0.1); C33 by table extrapolation."""
     if a_le_b:  # a << b
@@ -103,10 +113,9 @@ def creep_coefficients(a: float, b: float, poisson: float) -> CreepCoefficients:
         raise RailContactError(f"poisson must lie in [0, 0.5], got {poisson!r}")
     a_le_b = a <= b
     g = a / b if a_le_b else b / a
-    table = _A_LE_B if a_le_b else _A_GE_B
     if g < 0.1:
         c = _asymptote(g, nu, a_le_b)
     else:
-        rows = _interp_nu(table, nu)  # (10, 4)
-        c = np.array([np.interp(g, _G, rows[:, k]) for k in range(4)])
+        rows = _rows(a_le_b, nu)  # (4, 10)
+        c = np.array([np.interp(g, _G, rows[k]) for k in range(4)])
     return CreepCoefficients(*map(float, c))

@@ -19,7 +19,7 @@ from time import perf_counter
 
 from ..contact.loadloop import charge, vertical_approach, vertical_creep_estimate
 from ..contact.patch import normal_estimate, solve_patch_tangential
-from ..contact.start import NormalStart, WarmStart
+from ..contact.start import NormalStart, WarmStart, no_start
 from ..contact.wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution
 from ..contact.wheelrail import solve_wheel, solve_wheel_normal, wheel_problem
 from ..errors import RailContactError, SolverError
@@ -261,8 +261,11 @@ class PatchStart:
         """The settings' estimate (a patch without a remembered one, or one whose
         remembered pressure is gone)."""
         of = self.of
-        return normal_estimate(of.settings.normal_settings, self.hertz(),
-                               *samples(self.cp)[:3], of.pair, self.ctrl)
+        settings = of.settings.normal_settings
+        if settings.estimate == "none":  # (normal_estimate's answer, without its inputs)
+            return no_start("none")
+        return normal_estimate(settings, self.hertz(), *samples(self.cp)[:3], of.pair,
+                               self.ctrl)
 
     def pressure_on(self, grid: Grid) -> NormalStart:
         """The remembered pressure extrapolated onto ``grid``, with its ``A p`` when the
