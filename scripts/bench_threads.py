@@ -42,10 +42,17 @@ a GIL-free call of ``Ki`` (0: none), in turn (a real step's pattern: the Python 
 each of its long GIL-free calls and the call, as ``--profile``'s times and a timeline of
 one step give them).
 
+What a hand-over costs: ``--handoff`` times a ping-pong between two threads (two
+semaphores; after its turn each thread works 0, 20 or 100 us without the GIL), whose round
+trip is that work and two hand-overs, each a thread blocked on a lock woken by the other and
+taking the GIL, as at a GIL hand-over between two stepping wheelsets. On a virtual machine
+whose idle cores halt (Linux's cpuidle ``haltpoll`` with ``guest_halt_poll_ns`` 0, printed
+when present) a core that waited longer wakes slower.
+
 Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile]
                                       [--switch-interval SECONDS]
                                       [--synthetic PYTHON_US,KERNEL_US,CALLS |
-                                       --synthetic P1:K1,P2:K2,...]
+                                       --synthetic P1:K1,P2:K2,... | --handoff]
 """
 
 from __future__ import annotations
@@ -60,6 +67,7 @@ import sys
 import threading
 import time
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 
@@ -350,6 +358,50 @@ def synthetic(shape: str, steps: int, repeats: int) -> None:
           f"{max(0.5, python_us / (python_us + kernel_us)):.3f})")
 
 
+def _answer(ping, pong, spin, k: int, exchanges: int) -> None:
+    """The other side of :func:`handoff`'s ping-pong."""
+    for _ in range(exchanges):
+        ping.acquire()
+        pong.release()
+        spin(k)
+
+
+HANDOFF_WAITS = (0.0, 20.0, 100.0)
+"""Microseconds each thread works without the GIL between two hand-overs (``--handoff``)."""
+
+
+def handoff(exchanges: int) -> None:
+    """The latency of a hand-over between two threads of this process: a ping-pong of
+    two semaphores, each thread working :data:`HANDOFF_WAITS` microseconds without the
+    GIL after its turn; a round trip is that work and two hand-overs (a thread blocked on
+    a lock woken by the other, then taking the GIL), as a GIL hand-over between two
+    stepping wheelsets is. Prints the hand-over's median over five runs for each wait."""
+    spin = _synthetic_kernel()
+    spin(10)
+    per_k = _per_microsecond(spin, 2_000_000)
+    poll = Path("/sys/module/haltpoll/parameters/guest_halt_poll_ns")
+    if poll.exists():
+        print(f"guest halt polling (cpuidle haltpoll): {poll.read_text().strip()} ns")
+    for wait in HANDOFF_WAITS:
+        k = int(wait * per_k)
+        runs = []
+        for _ in range(5):
+            ping, pong = threading.Semaphore(0), threading.Semaphore(0)
+
+            t = threading.Thread(target=_answer, args=(ping, pong, spin, k, exchanges))
+            t.start()
+            t0 = time.perf_counter()
+            for _ in range(exchanges):
+                ping.release()
+                pong.acquire()
+                spin(k)
+            elapsed = time.perf_counter() - t0
+            t.join()
+            runs.append((elapsed / exchanges * 1e6 - wait) / 2)
+        print(f"work {wait:5.0f} us between hand-overs: a hand-over takes "
+              f"{np.median(runs):6.1f} us (runs {min(runs):.1f}-{max(runs):.1f})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100)
@@ -360,7 +412,12 @@ def main() -> None:
                     "setswitchinterval [s] for the run (Python's default: 0.005)")
     ap.add_argument("--synthetic", metavar="PYTHON_US,KERNEL_US,CALLS", default=None,
                     help="two threads of a synthetic step of this shape instead")
+    ap.add_argument("--handoff", action="store_true", help="the latency of a hand-over "
+                    "between two threads instead (a ping-pong; --steps exchanges x 100)")
     args = ap.parse_args()
+    if args.handoff:
+        handoff(100 * args.steps)
+        return
     if args.synthetic is not None:
         synthetic(args.synthetic, args.steps, args.repeats)
         return
