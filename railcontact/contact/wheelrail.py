@@ -234,6 +234,27 @@ def _resolves(grid: Grid, settings: GridSettings) -> bool:
             and abs(grid.dy - settings.dy) <= 1e-9 * settings.dy)
 
 
+PROBE_MARGIN_ELEMENTS = 1
+"""Elements of a coarse probe's grid added on each side of its contact box for the potential
+area of the full pass after it (:func:`_probed_area`)."""
+
+
+def _probed_area(probe) -> tuple[float, float, float, float]:
+    """The potential area (xmin, xmax, ymin, ymax) [m] of the full pass after a coarse
+    probe: the box of the probe's contact widened by :data:`PROBE_MARGIN_ELEMENTS` of its
+    elements and 5 % of its extent a side. The frames of the two passes differ (the full
+    pass's is formed at the probe's approach), so the area is checked against the rigid
+    overlap after the solve and grown where the contact may reach beyond it
+    (:func:`_overlap_covered`), as a time step's is."""
+    g = probe.grid
+    i0, i1, j0, j1 = probe.contact_box
+    x0, x1 = g.x0 + (i0 - 0.5) * g.dx, g.x0 + (i1 - 0.5) * g.dx
+    y0, y1 = g.y0 + (j0 - 0.5) * g.dy, g.y0 + (j1 - 0.5) * g.dy
+    mx = PROBE_MARGIN_ELEMENTS * g.dx + 0.05 * (x1 - x0)
+    my = PROBE_MARGIN_ELEMENTS * g.dy + 0.05 * (y1 - y0)
+    return (x0 - mx, x1 + mx, y0 - my, y1 + my)
+
+
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
              pair: ElasticPair, loads: list[float] | None = None,
              estimate_for: EstimateFor | None = None,
@@ -243,7 +264,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
     [m], or carrying the normal ``loads`` [N] (one per point).
 
     Each solution is checked against the patch's rigid overlap (:func:`_overlap_covered`):
-    on a potential area an estimate gave (a time step's), and with ``box_of`` (the box
+    on a potential area an estimate gave (a time step's) or a coarse probe's contact
+    (:func:`_probed_area`), and with ``box_of`` (the box
     around the patch's overlap with the wheel's run of vertical overlap at an approach,
     :func:`~railcontact.geometry.points.overlap_box_on_run`) on every area, so that a
     second lobe of the run that the patch's plane shows apart is not left out.
@@ -299,6 +321,10 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         # rigid overlap's, with the margin
         bounds = est.bounds
         given = bool(bounds)  # (a time step's: where the contact was, checked after)
+        if (not bounds and last is not None and last.normal.contact_box is not None
+                and not _resolves(last.normal.grid, grid)):  # (after a coarse probe)
+            bounds = _probed_area(last.normal)
+            given = True  # (checked after, as a time step's)
         if not bounds:
             if loads is not None:
                 hz = hz or hertz(cp.A, cp.B, pair, **kwargs)
