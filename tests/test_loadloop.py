@@ -10,6 +10,7 @@ import pytest
 import railcontact as rc
 import railcontact.contact.patch as patch_module
 from railcontact.contact.loadloop import (
+    PROBE_COARSENING,
     PROBE_FACTOR,
     probe_settings,
     vertical_creep_estimate,
@@ -101,6 +102,56 @@ def test_a_cold_wheel_probes_its_frame_and_ends_at_the_full_tolerance(monkeypatc
     for w, v in zip(r.wheels, ref.wheels, strict=True):
         assert w.approach == pytest.approx(v.approach, rel=10 * tol)
         assert w.max_pressure == pytest.approx(v.max_pressure, rel=10 * tol)
+
+
+@pytest.mark.parametrize("lateral", [1e-3, 6e-3])  # tread; flange root
+def test_a_probe_without_an_estimate_is_coarse_and_the_answer_is_the_full_grids(
+        monkeypatch, lateral):
+    """Without an estimate the probe is solved on elements PROBE_COARSENING times as large,
+    the full pass on the full grid (on the probe's contact box, checked against the rigid
+    overlap); the answer is that of solving without the coarse probe, to the solvers'
+    tolerance. With the INFCON estimate the probe stays on the full grid."""
+    sizes: list[tuple[float, float]] = []
+    normal = patch_module.solve_normal
+
+    def logged(gap, grid, op, **kwargs):
+        sizes.append((grid.dx, kwargs["tolerance"]))
+        return normal(gap, grid, op, **kwargs)
+
+    monkeypatch.setattr(patch_module, "solve_normal", logged)
+    h = 0.5e-3
+    kin = rc.Kinematics(30.0, 0.02)
+    r = wheelset(element_size=h, warm_start="none").solve(rc.Pose(lateral), loads=(Q, Q),
+                                                          kinematics=kin)
+    assert r.status == 0
+    tol = wheelset(element_size=h).settings.normal_tolerance
+    probes = [dx for dx, t in sizes if t == PROBE_FACTOR * tol]
+    full = [dx for dx, t in sizes if t == tol]
+    assert len(probes) == 2 and full  # one probe a wheel
+    assert probes == pytest.approx([PROBE_COARSENING * h] * 2, rel=1e-9)
+    assert full == pytest.approx([h] * len(full), rel=1e-9)
+
+    sizes.clear()
+    assert wheelset(element_size=h, warm_start="estimate").solve(
+        rc.Pose(lateral), loads=(Q, Q), kinematics=kin).status == 0
+    assert [dx for dx, _ in sizes] == pytest.approx([h] * len(sizes), rel=1e-9)
+
+    monkeypatch.setattr(patch_module, "solve_normal", normal)
+    monkeypatch.setattr("railcontact.contact.loadloop.PROBE_COARSENING", 1)
+    from railcontact.contact.loadloop import _probe_settings
+    _probe_settings.cache_clear()
+    try:
+        ref = wheelset(element_size=h, warm_start="none").solve(rc.Pose(lateral),
+                                                                loads=(Q, Q), kinematics=kin)
+    finally:
+        _probe_settings.cache_clear()
+    for w, v in zip(r.wheels, ref.wheels, strict=True):
+        assert w.approach == pytest.approx(v.approach, rel=1e-4)
+        assert w.max_pressure == pytest.approx(v.max_pressure, rel=tol)
+        mu_n = MU * v.normal_force
+        assert abs(w.normal_force - v.normal_force) < 1e-4 * v.normal_force
+        df = max(abs(a - b) for a, b in zip(w.creep_force, v.creep_force, strict=True))
+        assert df < 1e-3 * mu_n
 
 
 def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):
