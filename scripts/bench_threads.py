@@ -370,12 +370,13 @@ HANDOFF_WAITS = (0.0, 20.0, 100.0)
 """Microseconds each thread works without the GIL between two hand-overs (``--handoff``)."""
 
 
-def handoff(exchanges: int) -> None:
+def handoff(exchanges: int, repeats: int) -> None:
     """The latency of a hand-over between two threads of this process: a ping-pong of
     two semaphores, each thread working :data:`HANDOFF_WAITS` microseconds without the
     GIL after its turn; a round trip is that work and two hand-overs (a thread blocked on
     a lock woken by the other, then taking the GIL), as a GIL hand-over between two
-    stepping wheelsets is. Prints the hand-over's median over five runs for each wait."""
+    stepping wheelsets is. Prints the hand-over's median over ``repeats`` runs for each
+    wait."""
     spin = _synthetic_kernel()
     spin(10)
     per_k = _per_microsecond(spin, 2_000_000)
@@ -385,7 +386,7 @@ def handoff(exchanges: int) -> None:
     for wait in HANDOFF_WAITS:
         k = int(wait * per_k)
         runs = []
-        for _ in range(5):
+        for _ in range(repeats):
             ping, pong = threading.Semaphore(0), threading.Semaphore(0)
 
             t = threading.Thread(target=_answer, args=(ping, pong, spin, k, exchanges))
@@ -413,10 +414,11 @@ def main() -> None:
     ap.add_argument("--synthetic", metavar="PYTHON_US,KERNEL_US,CALLS", default=None,
                     help="two threads of a synthetic step of this shape instead")
     ap.add_argument("--handoff", action="store_true", help="the latency of a hand-over "
-                    "between two threads instead (a ping-pong; --steps exchanges x 100)")
+                    "between two threads instead (a ping-pong of --steps x 100 exchanges, "
+                    "--repeats runs)")
     args = ap.parse_args()
     if args.handoff:
-        handoff(100 * args.steps)
+        handoff(100 * args.steps, args.repeats)
         return
     if args.synthetic is not None:
         synthetic(args.synthetic, args.steps, args.repeats)

@@ -78,8 +78,8 @@ def test_cold_step_meets_the_load_near_the_estimated_share(lateral):
 def test_a_cold_wheel_probes_its_frame_and_ends_at_the_full_tolerance(monkeypatch):
     """The first normal solve of a cold wheel in the reference frame is a probe at
     PROBE_FACTOR times the normal tolerance; every later solve, the one reported among
-    them, is at the full tolerance; the result is the one without a probe to that
-    tolerance."""
+    them, is at the full tolerance; the result is the one without a probe (a probe at the
+    full tolerance on the full grid) to that tolerance."""
     tolerances: list[float] = []
     normal = patch_module.solve_normal
 
@@ -98,6 +98,8 @@ def test_a_cold_wheel_probes_its_frame_and_ends_at_the_full_tolerance(monkeypatc
     assert len(tolerances) == sum(w.load_passes for w in r.wheels)
 
     monkeypatch.setattr("railcontact.contact.loadloop.PROBE_FACTOR", 1.0)
+    monkeypatch.setattr("railcontact.contact.loadloop.PROBE_COARSENING", 1)
+    assert probe_settings(wc.settings.patch_settings).normal.tolerance == tol
     ref = wheelset(element_size=1e-3, warm_start="none").solve(rc.Pose(1e-3), loads=(Q, Q))
     for w, v in zip(r.wheels, ref.wheels, strict=True):
         assert w.approach == pytest.approx(v.approach, rel=10 * tol)
@@ -138,13 +140,8 @@ def test_a_probe_without_an_estimate_is_coarse_and_the_answer_is_the_full_grids(
 
     monkeypatch.setattr(patch_module, "solve_normal", normal)
     monkeypatch.setattr("railcontact.contact.loadloop.PROBE_COARSENING", 1)
-    from railcontact.contact.loadloop import _probe_settings
-    _probe_settings.cache_clear()
-    try:
-        ref = wheelset(element_size=h, warm_start="none").solve(rc.Pose(lateral),
-                                                                loads=(Q, Q), kinematics=kin)
-    finally:
-        _probe_settings.cache_clear()
+    ref = wheelset(element_size=h, warm_start="none").solve(rc.Pose(lateral), loads=(Q, Q),
+                                                            kinematics=kin)
     for w, v in zip(r.wheels, ref.wheels, strict=True):
         assert w.approach == pytest.approx(v.approach, rel=1e-4)
         assert w.max_pressure == pytest.approx(v.max_pressure, rel=tol)
@@ -152,6 +149,43 @@ def test_a_probe_without_an_estimate_is_coarse_and_the_answer_is_the_full_grids(
         assert abs(w.normal_force - v.normal_force) < 1e-4 * v.normal_force
         df = max(abs(a - b) for a, b in zip(w.creep_force, v.creep_force, strict=True))
         assert df < 1e-3 * mu_n
+
+
+@pytest.mark.parametrize("grid", [{"dx": 0.5e-3, "dy": 0.5e-3}, {"nx": 64, "ny": 64},
+                                  {"dx": 0.5e-3, "ny": 40}])  # sizes, counts, mixed
+@pytest.mark.parametrize("lateral", [-2e-3, 6e-3])
+def test_the_coarse_probe_keeps_estimate_starts_and_the_elements(root, monkeypatch, grid,
+                                                                   lateral):
+    """A wheel-rail case under load control (``railcontact.solve``), against the same case
+    without the coarse probe (PROBE_COARSENING = 1): started from INFCON, the same bits
+    (a probe that starts from a pressure stays on the full grid); without an estimate,
+    the final patch's elements within 0.2 % of the same size (given counts: meshed on
+    the cold pass's area, not on the probe's contact) and its penetration and largest
+    pressure within the normal tolerance."""
+    import copy
+
+    import numpy as np
+
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
+    base["grid"] = dict(grid)
+    base["geometry"]["lateral_displacement"] = lateral
+    for estimate in ("infcon", "none"):
+        case = copy.deepcopy(base)
+        case["normal"]["estimate"] = estimate
+        monkeypatch.setattr("railcontact.contact.loadloop.PROBE_COARSENING", 2)
+        got = rc.solve(case).patches[0].normal
+        monkeypatch.setattr("railcontact.contact.loadloop.PROBE_COARSENING", 1)
+        want = rc.solve(case).patches[0].normal
+        if estimate == "infcon":
+            assert got.grid == want.grid
+            assert np.array_equal(got.pressure, want.pressure)
+            assert got.iterations == want.iterations
+            continue
+        tol = case["normal"]["tolerance"]
+        assert got.grid.dx == pytest.approx(want.grid.dx, rel=2e-3)
+        assert got.grid.dy == pytest.approx(want.grid.dy, rel=2e-3)
+        assert got.penetration == pytest.approx(want.penetration, rel=tol)
+        assert got.max_pressure == pytest.approx(want.max_pressure, rel=tol)
 
 
 def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):

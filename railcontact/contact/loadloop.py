@@ -23,7 +23,7 @@ from ..errors import RailContactError, SolverError
 from ..geometry.points import ContactPoint
 from ..halfspace.hertz import hertz
 from ..halfspace.materials import ElasticPair
-from ..settings import Control, PatchSettings
+from ..settings import Control, GridSettings, PatchSettings
 from ..settings.friction import FrictionTable, friction_at_point
 from ..status import Status
 from ..tangential.kalker import creep_coefficients
@@ -58,41 +58,48 @@ on ``scripts/bench_step.py``, the same passes; 30 makes more passes."""
 PROBE_TOLERANCE = 1e-2
 """The loosest normal tolerance of a probe pass."""
 PROBE_COARSENING = 2
-"""A probe pass without an estimate to start from (``[normal] estimate = "none"``, a time
-step's ``warm_start = "none"``) is solved on elements this many times as large along each
-axis (a quarter of the elements; given element counts: that many times fewer). From the
-uniform start its CG takes about ten iterations, each a fifth of a full grid's. On
-``scripts/bench_step.py``'s cold run (S1002 on 60E1, 0.5 mm elements) its approach is
-within 0.17 % of the full grid's (0.08 % at the median), so that the full grid's frame,
-formed there, mostly serves (:data:`~.wheelrail.WARM_REFERENCE_RTOL`), and the normal
-BEM's time falls by half (2.8 to 1.5 ms a step) with the same passes; the pass after it
-starts from its pressure interpolated onto the full grid. A probe started from an
-estimate (INFCON, KP, Hertz) takes a few iterations on the full grid and stays there: its
-iteration counts are those the estimate is judged by."""
+"""A probe pass whose start gives no pressure (no estimate: ``[normal] estimate = "none"``,
+a time step's cold ``warm_start = "none"`` or ``"previous"``) is solved on elements this
+many times as large along each axis (:func:`probe_grid`: a quarter of the elements; given
+element counts, that many times fewer). From the uniform start its CG takes about ten
+iterations, each a fifth of a full grid's. On ``scripts/bench_step.py``'s cold run (S1002
+on 60E1, 0.5 mm elements) its approach is within 0.17 % of the full grid's (0.08 % at the
+median), and the pass after it starts from its pressure interpolated onto the full grid.
+A probe started from a pressure (an estimate, a table's previous point) takes a few
+iterations on the full grid and stays there."""
 
 
 def probe_settings(settings: PatchSettings) -> PatchSettings:
-    """``settings`` with the normal tolerance (:data:`PROBE_FACTOR`) and, without an
-    estimate, the grid (:data:`PROBE_COARSENING`) of a probe pass; formed once per
-    settings."""
+    """``settings`` with the normal tolerance of a probe pass (:data:`PROBE_FACTOR`, at most
+    :data:`PROBE_TOLERANCE`); formed once per settings (and constants)."""
     try:
-        return _probe_settings(settings)
+        hash(settings)
     except TypeError:  # (settings that do not hash: formed each time)
-        return _probe_settings.__wrapped__(settings)
+        return _probe_settings(settings, PROBE_FACTOR, PROBE_TOLERANCE)
+    return _probe_settings_cached(settings, PROBE_FACTOR, PROBE_TOLERANCE)
+
+
+def _probe_settings(settings: PatchSettings, factor: float, loosest: float) -> PatchSettings:
+    tol = settings.normal.tolerance
+    probe = max(min(factor * tol, loosest), tol)
+    return replace(settings, normal=replace(settings.normal, tolerance=probe))
+
+
+_probe_settings_cached = lru_cache(maxsize=64)(_probe_settings)
+
+
+def probe_grid(grid: GridSettings) -> GridSettings:
+    """The grid of a probe pass whose start gives no pressure: ``grid`` with elements
+    :data:`PROBE_COARSENING` times as large (element sizes) or that many times fewer
+    (element counts) along each axis; formed once per grid (and constant)."""
+    return _probe_grid(grid, PROBE_COARSENING)
 
 
 @lru_cache(maxsize=64)
-def _probe_settings(settings: PatchSettings) -> PatchSettings:
-    tol = settings.normal.tolerance
-    probe = max(min(PROBE_FACTOR * tol, PROBE_TOLERANCE), tol)
-    normal = replace(settings.normal, tolerance=probe)
-    if settings.normal.estimate != "none":
-        return replace(settings, normal=normal)
-    g, c = settings.grid, PROBE_COARSENING
-    grid = replace(g, nx=max(2, g.nx // c), ny=max(2, g.ny // c),
-                   dx=None if g.dx is None else c * g.dx,
-                   dy=None if g.dy is None else c * g.dy)
-    return replace(settings, normal=normal, grid=grid)
+def _probe_grid(grid: GridSettings, c: int) -> GridSettings:
+    return replace(grid, nx=max(2, grid.nx // c), ny=max(2, grid.ny // c),
+                   dx=None if grid.dx is None else c * grid.dx,
+                   dy=None if grid.dy is None else c * grid.dy)
 
 
 def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float, float, float],

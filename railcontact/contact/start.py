@@ -92,6 +92,12 @@ class WarmStart:
     bounds: Bounds | None = None
     traction_on: Callable[[Grid], TangentialStart | None] = _no_traction
 
+    @property
+    def gives_pressure(self) -> bool:
+        """Whether the start gives a pressure (else the BEM starts from its own uniform
+        one: :func:`no_start`)."""
+        return self.pressure_on is not _no_pressure
+
 
 def no_start(label: str) -> WarmStart:
     """A start that gives no pressure and no traction, labelled ``label`` (e.g. why)."""

@@ -76,6 +76,7 @@ from ..halfspace.hertz import (
     semi_axis_bound,
 )
 from ..halfspace.materials import ElasticPair
+from ..normal import NormalResult
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
 from ..settings.convention import side_creepage
 from ..settings.friction import FrictionTable, friction_at_point, row_friction, side_friction
@@ -86,6 +87,7 @@ from .loadloop import (
     creep_load,
     first_root,
     other_root,
+    probe_grid,
     probe_settings,
     vertical_approach,
     vertical_force,
@@ -144,7 +146,8 @@ WARM_REFERENCE_RTOL = 1e-3
 of 1e-3 in the approach moves the reference point by at most 2.3 um (under 0.005 of a
 0.5 mm element), its contact angle by at most 3.3e-5 rad and its rolling radius by at most
 0.3 um (S1002 on 60E1 at 1:40, approaches 50-120 um, lateral 0, 3, 5 and 7 mm; most at the
-flange root), so one pass serves a warm time step."""
+flange root), so one pass serves a warm time step. At most this also for a frame formed at
+a coarse probe's approach (:func:`_frame_rtol`)."""
 MAX_REFERENCE_PASSES = 6
 """Solves of a single-patch wheel at most, each with its frame formed again at the approach
 of the one before."""
@@ -224,48 +227,57 @@ def _covers(outer: tuple[float, float, float, float],
                                        and ho <= (1 + 4 * KEEP_SLACK) * hi))
 
 
-def _resolves(grid: Grid, settings: GridSettings) -> bool:
-    """Whether an earlier pass's ``grid`` has the resolution ``settings`` ask for: their
-    element sizes (to round-off: a grid's is its extent over its count), or their element
-    counts where the sizes are not given (a probe pass's coarser grid is not kept)."""
-    if settings.dx is None or settings.dy is None:
-        return grid.nx == settings.nx and grid.ny == settings.ny
-    return (abs(grid.dx - settings.dx) <= 1e-9 * settings.dx
-            and abs(grid.dy - settings.dy) <= 1e-9 * settings.dy)
-
-
 PROBE_MARGIN_ELEMENTS = 1
 """Elements of a coarse probe's grid added on each side of its contact box for the potential
 area of the full pass after it (:func:`_probed_area`)."""
+PROBE_MARGIN_SHARE = 0.05
+"""Share of the probe's contact extent added on each side as well (as a time step's area,
+:data:`~railcontact.timestep.warmstart.AREA_MARGIN_SHARE`)."""
 
 
-def _probed_area(probe) -> tuple[float, float, float, float]:
+def _probed_area(probe: NormalResult) -> tuple[float, float, float, float]:
     """The potential area (xmin, xmax, ymin, ymax) [m] of the full pass after a coarse
-    probe: the box of the probe's contact widened by :data:`PROBE_MARGIN_ELEMENTS` of its
-    elements and 5 % of its extent a side. The frames of the two passes differ (the full
-    pass's is formed at the probe's approach), so the area is checked against the rigid
-    overlap after the solve and grown where the contact may reach beyond it
-    (:func:`_overlap_covered`), as a time step's is."""
+    probe whose solution is ``probe``: the box of its contact widened by
+    :data:`PROBE_MARGIN_ELEMENTS` of its elements and :data:`PROBE_MARGIN_SHARE` of its
+    extent a side. The frames of the two passes differ (the full pass's is formed at the
+    probe's approach), so the area is checked against the rigid overlap after the solve
+    and grown where the contact may reach beyond it (:func:`_overlap_covered`), as a time
+    step's is. Used only for grids of given element sizes, whose answer does not depend
+    on the area (a grid of given counts would get finer elements)."""
     g = probe.grid
     i0, i1, j0, j1 = probe.contact_box
     x0, x1 = g.x0 + (i0 - 0.5) * g.dx, g.x0 + (i1 - 0.5) * g.dx
     y0, y1 = g.y0 + (j0 - 0.5) * g.dy, g.y0 + (j1 - 0.5) * g.dy
-    mx = PROBE_MARGIN_ELEMENTS * g.dx + 0.05 * (x1 - x0)
-    my = PROBE_MARGIN_ELEMENTS * g.dy + 0.05 * (y1 - y0)
+    mx = PROBE_MARGIN_ELEMENTS * g.dx + PROBE_MARGIN_SHARE * (x1 - x0)
+    my = PROBE_MARGIN_ELEMENTS * g.dy + PROBE_MARGIN_SHARE * (y1 - y0)
     return (x0 - mx, x1 + mx, y0 - my, y1 + my)
+
+
+def _frame_rtol(tolerance: float) -> float:
+    """The relative change of the approach within which a frame formed after a coarse
+    probe serves: the normal ``tolerance``, at least :data:`REFERENCE_RTOL` and at most
+    :data:`WARM_REFERENCE_RTOL` (the probe's approach is an estimate, as an earlier
+    solve's; a tight solve keeps the cold frame tolerance)."""
+    return min(WARM_REFERENCE_RTOL, max(REFERENCE_RTOL, tolerance))
 
 
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
              pair: ElasticPair, loads: list[float] | None = None,
              estimate_for: EstimateFor | None = None,
              previous: list[PatchSolution] | None = None,
-             box_of: BoxOf | None = None) -> list[PatchSolution]:
+             box_of: BoxOf | None = None, probe_grid: GridSettings | None = None,
+             after_probe: bool = False) -> list[PatchSolution]:
     """The normal BEM solution of each contact point's patch: at the vertical ``approach``
     [m], or carrying the normal ``loads`` [N] (one per point).
 
+    ``probe_grid``: the grid of a patch whose start gives no pressure (a coarse probe,
+    :func:`~.loadloop.probe_grid`), else that of ``settings``. ``after_probe``: the
+    patches of ``previous`` are such coarse probes: their grids are not kept, and with
+    element sizes the potential area is their contact's (:func:`_probed_area`).
+
     Each solution is checked against the patch's rigid overlap (:func:`_overlap_covered`):
     on a potential area an estimate gave (a time step's) or a coarse probe's contact
-    (:func:`_probed_area`), and with ``box_of`` (the box
+    (after a coarse probe), and with ``box_of`` (the box
     around the patch's overlap with the wheel's run of vertical overlap at an approach,
     :func:`~railcontact.geometry.points.overlap_box_on_run`) on every area, so that a
     second lobe of the run that the patch's plane shows apart is not left out.
@@ -321,8 +333,8 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         # rigid overlap's, with the margin
         bounds = est.bounds
         given = bool(bounds)  # (a time step's: where the contact was, checked after)
-        if (not bounds and last is not None and last.normal.contact_box is not None
-                and not _resolves(last.normal.grid, grid)):  # (after a coarse probe)
+        if (after_probe and not bounds and last is not None and grid.dx is not None
+                and grid.dy is not None and last.normal.contact_box is not None):
             bounds = _probed_area(last.normal)
             given = True  # (checked after, as a time step's)
         if not bounds:
@@ -334,12 +346,13 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
             xl = grid.margin * math.sqrt(d0 / cp.A)
             ylo, yhi = cp.lateral_extent(d0, grid.margin)
             bounds = (-xl, xl, ylo, yhi)
-        keep = (last is not None and _resolves(last.normal.grid, grid)
+        keep = (last is not None and not after_probe
                 and _covers(last.normal.grid.bounds, bounds, grid.dx is None or grid.dy is None))
-        res, work = solve_patch_normal(gap_of, bounds, grid, normal, pair, control,
+        mesh = probe_grid if probe_grid is not None and not est.gives_pressure else grid
+        res, work = solve_patch_normal(gap_of, bounds, mesh, normal, pair, control,
                                        est, grid=last.normal.grid if keep else None)
         if given or box_of is not None:
-            res = _overlap_covered(cp, gap_of, bounds, grid, normal, pair, control, est, res,
+            res = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair, control, est, res,
                                    work, box_of)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
@@ -752,10 +765,11 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     the plain iteration then swings). From Hertz's approach (a cold wheel: no ``previous``,
     no ``start``) the first pass is a probe of the approach, solved to a looser normal
     tolerance (:func:`~.loadloop.probe_settings`) and always followed by a pass at the
-    full one. A probe without an estimate to start from is solved on a coarser grid; the
-    frame formed at its approach, an estimate as an earlier solve's, then serves within
-    :data:`WARM_REFERENCE_RTOL`. Without ``reference``: one force-controlled solve at the
-    rigid point."""
+    full one. A probe whose start gives no pressure is solved on a coarser grid
+    (:func:`~.loadloop.probe_grid`); the frame formed at its approach, an estimate as an
+    earlier solve's, then serves within the normal tolerance (:func:`_frame_rtol`), and
+    the pass after it meshes the probe's contact (:func:`_probed_area`). Without
+    ``reference``: one force-controlled solve at the rigid point."""
     if not reference:
         cosg = math.cos(first.contact_angle)
         single = _patches([first], found.wheelset, 0.0, settings, pair, loads=[q / cosg],
@@ -778,14 +792,18 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     # from Hertz's approach the first pass is a probe of the approach, solved to a looser
     # tolerance (its frame is formed again at the approach it gives: 1-60 % from Hertz's)
     probe = approach > 0 and not previous and start is None
+    coarse = False  # (the pass before was a coarse probe: its start gave no pressure)
     for _ in range(MAX_REFERENCE_PASSES):
         cp = at_reference(found, first, approach) if approach > 0 else None
         cp = cp or first
         ps = _patches([cp], found.wheelset, 0.0,
                       probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
-                      previous=last, box_of=box_of)
+                      previous=last, box_of=box_of,
+                      probe_grid=probe_grid(settings.grid) if probe else None,
+                      after_probe=coarse)
         passes.append(ps)
+        coarse = probe and bool(ps) and not ps[0].start.gives_pressure
         new = vertical_approach(ps)
         if cp is first and (approach <= 0 or at_reference(found, first, new) is None):
             if probe:  # the rigid point's patch is the answer: solved again, in full
@@ -794,8 +812,8 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
             break  # no reference point to form: the rigid point's patch is the answer
         if abs(new - approach) <= rtol * new and not probe:
             break
-        if probe and ps and not _resolves(ps[0].normal.grid, settings.grid):
-            rtol = WARM_REFERENCE_RTOL  # (a coarse probe's approach: an estimate)
+        if coarse:  # (a coarse probe's approach: an estimate)
+            rtol = _frame_rtol(settings.normal.tolerance)
         probe = False
         tried.append((approach, new - approach))
         last = ps

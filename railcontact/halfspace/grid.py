@@ -162,9 +162,10 @@ def remesh(values: np.ndarray, source: Grid, target: Grid, conserve: bool = Fals
                 out *= v.sum() * source.element_area / total
         return out
     if method == "linear":  # (one compiled pass)
-        out = _bilinear(v, float(source.x0), float(source.dx), float(source.y0),
-                        float(source.dy), target.nx, target.ny, float(target.x0),
-                        float(target.dx), float(target.y0), float(target.dy))
+        out = _bilinear(np.ascontiguousarray(v), float(source.x0), float(source.dx),
+                        float(source.y0), float(source.dy), target.nx, target.ny,
+                        float(target.x0), float(target.dx), float(target.y0),
+                        float(target.dy))
     else:
         from scipy.interpolate import RegularGridInterpolator  # (off the lattice only)
 
