@@ -66,7 +66,16 @@ iterations, each a fifth of a full grid's. On ``scripts/bench_step.py``'s cold r
 on 60E1, 0.5 mm elements) its approach is within 0.17 % of the full grid's (0.08 % at the
 median), and the pass after it starts from its pressure interpolated onto the full grid.
 A probe started from a pressure (an estimate, a table's previous point) takes a few
-iterations on the full grid and stays there."""
+iterations on the full grid and stays there, and so does one at a normal tolerance tighter
+than :data:`PROBE_COARSE_TOLERANCE`."""
+PROBE_COARSE_TOLERANCE = 1e-3
+"""The tightest normal tolerance at which a probe is coarsened. The frame formed at a coarse
+probe's approach serves the pass after it within 1e-3 of the approach
+(:data:`~.wheelrail.WARM_REFERENCE_RTOL`); a tighter solve needs its frame within its own
+tolerance, which the coarse grid's approach (0.1 % off) misses, and the further pass costs
+more than the coarse grid saves: on ``scripts/bench_wheelrail.py``'s cold cases at CONTACT's
+tolerance (1e-5), 5.4 load and frame passes a case against 4.1, and 0.28 of the workload
+against 0.25."""
 
 
 def probe_settings(settings: PatchSettings) -> PatchSettings:
@@ -88,11 +97,15 @@ def _probe_settings(settings: PatchSettings, factor: float, loosest: float) -> P
 _probe_settings_cached = lru_cache(maxsize=64)(_probe_settings)
 
 
-def probe_grid(grid: GridSettings) -> GridSettings:
-    """The grid of a probe pass whose start gives no pressure: ``grid`` with elements
-    :data:`PROBE_COARSENING` times as large (element sizes) or that many times fewer
-    (element counts) along each axis; formed once per grid (and constant)."""
-    return _probe_grid(grid, PROBE_COARSENING)
+def probe_grid(settings: PatchSettings) -> GridSettings | None:
+    """The grid of a probe pass whose start gives no pressure: the settings' grid with
+    elements :data:`PROBE_COARSENING` times as large (element sizes) or that many times
+    fewer (element counts) along each axis; formed once per grid (and constant). None
+    (the settings' grid) at a normal tolerance tighter than
+    :data:`PROBE_COARSE_TOLERANCE`."""
+    if settings.normal.tolerance < PROBE_COARSE_TOLERANCE:
+        return None
+    return _probe_grid(settings.grid, PROBE_COARSENING)
 
 
 @lru_cache(maxsize=64)

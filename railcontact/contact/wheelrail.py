@@ -146,8 +146,9 @@ WARM_REFERENCE_RTOL = 1e-3
 of 1e-3 in the approach moves the reference point by at most 2.3 um (under 0.005 of a
 0.5 mm element), its contact angle by at most 3.3e-5 rad and its rolling radius by at most
 0.3 um (S1002 on 60E1 at 1:40, approaches 50-120 um, lateral 0, 3, 5 and 7 mm; most at the
-flange root), so one pass serves a warm time step. At most this also for a frame formed at
-a coarse probe's approach (:func:`_frame_rtol`)."""
+flange root), so one pass serves a warm time step. The same for a frame formed at a coarse
+probe's approach (:func:`_single_patch`, at normal tolerances from
+:data:`~.loadloop.PROBE_COARSE_TOLERANCE`)."""
 MAX_REFERENCE_PASSES = 6
 """Solves of a single-patch wheel at most, each with its frame formed again at the approach
 of the one before."""
@@ -251,14 +252,6 @@ def _probed_area(probe: NormalResult) -> tuple[float, float, float, float]:
     mx = PROBE_MARGIN_ELEMENTS * g.dx + PROBE_MARGIN_SHARE * (x1 - x0)
     my = PROBE_MARGIN_ELEMENTS * g.dy + PROBE_MARGIN_SHARE * (y1 - y0)
     return (x0 - mx, x1 + mx, y0 - my, y1 + my)
-
-
-def _frame_rtol(tolerance: float) -> float:
-    """The relative change of the approach within which a frame formed after a coarse
-    probe serves: the normal ``tolerance``, at least :data:`REFERENCE_RTOL` and at most
-    :data:`WARM_REFERENCE_RTOL` (the probe's approach is an estimate, as an earlier
-    solve's; a tight solve keeps the cold frame tolerance)."""
-    return min(WARM_REFERENCE_RTOL, max(REFERENCE_RTOL, tolerance))
 
 
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,
@@ -765,10 +758,11 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     the plain iteration then swings). From Hertz's approach (a cold wheel: no ``previous``,
     no ``start``) the first pass is a probe of the approach, solved to a looser normal
     tolerance (:func:`~.loadloop.probe_settings`) and always followed by a pass at the
-    full one. A probe whose start gives no pressure is solved on a coarser grid
-    (:func:`~.loadloop.probe_grid`); the frame formed at its approach, an estimate as an
-    earlier solve's, then serves within the normal tolerance (:func:`_frame_rtol`), and
-    the pass after it meshes the probe's contact (:func:`_probed_area`). Without
+    full one. A probe whose start gives no pressure is solved on a coarser grid where the
+    normal tolerance allows (:func:`~.loadloop.probe_grid`); the frame formed at its
+    approach, an estimate as an earlier solve's, then serves within
+    :data:`WARM_REFERENCE_RTOL`, and the pass after it meshes the probe's contact
+    (:func:`_probed_area`). Without
     ``reference``: one force-controlled solve at the rigid point."""
     if not reference:
         cosg = math.cos(first.contact_angle)
@@ -800,7 +794,7 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
                       probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
                       previous=last, box_of=box_of,
-                      probe_grid=probe_grid(settings.grid) if probe else None,
+                      probe_grid=probe_grid(settings) if probe else None,
                       after_probe=coarse)
         passes.append(ps)
         coarse = probe and bool(ps) and not ps[0].start.gives_pressure
@@ -812,8 +806,8 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
             break  # no reference point to form: the rigid point's patch is the answer
         if abs(new - approach) <= rtol * new and not probe:
             break
-        if coarse:  # (a coarse probe's approach: an estimate)
-            rtol = _frame_rtol(settings.normal.tolerance)
+        if coarse:  # (a coarse probe's approach: an estimate, as an earlier solve's)
+            rtol = WARM_REFERENCE_RTOL
         probe = False
         tried.append((approach, new - approach))
         last = ps
