@@ -191,6 +191,30 @@ def test_the_coarse_probe_keeps_estimate_starts_and_the_elements(root, monkeypat
         assert got.max_pressure == pytest.approx(want.max_pressure, rel=tol)
 
 
+@pytest.mark.parametrize("lateral", [-2e-3, 7e-3])  # tread; flange
+def test_a_tight_solve_does_not_depend_on_its_start(root, lateral):
+    """At a normal tolerance of 1e-7 (below PROBE_COARSE_TOLERANCE: no coarse probe, the
+    cold frame tolerance) a wheel-rail case under load control reaches the same patch
+    from no estimate and from Hertz's pressure: penetration and largest pressure within
+    1e-5, the contact angle within 1e-6 rad (a frame formed within 1e-3 of the approach
+    moves them by about 1e-4)."""
+    import copy
+
+    base = rc.load_case(root / "models" / "cases" / "s1002_60e1_dy-2mm.toml").to_dict()
+    base["grid"] = {"dx": 0.5e-3, "dy": 0.5e-3}
+    base["geometry"]["lateral_displacement"] = lateral
+    base["normal"]["tolerance"] = 1e-7
+    got = {}
+    for estimate in ("none", "hertz"):
+        case = copy.deepcopy(base)
+        case["normal"]["estimate"] = estimate
+        got[estimate] = rc.solve(case).patches[0]
+    a, b = got["none"], got["hertz"]
+    assert a.normal.penetration == pytest.approx(b.normal.penetration, rel=1e-5)
+    assert a.normal.max_pressure == pytest.approx(b.normal.max_pressure, rel=1e-5)
+    assert a.geometry.contact_angle == pytest.approx(b.geometry.contact_angle, abs=1e-6)
+
+
 def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):
     """The cold estimate of the creep share is work of the step: its time is in the
     wheel's ``seconds`` (the sum of its patches' work), here made to take 50 ms."""

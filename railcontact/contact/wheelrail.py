@@ -788,16 +788,16 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     probe = approach > 0 and not previous and start is None
     coarse = False  # (the pass before was a coarse probe: its start gave no pressure)
     for _ in range(MAX_REFERENCE_PASSES):
+        coarse_grid = probe_grid(settings) if probe else None  # (None: the full grid)
         cp = at_reference(found, first, approach) if approach > 0 else None
         cp = cp or first
         ps = _patches([cp], found.wheelset, 0.0,
                       probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
-                      previous=last, box_of=box_of,
-                      probe_grid=probe_grid(settings) if probe else None,
+                      previous=last, box_of=box_of, probe_grid=coarse_grid,
                       after_probe=coarse)
         passes.append(ps)
-        coarse = probe and bool(ps) and not ps[0].start.gives_pressure
+        coarse = coarse_grid is not None and bool(ps) and not ps[0].start.gives_pressure
         new = vertical_approach(ps)
         if cp is first and (approach <= 0 or at_reference(found, first, new) is None):
             if probe:  # the rigid point's patch is the answer: solved again, in full
