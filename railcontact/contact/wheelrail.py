@@ -67,7 +67,7 @@ from ..geometry.roll import contact_roll, first_contact_gap
 from ..geometry.search import search_wheel
 from ..geometry.separation import PatchSeparation, turned_angles
 from ..geometry.track import SIDES, Pose, Track, Wheelset
-from ..halfspace.grid import Grid
+from ..halfspace.grid import Grid, box_edges, widened
 from ..halfspace.hertz import (
     HertzSolution,
     hertz,
@@ -245,13 +245,8 @@ def _probed_area(probe: NormalResult) -> tuple[float, float, float, float]:
     and grown where the contact may reach beyond it (:func:`_overlap_covered`), as a time
     step's is. Used only for grids of given element sizes, whose answer does not depend
     on the area (a grid of given counts would get finer elements)."""
-    g = probe.grid
-    i0, i1, j0, j1 = probe.contact_box
-    x0, x1 = g.x0 + (i0 - 0.5) * g.dx, g.x0 + (i1 - 0.5) * g.dx
-    y0, y1 = g.y0 + (j0 - 0.5) * g.dy, g.y0 + (j1 - 0.5) * g.dy
-    mx = PROBE_MARGIN_ELEMENTS * g.dx + PROBE_MARGIN_SHARE * (x1 - x0)
-    my = PROBE_MARGIN_ELEMENTS * g.dy + PROBE_MARGIN_SHARE * (y1 - y0)
-    return (x0 - mx, x1 + mx, y0 - my, y1 + my)
+    return widened(box_edges(probe.contact_box, probe.grid), probe.grid,
+                   PROBE_MARGIN_ELEMENTS, PROBE_MARGIN_SHARE)
 
 
 def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: PatchSettings,

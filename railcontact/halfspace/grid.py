@@ -291,3 +291,28 @@ def nonzero_box(field):  # pragma: no cover - compiled
                 if j + 1 > j1:
                     j1 = j + 1
     return i0, i1, j0, j1
+
+
+def box_edges(box: tuple[int, int, int, int], grid: Grid
+              ) -> tuple[float, float, float, float] | None:
+    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements in the rows ``i0:i1`` and
+    columns ``j0:j1`` of ``grid`` (``box``, as :func:`nonzero_box` gives it: None when
+    empty, ``i0 < 0``), e.g. of a normal solution's
+    :attr:`~railcontact.normal.NormalResult.contact_box` (its pressure's elements ``> 0``:
+    the same as ``!= 0`` for a solved pressure, which is not negative and finite)."""
+    if box[0] < 0:
+        return None
+    i0, i1, j0, j1 = box
+    return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,
+            grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 - 0.5) * grid.dy)
+
+
+def widened(bounds: tuple[float, float, float, float], grid: Grid, elements: float,
+            share: float) -> tuple[float, float, float, float]:
+    """The area ``bounds`` (xmin, xmax, ymin, ymax) [m] widened on each side by
+    ``elements`` elements of ``grid`` and ``share`` of its extent along that axis (the
+    potential area around a known contact)."""
+    x0, x1, y0, y1 = bounds
+    mx = elements * grid.dx + share * (x1 - x0)
+    my = elements * grid.dy + share * (y1 - y0)
+    return (x0 - mx, x1 + mx, y0 - my, y1 + my)

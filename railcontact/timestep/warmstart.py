@@ -32,7 +32,15 @@ import numba
 import numpy as np
 
 from ..geometry.points import ContactPoint, overlap_on_rail
-from ..halfspace.grid import Grid, _shifted_copy, lattice_offset, nonzero_box, remesh
+from ..halfspace.grid import (
+    Grid,
+    _shifted_copy,
+    box_edges,
+    lattice_offset,
+    nonzero_box,
+    remesh,
+    widened,
+)
 from ..halfspace.sums import array_sum, numpy_sum
 from ..normal.bem import REUSE_GENERATIONS, Displacement
 
@@ -458,30 +466,12 @@ def previous_bounds(memory: PatchMemory) -> tuple[float, float, float, float] | 
     else:  # (min and max of the two, as of a sequence: the first of equal ones)
         x0, x1 = (ob[0] if ob[0] < b[0] else b[0]), (ob[1] if ob[1] > b[1] else b[1])
         y0, y1 = (ob[2] if ob[2] < b[2] else b[2]), (ob[3] if ob[3] > b[3] else b[3])
-    g = memory.grid
-    mx = AREA_MARGIN_ELEMENTS * g.dx + AREA_MARGIN_SHARE * (x1 - x0)
-    my = AREA_MARGIN_ELEMENTS * g.dy + AREA_MARGIN_SHARE * (y1 - y0)
-    return (x0 - mx, x1 + mx, y0 - my, y1 + my)
+    return widened((x0, x1, y0, y1), memory.grid, AREA_MARGIN_ELEMENTS, AREA_MARGIN_SHARE)
 
 
 def _contact_box(pressure: np.ndarray, grid: Grid) -> tuple[float, float, float, float] | None:
     """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements with pressure, or None."""
     return box_edges(nonzero_box(np.asarray(pressure)), grid)
-
-
-def box_edges(box: tuple[int, int, int, int], grid: Grid
-              ) -> tuple[float, float, float, float] | None:
-    """Outer edges (xmin, xmax, ymin, ymax) [m] of the elements in the rows ``i0:i1`` and
-    columns ``j0:j1`` of ``grid`` (``box``, as :func:`~railcontact.halfspace.grid.
-    nonzero_box` gives it: None when empty, ``i0 < 0``): :attr:`PatchMemory.contact_box`,
-    also from a normal solution's :attr:`~railcontact.normal.NormalResult.contact_box`
-    (its pressure's elements ``> 0``: the same as ``!= 0`` for a solved pressure, which is
-    not negative and finite)."""
-    if box[0] < 0:
-        return None
-    i0, i1, j0, j1 = box
-    return (grid.x0 + (i0 - 0.5) * grid.dx, grid.x0 + (i1 - 0.5) * grid.dx,
-            grid.y0 + (j0 - 0.5) * grid.dy, grid.y0 + (j1 - 0.5) * grid.dy)
 
 
 def previous_tangential(memory: PatchMemory, grid: Grid, time: float | None = None
