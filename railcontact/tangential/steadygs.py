@@ -602,6 +602,56 @@ def _run_coefficients(operator: InfluenceOperator) -> np.ndarray:
     return cum
 
 
+def compiled_setup(operator: InfluenceOperator, tolerance, max_iterations, omega_h, omega_s,
+                   engine) -> tuple | None:
+    """What the compiled solve (:func:`_steady_solve`) with the steady-rolling ``operator``
+    reads beyond the problem: ``(block, fft, kernels, run coefficients, tolerance, sweep
+    limit, (omega_h, omega_s))`` - the block's code address (:func:`_block_address`), the
+    operator's compiled product (:meth:`~railcontact.halfspace.operator.InfluenceOperator.
+    compiled_product`), :func:`_steady_kernels` and :func:`_run_coefficients` - with the
+    settings checked (:func:`~.convexgs.checked_settings`); None where the solve is not one
+    compiled call (no numba or no FFTW C interface, the numpy engine, a sweep limit no
+    machine integer holds, settings that do not pass their checks: the Python solve raises
+    for them in the order of its checks)."""
+    if _steady_solve_c is None:
+        return None
+    try:
+        tol, max_its, use_numba = checked_settings(tolerance, max_iterations, omega_h,
+                                                   omega_s, engine)
+        kern = (_steady_kernels(operator) if use_numba and max_its < COMPILED_MAX_SWEEPS
+                else None)
+    except RailContactError:  # (raised by the Python solve, in the order of the checks)
+        return None
+    fft = None if kern is None else operator.compiled_product()
+    if fft is None:
+        return None
+    return (_block_address(), fft, kern, _run_coefficients(operator), tol, max_its,
+            (float(omega_h), float(omega_s)))
+
+
+def compiled_record(t0: float, grid: Grid, operator: InfluenceOperator,
+                    embed: Embedding | None, tolerance: float, out: tuple
+                    ) -> TangentialResult:
+    """The :class:`~.convexgs.TangentialResult` of a compiled solve on ``grid`` (with
+    ``embed``: on its larger grid) from :func:`_steady_solve`'s outputs ``out``, started
+    at ``t0`` (:func:`time.perf_counter`) to ``tolerance``; raises for a pressure or a
+    start that the solve found not valid (not finite, or a negative pressure)."""
+    fields, traction, st, sums, hist, counts, err = out
+    its, converged, stalled, ok, start_ok, ncon = counts
+    if not ok:
+        raise pressure_error(grid)
+    if not start_ok:
+        raise start_failure(grid, None)
+    if embed is None:  # (the traction's sweep layout, transposed)
+        traction, state = traction.transpose(0, 2, 1), st
+    else:  # (the solve's states: the window of the result's)
+        state = st[embed[1][0], embed[1][1]]
+    return result_record(
+        "SteadyGS", STALL_SWEEPS, t0, grid, embed, tolerance, ncon > 0, True, its, err,
+        converged, stalled, hist, traction, st, sums,
+        slip_function(operator, grid.dx, fields[1], fields[2], fields[3:], state))
+
+
 def solve_steadygs(
     grid: Grid,
     operator: InfluenceOperator,
@@ -663,37 +713,18 @@ def solve_steadygs(
     pn, mu, xi, eta, phi, offset, rolling, p0, st0, start, start_error = checked_inputs(
         grid, operator, pressure, friction, creepage, initial_traction, initial_state,
         spin_offset)
-    fft = None
-    if _steady_solve_c is not None and rolling and start_error is None:
-        try:
-            tol, max_its, use_numba = checked_settings(tolerance, max_iterations, omega_h,
-                                                       omega_s, engine)
-            kern = (_steady_kernels(operator) if use_numba and max_its < COMPILED_MAX_SWEEPS
-                    else None)
-        except RailContactError:  # (raised below, in the order of the checks)
-            kern = None
-        fft = None if kern is None else operator.compiled_product()
-    if fft is not None:  # the whole solve one compiled call
+    setup = None
+    if rolling and start_error is None:
+        setup = compiled_setup(operator, tolerance, max_iterations, omega_h, omega_s, engine)
+    if setup is not None:  # the whole solve one compiled call
         whole = (-1, 0, 0, 0) if embed is None else (
             embed[0].nx, embed[0].ny, embed[1][0].start, embed[1][1].start)
-        fields, traction, st, sums, hist, counts, err = _steady_solve_c(
-            _block_address(), fft, kern, _run_coefficients(operator), pn, mu, grid.x0,
-            grid.dx, grid.y0, grid.dy, xi, eta, phi, offset, p0, st0, start,
-            float(omega_h), float(omega_s), tol, max_its, STALL_SWEEPS, STALL_GAIN,
-            BLOCK_SCALE**2 * grid.size, whole)
-        its, converged, stalled, ok, start_ok, ncon = counts
-        if not ok:
-            raise pressure_error(grid)
-        if not start_ok:
-            raise start_failure(grid, None)
-        if embed is None:  # (the traction's sweep layout, transposed)
-            traction, state = traction.transpose(0, 2, 1), st
-        else:  # (the solve's states: the window of the result's)
-            state = st[embed[1][0], embed[1][1]]
-        return result_record(
-            "SteadyGS", STALL_SWEEPS, t0, grid, embed, tol, ncon > 0, True, its, err,
-            converged, stalled, hist, traction, st, sums,
-            slip_function(operator, grid.dx, fields[1], fields[2], fields[3:], state))
+        block, fft, kern, cum, tol, max_its, omegas = setup
+        out = _steady_solve_c(block, fft, kern, cum, pn, mu, grid.x0, grid.dx, grid.y0,
+                              grid.dy, xi, eta, phi, offset, p0, st0, start, *omegas, tol,
+                              max_its, STALL_SWEEPS, STALL_GAIN,
+                              BLOCK_SCALE**2 * grid.size, whole)
+        return compiled_record(t0, grid, operator, embed, tol, out)
     prob = SweepProblem.set_up(grid, operator, pressure, friction, creepage, initial_traction,
                                initial_state, tolerance, max_iterations, omega_h, omega_s,
                                engine, spin_offset)

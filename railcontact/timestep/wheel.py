@@ -33,9 +33,11 @@ from ..settings import Control
 from ..settings.case import MAX_PENETRATION
 from ..settings.convention import wheel_frame_creepage
 from ..status import Status
+from .compiled import warm_tangential
 from .inputs import Kinematics, WheelSetup, solver_settings
 from .results import NOT_CONVERGED, OK, WheelContact, fill_resultants
 from .warmstart import (
+    RATE_GAIN,
     PatchMemory,
     _previous_pressure,
     _previous_tangential,
@@ -155,9 +157,16 @@ class StepStart:
                 c = 0.0 if m is None else m.extrapolation(time)
             last = m if previous is source else match(previous, u, z)
             work = patch.work
+            done = False
             if tangential:
                 k = self.creepage(cp, problem)
                 creepages.append(k)
+                creepage = (k[0], sgn * k[1], sgn * k[2])
+                # the warm stage in one compiled call where it is one (its work counted)
+                if m is not None and steady:
+                    done, rate = warm_tangential(patch, settings.tangential, pair, s.fft,
+                                                 creepage, m, c, last, time, RATE_GAIN)
+            if tangential and not done:
                 t0 = perf_counter()
                 prev = None
                 if m is not None:  # (the factor at the step's time for SteadyGS, else 0)
@@ -165,15 +174,15 @@ class StepStart:
                             _previous_tangential(m, c if steady else 0.0, n.grid))
                 seconds = work.seconds
                 solve_patch_tangential(patch, settings.tangential, pair, s.fft,
-                                       creepage=[k[0], sgn * k[1], sgn * k[2]],
-                                       previous=prev)
+                                       creepage=list(creepage), previous=prev)
                 seconds = work.seconds - seconds  # (the solve's own time, which it kept)
             t = patch.tangential
             # the traction's rate smoothed over the steps; its time, and the start's, is
             # the patch's work (the interval less the solve's own)
-            rate = (traction_rate(t.traction, n.grid, time, last)
-                    if t is not None and steady else None)
-            if tangential:
+            if not done:
+                rate = (traction_rate(t.traction, n.grid, time, last)
+                        if t is not None and steady else None)
+            if tangential and not done:
                 work.seconds += (perf_counter() - t0) - seconds
             # what a newer step keeps of the older one: its traction and time for the
             # extrapolation, not its own older step or traction rate, which this step's
