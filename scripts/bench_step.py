@@ -9,7 +9,8 @@ iterations, and the breakdown of the step time by stage: contact search, meshing
 (grids, gaps, re-meshing the previous step), reach check (whether the contact could
 reach beyond a warm patch's area: its scan of the overlap, the gap it forms counted as
 meshing), estimates (INFCON, FaStrip, previous-step
-prediction), normal BEM, tangential BEM, operators (influence coefficients, kernel spectra
+prediction), normal BEM, tangential BEM (a warm patch's compiled stage whole: its traction
+start and rate with the solve), operators (influence coefficients, kernel spectra
 and FFT planning for a new grid shape) and the rest (load loop, resultants, Python).
 
 A fixed numpy workload is timed in the same run (128 x 128 FFT round trips x 200, then a
@@ -61,11 +62,12 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
     "normal BEM": [(patch_module, "solve_normal")],
     "tangential BEM": ([(tangential.SOLVERS, name) for name in tangential.SOLVERS]
                        if hasattr(tangential, "SOLVERS")  # older versions: one solver
-                       else [(patch_module, "solve_tangential")]),
+                       else [(patch_module, "solve_tangential")])
+                      + [(step_wheel_module, "warm_tangential")],
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
 }
 LEGACY = frozenset({"strips_from_contact", "sample_on_strips", "uncovered", "overlap_box",
-                    "vertical_gap", "search_wheel"})
+                    "vertical_gap", "search_wheel", "warm_tangential"})
 """Targets that one version of the package has and another lacks (functions it no longer
 has, or not yet: the reach check), timed when present: the script also runs against an
 older package (bench_step_ab.py)."""

@@ -31,6 +31,7 @@ import numpy as np
 
 import railcontact as rc
 import railcontact.tangential as tangential
+import railcontact.timestep.compiled as stages
 from railcontact.tangential.convexgs import SweepProblem, _blocks_of
 from railcontact.tangential.steadygs import (
     BLOCK_SCALE,
@@ -69,6 +70,7 @@ def capture(steps: int, every: int, tolerance: float = EPS_TAU) -> list[dict]:
                            tangential_tolerance=tolerance))
     w = 2 * math.pi * 1.5
     tangential.SOLVERS["steadygs"] = spy
+    stages.ENABLED = False  # (the solver's own calls: the time step's stages in Python)
     try:
         for k in range(steps):
             t = k * 1e-3
@@ -77,6 +79,7 @@ def capture(steps: int, every: int, tolerance: float = EPS_TAU) -> list[dict]:
                      kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
     finally:
         tangential.SOLVERS["steadygs"] = solver
+        stages.ENABLED = True
     return found
 
 

@@ -103,7 +103,7 @@ def calls(monkeypatch):
 
 
 def _python_path(monkeypatch) -> None:
-    monkeypatch.setattr(step_wheel, "warm_tangential", lambda *a, **k: (False, None))
+    monkeypatch.setattr(compiled, "ENABLED", False)
 
 
 @pytest.mark.parametrize("lateral, steps", [(_hunting, 40), (_flange, 40)])

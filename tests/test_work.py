@@ -13,6 +13,7 @@ import pytest
 
 import railcontact as rc
 import railcontact.contact.patch as patch_module
+import railcontact.timestep.wheel as step_wheel
 from railcontact.io.jsonout import solution_json
 
 WORK_KEYS = {"normal_iterations", "tangential_iterations", "load_passes", "remeshes", "seconds"}
@@ -20,7 +21,8 @@ WORK_KEYS = {"normal_iterations", "tangential_iterations", "load_passes", "remes
 
 @pytest.fixture
 def calls(monkeypatch):
-    """Every normal and tangential BEM solve made through the patch solvers."""
+    """Every normal and tangential BEM solve made through the patch solvers and the time
+    step's compiled tangential stage."""
     log = {"normal": [], "tangential": []}
     normal = patch_module.solve_normal
 
@@ -39,6 +41,14 @@ def calls(monkeypatch):
     monkeypatch.setattr(patch_module, "solve_normal", counted_normal)
     for name, solver in patch_module.SOLVERS.items():
         monkeypatch.setitem(patch_module.SOLVERS, name, counted(solver))
+    stage = step_wheel.warm_tangential  # (a warm patch's tangential solve in one call)
+
+    def counted_stage(patch, *args, **kwargs):
+        done, rate = stage(patch, *args, **kwargs)
+        if done:
+            log["tangential"].append(patch.tangential.iterations)
+        return done, rate
+    monkeypatch.setattr(step_wheel, "warm_tangential", counted_stage)
     return log
 
 

@@ -36,6 +36,10 @@ from ..tangential.steadygs import (
 )
 from .warmstart import PatchMemory, _rate_on, _traction_start, traction_rate
 
+ENABLED = True
+"""Whether the stages run as their compiled calls where they can; False: every stage takes
+the Python path (the same bits, slower), for a study that observes the solvers' own calls
+(e.g. SteadyGS's warm starts, ``scripts/study_warm_relaxation.py``)."""
 NO_RATE = (0, 0, 1.0, 1.0, 0.0, 0.0)
 """The older step's grid (nx, ny, dx, dy, x0, y0) passed where no rate is formed."""
 _NO_FIELD = np.zeros((0, 0, 0))
@@ -106,7 +110,7 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     t0 = perf_counter()
     friction, rate = settings.friction, memory.traction_rate
     tr, st, o = memory.traction, memory.state, memory.older
-    if not (settings.solver == "steadygs" and settings.model == "bem"
+    if not (ENABLED and settings.solver == "steadygs" and settings.model == "bem"
             and type(friction) is float and 0.0 <= friction < math.inf
             and _steady_solve_c is not None and factor > 0 and o is not None
             and tr is not None and rate is not None and rate.shape == tr.shape
