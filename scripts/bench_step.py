@@ -48,6 +48,10 @@ try:
     import railcontact.timestep.wheel as step_wheel_module  # (a wheel of the step)
 except ImportError:  # an older package: the step's wheels solved in its wheelset module
     step_wheel_module = wheelset_module
+try:
+    import railcontact.timestep.compiled as stages_module  # (the warm step's compiled stages)
+except ImportError:  # an older package: none
+    stages_module = patch_module
 
 STAGES = {  # stage: (module, function name) pairs timed as that stage
     "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
@@ -64,7 +68,9 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
                        if hasattr(tangential, "SOLVERS")  # older versions: one solver
                        else [(patch_module, "solve_tangential")])
                       + [(step_wheel_module, "warm_tangential")],
-    "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")],
+    "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")]
+                 + ([(stages_module, "rolling_operator")] if stages_module is not patch_module
+                    else []),
 }
 LEGACY = frozenset({"strips_from_contact", "sample_on_strips", "uncovered", "overlap_box",
                     "vertical_gap", "search_wheel", "warm_tangential"})

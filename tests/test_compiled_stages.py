@@ -5,12 +5,17 @@ can; it must give what the Python path gives - the traction start advanced along
 remembered rate, SteadyGS on the contact's window, the new traction rate - to the bit, so
 that a step's answer does not depend on which path solved it. The runs: a hunting
 wheelset (S1002 on 60E1 at 1:40, 3 mm at 1.5 Hz, load control with kinematic creepages,
-1 ms steps), a flange contact with two patches on the wheel, and a run in which the
-contact's window changes size. Each run is stepped twice, once with the compiled stage
-and once with it switched off; every result and every remembered array must be equal.
+1 ms steps), a flange contact with two patches on the wheel, a run in which the
+contact's window changes size and one solved on the whole grid (no window). Each run is
+stepped twice, once with the compiled stage and once with it switched off
+(``compiled.ENABLED``); every result and every remembered array must be equal. A stage
+the call cannot run (no remembered rate, no extrapolation, zero creepage, ConvexGS) is
+left to the Python path with the patch untouched.
 """
 
+import copy
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -128,8 +133,66 @@ def test_a_moving_window_and_the_older_steps_grid_keep_the_bits(monkeypatch, cal
     _compare(fast, _run(sweep, 30, warm_start="previous"))
 
 
-@pytest.mark.parametrize("settings", [{"tangential_solver": "convexgs"},
-                                      {"warm_start": "none"}])
-def test_other_solvers_and_cold_steps_take_the_python_path(calls, settings):
-    _run(_hunting, 6, **settings)
-    assert calls["done"] == 0
+def test_a_solve_on_the_whole_grid_keeps_the_bits(monkeypatch, calls):
+    """Without a window (the contact filling its grid) the solve's traction is the
+    transpose of its sweep layout, and the next step starts from that view."""
+    import railcontact.contact.patch as patch_module
+
+    monkeypatch.setattr(compiled, "contact_window", lambda *a, **k: None)
+    monkeypatch.setattr(patch_module, "contact_window", lambda *a, **k: None)
+    fast = _run(_hunting, 20, warm_start="previous+estimate")
+    assert calls["done"] > 20
+    monkeypatch.setattr(compiled, "ENABLED", False)
+    _compare(fast, _run(_hunting, 20, warm_start="previous+estimate"))
+
+
+@pytest.fixture
+def stage_call(monkeypatch):
+    """The arguments of a compiled stage's call at the sixth step of the hunting run, a
+    copy of its patch taken before the call, and the patch after it."""
+    seen = []
+    original = step_wheel.warm_tangential
+
+    def spy(patch, *args):
+        before = copy.deepcopy(patch)
+        done, rate = original(patch, *args)
+        seen.append((before, args, patch, done, rate))
+        return done, rate
+    monkeypatch.setattr(step_wheel, "warm_tangential", spy)
+    _run(_hunting, 6, warm_start="previous+estimate")
+    before, args, after, done, rate = seen[-1]
+    assert done and rate is not None
+    return before, args, after, rate
+
+
+def test_the_stage_called_again_gives_its_answer(stage_call):
+    before, args, after, rate = stage_call
+    patch = copy.deepcopy(before)
+    done, again = compiled.warm_tangential(patch, *args)
+    assert done
+    np.testing.assert_array_equal(again, rate)
+    np.testing.assert_array_equal(patch.tangential.traction, after.tangential.traction)
+    assert patch.creepage == after.creepage and patch.friction == after.friction
+
+
+@pytest.mark.parametrize("change", ["no rate", "factor 0", "zero creepage", "convexgs",
+                                    "switched off"])
+def test_a_stage_it_cannot_run_is_left_to_the_python_path_untouched(stage_call, change,
+                                                                     monkeypatch):
+    before, args, after, rate = stage_call
+    settings, pair, fft, creepage, memory, factor, last, time, gain = args
+    if change == "no rate":
+        memory = replace(memory, traction_rate=None)
+    elif change == "factor 0":
+        factor = 0.0
+    elif change == "zero creepage":
+        creepage = (0.0, 0.0, 0.0)
+    elif change == "convexgs":
+        settings = replace(settings, solver="convexgs")
+    else:
+        monkeypatch.setattr(compiled, "ENABLED", False)
+    patch = copy.deepcopy(before)
+    assert compiled.warm_tangential(patch, settings, pair, fft, creepage, memory, factor,
+                                    last, time, gain) == (False, None)
+    assert patch.tangential is None and patch.creepage == before.creepage
+    assert patch.work.tangential_iterations == before.work.tangential_iterations

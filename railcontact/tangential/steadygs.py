@@ -111,6 +111,8 @@ try:
 except ImportError:  # pragma: no cover
     numba = None
 
+OMEGA_H, OMEGA_S = 0.65, 0.9
+"""SteadyGS's default relaxation in adhesion and in slip (module docstring)."""
 STALL_SWEEPS = 50
 """Sweeps without progress after which SteadyGS stops, not converged (a tolerance below
 what round-off lets it reach would otherwise run to ``max_iterations``)."""
@@ -663,8 +665,8 @@ def solve_steadygs(
     initial_state: np.ndarray | None = None,
     tolerance: float = 1e-2,
     max_iterations: int = 1000,
-    omega_h: float = 0.65,
-    omega_s: float = 0.9,
+    omega_h: float = OMEGA_H,
+    omega_s: float = OMEGA_S,
     engine: str = "auto",
     spin_offset: float = 1.0 / 6.0,
     embed: Embedding | None = None,

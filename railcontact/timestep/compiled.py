@@ -7,9 +7,11 @@ Python between them: the remembered traction advanced along its rate onto the pa
 (:func:`~.warmstart.traction_rate`). Here they run as one call that releases the GIL
 (:func:`_warm_tangential`): the same kernels on the same arrays in the same order, so the
 same bits, with Python only to gather the call's arguments and to form the result's
-records. Where the stage is not that one call (another solver or model, friction per
-element, no remembered rate, a start off the grid's lattice, no compiled FFT) the caller
-takes the Python path.
+records. Where the stage is not that one call the caller takes the Python path: ConvexGS
+or a simplified model, a patch without a remembered traction rate or older step (the
+first warm steps; a later load pass of a step, which starts from the pass before), zero
+creepage, a start off the grid's lattice, a window small enough for a dense product or no
+FFTW C interface.
 """
 
 from __future__ import annotations
@@ -24,10 +26,13 @@ from ..contact.patch import check_operator_memory, contact_window
 from ..contact.results import PatchSolution
 from ..halfspace.grid import Grid
 from ..halfspace.materials import ElasticPair
+from ..halfspace.operator import resolve_backend
 from ..settings import TangentialSettings
 from ..tangential.rolling import rolling_operator
 from ..tangential.steadygs import (
     BLOCK_SCALE,
+    OMEGA_H,
+    OMEGA_S,
     STALL_GAIN,
     STALL_SWEEPS,
     _steady_solve_c,
@@ -133,12 +138,16 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
         solved = Grid(i1 - i0, j1 - j0, grid.dx, grid.dy, grid.x0 + i0 * grid.dx,
                       grid.y0 + j0 * grid.dy)
         embed, whole = (grid, win), (grid.nx, grid.ny, i0, j0)
+    offset = settings.spin_offset
+    if not (type(offset) is float and offset - offset == 0.0
+            and resolve_backend(fft, solved.size) == "pyfftw"):
+        return False, None  # (a dense product, small grids: no compiled solve)
     check_operator_memory(solved, "xy", fft)
     operator = rolling_operator(solved, pair, fft)
-    setup = compiled_setup(operator, settings.tolerance, settings.max_iterations, 0.65, 0.9,
-                           "auto")
-    offset = settings.spin_offset
-    if setup is None or not (type(offset) is float and offset - offset == 0.0):
+    setup = compiled_setup(operator, settings.tolerance, settings.max_iterations, OMEGA_H,
+                           OMEGA_S, "auto")
+    if setup is None:
+        patch.work.seconds += perf_counter() - t0  # (the operator's, when it was formed)
         return False, None
     block, products, kern, cum, tol, max_its, (omega_h, omega_s) = setup
     # the older step's traction and rate (traction_rate's conditions: a rate at all, then
@@ -155,6 +164,13 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     else:
         older, v0, smooth, grid0, dt = _NO_FIELD, None, False, NO_RATE, 1.0
     g1 = memory.grid
+    # (C-ordered arrays: one signature of the call; a solve on the whole grid remembers
+    # its traction as a transposed view)
+    tr, rate, st = np.ascontiguousarray(tr), np.ascontiguousarray(rate), np.ascontiguousarray(st)
+    if with_rate:
+        older = np.ascontiguousarray(older)
+        v0 = None if v0 is None else np.ascontiguousarray(v0)
+    t_solve = perf_counter()
     kind, out, v, total, rated = _warm_tangential(
         grid.nx, grid.ny, grid.dx, grid.dy, grid.x0, grid.y0, tr, rate, st,
         memory.pressure.shape[0], memory.pressure.shape[1], g1.nx, g1.ny, g1.dx, g1.dy,
@@ -163,9 +179,11 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
         friction, xi, eta, phi, offset, omega_h, omega_s, tol, max_its, STALL_SWEEPS,
         STALL_GAIN, BLOCK_SCALE**2 * solved.size, whole, older,
         older if v0 is None else v0, smooth, grid0, float(gain), dt, with_rate)
-    if kind != 2:
+    if kind != 2:  # (the start off the lattice: only it was formed)
+        patch.work.seconds += perf_counter() - t0
         return False, None
-    t = compiled_record(t0, solved, operator, embed, tol, out)
+    # (the solve's time with its start and rate, which ran in the same call)
+    t = compiled_record(t_solve, solved, operator, embed, tol, out)
     patch.tangential_model, patch.tangential_estimate = settings.model, settings.estimate
     patch.friction = friction
     patch.tangential = t
