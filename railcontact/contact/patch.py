@@ -430,18 +430,24 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
         _tangential(patch, settings, pair, fft, creepage, previous, friction)
     finally:
         work.seconds += time.perf_counter() - t0
+    if patch.tangential is not None:
+        tangential_solved(patch, settings.creepage if creepage is None else creepage)
+
+
+def tangential_solved(patch: PatchSolution, creepage: tuple[float, float, float]) -> None:
+    """Record a patch's new tangential solution (``patch.tangential``): its ``creepage``
+    (xi [-], eta [-], phi [1/m]) and sweeps, and a solution that is not finite marked not
+    converged."""
     t = patch.tangential
-    if t is not None:
-        patch.creepage = tuple(map(float, settings.creepage if creepage is None
-                                   else creepage))
-        work.tangential_iterations += t.iterations
-        fx, fy = t.force
-        # the traction array checked by the solver's summary of it: max_traction is the
-        # largest |p| or NaN when one is NaN, so finite only when every traction is
-        if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
-                and math.isfinite(t.max_traction)):
-            t.converged = False
-            t.message = f"the tangential solution is not finite ({t.message})"
+    patch.creepage = tuple(map(float, creepage))
+    patch.work.tangential_iterations += t.iterations
+    fx, fy = t.force
+    # the traction array checked by the solver's summary of it: max_traction is the
+    # largest |p| or NaN when one is NaN, so finite only when every traction is
+    if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
+            and math.isfinite(t.max_traction)):
+        t.converged = False
+        t.message = f"the tangential solution is not finite ({t.message})"
 
 
 def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,

@@ -22,7 +22,7 @@ from time import perf_counter
 import numba
 import numpy as np
 
-from ..contact.patch import check_operator_memory, contact_window
+from ..contact.patch import check_operator_memory, contact_window, tangential_solved
 from ..contact.results import PatchSolution
 from ..halfspace.grid import Grid
 from ..halfspace.materials import ElasticPair
@@ -187,21 +187,14 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     patch.tangential_model, patch.tangential_estimate = settings.model, settings.estimate
     patch.friction = friction
     patch.tangential = t
-    patch.creepage = (xi, eta, phi)
-    work = patch.work
-    work.tangential_iterations += t.iterations
-    fx, fy = t.force
-    if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
-            and math.isfinite(t.max_traction)):
-        t.converged = False
-        t.message = f"the tangential solution is not finite ({t.message})"
+    tangential_solved(patch, (xi, eta, phi))
     if not rated_at_all:
         rate_out = None
     elif rated:
         rate_out = v if math.isfinite(total) else None
     else:  # (off the lattice: the Python path's re-meshed rate)
         rate_out = traction_rate(t.traction, grid, time, last, gain)
-    work.seconds += perf_counter() - t0
+    patch.work.seconds += perf_counter() - t0
     return True, rate_out
 
 
