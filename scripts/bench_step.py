@@ -9,7 +9,8 @@ iterations, and the breakdown of the step time by stage: contact search, meshing
 (grids, gaps, re-meshing the previous step), reach check (whether the contact could
 reach beyond a warm patch's area: its scan of the overlap, the gap it forms counted as
 meshing), estimates (INFCON, FaStrip, previous-step
-prediction), normal BEM, tangential BEM (a warm patch's compiled stage whole: its traction
+prediction), normal BEM (a warm patch's compiled normal stage whole: its gap, start and
+reach check with the solve), tangential BEM (a warm patch's compiled stage whole: its traction
 start and rate with the solve), operators (influence coefficients, kernel spectra
 and FFT planning for a new grid shape) and the rest (load loop, resultants, Python).
 
@@ -57,23 +58,27 @@ STAGES = {  # stage: (module, function name) pairs timed as that stage
     "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
                (step_wheel_module, "vertical_gap"), (wheelset_module, "search_wheel")],
     "meshing": [(patch_module, "make_grid"), (geometry_search.ContactPoint, "gap_on_grid"),
-                (warmstart_module, "remesh")],
+                (warmstart_module, "remesh")]
+               + ([(stages_module, "make_grid")] if hasattr(stages_module, "warm_normal")
+                  else []),
     "reach check": [(wheelrail_module, "uncovered"), (wheelrail_module, "overlap_box")],
     "estimate": [(patch_module, "virtual_penetration"), (patch_module, "remesh_strips"),
                  (patch_module, "fastrip"), (patch_module, "fastsim"),
                  (patch_module, "strips_on_contact"),
                  (patch_module, "strips_from_contact"), (patch_module, "sample_on_strips")],
-    "normal BEM": [(patch_module, "solve_normal")],
+    "normal BEM": [(patch_module, "solve_normal"), (step_wheel_module, "warm_normal")],
     "tangential BEM": ([(tangential.SOLVERS, name) for name in tangential.SOLVERS]
                        if hasattr(tangential, "SOLVERS")  # older versions: one solver
                        else [(patch_module, "solve_tangential")])
                       + [(step_wheel_module, "warm_tangential")],
     "operators": [(patch_module, "influence_operator"), (patch_module, "rolling_operator")]
                  + ([(stages_module, "rolling_operator")] if stages_module is not patch_module
-                    else []),
+                    else [])
+                 + ([(stages_module, "influence_operator")]
+                    if hasattr(stages_module, "warm_normal") else []),
 }
 LEGACY = frozenset({"strips_from_contact", "sample_on_strips", "uncovered", "overlap_box",
-                    "vertical_gap", "search_wheel", "warm_tangential"})
+                    "vertical_gap", "search_wheel", "warm_tangential", "warm_normal"})
 """Targets that one version of the package has and another lacks (functions it no longer
 has, or not yet: the reach check), timed when present: the script also runs against an
 older package (bench_step_ab.py)."""

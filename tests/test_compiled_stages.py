@@ -1,9 +1,14 @@
 """The warm step's compiled stages (railcontact/timestep/compiled.py) against its Python path.
 
-A warm patch's tangential stage runs as one compiled call (``warm_tangential``) where it
-can; it must give what the Python path gives - the traction start advanced along the
-remembered rate, SteadyGS on the contact's window, the new traction rate - to the bit, so
-that a step's answer does not depend on which path solved it. The runs: a hunting
+A warm patch's normal stage (``warm_normal``: the gap on the grid, the remembered
+pressure and displacement extrapolated onto it, the CG solve and the check of the rigid
+overlap) and its tangential stage (``warm_tangential``) run as one compiled call each
+where they can; they must give what the Python path gives - for the tangential stage
+the traction start advanced along the remembered rate, SteadyGS on the contact's window,
+the new traction rate - to the bit, so that a step's answer does not depend on which
+path solved it. A normal stage whose solution the solver does not keep as it is (its
+contact at the edge of its area, a place of the overlap beyond the grid that could touch)
+hands it to the Python path, which goes on from it. The runs: a hunting
 wheelset (S1002 on 60E1 at 1:40, 3 mm at 1.5 Hz, load control with kinematic creepages,
 1 ms steps), a flange contact with two patches on the wheel, a run in which the
 contact's window changes size and one solved on the whole grid (no window). Each run is
@@ -81,6 +86,10 @@ def _compare(a: list, b: list) -> None:
             assert (wa.tangential_iterations, wa.normal_iterations, wa.load_passes) == (
                 wb.tangential_iterations, wb.normal_iterations, wb.load_passes)
             for pa, pb in zip(wa.patches, wb.patches, strict=True):
+                na, nb = pa.normal, pb.normal
+                np.testing.assert_array_equal(na.pressure, nb.pressure)
+                assert (na.grid, na.penetration, na.iterations, na.converged) == (
+                    nb.grid, nb.penetration, nb.iterations, nb.converged)
                 ta, tb = pa.tangential, pb.tangential
                 np.testing.assert_array_equal(ta.traction, tb.traction)
                 np.testing.assert_array_equal(ta.state, tb.state)
@@ -95,15 +104,23 @@ def _compare(a: list, b: list) -> None:
 
 @pytest.fixture
 def calls(monkeypatch):
-    """How many tangential stages ran compiled (``done``) and how many fell back."""
-    seen = {"done": 0, "python": 0}
-    original = step_wheel.warm_tangential
+    """How many tangential stages ran compiled (``done``) and how many fell back; how many
+    normal stages gave the patch's solution (``final``), handed their solve on to the
+    Python path (``on``) or solved nothing (``none``)."""
+    seen = {"done": 0, "python": 0, "final": 0, "on": 0, "none": 0}
+    original, normal = step_wheel.warm_tangential, step_wheel.warm_normal
 
     def counted(*args, **kwargs):
         done, rate = original(*args, **kwargs)
         seen["done" if done else "python"] += 1
         return done, rate
+
+    def counted_normal(*args, **kwargs):
+        staged = normal(*args, **kwargs)
+        seen["none" if staged is None else "final" if staged[1] else "on"] += 1
+        return staged
     monkeypatch.setattr(step_wheel, "warm_tangential", counted)
+    monkeypatch.setattr(step_wheel, "warm_normal", counted_normal)
     return seen
 
 
@@ -116,6 +133,7 @@ def test_the_compiled_tangential_stage_gives_the_python_paths_bits(monkeypatch, 
                                                                     lateral, steps):
     fast = _run(lateral, steps, warm_start="previous+estimate")
     assert calls["done"] > steps  # (both wheels, nearly every step after the first two)
+    assert calls["final"] > steps
     monkeypatch.undo()
     _python_path(monkeypatch)
     _compare(fast, _run(lateral, steps, warm_start="previous+estimate"))
@@ -128,6 +146,8 @@ def test_a_moving_window_and_the_older_steps_grid_keep_the_bits(monkeypatch, cal
         return -4e-3 + 0.4 * t, 0.4
     fast = _run(sweep, 30, warm_start="previous")
     assert calls["done"] > 30
+    # (the contact grows out of its remembered area: normal stages handed on, grown there)
+    assert calls["final"] > 30 and calls["on"] > 0
     monkeypatch.undo()
     _python_path(monkeypatch)
     _compare(fast, _run(sweep, 30, warm_start="previous"))
@@ -196,3 +216,69 @@ def test_a_stage_it_cannot_run_is_left_to_the_python_path_untouched(stage_call, 
                                     last, time, gain) == (False, None)
     assert patch.tangential is None and patch.creepage == before.creepage
     assert patch.work.tangential_iterations == before.work.tangential_iterations
+
+
+@pytest.fixture
+def normal_call(monkeypatch):
+    """The arguments of a compiled normal stage's call at the sixth step of the hunting
+    run (its frame's samples formed before it) and its answer."""
+    seen = []
+    original = step_wheel.warm_normal
+
+    def spy(cp, *args):
+        formed = (cp.plane.i0, cp.plane.i1)
+        staged = original(cp, *args)
+        seen.append((cp, formed, args, staged))
+        return staged
+    monkeypatch.setattr(step_wheel, "warm_normal", spy)
+    _run(_hunting, 6, warm_start="previous+estimate")
+    cp, formed, args, staged = seen[-1]
+    assert staged is not None and staged[1]
+    return cp, formed, args, staged[0]
+
+
+def test_the_normal_stage_is_the_python_paths_first_solve(normal_call):
+    """The stage's solution is the patch solver's on the same grid from the same start
+    (solve_patch_normal with the start's pressure_on), and its reach check finds what
+    the Python path's finds (nothing beyond the grid)."""
+    import railcontact.contact.patch as patch_module
+    import railcontact.contact.wheelrail as wheelrail
+
+    cp, formed, args, res = normal_call
+    bounds, grid_settings, settings, pair, control, found, memory, factor = args
+    start = step_wheel.PatchStart(
+        step_wheel.PassStart((memory,), memory.time, None, pair, factor, found), cp, None,
+        control, memory)
+    est = rc.contact.start.WarmStart("previous", start.pressure_on, bounds)
+    python, work = patch_module.solve_patch_normal(cp.gap_on_grid, bounds, grid_settings,
+                                                   settings, pair, control, est)
+    assert python.grid == res.grid and work.remeshes == 0
+    np.testing.assert_array_equal(python.pressure, res.pressure)
+    np.testing.assert_array_equal(python.displacement.values, res.displacement.values)
+    assert (python.force, python.penetration, python.iterations, python.message) == (
+        res.force, res.penetration, res.iterations, res.message)
+    box = wheelrail.overlap_box_on_run(found, cp, res.penetration,
+                                       res.penetration / math.cos(cp.contact_angle) + cp.gap)
+    assert patch_module.uncovered(cp.gap_on_grid, res, pair, box) is None
+
+
+@pytest.mark.parametrize("change", ["penetration control", "rigid frame", "no frame found",
+                                    "switched off"])
+def test_a_normal_stage_it_cannot_run_solves_nothing(normal_call, change, monkeypatch):
+    cp, formed, args, res = normal_call
+    bounds, grid_settings, settings, pair, control, found, memory, factor = args
+    if change == "penetration control":
+        control = rc.settings.Control(penetration=res.penetration)
+    elif change == "rigid frame":
+        cp = cp.rigid
+    elif change == "no frame found":
+        found = None
+    else:
+        monkeypatch.setattr(compiled, "ENABLED", False)
+    plane = cp.plane
+    before = (plane.i0, plane.i1, None if plane.frame is None else plane.frame.copy())
+    assert compiled.warm_normal(cp, bounds, grid_settings, settings, pair, control, found,
+                                memory, factor) is None
+    assert (plane.i0, plane.i1) == before[:2]
+    if before[2] is not None:
+        np.testing.assert_array_equal(plane.frame, before[2])

@@ -49,6 +49,14 @@ def calls(monkeypatch):
             log["tangential"].append(patch.tangential.iterations)
         return done, rate
     monkeypatch.setattr(step_wheel, "warm_tangential", counted_stage)
+    normal_stage = step_wheel.warm_normal  # (a warm patch's first normal solve in one call)
+
+    def counted_normal_stage(*args, **kwargs):
+        staged = normal_stage(*args, **kwargs)
+        if staged is not None:
+            log["normal"].append(staged[0].iterations)
+        return staged
+    monkeypatch.setattr(step_wheel, "warm_normal", counted_normal_stage)
     return log
 
 

@@ -158,13 +158,18 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                        grid_settings: GridSettings, settings: NormalSettings,
                        pair: ElasticPair, control: Control, start: WarmStart,
                        automatic: tuple[bool, bool] = (True, True), grid: Grid | None = None,
-                       profiles: bool = True) -> tuple[NormalResult, Work]:
+                       profiles: bool = True, first: NormalResult | None = None
+                       ) -> tuple[NormalResult, Work]:
     """BEM normal solution of one patch on the potential area ``bounds`` [m], and the work
     it took.
 
     ``grid`` (e.g. the grid of an earlier load pass of the same patch) is the first grid
     instead of the one meshed on ``bounds``, so that a solution on it can start the next
     solve without interpolation.
+
+    ``first``: the solution of the first solve on ``grid``, made already (a time step's
+    compiled stage, :attr:`~.start.WarmStart.normal_stage`): checked as the first solve's
+    and grown from as it would be.
 
     ``gap_of(grid)`` gives the undeformed gap [m] on a grid, ``start.pressure_on(grid)``
     the initial pressure [Pa] (and its displacement, when known). ``automatic`` says
@@ -183,19 +188,26 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     work = Work(remeshes=-1)
     for k in range(MAX_GROW + 1):
         work.remeshes += 1
-        if grid is None or k > 0:
-            grid = make_grid(grid_settings, bounds)
-        check_operator_memory(grid, "z", settings.fft, grid_settings.max_elements)
-        op = influence_operator(grid, pair, "z", settings.fft)
-        gap = gap_of(grid)
-        # a grown area starts from the estimate again, not from the truncated solution:
-        # that start (its pressure piled up at the old edge) let the CG stop early, with the
-        # relative change small but the pressure wrong (a fuzzed two-patch wheel)
-        p0, shown = start.pressure_on(grid)
-        res = solve_normal(gap, grid, op, initial_pressure=p0,
-                           tolerance=settings.tolerance, max_iterations=settings.max_iterations,
-                           preconditioner=settings.preconditioner, initial_displacement=shown,
-                           min_load=MIN_LOAD, undefined_gap=UNDEFINED_GAP, **control.kwargs())
+        if k == 0 and first is not None:
+            res = first
+            grid = res.grid
+        else:
+            if grid is None or k > 0:
+                grid = make_grid(grid_settings, bounds)
+            check_operator_memory(grid, "z", settings.fft, grid_settings.max_elements)
+            op = influence_operator(grid, pair, "z", settings.fft)
+            gap = gap_of(grid)
+            # a grown area starts from the estimate again, not from the truncated
+            # solution: that start (its pressure piled up at the old edge) let the CG stop
+            # early, with the relative change small but the pressure wrong (a fuzzed
+            # two-patch wheel)
+            p0, shown = start.pressure_on(grid)
+            res = solve_normal(gap, grid, op, initial_pressure=p0,
+                               tolerance=settings.tolerance,
+                               max_iterations=settings.max_iterations,
+                               preconditioner=settings.preconditioner,
+                               initial_displacement=shown, min_load=MIN_LOAD,
+                               undefined_gap=UNDEFINED_GAP, **control.kwargs())
         work.normal_iterations += res.iterations
         # the pressure array checked by the solver's summary of it (solve_normal: the
         # force is its sum, max_pressure its largest value or NaN when one is NaN; a

@@ -85,12 +85,22 @@ class WarmStart:
     traction_on
         ``traction_on(grid) -> TangentialStart | None``: the initial traction [Pa] on the
         patch's grid (None: the tangential settings' estimate).
+    normal_stage
+        ``normal_stage(cp, bounds, grid_settings, settings, pair, control) -> (result,
+        final) | None``: the first normal solve of the patch at the contact point ``cp``
+        on the grid meshed on ``bounds`` from this start, and the check of its rigid
+        overlap, made in one compiled call where the start has one (a time step's warm
+        start, :func:`railcontact.timestep.compiled.warm_normal`): ``final`` when the
+        solve's result is the patch's (neither grown nor its area enlarged), else the
+        solver goes on from it (:func:`~.patch.solve_patch_normal`'s ``first``); None:
+        nothing was solved, the solver's own path. None: no such stage.
     """
 
     label: str
     pressure_on: Callable[[Grid], NormalStart] = _no_pressure
     bounds: Bounds | None = None
     traction_on: Callable[[Grid], TangentialStart | None] = _no_traction
+    normal_stage: Callable[..., tuple | None] | None = None
 
     @property
     def gives_pressure(self) -> bool:

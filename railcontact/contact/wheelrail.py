@@ -102,7 +102,7 @@ from .patch import (
     start_pressure,
     uncovered,
 )
-from .results import PatchSolution, set_frictional_power
+from .results import PatchSolution, Work, set_frictional_power
 from .start import NormalStart, WarmStart
 from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
 
@@ -337,11 +337,21 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         keep = (last is not None and not after_probe
                 and _covers(last.normal.grid.bounds, bounds, grid.dx is None or grid.dy is None))
         mesh = probe_grid if probe_grid is not None and not est.gives_pressure else grid
-        res, work = solve_patch_normal(gap_of, bounds, mesh, normal, pair, control,
-                                       est, grid=last.normal.grid if keep else None)
-        if given or box_of is not None:
-            res = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair, control, est, res,
-                                   work, box_of)
+        # a start's compiled stage: the first solve and the overlap check in one call (on
+        # a new grid, the patch's own gap and the run's overlap box, as below)
+        stage = est.normal_stage
+        staged = (stage(cp, bounds, mesh, normal, pair, control)
+                  if stage is not None and not keep and box_of is not None
+                  and (len(cps) == 1 or loads is not None) else None)
+        if staged is not None and staged[1]:  # (its result the patch's)
+            res, work = staged[0], Work(normal_iterations=staged[0].iterations)
+        else:
+            res, work = solve_patch_normal(gap_of, bounds, mesh, normal, pair, control,
+                                           est, grid=last.normal.grid if keep else None,
+                                           first=None if staged is None else staged[0])
+            if given or box_of is not None:
+                res = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair, control, est,
+                                       res, work, box_of)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work, start=est,

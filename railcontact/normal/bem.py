@@ -1018,11 +1018,9 @@ def solve_normal(
                                   area_el)
     # The solve (_solve_py): one compiled call that releases the GIL where both products
     # are compiled packed-plan products, else the same run as Python.
-    fft = operator.compiled_product() if COMPILED_LOOP else None
-    fft_inverse = (operator.compiled_product(PRECONDITIONER_FLOOR)
-                   if precondition and fft is not None else fft)
-    if fft is not None and fft_inverse is not None:
-        solve, kernels, products = _solve_compiled, (_kernel_addresses(),), (fft, fft_inverse)
+    products = compiled_products(operator, precondition)
+    if products is not None:
+        solve, kernels = _solve_compiled, (_kernel_addresses(),)
     else:  # (the kernels called from Python; the preconditioner's M x bound as A x)
         product = operator.bound()
         solve, kernels = _solve_py, (_gradient, _direction, _step, _shown_start)
@@ -1050,8 +1048,31 @@ def solve_normal(
         start = _formed_start(h, pressure, None, operator, force_control, load, penetration,
                               area_el)
         floor, values = False, None
-    (_, status, hist, its, err, delta, total, largest, count, edge, box, generations, in_q,
-     hmin, cut) = out
+    return solved_result(out, grid, pressure, q, u, gaps, contact, given, tolerance, t0)
+
+
+def compiled_products(operator: InfluenceOperator, precondition: bool) -> tuple | None:
+    """The packed-plan products ``(A, M)`` of :func:`_solve_compiled` for ``operator``
+    (``M`` its FFT preconditioner's with ``precondition``, else ``A``), or None where the
+    solve cannot run as one compiled call (:data:`COMPILED_LOOP`)."""
+    fft = operator.compiled_product() if COMPILED_LOOP else None
+    fft_inverse = (operator.compiled_product(PRECONDITIONER_FLOOR)
+                   if precondition and fft is not None else fft)
+    if fft is None or fft_inverse is None:
+        return None
+    return fft, fft_inverse
+
+
+def solved_result(out: tuple, grid: Grid, pressure: np.ndarray, q: np.ndarray,
+                  u: np.ndarray, gaps: np.ndarray, contact: np.ndarray,
+                  given: np.ndarray | None, tolerance: float, t0: float) -> NormalResult:
+    """The :class:`NormalResult` of a solve (:func:`_solve_py`, compiled or not) that ran
+    to its end (``out``'s outcome neither an error nor :data:`EMPTY_START`) on ``grid``:
+    its arrays ``pressure`` (the start floored into it), ``q``, ``u``, ``gaps`` and
+    ``contact``, the initial pressure ``given``, the ``tolerance`` and ``t0``
+    (:func:`time.perf_counter` at the solve's start)."""
+    (outcome, status, hist, its, err, delta, total, largest, count, edge, box, generations,
+     in_q, hmin, cut) = out
     if in_q:
         pressure = q
     summary = (delta, total, largest, count, edge, box)
@@ -1087,6 +1108,8 @@ def solve_normal(
     if res.touches_boundary:
         res.message += "; contact reaches the edge of the potential contact area"
     return res
+
+
 
 
 def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarray,

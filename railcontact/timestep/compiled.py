@@ -1,17 +1,30 @@
 """The warm step's stages as single compiled calls.
 
-A warm patch's tangential stage (:func:`warm_tangential`) is three compiled kernels with
-Python between them: the remembered traction advanced along its rate onto the patch's grid
-(:func:`~.warmstart.previous_tangential`), SteadyGS on the window of the contact
-(:func:`~railcontact.contact.patch.solve_patch_tangential`) and the traction's new rate
-(:func:`~.warmstart.traction_rate`). Here they run as one call that releases the GIL
-(:func:`_warm_tangential`): the same kernels on the same arrays in the same order, so the
-same bits, with Python only to gather the call's arguments and to form the result's
-records. Where the stage is not that one call the caller takes the Python path: ConvexGS
-or a simplified model, a patch without a remembered traction rate or older step (the
-first warm steps; a later load pass of a step, which starts from the pass before), zero
-creepage, a start off the grid's lattice, a window small enough for a dense product or no
-FFTW C interface.
+A warm patch's normal stage (:func:`warm_normal`) was the undeformed gap on the patch's
+grid, the remembered pressure and displacement extrapolated onto it
+(:func:`~.warmstart.previous_start`), the CG solve
+(:func:`~railcontact.normal.bem.solve_normal`) and the check that the rigid overlap holds
+no place beyond the grid the contact could reach
+(:func:`~railcontact.contact.wheelrail._overlap_covered`): five kernels with Python
+between them. Its tangential stage
+(:func:`warm_tangential`) was three: the remembered traction advanced along its rate onto
+the patch's grid (:func:`~.warmstart.previous_tangential`), SteadyGS on the window of the
+contact (:func:`~railcontact.contact.patch.solve_patch_tangential`) and the traction's new
+rate (:func:`~.warmstart.traction_rate`). Here each runs as one call that releases the
+GIL (:func:`_warm_normal`, :func:`_warm_tangential`): the same kernels on the same arrays
+in the same order, so the same bits, with Python only to gather the call's arguments and
+to form the result's records.
+
+Where a stage is not that one call the caller takes the Python path. The normal stage: a
+patch at its rigid contact point (no frame at the reference point), penetration control
+or a load below the solver's least, a start re-meshed off the lattice or without
+pressure, a grid small enough for a dense product or no FFTW C interface; a solution the
+patch solver would not keep as it is (its contact at the edge of its area, a place of the
+overlap beyond the grid that could touch) is handed on, and the solver goes on from it.
+The tangential stage: ConvexGS or a simplified model, a patch without a remembered
+traction rate or older step (the first warm steps; a later load pass of a step, which
+starts from the pass before), zero creepage, a start off the grid's lattice, a window
+small enough for a dense product or no FFTW C interface.
 """
 
 from __future__ import annotations
@@ -22,12 +35,36 @@ from time import perf_counter
 import numba
 import numpy as np
 
-from ..contact.patch import check_operator_memory, contact_window, tangential_solved
+from ..contact.patch import (
+    UNDEFINED_GAP,
+    _uncovered,
+    check_operator_memory,
+    contact_window,
+    make_grid,
+    tangential_solved,
+)
 from ..contact.results import PatchSolution
+from ..geometry.kernels import FRAME_GROW, extend_frame, gap_on_grid_part, overlap_box_frame
+from ..geometry.points import FAR, K0, ContactPoint, WheelSearch
 from ..halfspace.grid import Grid
+from ..halfspace.hertz import MIN_LOAD
 from ..halfspace.materials import ElasticPair
-from ..halfspace.operator import resolve_backend
-from ..settings import TangentialSettings
+from ..halfspace.operator import influence_operator, resolve_backend
+from ..normal.bem import (
+    EMPTY_START,
+    GAP_NOT_FINITE,
+    HISTORY_CHUNK,
+    MAX_LAST,
+    PRECONDITIONERS,
+    REUSE_GENERATIONS,
+    START_NOT_FINITE,
+    NormalResult,
+    _kernel_addresses,
+    _solve_compiled,
+    compiled_products,
+    solved_result,
+)
+from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
 from ..tangential.rolling import rolling_operator
 from ..tangential.steadygs import (
     BLOCK_SCALE,
@@ -39,7 +76,14 @@ from ..tangential.steadygs import (
     compiled_record,
     compiled_setup,
 )
-from .warmstart import PatchMemory, _rate_on, _traction_start, traction_rate
+from .warmstart import (
+    PatchMemory,
+    _pressure_start,
+    _rate_on,
+    _traction_start,
+    start_arguments,
+    traction_rate,
+)
 
 ENABLED = True
 """Whether the stages run as their compiled calls where they can; False: every stage takes
@@ -198,4 +242,174 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     return True, rate_out
 
 
-__all__ = ["warm_tangential"]
+@numba.njit(cache=True, nogil=True)
+def _gap_on_frame(what, frame, i0, i1, x0, dx, nx, y0, dy, ny, far,
+                  out):  # pragma: no cover - compiled
+    """The undeformed gap on a grid (nx, ny) written to ``out``
+    (:meth:`~railcontact.geometry.points.ContactPoint.gap_on_grid`) of a frame at the
+    reference point formed at the samples ``i0:i1`` of ``frame`` (``what`` its
+    :class:`~railcontact.geometry.points.TangentPlane`'s), formed further where the
+    grid reads beyond them, as the Python path forms it; returns the samples formed."""
+    s = what[18]
+    while True:
+        done, a, b = gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out)
+        if done:
+            return i0, i1
+        a, b = min(a, i0), max(b, i1)
+        extend_frame(what[0], what[1], what[2], what[3], what[4], what[5], what[6],
+                     what[7], what[8], what[9], what[10], what[11], what[12], what[13],
+                     what[14], what[15], what[16], what[17], what[18], what[19], i0, i1, a,
+                     b, frame)
+        i0, i1 = a, b
+
+
+@numba.njit(cache=True, nogil=True)
+def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x, n1y, d1x,
+                 d1y, x1, y1, box1, p0, u0, n0x, n0y, d0x, d0y, x00, y00, box0, c,
+                 extrapolate, reuse, use_shown, generations, kernels, kernel, product,
+                 inverse, precondition, load, self_compliance, tolerance, max_iterations,
+                 chunk, limit, pressure, q, u, gaps, contact, trace_gap, trace_u, g_min,
+                 rail_u, increasing, cos_gamma, cp_gap, k0, grow,
+                 compliance):  # pragma: no cover - compiled
+    """A warm patch's first normal solve and the check of its overlap in one call, as
+    the Python path makes them (:func:`warm_normal`): the gap on the grid (nx, ny, dx,
+    dy, x0, y0) of the frame ``what``, ``frame`` (its samples ``fi0:fi1``; ``far``);
+    :func:`~.warmstart._pressure_start` of the remembered pressures (``p1`` ... ``reuse``
+    its arguments); the solve :func:`~railcontact.normal.bem._solve_compiled` under force
+    control from it (its displacement with ``use_shown``, ``generations`` old;
+    ``kernels`` ... ``limit`` and ``pressure`` ... ``contact`` its arguments and arrays);
+    then, where the solution is one the patch solver keeps (finite, neither next to an
+    undefined gap nor at its area's edge), with a force and a penetration, the box around
+    the rigid overlap on the wheel's run
+    (:func:`~railcontact.geometry.kernels.overlap_box_frame`: the trace's gap ``trace_gap`` and rail positions ``trace_u``,
+    ``g_min``, ``rail_u``, ``increasing``; the approach ``penetration / cos_gamma +
+    cp_gap``; ``k0``, ``grow``) and the elements beyond the grid where the deformed gap
+    may be negative (:func:`~railcontact.contact.patch._uncovered`, with ``compliance``
+    ``1 / (pi E*)``).
+
+    Returns ``(fi0, fi1, kind, out, start, shown, check)``: the frame's samples formed,
+    the start's kind (:func:`~.warmstart._pressure_start`; -1: a start without pressure),
+    the solve's outputs (None: nothing was solved - a start off the lattice or without
+    pressure, a gap or start not finite, a start floored to nothing: the caller takes the
+    Python path), the start's pressure and displacement, and ``check``: 0 the solution
+    is not one the solver keeps, or the overlap was not checked; 1 the overlap holds no
+    place beyond the grid that could touch (or the solution has no force or
+    penetration): the solution is the patch's; 2 it holds such places."""
+    h = np.empty((nx, ny))
+    fi0, fi1 = _gap_on_frame(what, frame, fi0, fi1, x0, dx, nx, y0, dy, ny, far, h)
+    p, shown, kind = _pressure_start(nx, ny, dx, dy, x0, y0, p1, u1, n1x, n1y, d1x, d1y,
+                                     x1, y1, box1, p0, u0, n0x, n0y, d0x, d0y, x00, y00,
+                                     box0, c, extrapolate, reuse)
+    if kind == 0:
+        return fi0, fi1, kind, None, p, shown, 0
+    if kind == 1:
+        bad = positive = False  # (array_sum(p) > 0 of the floored start, NaN kept)
+        for v in p.ravel():
+            bad |= v != v
+            positive |= v > 0.0
+        if bad or not positive:
+            return fi0, fi1, -1, None, p, shown, 0
+    use = use_shown and kind == 2
+    out = _solve_compiled(kernels, h, p, True, shown if use else u, use,
+                          generations if use else 0, pressure, q, u, gaps, contact, kernel,
+                          product, inverse, precondition, True, load, 0.0, dx * dy,
+                          self_compliance, tolerance, max_iterations, chunk, limit)
+    outcome = out[0]
+    if outcome == GAP_NOT_FINITE or outcome == START_NOT_FINITE or outcome == EMPTY_START:
+        return fi0, fi1, kind, None, p, shown, 0
+    delta, total, largest, edge, cut = out[5], out[6], out[7], out[9], out[14]
+    force = total * (dx * dy)
+    if not (math.isfinite(force) and math.isfinite(delta) and math.isfinite(largest)
+            and not cut and not edge):
+        return fi0, fi1, kind, out, p, shown, 0
+    if not (force > 0 and math.isfinite(delta) and delta > 0):
+        return fi0, fi1, kind, out, p, shown, 1
+    xmin, xmax, ymin, ymax, fi0, fi1 = overlap_box_frame(
+        trace_gap, trace_u, g_min, delta / cos_gamma + cp_gap, rail_u, increasing, what[0],
+        what[1], what[2], what[3], what[4], what[5], what[6], what[7], what[8], what[9],
+        what[10], what[11], what[12], what[13], what[14], what[15], what[16], what[17],
+        what[18], what[19], frame, fi0, fi1, delta, k0, grow)
+    if (x0 - dx / 2 <= xmin and xmax <= x0 + (nx - 0.5) * dx and y0 - dy / 2 <= ymin
+            and ymax <= y0 + (ny - 0.5) * dy):
+        return fi0, fi1, kind, out, p, shown, 1
+    i0 = min(0, math.ceil((xmin - x0) / dx))
+    i1 = max(nx, math.floor((xmax - x0) / dx) + 1)
+    j0 = min(0, math.ceil((ymin - y0) / dy))
+    j1 = max(ny, math.floor((ymax - y0) / dy) + 1)
+    mx, my = i1 - i0, j1 - j0
+    ox, oy = x0 + i0 * dx, y0 + j0 * dy
+    outer = np.empty((mx, my))
+    fi0, fi1 = _gap_on_frame(what, frame, fi0, fi1, ox, dx, mx, oy, dy, my, far, outer)
+    solved = q if out[12] else pressure
+    found = _uncovered(outer, delta, solved, -i0, -j0, x0, dx, y0, dy, ox, oy,
+                       compliance)[0]
+    return fi0, fi1, kind, out, p, shown, 2 if found else 1
+
+
+def warm_normal(cp: ContactPoint, bounds: tuple[float, float, float, float],
+                grid_settings: GridSettings, settings: NormalSettings, pair: ElasticPair,
+                control: Control, found: WheelSearch | None, memory: PatchMemory,
+                factor: float) -> tuple[NormalResult, bool] | None:
+    """A warm patch's first normal solve and the check of its rigid overlap in one
+    compiled call (:func:`_warm_normal`), as the wheel solver's Python path makes them
+    (:attr:`~railcontact.contact.start.WarmStart.normal_stage`): the patch at the
+    contact point ``cp`` (a frame at its reference point) of the searched wheel
+    ``found``, on the grid the ``grid_settings`` mesh on ``bounds`` [m], under force
+    control (``control``), started from the remembered patch ``memory`` extrapolated with
+    ``factor`` (:func:`~.warmstart.previous_start`), solved with the normal ``settings``
+    and ``pair`` (:func:`~railcontact.contact.patch.solve_patch_normal`'s first solve),
+    its overlap on the wheel's run checked (the first check of
+    :func:`~railcontact.contact.wheelrail._overlap_covered`).
+
+    Returns ``(result, final)``: ``final`` when the result is the patch's solution, else
+    the solver goes on from it (grows its area, enlarges it to the overlap); None where
+    the stage is not that one call (nothing was solved: the caller takes the Python path):
+    a rigid contact point's frame, penetration control or a load the solver treats apart,
+    a start re-meshed off the lattice or without pressure, settings the solver would
+    reject, no compiled FFT product (small grids), a gap or a start not finite."""
+    plane = cp.plane
+    frame = plane.frame
+    load = control.load
+    if not (ENABLED and frame is not None and found is not None and load is not None
+            and MIN_LOAD <= load < math.inf and load > 0.0):
+        return None
+    tol, max_its = settings.tolerance, settings.max_iterations
+    if not (type(tol) is float and 0.0 < tol < math.inf and type(max_its) is int
+            and max_its > 0 and settings.preconditioner in PRECONDITIONERS):
+        return None
+    c = factor
+    args = start_arguments(memory, memory.older if c > 0 else None, c, True)
+    if args is None:
+        return None
+    (p1, u1, n1x, n1y, d1x, d1y, x1, y1, box1, p0, u0, n0x, n0y, d0x, d0y, x00, y00, box0,
+     c, extrapolate, reuse), generations = args
+    grid = make_grid(grid_settings, bounds)
+    check_operator_memory(grid, "z", settings.fft, grid_settings.max_elements)
+    operator = influence_operator(grid, pair, "z", settings.fft)
+    precondition = settings.preconditioner == "fft"
+    products = compiled_products(operator, precondition)
+    if products is None:
+        return None
+    t0 = perf_counter()
+    kernel, self_compliance = operator.first_kernel
+    shape = grid.shape
+    pressure, q, u, gaps = np.empty(shape), np.empty(shape), np.empty(shape), np.empty(shape)
+    contact = np.empty(shape, dtype=bool)
+    trace = found.trace
+    fi0, fi1, kind, out, start, shown, check = _warm_normal(
+        plane.what, frame, plane.i0, plane.i1, grid.nx, grid.ny, grid.dx, grid.dy, grid.x0,
+        grid.y0, FAR, p1, u1, n1x, n1y, d1x, d1y, x1, y1, box1, p0, u0, n0x, n0y, d0x,
+        d0y, x00, y00, box0, c, extrapolate, reuse, generations <= REUSE_GENERATIONS,
+        generations, _kernel_addresses(), kernel, *products, precondition, float(load),
+        self_compliance, float(tol), min(max_its, MAX_LAST), HISTORY_CHUNK,
+        float(UNDEFINED_GAP), pressure, q, u, gaps, contact, trace[4], trace[2],
+        found.least_gap, float(cp.rail_u), found.increasing,
+        math.cos(cp.contact_angle), cp.gap, K0, FRAME_GROW, 1.0 / (math.pi * pair.e_star))
+    plane.i0, plane.i1 = fi0, fi1
+    if out is None:
+        return None
+    res = solved_result(out, grid, pressure, q, u, gaps, contact, start, tol, t0)
+    return res, check == 1
+
+
+__all__ = ["warm_normal", "warm_tangential"]

@@ -190,6 +190,27 @@ def _previous_pressure(memory: PatchMemory, o: PatchMemory | None, c: float, gri
     the pressure and, when it can be formed, its displacement) of the memory and its
     ``older`` step ``o`` (None: no extrapolation) with the factor ``c``: one compiled
     pass (:func:`_pressure_start`) on one lattice, else re-meshed."""
+    args = start_arguments(memory, o, c, reuse)
+    if args is not None:
+        g = grid
+        p, u, kind = _pressure_start(g.nx, g.ny, g.dx, g.dy, g.x0, g.y0, *args[0])
+        if kind == 2:
+            return p, Displacement(u, args[1])
+        if kind == 1:
+            return (p, None) if reuse else p
+    p = remesh(memory.pressure, memory.grid, grid)
+    if o is not None:
+        p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
+    return (p, None) if reuse else p
+
+
+def start_arguments(memory: PatchMemory, o: PatchMemory | None, c: float, reuse: bool
+                    ) -> tuple[tuple, int] | None:
+    """The arguments of :func:`_pressure_start` after the grid's (the remembered
+    pressures, their displacements where ``reuse`` and they may be reused, their grids,
+    ``c``) for the memory and its ``older`` step ``o`` (None: no extrapolation), and the
+    generations of the displacement it would form; None where the pressures are not
+    arrays of two dimensions (re-meshed instead)."""
     u1 = memory.displacement if reuse else None
     u0 = o.displacement if o is not None and u1 is not None else None
     if u1 is not None and not (c <= MAX_REUSE_EXTRAPOLATION
@@ -197,27 +218,19 @@ def _previous_pressure(memory: PatchMemory, o: PatchMemory | None, c: float, gri
                                and max(u1.generations, u0.generations if u0 is not None
                                        else 0) < REUSE_GENERATIONS):
         u1 = None  # (the displacement is not reused: the pressure alone)
-    g, g1 = grid, memory.grid
+    g1 = memory.grid
     p1 = memory.pressure
-    if p1.ndim == 2 and (o is None or o.pressure.ndim == 2):
-        g0 = g1 if o is None else o.grid
-        p, u, kind = _pressure_start(
-            g.nx, g.ny, g.dx, g.dy, g.x0, g.y0,
-            p1, _NO_FIELD if u1 is None else u1.values, g1.nx, g1.ny, g1.dx, g1.dy,
-            g1.x0, g1.y0, memory.element_box,
-            p1 if o is None else o.pressure, _NO_FIELD if u0 is None else u0.values,
-            g0.nx, g0.ny, g0.dx, g0.dy, g0.x0, g0.y0,
-            memory.element_box if o is None else o.element_box,
-            c, o is not None, u1 is not None)
-        if kind == 2:
-            return p, Displacement(u, 1 + max(u1.generations, u0.generations
-                                              if u0 is not None else 0))
-        if kind == 1:
-            return (p, None) if reuse else p
-    p = remesh(memory.pressure, memory.grid, grid)
-    if o is not None:
-        p = np.maximum(p + c * (p - remesh(o.pressure, o.grid, grid)), 0.0)
-    return (p, None) if reuse else p
+    if not (p1.ndim == 2 and (o is None or o.pressure.ndim == 2)):
+        return None
+    g0 = g1 if o is None else o.grid
+    generations = 0 if u1 is None else 1 + max(u1.generations, u0.generations
+                                                if u0 is not None else 0)
+    return ((p1, _NO_FIELD if u1 is None else u1.values, g1.nx, g1.ny, g1.dx, g1.dy,
+             g1.x0, g1.y0, memory.element_box,
+             p1 if o is None else o.pressure, _NO_FIELD if u0 is None else u0.values,
+             g0.nx, g0.ny, g0.dx, g0.dy, g0.x0, g0.y0,
+             memory.element_box if o is None else o.element_box,
+             c, o is not None, u1 is not None), generations)
 
 
 _NO_FIELD = np.zeros((0, 0))

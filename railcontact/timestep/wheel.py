@@ -29,11 +29,12 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import array_sum
-from ..settings import Control
+from ..normal import NormalResult
+from ..settings import Control, GridSettings, NormalSettings
 from ..settings.case import MAX_PENETRATION
 from ..settings.convention import wheel_frame_creepage
 from ..status import Status
-from .compiled import warm_tangential
+from .compiled import warm_normal, warm_tangential
 from .inputs import Kinematics, WheelSetup, solver_settings
 from .results import NOT_CONVERGED, OK, WheelContact, fill_resultants
 from .warmstart import (
@@ -128,7 +129,7 @@ class StepStart:
         approach = self.approach if before is None else None
         if start is not None and approach is not None and approach > 0:  # expected there
             start = (approach, start[1])
-        starts = PassStart(source, time, s, pair, factor)
+        starts = PassStart(source, time, s, pair, factor, problem.found)
         patches = solve_wheel_normal(problem.track, problem.wheelset, problem.pose,
                                      problem.side, control, settings.patch, pair, starts,
                                      reference=settings.reference, start=start,
@@ -214,14 +215,16 @@ class PassStart:
         The elastic pair.
     """
 
-    __slots__ = ("factor", "last", "pair", "settings", "source", "time")
+    __slots__ = ("factor", "found", "last", "pair", "settings", "source", "time")
 
     def __init__(self, source: Memory, time: float | None, settings, pair: ElasticPair,
-                 factor: float) -> None:
+                 factor: float, found: WheelSearch | None = None) -> None:
         self.source, self.time, self.settings, self.pair = source, time, settings, pair
         self.factor = factor
         """The extrapolation factor of the first remembered patch to ``time``
         (:meth:`~.warmstart.PatchMemory.extrapolation`)."""
+        self.found = found
+        """The wheel searched at the step's pose (None: no compiled normal stage)."""
         self.last: PatchStart | None = None
         """The last patch start formed (its contact point's match read again after the
         normal solve)."""
@@ -242,7 +245,7 @@ class PassStart:
         bounds = (None if len(source) > 1 and merged(cp, m, source,
                                                      start.hertz().penetration)
                   else previous_bounds(m))
-        return WarmStart("previous", start.pressure_on, bounds)
+        return WarmStart("previous", start.pressure_on, bounds, normal_stage=start.solve)
 
 
 class PatchStart:
@@ -275,6 +278,15 @@ class PatchStart:
             return no_start("none")
         return normal_estimate(settings, self.hertz(), *samples(self.cp)[:3], of.pair,
                                self.ctrl)
+
+    def solve(self, cp: ContactPoint, bounds: tuple[float, float, float, float],
+              grid_settings: GridSettings, settings: NormalSettings, pair: ElasticPair,
+              control: Control) -> tuple[NormalResult, bool] | None:
+        """The patch's first normal solve from this start and the check of its overlap in
+        one compiled call (:func:`~.compiled.warm_normal`; the start's
+        :attr:`~railcontact.contact.start.WarmStart.normal_stage`)."""
+        return warm_normal(cp, bounds, grid_settings, settings, pair, control, self.of.found,
+                           self.memory, self.factor)
 
     def pressure_on(self, grid: Grid) -> NormalStart:
         """The remembered pressure extrapolated onto ``grid``, with its ``A p`` when the
