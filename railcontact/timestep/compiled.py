@@ -281,11 +281,11 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
     then, where the solution is one the patch solver keeps (finite, neither next to an
     undefined gap nor at its area's edge), with a force and a penetration, the box around
     the rigid overlap on the wheel's run
-    (:func:`~railcontact.geometry.kernels.overlap_box_frame`: the trace's gap ``trace_gap`` and rail positions ``trace_u``,
-    ``g_min``, ``rail_u``, ``increasing``; the approach ``penetration / cos_gamma +
-    cp_gap``; ``k0``, ``grow``) and the elements beyond the grid where the deformed gap
-    may be negative (:func:`~railcontact.contact.patch._uncovered`, with ``compliance``
-    ``1 / (pi E*)``).
+    (:func:`~railcontact.geometry.kernels.overlap_box_frame`: the trace's gap
+    ``trace_gap`` and rail positions ``trace_u``, ``g_min``, ``rail_u``, ``increasing``;
+    the approach ``penetration / cos_gamma + cp_gap``; ``k0``, ``grow``) and the elements
+    beyond the grid where the deformed gap may be negative
+    (:func:`~railcontact.contact.patch._uncovered`, ``compliance`` its ``1 / (pi E*)``).
 
     Returns ``(fi0, fi1, kind, out, start, shown, check)``: the frame's samples formed,
     the start's kind (:func:`~.warmstart._pressure_start`; -1: a start without pressure),
