@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 import railcontact as rc
+import railcontact.geometry.points as points
 import railcontact.timestep.compiled as compiled
 import railcontact.timestep.wheel as step_wheel
 
@@ -65,6 +66,12 @@ def _flange(t):
     return 6.2e-3 + 0.5 * t, 0.5
 
 
+def _sweep(t):
+    """A fast lateral sweep: the contact's window and the patch grid change from step to
+    step, and its area grows beyond the remembered one."""
+    return -4e-3 + 0.4 * t, 0.4
+
+
 def _arrays(memory) -> list[np.ndarray]:
     """Every array the step remembers (pressure, traction, map, rate, displacement)."""
     out = []
@@ -88,8 +95,11 @@ def _compare(a: list, b: list) -> None:
             for pa, pb in zip(wa.patches, wb.patches, strict=True):
                 na, nb = pa.normal, pb.normal
                 np.testing.assert_array_equal(na.pressure, nb.pressure)
-                assert (na.grid, na.penetration, na.iterations, na.converged) == (
-                    nb.grid, nb.penetration, nb.iterations, nb.converged)
+                np.testing.assert_array_equal(na.contact, nb.contact)
+                assert (na.grid, na.penetration, na.iterations, na.converged, na.message,
+                        na.touches_boundary, na.next_to_undefined, pa.work.remeshes) == (
+                    nb.grid, nb.penetration, nb.iterations, nb.converged, nb.message,
+                    nb.touches_boundary, nb.next_to_undefined, pb.work.remeshes)
                 ta, tb = pa.tangential, pb.tangential
                 np.testing.assert_array_equal(ta.traction, tb.traction)
                 np.testing.assert_array_equal(ta.state, tb.state)
@@ -106,8 +116,9 @@ def _compare(a: list, b: list) -> None:
 def calls(monkeypatch):
     """How many tangential stages ran compiled (``done``) and how many fell back; how many
     normal stages gave the patch's solution (``final``), handed their solve on to the
-    Python path (``on``) or solved nothing (``none``)."""
-    seen = {"done": 0, "python": 0, "final": 0, "on": 0, "none": 0}
+    Python path (``on``: ``uncovered`` of them with places beyond the grid that could
+    touch) or solved nothing (``none``)."""
+    seen = {"done": 0, "python": 0, "final": 0, "on": 0, "uncovered": 0, "none": 0}
     original, normal = step_wheel.warm_tangential, step_wheel.warm_normal
 
     def counted(*args, **kwargs):
@@ -117,7 +128,8 @@ def calls(monkeypatch):
 
     def counted_normal(*args, **kwargs):
         staged = normal(*args, **kwargs)
-        seen["none" if staged is None else "final" if staged[1] else "on"] += 1
+        seen["none" if staged is None else "final" if staged.final else "on"] += 1
+        seen["uncovered"] += staged is not None and staged.uncovered is not None
         return staged
     monkeypatch.setattr(step_wheel, "warm_tangential", counted)
     monkeypatch.setattr(step_wheel, "warm_normal", counted_normal)
@@ -142,15 +154,14 @@ def test_the_compiled_tangential_stage_gives_the_python_paths_bits(monkeypatch, 
 def test_a_moving_window_and_the_older_steps_grid_keep_the_bits(monkeypatch, calls):
     """A fast lateral sweep: the contact's window and the patch grid change from step
     to step (the start and the rate formed across grids of one lattice)."""
-    def sweep(t):
-        return -4e-3 + 0.4 * t, 0.4
-    fast = _run(sweep, 30, warm_start="previous")
+    fast = _run(_sweep, 30, warm_start="previous")
     assert calls["done"] > 30
-    # (the contact grows out of its remembered area: normal stages handed on, grown there)
-    assert calls["final"] > 30 and calls["on"] > 0
+    # (the contact grows out of its remembered area: normal stages handed on, the area
+    # grown to places of the overlap beyond it)
+    assert calls["final"] > 30 and calls["uncovered"] > 0
     monkeypatch.undo()
     _python_path(monkeypatch)
-    _compare(fast, _run(sweep, 30, warm_start="previous"))
+    _compare(fast, _run(_sweep, 30, warm_start="previous"))
 
 
 def test_a_solve_on_the_whole_grid_keeps_the_bits(monkeypatch, calls):
@@ -218,6 +229,61 @@ def test_a_stage_it_cannot_run_is_left_to_the_python_path_untouched(stage_call, 
     assert patch.work.tangential_iterations == before.work.tangential_iterations
 
 
+def _normal_calls(monkeypatch, lateral, steps: int) -> list:
+    """Each compiled normal stage's call of a run: a copy of its contact point taken
+    before it (its frame's samples as they were), the point, the arguments and the
+    answer."""
+    seen = []
+    original = step_wheel.warm_normal
+
+    def spy(cp, *args):
+        before = copy.deepcopy(cp)
+        staged = original(cp, *args)
+        seen.append((before, cp, args, staged))
+        return staged
+    monkeypatch.setattr(step_wheel, "warm_normal", spy)
+    _run(lateral, steps, warm_start="previous")
+    monkeypatch.undo()
+    return seen
+
+
+@pytest.mark.parametrize("lateral, steps, which", [(_hunting, 6, "final"),
+                                                   (_sweep, 30, "uncovered")])
+def test_the_normal_stage_is_the_python_paths_first_solve_and_check(monkeypatch, lateral,
+                                                                    steps, which):
+    """The stage's solution is the patch solver's on the same grid from the same start
+    (solve_patch_normal with the start's pressure_on), its reach check finds what the
+    Python path's first check finds (nothing; or the same places beyond the grid), and
+    the frame's samples are formed as the Python path forms them, from a copy of the
+    contact point as it was before the stage."""
+    import railcontact.contact.patch as patch_module
+
+    calls = [c for c in _normal_calls(monkeypatch, lateral, steps) if c[3] is not None
+             and (c[3].final if which == "final" else c[3].uncovered is not None)]
+    assert calls
+    before, cp, args, staged = calls[-1]
+    bounds, grid_settings, settings, pair, control, found, memory, factor = args
+    start = step_wheel.PatchStart(
+        step_wheel.PassStart((memory,), memory.time, None, pair, factor, found), before,
+        None, control, memory)
+    est = rc.contact.start.WarmStart("previous", start.pressure_on, bounds)
+    python, work = patch_module.solve_patch_normal(before.gap_on_grid, bounds, grid_settings,
+                                                   settings, pair, control, est)
+    res = staged.result
+    assert python.grid == res.grid and work.remeshes == 0
+    np.testing.assert_array_equal(python.pressure, res.pressure)
+    np.testing.assert_array_equal(python.displacement.values, res.displacement.values)
+    assert (python.force, python.penetration, python.iterations, python.message) == (
+        res.force, res.penetration, res.iterations, res.message)
+    box = points.overlap_box_on_run(
+        found, before, python.penetration,
+        python.penetration / math.cos(before.contact_angle) + before.gap)
+    assert patch_module.uncovered(before.gap_on_grid, python, pair, box) == staged.uncovered
+    assert (before.plane.i0, before.plane.i1) == (cp.plane.i0, cp.plane.i1)
+    np.testing.assert_array_equal(before.plane.frame[:, cp.plane.i0:cp.plane.i1],
+                                  cp.plane.frame[:, cp.plane.i0:cp.plane.i1])
+
+
 @pytest.fixture
 def normal_call(monkeypatch):
     """The arguments of a compiled normal stage's call at the sixth step of the hunting
@@ -226,48 +292,33 @@ def normal_call(monkeypatch):
     original = step_wheel.warm_normal
 
     def spy(cp, *args):
-        formed = (cp.plane.i0, cp.plane.i1)
         staged = original(cp, *args)
-        seen.append((cp, formed, args, staged))
+        seen.append((cp, args, staged))
         return staged
     monkeypatch.setattr(step_wheel, "warm_normal", spy)
     _run(_hunting, 6, warm_start="previous+estimate")
-    cp, formed, args, staged = seen[-1]
-    assert staged is not None and staged[1]
-    return cp, formed, args, staged[0]
-
-
-def test_the_normal_stage_is_the_python_paths_first_solve(normal_call):
-    """The stage's solution is the patch solver's on the same grid from the same start
-    (solve_patch_normal with the start's pressure_on), and its reach check finds what
-    the Python path's finds (nothing beyond the grid)."""
-    import railcontact.contact.patch as patch_module
-    import railcontact.contact.wheelrail as wheelrail
-
-    cp, formed, args, res = normal_call
-    bounds, grid_settings, settings, pair, control, found, memory, factor = args
-    start = step_wheel.PatchStart(
-        step_wheel.PassStart((memory,), memory.time, None, pair, factor, found), cp, None,
-        control, memory)
-    est = rc.contact.start.WarmStart("previous", start.pressure_on, bounds)
-    python, work = patch_module.solve_patch_normal(cp.gap_on_grid, bounds, grid_settings,
-                                                   settings, pair, control, est)
-    assert python.grid == res.grid and work.remeshes == 0
-    np.testing.assert_array_equal(python.pressure, res.pressure)
-    np.testing.assert_array_equal(python.displacement.values, res.displacement.values)
-    assert (python.force, python.penetration, python.iterations, python.message) == (
-        res.force, res.penetration, res.iterations, res.message)
-    box = wheelrail.overlap_box_on_run(found, cp, res.penetration,
-                                       res.penetration / math.cos(cp.contact_angle) + cp.gap)
-    assert patch_module.uncovered(cp.gap_on_grid, res, pair, box) is None
+    cp, args, staged = seen[-1]
+    assert staged is not None and staged.final
+    return cp, args, staged.result
 
 
 @pytest.mark.parametrize("change", ["penetration control", "rigid frame", "no frame found",
-                                    "switched off"])
+                                    "switched off", "start off the lattice",
+                                    "start without pressure", "no compiled product"])
 def test_a_normal_stage_it_cannot_run_solves_nothing(normal_call, change, monkeypatch):
-    cp, formed, args, res = normal_call
+    """Where the stage is not one call it answers None (the Python path solves the patch,
+    as it would without the stage), the frame's formed samples unchanged."""
+    cp, args, res = normal_call
     bounds, grid_settings, settings, pair, control, found, memory, factor = args
-    if change == "penetration control":
+    g = memory.grid
+    if change == "start off the lattice":
+        memory = replace(memory, grid=replace(g, x0=g.x0 + 0.5 * g.dx))
+    elif change == "start without pressure":
+        memory = replace(memory, pressure=np.zeros_like(memory.pressure),
+                         displacement=None)
+    elif change == "no compiled product":
+        monkeypatch.setattr(compiled, "compiled_products", lambda *a: None)
+    elif change == "penetration control":
         control = rc.settings.Control(penetration=res.penetration)
     elif change == "rigid frame":
         cp = cp.rigid
@@ -276,9 +327,9 @@ def test_a_normal_stage_it_cannot_run_solves_nothing(normal_call, change, monkey
     else:
         monkeypatch.setattr(compiled, "ENABLED", False)
     plane = cp.plane
-    before = (plane.i0, plane.i1, None if plane.frame is None else plane.frame.copy())
+    i0, i1 = plane.i0, plane.i1
+    formed = None if plane.frame is None else plane.frame[:, i0:i1].copy()
     assert compiled.warm_normal(cp, bounds, grid_settings, settings, pair, control, found,
                                 memory, factor) is None
-    assert (plane.i0, plane.i1) == before[:2]
-    if before[2] is not None:
-        np.testing.assert_array_equal(plane.frame, before[2])
+    if formed is not None:
+        np.testing.assert_array_equal(plane.frame[:, i0:i1], formed)

@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..halfspace.grid import Grid
-from ..normal.bem import Displacement
+from ..normal.bem import Displacement, NormalResult
 
 Bounds = tuple[float, float, float, float]
 """A potential contact area (xmin, xmax, ymin, ymax) [m]."""
@@ -55,6 +55,30 @@ class TangentialStart(NamedTuple):
     state: np.ndarray | None = None
 
 
+class StagedNormal(NamedTuple):
+    """A patch's first normal solve made by a start's compiled stage
+    (:attr:`WarmStart.normal_stage`).
+
+    Attributes
+    ----------
+    result
+        The solution on the grid meshed on the potential area.
+    final
+        Whether it is the patch's solution: the solver keeps it as it is (finite, neither
+        at its area's edge nor next to an undefined gap) and the reach check found no
+        place of the rigid overlap beyond the grid that could touch (or it has no force).
+        Else the solver goes on from it (:func:`~.patch.solve_patch_normal`'s ``first``).
+    uncovered
+        The box (xmin, xmax, ymin, ymax) [m] around the places beyond the grid that
+        could touch, where the reach check found some (the solver's first check then,
+        :func:`~.wheelrail._overlap_covered`'s ``flagged``); else None.
+    """
+
+    result: NormalResult
+    final: bool
+    uncovered: Bounds | None = None
+
+
 NO_NORMAL_START = NormalStart(None)
 """No initial pressure: the BEM starts from its own uniform pressure."""
 
@@ -86,14 +110,13 @@ class WarmStart:
         ``traction_on(grid) -> TangentialStart | None``: the initial traction [Pa] on the
         patch's grid (None: the tangential settings' estimate).
     normal_stage
-        ``normal_stage(cp, bounds, grid_settings, settings, pair, control) -> (result,
-        final) | None``: the first normal solve of the patch at the contact point ``cp``
-        on the grid meshed on ``bounds`` from this start, and the check of its rigid
-        overlap, made in one compiled call where the start has one (a time step's warm
-        start, :func:`railcontact.timestep.compiled.warm_normal`): ``final`` when the
-        solve's result is the patch's (neither grown nor its area enlarged), else the
-        solver goes on from it (:func:`~.patch.solve_patch_normal`'s ``first``); None:
-        nothing was solved, the solver's own path. None: no such stage.
+        ``normal_stage(cp, bounds, grid_settings, settings, pair, control) ->
+        StagedNormal | None``: the first normal solve of the patch at the contact point
+        ``cp`` on the grid meshed on ``bounds`` from this start, and the check of its
+        rigid overlap on the wheel's run, made in one compiled call where the start has
+        one (a time step's warm start, :func:`railcontact.timestep.compiled.warm_normal`;
+        :class:`StagedNormal`); None: nothing was solved, the solver's own path. None:
+        no such stage.
     """
 
     label: str

@@ -343,15 +343,19 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         staged = (stage(cp, bounds, mesh, normal, pair, control)
                   if stage is not None and not keep and box_of is not None
                   and (len(cps) == 1 or loads is not None) else None)
-        if staged is not None and staged[1]:  # (its result the patch's)
-            res, work = staged[0], Work(normal_iterations=staged[0].iterations)
+        if staged is not None and staged.final:  # (its result the patch's)
+            res, work = staged.result, Work(normal_iterations=staged.result.iterations)
         else:
             res, work = solve_patch_normal(gap_of, bounds, mesh, normal, pair, control,
                                            est, grid=last.normal.grid if keep else None,
-                                           first=None if staged is None else staged[0])
+                                           first=None if staged is None else staged.result)
             if given or box_of is not None:
+                # (the stage's reach check, when it found places beyond the grid: the
+                # first check, made before the gap beyond the grid was formed)
+                flagged = (staged.uncovered if staged is not None and res is staged.result
+                           else None)
                 res = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair, control, est,
-                                       res, work, box_of)
+                                       res, work, box_of, flagged)
         work.seconds = time.perf_counter() - t0  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work, start=est,
@@ -415,7 +419,8 @@ def own_gap(cp: ContactPoint, others: list[ContactPoint]) -> Callable[[Grid], An
 def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
                      bounds: tuple[float, float, float, float], grid: GridSettings, normal,
                      pair: ElasticPair, control: Control, est: WarmStart, res, work,
-                     box_of: BoxOf | None = None):
+                     box_of: BoxOf | None = None,
+                     flagged: tuple[float, float, float, float] | None = None):
     """The normal solution ``res`` of the patch ``cp`` on a potential area ``bounds``
     [m] (a time step's: the previous contact's box with a margin; or the cold one),
     checked against the patch's rigid overlap at the penetration it found
@@ -432,14 +437,17 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
     patch solver grows an area only where its contact reaches the edge. After the check
     the solution is the one a grid holding the whole overlap gives (a cold solve's),
     within the solver's tolerance. A solve still uncovered after
-    :data:`MAX_OVERLAP_PASSES` is not converged."""
+    :data:`MAX_OVERLAP_PASSES` is not converged. ``flagged``: the first check's places
+    beyond the grid, found already (a compiled stage's, :class:`~.start.StagedNormal`).
+    """
     for k in range(MAX_OVERLAP_PASSES + 1):
         if not (res.force > 0 and math.isfinite(res.penetration) and res.penetration > 0):
             return res
-        box = (overlap_box(cp, res.penetration) if box_of is None else
-               box_of(cp, res.penetration, res.penetration / math.cos(cp.contact_angle)
-                      + cp.gap))
-        flagged = uncovered(gap_of, res, pair, box)
+        if k > 0 or flagged is None:
+            box = (overlap_box(cp, res.penetration) if box_of is None else
+                   box_of(cp, res.penetration, res.penetration / math.cos(cp.contact_angle)
+                          + cp.gap))
+            flagged = uncovered(gap_of, res, pair, box)
         if flagged is None:
             return res
         if k == MAX_OVERLAP_PASSES:

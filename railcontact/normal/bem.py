@@ -1110,8 +1110,6 @@ def solved_result(out: tuple, grid: Grid, pressure: np.ndarray, q: np.ndarray,
     return res
 
 
-
-
 def _result(grid: Grid, pressure: np.ndarray, gap: np.ndarray, contact: np.ndarray,
             summary: tuple, iterations: int, converged: bool, message: str, error: float,
             history: np.ndarray, shown: Displacement | None, start: np.ndarray | None,

@@ -44,6 +44,7 @@ from ..contact.patch import (
     tangential_solved,
 )
 from ..contact.results import PatchSolution
+from ..contact.start import StagedNormal
 from ..geometry.kernels import FRAME_GROW, extend_frame, gap_on_grid_part, overlap_box_frame
 from ..geometry.points import FAR, K0, ContactPoint, WheelSearch
 from ..halfspace.grid import Grid
@@ -58,7 +59,6 @@ from ..normal.bem import (
     PRECONDITIONERS,
     REUSE_GENERATIONS,
     START_NOT_FINITE,
-    NormalResult,
     _kernel_addresses,
     _solve_compiled,
     compiled_products,
@@ -92,6 +92,10 @@ the Python path (the same bits, slower), for a study that observes the solvers' 
 NO_RATE = (0, 0, 1.0, 1.0, 0.0, 0.0)
 """The older step's grid (nx, ny, dx, dy, x0, y0) passed where no rate is formed."""
 _NO_FIELD = np.zeros((0, 0, 0))
+_NO_BOX = (0.0, 0.0, 0.0, 0.0)
+_LARGEST = 2.0**52
+"""Largest element offset of a reach check's box that the compiled stage forms (beyond
+it, or not finite, the Python path's check does, and raises)."""
 
 
 @numba.njit(cache=True, nogil=True)
@@ -287,28 +291,31 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
     beyond the grid where the deformed gap may be negative
     (:func:`~railcontact.contact.patch._uncovered`, ``compliance`` its ``1 / (pi E*)``).
 
-    Returns ``(fi0, fi1, kind, out, start, shown, check)``: the frame's samples formed,
+    Returns ``(fi0, fi1, kind, out, start, shown, check, flagged)``: the frame's samples
+    formed,
     the start's kind (:func:`~.warmstart._pressure_start`; -1: a start without pressure),
     the solve's outputs (None: nothing was solved - a start off the lattice or without
     pressure, a gap or start not finite, a start floored to nothing: the caller takes the
     Python path), the start's pressure and displacement, and ``check``: 0 the solution
     is not one the solver keeps, or the overlap was not checked; 1 the overlap holds no
     place beyond the grid that could touch (or the solution has no force or
-    penetration): the solution is the patch's; 2 it holds such places."""
+    penetration): the solution is the patch's; 2 it holds such places, ``flagged`` the box
+    (xmin, xmax, ymin, ymax) [m] around them (that of
+    :func:`~railcontact.contact.patch.uncovered`)."""
     h = np.empty((nx, ny))
     fi0, fi1 = _gap_on_frame(what, frame, fi0, fi1, x0, dx, nx, y0, dy, ny, far, h)
     p, shown, kind = _pressure_start(nx, ny, dx, dy, x0, y0, p1, u1, n1x, n1y, d1x, d1y,
                                      x1, y1, box1, p0, u0, n0x, n0y, d0x, d0y, x00, y00,
                                      box0, c, extrapolate, reuse)
     if kind == 0:
-        return fi0, fi1, kind, None, p, shown, 0
+        return fi0, fi1, kind, None, p, shown, 0, _NO_BOX
     if kind == 1:
         bad = positive = False  # (array_sum(p) > 0 of the floored start, NaN kept)
         for v in p.ravel():
             bad |= v != v
             positive |= v > 0.0
         if bad or not positive:
-            return fi0, fi1, -1, None, p, shown, 0
+            return fi0, fi1, -1, None, p, shown, 0, _NO_BOX
     use = use_shown and kind == 2
     out = _solve_compiled(kernels, h, p, True, shown if use else u, use,
                           generations if use else 0, pressure, q, u, gaps, contact, kernel,
@@ -316,14 +323,14 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
                           self_compliance, tolerance, max_iterations, chunk, limit)
     outcome = out[0]
     if outcome == GAP_NOT_FINITE or outcome == START_NOT_FINITE or outcome == EMPTY_START:
-        return fi0, fi1, kind, None, p, shown, 0
+        return fi0, fi1, kind, None, p, shown, 0, _NO_BOX
     delta, total, largest, edge, cut = out[5], out[6], out[7], out[9], out[14]
     force = total * (dx * dy)
     if not (math.isfinite(force) and math.isfinite(delta) and math.isfinite(largest)
             and not cut and not edge):
-        return fi0, fi1, kind, out, p, shown, 0
+        return fi0, fi1, kind, out, p, shown, 0, _NO_BOX
     if not (force > 0 and math.isfinite(delta) and delta > 0):
-        return fi0, fi1, kind, out, p, shown, 1
+        return fi0, fi1, kind, out, p, shown, 1, _NO_BOX
     xmin, xmax, ymin, ymax, fi0, fi1 = overlap_box_frame(
         trace_gap, trace_u, g_min, delta / cos_gamma + cp_gap, rail_u, increasing, what[0],
         what[1], what[2], what[3], what[4], what[5], what[6], what[7], what[8], what[9],
@@ -331,7 +338,11 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
         what[18], what[19], frame, fi0, fi1, delta, k0, grow)
     if (x0 - dx / 2 <= xmin and xmax <= x0 + (nx - 0.5) * dx and y0 - dy / 2 <= ymin
             and ymax <= y0 + (ny - 0.5) * dy):
-        return fi0, fi1, kind, out, p, shown, 1
+        return fi0, fi1, kind, out, p, shown, 1, _NO_BOX
+    if not (abs((xmin - x0) / dx) < _LARGEST and abs((xmax - x0) / dx) < _LARGEST
+            and abs((ymin - y0) / dy) < _LARGEST and abs((ymax - y0) / dy) < _LARGEST):
+        # (not finite, or beyond the integers: the Python path's check raises)
+        return fi0, fi1, kind, out, p, shown, 0, _NO_BOX
     i0 = min(0, math.ceil((xmin - x0) / dx))
     i1 = max(nx, math.floor((xmax - x0) / dx) + 1)
     j0 = min(0, math.ceil((ymin - y0) / dy))
@@ -341,15 +352,18 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
     outer = np.empty((mx, my))
     fi0, fi1 = _gap_on_frame(what, frame, fi0, fi1, ox, dx, mx, oy, dy, my, far, outer)
     solved = q if out[12] else pressure
-    found = _uncovered(outer, delta, solved, -i0, -j0, x0, dx, y0, dy, ox, oy,
-                       compliance)[0]
-    return fi0, fi1, kind, out, p, shown, 2 if found else 1
+    found, a0, a1, c0, c1 = _uncovered(outer, delta, solved, -i0, -j0, x0, dx, y0, dy, ox,
+                                       oy, compliance)
+    if not found:
+        return fi0, fi1, kind, out, p, shown, 1, _NO_BOX
+    return fi0, fi1, kind, out, p, shown, 2, (ox + (a0 - 0.5) * dx, ox + (a1 + 0.5) * dx,
+                                              oy + (c0 - 0.5) * dy, oy + (c1 + 0.5) * dy)
 
 
 def warm_normal(cp: ContactPoint, bounds: tuple[float, float, float, float],
                 grid_settings: GridSettings, settings: NormalSettings, pair: ElasticPair,
                 control: Control, found: WheelSearch | None, memory: PatchMemory,
-                factor: float) -> tuple[NormalResult, bool] | None:
+                factor: float) -> StagedNormal | None:
     """A warm patch's first normal solve and the check of its rigid overlap in one
     compiled call (:func:`_warm_normal`), as the wheel solver's Python path makes them
     (:attr:`~railcontact.contact.start.WarmStart.normal_stage`): the patch at the
@@ -361,12 +375,13 @@ def warm_normal(cp: ContactPoint, bounds: tuple[float, float, float, float],
     its overlap on the wheel's run checked (the first check of
     :func:`~railcontact.contact.wheelrail._overlap_covered`).
 
-    Returns ``(result, final)``: ``final`` when the result is the patch's solution, else
-    the solver goes on from it (grows its area, enlarges it to the overlap); None where
-    the stage is not that one call (nothing was solved: the caller takes the Python path):
-    a rigid contact point's frame, penetration control or a load the solver treats apart,
-    a start re-meshed off the lattice or without pressure, settings the solver would
-    reject, no compiled FFT product (small grids), a gap or a start not finite."""
+    Returns a :class:`~railcontact.contact.start.StagedNormal` (its result's
+    ``wall_time`` that of the whole stage: the gap, the start, the solve and the check),
+    or None where the stage is not that one call (nothing was solved: the caller takes
+    the Python path): a rigid contact point's frame, no searched wheel, penetration
+    control or a load the solver treats apart, a start re-meshed off the lattice or
+    without pressure, settings the solver would reject, no compiled FFT product (small
+    grids), a gap or a start not finite, a start floored to nothing."""
     plane = cp.plane
     frame = plane.frame
     load = control.load
@@ -396,7 +411,7 @@ def warm_normal(cp: ContactPoint, bounds: tuple[float, float, float, float],
     pressure, q, u, gaps = np.empty(shape), np.empty(shape), np.empty(shape), np.empty(shape)
     contact = np.empty(shape, dtype=bool)
     trace = found.trace
-    fi0, fi1, kind, out, start, shown, check = _warm_normal(
+    fi0, fi1, kind, out, start, shown, check, flagged = _warm_normal(
         plane.what, frame, plane.i0, plane.i1, grid.nx, grid.ny, grid.dx, grid.dy, grid.x0,
         grid.y0, FAR, p1, u1, n1x, n1y, d1x, d1y, x1, y1, box1, p0, u0, n0x, n0y, d0x,
         d0y, x00, y00, box0, c, extrapolate, reuse, generations <= REUSE_GENERATIONS,
@@ -409,7 +424,7 @@ def warm_normal(cp: ContactPoint, bounds: tuple[float, float, float, float],
     if out is None:
         return None
     res = solved_result(out, grid, pressure, q, u, gaps, contact, start, tol, t0)
-    return res, check == 1
+    return StagedNormal(res, check == 1, flagged if check == 2 else None)
 
 
 __all__ = ["warm_normal", "warm_tangential"]

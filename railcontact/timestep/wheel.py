@@ -19,7 +19,7 @@ from time import perf_counter
 
 from ..contact.loadloop import charge, vertical_approach, vertical_creep_estimate
 from ..contact.patch import normal_estimate, solve_patch_tangential
-from ..contact.start import NormalStart, WarmStart, no_start
+from ..contact.start import NormalStart, StagedNormal, WarmStart, no_start
 from ..contact.wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution
 from ..contact.wheelrail import solve_wheel, solve_wheel_normal, wheel_problem
 from ..errors import RailContactError, SolverError
@@ -29,7 +29,6 @@ from ..halfspace.grid import Grid
 from ..halfspace.hertz import HertzSolution, hertz
 from ..halfspace.materials import ElasticPair
 from ..halfspace.sums import array_sum
-from ..normal import NormalResult
 from ..settings import Control, GridSettings, NormalSettings
 from ..settings.case import MAX_PENETRATION
 from ..settings.convention import wheel_frame_creepage
@@ -213,6 +212,11 @@ class PassStart:
         The wheel's :class:`~railcontact.settings.ContactSettings`.
     pair
         The elastic pair.
+    factor
+        The extrapolation factor of the first remembered patch to ``time``.
+    found
+        The wheel searched at the step's pose, whose run the compiled normal stage's
+        reach check reads (:func:`~.compiled.warm_normal`; None: no such stage).
     """
 
     __slots__ = ("factor", "found", "last", "pair", "settings", "source", "time")
@@ -281,7 +285,7 @@ class PatchStart:
 
     def solve(self, cp: ContactPoint, bounds: tuple[float, float, float, float],
               grid_settings: GridSettings, settings: NormalSettings, pair: ElasticPair,
-              control: Control) -> tuple[NormalResult, bool] | None:
+              control: Control) -> StagedNormal | None:
         """The patch's first normal solve from this start and the check of its overlap in
         one compiled call (:func:`~.compiled.warm_normal`; the start's
         :attr:`~railcontact.contact.start.WarmStart.normal_stage`)."""
