@@ -16,9 +16,12 @@ in the same order, so the same bits, with Python only to gather the call's argum
 to form the result's records.
 
 Where a stage is not that one call the caller takes the Python path. The normal stage: a
-patch at its rigid contact point (no frame at the reference point), penetration control
-or a load below the solver's least, a start re-meshed off the lattice or without
-pressure, a grid small enough for a dense product or no FFTW C interface; a solution the
+patch at its rigid contact point (no frame at the reference point, or one whose samples
+were all formed, as a merged patch's cold area forms them), one beside other patches
+under approach control (its own gap), a later load pass of a step (started from the
+pass before, its grid kept), penetration control or a load below the solver's least, a
+start re-meshed off the lattice or without pressure, a grid small enough for a dense
+product or no FFTW C interface; a solution the
 patch solver would not keep as it is (its contact at the edge of its area, a place of the
 overlap beyond the grid that could touch) is handed on, and the solver goes on from it.
 The tangential stage: ConvexGS or a simplified model, a patch without a remembered
