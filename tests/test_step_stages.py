@@ -52,6 +52,10 @@ def solves(monkeypatch):
                         counted("normal", wheelrail.solve_patch_normal))
     monkeypatch.setattr(wheel, "solve_patch_tangential",
                         counted("tangential", wheel.solve_patch_tangential))
+    # (a warm patch's stages in one compiled call each, timestep.compiled)
+    monkeypatch.setattr(wheel, "warm_normal", counted("normal", wheel.warm_normal))
+    monkeypatch.setattr(wheel, "warm_tangential",
+                        counted("tangential", wheel.warm_tangential))
     monkeypatch.setattr(hertz_module, "semi_axes", counted("hertz", hertz_module.semi_axes))
     for cls in (InfluenceOperator, *InfluenceOperator.__subclasses__()):
         if "apply" in vars(cls):

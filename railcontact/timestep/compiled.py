@@ -1,29 +1,30 @@
 """The warm step's stages as single compiled calls.
 
-A warm patch's normal stage (:func:`warm_normal`) was the undeformed gap on the patch's
-grid, the remembered pressure and displacement extrapolated onto it
-(:func:`~.warmstart.previous_start`), the CG solve
+On the wheel solver's Python path a warm patch's normal stage is five kernels with Python
+between them: the undeformed gap on the patch's grid, the remembered pressure and
+displacement extrapolated onto it (:func:`~.warmstart.previous_start`), the CG solve
 (:func:`~railcontact.normal.bem.solve_normal`) and the check that the rigid overlap holds
-no place beyond the grid the contact could reach
-(:func:`~railcontact.contact.wheelrail._overlap_covered`): five kernels with Python
-between them. Its tangential stage
-(:func:`warm_tangential`) was three: the remembered traction advanced along its rate onto
-the patch's grid (:func:`~.warmstart.previous_tangential`), SteadyGS on the window of the
+no place beyond the grid the contact could reach (its box on the wheel's run, then the
+places beyond the grid: :func:`~railcontact.contact.wheelrail._overlap_covered`). Its
+tangential stage is three: the remembered traction advanced along its rate onto the
+patch's grid (:func:`~.warmstart.previous_tangential`), SteadyGS on the window of the
 contact (:func:`~railcontact.contact.patch.solve_patch_tangential`) and the traction's new
 rate (:func:`~.warmstart.traction_rate`). Here each runs as one call that releases the
-GIL (:func:`_warm_normal`, :func:`_warm_tangential`): the same kernels on the same arrays
-in the same order, so the same bits, with Python only to gather the call's arguments and
-to form the result's records.
+GIL (:func:`warm_normal`: :func:`_warm_normal`; :func:`warm_tangential`:
+:func:`_warm_tangential`): the same kernels on the same arrays in the same order, so the
+same bits, with Python only to gather the call's arguments and to form the result's
+records.
 
 Where a stage is not that one call the caller takes the Python path. The normal stage: a
 patch at its rigid contact point (no frame at the reference point, or one whose samples
 were all formed, as a merged patch's cold area forms them), one beside other patches
-under approach control (its own gap), a later load pass of a step (started from the
-pass before, its grid kept), penetration control or a load below the solver's least, a
-start re-meshed off the lattice or without pressure, a grid small enough for a dense
-product or no FFTW C interface; a solution the
-patch solver would not keep as it is (its contact at the edge of its area, a place of the
-overlap beyond the grid that could touch) is handed on, and the solver goes on from it.
+under approach control (its own gap), a later solve of a load pass at a frame formed
+again (started from the solve before, its grid kept), penetration control or a load
+below the solver's least, a start re-meshed off the lattice or without pressure, a grid
+small enough for a dense product or no FFTW C interface. A solution the patch solver
+would not keep as it is (its contact at the edge of its area, a place of the overlap
+beyond the grid that could touch) is handed on with what the check found, and the solver
+goes on from it.
 The tangential stage: ConvexGS or a simplified model, a patch without a remembered
 traction rate or older step (the first warm steps; a later load pass of a step, which
 starts from the pass before), zero creepage, a start off the grid's lattice, a window
