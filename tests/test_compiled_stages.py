@@ -196,14 +196,28 @@ def stage_call(monkeypatch):
     return before, args, after, rate
 
 
-def test_the_stage_called_again_gives_its_answer(stage_call):
+def test_the_stage_is_the_python_paths_start_solve_and_rate(stage_call):
+    """The stage's traction, map, sweeps and rate are those of the Python path's three
+    calls on a copy of the same patch: the remembered traction advanced along its rate
+    (previous_tangential), SteadyGS (solve_patch_tangential), the new rate
+    (traction_rate)."""
+    from railcontact.contact.patch import solve_patch_tangential
+    from railcontact.timestep.warmstart import _previous_tangential, traction_rate
+
     before, args, after, rate = stage_call
+    settings, pair, fft, creepage, memory, factor, last, time, gain = args
     patch = copy.deepcopy(before)
-    done, again = compiled.warm_tangential(patch, *args)
-    assert done
-    np.testing.assert_array_equal(again, rate)
-    np.testing.assert_array_equal(patch.tangential.traction, after.tangential.traction)
+    grid = patch.normal.grid
+    solve_patch_tangential(patch, settings, pair, fft, creepage=list(creepage),
+                           previous=_previous_tangential(memory, factor, grid))
+    t, c = patch.tangential, after.tangential
+    np.testing.assert_array_equal(t.traction, c.traction)
+    np.testing.assert_array_equal(t.state, c.state)
+    assert (t.iterations, t.error, t.force, t.spin_moment) == (
+        c.iterations, c.error, c.force, c.spin_moment)
     assert patch.creepage == after.creepage and patch.friction == after.friction
+    assert patch.work.tangential_iterations == after.work.tangential_iterations
+    np.testing.assert_array_equal(traction_rate(t.traction, grid, time, last, gain), rate)
 
 
 @pytest.mark.parametrize("change", ["no rate", "factor 0", "zero creepage", "convexgs",

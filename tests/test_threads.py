@@ -114,6 +114,7 @@ def _dispatchers():
 
 SHORT_KERNELS = {
     "railcontact.contact.patch._uncovered", "railcontact.geometry.kernels.count_runs",
+    "railcontact.geometry.kernels.gap_on_frame",
     "railcontact.geometry.kernels.gap_on_grid_part",
     "railcontact.geometry.kernels.merge_saddles",
     "railcontact.geometry.kernels.overlap_box_frame", "railcontact.halfspace.grid._bilinear",

@@ -123,7 +123,7 @@ class WarmStart:
     pressure_on: Callable[[Grid], NormalStart] = _no_pressure
     bounds: Bounds | None = None
     traction_on: Callable[[Grid], TangentialStart | None] = _no_traction
-    normal_stage: Callable[..., tuple | None] | None = None
+    normal_stage: Callable[..., StagedNormal | None] | None = None
 
     @property
     def gives_pressure(self) -> bool:

@@ -661,6 +661,26 @@ def gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
     return True, i0, i1
 
 
+@numba.njit(cache=True)  # a few us: keeps the GIL (see the threads docs)
+def gap_on_frame(what, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out):
+    """:func:`gap_on_grid` of a frame at the reference point formed at the samples
+    ``i0:i1`` of ``frame`` (``what``: the arguments of :func:`extend_frame` before
+    ``i0``, as :class:`~.points.TangentPlane` keeps them, its samples ``s`` the 19th),
+    formed further (:func:`extend_frame`) where the grid reads beyond them
+    (:func:`gap_on_grid_part`); returns the samples formed then (i0, i1)."""
+    s = what[18]
+    while True:
+        done, a, b = gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out)
+        if done:
+            return i0, i1
+        a, b = min(a, i0), max(b, i1)
+        extend_frame(what[0], what[1], what[2], what[3], what[4], what[5], what[6],
+                     what[7], what[8], what[9], what[10], what[11], what[12], what[13],
+                     what[14], what[15], what[16], what[17], what[18], what[19], i0, i1, a,
+                     b, frame)
+        i0, i1 = a, b
+
+
 @numba.njit(cache=True, nogil=True, inline="always")
 def _gap_rows(s, f, a_of_s, x0, dx, nx, y0, dy, ny, far, out):
     """``out[ix, jy]`` = f(y) + A(y) x^2 interpolated from the samples (``f`` = ``far``

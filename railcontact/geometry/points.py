@@ -220,13 +220,12 @@ class ContactPoint:
                                 float(grid.dx), grid.nx, float(grid.y0), float(grid.dy),
                                 grid.ny, FAR, out)
             return out
-        while True:  # a frame at the reference point formed over part of its samples
-            done, a, b = kernels.gap_on_grid_part(
-                _S_SAMPLES, plane.frame, plane.i0, plane.i1, float(grid.x0),
-                float(grid.dx), grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
-            if done:
-                return out
-            _extend(plane, a, b)
+        # a frame at the reference point formed over part of its samples: formed further
+        # where the grid reads beyond them
+        plane.i0, plane.i1 = kernels.gap_on_frame(
+            plane.what, plane.frame, plane.i0, plane.i1, float(grid.x0), float(grid.dx),
+            grid.nx, float(grid.y0), float(grid.dy), grid.ny, FAR, out)
+        return out
 
     def lateral_extent(self, delta: float, margin: float = 1.0) -> tuple[float, float]:
         """:func:`lateral_extent` of this patch."""

@@ -49,7 +49,7 @@ from ..contact.patch import (
 )
 from ..contact.results import PatchSolution
 from ..contact.start import StagedNormal
-from ..geometry.kernels import FRAME_GROW, extend_frame, gap_on_grid_part, overlap_box_frame
+from ..geometry.kernels import FRAME_GROW, gap_on_frame, overlap_box_frame
 from ..geometry.points import FAR, K0, ContactPoint, WheelSearch
 from ..halfspace.grid import Grid
 from ..halfspace.hertz import MIN_LOAD
@@ -251,27 +251,6 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
 
 
 @numba.njit(cache=True, nogil=True)
-def _gap_on_frame(what, frame, i0, i1, x0, dx, nx, y0, dy, ny, far,
-                  out):  # pragma: no cover - compiled
-    """The undeformed gap on a grid (nx, ny) written to ``out``
-    (:meth:`~railcontact.geometry.points.ContactPoint.gap_on_grid`) of a frame at the
-    reference point formed at the samples ``i0:i1`` of ``frame`` (``what`` its
-    :class:`~railcontact.geometry.points.TangentPlane`'s), formed further where the
-    grid reads beyond them, as the Python path forms it; returns the samples formed."""
-    s = what[18]
-    while True:
-        done, a, b = gap_on_grid_part(s, frame, i0, i1, x0, dx, nx, y0, dy, ny, far, out)
-        if done:
-            return i0, i1
-        a, b = min(a, i0), max(b, i1)
-        extend_frame(what[0], what[1], what[2], what[3], what[4], what[5], what[6],
-                     what[7], what[8], what[9], what[10], what[11], what[12], what[13],
-                     what[14], what[15], what[16], what[17], what[18], what[19], i0, i1, a,
-                     b, frame)
-        i0, i1 = a, b
-
-
-@numba.njit(cache=True, nogil=True)
 def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x, n1y, d1x,
                  d1y, x1, y1, box1, p0, u0, n0x, n0y, d0x, d0y, x00, y00, box0, c,
                  extrapolate, reuse, use_shown, generations, kernels, kernel, product,
@@ -307,7 +286,7 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
     (xmin, xmax, ymin, ymax) [m] around them (that of
     :func:`~railcontact.contact.patch.uncovered`)."""
     h = np.empty((nx, ny))
-    fi0, fi1 = _gap_on_frame(what, frame, fi0, fi1, x0, dx, nx, y0, dy, ny, far, h)
+    fi0, fi1 = gap_on_frame(what, frame, fi0, fi1, x0, dx, nx, y0, dy, ny, far, h)
     p, shown, kind = _pressure_start(nx, ny, dx, dy, x0, y0, p1, u1, n1x, n1y, d1x, d1y,
                                      x1, y1, box1, p0, u0, n0x, n0y, d0x, d0y, x00, y00,
                                      box0, c, extrapolate, reuse)
@@ -354,7 +333,7 @@ def _warm_normal(what, frame, fi0, fi1, nx, ny, dx, dy, x0, y0, far, p1, u1, n1x
     mx, my = i1 - i0, j1 - j0
     ox, oy = x0 + i0 * dx, y0 + j0 * dy
     outer = np.empty((mx, my))
-    fi0, fi1 = _gap_on_frame(what, frame, fi0, fi1, ox, dx, mx, oy, dy, my, far, outer)
+    fi0, fi1 = gap_on_frame(what, frame, fi0, fi1, ox, dx, mx, oy, dy, my, far, outer)
     solved = q if out[12] else pressure
     found, a0, a1, c0, c1 = _uncovered(outer, delta, solved, -i0, -j0, x0, dx, y0, dy, ox,
                                        oy, compliance)
