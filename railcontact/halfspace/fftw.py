@@ -183,10 +183,17 @@ else:  # pragma: no cover
     execute = None
 
 
+_DIMS = {n: _IODim * n for n in (1, 2, 3)}
+"""The array types of 1-3 dimensions (formed once: ctypes forms a new type, a reference
+cycle for the garbage collector, at every ``_IODim * n``)."""
+
+
 def _dims(a: np.ndarray, b: np.ndarray, axes: Sequence[int]) -> ctypes.Array:
     size = a.itemsize
-    return (_IODim * max(len(axes), 1))(
-        *[_IODim(a.shape[x], a.strides[x] // size, b.strides[x] // size) for x in axes])
+    n = max(len(axes), 1)
+    kind = _DIMS.get(n) or _IODim * n
+    return kind(*[_IODim(a.shape[x], a.strides[x] // size, b.strides[x] // size)
+                  for x in axes])
 
 
 def plan_dft(a: np.ndarray, b: np.ndarray, axes: Sequence[int], direction: str,

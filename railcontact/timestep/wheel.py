@@ -150,8 +150,8 @@ class StepStart:
             cp, n = patch.geometry, patch.normal
             u, z = cp.rail_u, cp.position[2]
             ps = starts.last  # (the start of this patch's contact point: its match)
-            if ps is not None and ps.cp is cp:
-                m, c = ps.memory, ps.factor
+            if ps is not None and ps[0] is cp:
+                m, c = ps[1], ps[2]
             else:
                 m = match(source, u, z) if source else None  # None without warm start
                 c = 0.0 if m is None else m.extrapolation(time)
@@ -229,9 +229,11 @@ class PassStart:
         (:meth:`~.warmstart.PatchMemory.extrapolation`)."""
         self.found = found
         """The wheel searched at the step's pose (None: no compiled normal stage)."""
-        self.last: PatchStart | None = None
-        """The last patch start formed (its contact point's match read again after the
-        normal solve)."""
+        self.last: tuple[ContactPoint, PatchMemory | None, float] | None = None
+        """The last patch start formed: its contact point, the remembered patch it matches
+        and that patch's extrapolation factor (read again after the normal solve). Not the
+        :class:`PatchStart`, which holds this start: a step's records form no reference
+        cycle, so that they are freed when dropped, not by the garbage collector."""
 
     def __call__(self, cp: ContactPoint, hz: HertzSolution | None, ctrl: Control
                  ) -> WarmStart:
@@ -243,7 +245,8 @@ class PassStart:
         its edge); Hertz's penetration read only then."""
         source = self.source
         m = match(source, cp.rail_u, cp.position[2]) if source else None
-        self.last = start = PatchStart(self, cp, hz, ctrl, m)
+        start = PatchStart(self, cp, hz, ctrl, m)
+        self.last = (cp, m, start.factor)
         if m is None:
             return start.estimate()
         bounds = (None if len(source) > 1 and merged(cp, m, source,
