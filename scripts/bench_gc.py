@@ -3,7 +3,7 @@
 Python frees an object when its last reference goes, except objects in reference cycles,
 which wait for the cyclic garbage collector. Its collections run under the GIL (every
 thread waits) and a full one traverses every object of the process, tens of thousands
-once numba, SciPy and Dask are imported: a pause of tens of ms, which a real-time host
+once numba and SciPy are imported: a pause of tens of ms, which a real-time host
 cannot take. A step that forms no reference cycles frees what it allocates itself, and
 the collector then has nothing to start for.
 

@@ -3,12 +3,13 @@
 Python frees an object whose last reference goes at once, except objects in a reference
 cycle, which wait for the cyclic garbage collector. Its collections stop every thread
 (they run under the GIL), and a full one traverses every object of the process (tens of
-thousands with numba, SciPy and Dask imported: tens of ms), a pause a real-time host cannot
+thousands with numba and SciPy imported: tens of ms), a pause a real-time host cannot
 take. A step that forms no cycles leaves the collector nothing to do: here, steps with the
 collector off leave no unreachable object behind, warm and cold, under load and
-penetration control, on one patch and on two, with and without the rigid wheelset's
-search (a patch start that its pass kept for after the normal solve, and an FFT plan's
-ctypes dimension type formed at each plan, were such cycles).
+penetration control, on the flange and with two patches a wheel, with and without the
+rigid wheelset's search (a patch start that its pass kept for after the normal solve was
+such a cycle); and an FFT plan leaves nothing behind (the ctypes type of its dimensions,
+a cycle, is formed once).
 """
 
 from __future__ import annotations
@@ -17,9 +18,11 @@ import gc
 import math
 from collections import Counter
 
+import numpy as np
 import pytest
 
 import railcontact as rc
+from railcontact.halfspace import fftw
 
 STEEL = rc.Material(206e9, 0.28)
 W = 2 * math.pi * 1.5
@@ -33,12 +36,12 @@ def _contact(**settings) -> rc.WheelsetContact:
 
 
 def _step(contact: rc.WheelsetContact, k: int, y0: float, amplitude: float,
-          vertical: float | None) -> None:
+          vertical: float | None, load: float) -> None:
     t = k * 1e-3
     y = y0 + amplitude * math.sin(W * t)
     kinematics = rc.Kinematics(30.0, amplitude * W * math.cos(W * t))
     if vertical is None:
-        contact.solve(rc.Pose(y), loads=(83.3e3, 83.3e3), kinematics=kinematics, time=t)
+        contact.solve(rc.Pose(y), loads=(load, load), kinematics=kinematics, time=t)
     else:
         contact.solve(rc.Pose(y), vertical=vertical, kinematics=kinematics, time=t)
 
@@ -48,30 +51,58 @@ def _unreachable(contact: rc.WheelsetContact, steps: int, **run) -> Counter:
     operators) leave for the garbage collector, by type."""
     for k in range(steps):
         _step(contact, k, **run)
+    return _left_by(lambda: [_step(contact, k, **run) for k in range(steps, 2 * steps)])
+
+
+def _left_by(work) -> Counter:
+    """The objects ``work()`` leaves for the garbage collector (run with it off), by type;
+    the collector's state as it was."""
+    enabled, debug = gc.isenabled(), gc.get_debug()
     gc.collect()
     gc.disable()
     try:
-        for k in range(steps, 2 * steps):
-            _step(contact, k, **run)
-        gc.set_debug(gc.DEBUG_SAVEALL)
+        work()
+        gc.set_debug(debug | gc.DEBUG_SAVEALL)
         gc.collect()
-        left = Counter(type(o).__name__ for o in gc.garbage)
+        return Counter(type(o).__name__ for o in gc.garbage)
     finally:
-        gc.set_debug(0)
+        gc.set_debug(debug)
         gc.garbage.clear()
-        gc.enable()
-    return left
+        if enabled:
+            gc.enable()
 
 
-@pytest.mark.parametrize("warm_start, rigid, y0, amplitude, vertical", [
-    ("previous+estimate", "skip", 0.0, 3e-3, None),  # the hunting run, warm
-    ("none", "skip", 0.0, 3e-3, None),  # cold: every pass formed afresh
-    ("previous+estimate", "skip", 0.0, 1e-3, -2.5e-4),  # penetration control
-    ("previous+estimate", "skip", 7e-3, 1e-3, None),  # at the flange: two patches
-    ("previous+estimate", "solve", 0.0, 3e-3, None),  # the rigid wheelset's search
+@pytest.mark.parametrize("warm_start, rigid, y0, amplitude, vertical, load, patches", [
+    ("previous+estimate", "skip", 0.0, 3e-3, None, 83.3e3, 1),  # the hunting run, warm
+    ("none", "skip", 0.0, 3e-3, None, 83.3e3, 1),  # cold: every pass formed afresh
+    ("previous+estimate", "skip", 0.0, 1e-3, -2.5e-4, None, 1),  # penetration control
+    ("previous+estimate", "skip", 7e-3, 1e-3, None, 83.3e3, 1),  # on the flange
+    ("previous+estimate", "skip", 5.1e-3, 1e-4, None, 12e3, 2),  # two patches a wheel
+    ("previous+estimate", "solve", 0.0, 3e-3, None, 83.3e3, 1),  # the rigid wheelset
 ])
 def test_steps_leave_nothing_to_the_garbage_collector(warm_start, rigid, y0, amplitude,
-                                                      vertical):
+                                                      vertical, load, patches):
     contact = _contact(warm_start=warm_start, rigid_wheelset=rigid)
-    left = _unreachable(contact, 8, y0=y0, amplitude=amplitude, vertical=vertical)
+    left = _unreachable(contact, 8, y0=y0, amplitude=amplitude, vertical=vertical,
+                        load=load)
     assert not left, f"reference cycles left by the steps: {left.most_common(8)}"
+    # (the run reaches what it is for: both wheels in contact, the patches a wheel)
+    result = contact.solve(rc.Pose(y0), loads=None if load is None else (load, load),
+                           vertical=vertical, kinematics=rc.Kinematics(30.0, 0.0),
+                           time=16e-3)
+    assert result.left.normal_force > 0 and result.right.normal_force > 0
+    assert max(len(result.left.patches), len(result.right.patches)) == patches
+
+
+@pytest.mark.skipif(not fftw.AVAILABLE, reason="FFTW's C interface not found")
+def test_an_fft_plan_leaves_nothing_to_the_garbage_collector():
+    """A plan formed after a collection (which frees any ctypes type no longer held)."""
+    a = np.zeros((6, 10), dtype=complex)
+    b = np.zeros((6, 10), dtype=complex)
+    plans = []
+    left = _left_by(lambda: plans.extend(
+        fftw.plan_dft(a, b, axes, "FFTW_FORWARD", ["FFTW_ESTIMATE"])
+        for axes in ((0, 1), (1,))))
+    fftw.destroy(plans)
+    assert all(plans)
+    assert not left, f"reference cycles left by the plans: {left.most_common(8)}"

@@ -184,8 +184,9 @@ else:  # pragma: no cover
 
 
 _DIMS = {n: _IODim * n for n in (1, 2, 3)}
-"""The array types of 1-3 dimensions (formed once: ctypes forms a new type, a reference
-cycle for the garbage collector, at every ``_IODim * n``)."""
+"""The array types of 1-3 dimensions, held for good: ctypes keeps ``_IODim * n`` only while
+the type is alive, and a type is a reference cycle, so a plan formed after the garbage
+collector freed the last one formed a new type, which left another cycle behind."""
 
 
 def _dims(a: np.ndarray, b: np.ndarray, axes: Sequence[int]) -> ctypes.Array:
