@@ -9,13 +9,18 @@ collector off leave no unreachable object behind, warm and cold, under load and
 penetration control, on the flange and with two patches a wheel, with and without the
 rigid wheelset's search (a patch start that its pass kept for after the normal solve was
 such a cycle); and an FFT plan leaves nothing behind (the ctypes type of its dimensions,
-a cycle, is formed once).
+a cycle, is formed once). The steps run in a new Python process (this file run as a
+script), where no other thread - an event loop another test left running, pytest-xdist's
+own - can leave cycles of its own while they run.
 """
 
 from __future__ import annotations
 
 import gc
+import json
 import math
+import subprocess
+import sys
 from collections import Counter
 
 import numpy as np
@@ -72,31 +77,26 @@ def _left_by(work) -> Counter:
             gc.enable()
 
 
-@pytest.mark.parametrize("warm_start, rigid, y0, amplitude, vertical, load, patches", [
-    ("previous+estimate", "skip", 0.0, 3e-3, None, 83.3e3, 1),  # the hunting run, warm
-    ("none", "skip", 0.0, 3e-3, None, 83.3e3, 1),  # cold: every pass formed afresh
-    ("previous+estimate", "skip", 0.0, 1e-3, -2.5e-4, None, 1),  # penetration control
-    ("previous+estimate", "skip", 7e-3, 1e-3, None, 83.3e3, 1),  # on the flange
-    ("previous+estimate", "skip", 5.1e-3, 1e-4, None, 12e3, 2),  # two patches a wheel
-    ("previous+estimate", "solve", 0.0, 3e-3, None, 83.3e3, 1),  # the rigid wheelset
-])
-def test_steps_leave_nothing_to_the_garbage_collector(warm_start, rigid, y0, amplitude,
-                                                      vertical, load, patches):
-    contact = _contact(warm_start=warm_start, rigid_wheelset=rigid)
-    left = _unreachable(contact, 8, y0=y0, amplitude=amplitude, vertical=vertical,
-                        load=load)
-    assert not left, f"reference cycles left by the steps: {left.most_common(8)}"
-    # (the run reaches what it is for: both wheels in contact, the patches a wheel)
-    result = contact.solve(rc.Pose(y0), loads=None if load is None else (load, load),
-                           vertical=vertical, kinematics=rc.Kinematics(30.0, 0.0),
-                           time=16e-3)
-    assert result.left.normal_force > 0 and result.right.normal_force > 0
-    assert max(len(result.left.patches), len(result.right.patches)) == patches
+CASES = {  # name: (contact settings, run, the most patches a wheel)
+    "hunting, warm": (dict(warm_start="previous+estimate"),
+                      dict(y0=0.0, amplitude=3e-3, vertical=None, load=83.3e3), 1),
+    "hunting, cold": (dict(warm_start="none"),  # every pass formed afresh
+                      dict(y0=0.0, amplitude=3e-3, vertical=None, load=83.3e3), 1),
+    "penetration control": (dict(warm_start="previous+estimate"),
+                            dict(y0=0.0, amplitude=1e-3, vertical=-2.5e-4, load=None), 1),
+    "on the flange": (dict(warm_start="previous+estimate"),
+                      dict(y0=7e-3, amplitude=1e-3, vertical=None, load=83.3e3), 1),
+    "two patches a wheel": (dict(warm_start="previous+estimate"),
+                            dict(y0=5.1e-3, amplitude=1e-4, vertical=None, load=12e3), 2),
+    "the rigid wheelset's search": (dict(warm_start="previous+estimate",
+                                         rigid_wheelset="solve"),
+                                    dict(y0=0.0, amplitude=3e-3, vertical=None, load=83.3e3), 1),
+}
 
 
-@pytest.mark.skipif(not fftw.AVAILABLE, reason="FFTW's C interface not found")
-def test_an_fft_plan_leaves_nothing_to_the_garbage_collector():
-    """A plan formed after a collection (which frees any ctypes type no longer held)."""
+def _plan_left() -> Counter:
+    """What FFT plans formed after a collection (which frees any ctypes type no longer
+    held) leave for the collector."""
     a = np.zeros((6, 10), dtype=complex)
     b = np.zeros((6, 10), dtype=complex)
     plans = []
@@ -105,4 +105,52 @@ def test_an_fft_plan_leaves_nothing_to_the_garbage_collector():
         for axes in ((0, 1), (1,))))
     fftw.destroy(plans)
     assert all(plans)
+    return left
+
+
+def _measure() -> dict:
+    """Each case's objects left for the collector by type, its wheels' normal forces [N]
+    and its most patches a wheel (one more step, at the run's centre); the FFT plans'."""
+    out = {}
+    for name, (settings, run, _) in CASES.items():
+        contact = _contact(**settings)
+        left = _unreachable(contact, 8, **run)
+        load, vertical = run["load"], run["vertical"]
+        result = contact.solve(rc.Pose(run["y0"]), vertical=vertical,
+                               loads=None if load is None else (load, load),
+                               kinematics=rc.Kinematics(30.0, 0.0), time=16e-3)
+        out[name] = {"left": dict(left),
+                     "forces": [result.left.normal_force, result.right.normal_force],
+                     "patches": max(len(result.left.patches), len(result.right.patches))}
+    if fftw.AVAILABLE:
+        out["fft plans"] = {"left": dict(_plan_left())}
+    return out
+
+
+@pytest.fixture(scope="module")
+def measured() -> dict:
+    """:func:`_measure` in a new Python process (this file as a script)."""
+    run = subprocess.run([sys.executable, __file__], capture_output=True, text=True,
+                         timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return json.loads(run.stdout.splitlines()[-1])
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_steps_leave_nothing_to_the_garbage_collector(measured, case):
+    m = measured[case]
+    left = Counter(m["left"])
+    assert not left, f"reference cycles left by the steps: {left.most_common(8)}"
+    # (the run reaches what it is for: both wheels in contact, the patches a wheel)
+    assert min(m["forces"]) > 0
+    assert m["patches"] == CASES[case][2]
+
+
+@pytest.mark.skipif(not fftw.AVAILABLE, reason="FFTW's C interface not found")
+def test_an_fft_plan_leaves_nothing_to_the_garbage_collector(measured):
+    left = Counter(measured["fft plans"]["left"])
     assert not left, f"reference cycles left by the plans: {left.most_common(8)}"
+
+
+if __name__ == "__main__":
+    print(json.dumps(_measure()))
