@@ -232,7 +232,7 @@ class PassStart:
         self.last: tuple[ContactPoint, PatchMemory | None, float] | None = None
         """The last patch start formed: its contact point, the remembered patch it matches
         and that patch's extrapolation factor (read again after the normal solve). Not the
-        :class:`PatchStart`, which holds this start: a step's records form no reference
+        :class:`PatchStart`, which holds this pass: a step's records form no reference
         cycle, so that they are freed when dropped, not by the garbage collector."""
 
     def __call__(self, cp: ContactPoint, hz: HertzSolution | None, ctrl: Control
