@@ -53,9 +53,16 @@ def run(steps: int, every: int, start_error: bool = False) -> dict:
                      initial_traction=initial_traction, initial_state=initial_state,
                      spin_offset=spin_offset, **kw)
         if keep[0] and initial_traction is not None and out.iterations > 0:
+            # (a solve on the contact's window returns its traction on the patch's grid,
+            # ``embed``: the exact solve starts from, and is compared on, the window)
+            embed = kw.get("embed")
+            solved = out.traction if embed is None else out.traction[:, embed[1][0],
+                                                                     embed[1][1]]
             exact = solver(grid, operator, pressure, friction, creepage,
-                           initial_traction=out.traction, tolerance=1e-9,
+                           initial_traction=solved, tolerance=1e-9,
                            max_iterations=3000, spin_offset=spin_offset)
+            if not exact.converged:
+                raise RuntimeError(f"the tight solve did not converge: {exact.message}")
             n = np.linalg.norm(exact.traction)
             starts.append(np.linalg.norm(np.asarray(initial_traction) - exact.traction) / n)
         return out
@@ -71,11 +78,16 @@ def run(steps: int, every: int, start_error: bool = False) -> dict:
             check = k > 0 and k % every == 0
             keep[0] = check
             r = wc.solve(pose, loads=(83.3e3, 83.3e3), kinematics=kin, time=t)
+            if r.status != rc.Status.OK:  # (a study of failed steps would print nonsense)
+                raise RuntimeError(f"step {k}: {[w.message for w in r.wheels]}")
             normal.append(sum(x.normal_iterations for x in r.wheels))
             sweeps.append(sum(x.tangential_iterations for x in r.wheels))
             if check:
                 keep[0] = False
                 q = ref.solve(pose, loads=(83.3e3, 83.3e3), kinematics=kin, time=t)
+                if q.status != rc.Status.OK:
+                    raise RuntimeError(f"reference at step {k}: "
+                                       f"{[w.message for w in q.wheels]}")
                 for a, b in zip(r.wheels, q.wheels, strict=True):
                     d = math.hypot(a.creep_force[0] - b.creep_force[0],
                                    a.creep_force[1] - b.creep_force[1])
