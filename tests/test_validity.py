@@ -312,7 +312,11 @@ def test_vertical_and_roll_with_creepages(lateral):
 def test_vertical_and_roll_not_found_is_said(monkeypatch):
     """On the flange the roll needs several evaluations; allowed only one, the solution
     says it did not converge (with by how much) instead of passing its first guess as
-    ok."""
+    ok, and so does the wheelset's status (the FMU's): its wheels carry their loads (each
+    solved under load control), but its vertical displacement, roll and moment about its
+    centre are that guess's."""
+    from railcontact.fmu.variables import table
+    from railcontact.status import Status
     from railcontact.timestep import rigid
 
     monkeypatch.setattr(rigid, "MAX_EVALUATIONS", 1)
@@ -320,6 +324,15 @@ def test_vertical_and_roll_not_found_is_said(monkeypatch):
     s = r.rigid_solution
     assert not s.converged and s.evaluations == 1
     assert "not converged" in s.message and "um" in s.message
+    assert all(w.status in (OK, OUTSIDE_VALIDITY) for w in r.wheels)  # (solved)
+    assert all(w.track_force[2] == pytest.approx(Q, rel=1e-3) for w in r.wheels)
+    assert r.status == Status.NOT_CONVERGED
+    status = next(v for v in table() if v.name == "status")
+    assert status.value(r) == Status.NOT_CONVERGED  # (the FMU's output)
+    monkeypatch.undo()  # found: the wheels' status again
+    r = contact().solve(Pose(8e-3), loads=(Q, Q), creepages=NONE)
+    assert r.rigid_solution.converged and r.status in (OK, OUTSIDE_VALIDITY)
+    assert r.status == Status.worst(w.status for w in r.wheels)
 
 
 def test_a_result_pickles_with_its_roll():

@@ -165,10 +165,16 @@ class WheelsetResult:
 
     @property
     def status(self) -> int:
-        """The wheels' most severe status (:data:`SEVERITY`). Whether the rigid
-        wheelset's :attr:`vertical` and :attr:`roll` were found under load control is
-        :attr:`rigid_solution`'s (the FMU's ``status`` counts it)."""
-        return Status.worst(w.status for w in self.wheels)
+        """The wheelset's status: the wheels' most severe (:data:`SEVERITY`), and
+        ``NOT_CONVERGED`` at least where the rigid wheelset's :attr:`vertical` and
+        :attr:`roll` were not found under load control (they, and the :attr:`moment`
+        about the centre, are then the search's best iterate; :attr:`rigid_solution`'s
+        ``message`` says by how much they miss), as the FMU's ``status``."""
+        status = Status.worst(w.status for w in self.wheels)
+        rigid = self.rigid_solution
+        if rigid is not None and not rigid.converged:
+            return Status.worst((status, Status.NOT_CONVERGED))
+        return status
 
     @property
     def moment(self) -> tuple[float, float, float]:
