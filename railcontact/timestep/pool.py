@@ -7,9 +7,11 @@ of :meth:`WheelsetContact.solve` and returns their results in wheelset order: on
 trip through a pipe per worker process and step, the workers solving at the same time
 (and, with ``here``, this process solving a share of its own meanwhile).
 
-Processes, not threads: the Python that runs between the compiled kernels of a step holds
-the interpreter, so two wheelsets on two threads of one process take about as long as one
-after the other; in two processes they run on two cores at once.
+Processes as well as threads: the compiled kernels release the interpreter, so wheelsets
+on threads of one process overlap, but only in part, because the Python that runs between
+the kernels of a step holds it (two wheelsets on two threads take 0.6-0.75 of one after
+the other on two free cores). In two processes they run on two cores at once, at the cost
+of a pipe's round trip a step.
 
 The workers are started once with the ``spawn`` method (safe after the compiled kernels,
 FFTW and threads are initialised in the host; each worker loads the compiled kernels from
