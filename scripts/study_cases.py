@@ -84,6 +84,8 @@ def normal_case(dy: float) -> dict:
     base["geometry"]["lateral_displacement"] = dy
     approach = approach_for_load(base, LOAD)
     ref = rc.solve(penetration_case(dy, approach, 1e-9, "none"))
+    if not ref.converged:  # (the estimates' errors are measured against it)
+        raise rc.SolverError(f"{dy * MM:+.2f} mm: the normal reference did not converge")
     pair = ref.case.pair
     out = {"dy": dy, "approach": approach, "reference": ref, "patches": []}
     for rp in ref.patches:
@@ -98,6 +100,8 @@ def normal_case(dy: float) -> dict:
         out["patches"].append(patch)
     for est, (pre, runs) in itertools.product(NORMAL_ESTIMATES, SOLVERS.items()):
         sol = rc.solve(penetration_case(dy, approach, 1e-3, est, pre))
+        if not sol.converged:  # (its iterations would be the limit's)
+            raise rc.SolverError(f"{dy * MM:+.2f} mm, {est}, {pre}: did not converge")
         if len(sol.patches) != len(ref.patches):
             raise rc.RailContactError(f"{dy * MM:+.2f} mm: patch count depends on the estimate")
         for patch, sp in zip(out["patches"], sol.patches, strict=True):
@@ -115,6 +119,8 @@ def tangential_case(dy: float, approach: float, creepage: float) -> dict:
     c = penetration_case(dy, approach, 1e-9, "infcon")
     c["tangential"] = dict(tspec, tolerance=1e-8, max_iterations=5000)
     ref = rc.solve(c)
+    if not ref.converged:
+        raise rc.SolverError(f"{dy * MM:+.2f} mm: the tangential reference did not converge")
     rp = ref.patches[0]
     pair = ref.case.pair
     out = {"reference": rp, "estimates": {}, "runs": {}}
@@ -124,7 +130,10 @@ def tangential_case(dy: float, approach: float, creepage: float) -> dict:
     for est in TANGENTIAL_ESTIMATES:
         c = penetration_case(dy, approach, 1e-9, "infcon")
         c["tangential"] = dict(tspec, tolerance=1e-2, estimate=est)
-        out["runs"][est] = rc.solve(c).patches[0].tangential
+        run = rc.solve(c)
+        if not run.converged:
+            raise rc.SolverError(f"{dy * MM:+.2f} mm, {est}: did not converge")
+        out["runs"][est] = run.patches[0].tangential
     return out
 
 

@@ -79,7 +79,7 @@ def run(steps: int, every: int, start_error: bool = False) -> dict:
             keep[0] = check
             r = wc.solve(pose, loads=(83.3e3, 83.3e3), kinematics=kin, time=t)
             if r.status != rc.Status.OK:  # (a study of failed steps would print nonsense)
-                raise RuntimeError(f"step {k}: {[w.message for w in r.wheels]}")
+                raise RuntimeError(f"step {k}: {[x.message for x in r.wheels]}")
             normal.append(sum(x.normal_iterations for x in r.wheels))
             sweeps.append(sum(x.tangential_iterations for x in r.wheels))
             if check:
@@ -87,7 +87,7 @@ def run(steps: int, every: int, start_error: bool = False) -> dict:
                 q = ref.solve(pose, loads=(83.3e3, 83.3e3), kinematics=kin, time=t)
                 if q.status != rc.Status.OK:
                     raise RuntimeError(f"reference at step {k}: "
-                                       f"{[w.message for w in q.wheels]}")
+                                       f"{[x.message for x in q.wheels]}")
                 for a, b in zip(r.wheels, q.wheels, strict=True):
                     d = math.hypot(a.creep_force[0] - b.creep_force[0],
                                    a.creep_force[1] - b.creep_force[1])

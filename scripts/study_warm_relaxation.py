@@ -75,8 +75,11 @@ def capture(steps: int, every: int, tolerance: float = EPS_TAU) -> list[dict]:
         for k in range(steps):
             t = k * 1e-3
             keep[0] = k >= 20 and k % every == 0
-            wc.solve(rc.Pose(3e-3 * math.sin(w * t)), loads=(83.3e3, 83.3e3),
-                     kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
+            r = wc.solve(rc.Pose(3e-3 * math.sin(w * t)), loads=(83.3e3, 83.3e3),
+                         kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
+            if r.status != rc.Status.OK:  # (a failed step's successor starts from cold:
+                # its start would pass here as a previous step's)
+                raise RuntimeError(f"step {k}: {[x.message for x in r.wheels]}")
     finally:
         tangential.SOLVERS["steadygs"] = solver
         stages.ENABLED = True
@@ -123,6 +126,9 @@ def main() -> None:
     problems = capture(args.steps, args.every, args.run_tolerance)
     exact = [solve_steadygs(*p["args"], tolerance=1e-9, max_iterations=3000,
                             spin_offset=p["spin_offset"]) for p in problems]
+    if not all(e.converged for e in exact):  # (the errors are measured against these)
+        raise RuntimeError("a tight solve did not converge: "
+                           + "; ".join(e.message for e in exact if not e.converged))
     start_err = [np.linalg.norm(p["start"] - e.traction) / np.linalg.norm(e.traction)
                  for p, e in zip(problems, exact, strict=True)]
     print(f"{len(problems)} warm SteadyGS solves of the hunting run; start error "

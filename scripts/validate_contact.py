@@ -123,14 +123,16 @@ def run(folder: Path, profiles: Path) -> list[dict]:
         y = float(row["y_mm"])
         case = wheel_case(row, 0.5, TOLERANCE, ("infcon", "fastrip"), profiles, None,
                           convention="contact")
+        zone = "tread" if abs(y) <= TREAD_MM else "flange"
         try:
             sol = rc.solve(case)
-        except (rc.RailContactError, rc.SolverError) as exc:
+        except (rc.RailContactError, rc.SolverError) as exc:  # (a case that misses all)
             print(f"  y = {y:g} {row['side']}: {exc}", file=sys.stderr)
+            rows.append({"y_mm": y, "side": row["side"], "zone": zone, "converged": False,
+                         "misses": "", "error": str(exc)})
             continue
         theirs = contact_values(row)
         ours = railcontact_values(sol, row["side"])
-        zone = "tread" if abs(y) <= TREAD_MM else "flange"
         out = {"y_mm": y, "side": row["side"], "zone": zone, "converged": sol.converged}
         for key in ours:
             out[f"{key}_railcontact"] = ours[key]
@@ -140,20 +142,32 @@ def run(folder: Path, profiles: Path) -> list[dict]:
     return rows
 
 
+def met_every_target(r: dict) -> bool:
+    """Whether a case was solved, converged and is within every target."""
+    return not r.get("error") and r["converged"] and not r["misses"]
+
+
 def print_table(rows: list[dict]) -> None:
     head = " ".join(f"{k:>15}" for k, *_ in QUANTITIES)
     print(f"{'side':5} {'y':>5} {head}   targets missed")
+    failed = [r for r in rows if r.get("error")]
+    rows = [r for r in rows if not r.get("error")]
+    for r in failed:
+        print(f"{r['side']:5} {r['y_mm']:5.1f} not solved: {r['error']}")
     for r in rows:
         vals = " ".join(
             f"{r[f'{k}_railcontact'] * SCALE[k]:7.4g}/{r[f'{k}_contact'] * SCALE[k]:<7.4g}"
             for k, *_ in QUANTITIES)
-        print(f"{r['side']:5} {r['y_mm']:5.1f} {vals}   {r['misses'] or '-'}")
+        note = "" if r["converged"] else ", not converged"
+        print(f"{r['side']:5} {r['y_mm']:5.1f} {vals}   {r['misses'] or '-'}{note}")
     print("(railcontact/CONTACT: F_N, F_x, F_s [kN] on the rail, M_n [N m], p_max [MPa], "
           "area [mm^2], angle [rad], rolling radius [mm], reference point on the rail [mm])")
     for zone in ("tread", "flange"):
         zr = [r for r in rows if r["zone"] == zone]
-        met = [r for r in zr if not r["misses"]]
-        print(f"{zone}: {len(met)} of {len(zr)} cases meet every target")
+        met = [r for r in zr if met_every_target(r)]
+        lost = [r for r in failed if r["zone"] == zone]
+        print(f"{zone}: {len(met)} of {len(zr) + len(lost)} cases meet every target (solved, "
+              f"converged, within the targets)")
         for key, *_ in QUANTITIES:
             bad = [f"{r['side']} {r['y_mm']:g}" for r in zr if key in r["misses"].split()]
             if bad:
@@ -178,7 +192,8 @@ def plot(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(3, 3, figsize=(12, 9), sharex=True)
     for ax, (key, label, unit, _) in zip(axes.flat, QUANTITIES, strict=True):
         for side, colour in (("left", "C0"), ("right", "C3")):
-            rs = sorted((r for r in rows if r["side"] == side), key=lambda r: r["y_mm"])
+            rs = sorted((r for r in rows if r["side"] == side and not r.get("error")),
+                        key=lambda r: r["y_mm"])
             y = [r["y_mm"] for r in rs]
             ax.plot(y, [r[f"{key}_contact"] * SCALE[key] for r in rs], "o", mfc="none",
                     color=colour, label=f"CONTACT, {side}")

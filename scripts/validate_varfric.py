@@ -273,16 +273,27 @@ def run(numbers: list[int] | None, rows: bool, kinematic: bool = True) -> list[d
         ours = sorted(solved["patch"], key=lambda p: abs(p.geometry.contact_angle))
         by_row = (sorted(solved["row"], key=lambda p: abs(p.geometry.contact_angle))
                   if "row" in solved else [None] * len(ours))
+        if len(ours) != len(theirs) or len(by_row) != len(ours):
+            # (patches cannot be paired: every one of CONTACT's counts as missed)
+            out.append({"case": case["case"], "patches": len(theirs),
+                        "mismatch": f"railcontact found {len(ours)} patches "
+                                    f"({len(by_row)} with mu per row), CONTACT "
+                                    f"{len(theirs)}"})
+            continue
         diagnosis = None
         if len(ours) > 1 and any(misses(values(p, q), q) for p, q in zip(ours, theirs,
-                                                                          strict=False)):
+                                                                          strict=True)):
             diagnosis = sorted(solve_own_creepages(case, contact_mu=True),
                                key=lambda p: abs(p.geometry.contact_angle))
-        for k, (p, q, r) in enumerate(zip(ours, theirs, by_row, strict=False)):
+        for k, (p, q, r) in enumerate(zip(ours, theirs, by_row, strict=True)):
             v = values(p, q)
+            solves = [x for x in (p, r) if x is not None]
+            converged = all(x.normal.converged and (x.tangential is None or x.tangential.converged)
+                            for x in solves)
             row = {"case": case["case"], "patch": k + 1, "y": case["y"],
                    "yaw": case["yaw"], "seconds": seconds, "ours": v, "theirs": q,
-                   "misses": misses(v, q), "rows": None if r is None else values(r, q),
+                   "misses": misses(v, q) + ([] if converged else ["not converged"]),
+                   "rows": None if r is None else values(r, q),
                    "angle": p.geometry.contact_angle,
                    "creepage": p.reported_creepage,
                    "contact_mu": None if diagnosis is None else values(diagnosis[k], q)}
@@ -291,6 +302,10 @@ def run(numbers: list[int] | None, rows: bool, kinematic: bool = True) -> list[d
 
 
 def print_table(rows: list[dict]) -> None:
+    unpaired = [r for r in rows if "mismatch" in r]
+    rows = [r for r in rows if "mismatch" not in r]
+    for r in unpaired:
+        print(f"case {r['case']}: {r['mismatch']}: its patches miss every target")
     print(f"{'case':>4} {'y':>4} {'yaw':>6} " + " ".join(f"{k:>17}" for k in COLUMNS)
           + "  targets missed")
     for r in rows:
@@ -339,7 +354,8 @@ def print_table(rows: list[dict]) -> None:
             d = " ".join(f"{k} {100 * (w[k] / o[k] - 1):+6.2f}" for k in ("FN", "FX", "FS"))
             print(f"  case {r['case']} patch {r['patch']}: {d}")
     met = sum(not r["misses"] for r in rows)
-    print(f"{met} of {len(rows)} patches meet every target")
+    total = len(rows) + sum(r["patches"] for r in unpaired)
+    print(f"{met} of {total} patches meet every target (converged, within the targets)")
 
 
 def main() -> None:
@@ -353,7 +369,7 @@ def main() -> None:
     numbers = [int(c) for c in args.cases.split(",") if c]
     rows = run(numbers, not args.no_rows, args.creepages == "kinematics")
     print_table(rows)
-    sys.exit(0 if all(not r["misses"] for r in rows) else 1)
+    sys.exit(0 if all(not r.get("misses", True) for r in rows) else 1)
 
 
 if __name__ == "__main__":
