@@ -44,6 +44,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean tol_defined, fmi2
     if (!c) return fmi2Error;
     c->time = start;
     c->control[0] = start;
+    c->discards = 0;
     return fmi2OK;
 }
 
@@ -87,6 +88,7 @@ fmi2Status fmi2Reset(fmi2Component comp) {
     LEAVE;
     c->mode = INSTANTIATED;
     c->time = 0.0;
+    c->discards = 0;
     return s;
 }
 
@@ -193,6 +195,7 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
         py.DecRef(args);
     }
     LEAVE;
+    if (n) c->discards = 0; /* (a parameter set: the run of discards ends) */
     return status;
 }
 
@@ -209,6 +212,15 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     fmi2Status s = call_status(c, c->m_do_step, NULL);
     LEAVE;
     if (s <= fmi2Warning) c->time = t + h;
+    if (s != fmi2Discard) {
+        c->discards = 0;
+    } else if (c->discards > 0 && t == c->discarded_at && h == c->discarded_size) {
+        ++c->discards; /* the same step again, with the same inputs */
+    } else {
+        c->discards = 1;
+        c->discarded_at = t;
+        c->discarded_size = h;
+    }
     return s;
 }
 
@@ -251,6 +263,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state) {
     fmi2Status s = call_status(c, c->m_set_state, args);
     py.DecRef(args);
     LEAVE;
+    c->discards = 0;
     return s;
 }
 
@@ -358,11 +371,21 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s,
     return fmi2Discard;
 }
 
+/* fmi2Terminated: true once the same step (communication point and step size) has been
+ * discarded twice with no input or parameter changed between the two calls: the slave is
+ * deterministic, so a master that retries it as it is (fmpy's simulate_fmu after a
+ * discard, with constant or tabulated inputs) would retry for ever; a master that changes
+ * an input, the step size or the state goes on */
 fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s,
                                 fmi2Boolean *value) {
     Instance *c = comp;
-    if (!c || s != fmi2Terminated) return fmi2Discard;
-    *value = fmi2False;
+    if (!c || s != fmi2Terminated || !value) return fmi2Discard;
+    *value = c->discards >= 2 ? fmi2True : fmi2False;
+    if (*value)
+        logf_(c, fmi2Warning, "logStatusWarning",
+              "the step at t = %g s (size %g s) was discarded %d times with the same inputs: "
+              "the FMU asks to terminate (change an input to go on)",
+              c->discarded_at, c->discarded_size, c->discards);
     return fmi2OK;
 }
 

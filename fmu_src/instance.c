@@ -263,7 +263,10 @@ fmi2Status set_values(Instance *c, const char *type, const fmi2ValueReference vr
                   vr[k]);
             return fmi2Error;
         }
-        memcpy((char *)buffer + vr[k] * size, (const char *)value + k * size, size);
+        char *dst = (char *)buffer + vr[k] * size;
+        const char *src = (const char *)value + k * size;
+        if (memcmp(dst, src, size) != 0) c->discards = 0; /* a changed input: a new step */
+        memcpy(dst, src, size);
     }
     return fmi2OK;
 }

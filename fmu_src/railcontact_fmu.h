@@ -152,6 +152,11 @@ typedef struct {
     size_t n_string;
     char **string_cache;
     double time;
+    /* the run of fmi2DoStep calls discarded at the same communication point and step size
+     * with no input changed between them (0: the last step was not discarded), its point
+     * and size: repeated, such a call would give the same answer (fmi2Terminated) */
+    int discards;
+    double discarded_at, discarded_size;
 } Instance;
 
 /* a new instance with its started slave, or NULL (the reason logged) */

@@ -296,6 +296,45 @@ def test_discarded_step_statuses_agree_with_outputs(fmu, extracted, md, capsys):
     k.free()
 
 
+def test_a_step_discarded_twice_as_it_was_asks_to_terminate(fmu, extracted, md, capsys):
+    """A discarded step retried with the same time, step size and inputs is discarded
+    again (the slave is deterministic): after the second, fmi2Terminated reads true, with a
+    warning; a changed input goes on (solved), and a new discard starts the count again."""
+    from fmpy.fmi2 import fmi2Terminated
+
+    s = Slave(fmu, extracted, md, "terminate", warm_start="none", element_size=2e-3)
+    assert s.step(lateral_displacement=2e-3) == 0
+    assert s.s.getBooleanStatus(fmi2Terminated) is False  # (solved)
+    assert s.step(load_left=-5.0) == 2
+    assert s.s.getBooleanStatus(fmi2Terminated) is False  # a host may change an input
+    assert s.step(load_left=-5.0) == 2  # set again to the same value: the same step
+    assert s.s.getBooleanStatus(fmi2Terminated) is True
+    assert "asks to terminate" in capsys.readouterr().out
+    assert s.step(load_left=-6.0) == 2  # another input: another step
+    assert s.s.getBooleanStatus(fmi2Terminated) is False
+    assert s.step(load_left=83.3e3) == 0 and s.get("normal_force_left") > 0
+    assert s.s.getBooleanStatus(fmi2Terminated) is False
+    s.free()
+
+
+def test_simulate_fmu_ends_on_an_input_out_of_range(fmu):
+    """fmpy's simulate_fmu retries a discarded step until the FMU asks to terminate: with
+    a load out of range from the start it ends at the last good time (0) instead of
+    retrying for ever (run in a process of its own, with a time limit)."""
+    import sys
+
+    code = ("import sys; from fmpy import simulate_fmu; "
+            "r = simulate_fmu(sys.argv[1], stop_time=0.005, step_size=1e-3, "
+            "start_values={'load_left': -83.3e3, 'element_size': 2e-3}, "
+            "output=['status']); print('rows', len(r), 'last', r['time'][-1], "
+            "'status', r['status'][-1])")
+    run = subprocess.run([sys.executable, "-c", code, str(fmu)], capture_output=True,
+                         text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "load_left = -83300 N" in run.stdout and "asks to terminate" in run.stdout
+    assert "last 0.0 status 3" in run.stdout
+
+
 def _stepped(fmu, extracted, md, name, **parameters) -> Slave:
     s = Slave(fmu, extracted, md, name, element_size=2e-3, **parameters)
     assert s.step(lateral_displacement=3e-3, xi_left=5e-3, xi_right=5e-3) == 0
