@@ -820,10 +820,15 @@ class Slave:
                                        f"range, {'; '.join(beyond)}: {_CREEPAGE_RANGE}")
         failed = [w for w in out.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
                                                         OUTSIDE_VALIDITY)]
+        logged = set()
         for w in failed:  # each wheel has its own status; the other is still solved
             name = STATUS_NAMES[w.status]  # (a message may name its status already)
-            text = w.message if w.message.startswith(name) else f"{name}: {w.message}"
-            u.log.append(f"{w.side} wheel: {text}")
+            whole = w.message.startswith(f"wheelset {name}")  # (both wheels': said once)
+            text = (w.message if whole or w.message.startswith(name)
+                    else f"{name}: {w.message}")
+            if text not in logged:
+                logged.add(text)
+                u.log.append(text if whole else f"{w.side} wheel: {text}")
         if any(_unsolved(w) for w in out.wheels):  # zero forces are no contact's only
             return FMI_DISCARD
         return FMI_WARNING if failed or unfound else FMI_OK

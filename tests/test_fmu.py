@@ -317,6 +317,20 @@ def test_a_step_discarded_twice_as_it_was_asks_to_terminate(fmu, extracted, md, 
     s.free()
 
 
+def test_a_pose_beyond_the_profiles_is_said_once(fmu, extracted, md, capsys):
+    """A lateral displacement beyond the profiles (2 m: given in mm) puts the wheelset out
+    of range: its step is discarded with one message naming the wheel and the pose, not one
+    a wheel each repeating the wheel's name."""
+    s = Slave(fmu, extracted, md, "beside", warm_start="none", element_size=2e-3)
+    assert s.step(lateral_displacement=2.0) == 2
+    assert s.get("status", "status_left", "status_right") == [3, 3, 3]
+    out = capsys.readouterr().out
+    assert out.count("beside its rail") == 1, out
+    assert "wheelset out of range: left wheel is beside its rail (lateral displacement 2 m" \
+        in out and "wheel: left wheel" not in out
+    s.free()
+
+
 def test_simulate_fmu_ends_on_an_input_out_of_range(fmu):
     """fmpy's simulate_fmu retries a discarded step until the FMU asks to terminate: with
     a load out of range from the start it ends at the last good time (0) instead of

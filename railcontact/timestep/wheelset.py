@@ -291,7 +291,9 @@ class WheelsetContact:
             except (CaseError, SolverError) as exc:  # (the penetration's control)
                 wheel, remembered = WheelContact(side, status_of(exc), str(exc)), ()
             except RailContactError as exc:  # the pose: beyond the profiles, into the rail
-                off_track = off_track or f"{side} wheel: {exc}"
+                text = str(exc)  # (it may name its wheel already)
+                off_track = off_track or (text if text.startswith(f"{side} wheel")
+                                          else f"{side} wheel: {text}")
                 wheel, remembered = WheelContact(side=side), ()
             wheels.append(wheel)
             kept.append(remembered)
