@@ -138,6 +138,8 @@ def plot_solution(solution: Solution, path: str | Path, patch: int = 0) -> Path:
         fig, axes = plt.subplots(2, 2, figsize=(12, 8.5), constrained_layout=True)
         _pressure_panels(fig, axes[0, 0], axes[0, 1], ps)
         _traction_panels(fig, axes[1, 0], axes[1, 1], solution, ps)
+    # (room between the columns: the colour bar's label beside the right panel's axis label)
+    fig.get_layout_engine().set(wspace=0.08)
     out = plot_path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
