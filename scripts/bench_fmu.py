@@ -88,7 +88,7 @@ def run_mode(fmu_dir: Path, md, mode: str, duration: float, step: float) -> dict
     w = 2 * math.pi * 1.5
     ins = [vr[n] for n in ("lateral_displacement", "yaw", "lateral_velocity", "yaw_rate",
                            "speed")]
-    its = [vr["normal_iterations"], vr["tangential_iterations"]]
+    its = [vr["normal_iterations"], vr["tangential_iterations"], vr["status"]]
     outs = [vr["force_lateral"], vr["yaw_moment"], vr["solve_time"]]
     rows = []
     n = int(round(duration / step))
@@ -99,7 +99,9 @@ def run_mode(fmu_dir: Path, md, mode: str, duration: float, step: float) -> dict
         t0 = time.perf_counter()
         s.setReal(ins, u)
         s.doStep(t, step)
-        ni, nt = s.getInteger(its)
+        ni, nt, status = s.getInteger(its)
+        if status != 0:  # (a step that failed would be timed as a cheap one)
+            raise SystemExit(f"{mode}: the FMU's step at t = {t:g} s has status {status}")
         fy, mz, solve = s.getReal(outs)
         rows.append((t, time.perf_counter() - t0, ni, nt, fy, mz, solve))
         if k % 100 == 0:
@@ -153,6 +155,9 @@ def _motion(steps: int, amplitude: float = 3e-3, phase: float = 0.0,
         y, v = amplitude * math.sin(w * t + phase), amplitude * w * math.cos(w * t + phase)
         r = wc.solve(rc.Pose(y), loads=(83.3e3, 83.3e3), kinematics=rc.Kinematics(30.0, v),
                      time=t)
+        if r.status != 0:  # (the rigid wheelset's pose not found counts: the inputs' own)
+            raise SystemExit(f"the motion's step at t = {t:g} s has status {int(r.status)}: "
+                             f"{[x.message for x in r.wheels]}")
         out.append({"time": t, "lateral_displacement": y, "lateral_velocity": v,
                     "speed": 30.0, "vertical_displacement": r.vertical, "roll": r.roll})
     return out
@@ -178,7 +183,11 @@ def _in_process_step(wc, m: dict) -> float:
                  vertical=m["vertical_displacement"],
                  kinematics=rc.Kinematics(m["speed"], m["lateral_velocity"]), time=m["time"])
     _read = (r.force, r.moment, r.yaw_moment, r.left.track_force, r.right.track_force)
-    return time.perf_counter() - t0
+    seconds = time.perf_counter() - t0
+    if r.status != 0:
+        raise SystemExit(f"the in-process step at t = {m['time']:g} s has status "
+                         f"{int(r.status)}: {[x.message for x in r.wheels]}")
+    return seconds
 
 
 INPUT_NAMES = ("lateral_displacement", "lateral_velocity", "speed", "vertical_displacement",
@@ -207,6 +216,7 @@ class _Instance:
                           if v.causality == "output" and v.type == "Real"
                           and v.name.endswith(x) and not v.name.startswith("solve_time")]
                          for x in suffixes]
+        self.statuses = [self.vr["status" + x] for x in suffixes]
 
     def step(self, motions: list[dict]) -> tuple[float, list[float]]:
         """Set the inputs (one motion per wheelset), doStep, get the outputs: the wall time
@@ -215,7 +225,12 @@ class _Instance:
         self.s.setReal(self.ins, [m[n] for m in motions for n in INPUT_NAMES])
         self.s.doStep(motions[0]["time"], 1e-3)
         out = self.s.getReal(self.outs)
-        return time.perf_counter() - t0, out
+        seconds = time.perf_counter() - t0
+        status = self.s.getInteger(self.statuses)  # (after the timing: not the host's work)
+        if any(status):  # (a step that failed would be timed as a cheap one)
+            raise SystemExit(f"the FMU's step at t = {motions[0]['time']:g} s has statuses "
+                             f"{status}")
+        return seconds, out
 
     def free(self) -> None:
         self.s.terminate()

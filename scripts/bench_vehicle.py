@@ -220,6 +220,9 @@ def main() -> None:
                     else:
                         t, c, results = run(ways[way], mode, steps)
                     if reference is None:
+                        bad = sum(w[0] != 0 for step in results for fp in step for w in fp)
+                        if bad:  # (a failed step is a cheap one: not a vehicle step's time)
+                            raise SystemExit(f"{mode}: {bad} wheel steps are not ok")
                         reference = results
                     elif results != reference:
                         raise SystemExit(f"{mode}, repeat {r}: the {way} results differ "

@@ -15,7 +15,9 @@ Two kinds of input:
 
 Each input is classified: ``ok``, ``clean error`` (exit 2 with ``railcontact: error: ...``
 and no traceback; ``RailContactError``; a documented status 2 or 3 with a message), ``not
-converged`` (exit 1, status 1), ``traceback`` (any other exception), ``hang`` (timeout),
+converged`` (exit 1, status 1), ``rigid not found`` (a wheelset step whose wheels were
+solved, and checked as a success's, but not the rigid wheelset's vertical displacement and
+roll: status 1), ``traceback`` (any other exception), ``hang`` (timeout),
 ``silent-wrong`` (success, but a number not finite or out of range: see
 :func:`check_solution` and :func:`check_wheelset`) and ``memory`` (``MemoryError``). The
 script prints the counts and one line per finding; ``--json FILE`` saves the findings with
@@ -54,7 +56,8 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ROOT / "models" / "cases"
 PROFILES = ROOT / "models" / "profiles"
-KINDS = ("ok", "clean error", "not converged", "traceback", "hang", "silent-wrong", "memory")
+KINDS = ("ok", "clean error", "not converged", "rigid not found", "traceback", "hang",
+         "silent-wrong", "memory")
 FINDINGS = ("traceback", "hang", "silent-wrong", "memory")
 MEMORY_LIMIT = 2 << 30  # address space of a child [bytes]
 P_MAX = 20e9  # largest plausible contact pressure of steel-like bodies [Pa]
@@ -958,6 +961,11 @@ def run_step(wc, step: dict, settings: dict, timeout: float | None = None) -> Ou
     if r.status in (0, 4):  # solved (4: outside validity, a documented status)
         return Outcome("ok", "" if r.status == 0 else _status_text(r), dt)
     if r.status == 1:
+        rigid = r.rigid_solution
+        if (rigid is not None and not rigid.converged
+                and all(w.status in (0, 4) for w in r.wheels)):  # (the wheels checked above)
+            return Outcome("rigid not found", f"{rigid.message[:120]} | {_status_text(r)}",
+                           dt)
         return Outcome("not converged", _status_text(r), dt)
     if all(w.message for w in r.wheels) and r.status in (2, 3):
         return Outcome("clean error" if r.status == 3 else "ok", _status_text(r), dt)
@@ -1068,17 +1076,17 @@ class Tally:
                                   "stderr": res.warnings.strip()[-300:], **reproducer})
 
     def table(self) -> str:
-        head = ["inputs", "ok", "clean errors", "not converged", "tracebacks", "hangs",
-                "silent-wrong", "memory"]
-        rows = [f"{'':10s}" + "".join(f"{h:>15s}" for h in head)]
+        head = ["inputs", "ok", "clean errors", "not converged", "rigid not found",
+                "tracebacks", "hangs", "silent-wrong", "memory"]
+        rows = [f"{'':10s}" + "".join(f"{h:>16s}" for h in head)]
         total = dict.fromkeys(KINDS, 0)
         for g, c in self.counts.items():
-            rows.append(f"{g:10s}" + f"{sum(c.values()):15d}" +
-                        "".join(f"{c[k]:15d}" for k in KINDS))
+            rows.append(f"{g:10s}" + f"{sum(c.values()):16d}" +
+                        "".join(f"{c[k]:16d}" for k in KINDS))
             for k in KINDS:
                 total[k] += c[k]
-        rows.append(f"{'total':10s}" + f"{sum(total.values()):15d}" +
-                    "".join(f"{total[k]:15d}" for k in KINDS))
+        rows.append(f"{'total':10s}" + f"{sum(total.values()):16d}" +
+                    "".join(f"{total[k]:16d}" for k in KINDS))
         return "\n".join(rows)
 
 

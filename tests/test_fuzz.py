@@ -124,7 +124,10 @@ def test_fuzzed_wheelset_steps_in_process():
                 findings.append(f"{res.kind}: {res.detail} <- settings {settings}, step {j} "
                                 f"{step}")
     assert not findings, _report(findings)
-    assert kinds.get("ok", 0) >= N_STEPS // 2
+    # at least half the steps with their wheels solved and checked (a pose beyond the
+    # flange's steepest point has no rigid wheelset's roll: its wheels are solved, its
+    # status says the roll was not found)
+    assert kinds.get("ok", 0) + kinds.get("rigid not found", 0) >= N_STEPS // 2
 
 
 def test_the_load_check_reads_contact_convention():
