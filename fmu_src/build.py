@@ -358,7 +358,7 @@ def build(output: str | Path = "dist/RailContact.fmu", profiles: list[str | Path
 
             if log is not None:
                 log("warming the FMU's kernels in the per-user cache (compiled once per "
-                    "environment: about a minute the first time) ...")
+                    "environment: a few minutes the first time) ...")
             result = warm_unpacked(root, use_env=False)
             if log is not None:
                 log(result.text)
