@@ -805,9 +805,8 @@ class Slave:
         speed = float(u["speed"])  # the frictional power: per unit speed times V
         self.real[u.power] *= speed if math.isfinite(speed) and speed > 0 else 0.0
         unfound = out.rigid is not None and not out.rigid[0]
-        if unfound:  # not found: the status says so
+        if unfound:  # not found: said (the result's status, the output, counts it)
             u.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {out.rigid[1]}")
-            u["status"] = Status.worst((NOT_CONVERGED, int(u["status"])))
         if not np.all(np.isfinite(self.real[u.real_outputs])):  # (inputs may be NaN)
             return self._discarded(u, "non-finite result; outputs set to zero")
         if self.modes.creepage_input == "kinematic":  # the creepages the velocities
