@@ -50,6 +50,13 @@ class Status(IntEnum):
         """The most severe of ``statuses`` (ok for none)."""
         return max((cls(s) for s in statuses), key=_SEVERITY.index, default=cls.OK)
 
+    @classmethod
+    def severity_order(cls) -> str:
+        """The solved statuses' codes from the most severe to the least, as the FMU's
+        variables say it: ``"3 > 1 > 4 > 2 > 0"``."""
+        return " > ".join(str(int(s)) for s in reversed(_SEVERITY)
+                          if s is not cls.NOT_COMPUTED)
+
 
 _LABELS = {Status.NOT_COMPUTED: "not computed", Status.OK: "ok",
            Status.NOT_CONVERGED: "not converged", Status.NO_CONTACT: "no contact",

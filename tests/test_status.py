@@ -37,6 +37,11 @@ def test_severity_orders_the_wheelset_status():
     assert list(W.SEVERITY) == order
     assert Status.worst([0, 4, 1]) is Status.NOT_CONVERGED
     assert Status.worst([]) is Status.OK
+    # the order the FMU's variables state, generated: the same ranks
+    said = [Status(int(c)) for c in Status.severity_order().split(" > ")]
+    assert said == order[::-1]
+    assert all(Status.severity_order() in v.description
+               for v in [*V.OUTPUTS, *V.VEHICLE_OUTPUTS] if v.name == "status")
     r = W.WheelsetResult(W.WheelContact("left", Status.OUTSIDE_VALIDITY),
                          W.WheelContact("right", Status.NO_CONTACT))
     assert r.status is Status.OUTSIDE_VALIDITY

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import importlib.util
 import math
+from pathlib import Path
 
 import pytest
 
@@ -22,6 +24,7 @@ from railcontact.geometry.search import ContactPoint
 from railcontact.halfspace.operator import InfluenceOperator
 from railcontact.timestep.wheelset import WheelContact, WheelsetContact
 
+ROOT = Path(__file__).resolve().parents[1]
 hertz_module = importlib.import_module("railcontact.halfspace.hertz")  # (the package's
 # name hertz is the function)
 STEEL = rc.Material(206e9, 0.28)
@@ -145,3 +148,35 @@ def test_reading_a_case_solution_solves_nothing(solves):
     p = sol.patches[0]
     assert p.frictional_power_per_speed < 0 and p.frictional_power == pytest.approx(
         p.velocity * p.frictional_power_per_speed, rel=1e-15)
+
+
+def _step_walk():
+    """``scripts/step_walk.py``: its :func:`walk` profiles one step."""
+    spec = importlib.util.spec_from_file_location("step_walk", ROOT / "scripts" / "step_walk.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("warm_start", ["previous+estimate", "none"])
+def test_a_step_searches_each_wheel_once_and_climbs_back_at_most_six_times(warm_start):
+    """The walk of a pose through a step: the contact search entered once per wheel (the
+    load loops re-use the search's record at every approach they try), and at most six
+    returns into :meth:`WheelsetContact.solve` (its stages), warm and cold, under load
+    control with the creep forces counted and kinematic creepages."""
+    walk = _step_walk().walk
+    contact = _contact(friction=0.4, warm_start=warm_start)
+    w = 2 * math.pi * 1.5
+
+    def step(k: int) -> dict:
+        t = k * 1e-3
+        return dict(pose=rc.Pose(3e-3 * math.sin(w * t)), loads=(83.3e3, 83.3e3),
+                    kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
+
+    for k in range(3):
+        contact.solve(**step(k))
+    entries, climbs, by, formed = walk(contact, **step(3))
+    assert sum(entries.values()) == 2, entries  # (one search of each wheel)
+    assert set(entries) == {"search_wheel"}
+    assert 1 <= climbs <= 6, by
+    assert formed["contact_points"] >= 2  # (the profile sees the step's calls)

@@ -420,7 +420,8 @@ OUTPUTS = [
              + _work_note("tangential_iterations"),
              _step_work("tangential_iterations")),
     Variable("status", "Integer", "output", None, "",
-             f"the wheelset's status, the more severe of its wheels' (3 > 1 > 4 > 2 > 0), "
+             f"the wheelset's status, the more severe of its wheels' "
+             f"({Status.severity_order()}), "
              f"1 also when control=load found no wheelset_vertical_displacement and "
              f"wheelset_roll: {STATUS}",
              lambda r: r.status),
@@ -567,8 +568,8 @@ def wheelset_count_parameter(wheelsets: int) -> Variable:
 
 VEHICLE_OUTPUTS = [
     Variable("status", "Integer", "output", None, "",
-             "the most severe of the wheelsets' status_k (3 > 1 > 4 > 2 > 0); the step's FMI "
-             "status is the worst of the wheelsets' steps"),
+             f"the most severe of the wheelsets' status_k ({Status.severity_order()}); the "
+             "step's FMI status is the worst of the wheelsets' steps"),
     Variable("solve_time", "Real", "output", None, "s",
              "wall time of the last step's solves of all wheelsets (in worker processes "
              "or on threads)"),
