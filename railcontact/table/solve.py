@@ -38,8 +38,8 @@ from ..errors import CaseError, RailContactError, SolverError
 from ..geometry.points import samples
 from ..settings import Case, ContactSettings
 from ..status import status_of
+from ..timestep.results import WheelContact, resultants
 from ..timestep.warmstart import PatchMemory, match, previous_pressure, previous_tangential
-from ..timestep.wheelset import WheelContact, fill_resultants
 from .spec import case_with
 from .variables import COUNTS, NO_CONTACT, OK, OUT_OF_RANGE, QUANTITIES
 
@@ -94,28 +94,24 @@ def solve_point(case: dict[str, Any], side: str, memory: list[PatchMemory] | Non
     exception of the solver, its message naming the exception), no contact when the wheel
     does not touch its rail; it is never an exception.
     """
-    wheel = WheelContact(side=side)
     try:
         c = Case.from_dict(case_with(case, {}, side))
         patches, pose = solve_wheel_rail(c, _starts(c, memory) if memory else None,
                                           frictional_power=False)
     except (RailContactError, SolverError) as exc:  # a load loop, a case, the geometry
-        wheel.status = status_of(exc)
         text = str(exc)  # (a case's and a load loop's messages name the wheel already)
-        wheel.message = text if isinstance(exc, (CaseError, SolverError)) else \
-            f"{side} wheel: {text}"
-        return wheel, []
+        return WheelContact(side=side, status=status_of(exc), message=(
+            text if isinstance(exc, (CaseError, SolverError)) else f"{side} wheel: {text}")
+        ), []
     except Exception as exc:  # a fault of the solver: this point lost, never the batch
-        wheel.status = OUT_OF_RANGE
-        wheel.message = (f"{side} wheel: the solver failed here "
-                         f"({type(exc).__name__}: {exc})")
-        return wheel, []
+        return WheelContact(side=side, status=OUT_OF_RANGE, message=(
+            f"{side} wheel: the solver failed here ({type(exc).__name__}: {exc})")), []
     if not patches:
-        return wheel, []
+        return WheelContact(side=side), []
+    values = resultants(side, patches, pose)
     if c.tangential is not None:
-        wheel.creepages = [tuple(c.tangential.creepage)] * len(patches)
-    fill_resultants(wheel, patches, pose)
-    return wheel, _memory(patches)
+        values["creepages"] = [tuple(c.tangential.creepage)] * len(patches)
+    return WheelContact(**values), _memory(patches)
 
 
 def estimate_case(case: dict[str, Any]) -> dict[str, Any] | None:

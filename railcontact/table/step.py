@@ -276,7 +276,8 @@ class TableContact:
             limits = replace(limits, friction=x[list(self.table.axes).index("friction")])
         wheel = self._fill(side, vals, status, creep, limits)
         if msg:  # clamped (out_of_range = clamp)
-            wheel.message = f"{wheel.message}; {msg} (the table's out_of_range policy)"
+            wheel = replace(wheel, message=f"{wheel.message}; {msg} (the table's "
+                                           "out_of_range policy)")
         return wheel
 
     def _fill(self, side: str, vals: np.ndarray, status: int, creep, limits: ContactSettings
@@ -293,20 +294,21 @@ class TableContact:
                                           for a in (cx, cy, cz, ws, rs, ga, rr))
             ts, ta = (ws, ga) if not math.isfinite(ts + ta) else (ts, ta)
         s = SIDES[side]
+        c = (creep[0], s * creep[1], s * creep[2])
         wheel = WheelContact(
             side=side, status=status,
             message="ok (table)" if status == OK else "a node of the table did not converge",
-            creepages=[(creep[0], s * creep[1], s * creep[2])], normal_force=fn,
+            creepages=[c], normal_force=fn,
             creep_force=(fx, fy), spin_moment=mz, track_force=(tx, ty, tz), yaw_moment=ym,
             wheel_position=ws, rail_position=rs, lateral_position=cy, contact_angle=ga,
             rolling_radius=rr, area=ar, max_pressure=pm, slip_area_ratio=sl,
-            contact_point=(cx, cy, cz), penetration=pen)
-        wheel.derailment_quotient = derailment_quotient(s, wheel.track_force)
-        c = wheel.creepages[0]  # the creep forces' power per unit speed, as an exact step's
-        wheel.frictional_power_per_speed = fx * c[0] + fy * c[1] + mz * c[2]
+            contact_point=(cx, cy, cz), penetration=pen,
+            derailment_quotient=derailment_quotient(s, (tx, ty, tz)),
+            # the creep forces' power per unit speed, as an exact step's
+            frictional_power_per_speed=fx * c[0] + fy * c[1] + mz * c[2])
         if fn > 0.0:
-            wheel.mark_validity(check_limits(s, wheel.track_force, [(ts, ta)], pen,
-                                             self.flange, limits))
+            wheel = wheel.with_validity(check_limits(s, wheel.track_force, [(ts, ta)], pen,
+                                                     self.flange, limits))
         return wheel
 
 

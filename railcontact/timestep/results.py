@@ -1,12 +1,13 @@
 """What a wheelset step returns: each wheel's :class:`WheelContact` and the wheelset's
-:class:`WheelsetResult` - plain records that compute nothing when read - and
-:func:`fill_resultants`, which sums a wheel's patches into its record (frames and signs as
-in :mod:`railcontact.timestep.wheelset`)."""
+:class:`WheelsetResult` - frozen records of values, formed once, that compute nothing when
+read - and :func:`resultants`, the sums of a wheel's patches that its record is formed
+from (frames and signs as in :mod:`railcontact.timestep.wheelset`)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numba
 import numpy as np
@@ -34,12 +35,13 @@ SEVERITY = tuple(sorted(STATUS_NAMES, key=lambda s: s.severity))
 wheelset's status is its wheels' most severe."""
 
 
-@dataclass
+@dataclass(frozen=True)
 class WheelContact:
     """Contact of one wheel at one time step (SI units; see the module docstring).
 
     Forces are summed over the wheel's patches; the contact-point quantities are those of
-    the patch with the largest normal force.
+    the patch with the largest normal force. A frozen record: formed once, from the sums
+    of :func:`resultants`; a later check gives a new record (:meth:`with_validity`).
     """
 
     side: str
@@ -113,24 +115,29 @@ class WheelContact:
     def n_patches(self) -> int:
         return len(self.patches)
 
-    def mark_validity(self, validity: Validity) -> None:
-        """Record a validity check: its bits in :attr:`validity`; an ok wheel beyond a
-        limit becomes OUTSIDE_VALIDITY, its message naming each quantity and value (a
-        wheel with another status keeps it, the limits added to its message)."""
-        self.validity = validity.flags
+    def with_validity(self, validity: Validity) -> WheelContact:
+        """This wheel with a validity check recorded: its bits in :attr:`validity`; an ok
+        wheel beyond a limit becomes OUTSIDE_VALIDITY, its message naming each quantity
+        and value (a wheel with another status keeps it, the limits added to its
+        message). The wheel itself where it is within every limit."""
         if not validity.flags:
-            return
+            return self
         if self.status == OK:
             note = self.message.removeprefix("ok")  # e.g. "; the load may have several ..."
-            self.status = OUTSIDE_VALIDITY
-            self.message = f"outside validity: {validity.message}{note}"
-        else:
-            self.message += f"; also outside validity: {validity.message}"
+            return replace(self, validity=validity.flags, status=OUTSIDE_VALIDITY,
+                           message=f"outside validity: {validity.message}{note}")
+        return replace(self, validity=validity.flags,
+                       message=f"{self.message}; also outside validity: {validity.message}")
 
 
-@dataclass
+@dataclass(frozen=True)
 class WheelsetResult:
-    """Both wheels at one time step, with the totals on the wheelset (track frame)."""
+    """Both wheels at one time step, with the totals on the wheelset (track frame).
+
+    A frozen record: its totals (:attr:`status`, :attr:`force`, :attr:`moment`,
+    :attr:`yaw_moment`) are formed with it from its wheels and the rigid wheelset's
+    solution; reading them computes nothing.
+    """
 
     left: WheelContact
     right: WheelContact
@@ -159,44 +166,40 @@ class WheelsetResult:
     search evaluated, left and right; zero where it did not run. Not in the wheels' own
     counts: the step's whole work is the wheels' plus this."""
 
+    status: Status = field(init=False)
+    """The wheelset's status: the wheels' most severe (:data:`SEVERITY`), and
+    ``NOT_CONVERGED`` at least where the rigid wheelset's :attr:`vertical` and :attr:`roll`
+    were not found under load control (they, and the :attr:`moment` about the centre, are
+    then the search's best iterate; :attr:`rigid_solution`'s ``message`` says by how much
+    they miss), as the FMU's ``status``."""
+    force: tuple[float, float, float] = field(init=False)
+    """Total force (X, Y, Z) of the rails on the wheelset [N]."""
+    moment: tuple[float, float, float] = field(init=False)
+    """Moment of the rails' forces on the wheelset about its centre (0, y, r0 + vertical;
+    r0 when :attr:`vertical` was not solved), track components (M_X roll, M_Y pitch, M_Z
+    yaw) [N m]: right-handed about X forward, Y left, Z up (M_X > 0 lifts the left wheel,
+    M_Z > 0 turns the nose to the left)."""
+    yaw_moment: float = field(init=False)
+    """Total moment about the vertical axis through the wheelset centre [N m]."""
+
+    def __post_init__(self) -> None:  # (the totals, formed once with the record)
+        left, right = self.left, self.right
+        status = Status.worst((left.status, right.status))
+        rigid = self.rigid_solution
+        if rigid is not None and not rigid.converged:
+            status = Status.worst((status, Status.NOT_CONVERGED))
+        force = tuple(float(left.track_force[k] + right.track_force[k]) for k in range(3))
+        h = self.wheelset_radius + (self.vertical or 0.0)
+        fx, fy, _ = force
+        m = [left.moment[k] + right.moment[k] for k in range(3)]
+        object.__setattr__(self, "status", status)
+        object.__setattr__(self, "force", force)
+        object.__setattr__(self, "moment", (m[0] + h * fy, m[1] - h * fx, m[2]))
+        object.__setattr__(self, "yaw_moment", left.yaw_moment + right.yaw_moment)
+
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:
         return (self.left, self.right)
-
-    @property
-    def status(self) -> int:
-        """The wheelset's status: the wheels' most severe (:data:`SEVERITY`), and
-        ``NOT_CONVERGED`` at least where the rigid wheelset's :attr:`vertical` and
-        :attr:`roll` were not found under load control (they, and the :attr:`moment`
-        about the centre, are then the search's best iterate; :attr:`rigid_solution`'s
-        ``message`` says by how much they miss), as the FMU's ``status``."""
-        status = Status.worst(w.status for w in self.wheels)
-        rigid = self.rigid_solution
-        if rigid is not None and not rigid.converged:
-            return Status.worst((status, Status.NOT_CONVERGED))
-        return status
-
-    @property
-    def moment(self) -> tuple[float, float, float]:
-        """Moment of the rails' forces on the wheelset about its centre (0, y, r0 +
-        vertical; r0 when :attr:`vertical` was not solved), track components (M_X roll,
-        M_Y pitch, M_Z yaw) [N m]: right-handed about X forward, Y left, Z up (M_X > 0
-        lifts the left wheel, M_Z > 0 turns the nose to the left)."""
-        h = self.wheelset_radius + (self.vertical or 0.0)
-        fx, fy, _ = self.force
-        m = [self.left.moment[k] + self.right.moment[k] for k in range(3)]
-        return (m[0] + h * fy, m[1] - h * fx, m[2])
-
-    @property
-    def force(self) -> tuple[float, float, float]:
-        """Total force (X, Y, Z) of the rails on the wheelset [N]."""
-        return tuple(float(self.left.track_force[k] + self.right.track_force[k])
-                     for k in range(3))
-
-    @property
-    def yaw_moment(self) -> float:
-        """Total moment about the vertical axis through the wheelset centre [N m]."""
-        return self.left.yaw_moment + self.right.yaw_moment
 
 
 def _first_moments(grid: Grid, pressure: np.ndarray) -> tuple[float, float]:
@@ -225,12 +228,14 @@ def _moment_sums(x0, dx, y0, dy, p):  # pragma: no cover - compiled
     return numpy_sum(out[0]), numpy_sum(out[1])
 
 
-def fill_resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pose) -> None:
-    """Fill ``wheel`` with the sums over its patches (module docstring for the frames).
+def resultants(side: str, patches: list[PatchSolution], pose: Pose) -> dict[str, Any]:
+    """The fields of the :class:`WheelContact` of the ``side`` wheel whose ``patches``
+    were solved at ``pose``: their sums (module docstring for the frames), the main
+    patch's contact point, the work, the status and message of their solves.
 
     Scalars and 3-vectors in plain floats (a per-step path: numpy's calls cost more than
     their arithmetic here), in the order of operations the array forms had."""
-    sgn = SIDES[wheel.side]
+    sgn = SIDES[side]
     u_ws = sgn * pose.lateral
     fx = fs = mn = n_tot = 0.0
     fu = fz = mz = 0.0
@@ -270,45 +275,38 @@ def fill_resultants(wheel: WheelContact, patches: list[PatchSolution], pose: Pos
     single = len(patches) == 1  # (the common case: no generators)
     main = patches[0] if single else max(patches, key=lambda p: p.normal.force)
     cp = main.geometry
-    wheel.normal_force = n_tot
-    wheel.creep_force = (fx, sgn * fs)
-    wheel.spin_moment = sgn * mn
-    wheel.track_force = (fx, sgn * fu, fz)
-    wheel.yaw_moment = sgn * mz
-    wheel.moment = (float(m0), float(m1), float(m2))
-    wheel.derailment_quotient = derailment_quotient(sgn, wheel.track_force)
-    wheel.approach = vertical_approach(patches)
-    wheel.penetration = float(main.normal.penetration if single else
-                              max(p.normal.penetration for p in patches))
-    wheel.wheel_position = cp.wheel_s
-    wheel.rail_position = cp.rail_y
-    wheel.lateral_position = cp.position[1]
-    wheel.contact_point = cp.position
-    wheel.contact_angle = cp.contact_angle
-    wheel.rolling_radius = cp.rolling_radius
+    track_force = (fx, sgn * fu, fz)
     if single:
-        wheel.area, wheel.max_pressure = float(main.normal.area), float(main.normal.max_pressure)
+        area, max_pressure = float(main.normal.area), float(main.normal.max_pressure)
     else:
-        wheel.area = float(sum(p.normal.area for p in patches))
-        wheel.max_pressure = float(max(p.normal.max_pressure for p in patches))
+        area = float(sum(p.normal.area for p in patches))
+        max_pressure = float(max(p.normal.max_pressure for p in patches))
     ts = ([] if main.tangential is None else [main.tangential]) if single else [
         p.tangential for p in patches if p.tangential is not None]
+    slip_area_ratio = 0.0
     if len(ts) == 1:  # one patch: its own ratio, the same count (slip over non-exterior)
-        wheel.slip_area_ratio = ts[0].slip_area_ratio
+        slip_area_ratio = ts[0].slip_area_ratio
     elif ts:
         n_el = [int(np.count_nonzero(t.state)) for t in ts]
         n_slip = [int(np.count_nonzero(t.state == 2)) for t in ts]
-        wheel.slip_area_ratio = sum(n_slip) / max(sum(n_el), 1)
-    wheel.normal_iterations, wheel.tangential_iterations = (work.normal_iterations,
-                                                            work.tangential_iterations)
-    wheel.load_passes, wheel.remeshes, wheel.seconds = (work.load_passes, work.remeshes,
-                                                        work.seconds)
-    wheel.patches = patches
+        slip_area_ratio = sum(n_slip) / max(sum(n_el), 1)
     if converged:
-        wheel.status, wheel.message = OK, "ok"
+        status, message = OK, "ok"
     else:
         failed = [r.message for p in patches for r in (p.normal, p.tangential)
                   if r is not None and not r.converged]
-        wheel.status = NOT_CONVERGED
-        wheel.message = f"a BEM solve did not converge: {failed[0]}"
-
+        status, message = NOT_CONVERGED, f"a BEM solve did not converge: {failed[0]}"
+    return dict(
+        side=side, status=status, message=message, patches=patches,
+        normal_force=n_tot, creep_force=(fx, sgn * fs), spin_moment=sgn * mn,
+        track_force=track_force, yaw_moment=sgn * mz, moment=(float(m0), float(m1), float(m2)),
+        derailment_quotient=derailment_quotient(sgn, track_force),
+        approach=vertical_approach(patches),
+        penetration=float(main.normal.penetration if single else
+                          max(p.normal.penetration for p in patches)),
+        wheel_position=cp.wheel_s, rail_position=cp.rail_y, lateral_position=cp.position[1],
+        contact_point=cp.position, contact_angle=cp.contact_angle,
+        rolling_radius=cp.rolling_radius, area=area, max_pressure=max_pressure,
+        slip_area_ratio=slip_area_ratio, normal_iterations=work.normal_iterations,
+        tangential_iterations=work.tangential_iterations, load_passes=work.load_passes,
+        remeshes=work.remeshes, seconds=work.seconds)

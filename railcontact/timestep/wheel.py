@@ -35,7 +35,7 @@ from ..settings.convention import wheel_frame_creepage
 from ..status import Status
 from .compiled import warm_normal, warm_tangential
 from .inputs import Kinematics, WheelSetup, solver_settings
-from .results import NOT_CONVERGED, OK, WheelContact, fill_resultants
+from .results import NOT_CONVERGED, OK, WheelContact, resultants
 from .warmstart import (
     RATE_GAIN,
     PatchMemory,
@@ -342,25 +342,25 @@ def solve_step_wheel(setup: WheelSetup, pose: Pose, control: Control,
     solution = solve_wheel(wheel_problem(setup.track, setup.wheelset, pose, side, pair,
                                          control, found),
                            wheel_settings(setup, tangential), start)
-    wheel = wheel_contact(side, solution, pose, kin and kin.speed, convention)
-    if solution.error is None and wheel.patches:
-        creep_in_load = control.by_load and tangential and settings.load_includes_creep
-        _mark_uniqueness(wheel, solution, bool(previous), creep_in_load)
+    creep_in_load = control.by_load and tangential and settings.load_includes_creep
+    wheel = wheel_contact(side, solution, pose, kin and kin.speed, convention,
+                          warm=bool(previous), creep_in_load=creep_in_load)
     return wheel, tuple(solution.memory or ()) if keep else (), solution.error
 
 
 def wheel_contact(side: str, solution: WheelSolution, pose: Pose, speed: float | None,
-                  convention: str) -> WheelContact:
+                  convention: str, warm: bool = False, creep_in_load: bool = False
+                  ) -> WheelContact:
     """The :class:`~.results.WheelContact` of a wheel's ``solution``: its patches summed
-    (:func:`~.results.fill_resultants`), the frictional power (with the forward
-    ``speed`` [m/s], when known), the creepages and creep forces in ``convention``; a
-    load loop not converged, or a solve that raised, is its status and message."""
+    (:func:`~.results.resultants`), the frictional power (with the forward ``speed``
+    [m/s], when known), the creepages and creep forces in ``convention``, whether its
+    load has one solution (:func:`_uniqueness`: ``warm``, ``creep_in_load``); a load
+    loop not converged, or a solve that raised, is its status and message."""
     if solution.error is not None or not solution.patches:
         return WheelContact(side=side, status=solution.status, message=solution.message)
-    wheel = WheelContact(side=side)
     patches, creepages = solution.patches, solution.creepages
-    wheel.creepages = creepages
-    fill_resultants(wheel, patches, pose)
+    values = resultants(side, patches, pose)
+    values["creepages"] = creepages
     if creepages:  # (side frame: the lateral and spin components mirrored)
         sgn = SIDES[side]
         per = 0.0
@@ -369,33 +369,34 @@ def wheel_contact(side: str, solution: WheelSolution, pose: Pose, speed: float |
             if t is not None:
                 fx, fy = t.force
                 per += fx * c[0] + sgn * (fy * c[1] + t.spin_moment * c[2])
-        wheel.frictional_power_per_speed = per
-        wheel.frictional_power = None if speed is None else speed * per
+        values["frictional_power_per_speed"] = per
+        values["frictional_power"] = None if speed is None else speed * per
     if convention == "contact":  # the creepages and creep forces as CONTACT's
-        wheel.creepages = [wheel_frame_creepage(c) for c in creepages]
-        fx, fy = wheel.creep_force
-        wheel.creep_force = (-fx, fy)
+        values["creepages"] = [wheel_frame_creepage(c) for c in creepages]
+        fx, fy = values["creep_force"]
+        values["creep_force"] = (-fx, fy)
         for p in patches:
             p.convention = "contact"
     if solution.status == Status.NOT_CONVERGED:  # the load loop's
-        wheel.status, wheel.message = NOT_CONVERGED, solution.message
-    return wheel
+        values["status"], values["message"] = NOT_CONVERGED, solution.message
+    values["load_unique"], why = _uniqueness(solution, warm, creep_in_load)
+    if why and values["status"] == OK:
+        values["message"] = "ok; the load has more than one solution: " + why
+    return WheelContact(**values)
 
 
-def _mark_uniqueness(wheel: WheelContact, solution: WheelSolution, warm: bool,
-                     creep_in_load: bool) -> None:
-    """Set the wheel's :attr:`~.results.WheelContact.load_unique`, and say in an ok
-    wheel's message why its load may have another solution: a merge of patches
+def _uniqueness(solution: WheelSolution, warm: bool, creep_in_load: bool
+                ) -> tuple[bool, str]:
+    """Whether a solved wheel's load has one solution, and if not why: a merge of patches
     (:attr:`~railcontact.contact.results.PatchSolution.load_other`; the smallest approach
     is returned, from warm and cold starts alike) or a steep patch's creep force
-    (:func:`~railcontact.contact.loadloop.load_unique`; the root the start leads to), the
-    latter only where the creep forces are in the load (``creep_in_load``: load control
-    with :attr:`ContactSettings.load_includes_creep`)."""
+    (:func:`~railcontact.contact.loadloop.load_unique`; the root the start leads to, from
+    a ``warm`` start or cold), the latter only where the creep forces are in the load
+    (``creep_in_load``: load control with :attr:`ContactSettings.load_includes_creep`)."""
     steep = creep_in_load and solution.steep
     other = solution.load_other
-    wheel.load_unique = not steep and other is None
-    if wheel.load_unique or wheel.status != OK:
-        return
+    if not steep and other is None:
+        return True, ""
     why = []
     if other is not None:
         why.append("two of its contact regions join into one patch between this "
@@ -405,7 +406,7 @@ def _mark_uniqueness(wheel: WheelContact, solution: WheelSolution, warm: bool,
         which = ("the one continuous with the previous step" if warm else
                  "the one reached from the normal share Q (cold start)")
         why.append(f"several patches with mu tan(gamma) >= 1 on one: {which}")
-    wheel.message = "ok; the load has more than one solution: " + "; ".join(why)
+    return False, "; ".join(why)
 
 
 def penetration_approach(found: WheelSearch, vertical: float) -> float:

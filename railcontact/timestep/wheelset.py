@@ -94,7 +94,7 @@ from .results import (  # noqa: F401  (the step's records, importable from here 
     STATUS_NAMES,
     WheelContact,
     WheelsetResult,
-    fill_resultants,
+    resultants,
 )
 from .rigid import RigidSolution, RigidWheelset
 from .rolled import RolledApproaches, rigid_stage
@@ -234,11 +234,11 @@ class WheelsetContact:
                             friction)
         found = self._search(step)
         wheels, memory, off_track = self._wheels(step, found)
-        result, memory = self._rigid_stage(step, found, wheels, memory, remember, off_track)
+        rigid, memory = self._rigid_stage(step, found, wheels, memory, remember, off_track)
         if remember:
             self.memory = memory
-        result.wall_time = perf_counter() - t0
-        return result
+        return WheelsetResult(wheels[0], wheels[1], perf_counter() - t0,
+                              self.wheelset.radius, *rigid)
 
     # -- its stages --------------------------------------------------------------------
     def _inputs(self, pose: Pose, loads: tuple[float, float] | None, vertical: float | None,
@@ -301,25 +301,25 @@ class WheelsetContact:
             msg = f"wheelset out of range: {off_track}"
             return ([WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
                      for s in SIDE_NAMES], EMPTY_MEMORY, True)
-        for wheel, setup in zip(wheels, step.setups, strict=True):
-            self._check_validity(wheel, setup)
+        wheels = [_checked(wheel, setup) for wheel, setup in zip(wheels, step.setups,
+                                                                  strict=True)]
         return wheels, StepMemory(kept[0], kept[1]), False
 
     def _rigid_stage(self, step: StepInputs, found: Found, wheels: list[WheelContact],
                      memory: StepMemory, remember: bool, off_track: bool
-                     ) -> tuple[WheelsetResult, StepMemory]:
-        """The step's result, under load control with the rigid wheelset's vertical
-        displacement and roll when the settings ask for them (:func:`~.rolled.
-        rigid_stage`; the wheels' least gaps at the step's roll from their searches
-        ``found``, each other roll searched once), and the memory the next step starts
-        from (empty when it is not remembered or the warm start does not use it)."""
+                     ) -> tuple[tuple, StepMemory]:
+        """The rigid wheelset's part of the step's result - ``(vertical, roll,
+        rigid_solution, rigid_work)`` of :class:`WheelsetResult` - under load control
+        solved when the settings ask for it (:func:`~.rolled.rigid_stage`; the wheels'
+        least gaps at the step's roll from their searches ``found``, each other roll
+        searched once), and the memory the next step starts from (empty when it is not
+        remembered or the warm start does not use it)."""
         keep = remember and self.settings.uses_previous  # (what the next step starts from)
         out = memory if keep else EMPTY_MEMORY
-        result = WheelsetResult(wheels[0], wheels[1], 0.0, self.wheelset.radius)
         pose = step.pose
+        values: tuple = ()  # (none solved: the record's defaults)
         if step.vertical is not None:
-            result.vertical, result.roll = step.vertical, pose.roll
-            result.rigid_solution = RigidSolution(step.vertical, pose.roll)
+            values = (step.vertical, pose.roll, RigidSolution(step.vertical, pose.roll))
         elif not off_track and self.settings.rigid_wheelset == "solve":
             last = self.memory if self.settings.uses_previous else EMPTY_MEMORY
             # the rolled wheels start from this step's solves (the previous step's when
@@ -335,13 +335,12 @@ class WheelsetContact:
                 gaps=None if any(isinstance(f, RailContactError) for f in found) else
                 (found[0].least_gap, found[1].least_gap))
             s = rigid_stage(rigid)
-            result.rigid_solution, result.rigid_work = s, s.work
-            if s.evaluations:  # (found, or its best estimate; none when the search raised)
-                result.vertical, result.roll = s.vertical, s.roll
             if keep:
                 roots, rolled = rigid.remembered(s)
                 out = replace(out, rigid=roots, rolled=rolled)
-        return result, out
+            # (vertical and roll: found, or the best estimate; none when the search raised)
+            values = ((s.vertical, s.roll) if s.evaluations else (None, None)) + (s, s.work)
+        return values, out
 
     def rolled_approaches(self, pose: Pose, *, loads: tuple[float, float],
                           creepages: tuple | None = None,
@@ -357,14 +356,17 @@ class WheelsetContact:
                                 self.convention, self.memory, rolled,
                                 self._setups.at(self.settings, None, None))
 
-    def _check_validity(self, wheel: WheelContact, setup: WheelSetup) -> None:
-        """Set the wheel's :attr:`~WheelContact.validity`; an ok wheel beyond a limit is
-        OUTSIDE_VALIDITY, its message naming each quantity and value."""
-        if not wheel.patches:
-            return
-        wheel.mark_validity(check_validity(SIDES[wheel.side], wheel.track_force,
-                                           wheel.patches, setup.wheelset.flange_flank,
-                                           setup.settings))
+
+
+def _checked(wheel: WheelContact, setup: WheelSetup) -> WheelContact:
+    """The solved ``wheel`` with its validity checked (:func:`~.validity.check_validity`):
+    an ok wheel beyond a limit is OUTSIDE_VALIDITY, its message naming each quantity and
+    value (:meth:`~.results.WheelContact.with_validity`)."""
+    if not wheel.patches:
+        return wheel
+    return wheel.with_validity(check_validity(SIDES[wheel.side], wheel.track_force,
+                                              wheel.patches, setup.wheelset.flange_flank,
+                                              setup.settings))
 
 
 def _searched(setup: WheelSetup, pose: Pose) -> WheelSearch | RailContactError:
