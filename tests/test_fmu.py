@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import subprocess
+import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
@@ -24,6 +25,7 @@ from fmpy.validation import validate_fmu  # noqa: E402
 from railcontact.geometry.profiles import read_profile  # noqa: E402
 from railcontact.geometry.track import Pose, Track, Wheelset  # noqa: E402
 from railcontact.halfspace.materials import ElasticPair, Material  # noqa: E402
+from railcontact.status import Status  # noqa: E402
 from railcontact.timestep.wheelset import ContactSettings, WheelsetContact  # noqa: E402
 
 STEP = 1e-3
@@ -946,6 +948,46 @@ def test_outside_validity_through_the_fmu(fmu, extracted, md, capsys):
     loose.step(lateral_displacement=10e-3, **CREEP)
     assert loose.get("validity_left") == 2 | 4
     loose.free()
+
+
+def test_status_round_trip_python_fmu_model_description(fmu, extracted, md):
+    """The status enum's round trip, Python -> the built FMU's outputs -> its
+    modelDescription. The modelDescription.xml in the FMU's zip declares status,
+    status_left and status_right Integer outputs whose descriptions give every
+    :class:`~railcontact.status.Status` (not computed, a table's, apart) with its number,
+    label and meaning; stepped, the three outputs are the statuses the API (WheelsetContact
+    with the FMU's defaults) gives for the same inputs: ok at 3 mm, outside validity on the
+    left wheel only at 10 mm (a flange climb: the sides not swapped), and out of range
+    beside the rail (2 m: the step discarded)."""
+    names = ("status", "status_left", "status_right")
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    declared = {v.get("name"): v for v in root.iter("ScalarVariable")
+                if v.get("name") in names}
+    assert set(declared) == set(names)
+    for name, v in declared.items():
+        assert v.get("causality") == "output", name
+        assert v[0].tag == "Integer", name
+        for s in Status:
+            if s is not Status.NOT_COMPUTED:
+                assert f"{int(s)} {s.label} ({s.description}" in v.get("description"), \
+                    (name, s)
+    s = Slave(fmu, extracted, md, "status-round-trip", warm_start="none")
+    ref = api("none")
+    creep = ((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3))
+    ok, out = Status.OK, Status.OUT_OF_RANGE
+    try:
+        for y, fmi, want in ((3e-3, 0, (ok, ok, ok)),
+                             (10e-3, 0, (Status.OUTSIDE_VALIDITY,) * 2 + (ok,)),
+                             (2.0, 2, (out, out, out))):
+            r = ref.solve(Pose(y), loads=(83.3e3, 83.3e3), creepages=creep)
+            assert (r.status, r.left.status, r.right.status) == want, y
+            assert s.step(lateral_displacement=y, **CREEP) == fmi, y  # 2: fmi2Discard
+            got = s.get(*names)
+            assert got == [int(r.status), int(r.left.status), int(r.right.status)], y
+            assert [Status(g) for g in got] == list(want), y
+    finally:
+        s.free()
 
 
 def test_new_outputs_match_the_api(fmu, extracted, md):

@@ -60,7 +60,10 @@ def test_one_map_from_exceptions_to_statuses():
 
 def test_the_fmu_describes_every_status_from_the_enum():
     """Python -> the FMU's variable descriptions (its modelDescription) -> the docs' table
-    (generated from them): every status with its number, label and meaning."""
+    (generated from them): every status with its number, label and meaning. (The built
+    FMU's modelDescription.xml, and its status outputs stepped against the API's:
+    tests/test_fmu.py::test_status_round_trip_python_fmu_model_description, where the
+    FMU is built once.)"""
     status_vars = [v for v in V.OUTPUTS if v.name.startswith("status")]
     assert {v.name for v in status_vars} >= {"status", "status_left", "status_right"}
     doc = (ROOT / "docs" / "fmu.md").read_text(encoding="utf-8")
