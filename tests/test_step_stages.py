@@ -180,3 +180,34 @@ def test_a_step_searches_each_wheel_once_and_climbs_back_at_most_six_times(warm_
     assert set(entries) == {"search_wheel"}
     assert 1 <= climbs <= 6, by
     assert formed["contact_points"] >= 2  # (the profile sees the step's calls)
+
+
+def test_the_step_records_say_status_message_and_work():
+    """The step's records carry the solver results' protocol: a status, a message and
+    the work (a :class:`~railcontact.contact.results.Work`); the wheelset's work is its
+    wheels' and the rigid wheelset's solves, its time the step's."""
+    contact = _contact(rigid_wheelset="solve", friction=0.4)
+    r = contact.solve(rc.Pose(3e-3), loads=(83.3e3, 83.3e3), creepages=CREEP)
+    assert r.status == rc.Status.OK and r.message == "ok"
+    for w in r.wheels:
+        assert w.status == rc.Status.OK and w.message == "ok"
+        assert (w.work.normal_iterations, w.work.tangential_iterations,
+                w.work.load_passes, w.work.remeshes, w.work.seconds) == (
+            w.normal_iterations, w.tangential_iterations, w.load_passes, w.remeshes,
+            w.seconds)
+        assert w.work.normal_iterations > 0 and w.work.load_passes >= 1
+    parts = (*(w.work for w in r.wheels), *r.rigid_work)
+    assert r.rigid_work[0].normal_iterations > 0  # (the rigid stage solved at other rolls)
+    for name in ("normal_iterations", "tangential_iterations", "load_passes", "remeshes"):
+        assert getattr(r.work, name) == sum(getattr(p, name) for p in parts), name
+    assert r.work.seconds == r.wall_time > 0
+    # a wheel beyond a limit: its message, named by its side; a wheelset off its rails:
+    # one message for both wheels, said once
+    r = contact.solve(rc.Pose(10e-3), loads=(83.3e3, 83.3e3), creepages=CREEP)
+    assert r.left.status == rc.Status.OUTSIDE_VALIDITY
+    assert r.message.startswith("left wheel: outside validity: ") and "right" not in r.message
+    r = contact.solve(rc.Pose(2.0), loads=(83.3e3, 83.3e3), creepages=CREEP)
+    assert r.status == rc.Status.OUT_OF_RANGE
+    assert r.message == r.left.message == r.right.message
+    assert r.message.startswith("wheelset out of range: ")
+    assert r.work.normal_iterations == 0

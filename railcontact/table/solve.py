@@ -27,6 +27,7 @@ stays the same across workers and resumes. :data:`STARTS` names the starts.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -147,7 +148,7 @@ def solve_recovering(case: dict[str, Any], side: str, memory: list[PatchMemory] 
             return wheel, new, how
     if len(tries) > 1:
         starts = ", ".join(t[0] for t in tries)
-        wheel.message = f"{wheel.message} (solved from each start: {starts})"
+        wheel = replace(wheel, message=f"{wheel.message} (solved from each start: {starts})")
     return wheel, new, how
 
 

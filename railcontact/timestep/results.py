@@ -110,6 +110,10 @@ class WheelContact:
     [N m]: the pressure and traction over each patch (each element's force at its place
     in the patch's plane: the spin moment and the pressure's offsets from the contact
     point included)."""
+    work: Work = field(default_factory=lambda: Work(load_passes=0))
+    """The work of the wheel's solves this step (:class:`~railcontact.contact.results.
+    Work`: iterations, load passes, re-meshes, wall time [s]), as the solver results
+    give theirs: the counts above, in one record."""
 
     @property
     def n_patches(self) -> int:
@@ -181,6 +185,14 @@ class WheelsetResult:
     M_Z > 0 turns the nose to the left)."""
     yaw_moment: float = field(init=False)
     """Total moment about the vertical axis through the wheelset centre [N m]."""
+    message: str = field(init=False)
+    """What became of the step in words: "ok", else each wheel's message that is not
+    plain "ok" (named by its side unless it names it) and, under load control, the rigid
+    wheelset's when its vertical displacement and roll were not found."""
+    work: Work = field(init=False)
+    """The step's whole work (:class:`~railcontact.contact.results.Work`): the wheels'
+    iterations, load passes and re-meshes with those of the rigid wheelset's solves
+    (:attr:`rigid_work`), and the step's wall time [s] (:attr:`wall_time`)."""
 
     def __post_init__(self) -> None:  # (the totals, formed once with the record)
         left, right = self.left, self.right
@@ -196,10 +208,35 @@ class WheelsetResult:
         object.__setattr__(self, "force", force)
         object.__setattr__(self, "moment", (m[0] + h * fy, m[1] - h * fx, m[2]))
         object.__setattr__(self, "yaw_moment", left.yaw_moment + right.yaw_moment)
+        object.__setattr__(self, "message", _step_message(left, right, rigid))
+        work = Work(load_passes=0)
+        for w in (left.work, right.work, *self.rigid_work):
+            work.absorb(w)
+            work.load_passes += w.load_passes
+        work.seconds = self.wall_time
+        object.__setattr__(self, "work", work)
 
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:
         return (self.left, self.right)
+
+
+def _step_message(left: WheelContact, right: WheelContact,
+                  rigid: RigidSolution | None) -> str:
+    """:attr:`WheelsetResult.message` of the wheels ``left`` and ``right`` and the rigid
+    wheelset's solution ``rigid``."""
+    said: list[str] = []
+    for w in (left, right):
+        m = w.message
+        if m == "ok":
+            continue
+        if not m.startswith(("left", "right", "wheelset")):
+            m = f"{w.side} wheel: {m}"
+        if m not in said:  # (a wheelset-wide message is said once)
+            said.append(m)
+    if rigid is not None and not rigid.converged:
+        said.append(f"rigid wheelset: {rigid.message}")
+    return "; ".join(said) or "ok"
 
 
 def _first_moments(grid: Grid, pressure: np.ndarray) -> tuple[float, float]:
@@ -309,4 +346,4 @@ def resultants(side: str, patches: list[PatchSolution], pose: Pose) -> dict[str,
         rolling_radius=cp.rolling_radius, area=area, max_pressure=max_pressure,
         slip_area_ratio=slip_area_ratio, normal_iterations=work.normal_iterations,
         tangential_iterations=work.tangential_iterations, load_passes=work.load_passes,
-        remeshes=work.remeshes, seconds=work.seconds)
+        remeshes=work.remeshes, seconds=work.seconds, work=work)
