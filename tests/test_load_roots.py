@@ -118,3 +118,25 @@ def test_warm_and_cold_return_the_smallest_approach(geometry, frame):
                 # the other root, or the merge it lies beyond
                 assert c.patches[0].load_other >= merge * (1 - 1e-9)
     assert not all(uniques)  # 34 kN lies within the fall at the merge
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-8])
+def test_two_patches_carry_the_load_to_the_settings_tolerance(geometry, rtol):
+    """Below the merge the load is shared by two patches: the secant on the wheel's
+    approach meets it to the tolerance it is given (the wheel settings'
+    ``normal_load_tolerance``), a loose one in fewer passes."""
+    q_ref, ps = _vertical(geometry, 40e-6, "reference")
+    assert len(ps) == 2
+    q = 0.93 * q_ref  # (not the approach the reference solve was at)
+    settings = _normal_settings(geometry, "reference")
+    ps = solve_wheel_normal(*geometry, POSE, "left", Control(load=q), settings, PAIR,
+                            reference=True, load_tolerance=rtol, load_acceptance=1e-3)
+    assert len(ps) == 2
+    assert abs(vertical_force(ps) - q) <= rtol * q
+    passes = ps[0].work.load_passes
+    loose = solve_wheel_normal(*geometry, POSE, "left", Control(load=q), settings, PAIR,
+                               reference=True, load_tolerance=1e-2, load_acceptance=1e-2)
+    assert abs(vertical_force(loose) - q) <= 1e-2 * q
+    assert loose[0].work.load_passes <= passes
+    if rtol == 1e-8:
+        assert loose[0].work.load_passes < passes

@@ -27,6 +27,9 @@ from ..settings import Control, PatchSettings, TangentialSettings
 from ..status import Status
 from .results import PatchSolution
 
+LOAD_RTOL = 1e-6
+"""Relative tolerance on the vertical load carried by the normal forces of several patches
+(:attr:`WheelSettings.normal_load_tolerance`'s default)."""
 CREEP_LOAD_RTOL = 1e-5
 """Relative tolerance on the total vertical force when creep forces carry part of it, of a
 case (``railcontact solve``, tables): :attr:`WheelSettings.load_tolerance`'s default."""
@@ -96,10 +99,16 @@ class WheelSettings(NamedTuple):
         A load loop that stops short of ``load_tolerance`` (at the tangential BEM's noise
         floor) still gives an ok wheel when its vertical force meets the load to this, or
         to the accuracy of its creep forces (:func:`~.loadloop.load_met`); at least
-        ``load_tolerance``.
+        ``load_tolerance``. The normal forces' loop over several patches
+        (``normal_load_tolerance``) that misses its load by more than this raises a
+        :class:`~railcontact.errors.ConvergenceError`.
     load_includes_creep
         A wheel load is the total vertical force, creep forces included (else the normal
         forces alone carry it: one pass).
+    normal_load_tolerance
+        Relative tolerance on the vertical load that the normal forces of several patches
+        carry: the secant on the wheel's vertical approach within each pass and the check
+        of another root (:func:`~.wheelrail.solve_wheel_normal`).
     """
 
     patch: PatchSettings
@@ -108,6 +117,7 @@ class WheelSettings(NamedTuple):
     load_tolerance: float = CREEP_LOAD_RTOL
     load_acceptance: float = LOAD_ACCEPT_RTOL
     load_includes_creep: bool = True
+    normal_load_tolerance: float = LOAD_RTOL
 
 
 @dataclass(frozen=True, slots=True)
@@ -199,5 +209,5 @@ class WheelSolution:
         return self
 
 
-__all__ = ["CREEP_LOAD_RTOL", "LOAD_ACCEPT_RTOL", "WheelPass", "WheelProblem",
+__all__ = ["CREEP_LOAD_RTOL", "LOAD_ACCEPT_RTOL", "LOAD_RTOL", "WheelPass", "WheelProblem",
            "WheelSettings", "WheelSolution", "WheelStart"]

@@ -104,7 +104,15 @@ from .patch import (
 )
 from .results import PatchSolution, Work, set_frictional_power
 from .start import NormalStart, WarmStart
-from .wheel import WheelPass, WheelProblem, WheelSettings, WheelSolution, WheelStart
+from .wheel import (
+    LOAD_ACCEPT_RTOL,
+    LOAD_RTOL,
+    WheelPass,
+    WheelProblem,
+    WheelSettings,
+    WheelSolution,
+    WheelStart,
+)
 
 EstimateFor = Callable[[ContactPoint, HertzSolution | None, Control], WarmStart]
 """``estimate_for(contact point, hertz, control)``: the start of a patch's solves (e.g. the
@@ -118,8 +126,6 @@ overlap at the vertical ``approach`` [m] around the patch's point
 (:func:`~railcontact.geometry.points.overlap_box_on_run` of a searched wheel)."""
 Starts = Callable[[str], EstimateFor | None]
 """``starts(side)``: the ``estimate_for`` of a wheel (its :class:`CaseStart`), or None."""
-LOAD_RTOL = 1e-6
-"""Relative tolerance on the vertical load carried by the normal forces of several patches."""
 ROLL_TOL = 1e-8
 """Convergence of the equal-loads roll [rad] (1e-8 rad moves a tread contact by ~3 nm)."""
 MAX_ROLL_PASSES = 16
@@ -578,7 +584,9 @@ class CaseStart:
         last = None if before is None else before.patches
         ps = solve_wheel_normal(problem.track, problem.wheelset, problem.pose, problem.side,
                                 control, settings.patch, problem.pair, self.estimate_for,
-                                last, reference=settings.reference, problem=problem)
+                                last, reference=settings.reference, problem=problem,
+                                load_tolerance=settings.normal_load_tolerance,
+                                load_acceptance=settings.load_acceptance)
         if settings.patch.tangential is not None:
             motion = settings.patch.kinematics
             kinematics_of = None if motion is None else wheel_kinematics(problem.found,
@@ -633,7 +641,9 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
                        previous: list[PatchSolution] | None = None,
                        reference: bool = False,
                        start: tuple[float, float] | None = None,
-                       problem: WheelProblem | None = None) -> list[PatchSolution]:
+                       problem: WheelProblem | None = None,
+                       load_tolerance: float = LOAD_RTOL,
+                       load_acceptance: float = LOAD_ACCEPT_RTOL) -> list[PatchSolution]:
     """The BEM normal solutions of one wheel's patches (creep forces not counted).
 
     ``control``: the vertical approach [m] beyond first contact, or the vertical load [N]
@@ -650,7 +660,11 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     not given: a single patch's frame is first formed at that approach scaled to
     ``control``'s load, and serves within :data:`WARM_REFERENCE_RTOL`. ``problem``: the
     wheel's problem at this pose (the wheel searched, its first contact point and merges:
-    not searched again).
+    not searched again). ``load_tolerance``: relative tolerance on the load that several
+    patches carry (the secant on the approach, and the check of another root); a loop
+    that misses the load by more than ``load_acceptance`` raises a
+    :class:`~railcontact.errors.ConvergenceError` (:attr:`~.wheel.WheelSettings.
+    normal_load_tolerance`, :attr:`~.wheel.WheelSettings.load_acceptance`).
     """
     found = (problem.found if problem is not None and problem.found is not None
              else search_wheel(track, ws, pose, side))
@@ -681,20 +695,21 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     if count_contacts(found, approach) == 1:
         ps = single
     else:  # several patches: secant on the vertical approach
-        ps, r = approach_secant(residual, approach, q, LOAD_RTOL)
-        _check_load(ps, r, q, side)
+        ps, r = approach_secant(residual, approach, q, load_tolerance)
+        _check_load(ps, r, q, side, load_acceptance)
     merges = merge_approaches(found, MIN_LOBE) if problem is None else problem.merges
-    ps, other = first_root(residual, ps, vertical_approach(ps), merges, q, LOAD_RTOL)
+    ps, other = first_root(residual, ps, vertical_approach(ps), merges, q, load_tolerance)
     if other is not None:
-        _check_load(ps, vertical_force(ps) - q, q, side)
+        _check_load(ps, vertical_force(ps) - q, q, side, load_acceptance)
     mark_other(ps, other)
     return count_passes(ps, passes) if len(passes) > 1 else ps
 
 
-def _check_load(ps: list[PatchSolution], r: float, q: float, side: str) -> None:
+def _check_load(ps: list[PatchSolution], r: float, q: float, side: str,
+                acceptance: float) -> None:
     """Raise a :class:`ConvergenceError` when the vertical force misses the load ``q``
-    [N] by ``r`` [N] more than 1e-3 of it."""
-    if abs(r) > 1e-3 * q:
+    [N] by ``r`` [N] more than ``acceptance`` of it."""
+    if abs(r) > acceptance * q:
         raise ConvergenceError(f"{side} wheel: load control did not converge (vertical "
                                f"force {r + q:.6g} N for load {q:.6g} N)", ps)
 

@@ -132,7 +132,9 @@ class StepStart:
         patches = solve_wheel_normal(problem.track, problem.wheelset, problem.pose,
                                      problem.side, control, settings.patch, pair, starts,
                                      reference=settings.reference, start=start,
-                                     problem=problem)
+                                     problem=problem,
+                                     load_tolerance=settings.normal_load_tolerance,
+                                     load_acceptance=settings.load_acceptance)
         kept, dropped = [], []
         for p in patches:
             (kept if p.normal.force > 0 else dropped).append(p)
