@@ -50,13 +50,17 @@ try:
 except ImportError:  # an older package: the step's wheels solved in its wheelset module
     step_wheel_module = wheelset_module
 try:
+    import railcontact.timestep.stages as step_stages_module  # (the step's stages)
+except ImportError:  # an older package: the stages are the wheelset's methods
+    step_stages_module = wheelset_module
+try:
     import railcontact.timestep.compiled as stages_module  # (the warm step's compiled stages)
 except ImportError:  # an older package: none
     stages_module = patch_module
 
 STAGES = {  # stage: (module, function name) pairs timed as that stage
     "search": [(wheelrail_module, "contact_points"), (wheelrail_module, "count_contacts"),
-               (step_wheel_module, "vertical_gap"), (wheelset_module, "search_wheel")],
+               (step_wheel_module, "vertical_gap"), (step_stages_module, "search_wheel")],
     "meshing": [(patch_module, "make_grid"), (geometry_search.ContactPoint, "gap_on_grid"),
                 (warmstart_module, "remesh")]
                + ([(stages_module, "make_grid")] if hasattr(stages_module, "warm_normal")

@@ -60,15 +60,11 @@ from __future__ import annotations
 from dataclasses import replace
 from time import perf_counter
 
-from ..errors import CaseError, RailContactError, SolverError
-from ..geometry.points import WheelSearch
-from ..geometry.search import search_wheel
-from ..geometry.track import SIDES, Pose, Track, Wheelset
-from ..halfspace.hertz import negligible_load
+from ..errors import RailContactError
+from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
-from ..settings import ContactSettings, Control
+from ..settings import ContactSettings
 from ..settings.case import check_convention
-from ..status import status_of
 from .inputs import (  # noqa: F401  (the step's records, importable from here too)
     MAX_CURVATURE,
     NO_DEVIATION,
@@ -96,15 +92,8 @@ from .results import (  # noqa: F401  (the step's records, importable from here 
     WheelsetResult,
     resultants,
 )
-from .rigid import RigidSolution, RigidWheelset
-from .rolled import RolledApproaches, rigid_stage
-from .validity import check_validity
-from .warmstart import PatchMemory
-from .wheel import penetration_approach, solve_step_wheel
-
-Found = tuple["WheelSearch | RailContactError", "WheelSearch | RailContactError"]
-"""The step's search of each wheel (left, right): its record, or the error of a wheel beside
-its rail."""
+from .rolled import RolledApproaches
+from .stages import Found, rigid_wheelset_stage, search_wheels, solve_wheels  # noqa: F401
 
 WARM_PROMISE = (0.01, 0.02)
 """What a warm step reported ok promises at the default tolerances (eps_n = 1e-3,
@@ -199,7 +188,10 @@ class WheelsetContact:
               time: float | None = None, remember: bool = True,
               rails: tuple[RailDeviation, RailDeviation] | None = None,
               friction: tuple[float, float] | None = None) -> WheelsetResult:
-        """Solve both wheels.
+        """Solve both wheels: the step's stages (:mod:`~.stages`) on its checked inputs -
+        each wheel searched, both wheels solved from the previous step's memory, the rigid
+        wheelset's vertical displacement and roll where the settings ask for them - and
+        the result formed from them; the memory they give is the next step's start.
 
         Parameters
         ----------
@@ -232,9 +224,12 @@ class WheelsetContact:
         t0 = perf_counter()
         step = self._inputs(pose, loads, vertical, creepages, kinematics, time, rails,
                             friction)
-        found = self._search(step)
-        wheels, memory, off_track = self._wheels(step, found)
-        rigid, memory = self._rigid_stage(step, found, wheels, memory, remember, off_track)
+        found = search_wheels(step)
+        wheels, memory, off_track = solve_wheels(step, found, self.memory, self.pair,
+                                                 self.convention)
+        rigid, memory = rigid_wheelset_stage(step, found, wheels, memory, self.memory,
+                                             self.settings, self.pair, self.convention,
+                                             remember, off_track)
         if remember:
             self.memory = memory
         return WheelsetResult(wheels[0], wheels[1], perf_counter() - t0,
@@ -250,98 +245,6 @@ class WheelsetContact:
         return step_inputs(pose, loads, vertical, creepages, kinematics, time,
                            self._setups.at(self.settings, rails, friction), self.convention)
 
-    def _search(self, step: StepInputs) -> Found:
-        """Each wheel searched at the step's pose (:func:`~railcontact.geometry.search.
-        search_wheel`): what its contact points and patch frames are formed from, or the
-        :class:`RailContactError` of a wheel beside its rail."""
-        left, right = step.setups
-        return _searched(left, step.pose), _searched(right, step.pose)
-
-    def _wheels(self, step: StepInputs, found: Found
-                ) -> tuple[list[WheelContact], StepMemory, bool]:
-        """Both wheels solved (:func:`~.wheel.solve_step_wheel`) on their searches
-        (``found``), each warm-started from this contact's memory, their validity checked,
-        what the next step keeps of them, and whether a wheel is off its rail. A wheel
-        that cannot be solved has its own status (the other still is); a wheel off its
-        rail (beside it: its search's error, raised where the wheel has a load or a
-        penetration to solve) puts the whole wheelset out of range."""
-        wheels = []
-        kept: list[tuple[PatchMemory, ...]] = []
-        off_track = ""
-        loads, memory = step.loads, self.memory
-        for k, setup in enumerate(step.setups):
-            side = setup.side
-            try:
-                searched = found[k]
-                if loads is not None:
-                    control = Control(load=loads[k])
-                    if isinstance(searched, RailContactError) and not negligible_load(
-                            control.load) and control.value != 0.0:
-                        raise searched
-                else:
-                    if isinstance(searched, RailContactError):
-                        raise searched
-                    control = Control(penetration=penetration_approach(searched,
-                                                                       step.vertical))
-                own = memory.wheel(side)
-                wheel, remembered, _ = solve_step_wheel(
-                    setup, step.pose, control, step.creep(k), step.kinematics, step.time,
-                    self.pair, self.convention, (own, own, own), None,
-                    None if isinstance(searched, RailContactError) else searched)
-            except (CaseError, SolverError) as exc:  # (the penetration's control)
-                wheel, remembered = WheelContact(side, status_of(exc), str(exc)), ()
-            except RailContactError as exc:  # the pose: beyond the profiles, into the rail
-                text = str(exc)  # (it may name its wheel already)
-                off_track = off_track or (text if text.startswith(f"{side} wheel")
-                                          else f"{side} wheel: {text}")
-                wheel, remembered = WheelContact(side=side), ()
-            wheels.append(wheel)
-            kept.append(remembered)
-        if off_track:  # a wheelset with a wheel off its rail has no contact forces to give
-            msg = f"wheelset out of range: {off_track}"
-            return ([WheelContact(side=s, status=OUT_OF_RANGE, message=msg)
-                     for s in SIDE_NAMES], EMPTY_MEMORY, True)
-        wheels = [_checked(wheel, setup) for wheel, setup in zip(wheels, step.setups,
-                                                                  strict=True)]
-        return wheels, StepMemory(kept[0], kept[1]), False
-
-    def _rigid_stage(self, step: StepInputs, found: Found, wheels: list[WheelContact],
-                     memory: StepMemory, remember: bool, off_track: bool
-                     ) -> tuple[tuple, StepMemory]:
-        """The rigid wheelset's part of the step's result - ``(vertical, roll,
-        rigid_solution, rigid_work)`` of :class:`WheelsetResult` - under load control
-        solved when the settings ask for it (:func:`~.rolled.rigid_stage`; the wheels'
-        least gaps at the step's roll from their searches ``found``, each other roll
-        searched once), and the memory the next step starts from (empty when it is not
-        remembered or the warm start does not use it)."""
-        keep = remember and self.settings.uses_previous  # (what the next step starts from)
-        out = memory if keep else EMPTY_MEMORY
-        pose = step.pose
-        values: tuple = ()  # (none solved: the record's defaults)
-        if step.vertical is not None:
-            values = (step.vertical, pose.roll, RigidSolution(step.vertical, pose.roll))
-        elif not off_track and self.settings.rigid_wheelset == "solve":
-            last = self.memory if self.settings.uses_previous else EMPTY_MEMORY
-            # the rolled wheels start from this step's solves (the previous step's when
-            # this one is not remembered) and from the previous step's at its root
-            rigid = RigidWheelset(
-                *step.geometry(), pose, (wheels[0].approach, wheels[1].approach),
-                tuple((w.lateral_position, w.rolling_radius, w.contact_angle)
-                      if w.patches else None for w in wheels),
-                RolledApproaches(pose, step.loads, step.creepages, step.kinematics,
-                                 step.time, self.pair, self.convention,
-                                 out if remember else self.memory, last.rolled, step.setups),
-                history=last.rigid, time=step.time,
-                gaps=None if any(isinstance(f, RailContactError) for f in found) else
-                (found[0].least_gap, found[1].least_gap))
-            s = rigid_stage(rigid)
-            if keep:
-                roots, rolled = rigid.remembered(s)
-                out = replace(out, rigid=roots, rolled=rolled)
-            # (vertical and roll: found, or the best estimate; none when the search raised)
-            values = ((s.vertical, s.roll) if s.evaluations else (None, None)) + (s, s.work)
-        return values, out
-
     def rolled_approaches(self, pose: Pose, *, loads: tuple[float, float],
                           creepages: tuple | None = None,
                           kinematics: Kinematics | None = None,
@@ -356,26 +259,6 @@ class WheelsetContact:
                                 self.convention, self.memory, rolled,
                                 self._setups.at(self.settings, None, None))
 
-
-
-def _checked(wheel: WheelContact, setup: WheelSetup) -> WheelContact:
-    """The solved ``wheel`` with its validity checked (:func:`~.validity.check_validity`):
-    an ok wheel beyond a limit is OUTSIDE_VALIDITY, its message naming each quantity and
-    value (:meth:`~.results.WheelContact.with_validity`)."""
-    if not wheel.patches:
-        return wheel
-    return wheel.with_validity(check_validity(SIDES[wheel.side], wheel.track_force,
-                                              wheel.patches, setup.wheelset.flange_flank,
-                                              setup.settings))
-
-
-def _searched(setup: WheelSetup, pose: Pose) -> WheelSearch | RailContactError:
-    """The wheel of ``setup`` searched at ``pose`` (:func:`~railcontact.geometry.search.
-    search_wheel`), or the :class:`RailContactError` of a wheel beside its rail."""
-    try:
-        return search_wheel(setup.track, setup.wheelset, pose, setup.side)
-    except RailContactError as exc:
-        return exc
 
 
 __all__ = ["WARM_PROMISE", "WheelsetContact"]
