@@ -1,5 +1,6 @@
 """The one status vocabulary of a solved wheel: the time step, the tables, the FMU and the
-co-simulation all say what became of a wheel with a :class:`Status`.
+co-simulation all say what became of a wheel with a :class:`Status`; and the one record of
+the work a solve took, :class:`Work`.
 
 A status is an integer (the FMU's ``status`` outputs, the tables' ``status`` variable) with
 a label, a description and a severity: a wheelset's status is its wheels' most severe
@@ -10,7 +11,9 @@ solving a wheel to the status the wheel is given.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass
 from enum import IntEnum
+from typing import Any
 
 from .errors import RailContactError, SolverError
 
@@ -91,4 +94,50 @@ def status_of(exc: BaseException) -> Status:
     raise exc
 
 
-__all__ = ["Status", "status_of"]
+@dataclass
+class Work:
+    """The work a result took, counted over all its load passes and re-meshes.
+
+    Every solver result says what became of it with the same words: ``converged`` (or a
+    :class:`Status`, ``status``), a ``message`` and its ``work``, this record.
+
+    Attributes
+    ----------
+    normal_iterations
+        Normal CG iterations, every solve included (grown potential areas, load passes).
+    tangential_iterations
+        Tangential Gauss-Seidel sweeps, every solve included.
+    load_passes
+        Solves of the wheel (or quadratic patch) that the result took: the passes of the
+        load loops (approach secant with several patches, the patch frame formed again at
+        the reference point, creep-load secant, equal-loads roll), 1 when the first solve
+        was the answer.
+    remeshes
+        Normal solves repeated on a grown potential area because the contact reached the
+        edge of the previous one.
+    seconds
+        Wall time [s]: of the patch's solves (estimates included) for a patch, of the
+        whole ``solve()`` (geometry and contact search included) for a solution.
+    """
+
+    normal_iterations: int = 0
+    tangential_iterations: int = 0
+    load_passes: int = 1
+    remeshes: int = 0
+    seconds: float = 0.0
+
+    def absorb(self, other: Work) -> None:
+        """Add the iterations, re-meshes and time of ``other`` (a discarded pass)."""
+        self.normal_iterations += other.normal_iterations
+        self.tangential_iterations += other.tangential_iterations
+        self.remeshes += other.remeshes
+        self.seconds += other.seconds
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"normal_iterations": self.normal_iterations,
+                "tangential_iterations": self.tangential_iterations,
+                "load_passes": self.load_passes, "remeshes": self.remeshes,
+                "seconds": self.seconds}
+
+
+__all__ = ["Status", "Work", "status_of"]

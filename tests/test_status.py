@@ -74,3 +74,51 @@ def test_the_fmu_describes_every_status_from_the_enum():
         for v in status_vars:
             assert words in v.description, (v.name, s)
         assert words in doc, s
+
+
+def test_every_solver_result_says_converged_or_status_message_and_work():
+    """One result protocol: a case's solution, its patches and their normal and
+    tangential solutions, a wheel's solution and a step's records each say whether they
+    converged (or their status), a message and their work (:class:`Work`), whose counts
+    are the results' own."""
+    import math
+
+    import railcontact as rc
+    from railcontact.contact.wheelrail import solve_wheel, wheel_problem
+    from railcontact.status import Work
+    from railcontact.timestep.inputs import solver_settings
+
+    d = {"material": {"young": 206e9, "poisson": 0.28},
+         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                      "inclination": 0.025, "lateral_displacement": 2e-3, "side": "left"},
+         "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 80e3},
+         "tangential": {"friction": 0.3, "creepage": [1e-3, 0.0, 0.0]}}
+    sol = rc.solve(d)
+    p = sol.patches[0]
+    results = [sol, p, p.normal, p.tangential]
+    for r in results:
+        assert isinstance(r.converged, bool) and isinstance(r.message, str), r
+        assert isinstance(r.work, Work), r
+    assert sol.converged and sol.message == p.message == "ok"
+    assert p.normal.work.normal_iterations == p.normal.iterations > 0
+    assert p.tangential.work.tangential_iterations == p.tangential.iterations > 0
+    assert p.normal.work.seconds == p.normal.wall_time
+    assert sol.work.normal_iterations == p.work.normal_iterations >= p.normal.iterations
+    # a wheel's solution and a step's records
+    track = rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40))
+    ws = rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46)
+    pair = rc.ElasticPair.of(rc.Material(206e9, 0.28), rc.Material(206e9, 0.28))
+    settings = rc.ContactSettings(element_size=1e-3, friction=0.3, warm_start="none")
+    w = solve_wheel(wheel_problem(track, ws, rc.Pose(2e-3), "left", pair,
+                                  rc.settings.Control(load=80e3)),
+                    solver_settings(settings, False))
+    assert w.status is Status.OK and w.message == "ok"
+    assert w.work.normal_iterations == sum(q.work.normal_iterations for q in w.patches) > 0
+    step = rc.WheelsetContact(track, ws, pair, settings).solve(rc.Pose(2e-3),
+                                                               loads=(80e3, 80e3))
+    for r in (step, *step.wheels):
+        assert r.status is Status.OK and r.message == "ok" and isinstance(r.work, Work)
+    # one that did not converge says so, in each record above it
+    q = rc.solve({**d, "normal": {"load": 80e3, "max_iterations": 2}}).patches[0]
+    assert not q.converged and not q.normal.converged
+    assert q.message == q.normal.message and q.message.startswith("not converged")

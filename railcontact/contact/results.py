@@ -13,52 +13,10 @@ from ..normal import NormalResult
 from ..normal.starterror import EstimateError, estimate_error
 from ..settings import Case
 from ..settings.convention import reported_forces, side_creepage
+from ..status import Work
 from ..tangential import TangentialResult
 from ..tangential.strips import StripResult
 from .start import WarmStart
-
-
-@dataclass
-class Work:
-    """The work a result took, counted over all its load passes and re-meshes.
-
-    Attributes
-    ----------
-    normal_iterations
-        Normal CG iterations, every solve included (grown potential areas, load passes).
-    tangential_iterations
-        Tangential Gauss-Seidel sweeps, every solve included.
-    load_passes
-        Solves of the wheel (or quadratic patch) that the result took: the passes of the
-        load loops (approach secant with several patches, the patch frame formed again at
-        the reference point, creep-load secant, equal-loads roll), 1 when the first solve
-        was the answer.
-    remeshes
-        Normal solves repeated on a grown potential area because the contact reached the
-        edge of the previous one.
-    seconds
-        Wall time [s]: of the patch's solves (estimates included) for a patch, of the
-        whole ``solve()`` (geometry and contact search included) for a solution.
-    """
-
-    normal_iterations: int = 0
-    tangential_iterations: int = 0
-    load_passes: int = 1
-    remeshes: int = 0
-    seconds: float = 0.0
-
-    def absorb(self, other: Work) -> None:
-        """Add the iterations, re-meshes and time of ``other`` (a discarded pass)."""
-        self.normal_iterations += other.normal_iterations
-        self.tangential_iterations += other.tangential_iterations
-        self.remeshes += other.remeshes
-        self.seconds += other.seconds
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"normal_iterations": self.normal_iterations,
-                "tangential_iterations": self.tangential_iterations,
-                "load_passes": self.load_passes, "remeshes": self.remeshes,
-                "seconds": self.seconds}
 
 
 @dataclass
@@ -186,6 +144,21 @@ class PatchSolution:
             return self.creepage
         return side_creepage(self.creepage, self.geometry.side, self.convention)
 
+    @property
+    def converged(self) -> bool:
+        """Whether the patch's normal and tangential solutions converged."""
+        t = self.tangential
+        return self.normal.converged and (t is None or t.converged)
+
+    @property
+    def message(self) -> str:
+        """"ok", else the message of its first solution (normal, then tangential) that did
+        not converge."""
+        for r in (self.normal, self.tangential):
+            if r is not None and not r.converged:
+                return r.message
+        return "ok"
+
     def _estimate_error_dict(self) -> dict[str, Any] | None:
         e = self.estimate_error
         if e is None:
@@ -292,6 +265,16 @@ class Solution:
         """Whether every patch's normal and tangential solutions converged."""
         return all(p.normal.converged and (p.tangential is None or p.tangential.converged)
                    for p in self.patches)
+
+    @property
+    def message(self) -> str:
+        """"ok", else the first patch's that did not converge (:attr:`PatchSolution.
+        message`), with its number (from 0) and side."""
+        for k, p in enumerate(self.patches):
+            if not p.converged:
+                side = "" if p.geometry is None else f" ({p.geometry.side} wheel)"
+                return f"patch {k}{side}: {p.message}"
+        return "ok"
 
     @property
     def work(self) -> Work:

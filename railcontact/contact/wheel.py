@@ -24,7 +24,7 @@ from ..geometry.points import ContactPoint, WheelSearch
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
 from ..settings import Control, PatchSettings, TangentialSettings
-from ..status import Status
+from ..status import Status, Work
 from .results import PatchSolution
 
 LOAD_RTOL = 1e-6
@@ -192,6 +192,17 @@ class WheelSolution:
     load_other: float | None = None
     steep: bool = False
     error: RailContactError | SolverError | None = None
+
+    @property
+    def work(self) -> Work:
+        """The work of the wheel's solve (:class:`~railcontact.status.Work`): its
+        patches' (each pass's charged to them) summed, their load passes once (the
+        patches of a wheel share them)."""
+        total = Work(load_passes=0)
+        for p in self.patches:
+            total.absorb(p.work)
+            total.load_passes = max(total.load_passes, p.work.load_passes)
+        return total
 
     @property
     def load_unique(self) -> bool:

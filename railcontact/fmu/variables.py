@@ -335,7 +335,7 @@ def _total(attribute: str):
 
 
 def _step_work(attribute: str):
-    """A work count of the whole step (a :class:`~railcontact.contact.results.Work`
+    """A work count of the whole step (a :class:`~railcontact.status.Work`
     field), both wheels: their contact solves' plus their solves at the rolls the rigid
     wheelset's search evaluated."""
     return lambda r: sum(getattr(w, attribute) + getattr(x, attribute)

@@ -54,6 +54,7 @@ from ..halfspace.hertz import no_contact_load
 from ..halfspace.operator import PRECONDITIONER_FLOOR, InfluenceOperator, packed_product
 from ..halfspace.pointers import address, function_at
 from ..halfspace.sums import array_sum, numpy_sum
+from ..status import Work
 
 PRECONDITIONERS = ("fft", "none")
 STALL_ITERATIONS = 100
@@ -176,6 +177,13 @@ class NormalResult:
     displacement: Displacement | None = field(default=None, repr=False)
     start: np.ndarray | None = field(default=None, repr=False, compare=False)
     next_to_undefined: bool = False
+
+    @property
+    def work(self) -> Work:
+        """The solve's work (:class:`~railcontact.status.Work`, the solver results'
+        record): its CG iterations and wall time [s]."""
+        return Work(normal_iterations=self.iterations, load_passes=0,
+                    seconds=self.wall_time)
 
 
 def _uniform_start(gap: np.ndarray, operator: InfluenceOperator, penetration: float) -> np.ndarray:

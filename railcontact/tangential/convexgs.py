@@ -33,6 +33,7 @@ from ..errors import RailContactError, check_count, check_finite, check_positive
 from ..halfspace.grid import Grid
 from ..halfspace.operator import InfluenceOperator
 from ..halfspace.sums import numpy_sum
+from ..status import Work
 from .rolling import slip_x, slip_y
 
 try:
@@ -626,6 +627,13 @@ class TangentialResult:
             state["_formed_slip"] = self.relative_slip()
         state["slip_of"] = None
         return state
+
+    @property
+    def work(self) -> Work:
+        """The solve's work (:class:`~railcontact.status.Work`, the solver results'
+        record): its sweeps and wall time [s]."""
+        return Work(tangential_iterations=self.iterations, load_passes=0,
+                    seconds=self.wall_time)
 
 
 def _summarised(grid: Grid, sx, sy, sm, ncon, nslip, pmax

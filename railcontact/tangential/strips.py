@@ -22,6 +22,7 @@ from ..errors import RailContactError
 from ..halfspace.grid import Grid
 from ..halfspace.interp import interp_on_piece, uniform_piece
 from ..halfspace.sums import numpy_sum
+from ..status import Work
 
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
 
@@ -272,6 +273,14 @@ class StripResult:
     message: str = ""
     wall_time: float = 0.0
     extra: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def work(self) -> Work:
+        """The solve's work (:class:`~railcontact.status.Work`, the solver results'
+        record): its iterations (none: a strip model is not iterated) and wall time
+        [s]."""
+        return Work(tangential_iterations=self.iterations, load_passes=0,
+                    seconds=self.wall_time)
 
 
 def summarise(strips: Strips, traction: np.ndarray, state: np.ndarray, pressure: np.ndarray,

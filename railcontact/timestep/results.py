@@ -111,9 +111,9 @@ class WheelContact:
     in the patch's plane: the spin moment and the pressure's offsets from the contact
     point included)."""
     work: Work = field(default_factory=lambda: Work(load_passes=0))
-    """The work of the wheel's solves this step (:class:`~railcontact.contact.results.
-    Work`: iterations, load passes, re-meshes, wall time [s]), as the solver results
-    give theirs: the counts above, in one record."""
+    """The work of the wheel's solves this step (:class:`~railcontact.status.Work`:
+    iterations, load passes, re-meshes, wall time [s]), as the solver results give
+    theirs: the counts above, in one record."""
 
     @property
     def n_patches(self) -> int:
@@ -165,7 +165,7 @@ class WheelsetResult:
     ``converged`` and ``message``); None where they were not solved."""
     rigid_work: tuple[Work, Work] = field(
         default_factory=lambda: (Work(load_passes=0), Work(load_passes=0)))
-    """The work (:class:`~railcontact.contact.results.Work`: iterations, load passes,
+    """The work (:class:`~railcontact.status.Work`: iterations, load passes,
     re-meshes, wall time [s]) of the wheels' solves at the rolls the rigid wheelset's
     search evaluated, left and right; zero where it did not run. Not in the wheels' own
     counts: the step's whole work is the wheels' plus this."""
@@ -190,7 +190,7 @@ class WheelsetResult:
     plain "ok" (named by its side unless it names it) and, under load control, the rigid
     wheelset's when its vertical displacement and roll were not found."""
     work: Work = field(init=False)
-    """The step's whole work (:class:`~railcontact.contact.results.Work`): the wheels'
+    """The step's whole work (:class:`~railcontact.status.Work`): the wheels'
     iterations, load passes and re-meshes with those of the rigid wheelset's solves
     (:attr:`rigid_work`), and the step's wall time [s] (:attr:`wall_time`)."""
 
