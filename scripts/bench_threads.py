@@ -17,7 +17,12 @@ per repetition, their medians and the ratio threaded / sequential (1.0: nothing 
 parallel; 0.5: two cores fully used), the process's CPU time over the wall time of each
 way (below 1 for the sequential way: other processes take the core; the threaded way can
 reach 2 only with two cores free), and checks that the threaded results equal the
-sequential ones (forces and tractions, bit for bit). On Linux it also prints the
+sequential ones (forces and tractions, bit for bit). After each repeat it times the
+machine itself the same way (column ``machine``): two threads of a compiled loop without
+the GIL and without Python, as long a step as the repeat's sequential step, in
+:data:`MACHINE_CALLS` calls a step - the ratio two such runs reach on the cores free at
+that moment (0.5 when both are), the bound the wheelsets' own ratio is to be read
+against on a shared machine. On Linux it also prints the
 process's voluntary context switches per wheelset step of each way (``/proc``): in the
 threaded way each is a thread put to sleep waiting for the GIL, i.e. a hand-over of the GIL
 between the threads that had to wake the other one.
@@ -73,6 +78,10 @@ import numpy as np
 
 import railcontact as rc
 
+MACHINE_CALLS = 8
+"""GIL-free calls of a wheelset step (two wheels: the contact search, the reference
+patch, the normal and the tangential stage each): the ``machine`` column's synthetic step
+has as many, with no Python between them."""
 TRAJECTORIES = {"A": (3e-3, 1.5, 0.0), "B": (2e-3, 2.1, 0.7)}
 """Lateral displacement amplitude [m], frequency [Hz] and phase [rad] of each run."""
 
@@ -318,6 +327,31 @@ def _pattern(shape: str) -> list[tuple[float, float]]:
     return pattern
 
 
+def _synthetic_ratio(spin, counts: list[tuple[int, int]], steps: int) -> tuple[float, float]:
+    """(threaded / sequential, the sequential wall time [s]) of two runs of ``steps``
+    synthetic steps, each ``counts``' (Python loop iterations, ``spin`` iterations) in
+    turn: one run after the other, then both at once on two threads."""
+
+    def one() -> None:
+        for _ in range(steps):
+            for n_py, n_k in counts:
+                _python_loop(n_py)
+                if n_k:
+                    spin(n_k)
+
+    t0 = time.perf_counter()
+    one()
+    one()
+    seq = time.perf_counter() - t0
+    threads = [threading.Thread(target=one) for _ in range(2)]
+    t0 = time.perf_counter()
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return (time.perf_counter() - t0) / seq, seq
+
+
 def synthetic(shape: str, steps: int, repeats: int) -> None:
     """Two threads stepping a synthetic step of ``shape`` (:func:`_pattern`) against one
     after the other; prints the ratio per repeat and its median."""
@@ -329,26 +363,10 @@ def synthetic(shape: str, steps: int, repeats: int) -> None:
     per_py, per_k = _per_microsecond(_python_loop), _per_microsecond(spin, 2_000_000)
     counts = [(int(p * per_py), int(k * per_k)) for p, k in pattern]
 
-    def one() -> None:
-        for _ in range(steps):
-            for n_py, n_k in counts:
-                _python_loop(n_py)
-                if n_k:
-                    spin(n_k)
-
     ratios = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        one()
-        one()
-        seq = time.perf_counter() - t0
-        threads = [threading.Thread(target=one) for _ in range(2)]
-        t0 = time.perf_counter()
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join()
-        ratios.append((time.perf_counter() - t0) / seq)
+        ratio, seq = _synthetic_ratio(spin, counts, steps)
+        ratios.append(ratio)
     step = seq / (2 * steps) * 1e6
     calls = sum(1 for _, k in pattern if k > 0)
     print(f"synthetic step: {python_us:g} us of Python and {kernel_us:g} us GIL-free in "
@@ -436,9 +454,13 @@ def main() -> None:
             worker.result()
         print(f"{os.cpu_count()} cores; {args.steps} steps of 1 ms per wheelset, two "
               f"wheelsets (trajectories {', '.join(TRAJECTORIES)})")
+        spin = _synthetic_kernel()
+        spin(10)
+        per_k = _per_microsecond(spin, 2_000_000)
         print(f"{'repeat':>6} {'sequential [s]':>14} {'threaded [s]':>12} {'ratio':>6} "
-              f"{'CPU/wall seq.':>13} {'CPU/wall thr.':>13} {'switches/step thr.':>18}")
-        seq, thr = [], []
+              f"{'CPU/wall seq.':>13} {'CPU/wall thr.':>13} {'switches/step thr.':>18} "
+              f"{'machine':>7}")
+        seq, thr, machine = [], [], []
         reference = None
         for k in range(args.repeats):
             ways = (sequential, threaded) if k % 2 == 0 else (threaded, sequential)
@@ -461,9 +483,14 @@ def main() -> None:
                                      "the first run's")
             seq.append(times["sequential"])
             thr.append(times["threaded"])
+            # the machine's own ratio now: a GIL-free compiled loop of the same wall time
+            # a step, in as many calls as the step's long GIL-free ones, no Python
+            n_k = int(per_k * seq[-1] / (2 * args.steps) * 1e6 / MACHINE_CALLS)
+            machine.append(_synthetic_ratio(spin, [(0, n_k)] * MACHINE_CALLS,
+                                            args.steps)[0])
             print(f"{k:6d} {seq[-1]:14.3f} {thr[-1]:12.3f} {thr[-1] / seq[-1]:6.3f} "
                   f"{cpu['sequential']:13.2f} {cpu['threaded']:13.2f} "
-                  f"{switches['threaded']:18.1f}")
+                  f"{switches['threaded']:18.1f} {machine[-1]:7.3f}")
     finally:
         for worker in workers:
             worker.stop()
@@ -475,6 +502,10 @@ def main() -> None:
           f"threaded {mt:.3f} s")
     print(f"ratio threaded / sequential: {mt / ms:.3f} (of the medians), per repeat "
           f"median {np.median(ratios):.3f}, min {ratios.min():.3f}, max {ratios.max():.3f}")
+    print(f"the machine's ratio for compiled loops without Python of the same length "
+          f"(column 'machine', {MACHINE_CALLS} calls a step; 0.5 on two free cores): per "
+          f"repeat median {np.median(machine):.3f}, min {min(machine):.3f}, max "
+          f"{max(machine):.3f}")
     print("threaded results equal the sequential ones bit for bit")
 
 
