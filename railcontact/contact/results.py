@@ -246,6 +246,17 @@ def set_frictional_power(patch: PatchSolution) -> None:
     patch.frictional_power = None if patch.velocity is None else patch.velocity * per
 
 
+def patches_work(patches: list[PatchSolution]) -> Work:
+    """The work of one wheel's (or one problem's) ``patches``: their iterations,
+    re-meshes and time summed, their load passes once (the patches of a wheel share
+    them)."""
+    total = Work(load_passes=0)
+    for p in patches:
+        total.absorb(p.work)
+        total.load_passes = max(total.load_passes, p.work.load_passes)
+    return total
+
+
 @dataclass
 class Solution:
     """The solution of a case: one entry per contact patch.

@@ -25,7 +25,7 @@ from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
 from ..settings import Control, PatchSettings, TangentialSettings
 from ..status import Status, Work
-from .results import PatchSolution
+from .results import PatchSolution, patches_work
 
 LOAD_RTOL = 1e-6
 """Relative tolerance on the vertical load carried by the normal forces of several patches
@@ -198,11 +198,7 @@ class WheelSolution:
         """The work of the wheel's solve (:class:`~railcontact.status.Work`): its
         patches' (each pass's charged to them) summed, their load passes once (the
         patches of a wheel share them)."""
-        total = Work(load_passes=0)
-        for p in self.patches:
-            total.absorb(p.work)
-            total.load_passes = max(total.load_passes, p.work.load_passes)
-        return total
+        return patches_work(self.patches)
 
     @property
     def load_unique(self) -> bool:

@@ -12,7 +12,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from ..contact.results import PatchSolution, Work
+from ..contact.results import PatchSolution, Work, patches_work
 from ..contact.wheelrail import vertical_approach
 from ..geometry.track import SIDES, Pose
 from ..halfspace.grid import Grid
@@ -62,18 +62,6 @@ class WheelContact:
     area: float = 0.0
     max_pressure: float = 0.0
     slip_area_ratio: float = 0.0
-    normal_iterations: int = 0
-    """Normal CG iterations of the step, over all patches, load passes and re-meshes."""
-    tangential_iterations: int = 0
-    """Tangential sweeps of the step, over all patches, load passes and re-meshes."""
-    load_passes: int = 0
-    """Solves of the wheel this step: 0 without contact, more than one when a wheel load
-    counts the creep forces (:attr:`ContactSettings.load_includes_creep`) or several
-    patches share it."""
-    remeshes: int = 0
-    """Normal solves repeated on a grown potential area."""
-    seconds: float = 0.0
-    """Wall time of the wheel's patch solves [s] (estimates included)."""
     contact_point: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """The rigid contact point of the main patch in the track frame (X, Y, Z) [m]."""
     load_unique: bool = True
@@ -113,11 +101,38 @@ class WheelContact:
     work: Work = field(default_factory=lambda: Work(load_passes=0))
     """The work of the wheel's solves this step (:class:`~railcontact.status.Work`:
     iterations, load passes, re-meshes, wall time [s]), as the solver results give
-    theirs: the counts above, in one record."""
+    theirs; the counts below read it."""
 
     @property
     def n_patches(self) -> int:
         return len(self.patches)
+
+    @property
+    def normal_iterations(self) -> int:
+        """Normal CG iterations of the step, over all patches, load passes and re-meshes."""
+        return self.work.normal_iterations
+
+    @property
+    def tangential_iterations(self) -> int:
+        """Tangential sweeps of the step, over all patches, load passes and re-meshes."""
+        return self.work.tangential_iterations
+
+    @property
+    def load_passes(self) -> int:
+        """Solves of the wheel this step: 0 without contact, more than one when a wheel
+        load counts the creep forces (:attr:`ContactSettings.load_includes_creep`) or
+        several patches share it."""
+        return self.work.load_passes
+
+    @property
+    def remeshes(self) -> int:
+        """Normal solves repeated on a grown potential area."""
+        return self.work.remeshes
+
+    @property
+    def seconds(self) -> float:
+        """Wall time of the wheel's patch solves [s] (estimates included)."""
+        return self.work.seconds
 
     def with_validity(self, validity: Validity) -> WheelContact:
         """This wheel with a validity check recorded: its bits in :attr:`validity`; an ok
@@ -278,7 +293,6 @@ def resultants(side: str, patches: list[PatchSolution], pose: Pose) -> dict[str,
     fu = fz = mz = 0.0
     m0 = m1 = m2 = 0.0
     converged = True
-    work = Work()
     for p in patches:
         cp, n = p.geometry, p.normal
         g = cp.contact_angle
@@ -307,8 +321,6 @@ def resultants(side: str, patches: list[PatchSolution], pose: Pose) -> dict[str,
         m1 += (lz * gx - lx * gz) + (-pm * sin_g - first_x * cos_g)
         m2 += (lx * gy - ly * gx) + sgn * (pm * cos_g - first_x * sin_g)
         converged &= n.converged and (t is None or t.converged)
-        work.absorb(p.work)
-        work.load_passes = max(work.load_passes, p.work.load_passes)
     single = len(patches) == 1  # (the common case: no generators)
     main = patches[0] if single else max(patches, key=lambda p: p.normal.force)
     cp = main.geometry
@@ -344,6 +356,4 @@ def resultants(side: str, patches: list[PatchSolution], pose: Pose) -> dict[str,
         wheel_position=cp.wheel_s, rail_position=cp.rail_y, lateral_position=cp.position[1],
         contact_point=cp.position, contact_angle=cp.contact_angle,
         rolling_radius=cp.rolling_radius, area=area, max_pressure=max_pressure,
-        slip_area_ratio=slip_area_ratio, normal_iterations=work.normal_iterations,
-        tangential_iterations=work.tangential_iterations, load_passes=work.load_passes,
-        remeshes=work.remeshes, seconds=work.seconds, work=work)
+        slip_area_ratio=slip_area_ratio, work=patches_work(patches))
