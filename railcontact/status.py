@@ -94,9 +94,10 @@ def status_of(exc: BaseException) -> Status:
     raise exc
 
 
-@dataclass
+@dataclass(frozen=True, slots=True)
 class Work:
-    """The work a result took, counted over all its load passes and re-meshes.
+    """The work a result took, counted over all its load passes and re-meshes: a value,
+    added up into new records (:meth:`absorbed`, :func:`dataclasses.replace`).
 
     Every solver result says what became of it with the same words: ``converged`` (or a
     :class:`Status`, ``status``), a ``message`` and its ``work``, this record.
@@ -126,12 +127,18 @@ class Work:
     remeshes: int = 0
     seconds: float = 0.0
 
-    def absorb(self, other: Work) -> None:
-        """Add the iterations, re-meshes and time of ``other`` (a discarded pass)."""
-        self.normal_iterations += other.normal_iterations
-        self.tangential_iterations += other.tangential_iterations
-        self.remeshes += other.remeshes
-        self.seconds += other.seconds
+    def absorbed(self, other: Work) -> Work:
+        """This work with the iterations, re-meshes and time of ``other`` (a discarded
+        pass) added; the load passes this one's."""
+        return Work(self.normal_iterations + other.normal_iterations,
+                    self.tangential_iterations + other.tangential_iterations,
+                    self.load_passes, self.remeshes + other.remeshes,
+                    self.seconds + other.seconds)
+
+    def plus_seconds(self, seconds: float) -> Work:
+        """This work with ``seconds`` [s] of wall time added."""
+        return Work(self.normal_iterations, self.tangential_iterations, self.load_passes,
+                    self.remeshes, self.seconds + seconds)
 
     def to_dict(self) -> dict[str, Any]:
         return {"normal_iterations": self.normal_iterations,

@@ -201,11 +201,14 @@ def solve_own_creepages(case: dict, at: str = "patch", contact_mu: bool = False
         ps = solve_wheel_normal(track, ws, pose, "right", Control(penetration=a), normal,
                                 c.pair, reference=True)
         ps = sorted(ps, key=lambda p: abs(p.geometry.contact_angle))
+        solved = []
         for p, q in zip(ps, theirs, strict=False):
             cr = side_creepage((q["cksi"], q["ceta"], q["cphi"] * 1e3), "right", "contact")
             mu = q["mu"] if contact_mu else patch_friction(t.friction, p.geometry, track)
-            solve_patch_tangential(p, t, c.pair, settings.normal.fft, creepage=cr, friction=mu)
-            p.convention = "contact"
+            solved.append(replace(solve_patch_tangential(p, t, c.pair, settings.normal.fft,
+                                                         creepage=cr, friction=mu),
+                                  convention="contact"))
+        ps = solved + ps[len(solved):]
         return vertical_force(ps) - LOAD, ps
 
     a0 = vertical_approach(rc.solve(c).patches)  # the one-creepage solution's approach

@@ -122,9 +122,9 @@ def calls(monkeypatch):
     original, normal = step_wheel.warm_tangential, step_wheel.warm_normal
 
     def counted(*args, **kwargs):
-        done, rate = original(*args, **kwargs)
+        patch, done, rate = original(*args, **kwargs)
         seen["done" if done else "python"] += 1
-        return done, rate
+        return patch, done, rate
 
     def counted_normal(*args, **kwargs):
         staged = normal(*args, **kwargs)
@@ -186,9 +186,9 @@ def stage_call(monkeypatch):
 
     def spy(patch, *args):
         before = copy.deepcopy(patch)
-        done, rate = original(patch, *args)
-        seen.append((before, args, patch, done, rate))
-        return done, rate
+        after, done, rate = original(patch, *args)
+        seen.append((before, args, after, done, rate))
+        return after, done, rate
     monkeypatch.setattr(step_wheel, "warm_tangential", spy)
     _run(_hunting, 6, warm_start="previous+estimate")
     before, args, after, done, rate = seen[-1]
@@ -206,10 +206,10 @@ def test_the_stage_is_the_python_paths_start_solve_and_rate(stage_call):
 
     before, args, after, rate = stage_call
     settings, pair, fft, creepage, memory, factor, last, time, gain = args
-    patch = copy.deepcopy(before)
-    grid = patch.normal.grid
-    solve_patch_tangential(patch, settings, pair, fft, creepage=list(creepage),
-                           previous=_previous_tangential(memory, factor, grid))
+    grid = before.normal.grid
+    patch = solve_patch_tangential(copy.deepcopy(before), settings, pair, fft,
+                                   creepage=list(creepage),
+                                   previous=_previous_tangential(memory, factor, grid))
     t, c = patch.tangential, after.tangential
     np.testing.assert_array_equal(t.traction, c.traction)
     np.testing.assert_array_equal(t.state, c.state)
@@ -236,9 +236,9 @@ def test_a_stage_it_cannot_run_is_left_to_the_python_path_untouched(stage_call, 
         settings = replace(settings, solver="convexgs")
     else:
         monkeypatch.setattr(compiled, "ENABLED", False)
-    patch = copy.deepcopy(before)
-    assert compiled.warm_tangential(patch, settings, pair, fft, creepage, memory, factor,
-                                    last, time, gain) == (False, None)
+    patch, done, rate = compiled.warm_tangential(copy.deepcopy(before), settings, pair, fft,
+                                                 creepage, memory, factor, last, time, gain)
+    assert (done, rate) == (False, None)
     assert patch.tangential is None and patch.creepage == before.creepage
     assert patch.work.tangential_iterations == before.work.tangential_iterations
 

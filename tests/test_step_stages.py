@@ -150,6 +150,54 @@ def test_reading_a_case_solution_solves_nothing(solves):
         p.velocity * p.frictional_power_per_speed, rel=1e-15)
 
 
+def _records(obj, seen=None) -> list:
+    """Every record (a railcontact dataclass instance) ``obj`` holds, itself included,
+    through its fields, lists and tuples."""
+    seen = set() if seen is None else seen
+    if id(obj) in seen or not (dataclasses.is_dataclass(obj) and not isinstance(obj, type)
+                               and type(obj).__module__.startswith("railcontact")):
+        return []
+    seen.add(id(obj))
+    out = [obj]
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        for v in value if isinstance(value, (list, tuple)) else (value,):
+            out.extend(_records(v, seen))
+    return out
+
+
+def test_results_are_frozen_records_all_the_way_down():
+    """A step's result and a case's solution hold only frozen records (the wheels, their
+    patches, each patch's normal and tangential solutions and work): a caller cannot
+    change a result, and no stage after the one that formed a record writes into it."""
+    contact = _contact()
+    for k, y in enumerate((2e-3, 2.5e-3)):  # (a warm step: the compiled stages' records)
+        r = contact.solve(rc.Pose(y), loads=(83.3e3, 80e3), creepages=CREEP, time=k * 1e-3)
+    d = {"material": {"young": 206e9, "poisson": 0.28},
+         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                      "inclination": 0.025, "lateral_displacement": 2e-3, "side": "left"},
+         "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 80e3},
+         "tangential": {"friction": 0.3},
+         "kinematics": {"speed": 20.0, "spin_speed": 20.0 / 0.4595}}
+    quadratic = {"material": {"young": 206e9, "poisson": 0.28},
+                 "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+                 "grid": {"nx": 32, "ny": 32},
+                 "normal": {"load": 1e4}, "tangential": {"friction": 0.3,
+                                                         "creepage": [1e-3, 0.0, 0.0]}}
+    for result in (r, rc.solve(d), rc.solve(quadratic)):
+        records = _records(result)
+        kinds = {type(x).__name__ for x in records}
+        assert {"PatchSolution", "NormalResult", "TangentialResult", "Work"} <= kinds
+        thawed = sorted({type(x).__name__ for x in records
+                         if not type(x).__dataclass_params__.frozen})
+        assert thawed == []
+    patch = r.left.patches[0]
+    for record, name in ((patch, "tangential"), (patch.normal, "converged"),
+                         (patch.tangential, "message"), (patch.work, "seconds")):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(record, name, getattr(record, name))
+
+
 def _step_walk():
     """``scripts/step_walk.py``: its :func:`walk` profiles one step."""
     spec = importlib.util.spec_from_file_location("step_walk", ROOT / "scripts" / "step_walk.py")

@@ -44,10 +44,10 @@ def calls(monkeypatch):
     stage = step_wheel.warm_tangential  # (a warm patch's tangential solve in one call)
 
     def counted_stage(patch, *args, **kwargs):
-        done, rate = stage(patch, *args, **kwargs)
+        patch, done, rate = stage(patch, *args, **kwargs)
         if done:
             log["tangential"].append(patch.tangential.iterations)
-        return done, rate
+        return patch, done, rate
     monkeypatch.setattr(step_wheel, "warm_tangential", counted_stage)
     normal_stage = step_wheel.warm_normal  # (a warm patch's first normal solve in one call)
 

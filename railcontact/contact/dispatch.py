@@ -11,6 +11,7 @@ from typing import Any
 from ..normal.resolution import under_resolved
 from ..settings import Case, load_case, validate_case
 from ..settings.case import check_convention
+from .patch import not_converged
 from .quadratic import solve_quadratic
 from .results import PatchSolution, Solution
 from .wheelrail import solve_wheel_rail
@@ -57,21 +58,20 @@ def solve(case: Case | Mapping[str, Any] | str | Path, *,
         roll = pose.roll
     else:
         patches, roll = [solve_quadratic(case)], None
-    for p in patches:
-        _check_resolution(p)
+    patches = [_check_resolution(p) for p in patches]
     return Solution(case=case, patches=patches, roll=roll, seconds=time.perf_counter() - t0)
 
 
-def _check_resolution(patch: PatchSolution) -> None:
-    """Mark a converged patch whose contact spans fewer than
+def _check_resolution(patch: PatchSolution) -> PatchSolution:
+    """``patch``, or a new record of it marked not converged, its normal message saying
+    so, when it converged but its contact spans fewer than
     :data:`~railcontact.normal.resolution.MIN_ELEMENTS_ACROSS` elements along x (the rolling
-    direction) not converged, its normal message saying so: the solve met its tolerance,
-    but its pressure has not converged under grid refinement (the case exits 1, as a
-    contact cut off by elements far larger than it)."""
+    direction): the solve met its tolerance, but its pressure has not converged under grid
+    refinement (the case exits 1, as a contact cut off by elements far larger than it)."""
     n = patch.normal
     if not n.converged:
-        return
+        return patch
     why = under_resolved(n.contact, n.grid.dx, n.grid.dy)
     if why:
-        n.converged = False
-        n.message = f"{why} ({n.message})"
+        return replace(patch, normal=not_converged(n, f"{why} ({n.message})"))
+    return patch

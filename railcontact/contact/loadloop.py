@@ -154,7 +154,8 @@ def vertical_creep_estimate(cp: ContactPoint, load: float, creepage: tuple[float
 
 def count_passes(final: list[PatchSolution],
                  passes: Iterable[list[PatchSolution]]) -> list[PatchSolution]:
-    """Charge the work of every discarded pass to the patches of ``final`` and return them.
+    """The patches of ``final`` charged with the work of every discarded pass (new
+    records).
 
     ``passes`` are the solves of one wheel (``final`` among them or not); the iterations,
     re-meshes and time of each patch of another pass go to the patch of ``final`` nearest to
@@ -162,30 +163,36 @@ def count_passes(final: list[PatchSolution],
     totals of all the work done.
     """
     extra = 0
+    out = final
     for ps in passes:
         if ps is final:
             continue
         extra += max((p.work.load_passes for p in ps), default=1)
-        charge(final, ps)
-    for f in final:
-        f.work.load_passes += extra
-    return final
+        out = charge(out, ps)
+    return [replace(f, work=replace(f.work, load_passes=f.work.load_passes + extra))
+            for f in out]
 
 
-def charge(final: list[PatchSolution], others: Iterable[PatchSolution]) -> None:
-    """Add the iterations, re-meshes and time of ``others`` (patches solved and left out,
-    of the same pass or another) to the nearest patch of ``final`` (lost when it is
-    empty: no patch to report them)."""
+def charge(final: list[PatchSolution], others: Iterable[PatchSolution]
+           ) -> list[PatchSolution]:
+    """The patches of ``final`` with the iterations, re-meshes and time of ``others``
+    (patches solved and left out, of the same pass or another) added to the nearest one
+    (new records; lost when ``final`` is empty: no patch to report them)."""
+    out = list(final)
     for p in others if final else ():
-        _nearest(final, p).work.absorb(p.work)
+        k = _nearest(out, p)
+        out[k] = replace(out[k], work=out[k].work.absorbed(p.work))
+    return out
 
 
-def _nearest(patches: list[PatchSolution], p: PatchSolution) -> PatchSolution:
+def _nearest(patches: list[PatchSolution], p: PatchSolution) -> int:
+    """The index of the patch of ``patches`` nearest to ``p`` on the rail."""
     if p.geometry is None:
-        return patches[0]
+        return 0
     u, z = p.geometry.rail_u, p.geometry.position[2]
-    return min(patches, key=lambda f: math.inf if f.geometry is None else
-               math.hypot(f.geometry.rail_u - u, f.geometry.position[2] - z))
+    return min(range(len(patches)), key=lambda k: math.inf if patches[k].geometry is None
+               else math.hypot(patches[k].geometry.rail_u - u,
+                               patches[k].geometry.position[2] - z))
 
 
 def vertical_approach(patches: list[PatchSolution]) -> float:
@@ -482,17 +489,18 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
                                   noisy=True)
         patches = final.patches
     one_root = load_unique(patches, t.friction)  # (of the patches returned)
+    if len(passes) > 1:  # the work of every pass counts
+        patches = count_passes(patches, [p.patches for p in passes])
     if not failure:
         unique = other is None and one_root
-        for p in patches:  # (the total's roots, not the normal share's of a pass)
-            p.load_other, p.load_unique = other, unique
         if other is not None and not load_met(patches, q, rtol, t.tolerance):
             failure = ("the vertical load with creep forces did not converge at the "
                        "smallest approach that carries it (vertical force "
                        f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
-    if len(passes) > 1:  # the work of every pass counts
-        count_passes(patches, [p.patches for p in passes])
-    patches[0].work.seconds += seconds
+        # (the total's roots, not the normal share's of a pass)
+        patches = [replace(p, load_other=other, load_unique=unique) for p in patches]
+    # the share's estimate is the first patch's work
+    patches = [replace(patches[0], work=patches[0].work.plus_seconds(seconds)), *patches[1:]]
     accept = max(settings.load_acceptance, rtol)
     status, message = Status.OK, "ok"
     if failure and not load_met(patches, q, accept, t.tolerance):

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numba
@@ -185,9 +185,8 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
     that the gap grows by that much from one element to the next.
     """
     t0 = time.perf_counter()
-    work = Work(remeshes=-1)
+    iterations = 0
     for k in range(MAX_GROW + 1):
-        work.remeshes += 1
         if k == 0 and first is not None:
             res = first
             grid = res.grid
@@ -208,26 +207,25 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                                preconditioner=settings.preconditioner,
                                initial_displacement=shown, min_load=MIN_LOAD,
                                undefined_gap=UNDEFINED_GAP, **control.kwargs())
-        work.normal_iterations += res.iterations
+        iterations += res.iterations
         # the pressure array checked by the solver's summary of it (solve_normal: the
         # force is its sum, max_pressure its largest value or NaN when one is NaN; a
         # NaN or an infinity anywhere makes one of them not finite)
         if not (math.isfinite(res.force) and math.isfinite(res.penetration)
                 and math.isfinite(res.max_pressure)):
-            res.converged = False
-            res.message = f"the normal solution is not finite ({res.message})"
+            res = not_converged(res, f"the normal solution is not finite ({res.message})")
             break
         if res.next_to_undefined:  # (the solve's check of the gap beside its contact)
-            res.converged = False
             if profiles:
-                res.message = ("the contact reaches where the profiles end (or turn away), "
-                               "so the patch is cut off there; the pose or the load is beyond "
-                               f"the profiles ({res.message})")
+                why = ("the contact reaches where the profiles end (or turn away), so the "
+                       "patch is cut off there; the pose or the load is beyond the profiles "
+                       f"({res.message})")
             else:
-                res.message = (f"the undeformed gap next to the contact is {UNDEFINED_GAP:g} m "
-                               f"or more: the elements ({grid.dx:.3g} x {grid.dy:.3g} m) are "
-                               "far larger than the contact; give a smaller potential area "
-                               f"([grid] x, y) or smaller elements ({res.message})")
+                why = (f"the undeformed gap next to the contact is {UNDEFINED_GAP:g} m or "
+                       f"more: the elements ({grid.dx:.3g} x {grid.dy:.3g} m) are far larger "
+                       "than the contact; give a smaller potential area ([grid] x, y) or "
+                       f"smaller elements ({res.message})")
+            res = not_converged(res, why)
             break
         if not res.touches_boundary:
             break
@@ -240,14 +238,20 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                 "potential contact area too small: the contact reaches the edge of [grid] "
                 f"x = {x} , y = {y} m; enlarge it or leave x and y out for an automatic area")
         if k == MAX_GROW:
-            res.converged = False
-            res.message = (f"the contact still reaches the edge of the potential area after "
-                           f"{MAX_GROW} enlargements by {GROW_FACTOR} (raise [grid] margin or "
-                           f"the element counts): {res.message}")
+            res = not_converged(res, (
+                f"the contact still reaches the edge of the potential area after {MAX_GROW} "
+                f"enlargements by {GROW_FACTOR} (raise [grid] margin or the element counts): "
+                f"{res.message}"))
             break
         bounds = _grown(grid.bounds, bounds, automatic)
-    work.seconds = time.perf_counter() - t0
-    return res, work
+    return res, Work(normal_iterations=iterations, remeshes=k,
+                     seconds=time.perf_counter() - t0)
+
+
+def not_converged(res, message: str):
+    """The solver result ``res`` (normal or tangential) marked not converged with
+    ``message``: a new record."""
+    return replace(res, converged=False, message=message)
 
 
 UNCOVERED_MARGIN = 2
@@ -414,8 +418,10 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
                            pair: ElasticPair, fft: str,
                            creepage: tuple[float, float, float] | None = None,
                            previous: tuple | None = None,
-                           friction: float | PatchFriction | None = None) -> None:
-    """Add the tangential solution to ``patch`` (same grid as its normal solution).
+                           friction: float | PatchFriction | None = None
+                           ) -> PatchSolution:
+    """``patch`` with its tangential solution (on the grid of its normal solution): a new
+    record.
 
     ``creepage`` (xi [-], eta [-], phi [1/m]) replaces the settings' (a time step gives
     each patch its own); ``fft`` is the convolution backend. ``previous`` = (traction
@@ -424,47 +430,51 @@ def solve_patch_tangential(patch: PatchSolution, settings: TangentialSettings,
     ``settings``. ``friction`` replaces the settings' coefficient (which must then be a
     number): the patch's own [-], or (:class:`PatchFriction`) its coefficient at the
     reference point and one per lateral element row. The coefficient at the reference point
-    is recorded in ``patch.friction``. The sweeps and the time are added to
-    ``patch.work``.
+    is the new record's ``friction``; its ``work`` is the patch's with the sweeps and the
+    time added.
     """
     t0 = time.perf_counter()
     if friction is None:
         friction = settings.friction
     if isinstance(friction, PatchFriction):
-        patch.friction = float(friction.reference)
+        reference = float(friction.reference)
     elif isinstance(friction, (int, float)):
-        patch.friction = float(friction)
+        reference = float(friction)
     else:
         raise CaseError("a friction table is read per patch: give solve_patch_tangential "
                         "the patch's coefficient (friction=...)")
-    work = patch.work
-    try:
-        _tangential(patch, settings, pair, fft, creepage, previous, friction)
-    finally:
-        work.seconds += time.perf_counter() - t0
-    if patch.tangential is not None:
-        tangential_solved(patch, settings.creepage if creepage is None else creepage)
+    t = _tangential(patch, settings, pair, fft, creepage, previous, friction, reference)
+    return tangential_solved(patch, t, settings.creepage if creepage is None else creepage,
+                             settings, reference, time.perf_counter() - t0)
 
 
-def tangential_solved(patch: PatchSolution, creepage: tuple[float, float, float]) -> None:
-    """Record a patch's new tangential solution (``patch.tangential``): its ``creepage``
-    (xi [-], eta [-], phi [1/m]) and sweeps, and a solution that is not finite marked not
-    converged."""
-    t = patch.tangential
-    patch.creepage = tuple(map(float, creepage))
-    patch.work.tangential_iterations += t.iterations
+def tangential_solved(patch: PatchSolution, t: TangentialResult | StripResult,
+                      creepage: tuple[float, float, float], settings: TangentialSettings,
+                      friction: float, seconds: float) -> PatchSolution:
+    """``patch`` with its new tangential solution ``t`` (a new record): the ``creepage``
+    (xi [-], eta [-], phi [1/m]), model and estimate of the ``settings`` and the
+    ``friction`` [-] it was solved with, its sweeps and the ``seconds`` [s] it took added
+    to the work; a solution that is not finite marked not converged."""
     fx, fy = t.force
     # the traction array checked by the solver's summary of it: max_traction is the
     # largest |p| or NaN when one is NaN, so finite only when every traction is
     if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
             and math.isfinite(t.max_traction)):
-        t.converged = False
-        t.message = f"the tangential solution is not finite ({t.message})"
+        t = not_converged(t, f"the tangential solution is not finite ({t.message})")
+    w = patch.work
+    work = Work(w.normal_iterations, w.tangential_iterations + t.iterations, w.load_passes,
+                w.remeshes, w.seconds + seconds)
+    return replace(patch, tangential=t, tangential_model=settings.model,
+                   tangential_estimate=settings.estimate, friction=friction,
+                   creepage=tuple(map(float, creepage)), work=work)
 
 
 def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,
                 fft: str, creepage: tuple[float, float, float] | None,
-                previous: tuple | None, friction: float | PatchFriction) -> None:
+                previous: tuple | None, friction: float | PatchFriction,
+                reference: float) -> TangentialResult | StripResult:
+    """The tangential solution of ``patch`` (:func:`solve_patch_tangential`; ``reference``
+    the coefficient of friction at its reference point)."""
     res = patch.normal
     creepage = settings.creepage if creepage is None else tuple(creepage)
     model, estimate = settings.model, settings.estimate
@@ -474,20 +484,17 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     needs_hertz = model != "bem" or (p0 is None and estimate != "none")
     hz = (hertz(*patch.curvatures, pair, load=res.force) if res.force > 0 and needs_hertz
           else None)
-    patch.tangential_model, patch.tangential_estimate = model, estimate
     actual = res if patch.geometry is not None else None  # wheel-rail: non-elliptic patch
     if model != "bem":
         if hz is None:
             raise CaseError("no contact: the simplified tangential models need a load")
         if isinstance(friction, PatchFriction):
             raise CaseError(f"{model}: friction per element row needs the BEM")
-        patch.tangential = simplified_tangential(model, hz, pair, settings, actual, creepage,
-                                                 friction)
-        return
+        return simplified_tangential(model, hz, pair, settings, actual, creepage, friction)
     if p0 is None and estimate != "none" and hz is not None:
         p0, st0 = remesh_strips(
             simplified_tangential(estimate, hz, pair, settings, actual, creepage,
-                                  patch.friction), res.grid)
+                                  reference), res.grid)
     grid, pn = res.grid, res.pressure
     solver = settings.solver
     window = None if solver == "convexgs" else contact_window(
@@ -502,7 +509,7 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     # (on a window: the result on the patch's grid, zero outside the window)
     check_operator_memory(grid, "xy", fft)
     mu = friction.rows(grid) if isinstance(friction, PatchFriction) else friction
-    patch.tangential = SOLVERS[solver](
+    return SOLVERS[solver](
         grid, rolling_operator(grid, pair, fft), pn, mu, creepage, initial_traction=p0,
         initial_state=st0, tolerance=settings.tolerance,
         max_iterations=settings.max_iterations, spin_offset=settings.spin_offset,

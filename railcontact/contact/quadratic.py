@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -16,7 +17,7 @@ from .patch import (
     solve_patch_normal,
     solve_patch_tangential,
 )
-from .results import PatchSolution, set_frictional_power
+from .results import PatchSolution, with_frictional_power
 
 
 def solve_quadratic(case: Case) -> PatchSolution:
@@ -46,10 +47,10 @@ def solve_quadratic(case: Case) -> PatchSolution:
     est = normal_estimate(settings, hz, s, B * s**2, np.full_like(s, A), pair, control)
     res, work = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
                                    grid_settings.automatic, profiles=False)
-    work.seconds = time.perf_counter() - t0  # the estimate's set-up included
+    work = replace(work, seconds=time.perf_counter() - t0)  # the estimate's set-up included
     patch = PatchSolution(normal=res, hertz=hz, estimate=est.label, curvatures=(A, B),
                           work=work, start=est)
     if case.tangential is not None and res.force > 0:
-        solve_patch_tangential(patch, case.tangential, pair, settings.fft)
-        set_frictional_power(patch)
+        patch = with_frictional_power(
+            solve_patch_tangential(patch, case.tangential, pair, settings.fft))
     return patch

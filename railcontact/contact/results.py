@@ -19,9 +19,10 @@ from ..tangential.strips import StripResult
 from .start import WarmStart
 
 
-@dataclass
+@dataclass(frozen=True)
 class PatchSolution:
-    """Solution on one contact patch.
+    """Solution on one contact patch: a frozen record, each stage of a solve forming a
+    new one (:func:`dataclasses.replace`).
 
     Attributes
     ----------
@@ -93,7 +94,7 @@ class PatchSolution:
     """The traction times the relative slip (slip velocity over the rolling speed)
     integrated over the patch [N = W per m/s]: the frictional power at unit rolling speed,
     negative (the traction opposes the slip); formed where a case's solution is made
-    (:func:`set_frictional_power`). None without a BEM tangential solution (the strip
+    (:func:`with_frictional_power`). None without a BEM tangential solution (the strip
     models have no slip field) and in a time step's patches (its wheels sum the power from
     the energy balance: :attr:`~railcontact.timestep.WheelContact.frictional_power`)."""
     frictional_power: float | None = None
@@ -232,18 +233,18 @@ class PatchSolution:
         return d
 
 
-def set_frictional_power(patch: PatchSolution) -> None:
-    """Form ``patch``'s :attr:`~PatchSolution.frictional_power_per_speed` and
-    :attr:`~PatchSolution.frictional_power` from its BEM tangential solution's slip (one
-    product with the operator, :meth:`~railcontact.tangential.TangentialResult.
-    relative_slip`); left None without one."""
+def with_frictional_power(patch: PatchSolution) -> PatchSolution:
+    """``patch`` with its :attr:`~PatchSolution.frictional_power_per_speed` and
+    :attr:`~PatchSolution.frictional_power` formed from its BEM tangential solution's slip
+    (one product with the operator, :meth:`~railcontact.tangential.TangentialResult.
+    relative_slip`): a new record; ``patch`` itself without one."""
     t = patch.tangential
     if t is None or not hasattr(t, "relative_slip"):
-        return
+        return patch
     g = t.grid
     per = float(np.sum(np.asarray(t.traction) * t.relative_slip())) * g.dx * g.dy
-    patch.frictional_power_per_speed = per
-    patch.frictional_power = None if patch.velocity is None else patch.velocity * per
+    return replace(patch, frictional_power_per_speed=per,
+                   frictional_power=None if patch.velocity is None else patch.velocity * per)
 
 
 def patches_work(patches: list[PatchSolution]) -> Work:
@@ -252,12 +253,12 @@ def patches_work(patches: list[PatchSolution]) -> Work:
     them)."""
     total = Work(load_passes=0)
     for p in patches:
-        total.absorb(p.work)
-        total.load_passes = max(total.load_passes, p.work.load_passes)
+        total = replace(total.absorbed(p.work),
+                        load_passes=max(total.load_passes, p.work.load_passes))
     return total
 
 
-@dataclass
+@dataclass(frozen=True)
 class Solution:
     """The solution of a case: one entry per contact patch.
 
@@ -297,7 +298,7 @@ class Solution:
             passes[side] = max(passes.get(side, 0), p.work.load_passes)
         total = Work(load_passes=sum(passes.values()) if passes else 0, seconds=self.seconds)
         for p in self.patches:
-            total.absorb(replace(p.work, seconds=0.0))
+            total = total.absorbed(replace(p.work, seconds=0.0))
         return total
 
     def to_dict(self) -> dict[str, Any]:

@@ -96,13 +96,14 @@ from .patch import (
     UNCOVERED_MARGIN,
     PatchFriction,
     normal_estimate,
+    not_converged,
     solve_patch_normal,
     solve_patch_tangential,
     start_from,
     start_pressure,
     uncovered,
 )
-from .results import PatchSolution, Work, set_frictional_power
+from .results import PatchSolution, Work, with_frictional_power
 from .start import NormalStart, WarmStart
 from .wheel import (
     LOAD_ACCEPT_RTOL,
@@ -360,9 +361,9 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                 # first check, made before the gap beyond the grid was formed)
                 flagged = (staged.uncovered if staged is not None and res is staged.result
                            else None)
-                res = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair, control, est,
-                                       res, work, box_of, flagged)
-        work.seconds = time.perf_counter() - t0  # the estimate's set-up included
+                res, work = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair,
+                                             control, est, res, work, box_of, flagged)
+        work = replace(work, seconds=time.perf_counter() - t0)  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work, start=est,
                                  started_from=None if last is None else "previous load pass"))
@@ -445,17 +446,18 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
     within the solver's tolerance. A solve still uncovered after
     :data:`MAX_OVERLAP_PASSES` is not converged. ``flagged``: the first check's places
     beyond the grid, found already (a compiled stage's, :class:`~.start.StagedNormal`).
+    Returns the solution and ``work`` with the solves' added.
     """
     for k in range(MAX_OVERLAP_PASSES + 1):
         if not (res.force > 0 and math.isfinite(res.penetration) and res.penetration > 0):
-            return res
+            return res, work
         if k > 0 or flagged is None:
             box = (overlap_box(cp, res.penetration) if box_of is None else
                    box_of(cp, res.penetration, res.penetration / math.cos(cp.contact_angle)
                           + cp.gap))
             flagged = uncovered(gap_of, res, pair, box)
         if flagged is None:
-            return res
+            return res, work
         if k == MAX_OVERLAP_PASSES:
             break
         m = UNCOVERED_MARGIN
@@ -464,13 +466,12 @@ def _overlap_covered(cp: ContactPoint, gap_of: Callable[[Grid], Any],
                   min(bounds[2], flagged[2] - m * res.grid.dy),
                   max(bounds[3], flagged[3] + m * res.grid.dy))
         res, more = solve_patch_normal(gap_of, bounds, grid, normal, pair, control, est)
-        work.absorb(more)
-        work.remeshes += 1
+        work = work.absorbed(more)
+        work = replace(work, remeshes=work.remeshes + 1)
     if res.converged:
-        res.converged = False
-        res.message = ("the contact may reach beyond the potential area after "
-                       f"{MAX_OVERLAP_PASSES} enlargements ({res.message})")
-    return res
+        res = not_converged(res, "the contact may reach beyond the potential area after "
+                            f"{MAX_OVERLAP_PASSES} enlargements ({res.message})")
+    return res, work
 
 
 KinematicsOf = Callable[[PatchSolution, list[PatchSolution]], PatchKinematics]
@@ -524,6 +525,7 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
     velocity), else with the settings' creepages; with a friction table, each patch's
     coefficient read on ``track`` (:func:`patch_friction`)."""
     mu = settings.tangential.friction
+    out = []
     for p in patches:
         if p.normal.force > 0:
             last = same_patch(previous, p.geometry)
@@ -532,15 +534,18 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
                 start = p.start.traction_on(p.normal.grid)
             if start is not None and start[0] is None:
                 start = None
-            creepage = None
+            creepage, solving = None, p
             if kinematics_of is not None:
                 kin = kinematics_of(p, patches)
-                creepage, p.velocity = kin.creepage, kin.velocity
-                p.kinematic_radius = kin.rolling_radius
-            solve_patch_tangential(p, settings.tangential, pair, settings.normal.fft,
-                                   creepage=creepage, previous=start,
-                                   friction=patch_friction(mu, p.geometry, track))
-    return patches
+                creepage = kin.creepage
+                solving = replace(p, velocity=kin.velocity,
+                                  kinematic_radius=kin.rolling_radius)
+            p = solve_patch_tangential(solving, settings.tangential, pair,
+                                       settings.normal.fft, creepage=creepage,
+                                       previous=start,
+                                       friction=patch_friction(mu, p.geometry, track))
+        out.append(p)
+    return out
 
 
 def wheel_problem(track: Track, ws: Wheelset, pose: Pose, side: str, pair: ElasticPair,
@@ -701,8 +706,9 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
     ps, other = first_root(residual, ps, vertical_approach(ps), merges, q, load_tolerance)
     if other is not None:
         _check_load(ps, vertical_force(ps) - q, q, side, load_acceptance)
-    mark_other(ps, other)
-    return count_passes(ps, passes) if len(passes) > 1 else ps
+    if len(passes) > 1:
+        ps = count_passes(ps, passes)
+    return mark_other(ps, other)
 
 
 def _check_load(ps: list[PatchSolution], r: float, q: float, side: str,
@@ -721,14 +727,12 @@ the lobe's own run carries about ``0.05^(3/2)`` ~ 1 % of the load (Hertz, the sa
 curvatures)."""
 
 
-def mark_other(ps: list[PatchSolution], other: float | None) -> None:
-    """Set the patches' :attr:`~.results.PatchSolution.load_other` to ``other`` [m] and
-    their ``load_unique`` (False with another root, else True where not yet set)."""
-    for p in ps:
-        if other is not None:
-            p.load_other, p.load_unique = other, False
-        elif p.load_unique is None:
-            p.load_unique = True
+def mark_other(ps: list[PatchSolution], other: float | None) -> list[PatchSolution]:
+    """The patches with :attr:`~.results.PatchSolution.load_other` ``other`` [m] and
+    ``load_unique`` False with another root, else True where not yet set (new records)."""
+    if other is not None:
+        return [replace(p, load_other=other, load_unique=False) for p in ps]
+    return [p if p.load_unique is not None else replace(p, load_unique=True) for p in ps]
 
 
 def _points_at(found: WheelSearch, approach: float, reference: bool,
@@ -874,10 +878,8 @@ def _not_converged(patches: list[PatchSolution], why: str) -> list[PatchSolution
     """A wheel's ``patches`` of the last pass of a load loop that did not converge, each
     marked not converged with ``why`` (the load loop's failure) in its normal message: of
     a case with both wheels, the failed wheel is reported so, the other as it is."""
-    for p in patches:
-        p.normal.converged = False
-        p.normal.message = f"not converged: {why} (this pass: {p.normal.message})"
-    return patches
+    return [replace(p, normal=not_converged(
+        p.normal, f"not converged: {why} (this pass: {p.normal.message})")) for p in patches]
 
 
 def side_settings(settings: PatchSettings, side: str, convention: str) -> PatchSettings:
@@ -957,9 +959,8 @@ def _equal_loads(track: Track, ws: Wheelset, pose: Pose, control: Control,
         if isinstance(exc, CaseError):
             raise
         raise CaseError(f"[geometry] roll = 'equal-loads': {exc}") from None
-    final = solved[phi]
-    for side, patches in final.items():  # every roll pass counts
-        count_passes(patches, [per_side[side] for per_side in solved.values()])
+    final = {side: count_passes(patches, [per_side[side] for per_side in solved.values()])
+             for side, patches in solved[phi].items()}  # every roll pass counts
     return Pose(pose.lateral, pose.yaw, phi), final
 
 
@@ -1009,19 +1010,19 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None, *,
     else:
         per_side = _solve_sides(track, ws, pose, sides, control, settings, pair, reference,
                                 convention, starts)
-    patches = [p for side in sides for p in per_side[side]]
-    for p in patches:
+    patches = []
+    for p in (p for side in sides for p in per_side[side]):
         if frictional_power:
-            set_frictional_power(p)
-        p.convention = convention
+            p = with_frictional_power(p)
         n, cp = p.normal, p.geometry
         if cp.rigid is not None:  # solved in the frame at its reference point
-            p.reference = ReferencePoint(offset=reference_offset(cp), position=cp.position,
-                                         rail_y=cp.rail_y, wheel_s=cp.wheel_s,
-                                         contact_angle=cp.contact_angle,
-                                         rolling_radius=cp.rolling_radius)
+            reference = ReferencePoint(offset=reference_offset(cp), position=cp.position,
+                                       rail_y=cp.rail_y, wheel_s=cp.wheel_s,
+                                       contact_angle=cp.contact_angle,
+                                       rolling_radius=cp.rolling_radius)
         else:  # at the rigid point (no reference point formed): from its interpenetration
             X, Y = n.grid.mesh()
-            p.reference = reference_point(cp, track, ws, X, Y,
-                                          n.penetration - cp.gap_on_grid(n.grid))
+            reference = reference_point(cp, track, ws, X, Y,
+                                        n.penetration - cp.gap_on_grid(n.grid))
+        patches.append(replace(p, convention=convention, reference=reference))
     return patches, pose

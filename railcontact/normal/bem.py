@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numba
@@ -103,7 +103,7 @@ class Displacement:
     generations: int = 0
 
 
-@dataclass
+@dataclass(frozen=True)
 class NormalResult:
     """Solution of the normal contact problem on a grid (SI units).
 
@@ -1108,13 +1108,13 @@ def solved_result(out: tuple, grid: Grid, pressure: np.ndarray, q: np.ndarray,
     depth = res.penetration - hmin
     if converged and res.max_pressure > 0 and not (lo <= res.max_pressure <= hi
                                                    and lo <= depth <= hi):
-        res.converged = False
-        res.message = (f"not converged: the largest pressure {res.max_pressure:.3g} Pa or "
-                       f"the depth of interpenetration {depth:.3g} m lies outside "
-                       f"{lo:g} .. {hi:g}, where the CG's inner products (squares) under- "
-                       f"or overflow ({message})")
+        res = replace(res, converged=False, message=(
+            f"not converged: the largest pressure {res.max_pressure:.3g} Pa or the depth "
+            f"of interpenetration {depth:.3g} m lies outside {lo:g} .. {hi:g}, where the "
+            f"CG's inner products (squares) under- or overflow ({message})"))
     if res.touches_boundary:
-        res.message += "; contact reaches the edge of the potential contact area"
+        res = replace(res, message=res.message
+                      + "; contact reaches the edge of the potential contact area")
     return res
 
 

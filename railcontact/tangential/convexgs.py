@@ -565,7 +565,7 @@ def _gs_kernels(operator: InfluenceOperator) -> tuple[np.ndarray, ...]:
     return tuple(np.ascontiguousarray(k[a, b][::-1, ::-1].T) for a in (0, 1) for b in (0, 1))
 
 
-@dataclass
+@dataclass(frozen=True)
 class TangentialResult:
     """Solution of the steady-rolling tangential problem (SI units).
 

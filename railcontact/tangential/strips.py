@@ -240,7 +240,7 @@ def _rule(n: int, quadrature: str) -> tuple[np.ndarray, np.ndarray]:
     return -1 + (2 * np.arange(n) + 1) / n, np.full(n, 2 / n)
 
 
-@dataclass
+@dataclass(frozen=True)
 class StripResult:
     """Result of a simplified tangential model on strips (SI units).
 

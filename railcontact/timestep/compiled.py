@@ -34,6 +34,7 @@ small enough for a dense product or no FFTW C interface.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from time import perf_counter
 
 import numba
@@ -151,7 +152,7 @@ def _warm_tangential(nx, ny, dx, dy, x0, y0, tr, rate, state, npx, npy, n1x, n1y
 def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,
                     fft: str, creepage: tuple[float, float, float], memory: PatchMemory,
                     factor: float, last: PatchMemory | None, time: float | None,
-                    gain: float) -> tuple[bool, np.ndarray | None]:
+                    gain: float) -> tuple[PatchSolution, bool, np.ndarray | None]:
     """The tangential stage of a warm ``patch`` (its normal solution found) in one
     compiled call (:func:`_warm_tangential`), as the time step's Python path forms it:
     its start the remembered patch ``memory`` advanced along its traction rate by the
@@ -161,9 +162,11 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     frame), then the traction's rate after ``last`` (the older step) at ``time``, smoothed
     with ``gain`` (:func:`~.warmstart.traction_rate`).
 
-    Returns ``(done, rate)``: ``done`` False where the stage is not that call (nothing was
-    changed: the caller takes the Python path); else the patch holds its tangential
-    solution, its work counted, and ``rate`` is the traction's rate (None: not formed)."""
+    Returns ``(patch, done, rate)``: ``done`` False where the stage is not that call (the
+    caller takes the Python path from the ``patch`` returned, which holds the time an
+    operator's forming took, if any); else ``patch`` is the new record with its tangential
+    solution, its work counted, and ``rate`` is the traction's rate (None: not
+    formed)."""
     t0 = perf_counter()
     friction, rate = settings.friction, memory.traction_rate
     tr, st, o = memory.traction, memory.state, memory.older
@@ -173,11 +176,11 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
             and tr is not None and rate is not None and rate.shape == tr.shape
             and tr.ndim == 3 and st is not None and st.dtype == np.int8 and st.ndim == 2
             and memory.pressure.ndim == 2):
-        return False, None
+        return patch, False, None
     xi, eta, phi = (float(c) for c in creepage)  # (as the solver's checks give them)
     if not (xi - xi == 0.0 and eta - eta == 0.0 and phi - phi == 0.0
             and (xi != 0.0 or eta != 0.0 or phi != 0.0)):
-        return False, None
+        return patch, False, None
     res = patch.normal
     grid = res.grid
     win = contact_window(res.contact, box=res.contact_box or (-1, 0, -1, 0))
@@ -193,14 +196,13 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     offset = settings.spin_offset
     if not (type(offset) is float and offset - offset == 0.0
             and resolve_backend(fft, solved.size) == "pyfftw"):
-        return False, None  # (a dense product, small grids: no compiled solve)
+        return patch, False, None  # (a dense product, small grids: no compiled solve)
     check_operator_memory(solved, "xy", fft)
     operator = rolling_operator(solved, pair, fft)
     setup = compiled_setup(operator, settings.tolerance, settings.max_iterations, OMEGA_H,
                            OMEGA_S, "auto")
-    if setup is None:
-        patch.work.seconds += perf_counter() - t0  # (the operator's, when it was formed)
-        return False, None
+    if setup is None:  # (the operator's time, when it was formed)
+        return _plus_seconds(patch, perf_counter() - t0), False, None
     block, products, kern, cum, tol, max_its, (omega_h, omega_s) = setup
     # the older step's traction and rate (traction_rate's conditions: a rate at all, then
     # one formed in the compiled pass)
@@ -232,22 +234,22 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
         STALL_GAIN, BLOCK_SCALE**2 * solved.size, whole, older,
         older if v0 is None else v0, smooth, grid0, float(gain), dt, with_rate)
     if kind != 2:  # (the start off the lattice: only it was formed)
-        patch.work.seconds += perf_counter() - t0
-        return False, None
+        return _plus_seconds(patch, perf_counter() - t0), False, None
     # (the solve's time with its start and rate, which ran in the same call)
     t = compiled_record(t_solve, solved, operator, embed, tol, out)
-    patch.tangential_model, patch.tangential_estimate = settings.model, settings.estimate
-    patch.friction = friction
-    patch.tangential = t
-    tangential_solved(patch, (xi, eta, phi))
     if not rated_at_all:
         rate_out = None
     elif rated:
         rate_out = v if math.isfinite(total) else None
     else:  # (off the lattice: the Python path's re-meshed rate)
         rate_out = traction_rate(t.traction, grid, time, last, gain)
-    patch.work.seconds += perf_counter() - t0
-    return True, rate_out
+    return (tangential_solved(patch, t, (xi, eta, phi), settings, friction,
+                              perf_counter() - t0), True, rate_out)
+
+
+def _plus_seconds(patch: PatchSolution, seconds: float) -> PatchSolution:
+    """``patch`` with ``seconds`` [s] added to its work (a new record)."""
+    return replace(patch, work=patch.work.plus_seconds(seconds))
 
 
 @numba.njit(cache=True, nogil=True)

@@ -224,12 +224,11 @@ class WheelsetResult:
         object.__setattr__(self, "moment", (m[0] + h * fy, m[1] - h * fx, m[2]))
         object.__setattr__(self, "yaw_moment", left.yaw_moment + right.yaw_moment)
         object.__setattr__(self, "message", _step_message(left, right, rigid))
-        work = Work(load_passes=0)
-        for w in (left.work, right.work, *self.rigid_work):
-            work.absorb(w)
-            work.load_passes += w.load_passes
-        work.seconds = self.wall_time
-        object.__setattr__(self, "work", work)
+        parts = (left.work, right.work, *self.rigid_work)
+        object.__setattr__(self, "work", Work(
+            sum(w.normal_iterations for w in parts),
+            sum(w.tangential_iterations for w in parts), sum(w.load_passes for w in parts),
+            sum(w.remeshes for w in parts), self.wall_time))
 
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:

@@ -4,7 +4,7 @@ stage itself (:func:`rigid_stage`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 from ..contact.results import Work
 from ..errors import RailContactError, SolverError
@@ -97,7 +97,7 @@ class RolledApproaches:
                 None if guess is None else guess[k], None if found is None else found[k])
             if error is not None:  # (a patch beyond the model, a load loop that raised)
                 raise error
-            count_work(self.work[side], wheel)
+            self.work[side] = counted(self.work[side], wheel)
             if not wheel.patches or wheel.status == NOT_CONVERGED:  # no approach to give
                 raise RailContactError(f"{side} wheel at roll {phi:.6g} rad: "
                                        + (wheel.message if wheel.patches else "no contact"))
@@ -123,13 +123,13 @@ def rigid_stage(rigid: RigidWheelset) -> RigidSolution:
         done = rigid.approach_at.work  # (this step's: all of it is this search's)
         return RigidSolution(0.0, 0.0, converged=False,
                              message=f"rigid wheelset's vertical displacement and roll: {exc}",
-                             work=(replace(done["left"]), replace(done["right"])))
+                             work=(done["left"], done["right"]))
 
 
-def count_work(work: Work, wheel: WheelContact) -> None:
-    """Add a wheel solve's iterations, load passes, re-meshes and time to ``work``."""
-    work.normal_iterations += wheel.normal_iterations
-    work.tangential_iterations += wheel.tangential_iterations
-    work.load_passes += wheel.load_passes
-    work.remeshes += wheel.remeshes
-    work.seconds += wheel.seconds
+def counted(work: Work, wheel: WheelContact) -> Work:
+    """``work`` with a wheel solve's iterations, load passes, re-meshes and time added."""
+    w = wheel.work
+    return Work(work.normal_iterations + w.normal_iterations,
+                work.tangential_iterations + w.tangential_iterations,
+                work.load_passes + w.load_passes, work.remeshes + w.remeshes,
+                work.seconds + w.seconds)

@@ -14,7 +14,7 @@ first normal share of the creep-load loop is the load less the previous step's c
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from time import perf_counter
 
 from ..contact.loadloop import charge, vertical_approach, vertical_creep_estimate
@@ -139,16 +139,15 @@ class StepStart:
         for p in patches:
             (kept if p.normal.force > 0 else dropped).append(p)
         if dropped:
-            charge(kept, dropped)  # their work counts
-        patches = kept
-        creepages, memory = [], []
-        approach = vertical_approach(patches)
+            kept = charge(kept, dropped)  # their work counts
+        creepages, memory, patches = [], [], []
+        approach = vertical_approach(kept)
         tangential = settings.tangential is not None
         # the traction extrapolated in time, and its rate kept, for SteadyGS only
         # (previous_tangential, traction_rate)
         steady = s.tangential_solver != "convexgs"
         sgn = SIDES[problem.side]
-        for patch in patches:
+        for patch in kept:
             cp, n = patch.geometry, patch.normal
             u, z = cp.rail_u, cp.position[2]
             ps = starts.last  # (the start of this patch's contact point: its match)
@@ -158,7 +157,6 @@ class StepStart:
                 m = match(source, u, z) if source else None  # None without warm start
                 c = 0.0 if m is None else m.extrapolation(time)
             last = m if previous is source else match(previous, u, z)
-            work = patch.work
             done = False
             if tangential:
                 k = self.creepage(cp, problem)
@@ -166,18 +164,19 @@ class StepStart:
                 creepage = (k[0], sgn * k[1], sgn * k[2])
                 # the warm stage in one compiled call where it is one (its work counted)
                 if m is not None and steady:
-                    done, rate = warm_tangential(patch, settings.tangential, pair, s.fft,
-                                                 creepage, m, c, last, time, RATE_GAIN)
+                    patch, done, rate = warm_tangential(patch, settings.tangential, pair,
+                                                        s.fft, creepage, m, c, last, time,
+                                                        RATE_GAIN)
             if tangential and not done:
                 t0 = perf_counter()
                 prev = None
                 if m is not None:  # (the factor at the step's time for SteadyGS, else 0)
                     prev = ((None, None) if m.traction is None or m.state is None else
                             _previous_tangential(m, c if steady else 0.0, n.grid))
-                seconds = work.seconds
-                solve_patch_tangential(patch, settings.tangential, pair, s.fft,
-                                       creepage=list(creepage), previous=prev)
-                seconds = work.seconds - seconds  # (the solve's own time, which it kept)
+                seconds = patch.work.seconds
+                patch = solve_patch_tangential(patch, settings.tangential, pair, s.fft,
+                                               creepage=list(creepage), previous=prev)
+                seconds = patch.work.seconds - seconds  # (the solve's own, which it kept)
             t = patch.tangential
             # the traction's rate smoothed over the steps; its time, and the start's, is
             # the patch's work (the interval less the solve's own)
@@ -185,7 +184,9 @@ class StepStart:
                 rate = (traction_rate(t.traction, n.grid, time, last)
                         if t is not None and steady else None)
             if tangential and not done:
-                work.seconds += (perf_counter() - t0) - seconds
+                patch = replace(patch, work=patch.work.plus_seconds(
+                    (perf_counter() - t0) - seconds))
+            patches.append(patch)
             # what a newer step keeps of the older one: its traction and time for the
             # extrapolation, not its own older step or traction rate, which this step's
             # rate has taken in (the memory, and an FMU's saved state, stay two steps deep)
@@ -377,8 +378,7 @@ def wheel_contact(side: str, solution: WheelSolution, pose: Pose, speed: float |
         values["creepages"] = [wheel_frame_creepage(c) for c in creepages]
         fx, fy = values["creep_force"]
         values["creep_force"] = (-fx, fy)
-        for p in patches:
-            p.convention = "contact"
+        values["patches"] = [replace(p, convention="contact") for p in patches]
     if solution.status == Status.NOT_CONVERGED:  # the load loop's
         values["status"], values["message"] = NOT_CONVERGED, solution.message
     values["load_unique"], why = _uniqueness(solution, warm, creep_in_load)
