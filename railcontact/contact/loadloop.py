@@ -491,16 +491,17 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     one_root = load_unique(patches, t.friction)  # (of the patches returned)
     if len(passes) > 1:  # the work of every pass counts
         patches = count_passes(patches, [p.patches for p in passes])
+    roots = {}
     if not failure:
-        unique = other is None and one_root
+        # (the total's roots, not the normal share's of a pass)
+        roots = {"load_other": other, "load_unique": other is None and one_root}
         if other is not None and not load_met(patches, q, rtol, t.tolerance):
             failure = ("the vertical load with creep forces did not converge at the "
                        "smallest approach that carries it (vertical force "
                        f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
-        # (the total's roots, not the normal share's of a pass)
-        patches = [replace(p, load_other=other, load_unique=unique) for p in patches]
-    # the share's estimate is the first patch's work
-    patches = [replace(patches[0], work=patches[0].work.plus_seconds(seconds)), *patches[1:]]
+    # (the share's estimate is the first patch's work)
+    patches = [replace(patches[0], work=patches[0].work.plus_seconds(seconds), **roots),
+               *(replace(p, **roots) if roots else p for p in patches[1:])]
     accept = max(settings.load_acceptance, rtol)
     status, message = Status.OK, "ok"
     if failure and not load_met(patches, q, accept, t.tolerance):
