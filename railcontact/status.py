@@ -135,6 +135,11 @@ class Work:
                     self.load_passes, self.remeshes + other.remeshes,
                     self.seconds + other.seconds)
 
+    def timed(self, seconds: float) -> Work:
+        """This work with its wall time ``seconds`` [s]."""
+        return Work(self.normal_iterations, self.tangential_iterations, self.load_passes,
+                    self.remeshes, seconds)
+
     def plus_seconds(self, seconds: float) -> Work:
         """This work with ``seconds`` [s] of wall time added."""
         return Work(self.normal_iterations, self.tangential_iterations, self.load_passes,

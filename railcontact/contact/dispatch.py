@@ -73,5 +73,5 @@ def _check_resolution(patch: PatchSolution) -> PatchSolution:
         return patch
     why = under_resolved(n.contact, n.grid.dx, n.grid.dy)
     if why:
-        return replace(patch, normal=not_converged(n, f"{why} ({n.message})"))
+        return patch.replaced(normal=not_converged(n, f"{why} ({n.message})"))
     return patch

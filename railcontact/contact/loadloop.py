@@ -169,7 +169,7 @@ def count_passes(final: list[PatchSolution],
             continue
         extra += max((p.work.load_passes for p in ps), default=1)
         out = charge(out, ps)
-    return [replace(f, work=replace(f.work, load_passes=f.work.load_passes + extra))
+    return [f.replaced(work=replace(f.work, load_passes=f.work.load_passes + extra))
             for f in out]
 
 
@@ -181,7 +181,7 @@ def charge(final: list[PatchSolution], others: Iterable[PatchSolution]
     out = list(final)
     for p in others if final else ():
         k = _nearest(out, p)
-        out[k] = replace(out[k], work=out[k].work.absorbed(p.work))
+        out[k] = out[k].replaced(work=out[k].work.absorbed(p.work))
     return out
 
 
@@ -500,8 +500,8 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
                        "smallest approach that carries it (vertical force "
                        f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
     # (the share's estimate is the first patch's work)
-    patches = [replace(patches[0], work=patches[0].work.plus_seconds(seconds), **roots),
-               *(replace(p, **roots) if roots else p for p in patches[1:])]
+    patches = [patches[0].replaced(work=patches[0].work.plus_seconds(seconds), **roots),
+               *(p.replaced(**roots) if roots else p for p in patches[1:])]
     accept = max(settings.load_acceptance, rtol)
     status, message = Status.OK, "ok"
     if failure and not load_met(patches, q, accept, t.tolerance):

@@ -464,9 +464,9 @@ def tangential_solved(patch: PatchSolution, t: TangentialResult | StripResult,
     w = patch.work
     work = Work(w.normal_iterations, w.tangential_iterations + t.iterations, w.load_passes,
                 w.remeshes, w.seconds + seconds)
-    return replace(patch, tangential=t, tangential_model=settings.model,
-                   tangential_estimate=settings.estimate, friction=friction,
-                   creepage=tuple(map(float, creepage)), work=work)
+    return patch.replaced(tangential=t, tangential_model=settings.model,
+                          tangential_estimate=settings.estimate, friction=friction,
+                          creepage=tuple(map(float, creepage)), work=work)
 
 
 def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: ElasticPair,

@@ -261,7 +261,7 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
              estimate_for: EstimateFor | None = None,
              previous: list[PatchSolution] | None = None,
              box_of: BoxOf | None = None, probe_grid: GridSettings | None = None,
-             after_probe: bool = False) -> list[PatchSolution]:
+             after_probe: bool = False, load_loop: bool = False) -> list[PatchSolution]:
     """The normal BEM solution of each contact point's patch: at the vertical ``approach``
     [m], or carrying the normal ``loads`` [N] (one per point).
 
@@ -279,9 +279,10 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
 
     A patch of ``previous`` (the wheel's last load pass) at the same contact point starts
     the solve: its pressure is the initial estimate, and its grid is kept when it serves
-    the new potential area (:func:`_covers`). Raises when the wheel is off its rail
-    (:func:`check_on_rail`) or a patch is beyond the half-space model
-    (:data:`MAX_PATCH_SHARE`)."""
+    the new potential area (:func:`_covers`). ``load_loop``: the patches are a pass of a
+    load loop (their ``load_unique`` True until the loop finds another root; else None).
+    Raises when the wheel is off its rail (:func:`check_on_rail`) or a patch is beyond
+    the half-space model (:data:`MAX_PATCH_SHARE`)."""
     grid, normal = settings.grid, settings.normal
     out = []
     for k, cp in enumerate(cps):
@@ -363,10 +364,11 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
                            else None)
                 res, work = _overlap_covered(cp, gap_of, bounds, mesh, normal, pair,
                                              control, est, res, work, box_of, flagged)
-        work = replace(work, seconds=time.perf_counter() - t0)  # the estimate's set-up included
+        work = work.timed(time.perf_counter() - t0)  # the estimate's set-up included
         out.append(PatchSolution(normal=res, hertz=hz, estimate=est.label,
                                  curvatures=(cp.A, cp.B), geometry=cp, work=work, start=est,
-                                 started_from=None if last is None else "previous load pass"))
+                                 started_from=None if last is None else "previous load pass",
+                                 load_unique=True if load_loop else None))
     return out
 
 
@@ -538,8 +540,8 @@ def _add_tangential(patches: list[PatchSolution], settings: PatchSettings,
             if kinematics_of is not None:
                 kin = kinematics_of(p, patches)
                 creepage = kin.creepage
-                solving = replace(p, velocity=kin.velocity,
-                                  kinematic_radius=kin.rolling_radius)
+                solving = p.replaced(velocity=kin.velocity,
+                                    kinematic_radius=kin.rolling_radius)
             p = solve_patch_tangential(solving, settings.tangential, pair,
                                        settings.normal.fft, creepage=creepage,
                                        previous=start,
@@ -692,7 +694,8 @@ def solve_wheel_normal(track: Track, ws: Wheelset, pose: Pose, side: str, contro
 
     def residual(a: float) -> tuple[float, list[PatchSolution]]:
         ps = _patches(_points_at(found, a, reference, settings.separation), ws, a, settings,
-                      pair, estimate_for=estimate_for, previous=passes[-1], box_of=box_of)
+                      pair, estimate_for=estimate_for, previous=passes[-1], box_of=box_of,
+                      load_loop=True)
         passes.append(ps)
         return vertical_force(ps) - q, ps
 
@@ -729,10 +732,11 @@ curvatures)."""
 
 def mark_other(ps: list[PatchSolution], other: float | None) -> list[PatchSolution]:
     """The patches with :attr:`~.results.PatchSolution.load_other` ``other`` [m] and
-    ``load_unique`` False with another root, else True where not yet set (new records)."""
+    ``load_unique`` False with another root, else True where not yet set (new records
+    where they change; a load loop's pass forms its patches with True)."""
     if other is not None:
-        return [replace(p, load_other=other, load_unique=False) for p in ps]
-    return [p if p.load_unique is not None else replace(p, load_unique=True) for p in ps]
+        return [p.replaced(load_other=other, load_unique=False) for p in ps]
+    return [p if p.load_unique is not None else p.replaced(load_unique=True) for p in ps]
 
 
 def _points_at(found: WheelSearch, approach: float, reference: bool,
@@ -799,7 +803,8 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
     if not reference:
         cosg = math.cos(first.contact_angle)
         single = _patches([first], found.wheelset, 0.0, settings, pair, loads=[q / cosg],
-                          estimate_for=estimate_for, previous=previous, box_of=box_of)
+                          estimate_for=estimate_for, previous=previous, box_of=box_of,
+                          load_loop=True)
         return single, [single]
     if previous:  # the pass before, its approach scaled to this load as Hertz's
         q_prev = sum(p.normal.force * math.cos(p.geometry.contact_angle) for p in previous)
@@ -827,7 +832,7 @@ def _single_patch(found: WheelSearch, first: ContactPoint, q: float,
                       probe_settings(settings) if probe else settings, pair,
                       loads=[q / math.cos(cp.contact_angle)], estimate_for=estimate_for,
                       previous=last, box_of=box_of, probe_grid=coarse_grid,
-                      after_probe=coarse)
+                      after_probe=coarse, load_loop=True)
         passes.append(ps)
         coarse = coarse_grid is not None and bool(ps) and not ps[0].start.gives_pressure
         new = vertical_approach(ps)
@@ -878,7 +883,7 @@ def _not_converged(patches: list[PatchSolution], why: str) -> list[PatchSolution
     """A wheel's ``patches`` of the last pass of a load loop that did not converge, each
     marked not converged with ``why`` (the load loop's failure) in its normal message: of
     a case with both wheels, the failed wheel is reported so, the other as it is."""
-    return [replace(p, normal=not_converged(
+    return [p.replaced(normal=not_converged(
         p.normal, f"not converged: {why} (this pass: {p.normal.message})")) for p in patches]
 
 
@@ -1024,5 +1029,5 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None, *,
             X, Y = n.grid.mesh()
             reference = reference_point(cp, track, ws, X, Y,
                                         n.penetration - cp.gap_on_grid(n.grid))
-        patches.append(replace(p, convention=convention, reference=reference))
+        patches.append(p.replaced(convention=convention, reference=reference))
     return patches, pose

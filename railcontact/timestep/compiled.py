@@ -34,7 +34,6 @@ small enough for a dense product or no FFTW C interface.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from time import perf_counter
 
 import numba
@@ -249,7 +248,7 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
 
 def _plus_seconds(patch: PatchSolution, seconds: float) -> PatchSolution:
     """``patch`` with ``seconds`` [s] added to its work (a new record)."""
-    return replace(patch, work=patch.work.plus_seconds(seconds))
+    return patch.replaced(work=patch.work.plus_seconds(seconds))
 
 
 @numba.njit(cache=True, nogil=True)

@@ -14,7 +14,7 @@ first normal share of the creep-load loop is the load less the previous step's c
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from time import perf_counter
 
 from ..contact.loadloop import charge, vertical_approach, vertical_creep_estimate
@@ -184,7 +184,7 @@ class StepStart:
                 rate = (traction_rate(t.traction, n.grid, time, last)
                         if t is not None and steady else None)
             if tangential and not done:
-                patch = replace(patch, work=patch.work.plus_seconds(
+                patch = patch.replaced(work=patch.work.plus_seconds(
                     (perf_counter() - t0) - seconds))
             patches.append(patch)
             # what a newer step keeps of the older one: its traction and time for the
@@ -378,7 +378,7 @@ def wheel_contact(side: str, solution: WheelSolution, pose: Pose, speed: float |
         values["creepages"] = [wheel_frame_creepage(c) for c in creepages]
         fx, fy = values["creep_force"]
         values["creep_force"] = (-fx, fy)
-        values["patches"] = [replace(p, convention="contact") for p in patches]
+        values["patches"] = [p.replaced(convention="contact") for p in patches]
     if solution.status == Status.NOT_CONVERGED:  # the load loop's
         values["status"], values["message"] = NOT_CONVERGED, solution.message
     values["load_unique"], why = _uniqueness(solution, warm, creep_in_load)
