@@ -454,11 +454,12 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     meets the load to ``settings.load_tolerance``, then the smallest approach that carries
     it (:func:`first_root`, the problem's merges). Each pass is ``start``'s
     (:meth:`~.wheel.WheelStart.solve_pass`, started from the pass before); the work of
-    every pass, and the time of the share's estimate, are charged to the patches
-    returned. The solution is not converged, with the loop's message, when the load is
-    missed by more than ``settings.load_acceptance`` (and by more than the accuracy of
-    the creep forces, :func:`load_met`); its patches say whether the load has another
-    root (``load_other``, ``load_unique``)."""
+    every pass is charged to the patches returned, the time of the share's estimate is
+    the solution's own (:attr:`~.wheel.WheelSolution.seconds`). The solution is not
+    converged, with the loop's message, when the load is missed by more than
+    ``settings.load_acceptance`` (and by more than the accuracy of the creep forces,
+    :func:`load_met`); its patches say whether the load has another root
+    (``load_other``, ``load_unique``)."""
     q = problem.control.load
     passes: list[WheelPass] = []
 
@@ -491,20 +492,20 @@ def creep_load(problem: WheelProblem, settings: WheelSettings, start: WheelStart
     one_root = load_unique(patches, t.friction)  # (of the patches returned)
     if len(passes) > 1:  # the work of every pass counts
         patches = count_passes(patches, [p.patches for p in passes])
-    roots = {}
     if not failure:
-        # (the total's roots, not the normal share's of a pass)
-        roots = {"load_other": other, "load_unique": other is None and one_root}
+        # the total's roots, not the normal share's of a pass (new records where they
+        # change it: a pass forms its patches with load_unique True)
+        unique = other is None and one_root
+        patches = [p if p.load_other == other and p.load_unique is unique
+                   else p.replaced(load_other=other, load_unique=unique) for p in patches]
         if other is not None and not load_met(patches, q, rtol, t.tolerance):
             failure = ("the vertical load with creep forces did not converge at the "
                        "smallest approach that carries it (vertical force "
                        f"{vertical_force(patches):.6g} N for load {q:.6g} N)")
-    # (the share's estimate is the first patch's work)
-    patches = [patches[0].replaced(work=patches[0].work.plus_seconds(seconds), **roots),
-               *(p.replaced(**roots) if roots else p for p in patches[1:])]
     accept = max(settings.load_acceptance, rtol)
     status, message = Status.OK, "ok"
     if failure and not load_met(patches, q, accept, t.tolerance):
         status, message = Status.NOT_CONVERGED, failure
     return WheelSolution(patches, status, message, final.creepages, final.memory,
-                         load_other=other_root(patches), steep=not one_root)
+                         load_other=other_root(patches), steep=not one_root,
+                         seconds=seconds)  # (the share's estimate: the wheel's work)

@@ -182,6 +182,10 @@ class WheelSolution:
         have another root.
     error
         The exception a pass raised (its :attr:`status` from it), or None.
+    seconds
+        Wall time [s] of the solve outside its passes (the creep-load loop's estimate of
+        the creep forces' share of the load), counted in :attr:`work` beside the
+        patches'.
     """
 
     patches: list[PatchSolution] = field(default_factory=list)
@@ -192,13 +196,15 @@ class WheelSolution:
     load_other: float | None = None
     steep: bool = False
     error: RailContactError | SolverError | None = None
+    seconds: float = 0.0
 
     @property
     def work(self) -> Work:
         """The work of the wheel's solve (:class:`~railcontact.status.Work`): its
         patches' (each pass's charged to them) summed, their load passes once (the
-        patches of a wheel share them)."""
-        return patches_work(self.patches)
+        patches of a wheel share them), and the solve's own :attr:`seconds`."""
+        work = patches_work(self.patches)
+        return work.plus_seconds(self.seconds) if self.seconds else work
 
     @property
     def load_unique(self) -> bool:

@@ -363,6 +363,7 @@ def wheel_contact(side: str, solution: WheelSolution, pose: Pose, speed: float |
         return WheelContact(side=side, status=solution.status, message=solution.message)
     patches, creepages = solution.patches, solution.creepages
     values = resultants(side, patches, pose)
+    values["work"] = solution.work  # (its patches' and the load loop's own)
     values["creepages"] = creepages
     if creepages:  # (side frame: the lateral and spin components mirrored)
         sgn = SIDES[side]
