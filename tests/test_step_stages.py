@@ -29,6 +29,14 @@ hertz_module = importlib.import_module("railcontact.halfspace.hertz")  # (the pa
 # name hertz is the function)
 STEEL = rc.Material(206e9, 0.28)
 CREEP = ((1e-3, -5e-4, 0.3), (1e-3, -5e-4, -0.3))
+WHEEL_RAIL_CASE = {
+    "material": {"young": 206e9, "poisson": 0.28},
+    "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                 "inclination": 0.025, "lateral_displacement": 2e-3, "side": "left"},
+    "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 80e3},
+    "tangential": {"friction": 0.3},
+    "kinematics": {"speed": 20.0, "spin_speed": 20.0 / 0.4595}}
+"""A left wheel on the tread with kinematic creepages (a case's solution to read)."""
 
 
 def _contact(**settings) -> WheelsetContact:
@@ -133,12 +141,7 @@ def test_a_wheel_contact_is_a_record_of_values():
 def test_reading_a_case_solution_solves_nothing(solves):
     """The same for a case's solution (``railcontact solve``): its patches' frictional
     power is formed with the solution, and reading every attribute solves nothing."""
-    d = {"material": {"young": 206e9, "poisson": 0.28},
-         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
-                      "inclination": 0.025, "lateral_displacement": 2e-3, "side": "left"},
-         "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 80e3},
-         "tangential": {"friction": 0.3},
-         "kinematics": {"speed": 20.0, "spin_speed": 20.0 / 0.4595}}
+    d = WHEEL_RAIL_CASE
     sol = rc.solve(d)
     before = dict(solves)
     assert before["normal"] > 0 and before["operator"] > 0
@@ -173,12 +176,7 @@ def test_results_are_frozen_records_all_the_way_down():
     contact = _contact()
     for k, y in enumerate((2e-3, 2.5e-3)):  # (a warm step: the compiled stages' records)
         r = contact.solve(rc.Pose(y), loads=(83.3e3, 80e3), creepages=CREEP, time=k * 1e-3)
-    d = {"material": {"young": 206e9, "poisson": 0.28},
-         "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
-                      "inclination": 0.025, "lateral_displacement": 2e-3, "side": "left"},
-         "grid": {"dx": 1e-3, "dy": 1e-3}, "normal": {"load": 80e3},
-         "tangential": {"friction": 0.3},
-         "kinematics": {"speed": 20.0, "spin_speed": 20.0 / 0.4595}}
+    d = WHEEL_RAIL_CASE
     quadratic = {"material": {"young": 206e9, "poisson": 0.28},
                  "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
                  "grid": {"nx": 32, "ny": 32},
