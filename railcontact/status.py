@@ -127,6 +127,14 @@ class Work:
     remeshes: int = 0
     seconds: float = 0.0
 
+    def added(self, other: Work) -> Work:
+        """This work and ``other``'s, every count and the time summed (two solves that
+        both count: the two wheels of a search, a wheel's solves at several rolls)."""
+        return Work(self.normal_iterations + other.normal_iterations,
+                    self.tangential_iterations + other.tangential_iterations,
+                    self.load_passes + other.load_passes, self.remeshes + other.remeshes,
+                    self.seconds + other.seconds)
+
     def absorbed(self, other: Work) -> Work:
         """This work with the iterations, re-meshes and time of ``other`` (a discarded
         pass) added; the load passes this one's."""

@@ -15,6 +15,7 @@ import railcontact as rc
 import railcontact.contact.patch as patch_module
 import railcontact.timestep.wheel as step_wheel
 from railcontact.io.jsonout import solution_json
+from railcontact.status import Work
 
 WORK_KEYS = {"normal_iterations", "tangential_iterations", "load_passes", "remeshes", "seconds"}
 
@@ -180,7 +181,11 @@ def test_rigid_wheelset_solves_count(calls, warm):
     assert (sum(calls["normal"]), sum(calls["tangential"])) == (wheels[0] + rigid[0],
                                                                 wheels[1] + rigid[1])
     assert all(w.load_passes >= 1 and w.seconds > 0 for w in r.rigid_work)
-    assert r.rigid_work == s.work
+    assert r.rigid_work == s.wheel_work
+    # the search's own work is a Work, as every solver result's: both wheels' solves
+    assert isinstance(s.work, Work)
+    assert (s.work.normal_iterations, s.work.tangential_iterations) == rigid
+    assert s.work.load_passes == sum(w.load_passes for w in r.rigid_work)
 
 
 def test_a_grown_area_keeps_the_fixed_extent_of_a_snapped_grid():

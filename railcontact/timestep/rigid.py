@@ -115,12 +115,18 @@ class RigidSolution:
     approaches: tuple[float, float] | None = None
     """The wheels' approaches [m] at :attr:`roll` (the next step's guess); None if not
     converged."""
-    work: tuple[Work, Work] = field(default_factory=lambda: (Work(load_passes=0),
-                                                             Work(load_passes=0)))
-    """The work of the wheels' solves at the rolls evaluated (left, right): iterations,
+    wheel_work: tuple[Work, Work] = field(default_factory=lambda: (Work(load_passes=0),
+                                                                   Work(load_passes=0)))
+    """The work of each wheel's solves at the rolls evaluated (left, right): iterations,
     load passes, re-meshes and wall time [s] over every evaluation, none of them counted
     in the step's :class:`~railcontact.timestep.WheelContact` (zero when no evaluation
     solved a wheel: the pose's roll was the root, or the search was skipped)."""
+    work: Work = field(init=False)
+    """The work of the search's solves, both wheels' (:attr:`wheel_work` summed, as
+    every solver result says its work: :class:`~railcontact.status.Work`)."""
+
+    def __post_init__(self) -> None:  # (the sum, formed once with the record)
+        object.__setattr__(self, "work", self.wheel_work[0].added(self.wheel_work[1]))
 
 
 def work_since(now: Work, then: Work) -> Work:
@@ -400,7 +406,8 @@ class RigidWheelset:
                               anchor=(None if start is None or approaches is None
                                       else (start, approaches)), gaps=self.gaps)
         if work is not None:  # the wheels' solves at other rolls: the step's work too
-            s = replace(s, work=tuple(work_since(work[k], before[k]) for k in ("left", "right")))
+            s = replace(s, wheel_work=tuple(work_since(work[k], before[k])
+                                            for k in ("left", "right")))
         return s
 
     def remembered(self, s: RigidSolution) -> tuple[tuple[RigidMemory, ...], Any]:

@@ -59,7 +59,7 @@ class RolledApproaches:
         repr=False, compare=False)
     """The work of every wheel solve of the calls so far, per wheel (iterations, load
     passes, re-meshes, wall time [s]): a running count over this step's searches
-    (:attr:`RigidSolution.work` is the part one search added)."""
+    (:attr:`RigidSolution.wheel_work` is the part one search added)."""
 
     def __call__(self, phi: float, guess: tuple[float, float] | None = None,
                  found: tuple[WheelSearch, WheelSearch] | None = None) -> tuple[float, float]:
@@ -123,13 +123,9 @@ def rigid_stage(rigid: RigidWheelset) -> RigidSolution:
         done = rigid.approach_at.work  # (this step's: all of it is this search's)
         return RigidSolution(0.0, 0.0, converged=False,
                              message=f"rigid wheelset's vertical displacement and roll: {exc}",
-                             work=(done["left"], done["right"]))
+                             wheel_work=(done["left"], done["right"]))
 
 
 def counted(work: Work, wheel: WheelContact) -> Work:
     """``work`` with a wheel solve's iterations, load passes, re-meshes and time added."""
-    w = wheel.work
-    return Work(work.normal_iterations + w.normal_iterations,
-                work.tangential_iterations + w.tangential_iterations,
-                work.load_passes + w.load_passes, work.remeshes + w.remeshes,
-                work.seconds + w.seconds)
+    return work.added(wheel.work)

@@ -142,7 +142,7 @@ def rigid_wheelset_stage(step: StepInputs, found: Found, wheels: list[WheelConta
         roots, rolled = rigid.remembered(s)
         out = replace(out, rigid=roots, rolled=rolled)
     # (vertical and roll: found, or the best estimate; none when the search raised)
-    return ((s.vertical, s.roll) if s.evaluations else (None, None)) + (s, s.work), out
+    return ((s.vertical, s.roll) if s.evaluations else (None, None)) + (s, s.wheel_work), out
 
 
 def _checked(wheel: WheelContact, setup: WheelSetup) -> WheelContact:
