@@ -224,14 +224,9 @@ class WheelsetResult:
         object.__setattr__(self, "moment", (m[0] + h * fy, m[1] - h * fx, m[2]))
         object.__setattr__(self, "yaw_moment", left.yaw_moment + right.yaw_moment)
         object.__setattr__(self, "message", _step_message(left, right, rigid))
-        a, b, (c, d) = left.work, right.work, self.rigid_work
-        object.__setattr__(self, "work", Work(
-            a.normal_iterations + b.normal_iterations + c.normal_iterations
-            + d.normal_iterations,
-            a.tangential_iterations + b.tangential_iterations + c.tangential_iterations
-            + d.tangential_iterations,
-            a.load_passes + b.load_passes + c.load_passes + d.load_passes,
-            a.remeshes + b.remeshes + c.remeshes + d.remeshes, self.wall_time))
+        rigid_left, rigid_right = self.rigid_work
+        object.__setattr__(self, "work", left.work.added(right.work).added(rigid_left)
+                           .added(rigid_right).timed(self.wall_time))
 
     @property
     def wheels(self) -> tuple[WheelContact, WheelContact]:
