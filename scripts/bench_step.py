@@ -19,8 +19,17 @@ A fixed numpy workload is timed in the same run (128 x 128 FFT round trips x 200
 that figures compare across machines (the targets: warm step <= 0.03, cold step <= 0.25
 of the workload). The resident memory (RSS) is printed at the end.
 
+What no rewrite of the step's Python can go below: ``--kernels`` runs each mode once more
+with every compiled kernel of the package and every DC-FFT product timed (as
+``scripts/bench_threads.py --profile`` does, without the stage breakdown) and prints, per
+step, the median time inside them - the contact search, the frame, the normal and the
+tangential stage, the products, whatever Python calls them - against the whole step's, both
+also as ratios to the workload: the floor of a step whose Python took no time at all, with
+today's kernels, grids and iterations.
+
 Usage: python scripts/bench_step.py [--steps 300] [--modes previous+estimate,none]
-       [--solver steadygs|convexgs] [--patch-frame reference|rigid]
+       [--solver steadygs|convexgs] [--patch-frame reference|rigid] [--kernels]
+       [--json FILE]
 """
 
 from __future__ import annotations
@@ -177,9 +186,11 @@ def clear_caches() -> None:
 
 
 def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None,
-        patch_frame: str | None = None) -> dict:
+        patch_frame: str | None = None, kernels=None) -> dict:
     """The hunting-like run with one warm-start mode, from empty operator caches; per-step
-    times and iterations."""
+    times and iterations. ``kernels``: a :class:`bench_threads.NogilTimer` installed
+    instead of the stage breakdown; the result then also holds the median time a step
+    spent in its kernels (``kernels``)."""
     clear_caches()
     extra = {} if solver is None else {"tangential_solver": solver}
     if patch_frame is not None:  # older versions without patch_frame: the rigid point only
@@ -190,22 +201,26 @@ def run(mode: str, steps: int, step: float = 1e-3, solver: str | None = None,
         rc.ElasticPair.of(rc.STEEL, rc.STEEL),
         rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode, **extra))
     w = 2 * math.pi * 1.5
-    times, normal, tangential, passes = [], [], [], []
+    times, normal, tangential, passes, inside = [], [], [], [], []
     bd = Breakdown()
-    with bd.installed():
+    with bd.installed() if kernels is None else kernels.installed():
         for k in range(steps):
             t = k * step
+            before = 0.0 if kernels is None else sum(kernels.seconds.values())
             t0 = time.perf_counter()
             r = wc.solve(rc.Pose(3e-3 * math.sin(w * t)), loads=(83.3e3, 83.3e3),
                          kinematics=rc.Kinematics(30.0, 3e-3 * w * math.cos(w * t)), time=t)
             times.append(time.perf_counter() - t0)
+            if kernels is not None:
+                inside.append(sum(kernels.seconds.values()) - before)
             normal.append(sum(x.normal_iterations for x in r.wheels))
             tangential.append(sum(x.tangential_iterations for x in r.wheels))
             passes.append(sum(x.load_passes for x in r.wheels))
             if r.status != 0:
                 print(f"  step {k}: status {r.status} ({r.left.message}; {r.right.message})")
     total = sum(times)
-    return {"mode": mode, "median": float(np.median(times[1:])),
+    out = {} if kernels is None else {"kernels": float(np.median(inside[1:]))}
+    return out | {"mode": mode, "median": float(np.median(times[1:])),
             "mean": float(np.mean(times[1:])),
             "normal": float(np.median(normal[1:])),
             "tangential": float(np.median(tangential[1:])),
@@ -221,6 +236,8 @@ def main() -> None:
                     "settings' default)")
     ap.add_argument("--patch-frame", default=None, choices=("reference", "rigid"),
                     help="origin of the patch frames (default: the settings' default)")
+    ap.add_argument("--kernels", action="store_true", help="also the median time a step "
+                    "spends in the compiled kernels (a run of each mode with them timed)")
     ap.add_argument("--json", type=Path, default=None, help="write the results (for "
                     "scripts/plot_performance.py)")
     args = ap.parse_args()
@@ -245,6 +262,19 @@ def main() -> None:
         shares = [r["breakdown"][s] if s != "rest" else 1 - sum(r["breakdown"].values())
                   for r in results]
         print(f"{s:<16}" + "".join(f"{x:20.1%}" for x in shares))
+    if args.kernels:
+        from bench_threads import NogilTimer
+
+        print("\ntime inside the compiled kernels and DC-FFT products (a run of each mode "
+              "with them timed; medians per step): the step's floor without Python")
+        print(f"{'warm start':<18} {'step [ms]':>9} {'/ workload':>10} {'kernels [ms]':>12} "
+              f"{'/ workload':>10} {'share':>6}")
+        for m in args.modes.split(","):
+            r = run(m, args.steps, solver=args.solver, patch_frame=args.patch_frame,
+                    kernels=NogilTimer())
+            print(f"{m:<18} {r['median'] * 1e3:9.2f} {r['median'] / ref:10.4f} "
+                  f"{r['kernels'] * 1e3:12.2f} {r['kernels'] / ref:10.4f} "
+                  f"{r['kernels'] / r['median']:6.1%}")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"\npeak RSS {rss:.0f} MB")
     if args.json:

@@ -72,6 +72,7 @@ import sys
 import threading
 import time
 from collections import defaultdict
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -249,6 +250,15 @@ class NogilTimer:
         for owner, attr, value in reversed(self._saved):
             setattr(owner, attr, value)
         self._saved.clear()
+
+    @contextmanager
+    def installed(self):
+        """:meth:`install` for the ``with`` block."""
+        self.install()
+        try:
+            yield self
+        finally:
+            self.uninstall()
 
 
 def profile(steps: int) -> None:
