@@ -9,6 +9,7 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import RELIABILITY
 
@@ -521,3 +522,64 @@ def test_one_wheel_of_a_wheelset_off_its_rail_is_an_error():
             "normal": {"load": 8e4}}
     with pytest.raises(rc.CaseError, match="puts the right wheel off its rail"):
         rc.solve(case)
+
+
+def test_vanishing_friction_in_fastrip_slides_every_element():
+    """A coefficient of friction whose scaled creepages overflow (mu = 1e-200: FaStrip's
+    xi' ~ 1/mu) is full sliding, as mu -> 0 gives it: every loaded element slides with
+    the traction mu p, no OverflowError; also through a wheelset step (its FaStrip start)."""
+    from railcontact.tangential.convexgs import SLIP
+    from railcontact.tangential.fastrip import fastrip_hertz
+
+    pair = rc.ElasticPair.of(rc.STEEL, rc.STEEL)
+    for mu in (1e-200, 1e-300):
+        r = fastrip_hertz(6e-3, 5e-3, 80e3, pair, mu, (1e-3, 1e-3, 0.5), nx=20, ny=20)
+        loaded = r.pressure > 0
+        assert loaded.any() and (r.state[loaded] == SLIP).all()
+        magnitude = np.hypot(*r.traction)
+        assert np.allclose(magnitude[loaded], mu * r.pressure[loaded], rtol=1e-12)
+    w = _wheelset(friction=1e-200, element_size=1e-3, warm_start="previous+estimate")
+    step = w.solve(rc.Pose(1e-3), loads=(83e3, 83e3), kinematics=rc.Kinematics(30.0, 0.1))
+    assert step.status == 0
+    assert 0 < abs(step.left.creep_force[1]) <= 1e-200 * step.left.normal_force * 1.01
+
+
+def test_wheelset_inputs_of_the_wrong_kind_are_named():
+    """A pose, kinematics, friction, settings or elastic pair of the wrong type, both
+    creepages and kinematics, or a creepage beyond the case files' range: a
+    RailContactError naming the input, never a TypeError or AttributeError from inside."""
+    from railcontact.settings.case import MAX_CREEPAGE
+
+    w = _wheelset(element_size=1e-3)
+    loads, kin = (83e3, 83e3), rc.Kinematics(30.0)
+    for kwargs, words in ((dict(pose=None, loads=loads), "pose must be a Pose"),
+                          (dict(pose=rc.Pose(), loads=loads, kinematics=(30.0, 0.0)),
+                           "kinematics must be a Kinematics"),
+                          (dict(pose=rc.Pose(), loads=loads, kinematics=kin,
+                                friction=(None, 0.4)), "left friction must be a number"),
+                          (dict(pose=rc.Pose(), loads=loads, kinematics=kin,
+                                creepages=((0.0,) * 3,) * 2), "at most one of creepages"),
+                          (dict(pose=rc.Pose(), loads=loads,
+                                creepages=((0.0, 1e305, 0.0), (0.0, 0.0, 0.0))),
+                           f"left creepage must be within \\+-{MAX_CREEPAGE:g}")):
+        with pytest.raises(rc.RailContactError, match=words):
+            w.solve(**kwargs)
+    track, wheelset = w.track, w.wheelset
+    with pytest.raises(rc.RailContactError, match="settings must be ContactSettings"):
+        rc.WheelsetContact(track, wheelset, rc.ElasticPair.of(rc.STEEL, rc.STEEL),
+                           {"friction": 0.3})
+    with pytest.raises(rc.RailContactError, match="pair must be an ElasticPair"):
+        rc.WheelsetContact(track, wheelset, rc.STEEL)
+
+
+def test_velocities_whose_creepages_overflow_are_out_of_range_not_infinite():
+    """A speed too small for the other velocities (1e-300 m/s beside 1000 m/s and
+    1000 rad/s) gives creepages of ~1e303: each wheel out of range, its message naming
+    the creepages, and no infinite frictional power in an ok result."""
+    w = _wheelset(element_size=1e-3)
+    w.solve(rc.Pose(1e-3), loads=(83e3, 83e3), kinematics=rc.Kinematics(30.0))  # (warm)
+    r = w.solve(rc.Pose(1e-3), loads=(83e3, 83e3),
+                kinematics=rc.Kinematics(1e-300, lateral_velocity=1e3, yaw_rate=1e3))
+    for wheel in r.wheels:
+        assert wheel.status == 3 and "the velocities give the creepages" in wheel.message
+        assert wheel.frictional_power is None or math.isfinite(wheel.frictional_power)

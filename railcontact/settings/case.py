@@ -350,6 +350,13 @@ class NormalSettings(Record):
                             ) from None
 
 
+MAX_CREEPAGE = 1e3
+"""Largest magnitude of a creepage (xi, eta [-]; phi [1/m]) a solve takes, given or
+formed from velocities: far beyond full sliding (a wheel-rail patch slides fully at
+creepages of about 1e-2), so the bound only keeps the creep forces' products (the
+frictional power) finite."""
+
+
 @document
 @dataclass(frozen=True)
 class TangentialSettings(Record):
@@ -357,8 +364,9 @@ class TangentialSettings(Record):
 
     TABLE: ClassVar[str] = "tangential"
     creepage: tuple[float, float, float] = setting((0.0, 0.0, 0.0), "floats3", "-, -, 1/m",
-                                                   "creepages [xi, eta, phi]", minimum=-1e3,
-                                                   maximum=1e3, required=True)
+                                                   "creepages [xi, eta, phi]",
+                                                   minimum=-MAX_CREEPAGE,
+                                                   maximum=MAX_CREEPAGE, required=True)
     friction: float | FrictionTable = setting(
         0.4, "float|friction", "-", "Coulomb coefficient mu, or a table of mu across the "
         "profile (against the rail's surface inclination or profile coordinate)", minimum=0.0,

@@ -111,9 +111,19 @@ def fastrip(strips: Strips, pressure: np.ndarray, load: float, a: float, b: floa
 
     traction, state, sums = _fastrip_all(
         strips.x_lo, strips.x_hi, strips.t, strips.w, strips.y, strips.width, pn, mu,
-        xi / l1, eta / l2, phi, l3, xi_, eta_, phi_, eta_**2, 1 - phi_**2, a / (1 - nu),
-        eta_ * phi_, mu * p0 / a, a)
+        xi / l1, eta / l2, phi, l3, xi_, eta_, phi_, _squared(eta_), 1 - _squared(phi_),
+        a / (1 - nu), eta_ * phi_, mu * p0 / a, a)
     return strip_result(strips, traction, state, pn, sums, "FaStrip", t0)
+
+
+def _squared(v: float) -> float:
+    """``v ** 2`` (the C library's pow, as the formulas were written), inf where it
+    overflows: a creepage scaled by a vanishing ``mu p0`` (``mu`` 1e-200), whose strips
+    all slide (:func:`_fastrip_strips` reads inf so)."""
+    try:
+        return v ** 2
+    except OverflowError:
+        return math.inf
 
 
 @numba.njit(cache=True, nogil=True)

@@ -8,10 +8,11 @@ import math
 from dataclasses import dataclass, field, replace
 
 from ..contact.wheel import WheelSettings
-from ..errors import RailContactError, check_finite, check_positive
+from ..errors import CaseError, RailContactError, check_finite, check_positive
 from ..geometry.points import ContactPoint
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..settings import ContactSettings
+from ..settings.case import MAX_CREEPAGE
 from ..settings.convention import wheel_frame_creepage
 
 
@@ -55,7 +56,10 @@ class Kinematics:
                                    f"{self.curvature:g} 1/m")
 
     def creepage(self, cp: ContactPoint, pose: Pose, r0: float) -> tuple[float, float, float]:
-        """(xi, eta, phi) of the patch ``cp`` in its contact frame (module docstring)."""
+        """(xi, eta, phi) of the patch ``cp`` in its contact frame (module docstring).
+        Raises a :class:`~railcontact.errors.CaseError` where one is beyond
+        :data:`~railcontact.settings.case.MAX_CREEPAGE` (a speed too small for the other
+        velocities)."""
         v = self.speed
         omega = v / r0 if self.spin_speed is None else self.spin_speed
         s = SIDES[cp.side]
@@ -70,6 +74,11 @@ class Kinematics:
                   - v * k * cp.position[1]) / v
             phi = (-s * omega * math.sin(g) + (self.yaw_rate + v * k) * math.cos(g)) / v
         eta = (self.lateral_velocity - v * pose.yaw) / (v * math.cos(g))
+        if not (abs(xi) <= MAX_CREEPAGE and abs(eta) <= MAX_CREEPAGE
+                and abs(phi) <= MAX_CREEPAGE):
+            raise CaseError(f"{cp.side} wheel: the velocities give the creepages "
+                            f"({xi:.4g}, {eta:.4g}, {phi:.4g} 1/m) beyond "
+                            f"+-{MAX_CREEPAGE:g} (speed {v:g} m/s too small for them)")
         return xi, eta, phi
 
 
@@ -210,8 +219,16 @@ def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics |
                 convention: str) -> StepInputs:
     """A step's inputs checked (:meth:`~railcontact.timestep.WheelsetContact.solve`'s
     parameters; creepages given in CONTACT's ``convention`` turned into railcontact's)."""
+    if not isinstance(pose, Pose):
+        raise RailContactError(f"pose must be a Pose, got {pose!r}")
     if (loads is None) == (vertical is None):
         raise RailContactError("give exactly one of loads [N] and vertical [m]")
+    if creepages is not None and kinematics is not None:
+        raise RailContactError("give at most one of creepages and kinematics (the "
+                               "creepages follow from the kinematics)")
+    if kinematics is not None and not isinstance(kinematics, Kinematics):
+        raise RailContactError(f"kinematics must be a Kinematics record, got "
+                               f"{kinematics!r}")
     if loads is not None:
         loads = per_wheel("loads", loads, 1, "(left, right) [N]")
     if creepages is not None:
@@ -223,13 +240,22 @@ def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics |
     else:
         check_finite("vertical", vertical, "m")
     if creepages is not None:
-        creepages = tuple(tuple(check_finite(f"{s} creepage", c) for c in cs)
+        creepages = tuple(tuple(_creepage(f"{s} creepage", c) for c in cs)
                           for s, cs in zip(SIDE_NAMES, creepages, strict=True))
         if convention == "contact":
             creepages = tuple(wheel_frame_creepage(c) for c in creepages)
     if time is not None:
         time = check_finite("time", time, "s")
     return StepInputs(pose, loads, vertical, creepages, kinematics, time, setups)
+
+
+def _creepage(name: str, value) -> float:
+    """``value`` as a finite float within :data:`~railcontact.settings.case.MAX_CREEPAGE`
+    (else a :class:`~railcontact.errors.RailContactError`)."""
+    c = check_finite(name, value)
+    if abs(c) > MAX_CREEPAGE:
+        raise RailContactError(f"{name} must be within +-{MAX_CREEPAGE:g}, got {c:g}")
+    return c
 
 
 class Setups:
@@ -269,7 +295,7 @@ class Setups:
                 if not isinstance(r, RailDeviation):
                     raise RailContactError(f"rails must be RailDeviation records, got {r!r}")
         if friction is not None:
-            friction = tuple(check_positive(f"{s} friction", float(mu), "")
+            friction = tuple(check_positive(f"{s} friction", mu, "")
                              for s, mu in zip(SIDE_NAMES,
                                               per_wheel("friction", friction, 1,
                                                          "(left, right) [-]"), strict=True))

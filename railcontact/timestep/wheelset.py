@@ -162,6 +162,10 @@ class WheelsetContact:
                                    f"{b.back_to_back:g} m")
         self.track, self.wheelset = self.tracks[0], self.wheelsets[0]
         """The left side's track and wheelset (the only ones when both sides share them)."""
+        if not isinstance(pair, ElasticPair):
+            raise RailContactError(f"pair must be an ElasticPair, got {pair!r}")
+        if settings is not None and not isinstance(settings, ContactSettings):
+            raise RailContactError(f"settings must be ContactSettings, got {settings!r}")
         self.pair = pair
         self._setups = Setups(self.tracks, self.wheelsets)
         settings = settings or ContactSettings()
