@@ -175,3 +175,26 @@ def test_a_lateral_displacement_beyond_the_profiles_is_a_clear_error(root, tmp_p
     (line,) = r.stderr.strip().splitlines()
     assert line.startswith("railcontact: error: [geometry] lateral_displacement = ")
     assert f"{lateral:g} m" in line and words in line, line
+
+
+def test_a_misspelt_key_or_table_is_named_with_the_key_it_is_close_to():
+    """A misspelt penetration is one error naming 'penetration' (not also "needs exactly
+    one of load and penetration", a knock-on of the typo); a misspelt table likewise; a
+    key close to none gets no guess, and a [normal] without load or penetration still
+    says it needs one."""
+    case = paper_case()
+    case["normal"]["penetraton"] = case["normal"].pop("penetration")
+    with pytest.raises(CaseError) as err:
+        validate_case(case)
+    assert str(err.value).startswith("unknown key(s) ['penetraton'] in [normal] (did you "
+                                     "mean 'penetration'?); known:")
+    assert "exactly one" not in str(err.value)
+    case = paper_case()
+    case["materal"] = case.pop("material")
+    with pytest.raises(CaseError, match=r"\['materal'\] \(did you mean 'material'\?\)"):
+        validate_case(case)
+    case = paper_case()
+    case["normal"]["zzz"] = case["normal"].pop("penetration")
+    with pytest.raises(CaseError) as err:
+        validate_case(case)
+    assert "did you mean" not in str(err.value) and "exactly one of load" in str(err.value)

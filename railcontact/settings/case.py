@@ -59,7 +59,7 @@ from .choices import (
     TANGENTIAL_SOLVERS,
     TRACTION_BOUNDS,
 )
-from .fields import Record, document, setting
+from .fields import Record, close_keys, did_you_mean, document, setting
 from .friction import MAX_MU, FrictionTable
 
 if sys.version_info >= (3, 11):
@@ -557,7 +557,9 @@ class Case:
             raise CaseError(f"a case must be a dictionary of tables, got {type(case).__name__}")
         unknown = set(case) - set(CASE_TABLES) - {"name", "convention"}
         if unknown:
-            raise CaseError(f"unknown table(s) {sorted(unknown)}; known: {sorted(CASE_TABLES)}")
+            raise CaseError(f"unknown table(s) {sorted(unknown)}"
+                            f"{did_you_mean(unknown, CASE_TABLES)}; known: "
+                            f"{sorted(CASE_TABLES)}")
         problems: list[str] = [f"missing table [{t}]" for t in _REQUIRED_TABLES
                                if t not in case]
         records: dict[str, Any] = {}
@@ -577,7 +579,10 @@ class Case:
             except CaseError as exc:
                 problems.append(str(exc))
         normal = case.get("normal")
-        if "normal" not in records and isinstance(normal, Mapping) and (
+        # (a misspelt load or penetration was named already, with the key it is close to)
+        misspelt = isinstance(normal, Mapping) and bool(
+            set(close_keys(normal, ("load", "penetration")).values()) - set(normal))
+        if "normal" not in records and isinstance(normal, Mapping) and not misspelt and (
                 ("load" in normal) == ("penetration" in normal)):
             problems.append("[normal] needs exactly one of load [N] and penetration [m]")
         name = case.get("name", "case")

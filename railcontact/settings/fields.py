@@ -10,8 +10,9 @@ records' docstrings and the settings reference (:mod:`railcontact.settings.refer
 
 from __future__ import annotations
 
+import difflib
 import inspect
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any, ClassVar
 
@@ -252,7 +253,8 @@ class Record:
         known = {f.name for f in fields(cls) if spec_of(f).case}  # type: ignore[arg-type]
         bad = set(values) - known
         if bad:
-            raise cls.ERROR(f"unknown key(s) {sorted(bad)} in {where}; known: {sorted(known)}")
+            raise cls.ERROR(f"unknown key(s) {sorted(bad)} in {where}{did_you_mean(bad, known)}"
+                            f"; known: {sorted(known)}")
         for f in fields(cls):  # type: ignore[arg-type]
             s = spec_of(f)
             if s.required and f.name not in values:
@@ -269,6 +271,28 @@ class Record:
                 out[f.name] = (list(v) if isinstance(v, tuple) else
                                v.to_dict() if isinstance(v, FrictionTable) else v)
         return out
+
+
+def close_keys(bad: Iterable[str], known: Iterable[str]) -> dict[str, str]:
+    """The known key each unknown one of ``bad`` is most likely a misspelling of (those
+    that are close to one, :func:`difflib.get_close_matches`)."""
+    known = sorted(known)
+    out = {}
+    for key in sorted(bad):
+        match = difflib.get_close_matches(str(key), known, n=1, cutoff=0.75)
+        if match:
+            out[key] = match[0]
+    return out
+
+
+def did_you_mean(bad: Iterable[str], known: Iterable[str]) -> str:
+    """" (did you mean 'load'?)" for the unknown keys ``bad`` close to a ``known`` one, else
+    ""."""
+    close = close_keys(bad, known)
+    if not close:
+        return ""
+    return " (did you mean " + ", ".join(f"{v!r} for {k!r}" if len(close) > 1 else repr(v)
+                                         for k, v in close.items()) + "?)"
 
 
 def default_of(f) -> Any:
