@@ -704,7 +704,7 @@ class Slave:
         are lost; fmi2SetFMUstate starts new workers)."""
         prepared = [self._guard_unit(u, self._prepare, u) for u in self.units]
         try:
-            outs = self._pool.step([p[0] if isinstance(p, tuple) else None
+            outs = self._pool.step([p if isinstance(p, dict) else None
                                     for p in prepared], errors="return")
         except RailContactError as exc:
             self._discard_all()
@@ -712,7 +712,7 @@ class Slave:
             return [FMI_ERROR] * len(self.units)
         statuses = []
         for u, p, out in zip(self.units, prepared, outs, strict=True):
-            if not isinstance(p, tuple):  # discarded before solving
+            if not isinstance(p, dict):  # discarded before solving
                 statuses.append(p)
             elif isinstance(out, RailContactError) and not isinstance(out, RemoteError):
                 statuses.append(self._discarded(u, f"input out of range: {out}"))
@@ -722,7 +722,7 @@ class Slave:
                 self._discard(u)
                 statuses.append(FMI_DISCARD)
             else:
-                statuses.append(self._guard_unit(u, self._finish, u, out, p[1]))
+                statuses.append(self._guard_unit(u, self._finish, u, out))
         return statuses
 
     def _guard_unit(self, u: _Wheelset, fn, *args):
@@ -751,19 +751,18 @@ class Slave:
         own status 3 or 1, the wheelset's status 3 or 1; an input not finite or beyond its
         range zeroes every output, each status 3); fmi2Warning for a wheel not ok but
         solved; fmi2OK otherwise."""
-        prepared = self._prepare(u)
-        if not isinstance(prepared, tuple):
-            return prepared
-        kw, x = prepared
+        kw = self._prepare(u)
+        if not isinstance(kw, dict):
+            return kw
         try:
             res = u.contact.solve(**kw)
         except RailContactError as exc:
             return self._discarded(u, f"input out of range: {exc}")
-        return self._finish(u, step_outputs(res), x)
+        return self._finish(u, step_outputs(res))
 
-    def _prepare(self, u: _Wheelset) -> tuple[dict, dict[str, float]] | int:
+    def _prepare(self, u: _Wheelset) -> dict | int:
         """Wheelset ``u``'s step from its inputs: the keyword arguments of its solve
-        (:meth:`WheelsetContact.solve <railcontact.timestep.WheelsetContact.solve>`) and
+        (:meth:`WheelsetContact.solve <railcontact.timestep.WheelsetContact.solve>`) from
         the inputs read [SI units]; or fmi2Discard, its step discarded (an input not finite
         or beyond its range, or a solve that cannot be set up)."""
         penetration = self.modes.control == "penetration"
@@ -796,11 +795,12 @@ class Slave:
                 kw["friction"] = tuple(m if m > 0 else self.settings.friction for m in mu)
         except RailContactError as exc:
             return self._discarded(u, f"input out of range: {exc}")
-        return kw, x
+        return kw
 
-    def _finish(self, u: _Wheelset, out: StepOutputs, x: dict[str, float]) -> int:
-        """Write wheelset ``u``'s outputs of its solved step ``out`` (its inputs ``x``)
-        and check them; its FMI status (:meth:`_step`)."""
+    def _finish(self, u: _Wheelset, out: StepOutputs) -> int:
+        """Write wheelset ``u``'s outputs of its solved step ``out`` and check them (a
+        creepage beyond the range that the kinematic inputs give is the wheel's own
+        status, out of range, from the solve); its FMI status (:meth:`_step`)."""
         _write(u, out)  # (the rigid wheelset: a stage of the solve when asked for)
         speed = float(u["speed"])  # the frictional power: per unit speed times V
         self.real[u.power] *= speed if math.isfinite(speed) and speed > 0 else 0.0
@@ -809,14 +809,6 @@ class Slave:
             u.log.append(f"wheelset: {STATUS_NAMES[NOT_CONVERGED]}: {out.rigid[1]}")
         if not np.all(np.isfinite(self.real[u.real_outputs])):  # (inputs may be NaN)
             return self._discarded(u, "non-finite result; outputs set to zero")
-        if self.modes.creepage_input == "kinematic":  # the creepages the velocities
-            beyond = [f"{w.side} wheel: (xi, eta, phi) = ({c[0]:g}, {c[1]:g}, {c[2]:g} 1/m)"
-                      for w in out.wheels for c in w.creepages  # formed, as direct ones
-                      if not all(abs(v) <= V.CREEPAGE_LIMITS[1] for v in c)]
-            if beyond:
-                return self._discarded(u, "inputs out of range: the kinematic inputs (speed "
-                                       f"= {x['speed']:g} m/s) give creepages beyond the "
-                                       f"range, {'; '.join(beyond)}: {_CREEPAGE_RANGE}")
         failed = [w for w in out.wheels if w.status in (NOT_CONVERGED, OUT_OF_RANGE,
                                                         OUTSIDE_VALIDITY)]
         logged = set()

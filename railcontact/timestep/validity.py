@@ -122,7 +122,7 @@ def check_validity(side_sign: int, track_force: Sequence[float],
         least = settings.load_tolerance * sum(p.normal.force for p in patches)
         coarse = [m for m in (under_resolved(p.normal.contact, p.normal.grid.dx,
                                              p.normal.grid.dy)
-                              for p in patches if p.normal.force > max(least, 0.0)) if m]
+                              for p in patches if p.normal.force > least) if m]
     if not coarse:
         return v
     return Validity(v.flags | RESOLUTION, "; ".join([m for m in (v.message, coarse[0]) if m]))
