@@ -112,11 +112,12 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         try:
             sol = solve(case)
         except (RailContactError, SolverError) as exc:
-            if not several:
-                raise
-            print(f"railcontact: error: {case}: {exc}", file=sys.stderr)
-            if args.json:  # a line for every file, in order
-                print(json.dumps({"file": str(case), "error": str(exc)}))
+            text = str(exc)  # (named with its file, unless it names it already)
+            print(f"railcontact: error: {text if str(case) in text else f'{case}: {text}'}",
+                  file=sys.stderr)
+            if args.json:  # an object for every file, in order (one line each of several)
+                print(json.dumps({"file": str(case), "error": str(exc)},
+                                 indent=None if several else 2))
             outcomes.add(2)
             continue
         if args.json:  # several files: one JSON object per line, with its file

@@ -112,12 +112,13 @@ def test_cli_json_and_plot(root, tmp_path):
 def test_cli_errors_are_one_line(tmp_path):
     r = run_cli("solve", str(tmp_path / "missing.toml"))
     assert r.returncode == 2
-    assert "error: case file not found" in r.stderr and "Traceback" not in r.stderr
+    assert r.stderr == f"railcontact: error: case file not found: {tmp_path / 'missing.toml'}\n"
     bad = tmp_path / "neg.toml"
     bad.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\nA = 1.0\nB = 5.0\n'
                    '[normal]\nload = -10.0\n')
     r = run_cli("solve", str(bad))
-    assert r.returncode == 2 and "[normal] load" in r.stderr and "Traceback" not in r.stderr
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert r.stderr.startswith(f"railcontact: error: {bad}: [normal] load")
 
 
 def test_rolling_case_json(root, tmp_path):
@@ -173,7 +174,7 @@ def test_a_lateral_displacement_beyond_the_profiles_is_a_clear_error(root, tmp_p
     r = run_cli("solve", str(case))
     assert r.returncode == 2 and r.stdout == "" and "Traceback" not in r.stderr
     (line,) = r.stderr.strip().splitlines()
-    assert line.startswith("railcontact: error: [geometry] lateral_displacement = ")
+    assert line.startswith(f"railcontact: error: {case}: [geometry] lateral_displacement = ")
     assert f"{lateral:g} m" in line and words in line, line
 
 
@@ -198,3 +199,23 @@ def test_a_misspelt_key_or_table_is_named_with_the_key_it_is_close_to():
     with pytest.raises(CaseError) as err:
         validate_case(case)
     assert "did you mean" not in str(err.value) and "exactly one of load" in str(err.value)
+
+
+def test_one_file_in_error_is_named_and_json_gets_its_object(root, tmp_path):
+    """CLI: a single case file in error is named on stderr as one of several is, and with
+    --json stdout holds its ``{"file", "error"}`` object (a script always reads JSON);
+    a table's spec given to ``solve`` points to ``railcontact table build``."""
+    text = (root / "models" / "cases" / "hertz_paper.toml").read_text()
+    case = tmp_path / "typo.toml"
+    case.write_text(text.replace("penetration = 1.0e-4", "penetraton = 1.0e-4"))
+    r = run_cli("solve", str(case), "--json")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    (line,) = r.stderr.strip().splitlines()
+    assert line.startswith(f"railcontact: error: {case}: unknown key(s) ['penetraton']")
+    out = json.loads(r.stdout)
+    assert out["file"] == str(case) and "did you mean 'penetration'" in out["error"]
+    spec = root / "models" / "tables" / "creep_nu028.toml"
+    r = run_cli("solve", str(spec))
+    assert r.returncode == 2 and r.stdout == ""
+    assert "unknown table(s) ['table']" in r.stderr
+    assert "`railcontact table build FILE -o STORE`" in r.stderr

@@ -557,9 +557,11 @@ class Case:
             raise CaseError(f"a case must be a dictionary of tables, got {type(case).__name__}")
         unknown = set(case) - set(CASE_TABLES) - {"name", "convention"}
         if unknown:
+            spec = ("; a [table] is a table's spec: build it with `railcontact table "
+                    "build FILE -o STORE`" if "table" in unknown else "")
             raise CaseError(f"unknown table(s) {sorted(unknown)}"
                             f"{did_you_mean(unknown, CASE_TABLES)}; known: "
-                            f"{sorted(CASE_TABLES)}")
+                            f"{sorted(CASE_TABLES)}{spec}")
         problems: list[str] = [f"missing table [{t}]" for t in _REQUIRED_TABLES
                                if t not in case]
         records: dict[str, Any] = {}
