@@ -42,8 +42,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean tol_defined, fmi2
     (void)stop;
     Instance *c = comp;
     if (!c) return fmi2Error;
-    c->time = start;
     c->control[0] = start;
+    c->control[2] = start; /* the last successful time */
     c->discards = 0;
     return fmi2OK;
 }
@@ -61,7 +61,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
     Instance *c = comp;
     if (!c || c->mode != INITIALIZATION) return fmi2Error;
-    c->control[0] = c->time;
+    c->control[0] = c->control[2];
     c->control[1] = 0.0;
     ENTER;
     fmi2Status s = call_status(c, c->m_exit_init, NULL);
@@ -87,7 +87,7 @@ fmi2Status fmi2Reset(fmi2Component comp) {
     fmi2Status s = call_status(c, c->m_reset, NULL);
     LEAVE;
     c->mode = INSTANTIATED;
-    c->time = 0.0;
+    c->control[2] = 0.0;
     c->discards = 0;
     return s;
 }
@@ -211,7 +211,7 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     ENTER;
     fmi2Status s = call_status(c, c->m_do_step, NULL);
     LEAVE;
-    if (s <= fmi2Warning) c->time = t + h;
+    if (s <= fmi2Warning) c->control[2] = t + h;
     if (s != fmi2Discard) {
         c->discards = 0;
     } else if (c->discards > 0 && t == c->discarded_at && h == c->discarded_size) {
@@ -361,7 +361,7 @@ fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status 
 fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real *value) {
     Instance *c = comp;
     if (!c || s != fmi2LastSuccessfulTime) return fmi2Discard;
-    *value = c->time;
+    *value = c->control[2]; /* (a restored state's: the slave restores control) */
     return fmi2OK;
 }
 

@@ -147,11 +147,13 @@ typedef struct {
     size_t n_real;
     int32_t *integer;
     size_t n_integer;
+    /* the slave's (time [s], step size [s]) of the step asked for and the last successful
+     * time [s] (fmi2LastSuccessfulTime): in the slave's array, so that a saved FMU state
+     * holds them and a restored one brings them back */
     double *control;
     unsigned char *real_flags, *integer_flags, *string_flags;
     size_t n_string;
     char **string_cache;
-    double time;
     /* the run of fmi2DoStep calls discarded at the same communication point and step size
      * with no input changed between them (0: the last step was not discarded), its point
      * and size: repeated, such a call would give the same answer (fmi2Terminated) */

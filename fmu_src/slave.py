@@ -149,7 +149,9 @@ class Slave:
         strs = [v for v in self.variables if v.type == "String"]
         self.real = np.zeros(len(reals))
         self.integer = np.zeros(len(ints), dtype=np.int32)
-        self.control = np.zeros(2)  # (current time, step size) written by the shim
+        # (the step's time and size, the last successful time [s]) written by the shim;
+        # a saved state holds them
+        self.control = np.zeros(3)
         self.strings = [""] * len(strs)
         self.string_flags = bytes(_CAUSALITY[v.causality] for v in strs)
         self.real_flags = bytes(_CAUSALITY[v.causality] for v in reals)
@@ -791,6 +793,10 @@ class Slave:
             if any(r != NO_DEVIATION for r in rails):
                 kw["rails"] = rails
             mu = tuple(x[f"friction_{s}"] for s in V.SIDES)
+            for s, m in zip(V.SIDES, mu, strict=True):
+                if m > V.MAX_MU:
+                    raise RailContactError(f"friction_{s} = {m:g} is above {V.MAX_MU:g} "
+                                           "(<= 0: the parameter friction)")
             if any(m > 0 for m in mu):  # (<= 0: the parameter's)
                 kw["friction"] = tuple(m if m > 0 else self.settings.friction for m in mu)
         except RailContactError as exc:
@@ -1039,7 +1045,7 @@ def warm(resources: str) -> tuple[int, int, float]:
         for k, inputs in enumerate(steps):
             for name, value in inputs.items():
                 s[name] = value
-            s.control[:] = (k * 1e-3, 1e-3)
+            s.control[:] = (k * 1e-3, 1e-3, k * 1e-3)
             if s.do_step() not in (FMI_OK, FMI_WARNING):
                 raise RailContactError(f"warming the kernels: step {k} failed: {s.pop_log()}")
     compiled, loaded = _kernelcache.kernel_counts()

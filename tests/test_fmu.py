@@ -457,6 +457,31 @@ def test_serialized_state_runs_no_code(fmu, extracted, md, tmp_path, capsys):
     s.free()
 
 
+def test_a_restored_state_brings_back_its_last_successful_time(fmu, extracted, md):
+    """fmi2GetRealStatus(fmi2LastSuccessfulTime) after fmi2SetFMUstate is the restored
+    state's time, not the time the instance had reached (the time travels with the state,
+    serialized too, and a discarded step after a restore leaves it there)."""
+    from fmpy.fmi2 import fmi2LastSuccessfulTime
+
+    s = _stepped(fmu, extracted, md, "time")  # t = STEP
+    kept = s.s.getFMUstate()
+    data = s.s.serializeFMUstate(kept)
+    for _ in range(3):
+        assert s.step(lateral_displacement=3.1e-3) == 0
+    assert s.s.getRealStatus(fmi2LastSuccessfulTime) == 4 * STEP
+    s.s.setFMUstate(kept)
+    assert s.s.getRealStatus(fmi2LastSuccessfulTime) == STEP
+    s.t = STEP
+    assert s.step(lateral_displacement=math.nan) == 2  # fmi2Discard: time stays
+    assert s.s.getRealStatus(fmi2LastSuccessfulTime) == STEP
+    assert s.step(lateral_displacement=3.1e-3) == 0
+    assert s.s.getRealStatus(fmi2LastSuccessfulTime) == 2 * STEP
+    s.s.setFMUstate(s.s.deSerializeFMUstate(data))
+    assert s.s.getRealStatus(fmi2LastSuccessfulTime) == STEP
+    s.s.freeFMUstate(kept)
+    s.free()
+
+
 def test_deserialize_refuses_what_is_no_state_of_this_fmu(fmu, extracted, md, capsys):
     """fmi2DeSerializeFMUstate itself is fmi2Error, the reason logged, for bytes that are
     no state of this FMU: another header, a damaged JSON header, an archive that would
@@ -1174,3 +1199,27 @@ def test_real_track_inputs_and_profiles_per_side(fmu, extracted, md):
     np.testing.assert_allclose(got[:-1], want, rtol=1e-9, atol=1e-9)
     assert got[-1] == r.status == 0 and got[5] < 0
     assert got[5] == pytest.approx(25.0 * r.left.frictional_power_per_speed, rel=1e-12)
+
+
+def test_track_inputs_beyond_their_ranges_discard_the_step_naming_them(fmu, extracted, md,
+                                                                      capsys):
+    """A friction input above its largest value is named with its input (and what <= 0
+    means), not as a friction "> 0" when <= 0 is allowed; a rail deviation beyond its
+    range is discarded too, as the variables' descriptions say (status 3, no forces)."""
+    s = Slave(fmu, extracted, md, "limits", element_size=2e-3)
+    try:
+        capsys.readouterr()
+        assert s.step(lateral_displacement=1e-3, friction_left=1000.0) == 2  # fmi2Discard
+        log = capsys.readouterr().out
+        assert "friction_left = 1000 is above 10 (<= 0: the parameter friction)" in log
+        assert s.get("status", "normal_force_right") == [3, 0.0]
+        assert s.step(friction_left=0.0, rail_offset_lateral_left=0.1) == 2
+        assert "0.05 m" in capsys.readouterr().out
+        assert s.step(rail_offset_lateral_left=0.0) == 0
+    finally:
+        s.free()
+    described = {v.name: v.description for v in md.modelVariables}
+    assert "at most 10; outside it the step is discarded" in described["friction_left"]
+    assert "within +-0.05; outside it" in described["rail_offset_vertical_right"]
+    assert "within +-0.1; outside it" in described["rail_roll_left"]
+    assert "within +-0.1, a radius of 10 m or more; outside" in described["curvature"]

@@ -179,7 +179,7 @@ def test_a_table_without_a_friction_axis_refuses_a_friction_per_step(tmp_path):
     assert s.exit_initialization() == 0, s.pop_log()
     assert s["creep_force_x_left"] == res.left.creep_force[0]
     s["friction_left"] = 0.3
-    s.control[:] = (0.0, 1e-3)
+    s.control[:] = (0.0, 1e-3, 0.0)
     assert s.do_step() == 2  # fmi2Discard
     assert "no friction axis" in s.pop_log() and s["status_left"] == 3
 

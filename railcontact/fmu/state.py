@@ -40,8 +40,9 @@ The header is an object with
     memories, wheelset 1 first.
 
 and the archive holds ``real`` (float64, the Real variables by value reference),
-``integer`` (int32, the Integer variables), ``control`` (float64, (time [s], step
-size [s]) of the last step) and the arrays of the memory, ``a0``, ``a1``, ...
+``integer`` (int32, the Integer variables), ``control`` (float64, the time [s] and
+step size [s] of the last step asked for, and the last successful time [s]) and the
+arrays of the memory, ``a0``, ``a1``, ...
 
 The tree: JSON null, booleans, integers, strings and finite numbers stand for themselves;
 a list for a list; objects with one key starting with ``$`` for the rest:
@@ -74,7 +75,7 @@ from ..timestep.rigid import RigidMemory
 from ..timestep.warmstart import PatchMemory
 
 MAGIC = b"RAILCONTACTSTATE"
-VERSION = 2
+VERSION = 3
 FORMAT = "railcontact-fmu-state"
 _PREFIX = struct.Struct("<16sIQ")
 MAX_HEADER = 1 << 30

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from ..errors import RailContactError
+from ..geometry.track import MAX_RAIL_ROLL, MAX_RAIL_SHIFT
 from ..settings import (
     ContactSettings,
     FMUModes,
@@ -26,7 +27,9 @@ from ..settings import (
     WheelRailGeometry,
 )
 from ..settings.fields import Record, default_of, spec_of
+from ..settings.friction import MAX_MU
 from ..status import Status
+from ..timestep.inputs import MAX_CURVATURE
 
 SIDES = ("left", "right")
 UNITS = {"-": "1", "": ""}
@@ -279,6 +282,7 @@ step is discarded, status 3."""
 _OUTSIDE = "; outside it the step is discarded (fmi2Discard, status 3)"
 _LOADS = f"{LOAD_LIMITS[0]:g} to {LOAD_LIMITS[1]:g} N (0 lifts the wheel){_OUTSIDE}"
 _CREEP = f"{CREEPAGE_LIMITS[0]:g} to {CREEPAGE_LIMITS[1]:g}{_OUTSIDE}"
+_SHIFTS = f"within +-{MAX_RAIL_SHIFT:g}{_OUTSIDE}"
 
 INPUTS = [
     Variable("lateral_displacement", "Real", "input", 0.0, "m",
@@ -501,25 +505,29 @@ TRACK_INPUTS = [
     Variable("curvature", "Real", "input", 0.0, "1/m",
              "track curvature, positive when the track turns left (creepage_input="
              "kinematic: the rails turn with -speed * curvature relative to the track frame; "
-             "a radius of 10 m or more)"),
+             f"within +-{MAX_CURVATURE:g}, a radius of {1 / MAX_CURVATURE:g} m or more"
+             f"{_OUTSIDE})"),
     *[v for s in SIDES for v in (
         Variable(f"rail_offset_lateral_{s}", "Real", "input", 0.0, "m",
                  f"{s} rail's lateral offset from its place, positive to the left (an "
-                 "irregularity; a gauge change)"),
+                 f"irregularity; a gauge change): {_SHIFTS}"),
         Variable(f"rail_offset_vertical_{s}", "Real", "input", 0.0, "m",
-                 f"{s} rail's vertical offset from its place, positive up"),
+                 f"{s} rail's vertical offset from its place, positive up: {_SHIFTS}"),
         Variable(f"rail_roll_{s}", "Real", "input", 0.0, "rad",
                  f"{s} rail's roll about the track X axis (right-handed, Y to the left, Z "
-                 "up), about the rail profile's origin"),
+                 f"up), about the rail profile's origin: within +-{MAX_RAIL_ROLL:g}"
+                 f"{_OUTSIDE}"),
         Variable(f"friction_{s}", "Real", "input", 0.0, "1",
                  f"coefficient of friction on the {s} rail at this step (wet, contaminated, "
-                 "lubricated); <= 0 means the parameter friction"))],
+                 f"lubricated); <= 0 means the parameter friction; at most {MAX_MU:g}"
+                 f"{_OUTSIDE}"))],
 ]
 """Inputs of the real track, numbered after :data:`APPENDED_OUTPUTS`."""
 TRACK_OUTPUTS = [
     *_wheel("frictional_power", "Real", "W", "frictional power of the wheel's creep forces, "
             "speed * (F_x xi + F_y eta + M_z phi) over its patches (negative: dissipated; "
-            "the traction times the slip integrated, in steady rolling)",
+            "the traction times the slip integrated, in steady rolling); 0 where speed is "
+            "not above 0 (creepage_input=direct: set speed to have it)",
             value=lambda w: w.frictional_power_per_speed),
 ]
 """Outputs of the real track, numbered after :data:`TRACK_INPUTS`; the slave multiplies

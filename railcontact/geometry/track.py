@@ -33,6 +33,10 @@ from . import kernels
 from .profiles import Profile
 
 SIDES = {"left": 1, "right": -1}
+MAX_RAIL_SHIFT = 0.05
+"""The largest deviation [m] of a rail from its place, laterally and vertically."""
+MAX_RAIL_ROLL = 0.1
+"""The largest roll [rad] of a rail about the track's X axis."""
 
 
 @dataclass(frozen=True)
@@ -75,13 +79,13 @@ class Track:
         check_positive("gauge", self.gauge, "m")
         check_positive("gauge_depth", self.gauge_depth, "m")
         du, dz = (check_finite("rail shift", v, "m") for v in self.shift)
-        if max(abs(du), abs(dz)) > 0.05:
-            raise RailContactError(f"a rail deviation must be small (|shift| <= 0.05 m), got "
-                                   f"({du:g}, {dz:g}) m")
+        if max(abs(du), abs(dz)) > MAX_RAIL_SHIFT:
+            raise RailContactError(f"a rail deviation must be small (|shift| <= "
+                                   f"{MAX_RAIL_SHIFT:g} m), got ({du:g}, {dz:g}) m")
         object.__setattr__(self, "shift", (float(du), float(dz)))
-        if abs(check_finite("rail tilt", self.tilt, "rad")) > 0.1:
-            raise RailContactError(f"a rail's roll must be a small angle (|roll| <= 0.1 rad), "
-                                   f"got {self.tilt:g}")
+        if abs(check_finite("rail tilt", self.tilt, "rad")) > MAX_RAIL_ROLL:
+            raise RailContactError(f"a rail's roll must be a small angle (|roll| <= "
+                                   f"{MAX_RAIL_ROLL:g} rad), got {self.tilt:g}")
 
     def deviated(self, side: str, offset: tuple[float, float] = (0.0, 0.0),
                  roll: float = 0.0) -> Track:
