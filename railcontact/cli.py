@@ -125,16 +125,18 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                                 file=str(case) if several else None))
         else:
             print(f"== {case}\n{_summary(sol)}" if several else _summary(sol))
-        if args.plot:
+        contact = any(p.normal.force > 0 for p in sol.patches)
+        if args.plot and sol.patches:
             out = plot_solution(sol, args.plot)
             if not args.json:
                 print(f"plot written to {out}")
         if not sol.converged:
             outcomes.add(1)
-        if not any(p.normal.force > 0 for p in sol.patches):
+        if not contact:
+            unplotted = "; no figure written" if args.plot and not sol.patches else ""
             print(f"railcontact: warning: {case}: no contact (zero load, a load below "
-                  f"{MIN_LOAD:g} N, or a penetration below the gap): nothing was solved",
-                  file=sys.stderr)
+                  f"{MIN_LOAD:g} N, or a penetration below the gap): nothing was "
+                  f"solved{unplotted}", file=sys.stderr)
             outcomes.add(NO_CONTACT_EXIT)
     return next((c for c in EXIT_PRIORITY if c in outcomes), 0)
 

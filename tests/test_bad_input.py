@@ -511,6 +511,11 @@ def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("railcontact: warning: ") and "nothing was solved" in err
     assert main(["solve", str(case), "missing.toml"]) == 2  # an error outranks no contact
+    case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = '
+                    '"wheel-rail"\n[normal]\nload = 0.0\n')  # (a wheel: no patch at all)
+    png = tmp_path / "zero.png"  # no patch to draw: said, not an IndexError
+    assert main(["solve", str(case), "--plot", str(png)]) == 3 and not png.exists()
+    assert capsys.readouterr().err.strip().endswith("nothing was solved; no figure written")
 
 
 def test_one_wheel_of_a_wheelset_off_its_rail_is_an_error():
@@ -598,3 +603,16 @@ def test_the_rigid_wheelset_is_not_searched_on_wheels_out_of_range():
     assert sum(x.load_passes for x in r.rigid_work) == 0
     r = w.solve(rc.Pose(1e-3), loads=(83e3, 83e3), kinematics=rc.Kinematics(30.0, 0.01))
     assert r.status == 0 and r.rigid_solution.converged  # (the stage itself works)
+
+
+def test_a_rolling_step_of_dissimilar_bodies_is_refused_naming_them():
+    """The tangential BEM takes quasi-identical bodies only: a step with creepages of a
+    dissimilar pair is a RailContactError naming Kalker's K, not a wheelset "out of range"
+    blamed on its pose; the normal problem alone is solved."""
+    pair = rc.ElasticPair.of(rc.Material(206e9, 0.28), rc.Material(100e9, 0.3))
+    w = rc.WheelsetContact(rc.Track(rc.read_profile("60E1", "rail"), 0.024994793618920156),
+                           rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46), pair,
+                           rc.ContactSettings(friction=0.4, element_size=2e-3))
+    with pytest.raises(rc.RailContactError, match=r"dissimilar \(Kalker's K = -0.0642\)"):
+        w.solve(rc.Pose(1e-3), loads=(83e3, 83e3), creepages=((1e-3, 0, 0), (1e-3, 0, 0)))
+    assert w.solve(rc.Pose(1e-3), loads=(83e3, 83e3)).status == 0

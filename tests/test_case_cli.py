@@ -219,3 +219,35 @@ def test_one_file_in_error_is_named_and_json_gets_its_object(root, tmp_path):
     assert r.returncode == 2 and r.stdout == ""
     assert "unknown table(s) ['table']" in r.stderr
     assert "`railcontact table build FILE -o STORE`" in r.stderr
+
+
+def test_inputs_that_misname_the_pose_are_named_themselves(tmp_path):
+    """Errors an outsider's case file met blamed the wheelset's lateral displacement: a
+    gauge that the wheelset's back-to-back distance does not fit, dissimilar materials
+    under the tangential BEM; they are named as such. A misspelt top-level key gets its
+    suggestion, and a folder given for a case file is called one."""
+    case = paper_case()
+    case["convetion"] = "contact"
+    with pytest.raises(CaseError, match=r"\['convetion'\] \(did you mean 'convention'\?\)"):
+        validate_case(case)
+    wheel = {"material": {"young": 206e9, "poisson": 0.28},
+             "geometry": {"type": "wheel-rail", "gauge": 1.0}, "normal": {"load": 8e4}}
+    with pytest.raises(CaseError, match=r"gauge = 1 m less back_to_back = 1.36 m is -360 mm"):
+        validate_case(wheel)
+    wheel["geometry"]["back_to_back"] = 0.93  # (metre gauge: fits)
+    validate_case(wheel)
+    wheel = {"material": {"young": [206e9, 100e9], "poisson": [0.28, 0.3]},
+             "geometry": {"type": "wheel-rail"}, "normal": {"load": 8e4},
+             "tangential": {"creepage": [1e-3, 0.0, 0.0], "friction": 0.4}}
+    with pytest.raises(CaseError, match=r"^\[material\] gives dissimilar bodies"):
+        validate_case(wheel)
+    del wheel["tangential"]  # (the normal problem takes them)
+    validate_case(wheel)
+    wheel = {"material": {"young": 206e9, "poisson": 0.28}, "geometry": {"type": "wheel-rail"},
+             "normal": {"load": 8e4}, "grid": {"dx": 0.5, "dy": 5e-4}}
+    with pytest.raises(CaseError, match=r"\[grid\] dx = 0.5 m is coarser than the 0.005 m "
+                       r"that still resolves a wheel-rail patch; 0.5 looks like millimetres"):
+        validate_case(wheel)
+    r = run_cli("solve", str(tmp_path))
+    assert r.returncode == 2 and r.stderr == f"railcontact: error: {tmp_path} is a folder, " \
+                                             "not a case file\n"

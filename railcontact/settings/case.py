@@ -138,6 +138,14 @@ MIN_GAUGE, MAX_GAUGE = 0.5, 2.0
 """Range of a track gauge [m] (narrow gauges from 0.6 m, broad gauges to 1.676 m, with room
 on both sides); the wheelset's flange-back distance is a little less than its gauge."""
 
+MAX_ELEMENT_SIZE = 0.005
+"""Coarsest element [m] that still resolves a wheel-rail patch."""
+_TOP_KEYS = ("name", "convention")
+"""The keys of a case beside its tables."""
+MAX_GAUGE_PLAY = 0.2
+"""Largest gauge less back-to-back distance [m] of a wheelset on its track (both flanges'
+thickness and their play: 75 mm on standard gauge, about 0.1 m on wide ones)."""
+
 _TRACK = {f.name: f.default for f in fields(Track)}
 _WHEELSET = {f.name: f.default for f in fields(Wheelset)}
 _SEPARATION = {f.name: f.default for f in fields(PatchSeparation)}
@@ -223,6 +231,17 @@ class WheelRailGeometry(Record):
                                           "patches still turn (default 2 "
                                           "separation_distance - combine_distance)",
                                           minimum=0.0, maximum=0.1)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        play = self.gauge - self.back_to_back
+        if not 0.0 < play <= MAX_GAUGE_PLAY:
+            raise CaseError(
+                f"[geometry] gauge = {self.gauge:g} m less back_to_back = "
+                f"{self.back_to_back:g} m is {play * 1e3:.4g} mm; a wheelset on its track "
+                f"has more than 0 and at most {MAX_GAUGE_PLAY * 1e3:g} mm there (both "
+                "flanges' thickness and their play: 75 mm on standard gauge, 1.435 - 1.36 "
+                "m)")
 
     def to_dict(self) -> dict[str, Any]:
         return {"type": self.TYPE, **super().to_dict()}
@@ -555,13 +574,13 @@ class Case:
         """
         if not isinstance(case, Mapping):
             raise CaseError(f"a case must be a dictionary of tables, got {type(case).__name__}")
-        unknown = set(case) - set(CASE_TABLES) - {"name", "convention"}
+        unknown = set(case) - set(CASE_TABLES) - set(_TOP_KEYS)
         if unknown:
             spec = ("; a [table] is a table's spec: build it with `railcontact table "
                     "build FILE -o STORE`" if "table" in unknown else "")
             raise CaseError(f"unknown table(s) {sorted(unknown)}"
-                            f"{did_you_mean(unknown, CASE_TABLES)}; known: "
-                            f"{sorted(CASE_TABLES)}{spec}")
+                            f"{did_you_mean(unknown, [*CASE_TABLES, *_TOP_KEYS])}; known: "
+                            f"{sorted(CASE_TABLES)} and the keys {list(_TOP_KEYS)}{spec}")
         problems: list[str] = [f"missing table [{t}]" for t in _REQUIRED_TABLES
                                if t not in case]
         records: dict[str, Any] = {}
@@ -595,6 +614,24 @@ class Case:
             check_convention(convention)
         except CaseError as exc:
             problems.append(str(exc))
+        grid = records.get("grid")
+        if isinstance(records.get("geometry"), WheelRailGeometry) and grid is not None:
+            for key in ("dx", "dy"):
+                size = getattr(grid, key)
+                if size is not None and size > MAX_ELEMENT_SIZE:
+                    mm = (f"; {size:g} looks like millimetres: {size:g} mm is "
+                          f"{size / 1000.0:g} m" if size / 1000.0 <= MAX_ELEMENT_SIZE else "")
+                    problems.append(f"[grid] {key} = {size:g} m is coarser than the "
+                                    f"{MAX_ELEMENT_SIZE:g} m that still resolves a wheel-rail "
+                                    f"patch{mm}")
+        material, tangential = records.get("material"), records.get("tangential")
+        if material is not None and tangential is not None and tangential.model == "bem":
+            k = material.elastic_pair().difference
+            if k != 0.0:
+                problems.append(f"[material] gives dissimilar bodies (Kalker's K = {k:.3g}), "
+                                "which couple normal and tangential contact; the tangential "
+                                "BEM takes quasi-identical bodies only (K = 0: one young "
+                                "and poisson, or pairs with equal (1 - 2 nu) / G)")
         if problems:
             raise CaseError(problems[0] if len(problems) == 1 else
                             f"{len(problems)} problems in the case:\n  " + "\n  ".join(problems))
@@ -668,7 +705,8 @@ def load_case(path: str | Path) -> Case:
     """
     p = Path(path)
     if not p.is_file():
-        raise CaseError(f"case file not found: {p}")
+        raise CaseError(f"{p} is a folder, not a case file" if p.is_dir() else
+                        f"case file not found: {p}")
     try:
         with p.open("rb") as f:
             raw = tomllib.load(f)

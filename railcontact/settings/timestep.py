@@ -16,6 +16,7 @@ from typing import ClassVar
 from ..errors import RailContactError
 from ..formed import formed_once
 from .case import (
+    MAX_ELEMENT_SIZE,
     GridSettings,
     NormalSettings,
     PatchSettings,
@@ -33,8 +34,6 @@ from .choices import (
 )
 from .fields import Record, document, inherit, setting
 
-MAX_ELEMENT_SIZE = 0.005
-"""Coarsest element [m] that still resolves a wheel-rail patch."""
 MIN_ELEMENT_SIZE = 1e-5
 """Finest element [m] (0.01 mm: a patch of 10 mm is then 1000 elements across)."""
 

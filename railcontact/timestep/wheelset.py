@@ -246,6 +246,11 @@ class WheelsetContact:
                 friction: tuple[float, float] | None) -> StepInputs:
         """The step's inputs checked (:meth:`solve`'s parameters), with each wheel's
         setup (:class:`WheelSetup`)."""
+        k = self.pair.difference
+        if k != 0.0 and (creepages is not None or kinematics is not None):
+            raise RailContactError(f"the pair's bodies are dissimilar (Kalker's K = {k:.3g}), "
+                                   "which couples normal and tangential contact; the "
+                                   "tangential BEM takes quasi-identical bodies only (K = 0)")
         return step_inputs(pose, loads, vertical, creepages, kinematics, time,
                            self._setups.at(self.settings, rails, friction), self.convention)
 
