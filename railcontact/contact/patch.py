@@ -232,11 +232,12 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
         c = res.contact
         edge = (bool(c[0].any() or c[-1].any()), bool(c[:, 0].any() or c[:, -1].any()))
         if any(e and not auto for e, auto in zip(edge, automatic, strict=True)):
-            x = None if grid_settings.x is None else list(grid_settings.x)
-            y = None if grid_settings.y is None else list(grid_settings.y)
+            given = ", ".join(f"{k} = {list(v)} m" for k, v, e, auto in zip(
+                "xy", (grid_settings.x, grid_settings.y), edge, automatic, strict=True)
+                if e and not auto)
             raise CaseError(
-                "potential contact area too small: the contact reaches the edge of [grid] "
-                f"x = {x} , y = {y} m; enlarge it or leave x and y out for an automatic area")
+                f"potential contact area too small: the contact reaches the edge of [grid] "
+                f"{given}; enlarge it or leave it out for an automatic area")
         if k == MAX_GROW:
             res = not_converged(res, (
                 f"the contact still reaches the edge of the potential area after {MAX_GROW} "

@@ -676,8 +676,9 @@ def _record(table: str, values: Any) -> Record:
         return WheelRailGeometry.from_mapping(rest)
     wheel_rail_keys = sorted(set(rest) & {f.name for f in fields(WheelRailGeometry)})
     if wheel_rail_keys:
+        said = "" if "type" in values else " (type is 'quadratic' when not given)"
         raise CaseError(f"[geometry] {', '.join(wheel_rail_keys)}: for type = 'wheel-rail'; a "
-                        "quadratic case takes A and B")
+                        f"quadratic case takes A and B{said}")
     return QuadraticGeometry.from_mapping(rest)
 
 
