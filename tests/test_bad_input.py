@@ -592,21 +592,6 @@ def test_velocities_whose_creepages_overflow_are_out_of_range_not_infinite():
         assert wheel.frictional_power is None or math.isfinite(wheel.frictional_power)
 
 
-def test_the_rigid_wheelset_is_not_searched_on_wheels_out_of_range():
-    """Under load control with the rigid wheelset's stage ("solve"), wheels out of range
-    (velocities too slow for their creepages) leave it unsolved: no vertical displacement
-    or roll, no solves at other rolls, and the wheelset's message only the wheels' (not a
-    "not converged" search on inputs that nothing can solve)."""
-    w = _wheelset(element_size=2e-3, rigid_wheelset="solve")
-    r = w.solve(rc.Pose(1e-3), loads=(83e3, 83e3), kinematics=rc.Kinematics(1e-9, 0.01))
-    assert r.status == 3 and [x.status for x in r.wheels] == [3, 3]
-    assert r.vertical is None and r.roll is None and r.rigid_solution is None
-    assert "rigid" not in r.message and "not converged" not in r.message
-    assert sum(x.load_passes for x in r.rigid_work) == 0
-    r = w.solve(rc.Pose(1e-3), loads=(83e3, 83e3), kinematics=rc.Kinematics(30.0, 0.01))
-    assert r.status == 0 and r.rigid_solution.converged  # (the stage itself works)
-
-
 def test_a_rolling_step_of_dissimilar_bodies_is_refused_naming_them():
     """The tangential BEM takes quasi-identical bodies only: a step with creepages of a
     dissimilar pair is a RailContactError naming Kalker's K, not a wheelset "out of range"

@@ -399,3 +399,17 @@ def test_the_convergence_measure_holds_at_any_traction_scale(sphere, solver):
                    tolerance=1e-8)
         assert r.converged and abs(r.iterations - ref.iterations) <= 1
         np.testing.assert_allclose(np.asarray(r.force) / lam, ref.force, rtol=1e-10)
+
+
+@pytest.mark.parametrize("solver", ["steadygs", "convexgs"])
+def test_no_friction_slides_the_whole_contact(root, solver):
+    """mu = 0 (a case file allows it): zero traction, and every loaded element slides -
+    not "no contact: zero normal pressure" with a slip area of 0 beside a normal force of
+    tens of kN (the solvers' bound mu p is zero everywhere, so they see no contact)."""
+    case = rc.load_case(root / "models/cases/hertz_paper_rolling.toml").to_dict()
+    case["tangential"].update(friction=0.0, solver=solver)
+    ps = rc.solve(case).patches[0]
+    t, n = ps.tangential, ps.normal
+    assert n.force > 1e4 and t.force == (0.0, 0.0) and t.spin_moment == 0.0
+    assert t.slip_area_ratio == 1.0 and "no friction" in t.message and t.converged
+    np.testing.assert_array_equal(t.state == 2, n.pressure > 0)

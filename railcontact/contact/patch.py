@@ -27,6 +27,7 @@ from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
 from ..settings.case import ELEMENT_BYTES, MAX_ELEMENTS, check_grid_size
 from ..tangential import SOLVERS, TangentialResult, rolling_operator
+from ..tangential.convexgs import EXTERIOR, SLIP
 from ..tangential.fastrip import fastrip, fastrip_hertz
 from ..tangential.fastsim import fastsim, fastsim_hertz, flexibilities
 from ..tangential.strips import StripResult, remesh_strips, strips_on_contact
@@ -462,6 +463,8 @@ def tangential_solved(patch: PatchSolution, t: TangentialResult | StripResult,
     if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
             and math.isfinite(t.max_traction)):
         t = not_converged(t, f"the tangential solution is not finite ({t.message})")
+    elif friction == 0.0 and type(friction) is float and patch.normal.force > 0:
+        t = _frictionless(t, patch.normal.pressure)
     w = patch.work
     work = Work(w.normal_iterations, w.tangential_iterations + t.iterations, w.load_passes,
                 w.remeshes, w.seconds + seconds)
@@ -515,6 +518,17 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         initial_state=st0, tolerance=settings.tolerance,
         max_iterations=settings.max_iterations, spin_offset=settings.spin_offset,
         embed=None if window is None else (res.grid, window))
+
+
+def _frictionless(t: TangentialResult, pressure: np.ndarray) -> TangentialResult:
+    """The tangential solution ``t`` of a contact (its ``pressure`` [Pa], on ``t``'s grid)
+    without friction: the BEM solvers, whose traction bound mu p is zero everywhere, see no
+    element in contact; the whole contact slides with zero traction."""
+    if pressure.shape != t.state.shape:
+        return t
+    return replace(t, state=np.where(pressure > 0, SLIP, EXTERIOR).astype(t.state.dtype),
+                   slip_area_ratio=1.0, message="no friction (mu = 0): zero traction, the "
+                   "whole contact slides")
 
 
 @dataclass(frozen=True)

@@ -114,20 +114,18 @@ def rigid_wheelset_stage(step: StepInputs, found: Found, wheels: list[WheelConta
 
     Under penetration control the pose's vertical displacement and roll. Under load
     control, when ``settings.rigid_wheelset`` is "solve" and no wheel is off its rail
-    (``off_track``) or out of range (nothing of it solved: its inputs beyond the model, as
-    velocities too slow for their creepages), the vertical displacement and roll at which
-    both ``wheels``, penetration-controlled, carry their loads
-    (:func:`~.rolled.rigid_stage`): the wheels' least gaps at the step's roll from their
-    searches ``found``, each other roll searched once; the wheels solved at other rolls
-    start from this step's solves (the previous step's ``last`` memory when this one is
-    not remembered) and from ``last``'s at its root."""
+    (``off_track``), the vertical displacement and roll at which both ``wheels``,
+    penetration-controlled, carry their loads (:func:`~.rolled.rigid_stage`): the wheels'
+    least gaps at the step's roll from their searches ``found``, each other roll searched
+    once; the wheels solved at other rolls start from this step's solves (the previous
+    step's ``last`` memory when this one is not remembered) and from ``last``'s at its
+    root."""
     keep = remember and settings.uses_previous  # (what the next step starts from)
     out = memory if keep else EMPTY_MEMORY
     pose = step.pose
     if step.vertical is not None:
         return (step.vertical, pose.roll, RigidSolution(step.vertical, pose.roll)), out
-    if (off_track or settings.rigid_wheelset != "solve"
-            or OUT_OF_RANGE in (wheels[0].status, wheels[1].status)):
+    if off_track or settings.rigid_wheelset != "solve":
         return (), out  # (none solved: the record's defaults)
     older = last if settings.uses_previous else EMPTY_MEMORY
     rigid = RigidWheelset(
