@@ -349,3 +349,28 @@ def test_out_of_range_has_no_vertical_or_roll():
     r = contact().solve(Pose(0.08), loads=(Q, Q), creepages=NONE)
     assert r.status == OUT_OF_RANGE and (r.vertical, r.roll) == (None, None)
     assert r.moment == (0.0, 0.0, 0.0)
+
+
+def test_a_flange_near_nadal_whose_secant_stalls_is_solved_on_its_bracket():
+    """8 mm to the left with spin, 90 kN on the left wheel at roll 0: the flange's creep
+    forces nearly cancel what its normal force carries up (mu tan(gamma) ~ 1.1), so the
+    vertical force bends sharply with the normal share (6.6 kN at 168 kN, 1.08 MN at
+    2.28 MN). The secant, damped to halving, stalled far from the load, and a pass at a
+    share it tried was refused as a patch beyond the model: the wheel read "out of range"
+    though two shares bracketed the load. Closing in on the bracket, the wheel carries the
+    load to the tolerance, with the validity status its Y/Q calls for (beyond Nadal's
+    limit), and a penetration-controlled solve at its approach gives the load back."""
+    wc = contact(rigid_wheelset="skip")
+    creep = ((1e-3, 2e-3, 0.2), (1e-3, 2e-3, -0.2))
+    r = wc.solve(Pose(8e-3), loads=(90e3, 75e3), creepages=creep)
+    left = r.left
+    assert left.status == 4 and "Nadal" in left.message, left.message
+    assert left.track_force[2] == pytest.approx(90e3, rel=1e-3)
+    assert abs(left.track_force[1]) / left.track_force[2] > 1.12  # (beyond Nadal's limit)
+    from railcontact.settings import Control
+    from railcontact.timestep.wheel import solve_step_wheel
+    setup = wc._setups.at(wc.settings, None, None)[0]
+    again, _, err = solve_step_wheel(setup, Pose(8e-3), Control(penetration=left.approach),
+                                     creep[0], None, None, wc.pair, "railcontact",
+                                     ((), (), ()))
+    assert err is None and again.track_force[2] == pytest.approx(90e3, rel=3e-3)

@@ -307,10 +307,21 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
         reached. The iteration stops when :data:`MAX_STALLED` passes in a row do not halve
         the smallest residual: the tangential BEM stops at ``eps_tau``, and an element
         changing between adhesion and slip moves the vertical force by steps (~1e-3 of the
-        load on a flange at ``eps_tau = 1e-2``), so the residual has a noise floor.
+        load on a flange at ``eps_tau = 1e-2``), so the residual has a noise floor. A step
+        beyond the two shares before is damped to a factor 2; one between two that bracket
+        the load is taken. Stalled with the load bracketed by two of its shares (near
+        Nadal's limit, where the vertical force bends sharply with the normal share), it
+        closes in on the bracket (:func:`_bracketed_share`).
     """
+    tried: list[tuple[float, float]] = []  # (share, residual) of every pass
+
+    def residual_of(q: float) -> tuple[float, T]:
+        r, s = residual(q)
+        tried.append((q, r))
+        return r, s
+
     q0 = start
-    r0, sol = residual(q0)
+    r0, sol = residual_of(q0)
     if abs(r0) <= rtol * load:
         return sol, ""
     first = best = sol
@@ -320,7 +331,7 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
     vertical = r0 + load
     q1 = q0 * load / vertical if vertical > 0 else 2.0 * q0
     q1 = min(max(q1, 0.05 * load), MAX_SHARE * load)
-    r1, sol = residual(q1)
+    r1, sol = residual_of(q1)
     for _ in range(MAX_SECANT):
         stalled = 0 if abs(r1) < 0.5 * best_r else stalled + 1
         if abs(r1) < best_r:
@@ -333,13 +344,63 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
                            f"N at a normal share of {q0:.6g} N, {r1 + load:.6g} N at "
                            f"{q1:.6g} N); no normal force carries the load {load:.6g} N")
         q2 = q1 - r1 * (q1 - q0) / (r1 - r0)
+        # a step between two shares that bracket the load is taken as it is (it stays in
+        # the bracket); beyond them it is damped to at most a factor 2
+        bracketed = (r0 < 0.0 < r1 or r1 < 0.0 < r0) and min(q0, q1) < q2 < max(q0, q1)
         q0, r0 = q1, r1
-        q1 = min(max(q2, 0.5 * q1, 0.05 * load), 2.0 * q1, MAX_SHARE * load)
-        r1, sol = residual(q1)
+        q1 = q2 if bracketed else min(max(q2, 0.5 * q1, 0.05 * load), 2.0 * q1,
+                                      MAX_SHARE * load)
+        r1, sol = residual_of(q1)
+    if best_r > rtol * load:  # stalled, yet two shares bracket the load: close in on it
+        best, best_r = _bracketed_share(residual_of, tried, best, best_r, rtol * load)
     if best_r <= rtol * load:
         return best, ""
     return best, (f"the vertical load with creep forces did not converge (vertical force "
                   f"off by {best_r:.6g} N for load {load:.6g} N)")
+
+
+MAX_BRACKETED = 12
+"""Steps at most of the regula falsi on a bracket of the normal share after the secant
+stalled (:func:`_bracketed_share`)."""
+
+
+def _bracketed_share(residual: Callable[[float], tuple[float, T]],
+                     tried: list[tuple[float, float]], best: T, best_r: float, tol: float
+                     ) -> tuple[T, float]:
+    """The creep-load iteration closed in on its root where the secant steps stalled
+    (far from the load: near Nadal's limit the vertical force bends sharply with the
+    normal share) but two of the shares ``tried`` (share, residual) bracket the load: the
+    regula falsi on the tightest bracket (Illinois: an end kept twice has its residual
+    halved), at most :data:`MAX_BRACKETED` passes, until a residual is within ``tol``
+    [N]. Returns the best solution and its residual's magnitude (``best``, ``best_r``
+    when no step improved on them, or no bracket)."""
+    below = [(q, r) for q, r in tried if r < 0.0]
+    above = [(q, r) for q, r in tried if r > 0.0]
+    if not below or not above:
+        return best, best_r
+    lo, r_lo = max(below, key=lambda t: t[0])  # (the vertical force grows with the share
+    hi, r_hi = min(above, key=lambda t: t[0])  # across the bracket: the tightest one)
+    if not lo < hi:
+        return best, best_r
+    kept = 0  # which end was kept last: -1 the lower, +1 the upper
+    for _ in range(MAX_BRACKETED):
+        q = hi - r_hi * (hi - lo) / (r_hi - r_lo)
+        if not lo < q < hi:
+            q = 0.5 * (lo + hi)
+        r, sol = residual(q)
+        if abs(r) < best_r:
+            best, best_r = sol, abs(r)
+        if best_r <= tol or r == 0.0:
+            break
+        if r < 0.0:
+            lo, r_lo = q, r
+            r_hi = 0.5 * r_hi if kept == 1 else r_hi
+            kept = 1
+        else:
+            hi, r_hi = q, r
+            r_lo = 0.5 * r_lo if kept == -1 else r_lo
+            kept = -1
+    return best, best_r
 
 
 MERGE_WINDOW = 1.3
