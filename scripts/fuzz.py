@@ -521,8 +521,14 @@ def classify_cli(code: int | None, out: str, err: str, case: dict) -> Outcome:
     if code == 2:
         if not _ERROR.match(err):
             return Outcome("traceback", f"exit 2 without a one-line error: {err[:200]!r}")
-        if "\n" in err.rstrip("\n") and not re.match(r"railcontact: error: \d+ problems", err):
+        if "\n" in err.rstrip("\n") and not re.match(r"railcontact: error: (.+: )?\d+ problems",
+                                                    err):  # (named with its file)
             return Outcome("traceback", f"multi-line error: {err[:200]!r}")
+        try:  # (the file's {"file", "error"} object)
+            if "error" not in strict_json(out):
+                return Outcome("traceback", f"exit 2 without the error's JSON: {out[:200]!r}")
+        except ValueError as exc:
+            return Outcome("traceback", f"exit 2 with JSON that is not strict: {exc}")
         return Outcome("clean error", err.strip().splitlines()[0][20:], warnings=warnings)
     try:
         d = strict_json(out)
