@@ -144,7 +144,8 @@ _TOP_KEYS = ("name", "convention")
 """The keys of a case beside its tables."""
 MAX_GAUGE_PLAY = 0.2
 """Largest gauge less back-to-back distance [m] of a wheelset on its track (both flanges'
-thickness and their play: 75 mm on standard gauge, about 0.1 m on wide ones)."""
+thickness and their play: 75 mm on standard gauge, 1.435 - 1.36 m); beyond it a wheel is
+off its rail."""
 
 _TRACK = {f.name: f.default for f in fields(Track)}
 _WHEELSET = {f.name: f.default for f in fields(Wheelset)}
