@@ -184,3 +184,25 @@ def test_creep_load_secant_on_model_functions():
 
     first, msg = creep_load_secant(climbing, q, q, 1e-5)
     assert "Nadal" in msg and first == q
+
+
+def test_creep_load_secant_closes_in_on_a_bracket_where_it_stalls_far_from_the_load():
+    """A flange near Nadal's limit: the vertical force bends sharply with the normal share
+    (a model of one at 90 kN: 6.6 kN at 168 kN, then a cubic rise to 1.09 MN at 2.28 MN).
+    The damped secant stalls with the load missed by most of itself, though its shares
+    bracket the load; closing in on the bracket (regula falsi, Illinois) meets it to the
+    tolerance in a few more passes."""
+    from railcontact.contact.loadloop import MAX_BRACKETED, creep_load_secant
+
+    q, calls = 90e3, []
+
+    def bent(qn):
+        calls.append(qn)
+        v = (6.6e3 + 1.08e6 * ((qn - 168e3) / 2.115e6) ** 3 if qn > 168e3
+             else 6.6e3 * qn / 168e3)
+        return v - q, qn
+
+    qn, msg = creep_load_secant(bent, q, 168e3, 1e-3)
+    assert msg == "" and abs(bent(qn)[0]) <= 1e-3 * q
+    assert len(calls) <= 1 + 2 + 3 + MAX_BRACKETED  # (first, secant, stalled, bracket)
+    assert 168e3 < qn < 2.28e6

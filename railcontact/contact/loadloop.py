@@ -309,9 +309,10 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
         changing between adhesion and slip moves the vertical force by steps (~1e-3 of the
         load on a flange at ``eps_tau = 1e-2``), so the residual has a noise floor. A step
         beyond the two shares before is damped to a factor 2; one between two that bracket
-        the load is taken. Stalled with the load bracketed by two of its shares (near
-        Nadal's limit, where the vertical force bends sharply with the normal share), it
-        closes in on the bracket (:func:`_bracketed_share`).
+        the load is taken. Stalled further from the load than that floor
+        (:data:`LOAD_SLACK_CAP`: near Nadal's limit, where the vertical force bends sharply
+        with the normal share) with the load bracketed by two of its shares, it closes in
+        on the bracket (:func:`_bracketed_share`).
     """
     tried: list[tuple[float, float]] = []  # (share, residual) of every pass
 
@@ -351,7 +352,8 @@ def creep_load_secant(residual: Callable[[float], tuple[float, T]], load: float,
         q1 = q2 if bracketed else min(max(q2, 0.5 * q1, 0.05 * load), 2.0 * q1,
                                       MAX_SHARE * load)
         r1, sol = residual_of(q1)
-    if best_r > rtol * load:  # stalled, yet two shares bracket the load: close in on it
+    if best_r > LOAD_SLACK_CAP * load:  # stalled far from the load (not at the creep
+        # forces' noise floor), yet two shares bracket it: close in on it
         best, best_r = _bracketed_share(residual_of, tried, best, best_r, rtol * load)
     if best_r <= rtol * load:
         return best, ""
