@@ -217,3 +217,17 @@ def test_compiled_spline_evaluation_is_the_cubic_spline():
             assert np.ndim(got) == 0
             np.testing.assert_allclose(float(got), float(ref(ti, nu)), rtol=1e-12, atol=1e-15)
     assert np.isnan(rail.height(float("nan")))
+
+
+def test_a_profile_file_in_metres_read_as_millimetres_is_named(tmp_path):
+    """60E1 written in metres and read with the default unit (mm) is a rail 73 um wide:
+    an error naming the unit, not a rail that "does not reach 14 mm below its top"; read
+    in metres it is the rail again."""
+    rail = builtin_profile("60E1")
+    f = tmp_path / "rail_m.txt"
+    np.savetxt(f, np.c_[rail.y, rail.z])
+    with pytest.raises(RailContactError, match=r"spans 7.\d+e-05 m in y with unit 'mm' "
+                       r"\(a file in metres read as millimetres\).*profile_unit"):
+        read_profile(f, "rail")
+    again = read_profile(f, "rail", "m")
+    np.testing.assert_allclose(again.z, rail.z, rtol=1e-12, atol=1e-15)

@@ -48,6 +48,9 @@ from .spline import evaluate
 KINDS = ("wheel", "rail")
 MAX_PROFILE_SPAN = 1.0
 """Largest extent [m] of a plausible wheel or rail profile (a larger one has a wrong unit)."""
+MIN_PROFILE_SPAN = 0.02
+"""Smallest lateral extent [m] of a plausible profile file (a rail's head is 70 mm wide,
+a wheel's tread and flange 130 mm: a smaller one has a wrong unit)."""
 
 
 @dataclass(frozen=True)
@@ -459,6 +462,13 @@ def read_xy(path: str | Path, kind: str, unit: str = "mm") -> Profile:
     a = np.array(rows) / f
     if a.shape[0] > 1 and a[0, 0] > a[-1, 0]:
         a = a[::-1]
+    span = float(np.ptp(a[:, 0]))
+    if span < MIN_PROFILE_SPAN:
+        big = " (a file in metres read as millimetres)" if unit == "mm" else ""
+        raise RailContactError(
+            f"profile {p.name!r} spans {span:.3g} m in y with unit {unit!r}{big}; a wheel or "
+            f"rail profile spans about 0.1-0.2 m (at least {MIN_PROFILE_SPAN} m): is its "
+            "unit right (profile_unit)?")
     return Profile(a[:, 0], a[:, 1], kind, p.stem)
 
 
