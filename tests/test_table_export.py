@@ -31,8 +31,9 @@ RAW = {"name": "export", "material": {"young": 206e9, "poisson": 0.28},
 
 @pytest.fixture(scope="module")
 def table(tmp_path_factory):
-    """The 2 x 2 table (both wheels) built in this process; one value made NaN (as a
-    point without contact has its geometry)."""
+    """The 2 x 2 table (both wheels) built in this process; one point's contact angle made
+    NaN and its status no contact (as a point without contact has its geometry: NaN at a
+    point solved ok is a damaged store, refused)."""
     import zarr
 
     spec = parse_spec(RAW)
@@ -42,6 +43,10 @@ def table(tmp_path_factory):
     a = arr[...]
     a[1, 0, 1] = np.nan
     arr[...] = a
+    status = zarr.open_group(str(out), mode="r+")["status"]
+    s = status[...]
+    s[1, 0, 1] = 2
+    status[...] = s
     return spec, out
 
 
@@ -109,3 +114,35 @@ def test_bad_export_is_an_error(table, tmp_path, capsys):
     assert main(["table", "export", str(tmp_path / "none.zarr"), str(tmp_path / "t.nc")]) == 2
     assert main(["table", "export", str(out), str(tmp_path / "t.txt"), "--format",
                  "csv"]) == 0
+
+
+def test_a_damaged_store_is_one_clear_error(table, tmp_path, capsys):
+    """A store whose chunk of a quantity is lost (zarr then reads its fill value, NaN, at
+    points solved ok) or holds garbage (the decompressor fails) is refused as damaged -
+    by ContactTable.open, show and export alike - never read as NaN with status ok nor a
+    reader's traceback."""
+    import shutil
+
+    from railcontact.errors import RailContactError
+
+    _, out = table
+    lost = tmp_path / "lost.zarr"
+    shutil.copytree(out, lost)
+    for f in (lost / "normal_force").iterdir():
+        if not f.name.startswith("."):
+            f.unlink()
+    with pytest.raises(RailContactError, match=r"a damaged table store \(normal_force not "
+                                               "finite at points solved ok"):
+        ContactTable.open(lost)
+    garbled = tmp_path / "garbled.zarr"
+    shutil.copytree(out, garbled)
+    for f in (garbled / "creep_force_y").iterdir():
+        if not f.name.startswith("."):
+            f.write_bytes(b"garbage\n")
+    capsys.readouterr()
+    for args in (["show", str(garbled)], ["export", str(garbled), str(tmp_path / "g.csv")]):
+        assert main(["table", *args]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "a damaged table store" in err, err
+    with pytest.raises(RailContactError, match="a damaged table store"):
+        ContactTable.open(garbled)

@@ -259,7 +259,7 @@ def test_kind_default_and_other_tables(rigid, tmp_path):
 def test_lookup_between_nodes_and_policy(rigid):
     """Multilinear between nodes (a node's values exactly); a patch only where every node
     used has it; outside an axis an error naming it."""
-    spec, _, table = rigid
+    spec, out, table = rigid
     a, b = table.node((1, 0)), table.node((2, 0))
     mid = table(lateral_displacement=0.001, yaw=0.0)
     for q in WHEELSET:
@@ -271,6 +271,12 @@ def test_lookup_between_nodes_and_policy(rigid):
         between.wheels["left"]["patch_rolling_radius"][1])
     with pytest.raises(RailContactError, match="yaw = 0.01 rad is outside the table"):
         table(lateral_displacement=0.0, yaw=0.01)
+    clamping = GeometryTable.open(out, out_of_range="clamp")
+    assert clamping(lateral_displacement=1.0, yaw=0.0).clamped == ("lateral_displacement",)
+    for bad in (float("nan"), float("inf"), -float("inf")):  # never clamped
+        with pytest.raises(RailContactError, match=f"lateral_displacement = {bad:g} m is "
+                           "outside the table"):
+            clamping(lateral_displacement=bad, yaw=0.0)
 
 
 def test_show_and_export(rigid, tmp_path, capsys):

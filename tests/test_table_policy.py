@@ -74,7 +74,7 @@ def test_clamp_gives_the_end_node_and_says_so(clamped, capsys):
     """Lateral displacement 5 mm on a table of 2..4 mm clamped: both wheels have the
     exact solve at 4 mm (the batch's first point: ``railcontact solve`` bit for bit), status
     ok, a message naming the clamped input; a creepage outside its axis (policy status)
-    stays out of range; NaN is never clamped."""
+    stays out of range; NaN and +-inf are never clamped."""
     spec, out = clamped
     table = ContactTable.open(out)
     assert table.out_of_range == {"lateral_displacement": "clamp", "creepage_y": "status"}
@@ -99,8 +99,10 @@ def test_clamp_gives_the_end_node_and_says_so(clamped, capsys):
                      creepages=((0, 0.002, 0), (0, -0.002, 0)))
     assert (res.left.status, res.left.normal_force) == (3, 0.0)
     assert "creepage_y = 0.002 1 is outside the table [0, 0.001]" in res.left.message
-    with pytest.raises(RailContactError, match="outside the table"):
-        table({"lateral_displacement": float("nan"), "creepage_y": 0.0}, "left")
+    for bad in (float("nan"), float("inf"), -float("inf")):  # (inf read ok at the end node)
+        with pytest.raises(RailContactError, match=f"lateral_displacement = {bad:g} m is "
+                           "outside the table"):
+            table({"lateral_displacement": bad, "creepage_y": 0.0}, "left")
     from railcontact.cli import main
 
     assert main(["table", "show", str(out)]) == 0

@@ -136,8 +136,9 @@ class GeometryTable:
             lo_end, hi_end = nodes[0], nodes[-1]
             bad = ~((x >= lo_end) & (x <= hi_end))
             if bad.any():
-                if self.out_of_range[n] != "clamp" or np.isnan(x).any():
-                    v = float(x[np.flatnonzero(bad)[0]])
+                finite = np.isfinite(x)
+                if self.out_of_range[n] != "clamp" or not finite.all():  # (never clamped)
+                    v = float(x[np.flatnonzero(bad if finite.all() else ~finite)[0]])
                     raise RailContactError(f"{n} = {v:g} {axis_info(n).unit} is outside the "
                                            f"table [{lo_end:g}, {hi_end:g}]")
                 x = np.clip(x, lo_end, hi_end)

@@ -31,6 +31,7 @@ import numba
 import numpy as np
 
 from ..errors import CaseError, RailContactError
+from ..status import Status
 from .spec import AXES, DEFAULT_POLICY, parse_policies
 from .store import FLANGE, IDENTITY, POLICY_ATTR, read_table, refuse_kind, wheel_flange
 from .variables import (
@@ -222,6 +223,13 @@ class ContactTable:
         status = np.asarray(arrays["status"]).astype(np.int8)
         values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
                            np.asarray(arrays[q.name], dtype=float) for q in QUANTITIES], axis=-1)
+        solved = np.isin(status, (OK, Status.OUTSIDE_VALIDITY))  # (every value finite)
+        lost = [q.name for k, q in enumerate(QUANTITIES)
+                if q.name not in missing and not np.isfinite(values[..., k][solved]).all()]
+        if lost:
+            raise RailContactError(f"{path}: a damaged table store ({', '.join(lost)} not "
+                                   "finite at points solved ok: a chunk lost); build it "
+                                   "again")
         flange = json.loads(attrs[FLANGE]) if FLANGE in attrs else None
         policies = json.loads(attrs.get(POLICY_ATTR, "{}"))
         if isinstance(out_of_range, str):
@@ -283,14 +291,15 @@ class ContactTable:
     def clamp(self, x: list[float]) -> tuple[list[float], tuple[str, ...]]:
         """The coordinates ``x`` (in axis order) with each finite value of an axis whose
         policy is ``clamp`` moved to the nearest end of the axis when outside it, and the
-        names of those axes."""
+        names of those axes (a value that is not finite is never clamped: left for the
+        range check, which refuses it)."""
         if not self._clamp:
             return x, ()
         x = list(x)
         moved = []
         for k, name, lo, hi in self._clamp:
             v = x[k]
-            if v < lo or v > hi:  # (NaN neither: left for the range check)
+            if (v < lo or v > hi) and math.isfinite(v):
                 x[k] = lo if v < lo else hi
                 moved.append(name)
         return x, tuple(moved)

@@ -402,6 +402,14 @@ def open_dataset(path: str | Path):
         raise RailContactError(f"{p} is not a readable table store: {exc}") from None
     if IDENTITY not in ds.attrs:
         raise RailContactError(f"{p} is not a railcontact table store")
+    try:  # (every chunk read here: a damaged one is this error, not a reader's traceback)
+        ds = ds.load()
+    except Exception as exc:  # noqa: BLE001
+        raise RailContactError(f"{p}: a damaged table store ({type(exc).__name__}: {exc}); "
+                               "build it again") from None
+    if "status" not in ds.variables and "coefficient_status" not in ds.variables:
+        raise RailContactError(f"{p}: a damaged table store (no status array); build it "
+                               "again")
     return ds
 
 
@@ -429,6 +437,13 @@ def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict
     if kind_of(attrs) == CREEP_KIND:
         raise RailContactError(f"{p} is a {CREEP_KIND} table, not a contact table (a "
                                f"{CREEP_KIND} table is read by {reader_of(CREEP_KIND)})")
-    arrays = {n: group[n][...] for n in names if n in group}
-    arrays["side"] = [str(x) for x in np.asarray(group["side"][...]).tolist()]
+    try:
+        arrays = {n: group[n][...] for n in names if n in group}
+        arrays["side"] = [str(x) for x in np.asarray(group["side"][...]).tolist()]
+    except Exception as exc:  # noqa: BLE001 - a chunk damaged, an array lost
+        raise RailContactError(f"{p}: a damaged table store ({type(exc).__name__}: {exc}); "
+                               "build it again") from None
+    if "status" in names and "status" not in arrays:
+        raise RailContactError(f"{p}: a damaged table store (no status array); build it "
+                               "again")
     return attrs, arrays
