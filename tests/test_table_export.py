@@ -146,3 +146,20 @@ def test_a_damaged_store_is_one_clear_error(table, tmp_path, capsys):
         assert err.count("\n") == 1 and "a damaged table store" in err, err
     with pytest.raises(RailContactError, match="a damaged table store"):
         ContactTable.open(garbled)
+
+
+def test_a_store_without_its_status_is_refused(table, tmp_path, capsys):
+    """A store whose status array is gone: show and export refuse it in one line (a
+    KeyError traceback, and an export without a status column, before)."""
+    import shutil
+
+    _, out = table
+    bare = tmp_path / "bare.zarr"
+    shutil.copytree(out, bare)
+    shutil.rmtree(bare / "status")
+    capsys.readouterr()
+    for args in (["show", str(bare)], ["export", str(bare), str(tmp_path / "b.csv")]):
+        assert main(["table", *args]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "no status array" in err, err
+    assert not (tmp_path / "b.csv").exists()

@@ -32,7 +32,7 @@ from ..errors import RailContactError
 from .creepread import export_creep_csv, is_creep_table
 from .geometry import KIND
 from .geometry_table import data_names, export_csv
-from .store import IDENTITY, kind_of, open_dataset
+from .store import IDENTITY, kind_of, open_dataset, require_status
 from .variables import COUNTS, QUANTITIES
 
 FORMATS = {".nc": "netcdf", ".csv": "csv"}
@@ -69,6 +69,8 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
     creep = is_creep_table(ds)
     if creep and fmt == "csv":
         return export_creep_csv(ds, out)
+    if not creep:
+        require_status(path, ds)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     geometry = kind_of(ds.attrs) == KIND
     data = (list(ds.data_vars) if creep else data_names() if geometry else

@@ -407,10 +407,15 @@ def open_dataset(path: str | Path):
     except Exception as exc:  # noqa: BLE001
         raise RailContactError(f"{p}: a damaged table store ({type(exc).__name__}: {exc}); "
                                "build it again") from None
-    if "status" not in ds.variables and "coefficient_status" not in ds.variables:
-        raise RailContactError(f"{p}: a damaged table store (no status array); build it "
-                               "again")
     return ds
+
+
+def require_status(path: str | Path, ds) -> None:
+    """Raise a :class:`RailContactError` when the contact or geometry table ``ds`` at
+    ``path`` has no ``status`` array (a damaged store)."""
+    if "status" not in ds.variables:
+        raise RailContactError(f"{path}: a damaged table store (no status array); build it "
+                               "again")
 
 
 def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict[str, Any]]:
