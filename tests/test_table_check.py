@@ -365,3 +365,23 @@ def test_refine_bad_input_and_nothing_to_do(checked, tmp_path, capsys):
                  "creep_force=10", "--target", "contact_angle=10", "--quiet"]) == 0
     assert "nothing exceeds the targets; unchanged" in capsys.readouterr().out
     assert {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()} == before
+
+
+def test_a_check_needs_a_complete_table_and_a_method_its_axes_fit(checked, tmp_path,
+                                                                   capsys):
+    """`table check` refuses a store not complete (its points not computed would be
+    compared as zero forces), as `refine` does; `table build --check N --method cubic` on
+    axes too short for it is refused before anything is built (after the build before)."""
+    import zarr
+
+    spec_path, out = checked
+    partial = tmp_path / "partial.zarr"
+    shutil.copytree(out, partial)
+    zarr.open_group(str(partial), mode="r+").attrs["complete"] = 0
+    assert main(["table", "check", str(partial), "4", "--workers", "0"]) == 2
+    assert "the table is not complete" in capsys.readouterr().err
+    fresh = tmp_path / "never.zarr"
+    assert main(["table", "build", str(spec_path), "-o", str(fresh), "--check", "3",
+                 "--method", "cubic", "--workers", "1", "--quiet"]) == 2
+    assert "cubic interpolation needs at least 4 nodes" in capsys.readouterr().err
+    assert not fresh.exists()

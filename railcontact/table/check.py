@@ -48,6 +48,7 @@ from ..errors import RailContactError
 from .interpolate import METHODS, ContactTable
 from .solve import solve_recovering
 from .spec import AXES, case_with
+from .store import read_table
 from .variables import FAILED, NO_CONTACT, OK
 
 GROUP = "check"
@@ -450,20 +451,30 @@ def check_text(path: str | Path) -> list[str]:
     return lines
 
 
+def check_method_fits(axes: dict[str, np.ndarray], method: str) -> None:
+    """Raise a :class:`RailContactError` for an interpolation ``method`` unknown, or one
+    the table's ``axes`` (name -> nodes) are too short for (cubic: 4 nodes an axis)."""
+    if method not in METHODS:
+        raise RailContactError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    short = [f"{n} ({len(v)})" for n, v in axes.items() if len(v) < 4]
+    if method == "cubic" and short:
+        raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
+                               f"{', '.join(short)}; check method 'linear'")
+
+
 def check_table(path: str | Path, n: int, seed: int = 0, method: str = "linear",
                 client: Any = None, lost_timeout: float = LOST_TIMEOUT) -> Check:
     """Check the table at ``path`` at ``n`` random states (:func:`new_check`; on the Dask
     ``client`` when given, which may have no worker for ``lost_timeout`` seconds) and keep
     the check in the store (:func:`write_check`)."""
+    attrs, _ = read_table(path, [])
+    if not attrs.get("complete"):  # (its points not computed would read as zero forces)
+        raise RailContactError(f"{path}: the table is not complete: build it first "
+                               "(railcontact table build --resume)")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # holes: counted by the check
         table = ContactTable.open(path)
-    if method not in METHODS:
-        raise RailContactError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    short = [f"{n} ({len(v)})" for n, v in table.axes.items() if len(v) < 4]
-    if method == "cubic" and short:  # before any solve
-        raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
-                               f"{', '.join(short)}; check method 'linear'")
+    check_method_fits(table.axes, method)  # before any solve
     chk = new_check(table, n, seed, method, client, lost_timeout)
     write_check(path, chk, table.axes)
     return chk
