@@ -33,7 +33,15 @@ import numpy as np
 from ..errors import CaseError, RailContactError
 from ..status import Status
 from .spec import AXES, DEFAULT_POLICY, parse_policies
-from .store import FLANGE, IDENTITY, POLICY_ATTR, read_table, refuse_kind, wheel_flange
+from .store import (
+    FLANGE,
+    IDENTITY,
+    POLICY_ATTR,
+    damaged,
+    read_table,
+    refuse_kind,
+    wheel_flange,
+)
 from .variables import (
     NOT_COMPUTED,
     OK,
@@ -227,9 +235,8 @@ class ContactTable:
         lost = [q.name for k, q in enumerate(QUANTITIES)
                 if q.name not in missing and not np.isfinite(values[..., k][solved]).all()]
         if lost:
-            raise RailContactError(f"{path}: a damaged table store ({', '.join(lost)} not "
-                                   "finite at points solved ok: a chunk lost); build it "
-                                   "again")
+            raise damaged(path, f"{', '.join(lost)} not finite at points solved ok: a "
+                          "chunk lost")
         flange = json.loads(attrs[FLANGE]) if FLANGE in attrs else None
         policies = json.loads(attrs.get(POLICY_ATTR, "{}"))
         if isinstance(out_of_range, str):

@@ -405,17 +405,20 @@ def open_dataset(path: str | Path):
     try:  # (every chunk read here: a damaged one is this error, not a reader's traceback)
         ds = ds.load()
     except Exception as exc:  # noqa: BLE001
-        raise RailContactError(f"{p}: a damaged table store ({type(exc).__name__}: {exc}); "
-                               "build it again") from None
+        raise damaged(p, f"{type(exc).__name__}: {exc}") from None
     return ds
+
+
+def damaged(path: str | Path, why: str) -> RailContactError:
+    """The error of the damaged table store at ``path`` (``why``: what is wrong in it)."""
+    return RailContactError(f"{path}: a damaged table store ({why}); build it again")
 
 
 def require_status(path: str | Path, ds) -> None:
     """Raise a :class:`RailContactError` when the contact or geometry table ``ds`` at
     ``path`` has no ``status`` array (a damaged store)."""
     if "status" not in ds.variables:
-        raise RailContactError(f"{path}: a damaged table store (no status array); build it "
-                               "again")
+        raise damaged(path, "no status array")
 
 
 def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -446,9 +449,7 @@ def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict
         arrays = {n: group[n][...] for n in names if n in group}
         arrays["side"] = [str(x) for x in np.asarray(group["side"][...]).tolist()]
     except Exception as exc:  # noqa: BLE001 - a chunk damaged, an array lost
-        raise RailContactError(f"{p}: a damaged table store ({type(exc).__name__}: {exc}); "
-                               "build it again") from None
+        raise damaged(p, f"{type(exc).__name__}: {exc}") from None
     if "status" in names and "status" not in arrays:
-        raise RailContactError(f"{p}: a damaged table store (no status array); build it "
-                               "again")
+        raise damaged(p, "no status array")
     return attrs, arrays
