@@ -166,6 +166,23 @@ def test_warm_steps_survive_a_change_of_friction_and_rail_position():
     assert math.hypot(*a.left.creep_force) <= 0.25 * a.left.normal_force * (1 + 1e-6)
 
 
+def test_a_warm_step_at_negligible_friction_slides_without_force():
+    """A step whose friction drops to 5e-324 (a subnormal number: every bound mu p too)
+    after warm steps at 0.4: both wheels slide without creep force (Coulomb's |F| <= mu N,
+    below 1e-300 N), status ok; it was "initial_traction must be finite" (out of range),
+    the warm start's tractions scaled by NaN."""
+    kin = Kinematics(V, 0.02)
+    wc = contact()
+    for k in range(2):
+        wc.solve(rc.Pose(2e-3), loads=(Q, Q), kinematics=kin, time=k * 1e-3)
+    r = wc.solve(rc.Pose(2e-3), loads=(Q, Q), kinematics=kin, time=2e-3,
+                 friction=(5e-324, 5e-324))
+    assert r.status == OK, r.message
+    for w in r.wheels:
+        assert w.creep_force == (0.0, 0.0) and w.normal_force > 0.5 * Q
+        assert all(p.tangential.slip_area_ratio == 1.0 for p in w.patches)
+
+
 @pytest.mark.parametrize("kwargs, words", [
     ({"friction": (0.3, -0.1)}, "right friction"),
     ({"friction": (0.3,)}, "friction must be"),

@@ -463,8 +463,9 @@ def tangential_solved(patch: PatchSolution, t: TangentialResult | StripResult,
     if not (math.isfinite(fx) and math.isfinite(fy) and math.isfinite(t.spin_moment)
             and math.isfinite(t.max_traction)):
         t = not_converged(t, f"the tangential solution is not finite ({t.message})")
-    elif friction == 0.0 and type(friction) is float and patch.normal.force > 0:
-        t = _frictionless(t, patch.normal.pressure)
+    elif (type(friction) is float and patch.normal.force > 0
+          and negligible_friction(friction, patch.normal.max_pressure)):
+        t = _frictionless(t, patch.normal.pressure, friction)
     w = patch.work
     work = Work(w.normal_iterations, w.tangential_iterations + t.iterations, w.load_passes,
                 w.remeshes, w.seconds + seconds)
@@ -482,6 +483,9 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
     res = patch.normal
     creepage = settings.creepage if creepage is None else tuple(creepage)
     model, estimate = settings.model, settings.estimate
+    if (not isinstance(friction, PatchFriction)
+            and negligible_friction(reference, res.max_pressure)):
+        friction = reference = 0.0  # (solved as mu = 0: no NaN of subnormal bounds)
     p0, st0 = previous if previous is not None else (None, None)
     # The simplified models work on the Hertz ellipse that carries the BEM's normal force
     # (not needed when the BEM starts from a given traction).
@@ -520,14 +524,33 @@ def _tangential(patch: PatchSolution, settings: TangentialSettings, pair: Elasti
         embed=None if window is None else (res.grid, window))
 
 
-def _frictionless(t: TangentialResult, pressure: np.ndarray) -> TangentialResult:
+NEGLIGIBLE_BOUND = 2.0**-970
+"""The largest traction bound mu p [Pa] (about 1e-292) below which a contact is solved
+without friction (:func:`negligible_friction`): from it, every bound of an element whose
+pressure is within 2**52 of the largest is a normal floating-point number; below it the
+bounds are subnormal numbers of a few bits, on which the solvers' arithmetic gives NaN."""
+
+
+def negligible_friction(friction: float, max_pressure: float) -> bool:
+    """Whether a contact whose largest pressure is ``max_pressure`` [Pa] has no friction to
+    speak of: ``friction`` mu [-] is 0, or its largest traction bound ``mu p`` is below
+    :data:`NEGLIGIBLE_BOUND` (the creep force it could carry is below 1e-290 N). Such a
+    contact is solved with mu = 0: zero traction, the whole contact slides."""
+    return friction == 0.0 or 0.0 < friction * max_pressure < NEGLIGIBLE_BOUND
+
+
+def _frictionless(t: TangentialResult, pressure: np.ndarray,
+                  friction: float) -> TangentialResult:
     """The tangential solution ``t`` of a contact (its ``pressure`` [Pa], on ``t``'s grid)
-    without friction: the BEM solvers, whose traction bound mu p is zero everywhere, see no
-    element in contact; the whole contact slides with zero traction."""
+    solved without friction (``friction`` mu [-] the case's, :func:`negligible_friction`):
+    the BEM solvers, whose traction bound mu p is zero everywhere, see no element in
+    contact; the whole contact slides with zero traction."""
     if pressure.shape != t.state.shape:
         return t
+    why = "mu = 0" if friction == 0.0 else (f"mu = {friction:.3g}: mu p below "
+                                            f"{NEGLIGIBLE_BOUND:.3g} Pa")
     return replace(t, state=np.where(pressure > 0, SLIP, EXTERIOR).astype(t.state.dtype),
-                   slip_area_ratio=1.0, message="no friction (mu = 0): zero traction, the "
+                   slip_area_ratio=1.0, message=f"no friction ({why}): zero traction, the "
                    "whole contact slides")
 
 

@@ -446,13 +446,20 @@ measures form as they are; beyond it they are scaled (:attr:`SweepProblem.measur
 bound of 1e-170 Pa made every change square to 0, and a sweep "converged" at once."""
 
 
+MAX_MEASURE_EXPONENT = 1000
+"""The largest power of two (2**1000) a measure scales by: the bounds below 2**-1000 Pa are
+subnormal numbers (friction near 1e-300 and below), which it brings to 2**-75 and above."""
+
+
 def _measure(largest_bound):
     """:attr:`SweepProblem.measure` for the largest traction bound [Pa] (also compiled, in
     the compiled solves)."""
     lo, hi = MEASURED_RANGE
     if lo <= largest_bound <= hi or not (0.0 < largest_bound < math.inf):
         return 1.0
-    return math.ldexp(1.0, -math.frexp(largest_bound)[1])
+    # (a subnormal bound, below 2**-1022: the power of two that brings it near 1 would
+    # overflow; 2**1000 brings it above 2**-75, whose squares are still normal numbers)
+    return math.ldexp(1.0, min(-math.frexp(largest_bound)[1], MAX_MEASURE_EXPONENT))
 
 
 def _floor_above(contact_count, largest_bound, measure):

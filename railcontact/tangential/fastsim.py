@@ -135,6 +135,10 @@ def fastsim(
     flex = tuple(check_positive(f"L{i + 1}", v, "m/Pa") for i, v in enumerate(flexibility))
     check_samples(strips, "pressure", pressure)
     pn = np.asarray(pressure, dtype=float)
+    if mu == 0.0:  # (the march tells the contact by its bound mu p > 0: none without mu)
+        return summarise(strips, np.zeros((2, *pn.shape)),
+                         np.where(pn > 0, SLIP, EXTERIOR).astype(np.int8), pn,
+                         "FASTSIM: no friction", t0)
     traction, state = _march(strips, mu * pn, cr, flex)
     return summarise(strips, traction, state, pn, "FASTSIM", t0)
 

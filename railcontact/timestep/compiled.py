@@ -45,6 +45,7 @@ from ..contact.patch import (
     check_operator_memory,
     contact_window,
     make_grid,
+    negligible_friction,
     tangential_solved,
 )
 from ..contact.results import PatchSolution
@@ -171,6 +172,8 @@ def warm_tangential(patch: PatchSolution, settings: TangentialSettings, pair: El
     tr, st, o = memory.traction, memory.state, memory.older
     if not (ENABLED and settings.solver == "steadygs" and settings.model == "bem"
             and type(friction) is float and 0.0 <= friction < math.inf
+            and (friction == 0.0
+                 or not negligible_friction(friction, patch.normal.max_pressure))
             and _steady_solve_c is not None and factor > 0 and o is not None
             and tr is not None and rate is not None and rate.shape == tr.shape
             and tr.ndim == 3 and st is not None and st.dtype == np.int8 and st.ndim == 2
