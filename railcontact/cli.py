@@ -132,7 +132,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                 print(f"plot written to {out}")
         if not sol.converged:
             outcomes.add(1)
-        if not contact:
+        if not contact and sol.converged:  # (else its message says why, and it exits 1)
             unplotted = "; no figure written" if args.plot and not sol.patches else ""
             print(f"railcontact: warning: {case}: no contact (zero load, a load below "
                   f"{MIN_LOAD:g} N, or a penetration below the gap): nothing was "

@@ -513,6 +513,15 @@ def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("railcontact: warning: ") and "nothing was solved" in err
     assert main(["solve", str(case), "missing.toml"]) == 2  # an error outranks no contact
+    # a contact between the element centres (2 x 2 elements) is under-resolved: exit 1,
+    # its message says so, and no warning of "no contact"
+    capsys.readouterr()
+    case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = '
+                    '"quadratic"\nA = 1.0\nB = 5.0\n[normal]\npenetration = 1e-4\n'
+                    '[grid]\nnx = 2\nny = 2\nx = [-0.03, 0.03]\ny = [-0.0134, 0.0134]\n')
+    assert main(["solve", str(case)]) == 1
+    out, err = capsys.readouterr()
+    assert "falls between the element centres" in out and "warning" not in err
     case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = '
                     '"wheel-rail"\n[normal]\nload = 0.0\n')  # (a wheel: no patch at all)
     png = tmp_path / "zero.png"  # no patch to draw: said, not an IndexError

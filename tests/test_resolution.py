@@ -67,6 +67,32 @@ def test_under_resolved_patch_is_far_off_hertz_and_not_converged(per_axis):
     assert "use smaller elements" in n.message
 
 
+def test_a_contact_between_the_element_centres_is_under_resolved_not_absent():
+    """Under penetration control a quadratic gap always has a contact (Hertz's ellipse,
+    semi-axes sqrt(delta / A), sqrt(delta / B)); on 2 x 2 elements wider than twice those
+    semi-axes no element centre lies inside it, so the grid sees no overlap. That is an
+    under-resolved patch (not converged, exit 1, the message says to use smaller
+    elements), not "no contact" with exit 3 and "a penetration below the gap"."""
+    delta = 1e-4
+    a, b = math.sqrt(delta / 1.0), math.sqrt(delta / 5.0)
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "quadratic", "A": 1.0, "B": 5.0},
+            "normal": {"penetration": delta},
+            "grid": {"nx": 2, "ny": 2, "x": [-3 * a, 3 * a], "y": [-3 * b, 3 * b]}}
+    n = solve(case).patches[0].normal
+    assert n.grid.dx / 2 > a and n.grid.dy / 2 > b  # (the centres outside the ellipse)
+    assert n.force == 0.0 and not n.converged
+    assert n.message.startswith("under-resolved patch: its contact falls between the "
+                                "element centres") and "use smaller elements" in n.message
+    # the smallest gap at a centre, A (dx/2)^2 + B (dy/2)^2, named
+    least = 1.0 * (n.grid.dx / 2) ** 2 + 5.0 * (n.grid.dy / 2) ** 2
+    assert f"{least * 1e3:.3g} mm" in n.message
+    # a potential area that leaves the origin out has no contact, as before
+    case["grid"].update(x=[a, 3 * a])
+    n = solve(case).patches[0].normal
+    assert n.force == 0.0 and n.converged and n.message.startswith("no contact")
+
+
 @pytest.mark.parametrize("per_axis", [5, 8])
 def test_resolved_patch_is_within_a_few_percent_of_hertz(per_axis):
     case = quadratic_case(per_axis)

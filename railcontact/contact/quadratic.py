@@ -13,6 +13,7 @@ from ..halfspace.hertz import hertz
 from ..settings import Case, QuadraticGeometry
 from .patch import (
     normal_estimate,
+    not_converged,
     potential_area,
     solve_patch_normal,
     solve_patch_tangential,
@@ -48,9 +49,30 @@ def solve_quadratic(case: Case) -> PatchSolution:
     res, work = solve_patch_normal(gap_of, bounds, grid_settings, settings, pair, control, est,
                                    grid_settings.automatic, profiles=False)
     work = replace(work, seconds=time.perf_counter() - t0)  # the estimate's set-up included
+    if res.force == 0 and res.converged and not control.by_load and res.gap.size:
+        res = _between_centres(res, control.penetration, bounds)
     patch = PatchSolution(normal=res, hertz=hz, estimate=est.label, curvatures=(A, B),
                           work=work, start=est)
     if case.tangential is not None and res.force > 0:
         patch = with_frictional_power(
             solve_patch_tangential(patch, case.tangential, pair, settings.fft))
     return patch
+
+
+def _between_centres(res, penetration: float, bounds: tuple[float, float, float, float]):
+    """The normal result ``res`` of a quadratic case under ``penetration`` [m] with no
+    element in contact, marked not converged when the contact is there but falls between
+    the element centres: the gap's least value, 0 at the origin, lies inside the potential
+    area ``bounds`` [m] and below the penetration, yet every element centre's gap is above
+    it (a grid too coarse for the contact ellipse, e.g. 2 x 2 elements with none at the
+    centre). A potential area that leaves the origin out has no contact: ``res``
+    unchanged."""
+    x0, x1, y0, y1 = bounds
+    if not (penetration > 0 and x0 < 0.0 < x1 and y0 < 0.0 < y1):
+        return res
+    grid = res.grid
+    return not_converged(res, (
+        "under-resolved patch: its contact falls between the element centres (the smallest "
+        f"gap at one, {(float(res.gap.min()) + penetration) * 1e3:.3g} mm, is above the "
+        f"penetration {penetration * 1e3:.3g} mm), elements of {grid.dx * 1e3:.3g} x "
+        f"{grid.dy * 1e3:.3g} mm; use smaller elements"))
