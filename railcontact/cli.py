@@ -126,10 +126,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         else:
             print(f"== {case}\n{_summary(sol)}" if several else _summary(sol))
         contact = any(p.normal.force > 0 for p in sol.patches)
-        if args.plot and sol.patches:
-            out = plot_solution(sol, args.plot)
-            if not args.json:
-                print(f"plot written to {out}")
+        if args.plot:  # (one figure per patch: both sides, tread and flange)
+            for k in range(len(sol.patches)):
+                out = plot_solution(sol, args.plot, patch=k)
+                if not args.json:
+                    print(f"plot written to {out}")
         if not sol.converged:
             outcomes.add(1)
         if not contact and sol.converged:  # (else its message says why, and it exits 1)
@@ -523,7 +524,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("case", nargs="+", help="case file(s) (TOML, SI units)")
     s.add_argument("--json", action="store_true", help="print the result as JSON (several "
                    "files: one object per line)")
-    s.add_argument("--plot", metavar="FILE", help="write the patch/pressure figure to FILE")
+    s.add_argument("--plot", metavar="FILE",
+                   help="write the patch/pressure figure to FILE (patch K >= 1 of a case "
+                   "with several: FILE-patchK beside it)")
     s.set_defaults(func=_cmd_solve)
     st = sub.add_parser("settings", help="print every setting (case-file keys, time-step and "
                         "FMU settings) with default, unit and allowed values (Markdown)")

@@ -109,6 +109,27 @@ def test_cli_json_and_plot(root, tmp_path):
     assert png.stat().st_size > 10_000
 
 
+def test_cli_plot_draws_every_patch(root, tmp_path, capsys):
+    """A case with two patches (``side = "both"``: one per wheel) has a figure for each:
+    patch 0 in the file given, patch 1 beside it; each figure names its patch and wheel
+    (only patch 0 was drawn)."""
+    from railcontact.cli import main
+
+    text = (root / "models/cases/s1002_60e1_dy-2mm.toml").read_text()
+    for old, new in (('side = "left"', 'side = "both"'), ("nx = 64", "nx = 16"),
+                     ("ny = 64", "ny = 16")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "both.toml"
+    path.write_text(text)
+    png = tmp_path / "both.png"
+    assert main(["solve", str(path), "--plot", str(png)]) in (0, 1)
+    out = capsys.readouterr().out
+    second = tmp_path / "both-patch1.png"
+    assert png.stat().st_size > 10_000 and second.stat().st_size > 10_000
+    assert f"plot written to {png}" in out and f"plot written to {second}" in out
+
+
 def test_cli_errors_are_one_line(tmp_path):
     r = run_cli("solve", str(tmp_path / "missing.toml"))
     assert r.returncode == 2

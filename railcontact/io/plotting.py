@@ -125,9 +125,15 @@ def plot_solution(solution: Solution, path: str | Path, patch: int = 0) -> Path:
     solution
         A solved case.
     path
-        Output image file (format from the extension, e.g. ``.png``, ``.pdf``).
+        Output image file (format from the extension, e.g. ``.png``, ``.pdf``); patch K >= 1
+        is drawn to ``NAME-patchK.EXT`` beside it (:func:`patch_plot_path`).
     patch
         Index of the patch to draw.
+
+    Returns
+    -------
+    Path
+        The file written.
     """
     plt = _pyplot()
     ps = solution.patches[patch]
@@ -138,13 +144,24 @@ def plot_solution(solution: Solution, path: str | Path, patch: int = 0) -> Path:
         fig, axes = plt.subplots(2, 2, figsize=(12, 8.5), constrained_layout=True)
         _pressure_panels(fig, axes[0, 0], axes[0, 1], ps)
         _traction_panels(fig, axes[1, 0], axes[1, 1], solution, ps)
+    if len(solution.patches) > 1:  # (which one this is: each patch has its own figure)
+        side = "" if ps.geometry is None else f", {ps.geometry.side} wheel"
+        fig.suptitle(f"patch {patch} of {len(solution.patches)}{side}", fontsize=11)
     # (room between the columns: the colour bar's label beside the right panel's axis label)
     fig.get_layout_engine().set(wspace=0.08)
-    out = plot_path(path)
+    out = patch_plot_path(path, patch)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
     plt.close(fig)
     return out
+
+
+def patch_plot_path(path: str | Path, patch: int) -> Path:
+    """The file of patch ``patch``'s figure for ``path`` (:func:`plot_path`): ``path``
+    itself for patch 0, ``NAME-patchK.EXT`` beside it for patch K >= 1 (a case with
+    several patches: two sides, or tread and flange)."""
+    out = plot_path(path)
+    return out if patch == 0 else out.with_name(f"{out.stem}-patch{patch}{out.suffix}")
 
 
 def plot_path(path: str | Path) -> Path:
