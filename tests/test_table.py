@@ -403,6 +403,28 @@ def test_bad_axes(entry, match):
     assert parse_spec(ok).shape == (3, 2, 2)
 
 
+@pytest.mark.parametrize("axis, entry, match", [
+    ("creepage_y", "[0.0, 2000.0, 2]",
+     r"\[table\] creepage_y must be >= -1000 and <= 1000, got 2000"),
+    ("creepage_x", "{ values = [-1500.0, 0.0] }",
+     r"\[table\] creepage_x must be .* got -1500"),
+    ("spin", "[0.0, 1e4, 2]", r"\[table\] spin must be .* got 10000"),
+    ("load", "[60e3, 2e8, 2]", r"\[table\] load \[N\] must be .* got 2e\+08"),
+])
+def test_axis_nodes_beyond_their_settings_bounds_are_refused(axis, entry, match):
+    """A node beyond the bounds its setting takes in a case (creepages within +-1000, a
+    load up to 1e8 N) is refused up front, as a friction above 10 was; such points were
+    built as holes (status out of range) of a table that said it was complete."""
+    from railcontact.errors import CaseError
+    from railcontact.table import parse_spec
+    from railcontact.table.spec import tomllib
+
+    text = SPEC.replace("creepage_y = [0.0, 0.002, 2]\n", "")
+    text = text.replace("load = [60e3, 80e3, 2]\n", "") + f"{axis} = {entry}\n"
+    with pytest.raises(CaseError, match=match):
+        parse_spec(tomllib.loads(text))
+
+
 @pytest.fixture(scope="module")
 def table_fmu(tmp_path_factory):
     """The FMU (built once for this module), its model description and unzipped folder."""

@@ -147,6 +147,13 @@ class Record:
         return cls._validate(key, spec_of(f), value, where)
 
     @classmethod
+    def check_item(cls, key: str, value: Any, where: str) -> float:
+        """One number ``value`` of the sequence field ``key`` (e.g. one creepage of
+        ``creepage``) checked against the field's bounds, named ``where`` in a message."""
+        f = next(f for f in fields(cls) if f.name == key)  # type: ignore[arg-type]
+        return cls._number(where, "", spec_of(f), value)
+
+    @classmethod
     def _validate(cls, key: str, spec: Spec, value: Any, where: str | None = None) -> Any:
         where = where or cls._where(key)
         unit = spec.unit if spec.unit != "-" else ""

@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import CaseError
 from ..settings import Case, TangentialSettings
+from ..settings.case import NormalSettings, WheelRailGeometry
 from .variables import QUANTITIES
 
 if sys.version_info >= (3, 11):
@@ -73,6 +74,9 @@ AXES: dict[str, Axis] = {
     "friction": Axis("tangential", "friction", None, "1", "coefficient of friction mu"),
 }
 """The axes a table may have."""
+_SETTINGS = {"geometry": WheelRailGeometry, "tangential": TangentialSettings,
+             "normal": NormalSettings}
+"""The settings record each axis's table names (:attr:`Axis.table`)."""
 CREEPAGE_AXES = ("creepage_x", "creepage_y", "spin")
 """The axes of a wheel's creepages (in its side frame)."""
 OTHER_AXES: dict[str, Axis] = {
@@ -358,9 +362,10 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
         raise CaseError("[tangential] friction: a contact table takes one coefficient of "
                         "friction (a number); a friction table across the profile is for "
                         "railcontact solve and the exact step")
+    for n in names:  # (each node within its setting's bounds, as a case's value is)
+        check_axis_values(n, axes[n])
     if "friction" in names:
         for mu in axes["friction"]:
-            TangentialSettings.check_value("friction", float(mu), "[table] friction")
             if not mu > 0.0:
                 raise CaseError(f"[table] friction: each coefficient of friction must be "
                                 f"above 0, got {mu:g}")
@@ -380,6 +385,25 @@ def parse_spec(raw: dict[str, Any]) -> TableSpec:
         raise CaseError(f"[table] batch must be an integer >= 1, got {batch!r}")
     return TableSpec(case=d, axes=axes, sides=sides, batch=min(batch, shape[-1]),
                      out_of_range=parse_policies(table.get("out_of_range"), names))
+
+
+def check_axis_values(name: str, values: np.ndarray) -> None:
+    """Refuse a node of the axis ``name`` beyond the bounds of the setting it sets (a
+    creepage beyond +-1000, a load above 1e8 N, a friction above 10: the points there
+    would be built as holes, status out of range).
+
+    Raises
+    ------
+    CaseError
+        Naming the axis, the bounds and the node.
+    """
+    axis = AXES[name]
+    settings = _SETTINGS[axis.table]
+    for v in values:
+        if axis.index is None:
+            settings.check_value(axis.key, float(v), f"[table] {name}")
+        else:
+            settings.check_item(axis.key, float(v), f"[table] {name}")
 
 
 def parse_policies(value: Any, names: list[str] | tuple[str, ...]) -> dict[str, str]:
