@@ -237,7 +237,7 @@ def _add_demo(sub) -> None:
                    help="a bogie passenger vehicle (Manchester benchmark Vehicle 1: car body, "
                    "two bogies, four wheelsets), its contact from an FMU of four wheelsets "
                    "(--contact); --quick: "
-                   "0.3 s, 2 ms steps, 1.5 mm elements (defaults 1 s, 1 ms, 1 mm)")
+                   "0.5 s, 2 ms steps, 1.5 mm elements (defaults 1 s, 1 ms, 1 mm)")
     d.add_argument("--contact", default="fmu", choices=("fmu", "in-process"),
                    help="--vehicle: the wheelsets' contact: fmu, the FMU of --fmu run by "
                    "fmpy; in-process, four WheelsetContacts in this process (default: fmu)")
