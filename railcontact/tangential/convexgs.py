@@ -447,8 +447,9 @@ bound of 1e-170 Pa made every change square to 0, and a sweep "converged" at onc
 
 
 MAX_MEASURE_EXPONENT = 1000
-"""The largest power of two (2**1000) a measure scales by: the bounds below 2**-1000 Pa are
-subnormal numbers (friction near 1e-300 and below), which it brings to 2**-75 and above."""
+"""The largest power of two (2**1000) a measure scales by: a largest bound below 2**-1000 Pa
+(friction near 1e-300 and below; subnormal numbers from 2**-1022 down to 2**-1074) is
+brought to 2**-74 and above, not scaled by a power of two that overflows."""
 
 
 def _measure(largest_bound):
@@ -458,7 +459,7 @@ def _measure(largest_bound):
     if lo <= largest_bound <= hi or not (0.0 < largest_bound < math.inf):
         return 1.0
     # (a subnormal bound, below 2**-1022: the power of two that brings it near 1 would
-    # overflow; 2**1000 brings it above 2**-75, whose squares are still normal numbers)
+    # overflow; 2**1000 brings it to 2**-74 and above, whose squares are normal numbers)
     return math.ldexp(1.0, min(-math.frexp(largest_bound)[1], MAX_MEASURE_EXPONENT))
 
 

@@ -25,7 +25,9 @@ small enough for a dense product or no FFTW C interface. A solution the patch so
 would not keep as it is (its contact at the edge of its area, a place of the overlap
 beyond the grid that could touch) is handed on with what the check found, and the solver
 goes on from it.
-The tangential stage: ConvexGS or a simplified model, a patch without a remembered
+The tangential stage: ConvexGS or a simplified model, a friction so small that the patch
+is solved without it (:func:`~railcontact.contact.patch.negligible_friction`), a patch
+without a remembered
 traction rate or older step (the first warm steps; a later load pass of a step, which
 starts from the pass before), zero creepage, a start off the grid's lattice, a window
 small enough for a dense product or no FFTW C interface.
