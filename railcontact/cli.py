@@ -36,7 +36,8 @@ def _summary(sol) -> str:
     for k, ps in enumerate(sol.patches):
         n = ps.normal
         g = n.grid
-        lines.append(f"patch {k}: BEM normal contact on {g.nx} x {g.ny} elements "
+        what = "BEM normal contact" if n.force > 0 else "no element in contact"
+        lines.append(f"patch {k}: {what} on {g.nx} x {g.ny} elements "
                      f"({g.dx * 1e3:.4g} x {g.dy * 1e3:.4g} mm), estimate '{ps.estimate}'")
         if ps.geometry is not None:
             cp = ps.geometry

@@ -510,8 +510,9 @@ def test_nothing_solved_is_a_warning_and_exit_3(tmp_path, capsys):
     case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\ntype = "quadratic"'
                     '\nA = 1.0\nB = 5.0\n[normal]\nload = 0.0\n')
     assert main(["solve", str(case)]) == 3
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert err.startswith("railcontact: warning: ") and "nothing was solved" in err
+    assert "patch 0: no element in contact on" in out  # (not "BEM normal contact on")
     assert main(["solve", str(case), "missing.toml"]) == 2  # an error outranks no contact
     # a contact between the element centres (2 x 2 elements) is under-resolved: exit 1,
     # its message says so, and no warning of "no contact"
