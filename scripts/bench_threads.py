@@ -28,12 +28,19 @@ threaded way each is a thread put to sleep waiting for the GIL, i.e. a hand-over
 between the threads that had to wake the other one.
 
 Where the time under the GIL remains: ``--profile`` runs trajectory A on one thread with
-every compiled kernel of the package (numba, ``nogil=True``) and every DC-FFT product
+every compiled kernel of the package that releases the GIL (numba's ``nogil=True``; the
+short ones that keep it count as holding it) and every DC-FFT product
 (FFTW's executes between compiled packing and spectral kernels) timed, and prints the
 share of the step time that runs without the GIL, per kernel, and the ratio two threads
 could reach at best on two free cores, ``max(0.5, 1 - share)`` (the GIL-holding rest of
 the two runs cannot overlap). numpy's own loops, which release the GIL on large arrays,
 count as holding it here.
+
+Where a step holds it: ``--timeline`` runs trajectory A on one thread with every compiled
+call logged in order (those that keep the GIL too) and prints the most common step's
+sequence - the Python before each call, the call and whether it releases the GIL - with
+the time a step holds the GIL and the stretches it holds it for between two GIL-free calls
+(while one thread holds the GIL, the other, its GIL-free call done, waits).
 
 What the shape of a step allows: ``--synthetic PYTHON_US,KERNEL_US,CALLS`` runs, instead
 of the wheelsets, two threads whose steps have the same shape - ``CALLS`` GIL-free calls of
@@ -54,7 +61,7 @@ taking the GIL, as at a GIL hand-over between two stepping wheelsets. On a virtu
 whose idle cores halt (Linux's cpuidle ``haltpoll`` with ``guest_halt_poll_ns`` 0, printed
 when present) a core that waited longer wakes slower.
 
-Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile]
+Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile | --timeline]
                                       [--switch-interval SECONDS]
                                       [--synthetic PYTHON_US,KERNEL_US,CALLS |
                                        --synthetic P1:K1,P2:K2,... | --handoff]
@@ -204,7 +211,10 @@ class NogilTimer:
 
     PACKAGES = ("contact", "geometry", "halfspace", "normal", "tangential", "timestep")
 
-    def __init__(self) -> None:
+    def __init__(self, every: bool = False) -> None:
+        self.every = every
+        """Wrap the kernels that keep the GIL too (``nogil`` not set), not only those
+        that release it."""
         self.seconds: dict[str, float] = defaultdict(float)
         self.calls: dict[str, int] = defaultdict(int)
         self._depth = 0
@@ -225,8 +235,9 @@ class NogilTimer:
         return timed
 
     def install(self) -> None:
-        """Wrap every numba dispatcher in the package's modules' globals (compiled
-        already: run the same work once before) and the FFT plans' products."""
+        """Wrap every numba dispatcher in the package's modules' globals that releases the
+        GIL (every one with :attr:`every`; compiled already: run the same work once
+        before) and the FFT plans' products."""
         from numba.core.registry import CPUDispatcher
 
         from railcontact.halfspace import operator
@@ -237,7 +248,8 @@ class NogilTimer:
                 continue
             module = importlib.import_module(info.name)
             for attr, value in list(vars(module).items()):
-                if isinstance(value, CPUDispatcher):
+                if isinstance(value, CPUDispatcher) and (
+                        value.targetoptions.get("nogil") or self.every):
                     if id(value) not in wrapped:
                         wrapped[id(value)] = self.wrap(value.__name__, value)
                     self._saved.append((module, attr, value))
@@ -283,6 +295,98 @@ def profile(steps: int) -> None:
     for name, s in sorted(timer.seconds.items(), key=lambda kv: -kv[1])[:20]:
         n = timer.calls[name]
         print(f"{name:<40} {s / total:6.1%} {n / steps:10.1f} {s / n * 1e6:8.1f}")
+
+
+class CallLog(NogilTimer):
+    """Every compiled kernel of the package (those that keep the GIL too) and every
+    DC-FFT product of one thread, logged in order: ``(name, start, end, gil_free)``
+    (:func:`time.perf_counter`, outermost calls only)."""
+
+    def __init__(self) -> None:
+        super().__init__(every=True)
+        self.calls_log: list[tuple[str, float, float, bool]] = []
+
+    def wrap(self, name: str, fn):
+        free = bool(getattr(fn, "targetoptions", {"nogil": True}).get("nogil"))
+        log = self.calls_log
+
+        def logged(*args, **kwargs):
+            if self._depth:
+                return fn(*args, **kwargs)
+            self._depth += 1
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                log.append((name, t0, time.perf_counter(), free))
+                self._depth -= 1
+        return logged
+
+
+def timeline(steps: int) -> None:
+    """Trajectory A on this thread, every compiled call of each step logged; prints the
+    most common step's sequence: the Python before each call (with the compiled calls
+    that keep the GIL, the time a step holds the GIL), each call and whether it releases
+    the GIL, medians over the steps of that sequence."""
+    run("A", steps)  # compiled, planned
+    log = CallLog()
+    bounds: list[tuple[float, float]] = []
+    solve = rc.WheelsetContact.solve
+
+    def marked(self, *args, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            return solve(self, *args, **kwargs)
+        finally:
+            bounds.append((t0, time.perf_counter()))
+
+    rc.WheelsetContact.solve = marked
+    try:
+        with log.installed():
+            run("A", steps)
+    finally:
+        rc.WheelsetContact.solve = solve
+    patterns: dict[tuple, list] = defaultdict(list)
+    calls, i = log.calls_log, 0
+    for s0, s1 in bounds[1:]:  # (the first step is cold)
+        while i < len(calls) and calls[i][1] < s0:
+            i += 1
+        seq, last = [], s0
+        while i < len(calls) and calls[i][2] <= s1:
+            name, a, b, free = calls[i]
+            seq.append((name, free, a - last, b - a))
+            last, i = b, i + 1
+        seq.append(("(end of step)", False, s1 - last, 0.0))
+        patterns[tuple((n, f) for n, f, _, _ in seq)].append(seq)
+    key, runs = max(patterns.items(), key=lambda kv: len(kv[1]))
+    med = [(name, free, float(np.median([r[k][2] for r in runs])) * 1e6,
+            float(np.median([r[k][3] for r in runs])) * 1e6)
+           for k, (name, free) in enumerate(key)]
+    print(f"trajectory A, {steps} steps on one thread: {len(runs)} of {len(bounds) - 1} "
+          f"warm steps run this sequence (medians over them, us)")
+    print(f"{'Python before':>13}  {'call':<28} {'GIL':<5} {'us':>7}")
+    held = free_us = 0.0
+    stretch, stretches = 0.0, []
+    for name, free, python_us, call_us in med:
+        if name != "(end of step)":
+            print(f"{python_us:13.1f}  {name:<28} {'free' if free else 'held':<5} "
+                  f"{call_us:7.1f}")
+        else:
+            print(f"{python_us:13.1f}  {name}")
+        held += python_us + (0.0 if free else call_us)
+        stretch += python_us + (0.0 if free else call_us)
+        if free:
+            free_us += call_us
+            stretches.append(stretch)
+            stretch = 0.0
+    stretches[0] += stretch  # (the end of a step runs on into the next one's start)
+    total = held + free_us
+    print(f"a step: {total:.0f} us, {held:.0f} us holding the GIL ({held / total:.1%}: "
+          f"Python and the compiled calls that keep it), {free_us:.0f} us without it in "
+          f"{len(stretches)} calls")
+    print("the GIL held between two GIL-free calls (a step's stretches, the first one "
+          "from the end of the step before), us: "
+          + ", ".join(f"{x:.0f}" for x in stretches))
 
 
 def _synthetic_kernel():
@@ -437,6 +541,9 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--profile", action="store_true", help="time the GIL-free calls of "
                     "one run instead (where the time under the GIL remains)")
+    ap.add_argument("--timeline", action="store_true", help="the sequence of one step "
+                    "instead: the Python before each compiled call, each call, whether it "
+                    "releases the GIL")
     ap.add_argument("--switch-interval", type=float, default=None, help="sys."
                     "setswitchinterval [s] for the run (Python's default: 0.005)")
     ap.add_argument("--synthetic", metavar="PYTHON_US,KERNEL_US,CALLS", default=None,
@@ -455,6 +562,9 @@ def main() -> None:
         sys.setswitchinterval(args.switch_interval)
     if args.profile:
         profile(args.steps)
+        return
+    if args.timeline:
+        timeline(args.steps)
         return
     workers = [Worker("wheelset-1"), Worker("wheelset-2")]
     try:
