@@ -180,6 +180,52 @@ def test_fastrip_pure_creepage_is_carter_on_every_strip():
     assert np.ptp(slip_len) < 2.5 * np.max(np.diff(x, axis=1))
 
 
+@pytest.mark.parametrize("ab", [1.0, 0.346, 2.89])
+def test_fastrip_linear_limit_is_kalkers(ab):
+    """FaStrip's scaled creepages make strip theory reproduce Kalker's linear theory:
+    at a small creepage F_x = -G a b C11 xi and F_y = -G a b C22 eta (Kalker's table,
+    interpolated in a/b). On the default 40 x 40 strips the samples carry the strips'
+    exact integrals (the midpoint rule in y leaves about 0.1 %); values at the cells'
+    midpoints miss the adhesion traction's peak next to the slip zone, 6 % low."""
+    a, b = 6e-3 * math.sqrt(ab), 6e-3 / math.sqrt(ab)
+    c = creep_coefficients(a, b, STEEL.poisson)
+    g_ab = STEEL.shear * a * b
+    for creepage, force, coefficient in (((1e-6, 0, 0), 0, c.c11), ((0, 1e-6, 0), 1, c.c22)):
+        r = fastrip_hertz(a, b, 1e4, STEEL, 0.4, creepage)
+        assert -r.force[force] / (g_ab * 1e-6) == pytest.approx(coefficient, rel=3e-3)
+        assert abs(r.force[1 - force]) < 1e-9 * abs(r.force[force])
+
+
+def test_fastrip_pure_creepage_force_is_the_strips_integral():
+    """For pure xi every strip of the Hertz ellipse is Carter's, with the same slip zone
+    length 2d (``d = a |xi'| / (1 - nu)``): its force is ``mu p0 pi / (2a) (a_y^2 -
+    (a_y - d)^2)``, ``mu p0 pi a_y^2 / (2a)`` when it slides. Their integral across the
+    patch (scipy's quad) is FaStrip's continuum force; the 40 x 40 samples carry it within
+    1 % from the linear range to full slip (Polach's Eurosprinter patch, CONTACT's
+    tractcurv example), 200 x 200 within 0.1 %."""
+    from scipy.integrate import quad
+
+    a, b, load, mu = 6.304e-3, 12.61e-3, 106.7e3, 0.33
+    c = creep_coefficients(a, b, CONTACT_G.poisson)
+    nu, g = CONTACT_G.poisson, CONTACT_G.shear
+    p0 = 3 * load / (2 * math.pi * a * b)
+    for xi in (1e-5, 1e-4, 3e-4, 1e-3, 3e-3):
+        d = a / (1 - nu) * g * 4 * (1 - nu) * c.c11 * xi / (2 * mu * p0 * math.pi**2)
+
+        def strip(y, d=d):
+            ay = a * math.sqrt(max(1 - (y / b) ** 2, 0.0))
+            return ay * ay - (ay - d) ** 2 if d < ay else ay * ay
+
+        kink = b * math.sqrt(max(0.0, 1 - (d / a) ** 2))
+        exact = -mu * p0 * math.pi / (2 * a) * quad(strip, -b, b, points=[-kink, kink],
+                                                     limit=200)[0]
+        coarse = fastrip_hertz(a, b, load, CONTACT_G, mu, (xi, 0, 0))
+        fine = fastrip_hertz(a, b, load, CONTACT_G, mu, (xi, 0, 0), nx=200, ny=200)
+        assert coarse.force[0] == pytest.approx(exact, rel=1e-2), xi
+        assert fine.force[0] == pytest.approx(exact, rel=1e-3), xi
+        assert np.all(np.hypot(*coarse.traction) <= mu * coarse.pressure * (1 + 1e-9))
+
+
 def test_estimates_cut_iterations(root):
     """Paper Sec. 4.2.1 (hertz_paper_rolling.toml): the paper reports 31 -> 10 sweeps with
     FaStrip. The estimates must leave the converged forces unchanged (within eps_tau)."""

@@ -136,20 +136,44 @@ def _fastrip_all(x_lo, x_hi, t, w, y, width, pn, mu, cx, cy, phi, l3, xi_, eta_,
         for k in range(pn.shape[1]):
             bound[j, k] = mu * pn[j, k]
     fs_traction, _ = _march_strips(x_lo, x_hi, t, y, bound, cx, cy, phi, phi, l3)
-    traction, state = _fastrip_strips(x_lo, x_hi, t, y, pn, mu, fs_traction, xi_, eta_,
+    traction, state = _fastrip_strips(x_lo, x_hi, t, w, y, pn, mu, fs_traction, xi_, eta_,
                                       phi_, eta2, one_phi2, d_scale, eta_phi, q_scale, a)
     return traction, state, summary(x_lo, x_hi, width, y, t, w, traction, state)
 
 
+@numba.njit(cache=True, nogil=True)
+def _arc_integral(x, c, r):  # pragma: no cover - compiled
+    """The antiderivative ``int sqrt(r^2 - (x - c)^2) dx`` at ``x`` [m^2], for the
+    circle of radius ``r`` [m] about ``c`` [m]; ``x`` beyond it is clamped to its ends."""
+    u = x - c
+    if u >= r:
+        return 0.25 * math.pi * r * r
+    if u <= -r:
+        return -0.25 * math.pi * r * r
+    return 0.5 * (u * math.sqrt(r * r - u * u) + r * r * math.asin(u / r))
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fastrip_strips(x_lo, x_hi, t, y, pn, mu, fs_traction, xi_, eta_, phi_, eta2, one_phi2,
-                    d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
-    """FaStrip's traction (2, ny, nx) [Pa] and state (ny, nx) at the samples ``t`` of the
-    strips at ``y`` [m] from ``x_lo`` to ``x_hi`` [m] (:attr:`Strips.x`), pressure ``pn``
-    [Pa], friction ``mu`` and the FASTSIM traction ``fs_traction`` (its direction in the
-    slip zone); the scaled creepages and the factors of :func:`fastrip` (``eta2 = eta'^2``,
-    ``one_phi2 = 1 - phi'^2``, ``d_scale = a/(1-nu)``, ``eta_phi = eta' phi'``,
-    ``q_scale = mu p0 / a``): numpy's operations of the formulas, element by element."""
+def _fastrip_strips(x_lo, x_hi, t, w, y, pn, mu, fs_traction, xi_, eta_, phi_, eta2,
+                    one_phi2, d_scale, eta_phi, q_scale, a):  # pragma: no cover - compiled
+    """FaStrip's traction (2, ny, nx) [Pa] and state (ny, nx) at the samples ``t`` (weights
+    ``w``) of the strips at ``y`` [m] from ``x_lo`` to ``x_hi`` [m] (:attr:`Strips.x`),
+    pressure ``pn`` [Pa], friction ``mu`` and the FASTSIM traction ``fs_traction`` (its
+    direction in the slip zone); the scaled creepages and the factors of :func:`fastrip`
+    (``eta2 = eta'^2``, ``one_phi2 = 1 - phi'^2``, ``d_scale = a/(1-nu)``,
+    ``eta_phi = eta' phi'``, ``q_scale = mu p0 / a``).
+
+    Each sample's traction is the mean over its cell of the strip (the cells of the
+    weights: sample ``k`` stands for ``[-1 + sum(w[:k]), -1 + sum(w[:k+1])]`` in ``t``),
+    so that the samples carry the strip's force as the formulas integrate it. The
+    adhesion part of a cell is integrated exactly (the two arcs' integrals,
+    :func:`_arc_integral`): the adhesion traction rises within about ``d`` of the
+    slip zone to ``mu p_n`` there, a peak the midpoint of a cell does not see (values at
+    the midpoints give the linear theory's forces 6 % low on 40 samples a strip, 2 % on
+    200). The slip part holds ``mu p_n`` at the sample in FASTSIM's direction; a cell's
+    mean is held to the bound ``mu p_n`` at its sample. A sample is in adhesion where it
+    lies in the adhesion zone and the mean of the adhesion traction over its cell's
+    adhesion part is within that bound."""
     ny, nx = pn.shape
     traction = np.zeros((2, ny, nx))
     state = np.zeros((ny, nx), dtype=np.int8)
@@ -168,25 +192,55 @@ def _fastrip_strips(x_lo, x_hi, t, y, pn, mu, fs_traction, xi_, eta_, phi_, eta2
         den = math.hypot(ex, ey)
         kappa = ex / den if den > 0 else 0.0
         lam = ey / den if den > 0 else 0.0
+        start = -ay + 2 * d  # (the adhesion zone: from it to ay)
+        edge = -1.0  # (the cell's trailing edge in t)
         for k in range(nx):
             xs = (centre + ay * t[k]) - centre  # (Strips.x: mid + half t)
-            r1 = ay * ay - xs * xs
-            r1 = math.sqrt(r1 if r1 > 0.0 or math.isnan(r1) else 0.0)
-            r2 = (ay - d) * (ay - d) - (xs - d) * (xs - d)
-            r2 = math.sqrt(r2 if r2 > 0.0 or math.isnan(r2) else 0.0)
-            qx = q_scale * (kappa * r1 - kappa * r2)
-            qy = q_scale * (lam * r1 - (lam - phi_) * r2)
+            x0 = ay * edge
+            edge = edge + w[k]
+            x1 = ay * edge
+            length = x1 - x0
+            lo = max(x0, start)
+            hi = min(x1, ay)
+            qx = qy = 0.0  # (the adhesion traction's mean over the cell's adhesion part)
+            part = 0.0  # (that part's share of the cell)
+            if not sliding and den > 0 and hi > lo and length > 0:
+                i1 = _arc_integral(hi, 0.0, ay) - _arc_integral(lo, 0.0, ay)
+                i2 = _arc_integral(hi, d, ay - d) - _arc_integral(lo, d, ay - d)
+                qx = q_scale * (kappa * i1 - kappa * i2) / (hi - lo)
+                qy = q_scale * (lam * i1 - (lam - phi_) * i2) / (hi - lo)
+                part = (hi - lo) / length
             p = pn[j, k]
             bound = mu * p
-            adhesion = (not sliding and den > 0 and xs >= -ay + 2 * d and p > 0
+            adhesion = (not sliding and den > 0 and xs >= start and p > 0 and part > 0
                         and math.hypot(qx, qy) <= bound * (1 + 1e-12))
             state[j, k] = (ADHESION if adhesion else SLIP) if p > 0 else EXTERIOR
-            if adhesion:
-                traction[0, j, k] = qx
-                traction[1, j, k] = qy
-            else:  # slip: mu p_n in the direction of the FASTSIM traction
-                fx, fy = fs_traction[0, j, k], fs_traction[1, j, k]
-                fs_mag = math.hypot(fx, fy)
-                traction[0, j, k] = bound * (fx / fs_mag if fs_mag > 0 else 0.0)
-                traction[1, j, k] = bound * (fy / fs_mag if fs_mag > 0 else 0.0)
+            # slip: mu p_n in the direction of the FASTSIM traction
+            fx, fy = fs_traction[0, j, k], fs_traction[1, j, k]
+            fs_mag = math.hypot(fx, fy)
+            sx = bound * (fx / fs_mag if fs_mag > 0 else 0.0)
+            sy = bound * (fy / fs_mag if fs_mag > 0 else 0.0)
+            if not adhesion and (xs >= start or part == 0.0 or p <= 0
+                                 or not math.hypot(qx, qy) <= bound * (1 + 1e-12)):
+                traction[0, j, k] = sx  # (the whole cell slides)
+                traction[1, j, k] = sy
+                continue
+            # the slip part's mean bound: mu p_n at the sample, shaped along the cell as
+            # the strip's elliptic arc (exact for Hertz's pressure; p_n is known at the
+            # sample only)
+            shape = 1.0
+            if part < 1.0:
+                r1 = ay * ay - xs * xs
+                r1 = math.sqrt(r1) if r1 > 0.0 else 0.0
+                cut = min(max(start, x0), x1)
+                if r1 > 0.0 and cut > x0:
+                    shape = ((_arc_integral(cut, 0.0, ay) - _arc_integral(x0, 0.0, ay))
+                             / (cut - x0)) / r1
+            vx = part * qx + (1.0 - part) * shape * sx
+            vy = part * qy + (1.0 - part) * shape * sy
+            m = math.hypot(vx, vy)
+            if m > bound:  # (a cell across the zones' border: within the bound)
+                vx, vy = vx * (bound / m), vy * (bound / m)
+            traction[0, j, k] = vx
+            traction[1, j, k] = vy
     return traction, state
