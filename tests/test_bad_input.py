@@ -82,6 +82,23 @@ def test_the_grid_budget_is_checked_before_allocating_and_settable():
         rc.solve(case)  # ~2000 x 900 elements for the automatic area
 
 
+def test_a_coarse_probe_beyond_the_budget_is_named_as_the_probe():
+    """A wheel-rail case with element sizes starts with a coarse probe (twice the
+    elements' size) on the rigid overlap's area; when even the probe is beyond
+    max_elements, the message names the probe's elements beside the case's own [grid] dx,
+    not the probe's as if they were [grid]'s."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1"},
+            "grid": {"dx": 2e-4, "dy": 2e-4, "max_elements": 100},
+            "normal": {"load": 83.3e3}}
+    with pytest.raises(rc.CaseError) as err:
+        rc.solve(case)
+    text = str(err.value)
+    assert "the coarse probe's dx = 0.0004, dy = 0.0004 m" in text, text
+    assert "[grid] dx = 0.0002, dy = 0.0002 m" in text, text
+    assert "[grid] dx = 0.0004" not in text and "max_elements" in text, text
+
+
 @pytest.mark.parametrize("name", ["F02_edge_truncated_margin", "F02c_nx2_truncated"])
 def test_a_contact_cut_by_the_potential_area_is_not_converged(name, monkeypatch, capsys):
     """After every enlargement the contact still reaches the edge (margin 0.1; 2 x 2

@@ -73,6 +73,22 @@ def _axis(lo: float, hi: float, n: int, h: float | None, q: int, centred: bool, 
     return c - n * h / 2, c + n * h / 2, n
 
 
+def check_grid_budget(settings: GridSettings, bounds: Bounds, elements: str | None = None
+                      ) -> None:
+    """Raise a :class:`~railcontact.errors.CaseError` when the grid ``settings`` mesh on
+    ``bounds`` [m] would have more elements than their ``max_elements`` (element sizes;
+    element counts are checked with the settings). ``elements`` names the element sizes
+    in the message (default: ``[grid] dx = ..., dy = ... m``)."""
+    x0, x1, y0, y1 = bounds
+    dx, dy = settings.dx, settings.dy
+    sx = (x1 - x0) / dx if dx else settings.nx
+    sy = (y1 - y0) / dy if dy else settings.ny
+    if not sx * sy <= settings.max_elements:  # (the message formed only when it is needed)
+        named = elements or f"[grid] dx = {dx}, dy = {dy} m"
+        check_grid_size(f"the potential area {(x1 - x0) * 1e3:.4g} x {(y1 - y0) * 1e3:.4g} "
+                        f"mm with {named}", sx, sy, settings.max_elements)
+
+
 def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
     """The BEM grid on ``bounds`` [m] from the counts or element sizes of ``settings``.
 
@@ -82,12 +98,8 @@ def make_grid(settings: GridSettings, bounds: Bounds) -> Grid:
     around the contact point and a warm start is not smeared by interpolation.
     """
     x0, x1, y0, y1 = map(float, bounds)  # Python floats: an overflow is inf, silently
+    check_grid_budget(settings, (x0, x1, y0, y1))
     dx, dy = settings.dx, settings.dy
-    sx = (x1 - x0) / dx if dx else settings.nx
-    sy = (y1 - y0) / dy if dy else settings.ny
-    if not sx * sy <= settings.max_elements:  # (the message formed only when it is needed)
-        check_grid_size(f"the potential area {(x1 - x0) * 1e3:.4g} x {(y1 - y0) * 1e3:.4g} "
-                        f"mm with [grid] dx = {dx}, dy = {dy} m", sx, sy, settings.max_elements)
     q, centred, snap = settings.quantum, settings.centred, settings.snap
     xmin, xmax, nx = _axis(x0, x1, settings.nx, dx, q, centred, snap)
     ymin, ymax, ny = _axis(y0, y1, settings.ny, dy, q, centred, snap)

@@ -95,6 +95,7 @@ from .loadloop import (
 from .patch import (
     UNCOVERED_MARGIN,
     PatchFriction,
+    check_grid_budget,
     normal_estimate,
     not_converged,
     solve_patch_normal,
@@ -345,6 +346,13 @@ def _patches(cps: list[ContactPoint], ws: Wheelset, approach: float, settings: P
         keep = (last is not None and not after_probe
                 and _covers(last.normal.grid.bounds, bounds, grid.dx is None or grid.dy is None))
         mesh = probe_grid if probe_grid is not None and not est.gives_pressure else grid
+        if mesh is not grid and mesh.dx is not None and mesh.dy is not None:
+            # (a coarse probe beyond the budget: named as the probe, not as [grid])
+            check_grid_budget(mesh, tuple(map(float, bounds)),
+                              f"the coarse probe's dx = {mesh.dx:.4g}, dy = {mesh.dy:.4g} m "
+                              f"({mesh.dx / grid.dx:g} x [grid] dx = {grid.dx:.4g}, "
+                              f"dy = {grid.dy:.4g} m; its contact sets the area of the "
+                              "[grid] elements)")
         # a start's compiled stage: the first solve and the overlap check in one call (on
         # a new grid, the patch's own gap and the run's overlap box, as below)
         stage = est.normal_stage
