@@ -82,6 +82,29 @@ def test_the_grid_budget_is_checked_before_allocating_and_settable():
         rc.solve(case)  # ~2000 x 900 elements for the automatic area
 
 
+def test_a_penetration_too_small_for_floats_is_named(tmp_path, capsys):
+    """A quadratic case under a penetration so small (a subnormal) that its automatic
+    potential area has no extent: an error naming [normal] penetration, exit 2 - not the
+    grid's own check of its bounds (which names no key of the case)."""
+    case = tmp_path / "tiny.toml"
+    case.write_text('[material]\nyoung = 206e9\npoisson = 0.28\n[geometry]\n'
+                    'type = "quadratic"\nA = 1.0\nB = 2.0\n[grid]\nnx = 16\nny = 16\n'
+                    '[normal]\npenetration = 5e-324\n')
+    assert main(["solve", str(case)]) == 2
+    err = capsys.readouterr().err
+    assert "[normal] penetration = 4.94066e-324" in err and "has no extent" in err, err
+
+
+def test_hertz_pressure_of_no_contact_is_zero():
+    """Hertz's solution of a zero load (a = b = 0) has no pressure anywhere, without a
+    division by zero (a zero-load case's --plot drew it with a RuntimeWarning)."""
+    hz = rc.hertz(1.0, 2.0, rc.ElasticPair.of(rc.STEEL), load=0.0)
+    assert hz.a == 0 and hz.b == 0
+    with np.errstate(all="raise"):
+        p = hz.pressure(np.linspace(-1e-3, 1e-3, 5)[:, None], np.zeros((1, 3)))
+    assert p.shape == (5, 3) and not p.any()
+
+
 def test_a_coarse_probe_beyond_the_budget_is_named_as_the_probe():
     """A wheel-rail case with element sizes starts with a coarse probe (twice the
     elements' size) on the rigid overlap's area; when even the probe is beyond

@@ -81,6 +81,18 @@ def test_bad_cases(mutate, match):
         solve(case)
 
 
+def test_a_missing_key_and_a_bad_value_are_both_named():
+    """All problems of a case at once: a missing required key does not hide a bad value
+    given beside it in the same table."""
+    case = paper_case()
+    case["geometry"].pop("B")
+    case["geometry"]["A"] = -1.0
+    with pytest.raises(CaseError) as err:
+        solve(case)
+    text = str(err.value)
+    assert "missing [geometry] B" in text and "[geometry] A [1/m] must be > 0" in text, text
+
+
 def test_missing_and_broken_files(tmp_path):
     with pytest.raises(CaseError, match="not found"):
         load_case(tmp_path / "nope.toml")

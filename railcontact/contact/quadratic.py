@@ -38,6 +38,13 @@ def solve_quadratic(case: Case) -> PatchSolution:
     auto = potential_area(A, B, hz.penetration if hz.penetration > 0 else 1e-12,
                           grid_settings.margin)
     bounds = (*(grid_settings.x or auto[:2]), *(grid_settings.y or auto[2:]))
+    if not (bounds[0] < bounds[1] and bounds[2] < bounds[3]):  # (an automatic side)
+        key, value = (("load", control.load) if control.by_load
+                      else ("penetration", control.penetration))
+        raise CaseError(f"[normal] {key} = {value:g} gives a contact too small for floating "
+                        f"point numbers: its automatic potential area, {2 * auto[1]:.3g} x "
+                        f"{2 * auto[3]:.3g} m, has no extent; give [grid] x and y, or a "
+                        f"larger {key}")
 
     def gap_of(grid: Grid) -> np.ndarray:
         X, Y = grid.mesh()

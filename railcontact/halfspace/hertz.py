@@ -170,8 +170,12 @@ class HertzSolution:
         return math.pi * self.a * self.b
 
     def pressure(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Pressure [Pa] at points (x, y) [m] (broadcast), zero outside the ellipse."""
-        s = 1.0 - (np.asarray(x) / self.a) ** 2 - (np.asarray(y) / self.b) ** 2
+        """Pressure [Pa] at points (x, y) [m] (broadcast), zero outside the ellipse (and
+        everywhere for no contact, ``a`` or ``b`` 0)."""
+        x, y = np.asarray(x), np.asarray(y)
+        if not (self.a > 0 and self.b > 0):
+            return np.zeros(np.broadcast(x, y).shape)
+        s = 1.0 - (x / self.a) ** 2 - (y / self.b) ** 2
         return self.max_pressure * np.sqrt(np.clip(s, 0.0, None))
 
 

@@ -262,11 +262,20 @@ class Record:
         if bad:
             raise cls.ERROR(f"unknown key(s) {sorted(bad)} in {where}{did_you_mean(bad, known)}"
                             f"; known: {sorted(known)}")
+        problems = []
         for f in fields(cls):  # type: ignore[arg-type]
             s = spec_of(f)
             if s.required and f.name not in values:
                 unit = f" ({s.doc} [{s.unit}])" if s.unit not in ("", "-") else f" ({s.doc})"
-                raise cls.ERROR(f"missing {where} {f.name}{unit}")
+                problems.append(f"missing {where} {f.name}{unit}")
+        if problems:  # with every bad value given beside them (all problems at once)
+            for f in fields(cls):  # type: ignore[arg-type]
+                if f.name in values:
+                    try:
+                        cls._validate(f.name, spec_of(f), values[f.name])
+                    except RailContactError as exc:
+                        problems.append(str(exc))
+            raise cls.ERROR("; ".join(problems))
         return cls(**values)
 
     def to_dict(self) -> dict[str, Any]:
