@@ -95,6 +95,19 @@ def test_a_penetration_too_small_for_floats_is_named(tmp_path, capsys):
     assert "[normal] penetration = 4.94066e-324" in err and "has no extent" in err, err
 
 
+def test_a_rail_profile_given_as_the_wheel_points_at_the_profiles(root):
+    """The 60E1 rail's profile file given as the wheel: the centred wheelset's other wheel
+    is off its rail (the "flange" climbed); near the track centre the error points at
+    the profiles, not only at the lateral displacement."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail",
+                         "wheel": str(root / "models" / "profiles" / "60E1.txt"),
+                         "rail": "60E1"},
+            "normal": {"load": 83.3e3}}
+    with pytest.raises(rc.CaseError, match=r"check \[geometry\] wheel and rail"):
+        rc.solve(case)
+
+
 def test_hertz_pressure_of_no_contact_is_zero():
     """Hertz's solution of a zero load (a = b = 0) has no pressure anywhere, without a
     division by zero (a zero-load case's --plot drew it with a RuntimeWarning)."""

@@ -731,6 +731,11 @@ def _check_load(ps: list[PatchSolution], r: float, q: float, side: str,
                                f"force {r + q:.6g} N for load {q:.6g} N)", ps)
 
 
+CENTRE_HINT = 5e-3
+"""Lateral wheelset displacement [m] within which a wheel off its rail points at the
+profiles (a wheelset near the track centre does not climb its flange on track profiles):
+the error says so."""
+
 MIN_LOBE = 0.05
 """Saddles whose shallower lobe is less deep than this share of the saddle's approach are
 ripples of the profiles, not checked for another root (:func:`~.loadloop.first_root`):
@@ -1015,8 +1020,11 @@ def solve_wheel_rail(case: Case, starts: Starts | None = None, *,
         try:
             check_on_rail(contact_points(search_wheel(placed, ws, pose, other), 0.0)[0], ws)
         except RailContactError as exc:
+            hint = ("; so near the track centre this points at the profiles rather than "
+                    "the pose: check [geometry] wheel and rail (a rail's profile given as "
+                    "the wheel's?)" if abs(pose.lateral) < CENTRE_HINT else "")
             raise CaseError(f"[geometry] lateral_displacement = {pose.lateral:g} m puts the "
-                            f"{other} wheel off its rail: {exc}") from None
+                            f"{other} wheel off its rail: {exc}{hint}") from None
     if geo.roll == "equal-loads":
         pose, per_side = _equal_loads(track, ws, pose, control, settings, pair, reference,
                                       convention, starts)
