@@ -45,3 +45,33 @@ def test_breakdown_restores_what_it_wrapped_and_charges_the_stage():
         for owner, name in targets:
             if bench._has(owner, name):
                 assert bench._get(owner, name) is before[(id(owner), name)], name
+
+
+def _bench_threads():
+    spec = importlib.util.spec_from_file_location("bench_threads",
+                                                  ROOT / "scripts" / "bench_threads.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_timeline_finds_the_warm_steps_gil_free_calls_and_restores_the_package(capsys):
+    """``bench_threads.py --timeline`` on a few steps: a warm step of the hunting run
+    releases the GIL in eight calls (each wheel's search, frame, normal and tangential
+    stage: the count docs/performance.md quotes), the short kernels keep it, and the
+    package's kernels and ``WheelsetContact.solve`` are its own again afterwards."""
+    import railcontact as rc
+    from railcontact.geometry import kernels
+
+    bench = _bench_threads()
+    solve, search = rc.WheelsetContact.solve, kernels.search_wheel
+    bench.timeline(6)
+    out = capsys.readouterr().out
+    assert rc.WheelsetContact.solve is solve and kernels.search_wheel is search
+    assert "without it in 8 calls" in out, out
+    rows = [line.split() for line in out.splitlines() if line[:13].strip()
+            .replace(".", "", 1).isdigit()]
+    free = [r[1] for r in rows if len(r) == 4 and r[2] == "free"]
+    held = {r[1] for r in rows if len(r) == 4 and r[2] == "held"}
+    assert free.count("search_wheel") == 2 and free.count("_warm_tangential") == 2, out
+    assert held <= {"merge_saddles", "count_runs", "_moment_sums", "_span"}, out
