@@ -361,6 +361,8 @@ def _cmd_table_check(args: argparse.Namespace) -> int:
 
     if args.states < 1:
         raise RailContactError(f"the number of states must be at least 1, got {args.states}")
+    if args.seed < 0:
+        raise RailContactError(f"--seed must be a non-negative integer, got {args.seed}")
     if args.scheduler and args.workers is not None:
         raise RailContactError("give --workers or --scheduler, not both")
     from .table.store import open_dataset

@@ -222,9 +222,16 @@ def test_outside_the_axes_is_an_error(built, point, match):
 
 
 def test_cubic_needs_four_nodes(built):
+    """Cubic interpolation on an axis of fewer than 4 nodes is an error where it is asked
+    for: a table's call, and a TableContact's construction (else every step of a run
+    would be out of range with zero forces)."""
+    from railcontact.table.step import TableContact
+
     table = ContactTable.open(built[1])
     with pytest.raises(RailContactError, match="at least 4 nodes"):
         table({"lateral_displacement": 0.0, "creepage_y": 0.0, "load": 7e4}, method="cubic")
+    with pytest.raises(RailContactError, match="at least 4 nodes"):
+        TableContact(table, method="cubic")
 
 
 def test_bad_input(built, tmp_path, capsys):
@@ -410,6 +417,7 @@ def test_bad_axes(entry, match):
      r"\[table\] creepage_x must be .* got -1500"),
     ("spin", "[0.0, 1e4, 2]", r"\[table\] spin must be .* got 10000"),
     ("load", "[60e3, 2e8, 2]", r"\[table\] load \[N\] must be .* got 2e\+08"),
+    ("yaw", "[-0.2, 0.2, 3]", r"\[table\] yaw \[rad\] must be >= -0.1 and <= 0.1, got -0.2"),
 ])
 def test_axis_nodes_beyond_their_settings_bounds_are_refused(axis, entry, match):
     """A node beyond the bounds its setting takes in a case (creepages within +-1000, a

@@ -172,6 +172,9 @@ def test_table_check_on_an_existing_table_replaces_the_check(checked, scheduler,
     assert main(["table", "check", str(copy), "2", "--workers", "0", "--method",
                  "cubic"]) == 2
     assert "cubic interpolation needs at least 4 nodes" in capsys.readouterr().err
+    assert main(["table", "check", str(copy), "2", "--workers", "0", "--seed", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--seed must be a non-negative integer" in err, err
     spec_path, _ = checked
     assert main(["table", "build", str(spec_path), "-o", str(tmp_path / "n.zarr"),
                  "--check", "-1"]) == 2

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -163,3 +164,48 @@ def test_a_store_without_its_status_is_refused(table, tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "no status array" in err, err
     assert not (tmp_path / "b.csv").exists()
+
+
+def test_a_store_missing_a_quantity_or_its_identity_is_refused(table, tmp_path, capsys):
+    """A store copied without a whole quantity's array (normal_force), without its batch
+    bookkeeping, or with its identity attribute garbled: refused as damaged by
+    ContactTable.open, show and export alike - not read as NaN forces with status ok nor
+    a KeyError or JSON traceback. The lost chunk read as NaN at points solved ok is
+    refused by show and export too (ContactTable.open did already)."""
+    import shutil
+
+    from railcontact.errors import RailContactError
+
+    _, out = table
+    stores = {}
+    for name, why in (("normal_force", r"no normal_force array"),
+                      ("batch_done", r"no batch_done array")):
+        bad = tmp_path / f"no_{name}.zarr"
+        shutil.copytree(out, bad)
+        shutil.rmtree(bad / name)
+        stores[bad] = why
+    ident = tmp_path / "ident.zarr"
+    shutil.copytree(out, ident)
+    attrs_file = ident / ".zattrs" if (ident / ".zattrs").exists() else ident / "zarr.json"
+    attrs = json.loads(attrs_file.read_text())
+    if ".zattrs" in attrs_file.name:
+        attrs["railcontact_table"] = "{not json"
+    else:
+        attrs["attributes"]["railcontact_table"] = "{not json"
+    attrs_file.write_text(json.dumps(attrs))
+    stores[ident] = r"railcontact_table attribute is not a table's identity"
+    lost = tmp_path / "lost.zarr"
+    shutil.copytree(out, lost)
+    for f in (lost / "normal_force").iterdir():
+        if not f.name.startswith("."):
+            f.unlink()
+    stores[lost] = r"normal_force not finite at points solved ok"
+    for store, why in stores.items():
+        capsys.readouterr()
+        for args in (["show", str(store)], ["export", str(store), str(tmp_path / "x.csv")]):
+            assert main(["table", *args]) == 2, (store, args)
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and re.search(why, err), err
+        if store.name != "no_batch_done.zarr":  # (an interpolating table needs no batches)
+            with pytest.raises(RailContactError, match=why):
+                ContactTable.open(store)

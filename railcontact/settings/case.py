@@ -191,7 +191,8 @@ class WheelRailGeometry(Record):
                                   maximum=MAX_WHEEL_RADIUS)
     lateral_displacement: float = setting(0.0, "float", "m",
                                           "wheelset lateral displacement, positive to the left")
-    yaw: float = setting(0.0, "float", "rad", "wheelset yaw angle")
+    yaw: float = setting(0.0, "float", "rad", "wheelset yaw angle (a small angle)",
+                         minimum=-0.1, maximum=0.1)
     roll: float | str = setting(0.0, "float|choice", "rad",
                                 "wheelset roll (left side up), or 'rigid' (both wheels touch) "
                                 "or 'equal-loads' (both carry [normal] load)",

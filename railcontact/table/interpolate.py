@@ -47,6 +47,7 @@ from .variables import (
     OK,
     QUANTITIES,
     STATUS_MEANINGS,
+    VALIDITY_QUANTITIES,
     failed_counts,
     failed_text,
 )
@@ -228,6 +229,9 @@ class ContactTable:
         ident = json.loads(attrs[IDENTITY])
         axes = {n: np.asarray(v, dtype=float) for n, v in ident["axes"].items()}
         missing = tuple(q.name for q in QUANTITIES if q.name not in arrays)
+        lacking = [n for n in missing if n not in VALIDITY_QUANTITIES]
+        if lacking:  # (only a store written before them lacks the validity quantities)
+            raise damaged(path, f"no {', '.join(lacking)} array")
         status = np.asarray(arrays["status"]).astype(np.int8)
         values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
                            np.asarray(arrays[q.name], dtype=float) for q in QUANTITIES], axis=-1)

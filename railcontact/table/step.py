@@ -98,7 +98,8 @@ class TableContact:
     Raises
     ------
     RailContactError
-        For an unknown method, a table without ``penetration`` (an earlier store) or
+        For an unknown method, ``cubic`` on a table with an axis of fewer than 4 nodes,
+        a table without ``penetration`` (an earlier store) or
         whose wheel flange is neither stored nor readable from its wheel profile.
     """
 
@@ -106,6 +107,10 @@ class TableContact:
                  settings: ContactSettings | None = None) -> None:
         if method not in ("linear", "cubic"):
             raise RailContactError(f"method must be 'linear' or 'cubic', got {method!r}")
+        short = [f"{n} ({len(v)})" for n, v in table.axes.items() if len(v) < 4]
+        if method == "cubic" and short:  # (every step would be out of range)
+            raise RailContactError("cubic interpolation needs at least 4 nodes on every "
+                                   f"axis: {', '.join(short)}; use method='linear'")
         lacking = [n for n in VALIDITY_QUANTITIES if n in table.missing]
         if lacking:
             raise RailContactError(

@@ -50,9 +50,17 @@ from .. import __version__
 from ..contact.wheelrail import build_geometry
 from ..errors import RailContactError
 from ..settings import Case
+from ..status import Status
 from .geometry import KIND as GEOMETRY_KIND
 from .spec import CREEP_KIND, DEFAULT_KIND, TableSpec, axis_info, comparable
-from .variables import COUNTS, NOT_COMPUTED, QUANTITIES, STATUS_MEANINGS, failed_counts
+from .variables import (
+    COUNTS,
+    NOT_COMPUTED,
+    QUANTITIES,
+    STATUS_MEANINGS,
+    VALIDITY_QUANTITIES,
+    failed_counts,
+)
 
 IDENTITY = "railcontact_table"
 FLANGE = "flange_flank"
@@ -402,11 +410,45 @@ def open_dataset(path: str | Path):
         raise RailContactError(f"{p} is not a readable table store: {exc}") from None
     if IDENTITY not in ds.attrs:
         raise RailContactError(f"{p} is not a railcontact table store")
+    check_identity_attr(p, ds.attrs)
     try:  # (every chunk read here: a damaged one is this error, not a reader's traceback)
         ds = ds.load()
     except Exception as exc:  # noqa: BLE001
         raise damaged(p, f"{type(exc).__name__}: {exc}") from None
+    if kind_of(ds.attrs) == DEFAULT_KIND:
+        check_contact_arrays(p, {n: ds[n].values for n in ds.data_vars})
     return ds
+
+
+def check_identity_attr(path: str | Path, attrs) -> None:
+    """Raise the error of a damaged store when the table's identity attribute at ``path``
+    is not the JSON object of a table (its ``axes`` among it)."""
+    try:
+        ident = json.loads(attrs[IDENTITY])
+        ok = isinstance(ident, dict) and isinstance(ident.get("axes"), dict)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise damaged(path, f"its {IDENTITY} attribute is not a table's identity")
+
+
+def check_contact_arrays(path: str | Path, arrays: dict[str, Any]) -> None:
+    """Raise the error of a damaged contact table at ``path`` when ``arrays`` lack the
+    status, the counts or a quantity (only the validity quantities may be absent: a store
+    written before them), or a quantity is not finite at a point solved ok (a chunk
+    lost: zarr reads it as its fill value)."""
+    lacking = [n for n in ("status", "batch_done", *(c.name for c in COUNTS),
+                           *(q.name for q in QUANTITIES))
+               if n not in arrays and n not in VALIDITY_QUANTITIES]
+    if lacking:
+        raise damaged(path, f"no {', '.join(lacking)} array")
+    status = np.asarray(arrays["status"])
+    solved = np.isin(status, (Status.OK, Status.OUTSIDE_VALIDITY))  # (every value finite)
+    lost = [q.name for q in QUANTITIES if q.name in arrays
+            and not np.isfinite(np.asarray(arrays[q.name], dtype=float)[solved]).all()]
+    if lost:
+        raise damaged(path, f"{', '.join(lost)} not finite at points solved ok: a chunk "
+                      "lost")
 
 
 def damaged(path: str | Path, why: str) -> RailContactError:
@@ -442,6 +484,7 @@ def read_table(path: str | Path, names: list[str]) -> tuple[dict[str, Any], dict
         raise RailContactError(f"{p} is not a readable table store: {exc}") from None
     if IDENTITY not in attrs:
         raise RailContactError(f"{p} is not a railcontact table store")
+    check_identity_attr(p, attrs)
     if kind_of(attrs) == CREEP_KIND:
         raise RailContactError(f"{p} is a {CREEP_KIND} table, not a contact table (a "
                                f"{CREEP_KIND} table is read by {reader_of(CREEP_KIND)})")
