@@ -32,7 +32,7 @@ from ..errors import RailContactError
 from .creepread import export_creep_csv, is_creep_table
 from .geometry import KIND
 from .geometry_table import data_names, export_csv
-from .store import IDENTITY, kind_of, open_dataset, require_status
+from .store import IDENTITY, check_contact_dataset, kind_of, open_dataset, require_status
 from .variables import COUNTS, QUANTITIES
 
 FORMATS = {".nc": "netcdf", ".csv": "csv"}
@@ -71,6 +71,7 @@ def export_table(path: str | Path, out: str | Path, fmt: str | None = None) -> P
         return export_creep_csv(ds, out)
     if not creep:
         require_status(path, ds)
+        check_contact_dataset(path, ds)
     names = list(json.loads(ds.attrs[IDENTITY])["axes"])
     geometry = kind_of(ds.attrs) == KIND
     data = (list(ds.data_vars) if creep else data_names() if geometry else

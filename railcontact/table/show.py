@@ -16,7 +16,14 @@ from .geometry import KIND
 from .geometry_table import plot_geometry, summary_lines
 from .refine import Targets, jumps
 from .spec import CREEPAGE_AXES, DEFAULT_POLICY, axis_info
-from .store import IDENTITY, kind_of, open_dataset, read_messages, require_status
+from .store import (
+    IDENTITY,
+    check_contact_dataset,
+    kind_of,
+    open_dataset,
+    read_messages,
+    require_status,
+)
 from .variables import STATUS_MEANINGS, failed_counts, failed_text
 
 SHOWN = ("normal_force", "creep_force_x", "creep_force_y", "spin_moment", "contact_angle",
@@ -32,6 +39,7 @@ def summary(path: str | Path) -> str:
     if is_creep_table(ds):
         return creep_summary(path)
     require_status(path, ds)
+    check_contact_dataset(path, ds)
     ident = json.loads(ds.attrs[IDENTITY])
     names = list(ident["axes"])
     done = ds["batch_done"].values

@@ -415,17 +415,23 @@ def open_dataset(path: str | Path):
         ds = ds.load()
     except Exception as exc:  # noqa: BLE001
         raise damaged(p, f"{type(exc).__name__}: {exc}") from None
-    if kind_of(ds.attrs) == DEFAULT_KIND:
-        check_contact_arrays(p, {n: ds[n].values for n in ds.data_vars})
     return ds
+
+
+def check_contact_dataset(path: str | Path, ds) -> None:
+    """:func:`check_contact_arrays` of the dataset ``ds`` of the table at ``path`` when it
+    is a contact table (``require_status`` first: a store without its status says so)."""
+    if kind_of(ds.attrs) == DEFAULT_KIND:
+        require_status(path, ds)
+        check_contact_arrays(path, {n: ds[n].values for n in ds.data_vars})
 
 
 def check_identity_attr(path: str | Path, attrs) -> None:
     """Raise the error of a damaged store when the table's identity attribute at ``path``
-    is not the JSON object of a table (its ``axes`` among it)."""
+    is not a JSON object (its ``axes``, where it has them, one too)."""
     try:
         ident = json.loads(attrs[IDENTITY])
-        ok = isinstance(ident, dict) and isinstance(ident.get("axes"), dict)
+        ok = isinstance(ident, dict) and isinstance(ident.get("axes", {}), dict)
     except (TypeError, ValueError):
         ok = False
     if not ok:
