@@ -221,6 +221,9 @@ class NogilTimer:
         self._saved: list = []
 
     def wrap(self, name: str, fn):
+        """``fn`` timed: each outermost call's start and end go to :meth:`record`."""
+        free = bool(getattr(fn, "targetoptions", {"nogil": True}).get("nogil"))
+
         def timed(*args, **kwargs):
             if self._depth:
                 return fn(*args, **kwargs)
@@ -229,10 +232,14 @@ class NogilTimer:
             try:
                 return fn(*args, **kwargs)
             finally:
-                self.seconds[name] += time.perf_counter() - t0
-                self.calls[name] += 1
+                self.record(name, t0, time.perf_counter(), free)
                 self._depth -= 1
         return timed
+
+    def record(self, name: str, start: float, end: float, gil_free: bool) -> None:
+        """One outermost call of ``name`` from ``start`` to ``end`` [s]."""
+        self.seconds[name] += end - start
+        self.calls[name] += 1
 
     def install(self) -> None:
         """Wrap every numba dispatcher in the package's modules' globals that releases the
@@ -306,21 +313,8 @@ class CallLog(NogilTimer):
         super().__init__(every=True)
         self.calls_log: list[tuple[str, float, float, bool]] = []
 
-    def wrap(self, name: str, fn):
-        free = bool(getattr(fn, "targetoptions", {"nogil": True}).get("nogil"))
-        log = self.calls_log
-
-        def logged(*args, **kwargs):
-            if self._depth:
-                return fn(*args, **kwargs)
-            self._depth += 1
-            t0 = time.perf_counter()
-            try:
-                return fn(*args, **kwargs)
-            finally:
-                log.append((name, t0, time.perf_counter(), free))
-                self._depth -= 1
-        return logged
+    def record(self, name: str, start: float, end: float, gil_free: bool) -> None:
+        self.calls_log.append((name, start, end, gil_free))
 
 
 def timeline(steps: int) -> None:

@@ -10,12 +10,16 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _bench_step():
-    spec = importlib.util.spec_from_file_location("bench_step",
-                                                  ROOT / "scripts" / "bench_step.py")
+def _script(name: str):
+    """The module of ``scripts/NAME.py``."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def _bench_step():
+    return _script("bench_step")
 
 
 def test_bench_step_times_functions_that_exist():
@@ -47,14 +51,6 @@ def test_breakdown_restores_what_it_wrapped_and_charges_the_stage():
                 assert bench._get(owner, name) is before[(id(owner), name)], name
 
 
-def _bench_threads():
-    spec = importlib.util.spec_from_file_location("bench_threads",
-                                                  ROOT / "scripts" / "bench_threads.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_timeline_finds_the_warm_steps_gil_free_calls_and_restores_the_package(capsys):
     """``bench_threads.py --timeline`` on a few steps: a warm step of the hunting run
     releases the GIL in eight calls (each wheel's search, frame, normal and tangential
@@ -63,7 +59,7 @@ def test_timeline_finds_the_warm_steps_gil_free_calls_and_restores_the_package(c
     import railcontact as rc
     from railcontact.geometry import kernels
 
-    bench = _bench_threads()
+    bench = _script("bench_threads")
     solve, search = rc.WheelsetContact.solve, kernels.search_wheel
     bench.timeline(6)
     out = capsys.readouterr().out
