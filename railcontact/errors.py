@@ -54,19 +54,34 @@ def check_finite(name: str, value: object, unit: str = "") -> float:
     """
     if type(value) is float and value - value == 0.0:  # the common case, at once
         return value  # (x - x is 0 for a finite float, NaN for inf and NaN)
+    x = check_number(name, value, unit)
+    if not math.isfinite(x):
+        raise RailContactError(f"{name}{f' [{unit}]' if unit else ''} must be finite, "
+                               f"got {x}")
+    return x
+
+
+def check_number(name: str, value: object, unit: str = "") -> float:
+    """Return ``value`` as a float, or raise if it is not a real number (NaN and the
+    infinities pass: for a check that names them in its own words, e.g. a table's range).
+
+    Parameters
+    ----------
+    name, value, unit
+        As :func:`check_finite`.
+    """
+    if type(value) is float:
+        return value
     suffix = f" [{unit}]" if unit else ""
     if isinstance(value, (bool, str)):
         raise RailContactError(f"{name}{suffix} must be a number, got {value!r}")
     try:
-        x = float(value)  # type: ignore[arg-type]
+        return float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):  # e.g. None, a list, an array of several values
         raise RailContactError(f"{name}{suffix} must be a number, got {value!r}") from None
     except OverflowError:  # an int beyond the floats, e.g. 10**400
         raise RailContactError(f"{name}{suffix} must be finite, got an integer of about "
                                f"{_digits(value)} digits") from None
-    if not math.isfinite(x):
-        raise RailContactError(f"{name}{suffix} must be finite, got {x}")
-    return x
 
 
 def _digits(value: int) -> int:

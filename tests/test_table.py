@@ -585,6 +585,28 @@ def _cubic_field_table(bad: dict[tuple[int, int], int]) -> tuple[ContactTable, o
                         flange=(-0.03845, 1.22193)), f
 
 
+def test_cubic_spline_reproduces_a_bicubic_and_returns_the_nodes():
+    """On a wheel whose nodes are all ok, ``cubic`` is the not-a-knot tensor-product
+    spline, which reproduces any polynomial of degree 3 in each axis: the bicubic field of
+    :func:`_cubic_field_table` to round-off between the nodes (uneven ones on one axis),
+    and each node's stored values. (scipy's RegularGridInterpolator, method "cubic",
+    solves for its spline iteratively and missed both by up to 5.6e-4.)"""
+    table, f = _cubic_field_table({})
+    for y in np.linspace(-0.005, 0.005, 23):
+        for eta in np.linspace(0.0, 4e-3, 19):
+            got = table({"lateral_displacement": float(y), "creepage_y": float(eta)},
+                        "right", "cubic")
+            assert got.status == 0
+            assert got["creep_force_y"] == pytest.approx(f(y, eta), rel=1e-12, abs=1e-12)
+    for i, y in enumerate(table.axes["lateral_displacement"]):
+        for k, eta in enumerate(table.axes["creepage_y"]):
+            got = table({"lateral_displacement": float(y), "creepage_y": float(eta)},
+                        "left", "cubic")
+            np.testing.assert_allclose(list(got.values.values()),
+                                       list(table.node((i, k), "left").values.values()),
+                                       rtol=1e-13, atol=1e-13)
+
+
 def test_cubic_with_failed_nodes_is_local_or_linear_never_a_traceback():
     """A no-contact node (status 2, NaN) and a not-computed node (-1, NaN) on the left wheel
     only: cubic is exact for a bicubic where its 4 x 4 stencil is ok (the local cubic), the
@@ -658,27 +680,73 @@ def test_workers_with_a_scheduler_is_an_error(tmp_path, capsys):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("pose, loads, creepages, words", [
-    ((float("nan"), 0.0), (8e4, 8e4), None, "lateral_displacement [m] must be finite"),
-    ((0.0, float("inf")), (8e4, 8e4), None, "yaw [rad] must be finite"),
-    ((0.0, 0.0), (8e4, float("nan")), None, "right wheel load [N] must be finite"),
-    ((0.0, 0.0), (8e4, 8e4), ((0.0, float("nan"), 0.0), (0.0, 0.0, 0.0)),
-     "creepages must be finite"),
+@pytest.mark.parametrize("pose, loads, creepages, kinematics, words", [
+    ((0.0, 0.0), (8e4, float("nan")), None, None, "right wheel load [N] must be finite"),
+    ((0.0, 0.0), (8e4, 8e4), ((0.0, float("nan"), 0.0), (0.0, 0.0, 0.0)), None,
+     "left creepage must be finite"),
+    ((0.0, 0.0), (8e4, 8e4), ((0.0, "0.1", 0.0), (0.0, 0.0, 0.0)), None,
+     "left creepage must be a number, got '0.1'"),
+    ((0.0, 0.0), (8e4, 8e4), ((0.0, 1j, 0.0), (0.0, 0.0, 0.0)), None,
+     "left creepage must be a number, got 1j"),
+    ((0.0, 0.0), (8e4, 8e4), ((0.0, 1e-3), (0.0, 0.0, 0.0)), None,
+     "creepages must be ((xi, eta, phi) left, (xi, eta, phi) right)"),
+    ((0.0, 0.0), (8e4,), None, None, "loads must be (left, right) [N], got (80000.0,)"),
+    ((0.0, 0.0), (None, 8e4), None, None, "left wheel load [N] must be a number"),
+    ((0.0, 0.0), (8e4, 8e4), None, (30.0, 0.0),
+     "kinematics must be a Kinematics record, got (30.0, 0.0)"),
+    (None, (8e4, 8e4), None, None, "pose must be a Pose, got None"),
 ])
-def test_table_step_names_the_input_that_is_not_finite(pose, loads, creepages, words):
-    """A NaN or infinite input to TableContact.solve: an error naming that input (was:
-    "creepages must be finite" for a NaN in the pose). A Pose refuses NaN itself, so the
-    pose here is any object with its attributes (what solve reads)."""
-    from types import SimpleNamespace
-
+def test_table_step_names_the_input_that_is_not_a_number(pose, loads, creepages,
+                                                         kinematics, words):
+    """An input to TableContact.solve that is not a finite number of its kind: an error
+    naming that input, the same as WheelsetContact's (was: a TypeError, ValueError or
+    AttributeError from inside for a string, a complex number, None, a creepage of two
+    components, one load, kinematics as a tuple or no Pose; "creepages must be finite"
+    named no wheel)."""
+    from railcontact.geometry.track import Pose
     from railcontact.table.step import TableContact
 
     table, _ = _cubic_field_table({})
     table.case = {"geometry": {"lateral_displacement": 0.0, "yaw": 0.0},
                   "normal": {"load": 8e4}, "tangential": {"creepage": [0.0, 0.0, 0.0]}}
     with pytest.raises(RailContactError, match=re.escape(words)):
-        TableContact(table).solve(SimpleNamespace(lateral=pose[0], yaw=pose[1], roll=0.0),
-                                  loads=loads, creepages=creepages)
+        TableContact(table).solve(None if pose is None else Pose(*pose), loads=loads,
+                                  creepages=creepages, kinematics=kinematics)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda t: t({"lateral_displacement": None, "creepage_y": 0.0}),
+     "lateral_displacement [m] must be a number, got None"),
+    (lambda t: t({"lateral_displacement": "0.001", "creepage_y": 0.0}),
+     "lateral_displacement [m] must be a number, got '0.001'"),
+    (lambda t: t({"lateral_displacement": 0.0, "creepage_y": 1j}),
+     "creepage_y must be a number, got 1j"),
+    (lambda t: t([0.0, 0.0]), "a table's point is a mapping of axis name to value"),
+    (lambda t: t.node((6, 0)), "lateral_displacement: 0 .. 5, creepage_y: 0 .. 4), got (6, 0)"),
+    (lambda t: t.node((0, -1)), "got (0, -1)"),
+    (lambda t: t.node("a"), "a node's index is one integer per axis"),
+    (lambda t: t.node((0,)), "a node's index is one integer per axis"),
+])
+def test_table_lookups_name_what_is_not_a_point_or_a_node(call, words):
+    """A ContactTable's point with a value that is not a real number, a point that is not
+    a mapping, a node index out of range (a negative one too: it would count from the end)
+    or not one integer per axis: an error naming it (was: TypeError, ValueError,
+    IndexError, or another node's values)."""
+    table, _ = _cubic_field_table({})
+    with pytest.raises(RailContactError, match=re.escape(words)):
+        call(table)
+
+
+def test_table_step_refuses_what_is_not_a_table_or_settings():
+    """TableContact of something that is not a ContactTable, or with settings that are not
+    ContactSettings: an error naming it (was: AttributeError)."""
+    from railcontact.table.step import TableContact
+
+    with pytest.raises(RailContactError, match="table must be a ContactTable"):
+        TableContact(None)
+    table, _ = _cubic_field_table({})
+    with pytest.raises(RailContactError, match="settings must be ContactSettings"):
+        TableContact(table, settings={"friction": 0.3})
 
 
 def test_store_identity_survives_a_rename_and_a_move_not_a_changed_profile(tmp_path):

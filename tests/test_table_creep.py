@@ -202,6 +202,18 @@ def test_out_of_range_policies_and_bad_states(table):
         tab.forces(0.006, 0.006, 1e5, 0.3, 8e10, 0.0, 0.0, 0.0, poisson=0.28)
     with pytest.raises(RailContactError, match="friction must be a finite number > 0"):
         tab.forces(0.006, 0.006, 1e5, 0.0, 8e10, 0.0, 0.0, 0.0)
+    # what is not a number (was: TypeError from numpy, or a string taken as a number)
+    with pytest.raises(RailContactError, match="creep table: friction must be a number, "
+                                               "got None"):
+        tab.forces(0.006, 0.006, 1e5, None, 8e10, 0.0, 0.0, 0.0)
+    with pytest.raises(RailContactError, match="creep table: eta must be a number, got '0'"):
+        tab.forces(0.006, 0.006, 1e5, 0.3, 8e10, 0.0, "0", 0.0)
+    with pytest.raises(RailContactError, match="creep table: xi must be a number, got 1j"):
+        tab.forces(0.006, 0.006, 1e5, 0.3, 8e10, 1j, 0.0, 0.0)
+    with pytest.raises(RailContactError, match="creepage_x must be a number, got None"):
+        tab.normalised({"ellipse_ratio": 1.0, "creepage_x": None})
+    with pytest.raises(RailContactError, match="a state is a mapping of axis name to value"):
+        tab.normalised([1.0, 0.0])
     with pytest.raises(RailContactError, match="not a contact table"):
         ContactTable.open(out)
     with pytest.raises(RailContactError, match=r"is a contact table, not a creep table: "

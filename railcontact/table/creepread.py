@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import csv
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import RailContactError
+from ..errors import RailContactError, check_number
 from .creep import COEFFICIENT_STATUS, COEFFICIENTS, OUTPUTS
 from .creepspec import CREEP_AXES, CREEPAGES, KIND, RATIO, scales
 from .spec import DEFAULT_POLICY
@@ -104,6 +105,11 @@ class CreepTable:
             value outside an axis of policy ``status``, a creepage the table has no axis
             for, or a node not ok around the state.
         """
+        if not isinstance(state, Mapping):
+            raise RailContactError(f"creep table {self.path}: a state is a mapping of axis "
+                                   f"name to value, got {state!r}")
+        state = {n: check_number(f"creep table {self.path}: {n}", v)
+                 for n, v in state.items()}
         for n, v in state.items():
             if not np.isfinite(v):
                 raise RailContactError(f"creep table {self.path}: {n} must be finite, "
@@ -184,6 +190,10 @@ class CreepTable:
             For a non-positive a, b, load, friction or shear, another Poisson's ratio,
             and as :meth:`normalised`.
         """
+        a, b, load, friction, shear, xi, eta, phi = (
+            check_number(f"creep table: {what}", v) for what, v in (
+                ("a", a), ("b", b), ("load", load), ("friction", friction), ("shear", shear),
+                ("xi", xi), ("eta", eta), ("phi", phi)))
         for what, v in (("a", a), ("b", b), ("load", load), ("friction", friction),
                         ("shear", shear)):
             if not (np.isfinite(v) and v > 0.0):
@@ -192,6 +202,8 @@ class CreepTable:
         for what, v in (("xi", xi), ("eta", eta), ("phi", phi)):
             if not np.isfinite(v):
                 raise RailContactError(f"creep table: {what} must be finite, got {v!r}")
+        if poisson is not None:
+            poisson = check_number("creep table: poisson", poisson)
         if poisson is not None and abs(poisson - self.poisson) > POISSON_TOLERANCE:
             raise RailContactError(f"creep table {self.path} holds Poisson's ratio "
                                    f"{self.poisson:g}; the state has {poisson:g}")

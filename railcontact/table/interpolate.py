@@ -4,7 +4,8 @@ axes.
 ``linear`` is multilinear over the axes (the nodes around the point, weights the products
 of the fractions along each axis; a point on a node returns the node's values exactly);
 ``cubic`` needs at least 4 nodes on every axis: on a wheel whose nodes are all ok it is
-scipy's tensor-product cubic spline (``RegularGridInterpolator``, method ``"cubic"``); when
+the tensor-product not-a-knot cubic spline through all of them (:func:`cubic_spline`; it
+reproduces a cubic polynomial and returns each node's values); when
 some node of that wheel is not ok (NaN values: no contact, out of range, not converged, not
 computed) a spline, which depends on whole grid lines, cannot be fitted, so it is the local
 tensor-product cubic through the 4 nodes around the point on each axis when all of those are
@@ -24,13 +25,14 @@ import bisect
 import json
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numba
 import numpy as np
 
-from ..errors import CaseError, RailContactError
+from ..errors import CaseError, RailContactError, check_number
 from ..status import Status
 from .spec import AXES, DEFAULT_POLICY, parse_policies
 from .store import (
@@ -125,6 +127,23 @@ def _multilinear(knots, meta, x, table, out):  # pragma: no cover - jit
         for q in range(nq):
             out[q] += w * table[r, q]
     return base
+
+
+def cubic_spline(axes: tuple[np.ndarray, ...], values: np.ndarray):
+    """The tensor-product cubic spline with not-a-knot ends through ``values`` (shape
+    (n1, ..., nd, ...): a node's quantities last) on the nodes ``axes`` (each at least 4,
+    increasing): scipy's ``NdBSpline``, its coefficients solved exactly along one axis after
+    the other (``make_interp_spline``'s banded solve; scipy's ``RegularGridInterpolator``
+    with ``method="cubic"`` solves the whole system iteratively, to about 1e-6, and misses
+    the nodes by that much)."""
+    from scipy.interpolate import NdBSpline, make_interp_spline
+
+    c, knots = np.asarray(values, dtype=float), []
+    for k, nodes in enumerate(axes):
+        b = make_interp_spline(np.asarray(nodes, dtype=float), c, k=3, axis=k)
+        knots.append(b.t)
+        c = np.moveaxis(b.c, 0, k)  # (the BSpline's coefficients: its axis first)
+    return NdBSpline(tuple(knots), c, 3)
 
 
 def _lagrange4(nodes: list[float], v: float) -> np.ndarray:
@@ -284,6 +303,9 @@ class ContactTable:
                                    f"{', '.join(self.sides)})") from None
 
     def _coordinates(self, point: dict[str, float]) -> list[float]:
+        if not isinstance(point, Mapping):
+            raise RailContactError("a table's point is a mapping of axis name to value "
+                                   f"(its axes: {', '.join(self.axes)}), got {point!r}")
         missing = [n for n in self.axes if n not in point]
         extra = [n for n in point if n not in self.axes]
         if missing or extra:
@@ -292,7 +314,8 @@ class ContactTable:
                 + (f"missing {', '.join(missing)}" if missing else "")
                 + ("; " if missing and extra else "")
                 + (f"not axes of this table: {', '.join(extra)}" if extra else ""))
-        x = [float(point[n]) for n in self.axes]
+        x = [check_number(n, point[n], "" if AXES[n].unit == "1" else AXES[n].unit)
+             for n in self.axes]
         x, _ = self.clamp(x)
         for n, nodes, v in zip(self.axes, self._nodes, x, strict=True):
             if not nodes[0] <= v <= nodes[-1]:  # NaN fails too
@@ -373,10 +396,8 @@ class ContactTable:
         key = self.sides[j]
         if bool(np.all(self._status[..., j] == OK)):  # a spline over the whole grid
             if key not in self._cubic:
-                from scipy.interpolate import RegularGridInterpolator
-
-                self._cubic[key] = RegularGridInterpolator(
-                    tuple(self.axes.values()), self._values[..., j, :], method="cubic")
+                self._cubic[key] = cubic_spline(tuple(self.axes.values()),
+                                                self._values[..., j, :])
             return self._cubic[key](np.array([x]))[0], OK
         # Some node of this wheel is not ok (NaN values): a spline would depend on it along
         # whole grid lines, so use the local cubic through the 4 nodes around x on each axis
@@ -394,8 +415,22 @@ class ContactTable:
         return vals, OK
 
     def node(self, index: tuple[int, ...], side: str = "left") -> Interpolated:
-        """The stored values of the node ``index`` (one index per axis)."""
+        """The stored values of the node ``index`` (one index per axis, each from 0 to the
+        axis's nodes less one)."""
         j = self._side(side)
+        shape = tuple(len(v) for v in self._nodes)
+        try:
+            ok = (len(index) == len(shape)
+                  and all(isinstance(i, (int, np.integer)) and not isinstance(i, bool)
+                          and 0 <= i < n for i, n in zip(index, shape, strict=True)))
+        except TypeError:  # (not a sequence)
+            ok = False
+        if not ok:
+            ranges = ", ".join(f"{a}: 0 .. {n - 1}"
+                               for a, n in zip(self.axes, shape, strict=True))
+            raise RailContactError(f"a node's index is one integer per axis ({ranges}), "
+                                   f"got {index!r}")
+        index = tuple(int(i) for i in index)
         return Interpolated(dict(zip(self.names, map(float, self._values[(*index, j)]),
                                      strict=True)), int(self._status[(*index, j)]))
 

@@ -54,10 +54,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import RailContactError, check_finite, check_positive
+from ..errors import RailContactError, check_positive
 from ..geometry.track import SIDES, Pose
 from ..settings import ContactSettings
-from ..timestep.inputs import per_wheel
+from ..timestep.inputs import checked_inputs, per_wheel
 from ..timestep.memory import EMPTY as EMPTY_MEMORY
 from ..timestep.memory import StepMemory
 from ..timestep.validity import check_limits, derailment_quotient
@@ -98,13 +98,19 @@ class TableContact:
     Raises
     ------
     RailContactError
-        For an unknown method, ``cubic`` on a table with an axis of fewer than 4 nodes,
+        For a ``table`` or ``settings`` of another type, an unknown method, ``cubic`` on
+        a table with an axis of fewer than 4 nodes,
         a table without ``penetration`` (an earlier store) or
         whose wheel flange is neither stored nor readable from its wheel profile.
     """
 
     def __init__(self, table: ContactTable, method: str = "linear",
                  settings: ContactSettings | None = None) -> None:
+        if not isinstance(table, ContactTable):
+            raise RailContactError("table must be a ContactTable (ContactTable.open(path)), "
+                                   f"got {table!r}")
+        if settings is not None and not isinstance(settings, ContactSettings):
+            raise RailContactError(f"settings must be ContactSettings, got {settings!r}")
         if method not in ("linear", "cubic"):
             raise RailContactError(f"method must be 'linear' or 'cubic', got {method!r}")
         short = [f"{n} ({len(v)})" for n, v in table.axes.items() if len(v) < 4]
@@ -170,28 +176,24 @@ class TableContact:
         a track curvature: given, they are an error. ``friction`` (left, right) [-] is
         looked up on the table's friction axis (None: ``settings.friction`` on both); a
         table without one refuses it."""
+        t0 = perf_counter()
+        if vertical is not None or loads is None:
+            raise RailContactError("a contact table is built by wheel load: give loads "
+                                   "(left, right) [N] (penetration control is not in a table)")
+        # the inputs checked as WheelsetContact checks them (each named where it is not a
+        # number of its kind: a pose that is not a Pose, a load or creepage not a finite
+        # float, a creepage not three of them)
+        pose, (ql, qr), _, creepages, kinematics, _ = checked_inputs(
+            pose, loads, None, creepages, kinematics, time, "railcontact")
         if rails is not None or (kinematics is not None and kinematics.curvature != 0.0):
             raise RailContactError("a contact table has no axes for rail deviations or the "
                                    "track curvature; solve with the exact contact "
                                    "(contact_model = bem)")
         mus = self._friction(friction)
-        t0 = perf_counter()
-        if vertical is not None or loads is None:
-            raise RailContactError("a contact table is built by wheel load: give loads "
-                                   "(left, right) [N] (penetration control is not in a table)")
-        ql, qr = loads
         if creepages is not None:
             (xl, el, pl), (xr, er, pr) = creepages
         else:
             xl = el = pl = xr = er = pr = 0.0
-        if not math.isfinite(ql + qr + xl + el + pl + xr + er + pr + pose.lateral + pose.yaw):
-            for name, v, unit in (("left wheel load", ql, "N"), ("right wheel load", qr, "N"),
-                                  ("lateral_displacement", pose.lateral, "m"),
-                                  ("yaw", pose.yaw, "rad")):  # as Pose names them
-                check_finite(name, v, unit)
-            raise RailContactError(f"creepages must be finite numbers, got {creepages!r}")
-        for side, q in (("left", ql), ("right", qr)):  # as WheelsetContact
-            check_positive(f"{side} wheel load", q, "N", allow_zero=True)
         kin = kinematics if creepages is None else None
         left = self._wheel("left", pose, ql, (xl, el, pl), kin, mus[0])
         right = self._wheel("right", pose, qr, (xr, -er, -pr), kin, mus[1])

@@ -218,7 +218,19 @@ def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics |
                 time: float | None, setups: tuple[WheelSetup, WheelSetup],
                 convention: str) -> StepInputs:
     """A step's inputs checked (:meth:`~railcontact.timestep.WheelsetContact.solve`'s
-    parameters; creepages given in CONTACT's ``convention`` turned into railcontact's)."""
+    parameters, :func:`checked_inputs`) with each wheel's ``setups``."""
+    return StepInputs(*checked_inputs(pose, loads, vertical, creepages, kinematics, time,
+                                      convention), setups)
+
+
+def checked_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics | None,
+                   time: float | None, convention: str) -> tuple:
+    """A step's inputs checked, ``(pose, loads, vertical, creepages, kinematics, time)``:
+    :meth:`~railcontact.timestep.WheelsetContact.solve`'s parameters as numbers of their
+    kinds (a :class:`RailContactError` naming the first that is not; the loads and
+    creepages as floats, creepages given in CONTACT's ``convention`` turned into
+    railcontact's). A table step (:class:`~railcontact.table.TableContact`) checks its
+    inputs here too."""
     if not isinstance(pose, Pose):
         raise RailContactError(f"pose must be a Pose, got {pose!r}")
     if (loads is None) == (vertical is None):
@@ -246,7 +258,7 @@ def step_inputs(pose: Pose, loads, vertical, creepages, kinematics: Kinematics |
             creepages = tuple(wheel_frame_creepage(c) for c in creepages)
     if time is not None:
         time = check_finite("time", time, "s")
-    return StepInputs(pose, loads, vertical, creepages, kinematics, time, setups)
+    return pose, loads, vertical, creepages, kinematics, time
 
 
 def _creepage(name: str, value) -> float:
