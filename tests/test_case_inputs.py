@@ -41,6 +41,17 @@ def test_a_length_in_millimetres_is_refused_with_its_unit(name, match, monkeypat
     assert "lateral_displacement" not in err
 
 
+@pytest.mark.parametrize("value, shown", [
+    (1.000005e8, "got 100000500.0"), (2e8, "got 2e+08"), (-1e-3, "got -0.001")])
+def test_a_value_just_beyond_a_bound_is_shown_beyond_it(value, shown):
+    """A value beyond a setting's bound that %g rounds onto the bound is shown in full
+    (was: "must be >= 0 and <= 1e+08, got 1e+08"); others keep their %g form."""
+    from railcontact.settings.case import NormalSettings
+    with pytest.raises(rc.CaseError, match=re.escape(f"[normal] load [N] must be >= 0 and "
+                                                     f"<= 1e+08, {shown}")):
+        NormalSettings(load=value)
+
+
 @pytest.mark.parametrize("key, value, mm", [
     ("wheel_radius", 0.1, False), ("wheel_radius", 460.0, True), ("wheel_radius", 2.0, False),
     ("gauge", 1435.0, True), ("gauge", 0.1, False), ("back_to_back", 1360.0, True),

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 
 import numpy as np
 import pytest
@@ -318,6 +319,25 @@ def test_kinds_in_a_contact_spec(tmp_path, capsys):
     assert "creep table" in capsys.readouterr().out
     assert math.isclose(CreepTable(tmp_path / "c.zarr").normalised(
         {"ellipse_ratio": 1.0, "creepage_x": 2.0})[0][0], -1.0, abs_tol=1e-3)
+
+
+@pytest.mark.parametrize("axis, nodes, words", [
+    ("creepage_x", [0.0, 1e6, 2], "[table] creepage_x: the node 1e+06 is, at ellipse_ratio "
+     "= 0.5 and the reference load, a longitudinal creepage of "),
+    ("spin", [-1e7, 0.0, 2], "[table] spin: the node -1e+07 is, at ellipse_ratio = "),
+])
+def test_a_creepage_axis_beyond_the_solver_is_refused_by_name(axis, nodes, words):
+    """A normalised creepage node whose physical creepage at the reference load exceeds
+    the solver's bound (1e3): refused when the spec is read, naming the axis, the node, the
+    ellipse ratio and the physical value (was: "[tangential] creepage[0] must be >= -1000
+    and <= 1000, got 8700.08" at the build, naming neither the axis nor the node)."""
+    raw = {"material": {"young": 206e9, "poisson": 0.28}, "tangential": {"friction": 0.3},
+           "table": {"kind": "creep", "ellipse_ratio": {"values": [0.5, 2.0]}, axis: nodes}}
+    with pytest.raises(CaseError, match=re.escape(words)) as err:
+        parse_creep_spec(raw)
+    assert "the solver takes at most +-1000" in str(err.value)
+    physical = float(str(err.value).split(" of ")[1].split(";")[0].split()[0])
+    assert abs(physical) > 1e3
 
 
 def test_a_failed_linear_limit_keeps_the_table(tmp_path, monkeypatch, capsys):

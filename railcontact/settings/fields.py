@@ -235,7 +235,10 @@ class Record:
             if spec.unit == "m" and spec.admits(x / 1000.0):
                 hint = (f"; {x:g} looks like millimetres: {x:g} mm is {x / 1000.0:g} m "
                         "(lengths are in metres)")
-            cls._fail(f"{where}{unit} must be {word}, got {x:g}{hint}")
+            got = f"{x:g}"
+            if any(b is not None and got == f"{b:g}" for b in (lo, hi)):
+                got = repr(x)  # (%g would round it onto the bound it passes)
+            cls._fail(f"{where}{unit} must be {word}, got {got}{hint}")
         return x
 
     @classmethod

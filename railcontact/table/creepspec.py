@@ -55,6 +55,7 @@ from ..errors import CaseError
 from ..halfspace.hertz import curvature_ratio, hertz
 from ..halfspace.materials import ElasticPair
 from ..settings import Case
+from ..settings.case import MAX_CREEPAGE
 from ..tangential.kalker import creep_coefficients
 from .spec import (
     CREEP_KIND,
@@ -77,6 +78,8 @@ CREEP_AXES: dict[str, tuple[str, str]] = {
 }
 """The axes of a creep table: name -> (unit, long name), in storage order."""
 CREEPAGES = ("creepage_x", "creepage_y", "spin")
+CREEPAGE_WORDS = ("longitudinal creepage", "lateral creepage", "spin")
+"""What each of :data:`CREEPAGES` is as a physical creepage (xi [-], eta [-], phi [1/m])."""
 OPTIONS = ("kind", "out_of_range")
 REFERENCE_LOAD = 100e3
 """The normal force [N] of the solves when the case gives none (the results do not
@@ -272,5 +275,30 @@ def parse_creep_spec(raw: dict[str, Any]) -> CreepSpec:
         raise CaseError("[table] kind = 'creep' takes quasi-identical bodies (one material, "
                         "or two of the same (1 - 2 nu)/G): the normalised solution depends on "
                         "a/b and nu alone only then")
-    return CreepSpec(case=d, axes=axes, out_of_range=parse_policies(table.get("out_of_range"),
+    spec = CreepSpec(case=d, axes=axes, out_of_range=parse_policies(table.get("out_of_range"),
                                                                      names))
+    _check_physical_creepages(spec)
+    return spec
+
+
+def _check_physical_creepages(spec: CreepSpec) -> None:
+    """Raise a :class:`CaseError` naming the creepage axis whose largest node is, at some
+    ellipse ratio of the table, a creepage beyond the solver's
+    :data:`~railcontact.settings.case.MAX_CREEPAGE` (the nodes are normalised; each solve
+    takes the physical creepages of the reference load)."""
+    for ratio in spec.axes[RATIO]:
+        per = case_scales(spec.case_at(float(ratio))).per_creepage()
+        for k, name in enumerate(CREEPAGES):
+            nodes = spec.axes.get(name)
+            if nodes is None:
+                continue
+            node = max(nodes, key=abs)
+            physical = node / per[k]
+            if not abs(physical) <= MAX_CREEPAGE:
+                unit = " 1/m" if name == "spin" else ""
+                raise CaseError(
+                    f"[table] {name}: the node {node:g} is, at {RATIO} = {ratio:g} and the "
+                    f"reference load, a {CREEPAGE_WORDS[k]} of {physical:.6g}{unit}; the "
+                    f"solver takes at most +-{MAX_CREEPAGE:g}, a normalised "
+                    f"{abs(node) * MAX_CREEPAGE / abs(physical):.3g} there (the creep forces "
+                    "saturate, full slip, long before)")
