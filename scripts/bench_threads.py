@@ -4,7 +4,8 @@ Two :class:`railcontact.WheelsetContact` instances run the hunting-like run of
 ``scripts/bench_step.py`` (S1002 on 60E1 at 1:40, 0.5 mm elements, mu = 0.4, 83.3 kN per
 wheel with the creep forces counted, 30 m/s, kinematic creepages, warm starts, 1 ms steps)
 on two different lateral trajectories: A a 3 mm sine at 1.5 Hz, B a 2 mm sine at 2.1 Hz
-with a phase of 0.7 rad. Each repetition runs them
+with a phase of 0.7 rad; ``--element-size`` sets another element size (finer elements:
+longer compiled calls beside about the same Python a step). Each repetition runs them
 
 * one after the other on one worker thread (``sequential``), and
 * at the same time, one on each of two worker threads (``threaded``),
@@ -61,7 +62,8 @@ taking the GIL, as at a GIL hand-over between two stepping wheelsets. On a virtu
 whose idle cores halt (Linux's cpuidle ``haltpoll`` with ``guest_halt_poll_ns`` 0, printed
 when present) a core that waited longer wakes slower.
 
-Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--profile | --timeline]
+Usage: python scripts/bench_threads.py [--steps 100] [--repeats 5] [--element-size 0.0005]
+                                      [--profile | --timeline]
                                       [--switch-interval SECONDS]
                                       [--synthetic PYTHON_US,KERNEL_US,CALLS |
                                        --synthetic P1:K1,P2:K2,... | --handoff]
@@ -94,13 +96,18 @@ TRAJECTORIES = {"A": (3e-3, 1.5, 0.0), "B": (2e-3, 2.1, 0.7)}
 """Lateral displacement amplitude [m], frequency [Hz] and phase [rad] of each run."""
 
 
+ELEMENT_SIZE = 0.5e-3
+"""The patch grids' element size [m] (``--element-size``; ``bench_step.py``'s 0.5 mm by
+default)."""
+
+
 def contact(mode: str = "previous+estimate") -> rc.WheelsetContact:
     """A new wheelset (its own track, profiles and settings, as two FMU instances have)."""
     return rc.WheelsetContact(
         rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
         rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
         rc.ElasticPair.of(rc.STEEL, rc.STEEL),
-        rc.ContactSettings(friction=0.4, element_size=0.5e-3, warm_start=mode))
+        rc.ContactSettings(friction=0.4, element_size=ELEMENT_SIZE, warm_start=mode))
 
 
 def run(name: str, steps: int, step: float = 1e-3) -> list[tuple]:
@@ -530,6 +537,7 @@ def handoff(exchanges: int, repeats: int) -> None:
 
 
 def main() -> None:
+    global ELEMENT_SIZE
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--repeats", type=int, default=5)
@@ -538,6 +546,9 @@ def main() -> None:
     ap.add_argument("--timeline", action="store_true", help="the sequence of one step "
                     "instead: the Python before each compiled call, each call, whether it "
                     "releases the GIL")
+    ap.add_argument("--element-size", type=float, default=ELEMENT_SIZE, help="the patch "
+                    "grids' element size [m] (finer: longer compiled calls for the same "
+                    "Python a step)")
     ap.add_argument("--switch-interval", type=float, default=None, help="sys."
                     "setswitchinterval [s] for the run (Python's default: 0.005)")
     ap.add_argument("--synthetic", metavar="PYTHON_US,KERNEL_US,CALLS", default=None,
@@ -546,6 +557,7 @@ def main() -> None:
                     "between two threads instead (a ping-pong of --steps x 100 exchanges, "
                     "--repeats runs)")
     args = ap.parse_args()
+    ELEMENT_SIZE = args.element_size
     if args.handoff:
         handoff(100 * args.steps, args.repeats)
         return
@@ -567,7 +579,8 @@ def main() -> None:
         for worker in workers:
             worker.result()
         print(f"{os.cpu_count()} cores; {args.steps} steps of 1 ms per wheelset, two "
-              f"wheelsets (trajectories {', '.join(TRAJECTORIES)})")
+              f"wheelsets (trajectories {', '.join(TRAJECTORIES)}), elements "
+              f"{ELEMENT_SIZE * 1e3:g} mm")
         spin = _synthetic_kernel()
         spin(10)
         per_k = _per_microsecond(spin, 2_000_000)
