@@ -166,3 +166,25 @@ def test_first_point_is_on_the_profiles(y):
     slope = float(WS.wheel.slope(cp.wheel_s))
     r = WS.radius + float(WS.wheel.height(cp.wheel_s))
     assert cp.A == pytest.approx(1.0 / (math.sqrt(1 + slope * slope) * 2 * r), rel=1e-4)
+
+
+def test_the_search_forms_the_merges_of_its_contact_regions():
+    """The search's merges (:attr:`~railcontact.geometry.points.WheelSearch.merges`, formed
+    in its compiled pass with MIN_LOBE) are merge_saddles of its trace's gap, bit for bit,
+    on both wheels at poses on the tread and the flange, two of which have merges; read-only;
+    merge_approaches returns them for MIN_LOBE and forms others for another lobe."""
+    with_merges = 0
+    for pose in POSES + [Pose(x * 1e-3) for x in (-8.0, -4.0, 4.5, 6.0, 6.6, 8.0)]:
+        for side in ("left", "right"):
+            try:
+                found = search.search_wheel(TRACK, WS, pose, side)
+            except RailContactError:  # (beside its rail)
+                continue
+            want = kernels.merge_saddles(found.trace[4], found.least_gap, points.MIN_LOBE)
+            assert np.array_equal(found.merges, want)
+            assert not found.merges.flags.writeable
+            assert points.merge_approaches(found, points.MIN_LOBE) is found.merges
+            assert np.array_equal(points.merge_approaches(found, 0.0),
+                                  kernels.merge_saddles(found.trace[4], found.least_gap, 0.0))
+            with_merges += found.merges.size > 0
+    assert with_merges >= 2

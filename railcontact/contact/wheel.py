@@ -62,8 +62,8 @@ class WheelProblem(NamedTuple):
     merges
         The vertical approaches [m] at which two of the wheel's contact regions join into
         one patch (:func:`~railcontact.geometry.points.merge_approaches`, the saddles of
-        at least :data:`~.wheelrail.MIN_LOBE`), increasing; checked for another root of a
-        load (:func:`~.loadloop.first_root`).
+        at least :data:`~railcontact.geometry.points.MIN_LOBE`), increasing; checked for
+        another root of a load (:func:`~.loadloop.first_root`).
     found
         The wheel searched at the pose (:func:`~railcontact.geometry.search.search_wheel`):
         what its contact points and patch frames are formed from; None without a load or

@@ -48,6 +48,7 @@ from scipy.optimize import brentq
 from ..errors import CaseError, ConvergenceError, RailContactError, SolverError
 from ..geometry.kinematics import PatchKinematics, WheelsetMotion, patch_kinematics
 from ..geometry.points import (
+    MIN_LOBE,
     ContactPoint,
     ReferencePoint,
     WheelSearch,
@@ -735,13 +736,6 @@ CENTRE_HINT = 5e-3
 """Lateral wheelset displacement [m] within which a wheel off its rail points at the
 profiles (a wheelset near the track centre does not climb its flange on track profiles):
 the error says so."""
-
-MIN_LOBE = 0.05
-"""Saddles whose shallower lobe is less deep than this share of the saddle's approach are
-ripples of the profiles, not checked for another root (:func:`~.loadloop.first_root`):
-the lobe's own run carries about ``0.05^(3/2)`` ~ 1 % of the load (Hertz, the same
-curvatures)."""
-
 
 def mark_other(ps: list[PatchSolution], other: float | None) -> list[PatchSolution]:
     """The patches with :attr:`~.results.PatchSolution.load_other` ``other`` [m] and

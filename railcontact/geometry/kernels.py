@@ -938,25 +938,30 @@ def rigid_record(eta, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back,
 @numba.njit(cache=True, nogil=True)
 def search_wheel(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx, u_ws, lo, hi, ur, zr, rx, rc,
                  wx, wc, radius, half_bb, flange_back, s, k0, denominator, pu, pz, order,
-                 pu_sorted, py, out):
+                 pu_sorted, py, min_lobe, out):
     """One wheel searched at a pose in one pass: its trace (:func:`trace_gap`, written to
-    ``out``) and, where its least gap is finite and on one sample, its first rigid contact
-    point (:func:`rigid_point` of that sample alone) with what :func:`rigid_record` gives
-    of it. Returns (n, the least gap, its first index, whether u increase, how many samples
-    have the least gap, whether the point is formed, its row (8) and (A, B, rail
-    coordinate)); the point is not formed for fewer than 10 trace points."""
+    ``out``), the heights at which its contact regions merge (:func:`merge_saddles` of the
+    trace's gap with ``min_lobe``) and, where its least gap is finite and on one sample,
+    its first rigid contact point (:func:`rigid_point` of that sample alone) with what
+    :func:`rigid_record` gives of it. Returns (n, the least gap, its first index, whether u
+    increase, how many samples have the least gap, the merges, whether the point is formed,
+    its row (8) and (A, B, rail coordinate)); neither the merges nor the point are formed
+    for fewer than 10 trace points."""
     n, g_min, k, increasing, ties = trace_gap(eta, r, dr, yawed, tan_psi, cz, sz, cx, sx,
                                               u_ws, radius, lo, hi, rx, rc, out)
     nan = math.nan
-    if n < 10 or ties != 1 or not math.isfinite(g_min):
-        return (n, g_min, k, increasing, ties, False, (nan, nan, nan, nan, nan, nan, nan, nan),
-                (nan, nan, nan))
+    no_point = (nan, nan, nan, nan, nan, nan, nan, nan)
+    if n < 10:
+        return n, g_min, k, increasing, ties, np.empty(0), False, no_point, (nan, nan, nan)
+    merges = merge_saddles(out[4, :n], g_min, min_lobe)
+    if ties != 1 or not math.isfinite(g_min):
+        return n, g_min, k, increasing, ties, merges, False, no_point, (nan, nan, nan)
     e, x, u, z, g = out[0, :n], out[1, :n], out[2, :n], out[3, :n], out[4, :n]
     row = rigid_point(e, x, u, g, g_min, k, k + 1, rx, rc, wx, wc, half_bb, flange_back)
     rec = rigid_record(e, u, z, g_min, ur, zr, wx, wc, radius, half_bb, flange_back, row[2],
                        row[3], row[5], row[0], s, k0, denominator, increasing, pu, pz, order,
                        pu_sorted, py)
-    return n, g_min, k, increasing, ties, True, row, rec
+    return n, g_min, k, increasing, ties, merges, True, row, rec
 
 
 @numba.njit(cache=True, nogil=True)

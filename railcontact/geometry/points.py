@@ -64,6 +64,14 @@ integrated along the track over the overlap ``e - x^2 / (2 r)`` gives ``e^(5/2)`
 matched to 0.01 mm and 0.001 rad, with 2 or 3 not)."""
 
 
+MIN_LOBE = 0.05
+"""Saddles whose shallower lobe is less deep than this share of the saddle's approach are
+ripples of the profiles, not checked for another root (:func:`~railcontact.contact.
+loadloop.first_root`): the lobe's own run carries about ``0.05^(3/2)`` ~ 1 % of the load
+(Hertz, the same curvatures). The search forms the merges with it
+(:attr:`WheelSearch.merges`)."""
+
+
 class WheelSearch(NamedTuple):
     """One wheel searched at a pose (:func:`~.search.search_wheel`): what every contact
     point and patch frame of the wheel at that pose is formed from (SI units, side frame;
@@ -88,6 +96,10 @@ class WheelSearch(NamedTuple):
         The first rigid contact point as the search formed it: its row of
         :func:`~.kernels.rigid_point` and its :func:`~.kernels.rigid_record`; None where
         the least gap is not on one sample (:func:`contact_points` forms it then).
+    merges
+        The approaches [m] at which its contact regions merge, with :data:`MIN_LOBE`
+        (:func:`merge_approaches`), as the search formed them; None: formed when asked
+        for.
     """
 
     track: Track
@@ -102,6 +114,9 @@ class WheelSearch(NamedTuple):
     rail: tuple
     wheel: tuple
     first: tuple | None = None
+    merges: np.ndarray | None = None
+    """:func:`merge_approaches` with :data:`MIN_LOBE`, as the search formed it (None: formed
+    when asked for)."""
 
     def __repr__(self) -> str:  # (without the arrays)
         return (f"WheelSearch(track={self.track!r}, wheelset={self.wheelset!r}, "
@@ -419,7 +434,10 @@ def merge_approaches(found: WheelSearch, min_lobe: float = 0.0) -> np.ndarray:
     contact regions (runs of :func:`contact_points`) join into one patch, increasing: the
     saddles of the trace's gap whose shallower lobe is at least ``min_lobe`` times the
     saddle's approach deep (a lobe shallower than that is a ripple of the profiles: its run
-    carries little of the load; :func:`~.kernels.merge_saddles`). Read-only."""
+    carries little of the load; :func:`~.kernels.merge_saddles`; with :data:`MIN_LOBE`
+    formed by the search itself, :attr:`WheelSearch.merges`). Read-only."""
+    if min_lobe == MIN_LOBE and found.merges is not None:
+        return found.merges
     out = kernels.merge_saddles(found.trace[4], found.least_gap, float(min_lobe))
     out.flags.writeable = False
     return out

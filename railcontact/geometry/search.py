@@ -64,10 +64,10 @@ def search_wheel(track: Track, ws: Wheelset, pose: Pose, side: str) -> WheelSear
     read them (:class:`~.points.WheelSearch`). Raises a :class:`RailContactError` when the
     wheel is beside its rail (the pose beyond the profiles)."""
     # (the kernel's least gap, sample, order and ties are a Python float, int, bool, int)
-    trace, g_min, k, increasing, ties, first, rail, wheel = _trace_of_pose(track, ws, pose,
-                                                                          side)
+    trace, g_min, k, increasing, ties, first, rail, wheel, merges = _trace_of_pose(
+        track, ws, pose, side)
     return WheelSearch(track, ws, pose, side, trace, g_min, k, increasing, ties, rail, wheel,
-                       first)
+                       first, merges)
 
 
 def vertical_gap(track: Track, ws: Wheelset, pose: Pose, side: str):
@@ -134,22 +134,26 @@ def _trace(track: Track, ws: Wheelset, pose: Pose, side: str, formed: tuple | No
     rigid contact point (its row of :func:`~.kernels.rigid_point` and its
     :func:`~.kernels.rigid_record`; None where the least gap is not on one sample): one
     compiled pass (:func:`~.kernels.search_wheel`); then the rail and the wheel as it read
-    them (:func:`rail_arrays`, :func:`wheel_arrays`). ``formed``: the track's and the
-    wheelset's part of that pass (:func:`_search_arguments`), when the caller holds it."""
+    them (:func:`rail_arrays`, :func:`wheel_arrays`), and the approaches at which the
+    wheel's contact regions merge (:func:`~.points.merge_approaches` with
+    :data:`~.points.MIN_LOBE`, formed in the same pass; read-only). ``formed``: the track's
+    and the wheelset's part of that pass (:func:`_search_arguments`), when the caller holds
+    it."""
     if side not in SIDES:
         raise RailContactError(f"side must be 'left' or 'right', got {side!r}")
     sgn = SIDES[side]
     psi, phi = sgn * pose.yaw, sgn * pose.roll
     eta, r, dr, tail, rail, wheel = formed or _search_arguments(track, ws)
     out = np.empty((5, eta.size))
-    n, g_min, k, increasing, ties, found, row, rec = kernels.search_wheel(
+    n, g_min, k, increasing, ties, merges, found, row, rec = kernels.search_wheel(
         eta, r, dr, psi != 0.0, math.tan(psi), math.cos(psi), math.sin(psi), math.cos(phi),
-        math.sin(phi), float(sgn * pose.lateral), *tail, out)
+        math.sin(phi), float(sgn * pose.lateral), *tail, _points.MIN_LOBE, out)
     if n < 10:
         raise RailContactError(f"{side} wheel is beside its rail (lateral displacement "
                                f"{pose.lateral:g} m is beyond the profiles)")
+    merges.flags.writeable = False
     return (out[:, :n], g_min, k, increasing, ties, (row, rec) if found else None, rail,
-            wheel)
+            wheel, merges)
 
 
 def _search_arguments(track: Track, ws: Wheelset) -> tuple:
