@@ -460,6 +460,7 @@ class Slave:
                 f"with railcontact fmu build --wheelsets {self['wheelsets']})")
         built = self._parameters(self.real, self.integer, self.strings)
         ps = V.parameter_settings(built)
+        self._show_choices(built)
         self.modes = ps.modes
         names = _read_inputs(ps.modes)  # (what a step reads, and where)
         self._reads = (names, tuple(n for n in names if n.startswith("load_")
@@ -591,6 +592,19 @@ class Slave:
                 "friction of a wheel whose input friction_left/right is <= 0; set it within "
                 "the axis")
         return table
+
+    def _show_choices(self, values: dict) -> None:
+        """Each String parameter with an enumeration (``<name>_choice``) and the
+        enumeration set to the word the solver was built with (:func:`~railcontact.fmu.
+        variables.resolve_choices` of the parameter ``values``): a host reads back the
+        setting in force whichever of the two it set."""
+        resolved = V.resolve_choices(values)
+        for v in V.CHOICES:
+            base = v.name.removesuffix(V.CHOICE_SUFFIX)
+            word = resolved.get(base)
+            if word in v.items:  # (the settings took it: one of them)
+                self[base] = word
+                self[v.name] = v.items.index(word) + 1
 
     def _exit_initialization(self) -> int:
         self._fell_back = False

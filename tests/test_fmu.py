@@ -914,6 +914,9 @@ def test_enumerations_set_before_initialization_take_effect(md, extracted):
                 continue
             s = _instantiate(md, extracted, f"{base}-{k}", {c.name: k}, reals=coarse)
             assert not isinstance(s, int), (c.name, word)
+            # the String parameter reads back the word in force (was: its default)
+            assert _string(md, s, base) == word, (c.name, word)
+            assert s.getInteger([_vr(md, c.name)])[0] == k
             # the slave's own settings took the word (pyfftw and scipy answer alike)
             slave = _slave_named(f"{base}-{k}")
             record, key = sources[base]
@@ -950,6 +953,21 @@ def test_enumeration_errors_name_the_parameters(md, extracted, capsys):
     s = _instantiate(md, extracted, "same", {"warm_start_choice": 1}, {"warm_start": "none"})
     assert not isinstance(s, int)
     s.freeInstance()
+    # the String alone: its enumeration reads back the word's number (was: its default)
+    s = _instantiate(md, extracted, "string", {}, {"warm_start": "none"})
+    assert s.getInteger([_vr(md, "warm_start_choice")])[0] == 1
+    assert _string(md, s, "warm_start") == "none"
+    s.freeInstance()
+
+
+def _vr(md, name: str) -> int:
+    return next(v.valueReference for v in md.modelVariables if v.name == name)
+
+
+def _string(md, s, name: str) -> str:
+    """The String variable ``name`` of the FMU2Slave ``s`` (fmpy gives bytes or str)."""
+    value = s.getString([_vr(md, name)])[0]
+    return value.decode() if isinstance(value, bytes) else value
 
 
 def test_outside_validity_through_the_fmu(fmu, extracted, md, capsys):

@@ -168,6 +168,13 @@ def test_reset_builds_new_wheelsets_in_the_same_workers(pool):
     assert [p.pid for p in pool._processes] == pids
     with pytest.raises(RailContactError, match="3 wheelset descriptions expected"):
         pool.reset([description()])
+    # a description that is not one: named before any wheelset is reset (was an
+    # AttributeError from its worker, after the others were reset)
+    assert all(m.wheel("left") for m in pool.memories())  # (warm after the steps)
+    with pytest.raises(RailContactError,
+                       match="wheelset 3: a WheelsetDescription expected, got str"):
+        pool.reset([description(), description(), "nope"])
+    assert all(m.wheel("left") for m in pool.memories())  # none was reset
 
 
 def test_demo_vehicle_in_processes_runs_as_in_process(capsys, tmp_path):

@@ -304,7 +304,8 @@ INPUTS = [
         Variable(f"eta_{s}", "Real", "input", 0.0, "1",
                  f"lateral creepage, {s} wheel (creepage_input=direct): {_CREEP}"),
         Variable(f"phi_{s}", "Real", "input", 0.0, "1/m",
-                 f"spin creepage, {s} wheel (creepage_input=direct): {_CREEP} 1/m"))],
+                 f"spin creepage, {s} wheel (creepage_input=direct): {CREEPAGE_LIMITS[0]:g} "
+                 f"to {CREEPAGE_LIMITS[1]:g} 1/m{_OUTSIDE}"))],
     Variable("lateral_velocity", "Real", "input", 0.0, "m/s",
              "wheelset lateral velocity (creepage_input=kinematic)"),
     Variable("yaw_rate", "Real", "input", 0.0, "rad/s",
@@ -660,8 +661,11 @@ def variables_markdown() -> str:
         name, meaning = f"`{v.name}`", v.description
         if v.name.endswith("_left") and v.name[:-5] + "_right" in names:
             name = f"`{v.name[:-5]}_left`, `_right`"
-            meaning = (meaning.replace(", left wheel", "").replace("left wheel", "each wheel")
-                       .replace(", left (", " ("))
+            meaning = (meaning.replace(", left wheel", "").replace("the left wheel's",
+                                                                  "each wheel's")
+                       .replace("the left rail's", "each rail's")
+                       .replace("on the left rail", "on each rail")
+                       .replace("left wheel", "each wheel").replace(", left (", " ("))
         kind = v.type
         if v.items:
             kind = "Enumeration: " + ", ".join(f"{k} {w}" for k, w in

@@ -331,10 +331,7 @@ class WheelsetPool:
         n = len(descriptions)
         if n == 0:
             raise RailContactError("a wheelset pool needs at least one wheelset")
-        for i, d in enumerate(descriptions):
-            if not isinstance(d, WheelsetDescription):
-                raise RailContactError(f"wheelset {i + 1}: a WheelsetDescription expected, "
-                                       f"got {type(d).__name__}")
+        _check_descriptions(descriptions)
         if reduce is not None:
             try:
                 pickle.dumps(reduce)
@@ -519,13 +516,18 @@ class WheelsetPool:
 
         Raises
         ------
+        RailContactError
+            For descriptions that are not one :class:`WheelsetDescription` per wheelset
+            (before any wheelset is reset).
         Exception
             A wheelset that cannot be built (the worker's exception; the wheelsets of
             that worker stay as they were).
         """
-        if descriptions is not None and len(descriptions) != self.count:
-            raise RailContactError(f"{self.count} wheelset descriptions expected, got "
-                                   f"{len(descriptions)}")
+        if descriptions is not None:
+            if len(descriptions) != self.count:
+                raise RailContactError(f"{self.count} wheelset descriptions expected, got "
+                                       f"{len(descriptions)}")
+            _check_descriptions(descriptions)  # (before any wheelset is reset)
         self._check_open()
         error = None
         if self.here:
@@ -620,6 +622,15 @@ class WheelsetPool:
         """Whether every worker process runs."""
         return not self._closed and all(p.is_alive() for p in self._processes)
 
+
+
+def _check_descriptions(descriptions: Sequence[WheelsetDescription]) -> None:
+    """Raise a :class:`RailContactError` naming the first of ``descriptions`` that is not
+    a :class:`WheelsetDescription` (counted from 1)."""
+    for i, d in enumerate(descriptions):
+        if not isinstance(d, WheelsetDescription):
+            raise RailContactError(f"wheelset {i + 1}: a WheelsetDescription expected, "
+                                   f"got {type(d).__name__}")
 
 __all__ = ["START_METHOD", "RemoteError", "WheelsetDescription", "WheelsetPool",
            "worker_python"]
