@@ -131,6 +131,21 @@ def test_the_rigid_stage_carries_both_loads_at_one_vertical_position():
         assert w.track_force[2] == pytest.approx(q, rel=5e-3)
 
 
+def test_no_rigid_wheelset_is_reported_for_wheels_out_of_range():
+    """Wheels out of range (kinematic creepages beyond the solver's +-1e3 at a speed of
+    1 um/s): the wheelset is out of range and the rigid stage does not run, so no
+    vertical displacement or roll is reported (was: a "converged" rigid solution after
+    one evaluation, balancing wheels that have no solution)."""
+    contact = _contact(rigid_wheelset="solve")
+    r = contact.solve(rc.Pose(0.0), loads=(80e3, 80e3), kinematics=rc.Kinematics(1e-6, 0.01))
+    assert r.status == 3 and "beyond +-1000" in r.message
+    assert all(w.status == 3 for w in r.wheels)
+    assert r.vertical is None and r.roll is None and r.rigid_solution is None
+    # a step at a speed the creepages allow solves the rigid wheelset again
+    r = contact.solve(rc.Pose(0.0), loads=(80e3, 80e3), kinematics=rc.Kinematics(30.0, 0.01))
+    assert r.status == 0 and r.rigid_solution.converged and r.vertical is not None
+
+
 def test_a_wheel_contact_is_a_record_of_values():
     """A WheelContact's properties are read from its fields (no solver reference)."""
     w = WheelContact(side="left")

@@ -113,8 +113,9 @@ def rigid_wheelset_stage(step: StepInputs, found: Found, wheels: list[WheelConta
     remembered (``remember``) or the warm start does not use it (``settings``).
 
     Under penetration control the pose's vertical displacement and roll. Under load
-    control, when ``settings.rigid_wheelset`` is "solve" and no wheel is off its rail
-    (``off_track``), the vertical displacement and roll at which both ``wheels``,
+    control, when ``settings.rigid_wheelset`` is "solve", no wheel is off its rail
+    (``off_track``) and none is out of range, the vertical displacement and roll at which
+    both ``wheels``,
     penetration-controlled, carry their loads (:func:`~.rolled.rigid_stage`): the wheels'
     least gaps at the step's roll from their searches ``found``, each other roll searched
     once; the wheels solved at other rolls start from this step's solves (the previous
@@ -125,8 +126,12 @@ def rigid_wheelset_stage(step: StepInputs, found: Found, wheels: list[WheelConta
     pose = step.pose
     if step.vertical is not None:
         return (step.vertical, pose.roll, RigidSolution(step.vertical, pose.roll)), out
-    if off_track or settings.rigid_wheelset != "solve":
-        return (), out  # (none solved: the record's defaults)
+    if (off_track or settings.rigid_wheelset != "solve"
+            or any(w.status == OUT_OF_RANGE for w in wheels)):
+        # (none solved: the record's defaults; a wheel out of range - creepages beyond
+        # the solver's, a patch beyond the half-space - has no solution for the rigid
+        # wheelset to balance)
+        return (), out
     older = last if settings.uses_previous else EMPTY_MEMORY
     rigid = RigidWheelset(
         *step.geometry(), pose, (wheels[0].approach, wheels[1].approach),
