@@ -528,7 +528,7 @@ TRACK_OUTPUTS = [
     *_wheel("frictional_power", "Real", "W", "frictional power of the wheel's creep forces, "
             "speed * (F_x xi + F_y eta + M_z phi) over its patches (negative: dissipated; "
             "the traction times the slip integrated, in steady rolling); 0 where speed is "
-            "not above 0 (creepage_input=direct: set speed to have it)",
+            "not a finite number above 0 (creepage_input=direct: set speed to have it)",
             value=lambda w: w.frictional_power_per_speed),
 ]
 """Outputs of the real track, numbered after :data:`TRACK_INPUTS`; the slave multiplies
