@@ -35,6 +35,8 @@ from .profiles import Profile
 SIDES = {"left": 1, "right": -1}
 MAX_RAIL_SHIFT = 0.05
 """The largest deviation [m] of a rail from its place, laterally and vertically."""
+MAX_POSE_ANGLE = 0.1
+"""Largest wheelset yaw and roll [rad] of a :class:`Pose` (small angles)."""
 MAX_RAIL_ROLL = 0.1
 """The largest roll [rad] of a rail about the track's X axis."""
 
@@ -252,5 +254,6 @@ class Pose:
         check_finite("lateral_displacement", self.lateral, "m")
         check_finite("yaw", self.yaw, "rad")
         check_finite("roll", self.roll, "rad")
-        if abs(self.yaw) > 0.1 or abs(self.roll) > 0.1:
-            raise RailContactError("yaw and roll must be small angles (|angle| < 0.1 rad)")
+        if abs(self.yaw) > MAX_POSE_ANGLE or abs(self.roll) > MAX_POSE_ANGLE:
+            raise RailContactError(f"yaw and roll must be small angles (|angle| < "
+                                   f"{MAX_POSE_ANGLE:g} rad)")

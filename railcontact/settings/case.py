@@ -42,7 +42,7 @@ from typing import Any, ClassVar
 from ..errors import CaseError
 from ..geometry.kinematics import WheelsetMotion
 from ..geometry.separation import PatchSeparation
-from ..geometry.track import Track, Wheelset
+from ..geometry.track import MAX_POSE_ANGLE, Track, Wheelset
 from ..halfspace.materials import ElasticPair, Material
 from .choices import (
     CASE_SIDES,
@@ -192,7 +192,7 @@ class WheelRailGeometry(Record):
     lateral_displacement: float = setting(0.0, "float", "m",
                                           "wheelset lateral displacement, positive to the left")
     yaw: float = setting(0.0, "float", "rad", "wheelset yaw angle (a small angle)",
-                         minimum=-0.1, maximum=0.1)
+                         minimum=-MAX_POSE_ANGLE, maximum=MAX_POSE_ANGLE)
     roll: float | str = setting(0.0, "float|choice", "rad",
                                 "wheelset roll (left side up), or 'rigid' (both wheels touch) "
                                 "or 'equal-loads' (both carry [normal] load)",

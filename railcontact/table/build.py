@@ -186,7 +186,7 @@ def build_table(spec: TableSpec, out: str | Path, *, scheduler: str | None = Non
         raise RailContactError(f"--check measures a {DEFAULT_KIND} table's interpolation "
                                f"error; this is a {spec.kind} table")
     if check > 0:  # (its method's needs, before any solve)
-        from .check import check_method_fits
+        from .interpolate import check_method_fits
 
         check_method_fits(spec.axes, check_method)
     out = Path(out)

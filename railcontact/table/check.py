@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import RailContactError
-from .interpolate import METHODS, ContactTable
+from .interpolate import METHODS, ContactTable, check_method_fits
 from .solve import solve_recovering
 from .spec import AXES, case_with
 from .store import read_table
@@ -449,17 +449,6 @@ def check_text(path: str | Path) -> list[str]:
                      f"{r['samples']:4d} {_fmt(r['normal_force'])} {_fmt(r['creep_force'])} "
                      f"{_fmt(r['contact_angle'], 1e3)} {r['holes']:5d}")
     return lines
-
-
-def check_method_fits(axes: dict[str, np.ndarray], method: str) -> None:
-    """Raise a :class:`RailContactError` for an interpolation ``method`` unknown, or one
-    the table's ``axes`` (name -> nodes) are too short for (cubic: 4 nodes an axis)."""
-    if method not in METHODS:
-        raise RailContactError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    short = [f"{n} ({len(v)})" for n, v in axes.items() if len(v) < 4]
-    if method == "cubic" and short:
-        raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
-                               f"{', '.join(short)}; check method 'linear'")
 
 
 def check_table(path: str | Path, n: int, seed: int = 0, method: str = "linear",

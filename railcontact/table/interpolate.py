@@ -33,13 +33,12 @@ import numba
 import numpy as np
 
 from ..errors import CaseError, RailContactError, check_number
-from ..status import Status
 from .spec import AXES, DEFAULT_POLICY, parse_policies
 from .store import (
     FLANGE,
     IDENTITY,
     POLICY_ATTR,
-    damaged,
+    check_quantities,
     read_table,
     refuse_kind,
     wheel_flange,
@@ -49,7 +48,6 @@ from .variables import (
     OK,
     QUANTITIES,
     STATUS_MEANINGS,
-    VALIDITY_QUANTITIES,
     failed_counts,
     failed_text,
 )
@@ -144,6 +142,17 @@ def cubic_spline(axes: tuple[np.ndarray, ...], values: np.ndarray):
         knots.append(b.t)
         c = np.moveaxis(b.c, 0, k)  # (the BSpline's coefficients: its axis first)
     return NdBSpline(tuple(knots), c, 3)
+
+
+def check_method_fits(axes: dict[str, np.ndarray], method: str) -> None:
+    """Raise a :class:`RailContactError` for an interpolation ``method`` unknown, or one
+    the table's ``axes`` (name -> nodes) are too short for (cubic: 4 nodes an axis)."""
+    if method not in METHODS:
+        raise RailContactError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    short = [f"{n} ({len(v)})" for n, v in axes.items() if len(v) < 4]
+    if method == "cubic" and short:
+        raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
+                               f"{', '.join(short)}; use method 'linear'")
 
 
 def _lagrange4(nodes: list[float], v: float) -> np.ndarray:
@@ -247,19 +256,11 @@ class ContactTable:
         refuse_kind(path, attrs, "ContactTable (table check, the FMU's table mode)")
         ident = json.loads(attrs[IDENTITY])
         axes = {n: np.asarray(v, dtype=float) for n, v in ident["axes"].items()}
+        check_quantities(path, arrays)
         missing = tuple(q.name for q in QUANTITIES if q.name not in arrays)
-        lacking = [n for n in missing if n not in VALIDITY_QUANTITIES]
-        if lacking:  # (only a store written before them lacks the validity quantities)
-            raise damaged(path, f"no {', '.join(lacking)} array")
         status = np.asarray(arrays["status"]).astype(np.int8)
         values = np.stack([np.full(status.shape, np.nan) if q.name in missing else
                            np.asarray(arrays[q.name], dtype=float) for q in QUANTITIES], axis=-1)
-        solved = np.isin(status, (OK, Status.OUTSIDE_VALIDITY))  # (every value finite)
-        lost = [q.name for k, q in enumerate(QUANTITIES)
-                if q.name not in missing and not np.isfinite(values[..., k][solved]).all()]
-        if lost:
-            raise damaged(path, f"{', '.join(lost)} not finite at points solved ok: a "
-                          "chunk lost")
         flange = json.loads(attrs[FLANGE]) if FLANGE in attrs else None
         policies = json.loads(attrs.get(POLICY_ATTR, "{}"))
         if isinstance(out_of_range, str):
@@ -350,13 +351,11 @@ class ContactTable:
         j = self._side(side)
         x = self._coordinates(point)
         clamped = tuple(n for n, v in zip(self.axes, x, strict=True) if v != float(point[n]))
+        check_method_fits(self.axes, method)
         if method == "linear":
             vals, status = self.linear(x, j)
-        elif method == "cubic":
-            vals, status = self._cubic_at(x, j)
         else:
-            raise RailContactError(f"method must be one of {', '.join(METHODS)}, got "
-                                   f"{method!r}")
+            vals, status = self._cubic_at(x, j)
         return Interpolated(dict(zip(self.names, vals.tolist(), strict=True)), status,
                             clamped)
 
@@ -389,10 +388,6 @@ class ContactTable:
         return idx
 
     def _cubic_at(self, x: list[float], j: int) -> tuple[np.ndarray, int]:
-        short = [f"{n} ({len(v)})" for n, v in self.axes.items() if len(v) < 4]
-        if short:
-            raise RailContactError("cubic interpolation needs at least 4 nodes on every axis: "
-                                   f"{', '.join(short)}; use method='linear'")
         key = self.sides[j]
         if bool(np.all(self._status[..., j] == OK)):  # a spline over the whole grid
             if key not in self._cubic:

@@ -69,7 +69,7 @@ from ..timestep.wheelset import (
     WheelContact,
     WheelsetResult,
 )
-from .interpolate import ContactTable
+from .interpolate import ContactTable, check_method_fits
 from .spec import AXES, CREEPAGE_AXES
 from .variables import NOT_COMPUTED, VALIDITY_QUANTITIES
 
@@ -111,12 +111,7 @@ class TableContact:
                                    f"got {table!r}")
         if settings is not None and not isinstance(settings, ContactSettings):
             raise RailContactError(f"settings must be ContactSettings, got {settings!r}")
-        if method not in ("linear", "cubic"):
-            raise RailContactError(f"method must be 'linear' or 'cubic', got {method!r}")
-        short = [f"{n} ({len(v)})" for n, v in table.axes.items() if len(v) < 4]
-        if method == "cubic" and short:  # (every step would be out of range)
-            raise RailContactError("cubic interpolation needs at least 4 nodes on every "
-                                   f"axis: {', '.join(short)}; use method='linear'")
+        check_method_fits(table.axes, method)  # (cubic on short axes: every step out of range)
         lacking = [n for n in VALIDITY_QUANTITIES if n in table.missing]
         if lacking:
             raise RailContactError(

@@ -420,9 +420,9 @@ def open_dataset(path: str | Path):
 
 def check_contact_dataset(path: str | Path, ds) -> None:
     """:func:`check_contact_arrays` of the dataset ``ds`` of the table at ``path`` when it
-    is a contact table (``require_status`` first: a store without its status says so)."""
+    is a contact table (after :func:`require_status`: a store without its status says
+    so)."""
     if kind_of(ds.attrs) == DEFAULT_KIND:
-        require_status(path, ds)
         check_contact_arrays(path, {n: ds[n].values for n in ds.data_vars})
 
 
@@ -440,12 +440,21 @@ def check_identity_attr(path: str | Path, attrs) -> None:
 
 def check_contact_arrays(path: str | Path, arrays: dict[str, Any]) -> None:
     """Raise the error of a damaged contact table at ``path`` when ``arrays`` lack the
-    status, the counts or a quantity (only the validity quantities may be absent: a store
-    written before them), or a quantity is not finite at a point solved ok (a chunk
-    lost: zarr reads it as its fill value)."""
-    lacking = [n for n in ("status", "batch_done", *(c.name for c in COUNTS),
-                           *(q.name for q in QUANTITIES))
-               if n not in arrays and n not in VALIDITY_QUANTITIES]
+    status, the batch bookkeeping or the counts, or as :func:`check_quantities`."""
+    lacking = [n for n in ("status", "batch_done", *(c.name for c in COUNTS))
+               if n not in arrays]
+    if lacking:
+        raise damaged(path, f"no {', '.join(lacking)} array")
+    check_quantities(path, arrays)
+
+
+def check_quantities(path: str | Path, arrays: dict[str, Any]) -> None:
+    """Raise the error of a damaged contact table at ``path`` when ``arrays`` (with the
+    status) lack a quantity (only the validity quantities may be absent: a store written
+    before them), or a quantity is not finite at a point solved ok (a chunk lost: zarr
+    reads it as its fill value)."""
+    lacking = [q.name for q in QUANTITIES
+               if q.name not in arrays and q.name not in VALIDITY_QUANTITIES]
     if lacking:
         raise damaged(path, f"no {', '.join(lacking)} array")
     status = np.asarray(arrays["status"])
