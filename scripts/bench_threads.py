@@ -23,7 +23,13 @@ machine itself the same way (column ``machine``): two threads of a compiled loop
 the GIL and without Python, as long a step as the repeat's sequential step, in
 :data:`MACHINE_CALLS` calls a step - the ratio two such runs reach on the cores free at
 that moment (0.5 when both are), the bound the wheelsets' own ratio is to be read
-against on a shared machine. On Linux it also prints the
+against on a shared machine. Then it replays the two runs' own GIL-free calls (column
+``kernels``: each trajectory's compiled calls, logged once on its thread after the
+warm-up, made again with the same arguments, without the Python between them) one after
+the other and on two threads: what the step's compiled work alone reaches on these cores
+at that moment (memory-bound solvers share more than a compiled loop does: caches,
+memory bandwidth), the ratio the wheelsets would have if their Python cost nothing. On
+Linux it also prints the
 process's voluntary context switches per wheelset step of each way (``/proc``): in the
 threaded way each is a thread put to sleep waiting for the GIL, i.e. a hand-over of the GIL
 between the threads that had to wake the other one.
@@ -285,6 +291,113 @@ class NogilTimer:
             yield self
         finally:
             self.uninstall()
+
+
+class KernelLog(NogilTimer):
+    """The GIL-free calls of one thread, their arguments and results, in order (outermost
+    calls only), to be replayed without the Python between them (:func:`replay`). A
+    packed FFT plan's width, which the Python before a compiled product sets
+    (:meth:`~railcontact.halfspace.operator._PackedPlan.kernel_arguments`: its input
+    buffer's padding zeroed for another grid width), is logged as a call too, and the
+    plans the calls were given are kept alive with the log: their products run on the
+    plans' own buffers, and a plan dropped from its thread's cache would be freed.
+    Install it on one thread at a time (it wraps module globals)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.log: list[tuple] = []
+        self.plans: list = []
+
+    def wrap(self, name: str, fn):
+        def logged(*args):
+            if self._depth:
+                return fn(*args)
+            self._depth += 1
+            try:
+                out = fn(*args)
+                self.log.append((fn, args, _copied(out)))
+                return out
+            finally:
+                self._depth -= 1
+        return logged
+
+    def install(self) -> None:
+        from railcontact.halfspace import operator
+
+        super().install()
+        plan = operator._fftw_plan
+        width = operator._PackedPlan.kernel_arguments
+
+        def kept(*args):
+            out = plan(*args)
+            self.plans.append(out)
+            return out
+
+        def widened(packed, operands, ny):
+            self.log.append((width, (packed, operands, ny), None))
+            return width(packed, operands, ny)
+
+        self._saved += [(operator, "_fftw_plan", plan),
+                        (operator._PackedPlan, "kernel_arguments", width)]
+        operator._fftw_plan = kept
+        operator._PackedPlan.kernel_arguments = widened
+
+
+def captured(name: str, steps: int) -> KernelLog:
+    """Trajectory ``name`` over ``steps`` steps on this thread with its GIL-free calls
+    logged (:class:`KernelLog`; to be replayed on this thread, whose FFT plans they
+    use)."""
+    log = KernelLog()
+    with log.installed():
+        run(name, steps)
+    return log
+
+
+def replay(log: KernelLog) -> list[str]:
+    """The logged GIL-free calls made again, in order, with their arguments: the step's
+    compiled work without its Python. Returns the names of the calls whose result is
+    not the logged one (their inputs changed after the call, e.g. an array the Python
+    after it wrote into: not the same work)."""
+    other = []
+    for fn, args, out in log.log:
+        again = fn(*args)
+        if out is not None and not _same(again, out):
+            other.append(getattr(fn, "__name__", str(fn)))
+    return other
+
+
+def _copied(out):
+    """A result of a compiled call with its arrays copied (the caller may change them)."""
+    if isinstance(out, tuple):
+        return tuple(_copied(x) for x in out)
+    return out.copy() if isinstance(out, np.ndarray) else out
+
+
+def _same(a, b) -> bool:
+    """Whether two results of a compiled call are equal (tuples item by item, arrays
+    element by element, NaN equal to NaN)."""
+    if isinstance(a, tuple) and isinstance(b, tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)
+                and a.shape == b.shape and np.array_equal(a, b, equal_nan=True))
+    return a == b or (a != a and b != b)
+
+
+def kernels_ratio(workers: list[Worker], logs: list[KernelLog]) -> float:
+    """Threaded / sequential of the two runs' GIL-free calls replayed (:func:`replay`),
+    each on the worker that logged it: one after the other, then at the same time."""
+    t0 = time.perf_counter()
+    for worker, log in zip(workers, logs, strict=True):
+        worker.submit(lambda log=log: replay(log))
+        worker.result()
+    seq = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for worker, log in zip(workers, logs, strict=True):
+        worker.submit(lambda log=log: replay(log))
+    for worker in workers:
+        worker.result()
+    return (time.perf_counter() - t0) / seq
 
 
 def profile(steps: int) -> None:
@@ -578,6 +691,15 @@ def main() -> None:
             worker.submit(lambda: [run(n, args.steps) for n in TRAJECTORIES])
         for worker in workers:
             worker.result()
+        logs = []  # (column 'kernels': logged one worker after the other)
+        for worker, n in zip(workers, TRAJECTORIES, strict=True):
+            worker.submit(lambda n=n: captured(n, args.steps))
+            logs.append(worker.result())
+        for worker, log in zip(workers, logs, strict=True):  # (the same results?)
+            worker.submit(lambda log=log: replay(log))
+            other = worker.result()
+            print(f"{len(other)} of {len(log.log)} replayed calls returned another result "
+                  f"than logged ({', '.join(sorted(set(other))) or 'none'})")
         print(f"{os.cpu_count()} cores; {args.steps} steps of 1 ms per wheelset, two "
               f"wheelsets (trajectories {', '.join(TRAJECTORIES)}), elements "
               f"{ELEMENT_SIZE * 1e3:g} mm")
@@ -586,8 +708,8 @@ def main() -> None:
         per_k = _per_microsecond(spin, 2_000_000)
         print(f"{'repeat':>6} {'sequential [s]':>14} {'threaded [s]':>12} {'ratio':>6} "
               f"{'CPU/wall seq.':>13} {'CPU/wall thr.':>13} {'switches/step thr.':>18} "
-              f"{'machine':>7}")
-        seq, thr, machine = [], [], []
+              f"{'machine':>7} {'kernels':>7}")
+        seq, thr, machine, alone = [], [], [], []
         reference = None
         for k in range(args.repeats):
             ways = (sequential, threaded) if k % 2 == 0 else (threaded, sequential)
@@ -615,9 +737,10 @@ def main() -> None:
             n_k = int(per_k * seq[-1] / (2 * args.steps) * 1e6 / MACHINE_CALLS)
             machine.append(_synthetic_ratio(spin, [(0, n_k)] * MACHINE_CALLS,
                                             args.steps)[0])
+            alone.append(kernels_ratio(workers, logs))
             print(f"{k:6d} {seq[-1]:14.3f} {thr[-1]:12.3f} {thr[-1] / seq[-1]:6.3f} "
                   f"{cpu['sequential']:13.2f} {cpu['threaded']:13.2f} "
-                  f"{switches['threaded']:18.1f} {machine[-1]:7.3f}")
+                  f"{switches['threaded']:18.1f} {machine[-1]:7.3f} {alone[-1]:7.3f}")
     finally:
         for worker in workers:
             worker.stop()
@@ -633,6 +756,9 @@ def main() -> None:
           f"(column 'machine', {MACHINE_CALLS} calls a step; 0.5 on two free cores): per "
           f"repeat median {np.median(machine):.3f}, min {min(machine):.3f}, max "
           f"{max(machine):.3f}")
+    print(f"the wheelsets' own GIL-free calls replayed without the Python between them "
+          f"(column 'kernels'): per repeat median {np.median(alone):.3f}, min "
+          f"{min(alone):.3f}, max {max(alone):.3f}")
     print("threaded results equal the sequential ones bit for bit")
 
 
