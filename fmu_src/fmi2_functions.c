@@ -124,6 +124,8 @@ fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size
     ENTER;
     for (size_t k = 0; k < n; ++k) {
         if (vr[k] >= c->n_string) {
+            logf_(c, fmi2Error, "logStatusError", "no String variable with value reference %u",
+                  vr[k]);
             status = fmi2Error;
             break;
         }
@@ -168,6 +170,7 @@ fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], siz
     (void)value;
     Instance *c = comp;
     if (!c) return fmi2Error;
+    if (n) logf_(c, fmi2Error, "logStatusError", "this FMU has no Boolean variables");
     return n ? fmi2Error : fmi2OK;
 }
 
@@ -177,9 +180,10 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
     if (!c) return fmi2Error;
     fmi2Status status = fmi2OK;
     for (size_t k = 0; k < n; ++k) {
-        if (vr[k] >= c->n_string || !settable(c, c->string_flags[vr[k]]) || !value[k]) {
-            logf_(c, fmi2Error, "logStatusError", "String variable %u cannot be set now",
-                  vr[k]);
+        int why = refusal(c, vr[k], c->string_flags, c->n_string);
+        if (why < 0 && !value[k]) why = REFUSED_NULL;
+        if (why >= 0) {
+            log_refusal(c, "String", vr[k], why);
             return fmi2Error;
         }
     }

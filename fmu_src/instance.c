@@ -91,7 +91,8 @@ void instance_free(Instance *c) {
         PyObject *objs[] = {c->m_do_step, c->m_exit_init, c->m_enter_init, c->m_reset,
                             c->m_get_state, c->m_set_state, c->m_check_state,
                             c->m_get_string, c->m_set_string,
-                            c->m_pop_log, c->m_terminate, c->m_close, c->slave};
+                            c->m_pop_log, c->m_terminate, c->m_close, c->m_refusal,
+                            c->slave};
         for (size_t k = 0; k < sizeof objs / sizeof objs[0]; ++k)
             if (objs[k]) py.DecRef(objs[k]);
         LEAVE;
@@ -197,6 +198,7 @@ Instance *instance_new(fmi2String name, fmi2Type type, fmi2String resources_uri,
             c->m_pop_log = method(slave, "pop_log");
             c->m_terminate = method(slave, "terminate");
             c->m_close = method(slave, "close");
+            c->m_refusal = method(slave, "refusal");
             PyObject *bm = method(slave, "buffers");
             PyObject *b = bm ? py.CallObject(bm, NULL) : NULL;
             if (bm) py.DecRef(bm);
@@ -215,7 +217,7 @@ Instance *instance_new(fmi2String name, fmi2Type type, fmi2String resources_uri,
                      c->m_get_state && c->m_set_state && c->m_check_state &&
                      c->m_get_string &&
                      c->m_set_string && c->m_pop_log && c->m_terminate && c->m_close &&
-                     !py.ErrOccurred();
+                     c->m_refusal && !py.ErrOccurred();
             }
             if (!ok) {
                 py.ErrClear();
@@ -234,10 +236,30 @@ Instance *instance_new(fmi2String name, fmi2Type type, fmi2String resources_uri,
     return c;
 }
 
-int settable(const Instance *c, unsigned char flag) {
-    if (flag == INPUT) return c->mode != TERMINATED && c->mode != FAILED;
-    if (flag == PARAMETER) return c->mode == INSTANTIATED || c->mode == INITIALIZATION;
-    return 0;
+int refusal(const Instance *c, fmi2ValueReference vr, const unsigned char *flags,
+            size_t count) {
+    if (vr >= count) return REFUSED_UNKNOWN;
+    if (flags[vr] == INPUT)
+        return c->mode != TERMINATED && c->mode != FAILED ? -1 : REFUSED_ENDED;
+    if (flags[vr] == PARAMETER)
+        return c->mode == INSTANTIATED || c->mode == INITIALIZATION ? -1 : REFUSED_PARAMETER;
+    return REFUSED_OUTPUT;
+}
+
+void log_refusal(Instance *c, const char *type, fmi2ValueReference vr, int reason) {
+    ENTER;
+    PyObject *args = py.BuildValue("(sIi)", type, vr, reason);
+    PyObject *r = args ? py.CallObject(c->m_refusal, args) : NULL;
+    const char *t = r ? py.UnicodeAsUTF8(r) : NULL;
+    if (t) {
+        logf_(c, fmi2Error, "logStatusError", "%s", t);
+    } else { /* (the slave failed to word it) */
+        py.ErrClear();
+        logf_(c, fmi2Error, "logStatusError", "%s variable %u cannot be set now", type, vr);
+    }
+    if (r) py.DecRef(r);
+    if (args) py.DecRef(args);
+    LEAVE;
 }
 
 /* Real and Integer values live in the slave's numpy buffers (double, int32): get and set
@@ -246,7 +268,8 @@ fmi2Status get_values(Instance *c, const char *type, const fmi2ValueReference vr
                       const void *buffer, size_t count, size_t size, void *value) {
     for (size_t k = 0; k < n; ++k) {
         if (vr[k] >= count) {
-            logf_(c, fmi2Error, "logStatusError", "no %s variable %u", type, vr[k]);
+            logf_(c, fmi2Error, "logStatusError", "no %s variable with value reference %u",
+                  type, vr[k]);
             return fmi2Error;
         }
         memcpy((char *)value + k * size, (const char *)buffer + vr[k] * size, size);
@@ -258,9 +281,9 @@ fmi2Status set_values(Instance *c, const char *type, const fmi2ValueReference vr
                       void *buffer, const unsigned char *flags, size_t count, size_t size,
                       const void *value) {
     for (size_t k = 0; k < n; ++k) {
-        if (vr[k] >= count || !settable(c, flags[vr[k]])) {
-            logf_(c, fmi2Error, "logStatusError", "%s variable %u cannot be set now", type,
-                  vr[k]);
+        int why = refusal(c, vr[k], flags, count);
+        if (why >= 0) {
+            log_refusal(c, type, vr[k], why);
             return fmi2Error;
         }
         char *dst = (char *)buffer + vr[k] * size;

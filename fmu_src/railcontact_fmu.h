@@ -134,6 +134,8 @@ void prime_thread(void);
 /* ---- instance.c: an instance and its slave ------------------------------------------ */
 enum { OUTPUT = 0, INPUT = 1, PARAMETER = 2 };
 enum { INSTANTIATED, INITIALIZATION, STEPPING, TERMINATED, FAILED };
+/* why a value was not set (the slave's refusal() words it, naming the variable) */
+enum { REFUSED_UNKNOWN, REFUSED_OUTPUT, REFUSED_PARAMETER, REFUSED_ENDED, REFUSED_NULL };
 
 typedef struct {
     char *name;
@@ -142,7 +144,8 @@ typedef struct {
     int mode;
     PyObject *slave;
     PyObject *m_do_step, *m_exit_init, *m_enter_init, *m_reset, *m_get_state, *m_set_state,
-        *m_check_state, *m_get_string, *m_set_string, *m_pop_log, *m_terminate, *m_close;
+        *m_check_state, *m_get_string, *m_set_string, *m_pop_log, *m_terminate, *m_close,
+        *m_refusal;
     double *real;
     size_t n_real;
     int32_t *integer;
@@ -176,8 +179,13 @@ fmi2Status get_values(Instance *c, const char *type, const fmi2ValueReference vr
 fmi2Status set_values(Instance *c, const char *type, const fmi2ValueReference vr[],
                       size_t n, void *buffer, const unsigned char *flags, size_t count,
                       size_t size, const void *value);
-/* whether a variable of causality flag can be set in the instance's mode */
-int settable(const Instance *c, unsigned char flag);
+/* why the variable vr of count, with causality flags, cannot be set in the instance's
+ * mode (REFUSED_*), or -1: it can */
+int refusal(const Instance *c, fmi2ValueReference vr, const unsigned char *flags,
+            size_t count);
+/* log the refusal to set the type variable vr for reason (REFUSED_*), the variable named by
+ * the slave; GIL not held */
+void log_refusal(Instance *c, const char *type, fmi2ValueReference vr, int reason);
 
 /* ---- log.c: the FMI logger ---------------------------------------------------------- */
 #define LOG_PIECE 1000

@@ -59,6 +59,8 @@ from .timestep.wheelset import (
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 OUTPUT, INPUT, PARAMETER = 0, 1, 2
+REFUSED_UNKNOWN, REFUSED_OUTPUT, REFUSED_PARAMETER, REFUSED_ENDED, REFUSED_NULL = range(5)
+"""Why the shim did not set a value (its ``REFUSED_*``, :meth:`Slave.refusal`)."""
 _CAUSALITY = {"output": OUTPUT, "input": INPUT, "parameter": PARAMETER}
 WHEELSETS_FILE = "wheelsets.txt"
 """The resources file of an FMU of several wheelsets: their number N (absent: the
@@ -159,6 +161,7 @@ class Slave:
         # each variable's buffer (a stable object: states are restored in place) and slot
         buffer = {"Real": self.real, "Integer": self.integer, "String": self.strings}
         self._slots = {v.name: (buffer[v.type], v.vr) for v in self.variables}
+        self._by_reference = {(v.type, v.vr): v for v in self.variables}
         outputs = [v for v in self.variables if v.causality == "output"]
         if not all(v.type in ("Real", "Integer") for v in outputs):
             raise TypeError("the FMU's outputs are Real or Integer variables")
@@ -192,6 +195,26 @@ class Slave:
         return (self.real.ctypes.data, len(self.real), self.integer.ctypes.data,
                 len(self.integer), self.control.ctypes.data, self.real_flags,
                 self.integer_flags, self.string_flags)
+
+    def refusal(self, type_: str, vr: int, reason: int) -> str:
+        """The message of the shim's refusal to set the ``type_`` ("Real", "Integer",
+        "String") variable of value reference ``vr`` for ``reason`` (:data:`REFUSED_UNKNOWN`
+        ... :data:`REFUSED_NULL`), naming the variable."""
+        v = self._by_reference.get((type_, vr))
+        if v is None or reason == REFUSED_UNKNOWN:
+            return f"no {type_} variable with value reference {vr}"
+        what = f"{type_} variable {v.name} (value reference {vr})"
+        if reason == REFUSED_OUTPUT:
+            return f"{what} is an output: only inputs and parameters can be set"
+        if reason == REFUSED_PARAMETER:
+            return (f"{what} is a parameter: it can be set only before "
+                    "fmi2ExitInitializationMode (again after fmi2Reset)")
+        if reason == REFUSED_ENDED:
+            return (f"{what} cannot be set after fmi2Terminate or a failed initialization "
+                    "(fmi2Reset starts the instance again)")
+        if reason == REFUSED_NULL:
+            return f"{what}: the value given is NULL, not a string"
+        return f"{what} cannot be set now"
 
     def pop_log(self) -> str:
         """The messages since the last call, one per line."""

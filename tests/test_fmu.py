@@ -647,6 +647,58 @@ def test_bad_parameter_is_an_error_at_initialization(fmu, extracted, md, capsys)
         assert "[ERROR]" in log and words in log, log
 
 
+def test_values_refused_are_named_with_the_reason(fmu, extracted, md, capsys):
+    """A value the FMU does not set is fmi2Error with a message naming the variable and
+    why: an output, a parameter after initialisation, an input after fmi2Terminate, a
+    NULL string, a value reference of no variable (and no Boolean variables at all)."""
+    import ctypes
+
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2String, fmi2ValueReference
+
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="refused")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+
+    def refused(call, *args) -> str:
+        capsys.readouterr()
+        with pytest.raises(FMICallException) as err:
+            call(*args)
+        assert err.value.status == 3
+        return capsys.readouterr().out
+
+    out = refused(s.setReal, [vr["normal_force_left"]], [1.0])
+    assert (f"Real variable normal_force_left (value reference {vr['normal_force_left']}) "
+            "is an output: only inputs and parameters can be set") in out, out
+    assert f"Integer variable status (value reference {vr['status']}) is an output" in \
+        refused(s.setInteger, [vr["status"]], [1])
+    assert "no Real variable with value reference 99999" in refused(s.setReal, [99999],
+                                                                      [1.0])
+    # a NULL string (fmpy encodes str: the C call itself)
+    null = refused(s.fmi2SetString, s.component, (fmi2ValueReference * 1)(vr["warm_start"]),
+                   1, (fmi2String * 1)(ctypes.c_char_p(None)))
+    assert (f"String variable warm_start (value reference {vr['warm_start']}): the value "
+            "given is NULL, not a string") in null, null
+    assert "this FMU has no Boolean variables" in refused(s.setBoolean, [0], [True])
+    s.exitInitializationMode()
+    for setter, name, value in ((s.setReal, "friction", 0.3),
+                                (s.setInteger, "warm_start_choice", 1),
+                                (s.setString, "warm_start", "none")):
+        out = refused(setter, [vr[name]], [value])
+        assert (f"variable {name} (value reference {vr[name]}) is a parameter: it can be "
+                "set only before fmi2ExitInitializationMode") in out, out
+    assert "no String variable with value reference 99999" in refused(s.getString, [99999])
+    s.setReal([vr["lateral_displacement"]], [1e-3])  # an input: settable while stepping
+    s.terminate()
+    out = refused(s.setReal, [vr["lateral_displacement"]], [2e-3])
+    assert ("Real variable lateral_displacement (value reference "
+            f"{vr['lateral_displacement']}) cannot be set after fmi2Terminate") in out, out
+    s.freeInstance()
+
+
 def test_bare_c_host_clean_environment(extracted, md, tmp_path):
     """100 steps, three load/unload cycles, in a C program with an empty environment."""
     headers = Path(fmpy.__file__).parent / "c-code"
