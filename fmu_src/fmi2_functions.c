@@ -12,6 +12,24 @@ typedef struct {
     PyObject *bytes;
 } State;
 
+/* the instance's mode, for messages */
+static const char *mode_name(int mode) {
+    switch (mode) {
+    case INSTANTIATED: return "instantiated (before fmi2EnterInitializationMode)";
+    case INITIALIZATION: return "in initialization mode";
+    case STEPPING: return "in step mode";
+    case TERMINATED: return "terminated (fmi2Reset starts it again)";
+    default: return "failed at initialization (fmi2Reset starts it again)";
+    }
+}
+
+/* log that call cannot be made in the instance's mode; fmi2Error */
+static fmi2Status wrong_mode(Instance *c, const char *call, const char *expected) {
+    logf_(c, fmi2Error, "logStatusError", "%s can be called %s; the instance is %s", call,
+          expected, mode_name(c->mode));
+    return fmi2Error;
+}
+
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
 
@@ -42,6 +60,13 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean tol_defined, fmi2
     (void)stop;
     Instance *c = comp;
     if (!c) return fmi2Error;
+    if (c->mode != INSTANTIATED)
+        return wrong_mode(c, "fmi2SetupExperiment", "only before fmi2EnterInitializationMode");
+    if (!(start - start == 0.0)) { /* NaN or infinite */
+        logf_(c, fmi2Error, "logStatusError",
+              "fmi2SetupExperiment: startTime = %g s is not a finite number", start);
+        return fmi2Error;
+    }
     c->control[0] = start;
     c->control[2] = start; /* the last successful time */
     c->discards = 0;
@@ -50,7 +75,10 @@ fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean tol_defined, fmi2
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component comp) {
     Instance *c = comp;
-    if (!c || c->mode != INSTANTIATED) return fmi2Error;
+    if (!c) return fmi2Error;
+    if (c->mode != INSTANTIATED)
+        return wrong_mode(c, "fmi2EnterInitializationMode", "only once after instantiation "
+                          "(or fmi2Reset)");
     ENTER;
     fmi2Status s = call_status(c, c->m_enter_init, NULL);
     LEAVE;
@@ -60,7 +88,9 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component comp) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
     Instance *c = comp;
-    if (!c || c->mode != INITIALIZATION) return fmi2Error;
+    if (!c) return fmi2Error;
+    if (c->mode != INITIALIZATION)
+        return wrong_mode(c, "fmi2ExitInitializationMode", "only in initialization mode");
     c->control[0] = c->control[2];
     c->control[1] = 0.0;
     ENTER;
@@ -206,10 +236,10 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
 fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {
     (void)no_prior;
     Instance *c = comp;
-    if (!c || c->mode != STEPPING) {
-        if (c) logf_(c, fmi2Error, "logStatusError", "doStep outside step mode");
-        return fmi2Error;
-    }
+    if (!c) return fmi2Error;
+    if (c->mode != STEPPING)
+        return wrong_mode(c, "fmi2DoStep", "only in step mode (after "
+                          "fmi2ExitInitializationMode)");
     c->control[0] = t;
     c->control[1] = h;
     ENTER;

@@ -699,6 +699,49 @@ def test_values_refused_are_named_with_the_reason(fmu, extracted, md, capsys):
     s.freeInstance()
 
 
+def test_calls_out_of_their_mode_say_why(fmu, extracted, md, capsys):
+    """An FMI call the instance's mode does not allow is fmi2Error with a message naming
+    the call, when it can be made and the mode the instance is in; a start time that is
+    not finite is refused."""
+    from fmpy.fmi1 import FMICallException
+
+    s = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="modes")
+    s.instantiate()
+
+    def refused(call, *args) -> str:
+        capsys.readouterr()
+        with pytest.raises(FMICallException) as err:
+            call(*args)
+        assert err.value.status == 3
+        return capsys.readouterr().out
+
+    assert ("fmi2DoStep can be called only in step mode (after fmi2ExitInitializationMode); "
+            "the instance is instantiated") in refused(s.doStep, 0.0, 1e-3)
+    assert "startTime = nan s is not a finite number" in refused(
+        lambda: s.setupExperiment(startTime=float("nan")))
+    assert ("fmi2ExitInitializationMode can be called only in initialization mode; the "
+            "instance is instantiated") in refused(s.exitInitializationMode)
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    assert ("fmi2EnterInitializationMode can be called only once after instantiation (or "
+            "fmi2Reset); the instance is in initialization mode") in refused(
+                s.enterInitializationMode)
+    s.exitInitializationMode()
+    assert ("fmi2SetupExperiment can be called only before fmi2EnterInitializationMode; "
+            "the instance is in step mode") in refused(lambda: s.setupExperiment(startTime=0.0))
+    s.terminate()
+    assert "the instance is terminated (fmi2Reset starts it again)" in refused(
+        s.doStep, 0.0, 1e-3)
+    s.reset()  # (then it starts again)
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    s.doStep(0.0, 1e-3)
+    s.terminate()
+    s.freeInstance()
+
+
 def test_bare_c_host_clean_environment(extracted, md, tmp_path):
     """100 steps, three load/unload cycles, in a C program with an empty environment."""
     headers = Path(fmpy.__file__).parent / "c-code"
