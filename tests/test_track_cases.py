@@ -274,6 +274,17 @@ def test_kinematics_and_creepage_exclude_each_other():
         rc.solve(case)
 
 
+def test_kinematic_creepages_beyond_the_solvers_are_refused():
+    """Creepages a case's [kinematics] give beyond +-1e3 (a speed too small for the
+    lateral velocity) are refused as a case's [tangential] creepage is, naming the
+    wheel, the creepages and the speed: the solver's range, as the time step's."""
+    case = _case(lateral_velocity=0.05)
+    case["kinematics"]["speed"] = 1e-6
+    with pytest.raises(rc.CaseError, match=r"left wheel: the \[kinematics\] velocities "
+                       r"give the creepages \(.*e\+04.*\) beyond \+-1000 \(speed 1e-06"):
+        rc.solve(case)
+
+
 def test_example_case_file_is_contacts_curve_case(root):
     """``models/cases/mbench_curve_r600.toml`` poses CONTACT's case A1_L_013 (curve of
     600 m to the right, left wheel): its results meet the targets against CONTACT's."""

@@ -79,6 +79,7 @@ from ..halfspace.hertz import (
 from ..halfspace.materials import ElasticPair
 from ..normal import NormalResult
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
+from ..settings.case import MAX_CREEPAGE
 from ..settings.convention import side_creepage
 from ..settings.friction import FrictionTable, friction_at_point, row_friction, side_friction
 from ..status import Status, status_of
@@ -505,9 +506,17 @@ def wheel_kinematics(found: WheelSearch, motion: WheelsetMotion) -> KinematicsOf
     def of(patch: PatchSolution, patches: list[PatchSolution]) -> PatchKinematics:
         cp = patch.geometry
         height = ws.radius - found.least_gap - vertical_approach(patches)
-        return patch_kinematics(side, cp.position, cp.contact_angle, patch.normal.penetration,
-                                (0.0, pose.lateral, height), pose.roll, pose.yaw, origin,
-                                motion)
+        kin = patch_kinematics(side, cp.position, cp.contact_angle, patch.normal.penetration,
+                               (0.0, pose.lateral, height), pose.roll, pose.yaw, origin,
+                               motion)
+        xi, eta, phi = kin.creepage
+        if not (abs(xi) <= MAX_CREEPAGE and abs(eta) <= MAX_CREEPAGE
+                and abs(phi) <= MAX_CREEPAGE):  # (as a case's [tangential] creepage)
+            raise CaseError(f"{side} wheel: the [kinematics] velocities give the creepages "
+                            f"({xi:.4g}, {eta:.4g}, {phi:.4g} 1/m) beyond "
+                            f"+-{MAX_CREEPAGE:g} (speed {motion.speed:g} m/s too small "
+                            "for them)")
+        return kin
     return of
 
 
