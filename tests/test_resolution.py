@@ -93,6 +93,28 @@ def test_a_contact_between_the_element_centres_is_under_resolved_not_absent():
     assert n.force == 0.0 and n.converged and n.message.startswith("no contact")
 
 
+def test_a_wheel_rail_area_is_not_grown_into_elements_too_coarse_for_it():
+    """A wheel-rail case meshed by element counts too few for its patch (2 x 2): its
+    contact covers the area, and growing the area (the counts fixed) only coarsens the
+    elements. It is an under-resolved patch (not converged, saying to give more elements
+    or element sizes) once the grown elements would pass the 5 mm that resolve a
+    wheel-rail patch - not an area grown to metres along the track and an error that
+    blames the profiles."""
+    case = {"material": {"young": 206e9, "poisson": 0.28},
+            "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
+                         "inclination": math.atan(1 / 40), "lateral_displacement": -2e-3,
+                         "side": "left"},
+            "grid": {"nx": 2, "ny": 2},
+            "normal": {"load": 83.3e3, "tolerance": 1e-3}}
+    (patch,) = solve(case).patches
+    n = patch.normal
+    assert not n.converged
+    assert n.message.startswith("under-resolved patch: its contact reaches the edge of the "
+                                "potential area of 2 x 2 elements"), n.message
+    assert "give more elements ([grid] nx, ny) or the element sizes" in n.message
+    assert max(n.grid.dx, n.grid.dy) < 0.02  # (not grown towards the profiles' ends)
+
+
 @pytest.mark.parametrize("per_axis", [5, 8])
 def test_resolved_patch_is_within_a_few_percent_of_hertz(per_axis):
     case = quadratic_case(per_axis)
