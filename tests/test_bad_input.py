@@ -631,7 +631,9 @@ def test_wheelset_inputs_of_the_wrong_kind_are_named():
                                 creepages=((0.0,) * 3,) * 2), "at most one of creepages"),
                           (dict(pose=rc.Pose(), loads=loads,
                                 creepages=((0.0, 1e305, 0.0), (0.0, 0.0, 0.0))),
-                           f"left creepage must be within \\+-{MAX_CREEPAGE:g}")):
+                           f"left creepage must be within \\+-{MAX_CREEPAGE:g}"),
+                          (dict(pose=rc.Pose(), loads=loads, remember="no"),
+                           "remember must be True or False, got 'no'")):
         with pytest.raises(rc.RailContactError, match=words):
             w.solve(**kwargs)
     track, wheelset = w.track, w.wheelset
@@ -640,6 +642,9 @@ def test_wheelset_inputs_of_the_wrong_kind_are_named():
                            {"friction": 0.3})
     with pytest.raises(rc.RailContactError, match="pair must be an ElasticPair"):
         rc.WheelsetContact(track, wheelset, rc.STEEL)
+    for kind in ("banana", None):  # (a built-in's name or a file: the kind first)
+        with pytest.raises(rc.RailContactError, match="profile kind must be one of"):
+            rc.read_profile("S1002", kind)
 
 
 def test_velocities_whose_creepages_overflow_are_out_of_range_not_infinite():

@@ -474,6 +474,8 @@ def read_xy(path: str | Path, kind: str, unit: str = "mm") -> Profile:
 
 def read_profile(spec: str | Path, kind: str, unit: str = "mm") -> Profile:
     """A profile from a built-in name or a file (``.prr``/``.prw`` SIMPACK, else two columns)."""
+    if kind not in KINDS:
+        raise RailContactError(f"profile kind must be one of {KINDS}, got {kind!r}")
     s = str(spec)
     key = _ALIASES.get(s.upper(), s.upper())
     if key in _BUILTIN and not Path(s).is_file():

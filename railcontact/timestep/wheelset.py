@@ -60,6 +60,8 @@ from __future__ import annotations
 from dataclasses import replace
 from time import perf_counter
 
+import numpy as np
+
 from ..errors import RailContactError
 from ..geometry.track import Pose, Track, Wheelset
 from ..halfspace.materials import ElasticPair
@@ -226,6 +228,8 @@ class WheelsetContact:
             or lubricated rail); None: the settings' ``friction`` on both.
         """
         t0 = perf_counter()
+        if not isinstance(remember, (bool, np.bool_)):  # ("no" would read as True)
+            raise RailContactError(f"remember must be True or False, got {remember!r}")
         step = self._inputs(pose, loads, vertical, creepages, kinematics, time, rails,
                             friction)
         found = search_wheels(step)
