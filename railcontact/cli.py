@@ -27,7 +27,9 @@ from .settings.choices import PROFILE_UNITS, WARM_STARTS
 from .settings.friction import FrictionTable
 
 
-def _summary(sol) -> str:
+def _summary(sol, wheels=()) -> str:
+    """The text report of a solution ``sol`` and its loaded ``wheels``
+    (:func:`~railcontact.io.wheels.case_wheels`)."""
     lines = [f"case: {sol.case.name}"]
     if sol.roll is not None:
         lines.append(f"wheelset roll   {sol.roll:12.6g} rad")
@@ -80,6 +82,10 @@ def _summary(sol) -> str:
             lines.append(f"  iterations     {t.iterations:12d}   ({t.message})")
             lines.append(f"  wall time      {t.wall_time * 1e3:12.3f} ms")
         lines.append(f"  all work       {_work(ps.work)}")
+    for w in wheels:
+        within = (f"outside validity: {w.validity.message}" if w.validity.flags
+                  else "within validity")
+        lines.append(f"{w.side} wheel: Y/Q = {w.derailment_quotient:.4g}; {within}")
     lines.append(f"total: {_work(sol.work)}")
     return "\n".join(lines)
 
@@ -100,6 +106,7 @@ case that did not converge, then one without contact."""
 def _cmd_solve(args: argparse.Namespace) -> int:
     from .contact import solve
     from .io.jsonout import solution_json
+    from .io.wheels import case_wheels
 
     several = len(args.case) > 1
     if args.plot:
@@ -121,11 +128,17 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                                  indent=None if several else 2))
             outcomes.add(2)
             continue
+        wheels = case_wheels(sol)
         if args.json:  # several files: one JSON object per line, with its file
             print(solution_json(sol, indent=None if several else 2,
-                                file=str(case) if several else None))
+                                file=str(case) if several else None, wheels=wheels))
         else:
-            print(f"== {case}\n{_summary(sol)}" if several else _summary(sol))
+            text = _summary(sol, wheels)
+            print(f"== {case}\n{text}" if several else text)
+        for w in wheels:  # (solved as asked; the exit status is the solve's)
+            if w.validity.flags:
+                print(f"railcontact: warning: {case}: {w.side} wheel outside the model's "
+                      f"validity: {w.validity.message}", file=sys.stderr)
         contact = any(p.normal.force > 0 for p in sol.patches)
         if args.plot:  # (one figure per patch: both sides, tread and flange)
             for k in range(len(sol.patches)):

@@ -7,16 +7,23 @@ import math
 from typing import Any
 
 from ..contact import Solution
+from .wheels import CaseWheel, case_wheels
 
 
-def solution_json(solution: Solution, indent: int | None = 2, file: str | None = None) -> str:
+def solution_json(solution: Solution, indent: int | None = 2, file: str | None = None,
+                  wheels: list[CaseWheel] | None = None) -> str:
     """The JSON text of ``solution.to_dict()`` (SI units), with ``"file"`` first when the
-    case ``file`` is given.
+    case ``file`` is given, and for a wheel-rail case ``"wheels"``: each loaded wheel's
+    force in the track frame, Y/Q and validity (:func:`~.wheels.case_wheels`; ``wheels``
+    when the caller formed them).
 
     A number that is not finite is written as ``null`` (JSON has no NaN); the solve that
     produced it is reported ``"converged": false``.
     """
     d = solution.to_dict() if file is None else {"file": file, **solution.to_dict()}
+    wheels = case_wheels(solution) if wheels is None else wheels
+    if wheels:
+        d["wheels"] = [w.to_dict() for w in wheels]
     return json.dumps(finite(d), indent=indent, allow_nan=False)
 
 

@@ -86,7 +86,7 @@ WITHIN = Validity()
 
 def check_validity(side_sign: int, track_force: Sequence[float],
                    patches: Sequence[PatchSolution], flange_flank: tuple[float, float],
-                   settings: ContactSettings) -> Validity:
+                   settings: ContactSettings, friction: float | None = None) -> Validity:
     """The validity of a solved wheel (module docstring): :func:`check_limits` with each
     patch's contact point and the largest normal penetration of the patches, and
     ``RESOLUTION`` for a patch whose contact spans too few elements.
@@ -103,13 +103,15 @@ def check_validity(side_sign: int, track_force: Sequence[float],
         Profile coordinate S [m] and angle [rad] of the flange's steepest point.
     settings
         The limits (and the friction coefficient).
+    friction
+        The friction coefficient of Nadal's limit [-] (None: ``settings.friction``).
     """
     if len(patches) == 1:  # (the common case, as below without the generators)
         p = patches[0]
         g, n = p.geometry, p.normal
         contacts = [] if g is None else [(g.wheel_s, g.contact_angle)]
         v = check_limits(side_sign, track_force, contacts, n.penetration, flange_flank,
-                         settings)
+                         settings, friction)
         m = under_resolved(n.contact, n.grid.dx, n.grid.dy) if n.force > 0 else None
         coarse = [m] if m else []
     else:
@@ -117,7 +119,7 @@ def check_validity(side_sign: int, track_force: Sequence[float],
                     if p.geometry is not None]
         penetration = max((p.normal.penetration for p in patches), default=0.0)
         v = check_limits(side_sign, track_force, contacts, penetration, flange_flank,
-                         settings)
+                         settings, friction)
         # (a sliver within the load loop's tolerance: not checked, module docstring)
         least = settings.load_tolerance * sum(p.normal.force for p in patches)
         coarse = [m for m in (under_resolved(p.normal.contact, p.normal.grid.dx,
@@ -130,7 +132,8 @@ def check_validity(side_sign: int, track_force: Sequence[float],
 
 def check_limits(side_sign: int, track_force: Sequence[float],
                  contacts: Sequence[tuple[float, float]], penetration: float,
-                 flange_flank: tuple[float, float], settings: ContactSettings) -> Validity:
+                 flange_flank: tuple[float, float], settings: ContactSettings,
+                 friction: float | None = None) -> Validity:
     """The validity of a wheel from its resultants (module docstring); what
     :func:`check_validity` checks, also for a wheel without its patches (a table step).
 
@@ -150,7 +153,10 @@ def check_limits(side_sign: int, track_force: Sequence[float],
     settings
         The limits (``max_y_q``, ``max_penetration``, ``max_wheel_load``) and the friction
         coefficient.
+    friction
+        The friction coefficient of Nadal's limit [-] (None: ``settings.friction``).
     """
+    mu = settings.friction if friction is None else friction
     flags, why = 0, []
     yq = derailment_quotient(side_sign, track_force)
     q = float(track_force[2])
@@ -158,11 +164,11 @@ def check_limits(side_sign: int, track_force: Sequence[float],
         flags |= Y_Q
         why.append(f"Y/Q = {yq:.3g} above max_y_q = {settings.max_y_q:g}")
     s_steep, steepest = flange_flank
-    limit = nadal_limit(steepest, settings.friction)
+    limit = nadal_limit(steepest, mu)
     if yq > limit:
         flags |= NADAL
         why.append(f"Y/Q = {yq:.3g} beyond Nadal's limit {limit:.3g} (flange "
-                   f"{math.degrees(steepest):.3g} deg, mu {settings.friction:g})")
+                   f"{math.degrees(steepest):.3g} deg, mu {mu:g})")
     for wheel_s, angle in contacts:
         if wheel_s < s_steep and abs(angle) < steepest - FLANGE_CLIMB_MARGIN:
             flags |= FLANGE_CLIMB
