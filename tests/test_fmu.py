@@ -11,6 +11,7 @@ import math
 import subprocess
 import xml.etree.ElementTree as ET
 import zipfile
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -647,13 +648,23 @@ def test_bad_parameter_is_an_error_at_initialization(fmu, extracted, md, capsys)
         assert "[ERROR]" in log and words in log, log
 
 
+def _refused(capsys, call, *args) -> str:
+    """What the FMU logged for ``call(*args)``, which must be fmi2Error."""
+    from fmpy.fmi1 import FMICallException
+
+    capsys.readouterr()
+    with pytest.raises(FMICallException) as err:
+        call(*args)
+    assert err.value.status == 3
+    return capsys.readouterr().out
+
+
 def test_values_refused_are_named_with_the_reason(fmu, extracted, md, capsys):
     """A value the FMU does not set is fmi2Error with a message naming the variable and
     why: an output, a parameter after initialisation, an input after fmi2Terminate, a
     NULL string, a value reference of no variable (and no Boolean variables at all)."""
     import ctypes
 
-    from fmpy.fmi1 import FMICallException
     from fmpy.fmi2 import fmi2String, fmi2ValueReference
 
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -662,13 +673,7 @@ def test_values_refused_are_named_with_the_reason(fmu, extracted, md, capsys):
     s.instantiate()
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
-
-    def refused(call, *args) -> str:
-        capsys.readouterr()
-        with pytest.raises(FMICallException) as err:
-            call(*args)
-        assert err.value.status == 3
-        return capsys.readouterr().out
+    refused = partial(_refused, capsys)
 
     out = refused(s.setReal, [vr["normal_force_left"]], [1.0])
     assert (f"Real variable normal_force_left (value reference {vr['normal_force_left']}) "
@@ -703,18 +708,11 @@ def test_calls_out_of_their_mode_say_why(fmu, extracted, md, capsys):
     """An FMI call the instance's mode does not allow is fmi2Error with a message naming
     the call, when it can be made and the mode the instance is in; a start time that is
     not finite is refused."""
-    from fmpy.fmi1 import FMICallException
 
     s = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="modes")
     s.instantiate()
-
-    def refused(call, *args) -> str:
-        capsys.readouterr()
-        with pytest.raises(FMICallException) as err:
-            call(*args)
-        assert err.value.status == 3
-        return capsys.readouterr().out
+    refused = partial(_refused, capsys)
 
     assert ("fmi2DoStep can be called only in step mode (after fmi2ExitInitializationMode); "
             "the instance is instantiated") in refused(s.doStep, 0.0, 1e-3)
