@@ -708,7 +708,6 @@ def test_calls_out_of_their_mode_say_why(fmu, extracted, md, capsys):
     """An FMI call the instance's mode does not allow is fmi2Error with a message naming
     the call, when it can be made and the mode the instance is in; a start time that is
     not finite is refused."""
-
     s = FMU2Slave(guid=md.guid, unzipDirectory=str(extracted),
                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="modes")
     s.instantiate()
