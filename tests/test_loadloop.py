@@ -10,6 +10,7 @@ import pytest
 import railcontact as rc
 import railcontact.contact.patch as patch_module
 from railcontact.contact.loadloop import (
+    LOAD_SLACK_CAP,
     PROBE_COARSE_TOLERANCE,
     PROBE_COARSENING,
     PROBE_FACTOR,
@@ -230,3 +231,37 @@ def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):
     r = wheelset(warm_start="none").solve(rc.Pose(1e-3), loads=(Q, Q),
                                           creepages=((1e-3, 1e-3, 0.0),) * 2)
     assert all(w.status == 0 and w.seconds >= 0.05 for w in r.wheels)
+
+
+def test_a_warm_flange_step_at_the_creep_forces_noise_is_not_a_failure():
+    """S1002 on 60E1, yaw -4 mrad, the left flange at 65.5 deg beyond Nadal's limit
+    (Y/Q 2.2) with the creep force mostly longitudinal (F_x 73 kN, F_s 1.3 kN): two
+    starts of one normal share give vertical forces some 400 N apart (SteadyGS's
+    eps_tau = 1e-2 bounds the whole traction field, so F_s sin(gamma) is known to
+    eps_tau |F| sin(gamma) = 660 N). The third warm step of the run stalled 150-180 N
+    from the load and was reported not converged (status 1), though within that noise
+    and within what a warm step promises against a tight cold solve; the load is met to
+    the creep forces' accuracy (status 4: outside validity, for its Y/Q)."""
+    from railcontact.timestep.wheelset import WARM_PROMISE
+
+    steel = rc.Material(206e9, 0.28)
+    geometry = (rc.Track(rc.read_profile("60E1", "rail"), math.atan(1 / 40)),
+                rc.Wheelset(rc.read_profile("S1002", "wheel"), 0.46),
+                rc.ElasticPair.of(steel, steel))
+    warm = rc.WheelsetContact(*geometry, rc.ContactSettings(
+        friction=0.4, element_size=5e-4, warm_start="previous+estimate"))
+    loads = (83.3e3, 83.3e3)
+    for k in (99, 100, 101):
+        pose = rc.Pose(9e-3 * (1 - abs(k - 100) / 100), yaw=-0.004)
+        kin = rc.Kinematics(30.0, 0.09 if k < 100 else -0.09)
+        w = warm.solve(pose, loads=loads, kinematics=kin, time=k * 1e-3).left
+    tight = rc.WheelsetContact(*geometry, rc.ContactSettings(
+        friction=0.4, element_size=5e-4, warm_start="none", normal_tolerance=1e-6,
+        tangential_tolerance=1e-6, load_tolerance=1e-6)).solve(
+            pose, loads=loads, kinematics=kin).left
+    assert tight.status == w.status == rc.Status.OUTSIDE_VALIDITY, w.message
+    assert abs(w.track_force[2] - loads[0]) <= LOAD_SLACK_CAP * loads[0]
+    n = tight.normal_force
+    assert abs(w.normal_force - n) / n <= WARM_PROMISE[0]
+    assert max(abs(a - b) for a, b in zip(w.creep_force, tight.creep_force, strict=True)) \
+        <= WARM_PROMISE[1] * 0.4 * n
