@@ -88,6 +88,7 @@ import threading
 import time
 from collections import defaultdict
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -309,13 +310,14 @@ class KernelLog(NogilTimer):
         self.plans: list = []
 
     def wrap(self, name: str, fn):
-        def logged(*args):
+        def logged(*args, **kwargs):
             if self._depth:
-                return fn(*args)
+                return fn(*args, **kwargs)
             self._depth += 1
             try:
-                out = fn(*args)
-                self.log.append((fn, args, _copied(out)))
+                out = fn(*args, **kwargs)
+                self.log.append((partial(fn, **kwargs) if kwargs else fn, args,
+                                 _copied(out)))
                 return out
             finally:
                 self._depth -= 1

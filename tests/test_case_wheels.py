@@ -23,7 +23,7 @@ def _case(lateral: float, tangential: bool = False) -> dict:
             "grid": {"dx": 5e-4, "dy": 5e-4},
             "normal": {"load": 83.3e3, "tolerance": 1e-3}}
     if tangential:
-        case["tangential"] = {"friction": 0.4}
+        case["tangential"] = {"friction": 0.3}
         case["kinematics"] = {"speed": 30.0}
     return case
 
@@ -76,6 +76,18 @@ def test_solve_reports_the_wheels_in_its_json_and_warns_outside_validity(tmp_pat
         rc.ContactSettings(friction=0.4, element_size=5e-4, warm_start="none"))
     r = step.solve(rc.Pose(0.02), loads=(83.3e3, 83.3e3), kinematics=rc.Kinematics(30.0))
     assert r.left.validity & FLANGE_CLIMB
+
+
+def test_nadals_limit_takes_the_cases_friction():
+    """On the flange at 12 mm (54.8 deg, past the steepest point) with mu = 0.3 the wheel
+    is beyond Nadal's limit of S1002's 70 deg flange for mu = 0.3, (tan 70 - 0.3) / (1 +
+    0.3 tan 70) = 1.342, named with that mu (not the time step's default 0.4)."""
+    (wheel,) = case_wheels(rc.solve(_case(0.012, tangential=True)))
+    limit = (math.tan(math.radians(70)) - 0.3) / (1 + 0.3 * math.tan(math.radians(70)))
+    assert wheel.derailment_quotient > limit
+    assert wheel.validity.flags & NADAL
+    assert f"beyond Nadal's limit {limit:.3g} (flange 70 deg, mu 0.3)" in \
+        wheel.validity.message, wheel.validity.message
 
 
 def test_a_quadratic_case_has_no_wheels(root):

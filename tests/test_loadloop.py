@@ -10,7 +10,6 @@ import pytest
 import railcontact as rc
 import railcontact.contact.patch as patch_module
 from railcontact.contact.loadloop import (
-    LOAD_SLACK_CAP,
     PROBE_COARSE_TOLERANCE,
     PROBE_COARSENING,
     PROBE_FACTOR,
@@ -233,15 +232,14 @@ def test_the_cold_share_estimate_counts_in_the_wheels_time(monkeypatch):
     assert all(w.status == 0 and w.seconds >= 0.05 for w in r.wheels)
 
 
-def test_a_warm_flange_step_at_the_creep_forces_noise_is_not_a_failure():
+def test_a_warm_flange_step_that_stalls_in_its_load_loop_is_solved_again_cold():
     """S1002 on 60E1, yaw -4 mrad, the left flange at 65.5 deg beyond Nadal's limit
-    (Y/Q 2.2) with the creep force mostly longitudinal (F_x 73 kN, F_s 1.3 kN): two
-    starts of one normal share give vertical forces some 400 N apart (SteadyGS's
-    eps_tau = 1e-2 bounds the whole traction field, so F_s sin(gamma) is known to
-    eps_tau |F| sin(gamma) = 660 N). The third warm step of the run stalled 150-180 N
-    from the load and was reported not converged (status 1), though within that noise
-    and within what a warm step promises against a tight cold solve; the load is met to
-    the creep forces' accuracy (status 4: outside validity, for its Y/Q)."""
+    (Y/Q 2.2), the creep force mostly longitudinal (F_x 73 kN, F_s 1.3 kN). From the
+    previous steps' start the third step's load loop stalls 150-180 N off the load (the
+    vertical force at one normal share depends on the start by some hundred newtons
+    here, SteadyGS's tolerance); cold it meets the load. The step is solved again cold:
+    the load met to its tolerance, status 4 (outside validity, for its Y/Q), within what
+    a warm step promises against a tight cold solve."""
     from railcontact.timestep.wheelset import WARM_PROMISE
 
     steel = rc.Material(206e9, 0.28)
@@ -260,7 +258,7 @@ def test_a_warm_flange_step_at_the_creep_forces_noise_is_not_a_failure():
         tangential_tolerance=1e-6, load_tolerance=1e-6)).solve(
             pose, loads=loads, kinematics=kin).left
     assert tight.status == w.status == rc.Status.OUTSIDE_VALIDITY, w.message
-    assert abs(w.track_force[2] - loads[0]) <= LOAD_SLACK_CAP * loads[0]
+    assert abs(w.track_force[2] - loads[0]) <= 1e-3 * loads[0]  # (load_tolerance)
     n = tight.normal_force
     assert abs(w.normal_force - n) / n <= WARM_PROMISE[0]
     assert max(abs(a - b) for a, b in zip(w.creep_force, tight.creep_force, strict=True)) \

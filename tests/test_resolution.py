@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from railcontact import hertz, solve, validate_case
+from railcontact import CaseError, hertz, solve, validate_case
 from railcontact.geometry.profiles import read_profile
 from railcontact.geometry.track import Pose, Track, Wheelset
 from railcontact.halfspace.materials import ElasticPair, Material
@@ -93,26 +93,25 @@ def test_a_contact_between_the_element_centres_is_under_resolved_not_absent():
     assert n.force == 0.0 and n.converged and n.message.startswith("no contact")
 
 
-def test_a_wheel_rail_area_is_not_grown_into_elements_too_coarse_for_it():
-    """A wheel-rail case meshed by element counts too few for its patch (2 x 2): its
-    contact covers the area, and growing the area (the counts fixed) only coarsens the
-    elements. It is an under-resolved patch (not converged, saying to give more elements
-    or element sizes) once the grown elements would pass the 5 mm that resolve a
-    wheel-rail patch - not an area grown to metres along the track and an error that
-    blames the profiles."""
+def test_a_wheel_rail_grid_of_two_elements_along_an_axis_is_refused():
+    """A wheel-rail case meshed by element counts with 2 along an axis: both elements lie
+    at the edge of the potential area, so the contact always reaches it and the area grew
+    without end (to 2.7 m along the track for 83.3 kN, the error then blaming the
+    profiles). It is refused when the case is read, naming the key; 3 elements are an
+    under-resolved patch (not converged, saying to use smaller elements)."""
     case = {"material": {"young": 206e9, "poisson": 0.28},
             "geometry": {"type": "wheel-rail", "wheel": "S1002", "rail": "60E1",
                          "inclination": math.atan(1 / 40), "lateral_displacement": -2e-3,
                          "side": "left"},
-            "grid": {"nx": 2, "ny": 2},
+            "grid": {"nx": 2, "ny": 64},
             "normal": {"load": 83.3e3, "tolerance": 1e-3}}
+    with pytest.raises(CaseError, match=r"\[grid\] nx = 2 elements cannot hold a wheel-rail "
+                       r"patch: every element is at the edge"):
+        solve(case)
+    case["grid"] = {"nx": 3, "ny": 3}
     (patch,) = solve(case).patches
-    n = patch.normal
-    assert not n.converged
-    assert n.message.startswith("under-resolved patch: its contact reaches the edge of the "
-                                "potential area of 2 x 2 elements"), n.message
-    assert "give more elements ([grid] nx, ny) or the element sizes" in n.message
-    assert max(n.grid.dx, n.grid.dy) < 0.02  # (not grown towards the profiles' ends)
+    assert not patch.normal.converged
+    assert patch.normal.message.startswith("under-resolved patch")
 
 
 @pytest.mark.parametrize("per_axis", [5, 8])

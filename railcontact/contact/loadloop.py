@@ -269,18 +269,11 @@ def _patch_mu(patch: PatchSolution, friction: float | FrictionTable) -> float:
 def load_met(patches: list[PatchSolution], load: float, rtol: float,
              tangential_tolerance: float) -> bool:
     """Whether the wheel's vertical force is the ``load`` [N] to ``rtol``, or to the
-    accuracy its creep forces have, but never looser than :data:`LOAD_SLACK_CAP` of the
-    load. The creep forces enter the vertical force by ``F_s sin(gamma)``; the tangential
-    BEM's tolerance ``eps_tau`` bounds the change of the whole traction field, so ``F_s``
-    is known to ``eps_tau |F|`` with ``|F|`` the whole creep force (``F_x`` and ``F_s``),
-    not to ``eps_tau |F_s|``: on a yawed or spinning flange ``F_x`` dominates (S1002 on
-    60E1 at 8.9 mm and -4 mrad yaw: ``F_x`` 72.8 kN, ``F_s`` 1.3 kN at 65.5 deg), and two
-    starts of one load share (a warm and a cold one) give vertical forces about 400 N
-    apart, against ``eps_tau |F| sin(gamma)`` = 663 N and ``eps_tau |F_s| sin(gamma)`` =
-    12 N. On a flange near Nadal's limit N is many times the load, and so is that
-    noise."""
-    creep = sum(math.hypot(p.tangential.force[0], p.tangential.force[1])
-                * abs(math.sin(p.geometry.contact_angle))
+    accuracy its creep forces have: ``eps_tau`` of their vertical components (on a flange
+    near Nadal's limit N is many times the load, and so is the noise of ``F_s sin(gamma)``
+    that the tangential BEM's tolerance leaves), but never looser than
+    :data:`LOAD_SLACK_CAP` of the load."""
+    creep = sum(abs(p.tangential.force[1] * math.sin(p.geometry.contact_angle))
                 for p in patches if p.tangential is not None)
     slack = min(tangential_tolerance * creep, LOAD_SLACK_CAP * load)
     return abs(vertical_force(patches) - load) <= max(rtol * load, slack)

@@ -25,7 +25,7 @@ from ..halfspace.operator import influence_operator, operator_bytes, resolve_bac
 from ..normal import NormalResult, solve_normal
 from ..normal.virtual import virtual_penetration
 from ..settings import Control, GridSettings, NormalSettings, TangentialSettings
-from ..settings.case import ELEMENT_BYTES, MAX_ELEMENT_SIZE, MAX_ELEMENTS, check_grid_size
+from ..settings.case import ELEMENT_BYTES, MAX_ELEMENTS, check_grid_size
 from ..tangential import SOLVERS, TangentialResult, rolling_operator
 from ..tangential.convexgs import EXTERIOR, SLIP
 from ..tangential.fastrip import fastrip, fastrip_hertz
@@ -258,27 +258,8 @@ def solve_patch_normal(gap_of: Callable[[Grid], np.ndarray], bounds: Bounds,
                 f"{res.message}"))
             break
         bounds = _grown(grid.bounds, bounds, automatic)
-        coarse = _too_coarse(grid_settings, bounds) if profiles else ""
-        if coarse:  # (element counts: a grown area has larger elements)
-            res = not_converged(res, (
-                f"under-resolved patch: its contact reaches the edge of the potential "
-                f"area of {grid.nx} x {grid.ny} elements, and the area grown to hold it "
-                f"would have {coarse}, coarser than the {MAX_ELEMENT_SIZE:g} m that still "
-                "resolves a wheel-rail patch; give more elements ([grid] nx, ny) or the "
-                f"element sizes ([grid] dx, dy): {res.message}"))
-            break
     return res, Work(normal_iterations=iterations, remeshes=k,
                      seconds=time.perf_counter() - t0)
-
-
-def _too_coarse(grid_settings: GridSettings, bounds: Bounds) -> str:
-    """The elements of the grid ``grid_settings`` mesh on ``bounds`` [m] where a count
-    makes them coarser than :data:`~railcontact.settings.case.MAX_ELEMENT_SIZE` (e.g.
-    "elements of 27.3 x 9.4 mm"), else ``""`` (given element sizes stay as given)."""
-    grid = make_grid(grid_settings, bounds)
-    if max(grid.dx, grid.dy) <= MAX_ELEMENT_SIZE:
-        return ""
-    return f"elements of {grid.dx * 1e3:.3g} x {grid.dy * 1e3:.3g} mm"
 
 
 def not_converged(res, message: str):

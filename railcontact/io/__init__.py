@@ -1,1 +1,2 @@
-"""Output of solutions: strict JSON (:mod:`.jsonout`) and figures (:mod:`.plotting`)."""
+"""Output of solutions: strict JSON (:mod:`.jsonout`), a wheel-rail case's wheels with their
+validity (:mod:`.wheels`) and figures (:mod:`.plotting`)."""

@@ -140,6 +140,10 @@ on both sides); the wheelset's flange-back distance is a little less than its ga
 
 MAX_ELEMENT_SIZE = 0.005
 """Coarsest element [m] that still resolves a wheel-rail patch."""
+MIN_PATCH_ELEMENTS = 3
+"""Fewest elements along each axis of a wheel-rail case's grid given by counts: with fewer
+every element lies at the edge of the potential area (a contact inside it needs one free
+element on each side)."""
 _TOP_KEYS = ("name", "convention")
 """The keys of a case beside its tables."""
 MAX_GAUGE_PLAY = 0.2
@@ -618,6 +622,15 @@ class Case:
             problems.append(str(exc))
         grid = records.get("grid")
         if isinstance(records.get("geometry"), WheelRailGeometry) and grid is not None:
+            for key, size in (("nx", grid.dx), ("ny", grid.dy)):
+                count = getattr(grid, key)
+                if size is None and count < MIN_PATCH_ELEMENTS:
+                    problems.append(
+                        f"[grid] {key} = {count} elements cannot hold a wheel-rail patch: "
+                        f"every element is at the edge of its area, so its contact always "
+                        f"reaches the edge and the area would grow without end; give at "
+                        f"least {MIN_PATCH_ELEMENTS} (or the element size [grid] "
+                        f"d{key[1]})")
             for key in ("dx", "dy"):
                 size = getattr(grid, key)
                 if size is not None and size > MAX_ELEMENT_SIZE:
