@@ -79,7 +79,7 @@ from ..halfspace.hertz import (
 from ..halfspace.materials import ElasticPair
 from ..normal import NormalResult
 from ..settings import Case, Control, GridSettings, PatchSettings, WheelRailGeometry
-from ..settings.case import MAX_CREEPAGE
+from ..settings.case import check_kinematic_creepage
 from ..settings.convention import side_creepage
 from ..settings.friction import FrictionTable, friction_at_point, row_friction, side_friction
 from ..status import Status, status_of
@@ -176,8 +176,7 @@ def build_geometry(geo: WheelRailGeometry) -> tuple[Track, Wheelset, Pose]:
     try:
         track = Track(read_profile(geo.rail, "rail", geo.profile_unit), geo.inclination,
                       geo.gauge, geo.gauge_depth)
-        ws = Wheelset(read_profile(geo.wheel, "wheel", geo.profile_unit), geo.wheel_radius,
-                      geo.back_to_back, geo.flange_back)
+        ws = case_wheelset(geo)
         roll = geo.roll
         if isinstance(roll, str):
             roll = contact_roll(track, ws, geo.lateral_displacement, geo.yaw)
@@ -185,6 +184,12 @@ def build_geometry(geo: WheelRailGeometry) -> tuple[Track, Wheelset, Pose]:
     except RailContactError as exc:
         raise CaseError(f"[geometry]: {exc}") from None
     return track, ws, pose
+
+
+def case_wheelset(geo: WheelRailGeometry) -> Wheelset:
+    """The wheelset of the ``[geometry]`` settings of a wheel-rail case."""
+    return Wheelset(read_profile(geo.wheel, "wheel", geo.profile_unit), geo.wheel_radius,
+                    geo.back_to_back, geo.flange_back)
 
 
 def same_patch(patches: list[PatchSolution] | None, cp: ContactPoint
@@ -509,13 +514,8 @@ def wheel_kinematics(found: WheelSearch, motion: WheelsetMotion) -> KinematicsOf
         kin = patch_kinematics(side, cp.position, cp.contact_angle, patch.normal.penetration,
                                (0.0, pose.lateral, height), pose.roll, pose.yaw, origin,
                                motion)
-        xi, eta, phi = kin.creepage
-        if not (abs(xi) <= MAX_CREEPAGE and abs(eta) <= MAX_CREEPAGE
-                and abs(phi) <= MAX_CREEPAGE):  # (as a case's [tangential] creepage)
-            raise CaseError(f"{side} wheel: the [kinematics] velocities give the creepages "
-                            f"({xi:.4g}, {eta:.4g}, {phi:.4g} 1/m) beyond "
-                            f"+-{MAX_CREEPAGE:g} (speed {motion.speed:g} m/s too small "
-                            "for them)")
+        check_kinematic_creepage(side, kin.creepage, motion.speed,
+                                 "the [kinematics] velocities")
         return kin
     return of
 

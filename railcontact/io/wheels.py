@@ -14,12 +14,12 @@ that of a frictionless flange.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from ..contact import Solution
-from ..contact.wheelrail import build_geometry
-from ..geometry.track import SIDES
+from ..contact.wheelrail import case_wheelset
+from ..geometry.track import SIDES, Pose
 from ..settings import ContactSettings, WheelRailGeometry
 from ..timestep.results import resultants
 from ..timestep.validity import Validity, check_validity
@@ -57,9 +57,9 @@ def case_wheels(solution: Solution) -> list[CaseWheel]:
     geo = solution.case.geometry
     if not isinstance(geo, WheelRailGeometry):
         return []
-    _, wheelset, pose = build_geometry(geo)
-    if solution.roll is not None:  # (resolved: "rigid" or "equal-loads")
-        pose = replace(pose, roll=solution.roll)
+    wheelset = case_wheelset(geo)  # (read by the solve already)
+    # the roll the patches were solved at (resolved for "rigid" or "equal-loads")
+    pose = Pose(geo.lateral_displacement, geo.yaw, solution.roll)
     tangential = solution.case.tangential
     out = []
     for side in SIDES:

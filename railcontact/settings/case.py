@@ -382,6 +382,22 @@ creepages of about 1e-2), so the bound only keeps the creep forces' products (th
 frictional power) finite."""
 
 
+def check_kinematic_creepage(side: str, creepage: tuple[float, float, float], speed: float,
+                             velocities: str = "the velocities"
+                             ) -> tuple[float, float, float]:
+    """The ``side`` wheel's creepages (xi, eta, phi) that its ``velocities`` give at the
+    forward ``speed`` [m/s], checked within :data:`MAX_CREEPAGE` as a case's creepage is;
+    a :class:`~railcontact.errors.CaseError` naming them and the speed (too small for the
+    other velocities) where one is beyond, or not a number."""
+    xi, eta, phi = creepage
+    if not (abs(xi) <= MAX_CREEPAGE and abs(eta) <= MAX_CREEPAGE
+            and abs(phi) <= MAX_CREEPAGE):
+        raise CaseError(f"{side} wheel: {velocities} give the creepages ({xi:.4g}, "
+                        f"{eta:.4g}, {phi:.4g} 1/m) beyond +-{MAX_CREEPAGE:g} (speed "
+                        f"{speed:g} m/s too small for them)")
+    return creepage
+
+
 @document
 @dataclass(frozen=True)
 class TangentialSettings(Record):

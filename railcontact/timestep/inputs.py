@@ -8,11 +8,11 @@ import math
 from dataclasses import dataclass, field, replace
 
 from ..contact.wheel import WheelSettings
-from ..errors import CaseError, RailContactError, check_finite, check_positive
+from ..errors import RailContactError, check_finite, check_positive
 from ..geometry.points import ContactPoint
 from ..geometry.track import SIDES, Pose, Track, Wheelset
 from ..settings import ContactSettings
-from ..settings.case import MAX_CREEPAGE
+from ..settings.case import MAX_CREEPAGE, check_kinematic_creepage
 from ..settings.convention import wheel_frame_creepage
 
 
@@ -74,12 +74,7 @@ class Kinematics:
                   - v * k * cp.position[1]) / v
             phi = (-s * omega * math.sin(g) + (self.yaw_rate + v * k) * math.cos(g)) / v
         eta = (self.lateral_velocity - v * pose.yaw) / (v * math.cos(g))
-        if not (abs(xi) <= MAX_CREEPAGE and abs(eta) <= MAX_CREEPAGE
-                and abs(phi) <= MAX_CREEPAGE):
-            raise CaseError(f"{cp.side} wheel: the velocities give the creepages "
-                            f"({xi:.4g}, {eta:.4g}, {phi:.4g} 1/m) beyond "
-                            f"+-{MAX_CREEPAGE:g} (speed {v:g} m/s too small for them)")
-        return xi, eta, phi
+        return check_kinematic_creepage(cp.side, (xi, eta, phi), v)
 
 
 MAX_CURVATURE = 0.1
